@@ -1,0 +1,85 @@
+# tdc_delaunay: PGXS build of the extension, plus the PostgreSQL-free core,
+# its command-line front end ./tdc and the core test suite.
+#
+#   make && make install        build and install the extension (needs pg_config)
+#   make tdc                    ./tdc without PostgreSQL
+#   make check-core             core suite (prints "N passed, N failed")
+#   make check-core-asan        core suite under AddressSanitizer + UBSan (clang)
+#   make check-core-tsan        core suite under ThreadSanitizer (clang)
+#   make installcheck           pg_regress against a running server
+#   make test                   everything, on a throw-away cluster (scripts/test.sh)
+#   make demo                   set-up + side-by-side demo (scripts/demo.sh)
+#   make bench                  benchmarks (bench/run.sh)
+
+EXTENSION = tdc_delaunay
+EXTVERSION = 0.1.0
+MODULE_big = tdc_delaunay
+DATA = tdc_delaunay--$(EXTVERSION).sql
+
+CORE_SRCS = $(sort $(wildcard src/core/*.c))
+PG_SRCS = $(sort $(wildcard src/pg/*.c))
+OBJS = $(CORE_SRCS:.c=.o) $(PG_SRCS:.c=.o)
+
+REGRESS = $(basename $(notdir $(sort $(wildcard sql/*.sql))))
+REGRESS_OPTS = --inputdir=. --outputdir=build/regress
+
+PG_CPPFLAGS = -Isrc/core -pthread
+SHLIB_LINK = -pthread -lm
+EXTRA_CLEAN = tdc build
+
+# Exact predicates: never -ffast-math, -Ofast or -ffp-contract=fast.
+CORE_CFLAGS = -std=c11 -D_GNU_SOURCE -O2 -g -Wall -Wextra -Wno-unused-parameter \
+	-ffp-contract=off -pthread -Isrc/core
+CC_CORE ?= cc
+
+TEST_SRCS = $(sort $(wildcard test/test_*.c))
+
+.PHONY: check-core check-core-asan check-core-tsan test demo bench
+
+tdc: src/cli/tdc.c $(CORE_SRCS) $(wildcard src/core/*.h)
+	$(CC_CORE) $(CORE_CFLAGS) -o $@ src/cli/tdc.c $(CORE_SRCS) -lm
+
+build/test_core: $(TEST_SRCS) test/harness.h $(CORE_SRCS) $(wildcard src/core/*.h)
+	@mkdir -p build
+	$(CC_CORE) $(CORE_CFLAGS) -Itest -o $@ $(TEST_SRCS) $(CORE_SRCS) -lgmp -lm
+
+check-core: build/test_core
+	build/test_core
+
+build/test_core_asan: $(TEST_SRCS) test/harness.h $(CORE_SRCS) $(wildcard src/core/*.h)
+	@mkdir -p build
+	clang $(filter-out -O2,$(CORE_CFLAGS)) -O1 -fno-omit-frame-pointer \
+		-fsanitize=address,undefined -fno-sanitize-recover=all -Itest -o $@ \
+		$(TEST_SRCS) $(CORE_SRCS) -lgmp -lm
+
+check-core-asan: build/test_core_asan
+	build/test_core_asan --quick
+
+build/test_core_tsan: $(TEST_SRCS) test/harness.h $(CORE_SRCS) $(wildcard src/core/*.h)
+	@mkdir -p build
+	clang $(filter-out -O2,$(CORE_CFLAGS)) -O1 -fsanitize=thread -Itest -o $@ \
+		$(TEST_SRCS) $(CORE_SRCS) -lgmp -lm
+
+check-core-tsan: build/test_core_tsan
+	build/test_core_tsan --quick
+
+test:
+	bash scripts/test.sh
+
+demo:
+	bash scripts/demo.sh
+
+bench:
+	bash bench/run.sh
+
+# PGXS is optional: the core, ./tdc and its tests build without PostgreSQL.
+PG_CONFIG ?= pg_config
+PGXS := $(shell $(PG_CONFIG) --pgxs 2>/dev/null)
+ifneq ($(PGXS),)
+include $(PGXS)
+# Core objects inside the extension are built with the core's language level.
+src/core/%.o: src/core/%.c $(wildcard src/core/*.h)
+	$(CC) $(CFLAGS) -std=c11 -D_GNU_SOURCE -ffp-contract=off -pthread -Isrc/core -c -o $@ $<
+else
+all: tdc
+endif

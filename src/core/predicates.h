@@ -1,0 +1,81 @@
+/*
+ * predicates.h
+ *		Exact orientation and in-circle predicates.
+ *
+ * Each predicate first evaluates the determinant in plain double arithmetic
+ * and accepts its sign when the magnitude exceeds a forward error bound
+ * (Shewchuk 1997, "Adaptive Precision Floating-Point Arithmetic and Fast
+ * Robust Geometric Predicates", stage A bounds).  An absolute term is added to
+ * the bound so that underflow in the products can never let a wrong sign
+ * through.  Otherwise predicates.c evaluates the determinant exactly with
+ * expansion arithmetic on the raw coordinates, which is exact for every
+ * coordinate that is 0 or of magnitude in [1e-60, 1e60] (the driver rejects
+ * others).
+ *
+ * Conventions (as Shewchuk's):
+ *	tdc_orient2d(a,b,c) > 0  iff a,b,c are in counter-clockwise order.
+ *	tdc_incircle(a,b,c,d) > 0 iff d lies inside the circle through a,b,c,
+ *	given a,b,c counter-clockwise.
+ * Only the sign of the result is meaningful.
+ */
+#ifndef TDC_PREDICATES_H
+#define TDC_PREDICATES_H
+
+/* (3 + 16 eps) eps and (10 + 96 eps) eps with eps = 2^-53 */
+#define TDC_CCW_ERRBOUND	(3.3306690738754716e-16)
+#define TDC_ICC_ERRBOUND	(1.1102230246251577e-15)
+/* Absolute slack: covers the rounding of products that fall below 2^-960. */
+#define TDC_UNDERFLOW_SLACK	(0x1p-900)
+
+/* Exact signs (-1.0, 0.0 or +1.0); called only when the filter fails. */
+extern double tdc_orient2d_exact(const double *a, const double *b, const double *c);
+extern double tdc_incircle_exact(const double *a, const double *b,
+								 const double *c, const double *d);
+
+static inline double
+tdc_orient2d(const double *a, const double *b, const double *c)
+{
+	double		detleft = (a[0] - c[0]) * (b[1] - c[1]);
+	double		detright = (a[1] - c[1]) * (b[0] - c[0]);
+	double		det = detleft - detright;
+	double		bound;
+
+	bound = TDC_CCW_ERRBOUND * (__builtin_fabs(detleft) + __builtin_fabs(detright))
+		+ TDC_UNDERFLOW_SLACK;
+	if (det > bound || -det > bound)
+		return det;
+	return tdc_orient2d_exact(a, b, c);
+}
+
+static inline double
+tdc_incircle(const double *a, const double *b, const double *c, const double *d)
+{
+	double		adx = a[0] - d[0],
+				ady = a[1] - d[1],
+				bdx = b[0] - d[0],
+				bdy = b[1] - d[1],
+				cdx = c[0] - d[0],
+				cdy = c[1] - d[1];
+	double		bdxcdy = bdx * cdy,
+				cdxbdy = cdx * bdy,
+				cdxady = cdx * ady,
+				adxcdy = adx * cdy,
+				adxbdy = adx * bdy,
+				bdxady = bdx * ady;
+	double		alift = adx * adx + ady * ady,
+				blift = bdx * bdx + bdy * bdy,
+				clift = cdx * cdx + cdy * cdy;
+	double		det = alift * (bdxcdy - cdxbdy)
+		+ blift * (cdxady - adxcdy)
+		+ clift * (adxbdy - bdxady);
+	double		permanent = (__builtin_fabs(bdxcdy) + __builtin_fabs(cdxbdy)) * alift
+		+ (__builtin_fabs(cdxady) + __builtin_fabs(adxcdy)) * blift
+		+ (__builtin_fabs(adxbdy) + __builtin_fabs(bdxady)) * clift;
+	double		bound = TDC_ICC_ERRBOUND * permanent + TDC_UNDERFLOW_SLACK;
+
+	if (det > bound || -det > bound)
+		return det;
+	return tdc_incircle_exact(a, b, c, d);
+}
+
+#endif							/* TDC_PREDICATES_H */

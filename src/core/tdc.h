@@ -1,0 +1,147 @@
+/*
+ * tdc.h
+ *		Public API of the tdc_delaunay core: exact, deterministic, threaded
+ *		twofold divide-and-conquer Delaunay triangulation of planar points
+ *		(Wu, Rui, Su, Cheng, Wang 2014).
+ *
+ * The core is plain C11 + pthreads.  It never calls PostgreSQL, never exits,
+ * and keeps no global mutable state: every triangulation is a tdc_job that
+ * owns its threads and memory.  A job runs asynchronously so that the caller's
+ * thread stays free to notice interrupts (query cancel) and call
+ * tdc_job_cancel(); the workers poll the cancel flag and stop within a few ms.
+ *
+ * Site ids: the engine copies the input, sorts and de-duplicates it.  The
+ * surviving sites are identified by "site ids" in [0, tdc_site_id_limit()).
+ * Ids are not dense (removed duplicates leave holes) and their order depends
+ * on the subdivision, so only compare triangle sets by coordinates.
+ */
+#ifndef TDC_H
+#define TDC_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+/* Status codes.  Negative values are errors; the job keeps a message. */
+#define TDC_OK				0
+#define TDC_RUNNING			1	/* tdc_job_wait timed out */
+#define TDC_ENOMEM			(-1)	/* malloc failed */
+#define TDC_ECANCELED		(-2)	/* tdc_job_cancel was called */
+#define TDC_EINVAL			(-3)	/* bad option or non-finite / out-of-range coordinate */
+#define TDC_ETOOBIG			(-4)	/* more points than the 32-bit index width allows */
+#define TDC_EMEMLIMIT		(-5)	/* would exceed options.max_memory */
+#define TDC_ETHREAD			(-6)	/* pthread_create failed */
+
+/*
+ * Largest input size: the mesh numbers half-edges with uint32_t and needs
+ * 6 per point.
+ */
+#define TDC_MAX_POINTS		((size_t) 700000000)
+
+/*
+ * Coordinates must be 0 or of magnitude within [TDC_COORD_MIN, TDC_COORD_MAX];
+ * inside that range every predicate is evaluated exactly.
+ */
+#define TDC_COORD_MIN		1e-60
+#define TDC_COORD_MAX		1e60
+
+typedef struct tdc_options
+{
+	int			threads;		/* worker threads; 0 = all online CPUs */
+	int			grid_size;		/* s of the s x s auxiliary grid; 0 = auto */
+	int			levels;			/* d: up to 2^d subsets; 0 = auto, -1 = none */
+	double		tolerance;		/* > 0: drop a site closer than this to a kept one */
+	size_t		max_memory;		/* bytes the engine may allocate; 0 = no limit */
+} tdc_options;
+
+/* Phase timings in seconds, as in Table 1 of the paper. */
+typedef struct tdc_times
+{
+	double		sort;			/* copy, validation, tolerance pass, leaf sort + dedup */
+	double		subdivide;		/* step 1: grid subdivision into 2^d subsets */
+	double		leaves;			/* step 2: Guibas-Stolfi inside every subset */
+	double		merge;			/* step 3: merging up the tree */
+	double		total;
+} tdc_times;
+
+typedef struct tdc_job tdc_job;
+
+typedef struct tdc_iter
+{
+	size_t		pos;
+} tdc_iter;
+
+extern void tdc_options_init(tdc_options *opt);
+
+/* Bytes the engine will allocate for n input points (for memory caps). */
+extern size_t tdc_estimate_memory(size_t n);
+
+/*
+ * Start triangulating n points given as interleaved x,y doubles.  The engine
+ * copies what it needs; xy may be freed once this returns.  Signals are
+ * blocked in the worker threads.  On failure returns an error code, *job is
+ * NULL and err holds a message.
+ */
+extern int	tdc_job_start(const double *xy, size_t n, const tdc_options *opt,
+						  tdc_job **job, char *err, size_t errlen);
+
+/*
+ * Wait up to timeout_ms (< 0: forever).  Returns TDC_RUNNING on timeout,
+ * otherwise the job's final status.
+ */
+extern int	tdc_job_wait(tdc_job *job, int timeout_ms);
+
+/* Ask the workers to stop; tdc_job_wait then returns TDC_ECANCELED. */
+extern void tdc_job_cancel(tdc_job *job);
+
+/* Message for the final status ("" when TDC_OK). */
+extern const char *tdc_job_error(const tdc_job *job);
+
+/* Cancel if running, join threads, free everything.  NULL is allowed. */
+extern void tdc_job_free(tdc_job *job);
+
+/* Convenience: start + wait forever. */
+extern int	tdc_triangulate(const double *xy, size_t n, const tdc_options *opt,
+							tdc_job **job, char *err, size_t errlen);
+
+/* --- Results, valid once tdc_job_wait returned TDC_OK --- */
+extern size_t tdc_num_input(const tdc_job *job);
+extern size_t tdc_num_sites(const tdc_job *job);		/* unique kept sites */
+extern size_t tdc_num_triangles(const tdc_job *job);
+extern size_t tdc_num_edges(const tdc_job *job);
+extern int	tdc_threads_used(const tdc_job *job);
+extern int	tdc_levels_used(const tdc_job *job);
+extern int	tdc_grid_used(const tdc_job *job);
+extern void tdc_job_times(const tdc_job *job, tdc_times *t);
+
+/* Exclusive upper bound of site ids. */
+extern uint32_t tdc_site_id_limit(const tdc_job *job);
+
+/* Coordinates (x, y) of a site. */
+extern const double *tdc_site_xy(const tdc_job *job, uint32_t site);
+
+/* Input index of the first input point with this site's coordinates. */
+extern size_t tdc_site_input(const tdc_job *job, uint32_t site);
+
+/* Site that input point i became (duplicates and tolerance drops included). */
+extern uint32_t tdc_input_site(const tdc_job *job, size_t i);
+
+/*
+ * Iterate triangles: initialise it->pos = 0, then call until it returns 0.
+ * v receives three site ids in counter-clockwise order.
+ */
+extern int	tdc_next_triangle(const tdc_job *job, tdc_iter *it, uint32_t v[3]);
+
+/* Iterate undirected edges the same way (v[0] < v[1] in lexicographic x,y). */
+extern int	tdc_next_edge(const tdc_job *job, tdc_iter *it, uint32_t v[2]);
+
+/*
+ * Exact validator (validate.c).  sites: m unique points; tri: ntri triangles
+ * as indices into sites.  Checks counter-clockwise non-degenerate triangles,
+ * manifold edges, boundary equal to the convex hull (collinear hull sites
+ * included), every site used (unless all collinear), local Delaunay edges
+ * under exact predicates, and ntri == 2m - 2 - h.  Returns 0 or -1 with err.
+ */
+extern int	tdc_validate(const double *sites, size_t m, const uint32_t *tri,
+						 size_t ntri, char *err, size_t errlen);
+
+#endif							/* TDC_H */

@@ -1,0 +1,35 @@
+/*
+ * harness.h
+ *		Minimal test harness for the core suite: every CHECK counts one pass or
+ *		one failure; main() prints "N passed, N failed".
+ */
+#ifndef TDC_HARNESS_H
+#define TDC_HARNESS_H
+
+#include <stdio.h>
+
+extern long tdc_test_passed;
+extern long tdc_test_failed;
+
+#define CHECK(cond, ...) \
+	do { \
+		if (cond) \
+			tdc_test_passed++; \
+		else \
+		{ \
+			tdc_test_failed++; \
+			fprintf(stderr, "FAIL %s:%d: ", __FILE__, __LINE__); \
+			fprintf(stderr, __VA_ARGS__); \
+			fputc('\n', stderr); \
+		} \
+	} while (0)
+
+/* Each test file exports one entry point, called from test_main.c. */
+extern void test_predicates(void);
+extern void test_engine(void);
+extern void test_conformance(void);
+
+/* Set by --quick (sanitizer runs): smaller sizes. */
+extern int	tdc_test_quick;
+
+#endif
