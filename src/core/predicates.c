@@ -1,0 +1,571 @@
+/*
+ * predicates.c
+ *		Exact fallback of the orientation and in-circle predicates.
+ *
+ * The inline filters in predicates.h settle almost every call in plain double
+ * arithmetic.  What reaches this file is the hard residue: determinants that
+ * are zero or so close to zero that rounding could have flipped their sign.
+ * Here we compute the sign exactly, using floating-point expansion arithmetic
+ * as described by Priest (1991) and by J. R. Shewchuk, "Adaptive Precision
+ * Floating-Point Arithmetic and Fast Robust Geometric Predicates", Discrete &
+ * Computational Geometry 18:305-363, 1997.  The code below is an independent
+ * implementation of the algorithms published in that paper; the theorem
+ * numbers quoted refer to it.
+ *
+ * An expansion is an array of doubles, ordered by increasing magnitude and
+ * pairwise non-overlapping, whose exact (unrounded) sum is the value it
+ * represents.  The largest component carries the sign of the whole sum, so
+ * once a determinant is held as an expansion its sign is read off its last
+ * component.  Every routine here eliminates zero components as it goes: the
+ * hard inputs are dominated by integer-like coordinates (grids, snapped
+ * survey data) whose products are exact, and with zero elimination their
+ * expansions stay one or two components long, which is what makes the exact
+ * path cheap.  By convention an expansion of length 0 represents zero.
+ *
+ * Two evaluation routes are used, both exact:
+ *
+ * 1. If every coordinate difference against the pivot point (c for orient2d,
+ *    d for incircle) is computed without rounding (which Two-Diff tells us at
+ *    the cost of a few additions), we evaluate the textbook determinant on
+ *    those differences.  This is the common case: Sterbenz's lemma makes the
+ *    difference of two doubles within a factor two of each other exact, so
+ *    clustered near-degenerate points and lattice points take this route.
+ *    The products involved have degree at most 4 and small expansions.
+ *
+ * 2. Otherwise we evaluate the determinant on the raw coordinates, with the
+ *    translation folded into the algebra (orient2d as a sum of three 2x2
+ *    minors, incircle as the 4x4 lifted determinant expanded along its lift
+ *    column), so that no rounded difference is ever formed.  This costs more
+ *    (the final expansion may have a few hundred components) but is rare.
+ *
+ * Why this is exact for every coordinate that is 0 or has magnitude in
+ * [1e-60, 1e60]: such a double is an integer multiple of 2^-252 (1e-60 lies in
+ * [2^-200, 2^-199) and a double carries 53 bits), and is below 2^200.  Every
+ * value formed by the error-free transformations below (sums, Two-Sum and
+ * Two-Product error terms, Veltkamp split halves) is an exact polynomial of
+ * degree <= 4 in the inputs or a piece of one, so it is an integer multiple of
+ * 2^-1008, well above the subnormal quantum 2^-1074.  Whenever the
+ * correctness proof of an operation (done in a model with unbounded exponent)
+ * needs a result to be representable, that result is a multiple of 2^-1074
+ * with at most 53 significant bits, hence representable in IEEE double even
+ * in the subnormal range; rounded results of magnitude >= 2^-1022 round
+ * exactly as in the unbounded model.  So gradual underflow can never break a
+ * proof.  On the other side, magnitudes stay below about 2^800 even after the
+ * 2^27 splitter multiplies a degree-4 quantity, far from overflow.
+ *
+ * Requirements on the floating-point environment: IEEE double with round to
+ * nearest, ties to even (Theorem 13 needs it), no extended precision
+ * (FLT_EVAL_METHOD == 0, true with SSE2 on x86-64), and no contraction of
+ * a*b+c into a fused multiply-add, which would break Two-Product and Two-Sum.
+ * The build passes -ffp-contract=off; -ffast-math is rejected below.  We do
+ * not use fma() on purpose: baseline x86-64 has no hardware FMA and the
+ * library fallback is slow.
+ *
+ * All working storage lives in fixed-size stack arrays whose sizes follow
+ * from the expansion-length bounds of the theorems (noted at each use); the
+ * code never allocates and keeps no state.
+ */
+#include <float.h>
+
+#include "predicates.h"
+
+#if defined(__FAST_MATH__)
+#error "predicates.c must not be compiled with -ffast-math: exactness depends on IEEE semantics"
+#endif
+#if !defined(FLT_EVAL_METHOD) || FLT_EVAL_METHOD != 0
+#error "predicates.c needs FLT_EVAL_METHOD == 0 (no extended precision intermediates)"
+#endif
+
+/* 2^27 + 1: Veltkamp splitting of a 53-bit significand into two 26-bit halves */
+#define SPLITTER	134217729.0
+
+/* ------------------------------------------------------------------------
+ * Error-free transformations
+ * ------------------------------------------------------------------------
+ */
+
+/*
+ * Fast-Two-Sum (Theorem 6, after Dekker): x + y == a + b exactly with
+ * x = fl(a + b), provided |a| >= |b|.
+ */
+static inline void
+fast_two_sum(double a, double b, double *x, double *y)
+{
+	double		s = a + b;
+	double		bvirt = s - a;
+
+	*x = s;
+	*y = b - bvirt;
+}
+
+/*
+ * Two-Sum (Theorem 7, after Knuth): same as above with no precondition on
+ * the magnitudes, at the price of three extra operations.
+ */
+static inline void
+two_sum(double a, double b, double *x, double *y)
+{
+	double		s = a + b;
+	double		bvirt = s - a;
+	double		avirt = s - bvirt;
+	double		bround = b - bvirt;
+	double		around = a - avirt;
+
+	*x = s;
+	*y = around + bround;
+}
+
+/* Two-Diff: Two-Sum of a and -b, written out so that no negation is needed. */
+static inline void
+two_diff(double a, double b, double *x, double *y)
+{
+	double		s = a - b;
+	double		bvirt = a - s;
+	double		avirt = s + bvirt;
+	double		bround = bvirt - b;
+	double		around = a - avirt;
+
+	*x = s;
+	*y = around + bround;
+}
+
+/*
+ * Split (Theorem 17, Veltkamp): a == hi + lo where hi and lo each fit in 26
+ * bits (one of them borrowing the sign bit), so that products of halves are
+ * exact in double precision.
+ */
+static inline void
+split(double a, double *hi, double *lo)
+{
+	double		c = SPLITTER * a;
+	double		abig = c - a;
+	double		h = c - abig;
+
+	*hi = h;
+	*lo = a - h;
+}
+
+/*
+ * Two-Product (Theorem 18, Dekker): x + y == a * b exactly with x = fl(a*b).
+ * b arrives already split because scale_expansion multiplies many components
+ * by the same b.
+ */
+static inline void
+two_product_presplit(double a, double b, double bhi, double blo,
+					 double *x, double *y)
+{
+	double		p = a * b;
+	double		ahi,
+				alo;
+	double		err1,
+				err2,
+				err3;
+
+	split(a, &ahi, &alo);
+	err1 = p - ahi * bhi;
+	err2 = err1 - alo * bhi;
+	err3 = err2 - ahi * blo;
+	*x = p;
+	*y = alo * blo - err3;
+}
+
+static inline void
+two_product(double a, double b, double *x, double *y)
+{
+	double		bhi,
+				blo;
+
+	split(b, &bhi, &blo);
+	two_product_presplit(a, b, bhi, blo, x, y);
+}
+
+/* ------------------------------------------------------------------------
+ * Expansion arithmetic (all with zero elimination; length 0 means zero)
+ * ------------------------------------------------------------------------
+ */
+
+/*
+ * Store the two-component expansion hi + lo (lo the smaller, as produced by
+ * the transformations above) without its zero components.  Returns the
+ * length, 0..2.
+ */
+static inline int
+pack2(double hi, double lo, double *h)
+{
+	int			n = 0;
+
+	if (lo != 0.0)
+		h[n++] = lo;
+	if (hi != 0.0)
+		h[n++] = hi;
+	return n;
+}
+
+/*
+ * Expansion sum by merging (Theorem 13, "Fast-Expansion-Sum"): merge the
+ * components of e and f by increasing magnitude, then run them through one
+ * Fast-Two-Sum and a chain of Two-Sums, emitting each nonzero error term.  If
+ * e and f are strongly non-overlapping (as all our expansions are), so is h,
+ * under round-to-even.  h must have room for elen + flen components and must
+ * not alias e or f.
+ */
+static int
+expansion_sum(int elen, const double *e, int flen, const double *f, double *h)
+{
+	int			i = 0,
+				j = 0,
+				hlen = 0;
+	double		q,
+				g,
+				hh;
+
+	if (elen == 0 || flen == 0)
+	{
+		const double *src = (elen == 0) ? f : e;
+		int			n = (elen == 0) ? flen : elen;
+
+		for (i = 0; i < n; i++)
+			h[i] = src[i];
+		return n;
+	}
+
+	/* The two smallest components start the chain with a Fast-Two-Sum. */
+	if (__builtin_fabs(e[0]) <= __builtin_fabs(f[0]))
+		q = e[i++];
+	else
+		q = f[j++];
+	if (j >= flen || (i < elen && __builtin_fabs(e[i]) <= __builtin_fabs(f[j])))
+		g = e[i++];
+	else
+		g = f[j++];
+	fast_two_sum(g, q, &q, &hh);
+	if (hh != 0.0)
+		h[hlen++] = hh;
+
+	while (i < elen || j < flen)
+	{
+		if (j >= flen || (i < elen && __builtin_fabs(e[i]) <= __builtin_fabs(f[j])))
+			g = e[i++];
+		else
+			g = f[j++];
+		two_sum(q, g, &q, &hh);
+		if (hh != 0.0)
+			h[hlen++] = hh;
+	}
+	if (q != 0.0)
+		h[hlen++] = q;
+	return hlen;
+}
+
+/*
+ * Scale-Expansion (Theorem 19): h = b * e exactly.  Each component product
+ * is split into two by Two-Product and folded into the running sum with a
+ * Two-Sum and a Fast-Two-Sum.  h needs room for 2 * elen components and
+ * must not alias e.
+ */
+static int
+scale_expansion(int elen, const double *e, double b, double *h)
+{
+	double		bhi,
+				blo,
+				q,
+				sum,
+				hh,
+				p1,
+				p0;
+	int			i,
+				hlen = 0;
+
+	if (elen == 0 || b == 0.0)
+		return 0;
+
+	split(b, &bhi, &blo);
+	two_product_presplit(e[0], b, bhi, blo, &q, &hh);
+	if (hh != 0.0)
+		h[hlen++] = hh;
+	for (i = 1; i < elen; i++)
+	{
+		two_product_presplit(e[i], b, bhi, blo, &p1, &p0);
+		two_sum(q, p0, &sum, &hh);
+		if (hh != 0.0)
+			h[hlen++] = hh;
+		fast_two_sum(p1, sum, &q, &hh);
+		if (hh != 0.0)
+			h[hlen++] = hh;
+	}
+	if (q != 0.0)
+		h[hlen++] = q;
+	return hlen;
+}
+
+/* Sign of an expansion: that of its largest (last) component. */
+static inline double
+expansion_sign(int elen, const double *e)
+{
+	if (elen == 0)
+		return 0.0;
+	return (e[elen - 1] > 0.0) ? 1.0 : -1.0;
+}
+
+/* ------------------------------------------------------------------------
+ * Determinant building blocks
+ * ------------------------------------------------------------------------
+ */
+
+/* h = p*s - q*t exactly, up to 4 components. */
+static int
+product_diff(double p, double s, double q, double t, double *h)
+{
+	double		x1,
+				y1,
+				x2,
+				y2;
+	double		e[2],
+				f[2];
+	int			elen,
+				flen;
+
+	two_product(p, s, &x1, &y1);
+	two_product(q, t, &x2, &y2);
+	elen = pack2(x1, y1, e);
+	flen = pack2(-x2, -y2, f);
+	return expansion_sum(elen, e, flen, f, h);
+}
+
+/* h = e1 + e2 + e3 for three expansions of up to 4 components: up to 12. */
+static int
+sum3(int len1, const double *e1, int len2, const double *e2,
+	 int len3, const double *e3, double *h)
+{
+	double		tmp[8];
+	int			n;
+
+	n = expansion_sum(len1, e1, len2, e2, tmp);
+	return expansion_sum(n, tmp, len3, e3, h);
+}
+
+/*
+ * h = (u^2 + v^2) * e, computed as u*(u*e) + v*(v*e), or its negation when
+ * negative is set (folded into the second scaling, which is free).  With
+ * elen <= 12 the result has at most 4*12 + 4*12 = 96 components.
+ */
+static int
+lift_scale(int elen, const double *e, double u, double v, int negative,
+		   double *h)
+{
+	double		t1[24],
+				t2[48],
+				t3[24],
+				t4[48];
+	int			n1,
+				n2,
+				n3,
+				n4;
+
+	n1 = scale_expansion(elen, e, u, t1);
+	n2 = scale_expansion(n1, t1, negative ? -u : u, t2);
+	n3 = scale_expansion(elen, e, v, t3);
+	n4 = scale_expansion(n3, t3, negative ? -v : v, t4);
+	return expansion_sum(n2, t2, n4, t4, h);
+}
+
+/*
+ * Route 1 of incircle, on exact differences: the 3x3 determinant
+ *	alift * (bdx cdy - cdx bdy) + blift * (cdx ady - adx cdy)
+ *		+ clift * (adx bdy - bdx ady).
+ * Minors have <= 4 components, each lifted term <= 32, the total <= 96.
+ */
+static double
+incircle_from_differences(double adx, double ady, double bdx, double bdy,
+						  double cdx, double cdy)
+{
+	double		bc[4],
+				ca[4],
+				ab[4];
+	double		aterm[32],
+				bterm[32],
+				cterm[32];
+	double		abterm[64],
+				det[96];
+	int			bclen,
+				calen,
+				ablen,
+				alen,
+				blen,
+				clen,
+				ablen2,
+				detlen;
+
+	bclen = product_diff(bdx, cdy, cdx, bdy, bc);
+	calen = product_diff(cdx, ady, adx, cdy, ca);
+	ablen = product_diff(adx, bdy, bdx, ady, ab);
+
+	alen = lift_scale(bclen, bc, adx, ady, 0, aterm);
+	blen = lift_scale(calen, ca, bdx, bdy, 0, bterm);
+	clen = lift_scale(ablen, ab, cdx, cdy, 0, cterm);
+
+	ablen2 = expansion_sum(alen, aterm, blen, bterm, abterm);
+	detlen = expansion_sum(ablen2, abterm, clen, cterm, det);
+	return expansion_sign(detlen, det);
+}
+
+/*
+ * Route 2 of incircle, on raw coordinates.  With l(p) = px^2 + py^2 and the
+ * 4x4 determinant |x y l 1| of a, b, c, d (equal to the translated 3x3 one:
+ * subtracting row d from the others and then 2*dx times column x and 2*dy
+ * times column y from column l leaves it unchanged), expansion along the
+ * lift column gives
+ *	l(a) O(b,c,d) - l(b) O(a,c,d) + l(c) O(a,b,d) - l(d) O(a,b,c),
+ * where O(p,q,r) = pq + qr + rp and pq = px qy - qx py.  Each O has <= 12
+ * components, each lifted term <= 96, the total <= 384.
+ */
+static double
+incircle_from_raw(const double *a, const double *b, const double *c,
+				  const double *d)
+{
+	double		ab[4],
+				bc[4],
+				cd[4],
+				da[4],
+				ac[4],
+				bd[4],
+				ca[4],
+				db[4];
+	int			ablen,
+				bclen,
+				cdlen,
+				dalen,
+				aclen,
+				bdlen;
+	double		obcd[12],
+				oacd[12],
+				oabd[12],
+				oabc[12];
+	int			nbcd,
+				nacd,
+				nabd,
+				nabc;
+	double		aterm[96],
+				bterm[96],
+				cterm[96],
+				dterm[96];
+	int			alen,
+				blen,
+				clen,
+				dlen;
+	double		abterm[192],
+				cdterm[192],
+				det[384];
+	int			abtermlen,
+				cdtermlen,
+				detlen;
+	int			i;
+
+	ablen = product_diff(a[0], b[1], b[0], a[1], ab);
+	bclen = product_diff(b[0], c[1], c[0], b[1], bc);
+	cdlen = product_diff(c[0], d[1], d[0], c[1], cd);
+	dalen = product_diff(d[0], a[1], a[0], d[1], da);
+	aclen = product_diff(a[0], c[1], c[0], a[1], ac);
+	bdlen = product_diff(b[0], d[1], d[0], b[1], bd);
+	for (i = 0; i < aclen; i++)
+		ca[i] = -ac[i];
+	for (i = 0; i < bdlen; i++)
+		db[i] = -bd[i];
+
+	nbcd = sum3(bclen, bc, cdlen, cd, bdlen, db, obcd);
+	nacd = sum3(aclen, ac, cdlen, cd, dalen, da, oacd);
+	nabd = sum3(ablen, ab, bdlen, bd, dalen, da, oabd);
+	nabc = sum3(ablen, ab, bclen, bc, aclen, ca, oabc);
+
+	alen = lift_scale(nbcd, obcd, a[0], a[1], 0, aterm);
+	blen = lift_scale(nacd, oacd, b[0], b[1], 1, bterm);
+	clen = lift_scale(nabd, oabd, c[0], c[1], 0, cterm);
+	dlen = lift_scale(nabc, oabc, d[0], d[1], 1, dterm);
+
+	abtermlen = expansion_sum(alen, aterm, blen, bterm, abterm);
+	cdtermlen = expansion_sum(clen, cterm, dlen, dterm, cdterm);
+	detlen = expansion_sum(abtermlen, abterm, cdtermlen, cdterm, det);
+	return expansion_sign(detlen, det);
+}
+
+/* ------------------------------------------------------------------------
+ * Entry points
+ * ------------------------------------------------------------------------
+ */
+
+/*
+ * Exact sign of (ax-cx)(by-cy) - (ay-cy)(bx-cx).
+ */
+double
+tdc_orient2d_exact(const double *a, const double *b, const double *c)
+{
+	double		acx,
+				acy,
+				bcx,
+				bcy;
+	double		acxtail,
+				acytail,
+				bcxtail,
+				bcytail;
+	double		ab[4],
+				bc[4],
+				ca[4],
+				det[12];
+	int			ablen,
+				bclen,
+				calen,
+				detlen;
+
+	two_diff(a[0], c[0], &acx, &acxtail);
+	two_diff(a[1], c[1], &acy, &acytail);
+	two_diff(b[0], c[0], &bcx, &bcxtail);
+	two_diff(b[1], c[1], &bcy, &bcytail);
+
+	if (acxtail == 0.0 && acytail == 0.0 && bcxtail == 0.0 && bcytail == 0.0)
+	{
+		/* Route 1: exact differences, one 2x2 minor of up to 4 components. */
+		detlen = product_diff(acx, bcy, acy, bcx, det);
+		return expansion_sign(detlen, det);
+	}
+
+	/* Route 2: raw coordinates, ab + bc + ca (see incircle_from_raw). */
+	ablen = product_diff(a[0], b[1], b[0], a[1], ab);
+	bclen = product_diff(b[0], c[1], c[0], b[1], bc);
+	calen = product_diff(c[0], a[1], a[0], c[1], ca);
+	detlen = sum3(ablen, ab, bclen, bc, calen, ca, det);
+	return expansion_sign(detlen, det);
+}
+
+/*
+ * Exact sign of the in-circle determinant of predicates.h.
+ */
+double
+tdc_incircle_exact(const double *a, const double *b, const double *c,
+				   const double *d)
+{
+	double		adx,
+				ady,
+				bdx,
+				bdy,
+				cdx,
+				cdy;
+	double		adxtail,
+				adytail,
+				bdxtail,
+				bdytail,
+				cdxtail,
+				cdytail;
+
+	two_diff(a[0], d[0], &adx, &adxtail);
+	two_diff(a[1], d[1], &ady, &adytail);
+	two_diff(b[0], d[0], &bdx, &bdxtail);
+	two_diff(b[1], d[1], &bdy, &bdytail);
+	two_diff(c[0], d[0], &cdx, &cdxtail);
+	two_diff(c[1], d[1], &cdy, &cdytail);
+
+	if (adxtail == 0.0 && adytail == 0.0 && bdxtail == 0.0 &&
+		bdytail == 0.0 && cdxtail == 0.0 && cdytail == 0.0)
+		return incircle_from_differences(adx, ady, bdx, bdy, cdx, cdy);
+
+	return incircle_from_raw(a, b, c, d);
+}
