@@ -1,0 +1,123 @@
+# bench/lib.sh -- helpers shared by bench/core_bench.sh and bench/sql_bench.sh.
+# Sourced, not executed.  Expects ROOT (the repository root) to be set.
+#
+# Data files (git-ignored) go to $BENCH_DATA (default data/bench), results to
+# $BENCH_OUT (default build/bench), helper binaries to build/.
+
+BENCH_DATA=${BENCH_DATA:-$ROOT/data/bench}
+BENCH_OUT=${BENCH_OUT:-$ROOT/build/bench}
+BENCH_BIN=$ROOT/build
+GSHHG_SUBSET_N=1000000
+GSHHG_SUBSET_SEED=7
+POINT_SEED=42
+
+log() { printf '[%s] %s\n' "$(date -u +%H:%M:%S)" "$*" >&2; }
+die() { log "ERROR: $*"; exit 1; }
+
+# apt-get install the given Debian packages if any is missing (root only).
+ensure_debs() {
+	local missing=() p
+	for p in "$@"; do
+		dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q 'ok installed' || missing+=("$p")
+	done
+	[ ${#missing[@]} -eq 0 ] && return 0
+	log "installing missing packages: ${missing[*]}"
+	if [ "$(id -u)" -ne 0 ]; then
+		die "packages missing (${missing[*]}) and not root: apt-get install ${missing[*]}"
+	fi
+	DEBIAN_FRONTEND=noninteractive apt-get install -y -q "${missing[@]}" >&2 ||
+		{ apt-get update -q >&2 && DEBIAN_FRONTEND=noninteractive apt-get install -y -q "${missing[@]}" >&2; } ||
+		die "apt-get install ${missing[*]} failed"
+}
+
+# build_tool NAME SRC COMPILER FLAGS...: (re)build $BENCH_BIN/NAME when SRC is newer
+build_tool() {
+	local name=$1 src=$2 compiler=$3
+	shift 3
+	local out=$BENCH_BIN/$name
+	mkdir -p "$BENCH_BIN"
+	if [ ! -x "$out" ] || [ "$src" -nt "$out" ]; then
+		log "building $out"
+		"$compiler" "$@" -o "$out" "$src" ${LIBS:-} || die "cannot build $out"
+	fi
+}
+
+build_helpers() {
+	command -v cc >/dev/null || die "cc not found"
+	LIBS=-lm build_tool gen_points "$ROOT/bench/gen_points.c" cc -O2 -Wall
+	build_tool gshhg_convert "$ROOT/bench/gshhg_convert.c" cc -O2 -Wall
+}
+
+build_cgal() {
+	if [ ! -f /usr/include/CGAL/Delaunay_triangulation_2.h ]; then
+		ensure_debs libcgal-dev libgmp-dev libmpfr-dev
+	fi
+	command -v g++ >/dev/null || ensure_debs g++
+	LIBS="-lgmp -lmpfr" build_tool cgal_dt "$ROOT/bench/cgal_dt.cpp" g++ -O2 -DNDEBUG -DCGAL_NDEBUG
+}
+
+# n_of LABEL: 1e5 -> 100000
+n_of() { awk -v s="$1" 'BEGIN { printf "%.0f\n", s + 0 }'; }
+
+# ensure_points KIND NLABEL: path of the .bin file (generated if missing)
+ensure_points() {
+	local kind=$1 nl=$2 f
+	f=$BENCH_DATA/${kind}_${nl}.bin
+	mkdir -p "$BENCH_DATA"
+	if [ ! -s "$f" ] || [ "$(stat -c %s "$f")" -ne $(( $(n_of "$nl") * 16 )) ]; then
+		log "generating $f"
+		"$BENCH_BIN/gen_points" "$kind" "$nl" "$POINT_SEED" "$f.tmp" && mv "$f.tmp" "$f" ||
+			die "gen_points $kind $nl failed"
+	fi
+	printf '%s\n' "$f"
+}
+
+# ensure_gshhg: GSHHG full-resolution shorelines (all levels) via GMT ->
+#   $BENCH_DATA/gshhg.bin, gshhg_lines.ewkt, gshhg_sub.bin, gshhg_sub.tsv, gshhg.meta
+ensure_gshhg() {
+	local d=$BENCH_DATA
+	if [ -s "$d/gshhg.meta" ] && [ -s "$d/gshhg.bin" ] && [ -s "$d/gshhg_lines.ewkt" ] &&
+		[ -s "$d/gshhg_sub.bin" ] && [ -s "$d/gshhg_sub.tsv" ]; then
+		return 0
+	fi
+	ensure_debs gmt gmt-gshhg-full
+	mkdir -p "$d"
+	local tmp
+	tmp=$(mktemp -d)
+	log "extracting GSHHG full resolution: gmt coast -Rd -Df -W -M"
+	# GMT writes gmt.history into the working directory: run it in a temp dir
+	(cd "$tmp" && gmt coast -Rd -Df -W -M > coast.txt) || die "gmt coast failed"
+	"$BENCH_BIN/gshhg_convert" "$tmp/coast.txt" "$d/gshhg" "$GSHHG_SUBSET_N" "$GSHHG_SUBSET_SEED" \
+		> "$d/gshhg.meta.tmp" || die "gshhg_convert failed"
+	rm -rf "$tmp"
+	mv "$d/gshhg.meta.tmp" "$d/gshhg.meta"
+	log "GSHHG: $(cat "$d/gshhg.meta")"
+}
+
+# kv FILE KEY: value of KEY=value on the last line of FILE containing "KEY="
+kv() {
+	awk -v k="$2" '{ for (i = 1; i <= NF; i++) { n = index($i, "="); if (n > 0 && substr($i, 1, n - 1) == k) v = substr($i, n + 1) } } END { print v }' "$1"
+}
+
+# median of the numbers on stdin (empty input -> empty output)
+median() {
+	awk '$1 != "" { a[++n] = $1 + 0 }
+		END {
+			if (n == 0) exit;
+			for (i = 2; i <= n; i++) { x = a[i]; j = i - 1; while (j > 0 && a[j] > x) { a[j + 1] = a[j]; j-- } a[j + 1] = x }
+			if (n % 2) print a[(n + 1) / 2]; else print (a[n / 2] + a[n / 2 + 1]) / 2
+		}'
+}
+
+# ensure the ./tdc CLI is built; returns 1 if it cannot be
+ensure_tdc() {
+	if [ ! -f "$ROOT/src/cli/tdc.c" ]; then
+		log "src/cli/tdc.c does not exist yet: no ./tdc"
+		return 1
+	fi
+	if ! make -C "$ROOT" -s tdc >&2; then
+		log "make tdc failed"
+		return 1
+	fi
+	[ -x "$ROOT/tdc" ]
+}
