@@ -1,0 +1,658 @@
+/*
+ * gserialized.c
+ *		Read PostGIS geometry values into a point buffer, write
+ *		triangulations back as geometry values.
+ *
+ * A triangulation only needs the vertices of its input, and going through
+ * liblwgeom for that (deserialize to an LWGEOM, walk it, copy points out)
+ * costs more than the triangulation of a small geometry.  So we read the
+ * on-disk format directly.  PostGIS 3 stores a geometry as
+ *
+ *	varlena header (4 bytes after detoasting)
+ *	srid[3]			21-bit signed SRID, big-endian-ish: high 5 bits first
+ *	gflags			Z 0x01, M 0x02, BBOX 0x04, GEODETIC 0x08,
+ *					EXTENDED 0x10 (v2), VERSION 0x40 (set = v2)
+ *	[uint64]		extended flags, v2 only, when EXTENDED is set
+ *	[float box]		when BBOX is set: 2 floats per dimension (6 if geodetic)
+ *	geometry		uint32 type, uint32 count, then
+ *					  point/line/triangle/circularstring: count vertices
+ *					  polygon: count ring sizes, padded to 8 bytes, then the
+ *						rings' vertices
+ *					  multi and collection types: count nested geometries
+ *
+ * Vertices are doubles, 2 to 4 per vertex (XY, XYZ, XYM, XYZM).  Version 1
+ * (PostGIS 2, possibly still on disk after pg_upgrade) differs only in the
+ * flags byte: no EXTENDED flag, 0x10 is a read-only bit we ignore.
+ *
+ * Every count read from a value is checked against the bytes that remain
+ * before it is used, with 64-bit arithmetic, so a corrupt value gives an
+ * ERROR and never a read outside the value.  Reading is done in two passes
+ * over the structure: the first validates and counts vertices (so the buffer
+ * grows once per value, not per vertex), the second copies coordinates,
+ * rejecting NaN and infinities.  Curves are rejected: PostGIS would stroke
+ * them into segments first, with a precision we should not guess for the
+ * user, so we ask for an explicit ST_CurveToLine.
+ *
+ * Results are written in version 2 without a bounding box (PostGIS computes
+ * one when it needs it), with the Z flag when the input had Z.  All parts of
+ * the format are multiples of 8 bytes, so the doubles stay aligned.
+ */
+#include "postgres.h"
+
+#include <math.h>
+
+#include "miscadmin.h"
+#include "utils/memutils.h"
+
+#include "tdc_pg.h"
+
+/* Geometry type numbers of the serialized format. */
+#define G_POINT				1
+#define G_LINE				2
+#define G_POLYGON			3
+#define G_MULTIPOINT		4
+#define G_MULTILINE			5
+#define G_MULTIPOLYGON		6
+#define G_COLLECTION		7
+#define G_CIRCSTRING		8
+#define G_COMPOUND			9
+#define G_CURVEPOLY			10
+#define G_MULTICURVE		11
+#define G_MULTISURFACE		12
+#define G_POLYHEDRAL		13
+#define G_TRIANGLE			14
+#define G_TIN				15
+
+/* Flag bits. */
+#define GF_Z				0x01
+#define GF_M				0x02
+#define GF_BBOX				0x04
+#define GF_GEODETIC			0x08
+#define GF_EXTENDED			0x10
+#define GF_VERSION			0x40
+
+/* srid[3] + gflags */
+#define G_HEADER			4
+
+typedef struct GserWalk
+{
+	const char *start;			/* first byte after the varlena header */
+	const char *end;			/* one past the last byte */
+	int			ndims;			/* doubles per vertex */
+	bool		hasz;
+	uint64		count;			/* vertices seen so far */
+	double	   *xy;				/* copy pass: destinations, else NULL */
+	double	   *z;
+	const char *fname;
+} GserWalk;
+
+static const char *
+curve_name(uint32 type)
+{
+	switch (type)
+	{
+		case G_CIRCSTRING:
+			return "CIRCULARSTRING";
+		case G_COMPOUND:
+			return "COMPOUNDCURVE";
+		case G_CURVEPOLY:
+			return "CURVEPOLYGON";
+		case G_MULTICURVE:
+			return "MULTICURVE";
+		case G_MULTISURFACE:
+			return "MULTISURFACE";
+	}
+	return "curve";
+}
+
+static void
+corrupt(const GserWalk *w, const char *p, const char *what)
+{
+	ereport(ERROR,
+			(errcode(ERRCODE_DATA_CORRUPTED),
+			 errmsg("%s: corrupt geometry value: %s at byte %ld of %ld",
+					w->fname, what, (long) (p - w->start) + VARHDRSZ,
+					(long) (w->end - w->start) + VARHDRSZ)));
+}
+
+static inline uint32
+read_u32(const char *p)
+{
+	uint32		v;
+
+	memcpy(&v, p, sizeof(v));
+	return v;
+}
+
+/* Vertices of one point list: check the size, count, copy on pass two. */
+static const char *
+walk_points(GserWalk *w, const char *p, uint32 npoints)
+{
+	uint64		bytes = (uint64) npoints * w->ndims * sizeof(double);
+
+	if (bytes > (uint64) (w->end - p))
+		corrupt(w, p, "vertex list longer than the value");
+
+	if (w->xy != NULL)
+	{
+		double	   *xy = w->xy + 2 * w->count;
+		double	   *z = w->hasz ? w->z + w->count : NULL;
+		uint32		i;
+
+		if (w->ndims == 2)
+			memcpy(xy, p, (size_t) bytes);
+		for (i = 0; i < npoints; i++)
+		{
+			const char *v = p + (size_t) i * w->ndims * sizeof(double);
+			double		c[3];
+
+			if (w->ndims == 2)
+			{
+				c[0] = xy[2 * i];
+				c[1] = xy[2 * i + 1];
+			}
+			else
+			{
+				memcpy(c, v, (w->hasz ? 3 : 2) * sizeof(double));
+				xy[2 * i] = c[0];
+				xy[2 * i + 1] = c[1];
+			}
+			if (!isfinite(c[0]) || !isfinite(c[1]) ||
+				(z != NULL && !isfinite(c[2])))
+				ereport(ERROR,
+						(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
+						 errmsg("%s: input has a non-finite coordinate (NaN or Infinity)",
+								w->fname)));
+			if (z != NULL)
+				z[i] = c[2];
+		}
+	}
+	w->count += npoints;
+	return p + bytes;
+}
+
+/* One nested geometry starting at p; returns the first byte after it. */
+static const char *
+walk_geom(GserWalk *w, const char *p)
+{
+	uint32		type;
+	uint32		count;
+	uint32		i;
+
+	check_stack_depth();
+	CHECK_FOR_INTERRUPTS();
+
+	if (w->end - p < 8)
+		corrupt(w, p, "truncated geometry header");
+	type = read_u32(p);
+	count = read_u32(p + 4);
+	p += 8;
+
+	switch (type)
+	{
+		case G_POINT:
+			if (count > 1)
+				corrupt(w, p - 8, "point with more than one vertex");
+			/* FALLTHROUGH */
+		case G_LINE:
+		case G_TRIANGLE:
+			return walk_points(w, p, count);
+
+		case G_POLYGON:
+			{
+				const char *rings = p;
+				uint64		hdr = (uint64) count * 4;
+
+				if (count % 2)
+					hdr += 4;	/* padding to 8 bytes */
+				if (hdr > (uint64) (w->end - p))
+					corrupt(w, p, "ring count larger than the value");
+				p += hdr;
+				for (i = 0; i < count; i++)
+					p = walk_points(w, p, read_u32(rings + 4 * (size_t) i));
+				return p;
+			}
+
+		case G_MULTIPOINT:
+		case G_MULTILINE:
+		case G_MULTIPOLYGON:
+		case G_COLLECTION:
+		case G_POLYHEDRAL:
+		case G_TIN:
+			/* every member takes at least 8 bytes: the loop is bounded */
+			for (i = 0; i < count; i++)
+				p = walk_geom(w, p);
+			return p;
+
+		case G_CIRCSTRING:
+		case G_COMPOUND:
+		case G_CURVEPOLY:
+		case G_MULTICURVE:
+		case G_MULTISURFACE:
+			ereport(ERROR,
+					(errcode(ERRCODE_FEATURE_NOT_SUPPORTED),
+					 errmsg("%s: curved geometries (%s) are not supported",
+							w->fname, curve_name(type)),
+					 errhint("Convert them to line segments first with ST_CurveToLine.")));
+	}
+	corrupt(w, p - 8, psprintf("unknown geometry type %u", type));
+	return NULL;				/* not reached */
+}
+
+static int32
+read_srid(const unsigned char *s)
+{
+	int32		srid = ((int32) (s[0] & 0x1f) << 16) | ((int32) s[1] << 8) | s[2];
+
+	/* sign-extend the 21-bit value */
+	if (srid & 0x100000)
+		srid -= 0x200000;
+	return srid;
+}
+
+/* ----------------------------------------------------------------
+ *		point buffer
+ * ----------------------------------------------------------------
+ */
+
+void
+tdc_pointbuf_init(TdcPointBuf *buf, MemoryContext cxt)
+{
+	memset(buf, 0, sizeof(*buf));
+	buf->cxt = cxt;
+}
+
+static uint64
+pointbuf_bytes_for(uint64 cap, bool hasz)
+{
+	return cap * (hasz ? 3 : 2) * sizeof(double);
+}
+
+uint64
+tdc_pointbuf_bytes(const TdcPointBuf *buf)
+{
+	return pointbuf_bytes_for(buf->cap, buf->hasz);
+}
+
+/* Make room for "extra" more vertices, honouring tdc_delaunay.max_memory. */
+void
+tdc_pointbuf_reserve(TdcPointBuf *buf, uint64 extra, const char *fname)
+{
+	uint64		need = buf->n + extra;
+	uint64		newcap;
+	uint64		limit = tdc_max_memory_bytes();
+
+	if (need <= buf->cap)
+		return;
+	if (need > TDC_MAX_POINTS)
+		ereport(ERROR,
+				(errcode(ERRCODE_PROGRAM_LIMIT_EXCEEDED),
+				 errmsg("%s: too many input vertices (more than %zu)",
+						fname, (size_t) TDC_MAX_POINTS)));
+
+	newcap = Max(buf->cap, 1024);
+	while (newcap < need)
+		newcap *= 2;
+	if (newcap > TDC_MAX_POINTS)
+		newcap = TDC_MAX_POINTS;
+	/* don't let doubling alone trip the memory limit */
+	if (limit > 0 && pointbuf_bytes_for(newcap, buf->hasz) > limit)
+		newcap = Max(need, limit / ((buf->hasz ? 3 : 2) * sizeof(double)));
+	if (limit > 0 && pointbuf_bytes_for(newcap, buf->hasz) > limit)
+		ereport(ERROR,
+				(errcode(ERRCODE_PROGRAM_LIMIT_EXCEEDED),
+				 errmsg("%s: input of %llu vertices needs more than tdc_delaunay.max_memory (%d MB)",
+						fname, (unsigned long long) need,
+						tdc_guc_max_memory_mb),
+				 errhint("Raise tdc_delaunay.max_memory or triangulate fewer points.")));
+
+	if (buf->xy == NULL)
+	{
+		buf->xy = MemoryContextAllocHuge(buf->cxt,
+										 (Size) newcap * 2 * sizeof(double));
+		if (buf->hasz)
+			buf->z = MemoryContextAllocHuge(buf->cxt,
+											(Size) newcap * sizeof(double));
+	}
+	else
+	{
+		buf->xy = repalloc_huge(buf->xy, (Size) newcap * 2 * sizeof(double));
+		if (buf->hasz)
+			buf->z = repalloc_huge(buf->z, (Size) newcap * sizeof(double));
+	}
+	buf->cap = newcap;
+}
+
+/* The first input fixes SRID and dimensions; later ones must agree. */
+void
+tdc_pointbuf_check_meta(TdcPointBuf *buf, int32 srid, bool hasz,
+						const char *fname)
+{
+	if (!buf->have_first)
+	{
+		Assert(buf->n == 0 && buf->xy == NULL);
+		buf->have_first = true;
+		buf->srid = srid;
+		buf->hasz = hasz;
+		return;
+	}
+	if (buf->srid != srid)
+		ereport(ERROR,
+				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
+				 errmsg("%s: geometries have mixed SRIDs %d and %d",
+						fname, buf->srid, srid),
+				 errhint("Transform them to one SRID with ST_Transform or set it with ST_SetSRID.")));
+	if (buf->hasz != hasz)
+		ereport(ERROR,
+				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
+				 errmsg("%s: geometries have mixed dimensions (%s and %s)",
+						fname, buf->hasz ? "XYZ" : "XY", hasz ? "XYZ" : "XY"),
+				 errhint("Use ST_Force2D or ST_Force3DZ to give all inputs the same dimensions.")));
+}
+
+/* Append all vertices of src (another aggregate state) to dst. */
+void
+tdc_pointbuf_append_buf(TdcPointBuf *dst, const TdcPointBuf *src,
+						const char *fname)
+{
+	if (!src->have_first)
+		return;
+	tdc_pointbuf_check_meta(dst, src->srid, src->hasz, fname);
+	if (src->n == 0)
+		return;
+	tdc_pointbuf_reserve(dst, src->n, fname);
+	memcpy(dst->xy + 2 * dst->n, src->xy, (Size) src->n * 2 * sizeof(double));
+	if (dst->hasz)
+		memcpy(dst->z + dst->n, src->z, (Size) src->n * sizeof(double));
+	dst->n += src->n;
+}
+
+/* ----------------------------------------------------------------
+ *		reading
+ * ----------------------------------------------------------------
+ */
+
+/*
+ * Append the vertices of one detoasted geometry value to buf.
+ */
+void
+tdc_gser_append(TdcPointBuf *buf, const struct varlena *geom,
+				const char *fname)
+{
+	GserWalk	w;
+	const unsigned char *hdr;
+	const char *p;
+	uint8		gflags;
+	int32		srid;
+	bool		hasm;
+	const char *after;
+	uint64		count;
+
+	Assert(!VARATT_IS_EXTENDED(geom));
+	memset(&w, 0, sizeof(w));
+	w.fname = fname;
+	w.start = VARDATA(geom);
+	w.end = (const char *) geom + VARSIZE(geom);
+	if (VARSIZE(geom) < VARHDRSZ + G_HEADER)
+		corrupt(&w, w.start, "value shorter than its header");
+
+	hdr = (const unsigned char *) w.start;
+	srid = read_srid(hdr);
+	gflags = hdr[3];
+	w.hasz = (gflags & GF_Z) != 0;
+	hasm = (gflags & GF_M) != 0;
+	w.ndims = 2 + (w.hasz ? 1 : 0) + (hasm ? 1 : 0);
+	p = w.start + G_HEADER;
+
+	if ((gflags & GF_VERSION) && (gflags & GF_EXTENDED))
+	{
+		if (w.end - p < 8)
+			corrupt(&w, p, "truncated extended flags");
+		p += 8;
+	}
+	if (gflags & GF_BBOX)
+	{
+		size_t		boxbytes = sizeof(float) *
+			((gflags & GF_GEODETIC) ? 6 : 2 * w.ndims);
+
+		if ((size_t) (w.end - p) < boxbytes)
+			corrupt(&w, p, "truncated bounding box");
+		p += boxbytes;
+	}
+
+	/* pass 1: validate and count */
+	after = walk_geom(&w, p);
+	if (after != w.end)
+		corrupt(&w, after, "trailing bytes after the geometry");
+	count = w.count;
+
+	tdc_pointbuf_check_meta(buf, srid, w.hasz, fname);
+	if (count == 0)
+		return;
+
+	/* pass 2: copy */
+	tdc_pointbuf_reserve(buf, count, fname);
+	w.count = 0;
+	w.xy = buf->xy + 2 * buf->n;
+	w.z = w.hasz ? buf->z + buf->n : NULL;
+	(void) walk_geom(&w, p);
+	Assert(w.count == count);
+	buf->n += count;
+}
+
+/* ----------------------------------------------------------------
+ *		writing
+ * ----------------------------------------------------------------
+ */
+
+/* Bytes of one member of a result (without the value's header). */
+static uint64
+member_size(int flags, bool hasz)
+{
+	uint64		vtx = (hasz ? 3 : 2) * sizeof(double);
+
+	switch (flags)
+	{
+		case TDC_OUT_POLYGONS:
+			return 16 + 4 * vtx;	/* type, nrings, npoints, pad, ring */
+		case TDC_OUT_EDGES:
+			return 8 + 2 * vtx; /* type, npoints, 2 vertices */
+		case TDC_OUT_TIN:
+			return 8 + 4 * vtx; /* type, npoints, closed ring */
+	}
+	return 0;
+}
+
+static uint64
+member_count(const tdc_job *job, int flags)
+{
+	return flags == TDC_OUT_EDGES ? tdc_num_edges(job) : tdc_num_triangles(job);
+}
+
+/* Size of the whole result value, header included. */
+uint64
+tdc_gser_result_size(const tdc_job *job, int flags, bool hasz)
+{
+	uint64		m = member_count(job, flags);
+
+	if (m == 0)
+		hasz = false;
+	return VARHDRSZ + G_HEADER + 8 + m * member_size(flags, hasz);
+}
+
+/* Upper bound of the result size for n input vertices (2n triangles, 3n edges). */
+uint64
+tdc_gser_result_bound(uint64 n, int flags, bool hasz)
+{
+	uint64		m = (flags == TDC_OUT_EDGES ? 3 : 2) * n;
+
+	return VARHDRSZ + G_HEADER + 8 + m * member_size(flags, hasz);
+}
+
+void
+tdc_gser_check_result_size(uint64 size, const char *fname)
+{
+	if (size > (uint64) tdc_guc_max_result_bytes)
+		ereport(ERROR,
+				(errcode(ERRCODE_PROGRAM_LIMIT_EXCEEDED),
+				 errmsg("%s: result of %llu bytes exceeds the limit of %d bytes for a single value",
+						fname, (unsigned long long) size,
+						tdc_guc_max_result_bytes),
+				 errhint("Use ST_TDCDelaunayDump(query) to get one row per triangle.")));
+}
+
+static void
+write_header(char *out, Size size, int32 srid, bool hasz)
+{
+	unsigned char *h = (unsigned char *) VARDATA(out);
+	uint32		s = (uint32) srid & 0x1fffff;
+
+	SET_VARSIZE(out, size);
+	h[0] = (unsigned char) (s >> 16);
+	h[1] = (unsigned char) (s >> 8);
+	h[2] = (unsigned char) s;
+	h[3] = GF_VERSION | (hasz ? GF_Z : 0);
+}
+
+static inline char *
+put_u32(char *p, uint32 v)
+{
+	memcpy(p, &v, sizeof(v));
+	return p + sizeof(v);
+}
+
+static inline char *
+put_vertex(char *p, const tdc_job *job, uint32 site, const TdcPointBuf *buf,
+		   bool hasz)
+{
+	const double *xy = tdc_site_xy(job, site);
+
+	memcpy(p, xy, 2 * sizeof(double));
+	p += 2 * sizeof(double);
+	if (hasz)
+	{
+		double		z = buf->z[tdc_site_input(job, site)];
+
+		memcpy(p, &z, sizeof(double));
+		p += sizeof(double);
+	}
+	return p;
+}
+
+/*
+ * The whole triangulation as one geometry value: GEOMETRYCOLLECTION of
+ * POLYGON, MULTILINESTRING or TIN.  Empty results are 2D, like PostGIS.
+ */
+struct varlena *
+tdc_gser_result(const tdc_job *job, int flags, const TdcPointBuf *buf,
+				const char *fname)
+{
+	uint64		m = member_count(job, flags);
+	bool		hasz = buf->hasz && m > 0;
+	uint64		size = tdc_gser_result_size(job, flags, buf->hasz);
+	char	   *out;
+	char	   *p;
+	tdc_iter	it;
+	uint64		written = 0;
+	uint32		type;
+
+	tdc_gser_check_result_size(size, fname);
+
+	out = palloc((Size) size);
+	write_header(out, (Size) size, buf->srid, hasz);
+	p = VARDATA(out) + G_HEADER;
+	type = flags == TDC_OUT_POLYGONS ? G_COLLECTION :
+		flags == TDC_OUT_EDGES ? G_MULTILINE : G_TIN;
+	p = put_u32(p, type);
+	p = put_u32(p, (uint32) m);
+
+	it.pos = 0;
+	if (flags == TDC_OUT_EDGES)
+	{
+		uint32		v[2];
+
+		while (tdc_next_edge(job, &it, v))
+		{
+			if (written++ >= m)
+				elog(ERROR, "%s: core returned more edges than it counted", fname);
+			p = put_u32(p, G_LINE);
+			p = put_u32(p, 2);
+			p = put_vertex(p, job, v[0], buf, hasz);
+			p = put_vertex(p, job, v[1], buf, hasz);
+		}
+	}
+	else
+	{
+		uint32		v[3];
+
+		while (tdc_next_triangle(job, &it, v))
+		{
+			if (written++ >= m)
+				elog(ERROR, "%s: core returned more triangles than it counted", fname);
+			if (flags == TDC_OUT_POLYGONS)
+			{
+				p = put_u32(p, G_POLYGON);
+				p = put_u32(p, 1);
+				p = put_u32(p, 4);
+				p = put_u32(p, 0);	/* padding */
+			}
+			else
+			{
+				p = put_u32(p, G_TRIANGLE);
+				p = put_u32(p, 4);
+			}
+			p = put_vertex(p, job, v[0], buf, hasz);
+			p = put_vertex(p, job, v[1], buf, hasz);
+			p = put_vertex(p, job, v[2], buf, hasz);
+			p = put_vertex(p, job, v[0], buf, hasz);
+		}
+	}
+	if (written != m || p != out + size)
+		elog(ERROR, "%s: core returned %llu of %llu counted %s", fname,
+			 (unsigned long long) written, (unsigned long long) m,
+			 flags == TDC_OUT_EDGES ? "edges" : "triangles");
+	return (struct varlena *) out;
+}
+
+/* An empty result of the given kind (2D, like PostGIS). */
+struct varlena *
+tdc_gser_empty(int flags, int32 srid)
+{
+	Size		size = VARHDRSZ + G_HEADER + 8;
+	char	   *out = palloc(size);
+	char	   *p;
+
+	write_header(out, size, srid, false);
+	p = VARDATA(out) + G_HEADER;
+	p = put_u32(p, flags == TDC_OUT_POLYGONS ? G_COLLECTION :
+				flags == TDC_OUT_EDGES ? G_MULTILINE : G_TIN);
+	(void) put_u32(p, 0);
+	return (struct varlena *) out;
+}
+
+/* Size of one POLYGON value as written by tdc_gser_write_triangle. */
+Size
+tdc_gser_triangle_size(bool hasz)
+{
+	return VARHDRSZ + G_HEADER + member_size(TDC_OUT_POLYGONS, hasz);
+}
+
+/* Write one triangle as a POLYGON value into out (tdc_gser_triangle_size). */
+void
+tdc_gser_write_triangle(struct varlena *out, const tdc_job *job,
+						const uint32 v[3], const TdcPointBuf *buf)
+{
+	char	   *p;
+
+	write_header((char *) out, tdc_gser_triangle_size(buf->hasz), buf->srid,
+				 buf->hasz);
+	p = VARDATA(out) + G_HEADER;
+	p = put_u32(p, G_POLYGON);
+	p = put_u32(p, 1);
+	p = put_u32(p, 4);
+	p = put_u32(p, 0);
+	p = put_vertex(p, job, v[0], buf, buf->hasz);
+	p = put_vertex(p, job, v[1], buf, buf->hasz);
+	p = put_vertex(p, job, v[2], buf, buf->hasz);
+	(void) put_vertex(p, job, v[0], buf, buf->hasz);
+}

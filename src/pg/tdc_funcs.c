@@ -1,0 +1,467 @@
+/*
+ * tdc_funcs.c
+ *		ST_TDCDelaunayTriangles, ST_TDCDelaunayDump and the helper that runs
+ *		the core inside a backend.
+ *
+ * Running the core.  The core triangulates on its own worker threads and
+ * never calls PostgreSQL; the backend's main thread waits for it in slices of
+ * 10 ms (tdc_job_wait with a timeout) and between slices looks at
+ * InterruptPending.  A query cancel, statement_timeout or terminate request
+ * cancels the job, waits for the workers to stop (they poll their cancel
+ * flag every few ms), frees the job and only then lets CHECK_FOR_INTERRUPTS
+ * raise the error, so the error arrives within about 10 ms plus the workers'
+ * reaction time, and no thread outlives the statement.  Other interrupts are
+ * processed while the job keeps running.
+ *
+ * The job is malloc'd memory that PostgreSQL knows nothing about.  Every job
+ * is owned by a TdcRun registered with a reset callback on the current memory
+ * context: whatever ERROR is raised after tdc_job_start (cancel, out of
+ * memory while building the result, a corrupt value in a later row...), the
+ * context is reset during error recovery and the callback cancels, joins and
+ * frees the job.  On success tdc_run_free frees it right away and clears the
+ * pointer, so the callback has nothing left to do.
+ *
+ * Memory limit.  tdc_delaunay.max_memory caps the collected vertices, the
+ * engine's own estimate (tdc_estimate_memory) and an upper bound of the
+ * result; the check happens before the engine allocates, and the engine
+ * gets what is left as its own max_memory.
+ *
+ * ST_TDCDelaunayDump runs a query through SPI (as the calling user: the
+ * function is not SECURITY DEFINER), reads its single geometry column with a
+ * cursor in batches, triangulates, and returns one POLYGON row per triangle
+ * through a tuplestore, which spills to disk past work_mem.  So it is not
+ * bound by the 1 GB limit of a single value.
+ */
+#include "postgres.h"
+
+#include <math.h>
+#include <unistd.h>
+
+#include "executor/spi.h"
+#include "funcapi.h"
+#include "miscadmin.h"
+#include "utils/builtins.h"
+#include "utils/lsyscache.h"
+#include "utils/memutils.h"
+#include "utils/tuplestore.h"
+
+#include "tdc_pg.h"
+
+/* Rows fetched from the Dump query at a time. */
+#define DUMP_BATCH			10000
+
+static const char *
+status_name(int rc)
+{
+	switch (rc)
+	{
+		case TDC_ENOMEM:
+			return "out of memory";
+		case TDC_ECANCELED:
+			return "canceled";
+		case TDC_EINVAL:
+			return "invalid input";
+		case TDC_ETOOBIG:
+			return "input too large";
+		case TDC_EMEMLIMIT:
+			return "memory limit exceeded";
+		case TDC_ETHREAD:
+			return "could not start worker threads";
+	}
+	return "unknown error";
+}
+
+/* ereport a core status with the core's message. */
+static void
+report_core_error(int rc, const char *msg, const char *fname)
+{
+	int			code;
+	const char *hint = NULL;
+
+	if (msg == NULL || msg[0] == '\0')
+		msg = status_name(rc);
+
+	switch (rc)
+	{
+		case TDC_ENOMEM:
+			code = ERRCODE_OUT_OF_MEMORY;
+			break;
+		case TDC_EMEMLIMIT:
+			code = ERRCODE_PROGRAM_LIMIT_EXCEEDED;
+			hint = "Raise tdc_delaunay.max_memory or triangulate fewer points.";
+			break;
+		case TDC_EINVAL:
+			code = ERRCODE_INVALID_PARAMETER_VALUE;
+			break;
+		case TDC_ETOOBIG:
+			code = ERRCODE_PROGRAM_LIMIT_EXCEEDED;
+			break;
+		case TDC_ECANCELED:
+			code = ERRCODE_QUERY_CANCELED;
+			break;
+		case TDC_ETHREAD:
+			code = ERRCODE_INSUFFICIENT_RESOURCES;
+			hint = "Lower tdc_delaunay.threads.";
+			break;
+		default:
+			code = ERRCODE_INTERNAL_ERROR;
+			break;
+	}
+	ereport(ERROR,
+			(errcode(code),
+			 errmsg("%s: %s", fname, msg),
+			 hint ? errhint("%s", hint) : 0));
+}
+
+static void
+run_reset_callback(void *arg)
+{
+	TdcRun	   *run = (TdcRun *) arg;
+
+	if (run->job != NULL)
+	{
+		tdc_job_free(run->job);
+		run->job = NULL;
+	}
+}
+
+static int
+effective_threads(void)
+{
+	int			t = tdc_guc_threads;
+
+	if (tdc_guc_max_threads > 0)
+	{
+		if (t == 0)
+		{
+			long		ncpu = sysconf(_SC_NPROCESSORS_ONLN);
+
+			t = ncpu > 0 ? (int) Min(ncpu, 1024) : 1;
+		}
+		t = Min(t, tdc_guc_max_threads);
+	}
+	return t;
+}
+
+static void
+report_stats(const tdc_job *job, const char *fname)
+{
+	tdc_times	t;
+
+	tdc_job_times(job, &t);
+	ereport(NOTICE,
+			(errmsg("%s: %zu input points, %zu sites, %zu triangles, %zu edges",
+					fname, tdc_num_input(job), tdc_num_sites(job),
+					tdc_num_triangles(job), tdc_num_edges(job)),
+			 errdetail("threads %d, levels %d, grid %d; sort %.3f ms, subdivide %.3f ms, leaves %.3f ms, merge %.3f ms, total %.3f ms",
+					   tdc_threads_used(job), tdc_levels_used(job),
+					   tdc_grid_used(job),
+					   t.sort * 1000.0, t.subdivide * 1000.0,
+					   t.leaves * 1000.0, t.merge * 1000.0,
+					   t.total * 1000.0)));
+}
+
+/* ----------------------------------------------------------------
+ *		shared helpers
+ * ----------------------------------------------------------------
+ */
+
+void
+tdc_check_params(double tolerance, int flags, const char *fname)
+{
+	if (isnan(tolerance) || tolerance < 0 || isinf(tolerance))
+		ereport(ERROR,
+				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
+				 errmsg("%s: tolerance must be a finite number >= 0, not %g",
+						fname, tolerance)));
+	if (flags < TDC_OUT_POLYGONS || flags > TDC_OUT_TIN)
+		ereport(ERROR,
+				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
+				 errmsg("%s: invalid flags %d", fname, flags),
+				 errhint("Use 0 for a GEOMETRYCOLLECTION of polygons, 1 for a MULTILINESTRING of edges, 2 for a TIN.")));
+}
+
+/*
+ * Triangulate the points of buf with the core, waiting interruptibly.
+ * result_bytes: what the caller will allocate for the result, for the
+ * tdc_delaunay.max_memory check.  Returns with run->job finished (TDC_OK);
+ * any failure is an ERROR.  The caller calls tdc_run_free when done.
+ */
+TdcRun *
+tdc_run(const TdcPointBuf *buf, double tolerance, uint64 result_bytes,
+		const char *fname)
+{
+	tdc_options opt;
+	TdcRun	   *run;
+	MemoryContextCallback *cb;
+	uint64		limit = tdc_max_memory_bytes();
+	char		err[256];
+	int			rc;
+
+	tdc_options_init(&opt);
+	opt.threads = effective_threads();
+	opt.grid_size = tdc_guc_grid_size;
+	opt.levels = tdc_guc_levels;
+	opt.tolerance = tolerance;
+	if (limit > 0)
+	{
+		uint64		engine = tdc_estimate_memory((size_t) buf->n);
+		uint64		have = tdc_pointbuf_bytes(buf) + result_bytes;
+
+		if (have + engine > limit)
+			ereport(ERROR,
+					(errcode(ERRCODE_PROGRAM_LIMIT_EXCEEDED),
+					 errmsg("%s: triangulating %llu vertices needs about %llu MB, more than tdc_delaunay.max_memory (%d MB)",
+							fname, (unsigned long long) buf->n,
+							(unsigned long long) ((have + engine + (1 << 20) - 1) >> 20),
+							tdc_guc_max_memory_mb),
+					 errhint("Raise tdc_delaunay.max_memory or triangulate fewer points.")));
+		opt.max_memory = (size_t) (limit - have);
+	}
+
+	run = palloc0(sizeof(TdcRun));
+	cb = palloc0(sizeof(MemoryContextCallback));
+	cb->func = run_reset_callback;
+	cb->arg = run;
+	MemoryContextRegisterResetCallback(CurrentMemoryContext, cb);
+
+	err[0] = '\0';
+	rc = tdc_job_start(buf->xy, (size_t) buf->n, &opt, &run->job, err,
+					   sizeof(err));
+	if (rc != TDC_OK)
+	{
+		run->job = NULL;
+		report_core_error(rc, err, fname);
+	}
+
+	while ((rc = tdc_job_wait(run->job, 10)) == TDC_RUNNING)
+	{
+		if (!InterruptPending)
+			continue;
+		if (QueryCancelPending || ProcDiePending)
+		{
+			/* stop the workers before the error unwinds this stack */
+			tdc_job_cancel(run->job);
+			(void) tdc_job_wait(run->job, -1);
+			tdc_job_free(run->job);
+			run->job = NULL;
+			CHECK_FOR_INTERRUPTS();
+			/* interrupts are held off: still, we have no result */
+			ereport(ERROR,
+					(errcode(ERRCODE_QUERY_CANCELED),
+					 errmsg("%s: triangulation canceled", fname)));
+		}
+		/* anything else: process it, the job keeps running */
+		CHECK_FOR_INTERRUPTS();
+	}
+
+	if (rc != TDC_OK)
+	{
+		strlcpy(err, tdc_job_error(run->job), sizeof(err));
+		tdc_job_free(run->job);
+		run->job = NULL;
+		report_core_error(rc, err, fname);
+	}
+
+	if (tdc_guc_stats)
+		report_stats(run->job, fname);
+	return run;
+}
+
+void
+tdc_run_free(TdcRun *run)
+{
+	if (run->job != NULL)
+	{
+		tdc_job_free(run->job);
+		run->job = NULL;
+	}
+}
+
+/* Triangulate buf into one geometry value of the given kind. */
+Datum
+tdc_triangulate_to_datum(const TdcPointBuf *buf, double tolerance, int flags,
+						 const char *fname)
+{
+	TdcRun	   *run;
+	struct varlena *result;
+
+	if (buf->n == 0)
+		return PointerGetDatum(tdc_gser_empty(flags, buf->srid));
+
+	run = tdc_run(buf, tolerance,
+				  tdc_gser_result_bound(buf->n, flags, buf->hasz), fname);
+	result = tdc_gser_result(run->job, flags, buf, fname);
+	tdc_run_free(run);
+	return PointerGetDatum(result);
+}
+
+/* ----------------------------------------------------------------
+ *		ST_TDCDelaunayDump helpers
+ * ----------------------------------------------------------------
+ */
+
+static void
+dump_error_context(void *arg)
+{
+	errcontext("query of ST_TDCDelaunayDump: %s", (const char *) arg);
+}
+
+/* Run the query and collect the vertices of its geometry column. */
+static void
+dump_collect(TdcPointBuf *buf, const char *query, Oid geomoid,
+			 const char *fname)
+{
+	ErrorContextCallback errcb;
+	SPIPlanPtr	plan;
+	Portal		portal;
+	TupleDesc	desc;
+	Oid			coltype;
+
+	errcb.callback = dump_error_context;
+	errcb.arg = (void *) query;
+	errcb.previous = error_context_stack;
+	error_context_stack = &errcb;
+
+	if (SPI_connect() != SPI_OK_CONNECT)
+		elog(ERROR, "%s: SPI_connect failed", fname);
+
+	plan = SPI_prepare(query, 0, NULL);
+	if (plan == NULL)
+		elog(ERROR, "%s: could not prepare the query: %s", fname,
+			 SPI_result_code_string(SPI_result));
+	if (!SPI_is_cursor_plan(plan))
+		ereport(ERROR,
+				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
+				 errmsg("%s: the query must be a single SELECT returning one geometry column",
+						fname)));
+	portal = SPI_cursor_open(NULL, plan, NULL, NULL, false);
+
+	desc = portal->tupDesc;
+	if (desc == NULL || desc->natts != 1)
+		ereport(ERROR,
+				(errcode(ERRCODE_DATATYPE_MISMATCH),
+				 errmsg("%s: the query must return exactly one column of type geometry, it returns %d columns",
+						fname, desc ? desc->natts : 0)));
+	coltype = getBaseType(TupleDescAttr(desc, 0)->atttypid);
+	if (coltype != geomoid)
+		ereport(ERROR,
+				(errcode(ERRCODE_DATATYPE_MISMATCH),
+				 errmsg("%s: the query's column must be of type geometry, not %s",
+						fname, format_type_be(TupleDescAttr(desc, 0)->atttypid))));
+
+	for (;;)
+	{
+		uint64		i;
+
+		SPI_cursor_fetch(portal, true, DUMP_BATCH);
+		if (SPI_processed == 0)
+			break;
+		for (i = 0; i < SPI_processed; i++)
+		{
+			bool		isnull;
+			Datum		d = SPI_getbinval(SPI_tuptable->vals[i],
+										  SPI_tuptable->tupdesc, 1, &isnull);
+			struct varlena *g;
+
+			if (isnull)
+				continue;
+			g = PG_DETOAST_DATUM(d);
+			tdc_gser_append(buf, g, fname);
+			if ((Pointer) g != DatumGetPointer(d))
+				pfree(g);
+		}
+		SPI_freetuptable(SPI_tuptable);
+		CHECK_FOR_INTERRUPTS();
+	}
+	SPI_cursor_close(portal);
+	SPI_finish();
+
+	error_context_stack = errcb.previous;
+}
+
+/* ----------------------------------------------------------------
+ *		SQL entry points
+ * ----------------------------------------------------------------
+ */
+
+PG_FUNCTION_INFO_V1(st_tdcdelaunaytriangles);
+
+/*
+ * ST_TDCDelaunayTriangles(geometry, tolerance float8, flags int4)
+ *		drop-in for ST_DelaunayTriangles; STRICT like it.
+ */
+Datum
+st_tdcdelaunaytriangles(PG_FUNCTION_ARGS)
+{
+	const char *fname = "ST_TDCDelaunayTriangles";
+	struct varlena *geom = PG_DETOAST_DATUM(PG_GETARG_DATUM(0));
+	double		tolerance = PG_NARGS() > 1 ? PG_GETARG_FLOAT8(1) : 0.0;
+	int32		flags = PG_NARGS() > 2 ? PG_GETARG_INT32(2) : 0;
+	TdcPointBuf buf;
+
+	tdc_check_params(tolerance, flags, fname);
+	tdc_pointbuf_init(&buf, CurrentMemoryContext);
+	tdc_gser_append(&buf, geom, fname);
+	PG_RETURN_DATUM(tdc_triangulate_to_datum(&buf, tolerance, flags, fname));
+}
+
+PG_FUNCTION_INFO_V1(st_tdcdelaunaydump);
+
+/*
+ * ST_TDCDelaunayDump(query text, tolerance float8)
+ *		RETURNS TABLE(id bigint, geom geometry)
+ */
+Datum
+st_tdcdelaunaydump(PG_FUNCTION_ARGS)
+{
+	const char *fname = "ST_TDCDelaunayDump";
+	ReturnSetInfo *rsinfo = (ReturnSetInfo *) fcinfo->resultinfo;
+	char	   *query;
+	double		tolerance;
+	Oid			geomoid;
+	TdcPointBuf buf;
+	TdcRun	   *run;
+	struct varlena *tri;
+	tdc_iter	it;
+	uint32		v[3];
+	int64		id = 0;
+	Datum		values[2];
+	bool		nulls[2] = {false, false};
+
+	if (PG_ARGISNULL(0) || PG_ARGISNULL(1))
+		ereport(ERROR,
+				(errcode(ERRCODE_NULL_VALUE_NOT_ALLOWED),
+				 errmsg("%s: query and tolerance must not be NULL", fname)));
+	query = text_to_cstring(PG_GETARG_TEXT_PP(0));
+	tolerance = PG_GETARG_FLOAT8(1);
+	tdc_check_params(tolerance, TDC_OUT_POLYGONS, fname);
+
+#if PG_VERSION_NUM >= 150001
+	InitMaterializedSRF(fcinfo, 0);
+#else
+	SetSingleFuncCall(fcinfo, 0);
+#endif
+	geomoid = TupleDescAttr(rsinfo->setDesc, 1)->atttypid;
+
+	tdc_pointbuf_init(&buf, CurrentMemoryContext);
+	dump_collect(&buf, query, geomoid, fname);
+	if (buf.n == 0)
+		return (Datum) 0;
+
+	run = tdc_run(&buf, tolerance, 0, fname);
+
+	tri = palloc(tdc_gser_triangle_size(buf.hasz));
+	it.pos = 0;
+	while (tdc_next_triangle(run->job, &it, v))
+	{
+		tdc_gser_write_triangle(tri, run->job, v, &buf);
+		values[0] = Int64GetDatum(++id);
+		values[1] = PointerGetDatum(tri);
+		tuplestore_putvalues(rsinfo->setResult, rsinfo->setDesc, values, nulls);
+		if ((id & 0xffff) == 0)
+			CHECK_FOR_INTERRUPTS();
+	}
+	tdc_run_free(run);
+	return (Datum) 0;
+}

@@ -1,0 +1,94 @@
+/*
+ * tdc_pg.h
+ *		Declarations shared by the PostgreSQL side of tdc_delaunay.
+ *
+ * The PostgreSQL layer has four parts:
+ *
+ *	gserialized.c	reads PostGIS geometry values straight into a point
+ *					buffer and writes triangulations back as geometry values
+ *	tdc_agg.c		the ST_TDCDelaunay aggregates (state, parallel support)
+ *	tdc_funcs.c		ST_TDCDelaunayTriangles, ST_TDCDelaunayDump and the
+ *					helper that runs the core while watching for interrupts
+ *	tdc_guc.c		_PG_init and the tdc_delaunay.* settings
+ *
+ * Only the backend's main thread ever calls PostgreSQL.  The core's worker
+ * threads see nothing but plain malloc'd arrays.
+ */
+#ifndef TDC_PG_H
+#define TDC_PG_H
+
+#include "postgres.h"
+
+#include "fmgr.h"
+#include "tdc.h"
+
+/* Output kinds, the "flags" argument of ST_DelaunayTriangles. */
+#define TDC_OUT_POLYGONS	0	/* GEOMETRYCOLLECTION of POLYGON */
+#define TDC_OUT_EDGES		1	/* MULTILINESTRING */
+#define TDC_OUT_TIN			2	/* TIN */
+
+/* Settings (tdc_guc.c). */
+extern int	tdc_guc_threads;
+extern int	tdc_guc_max_threads;
+extern int	tdc_guc_grid_size;
+extern int	tdc_guc_levels;
+extern int	tdc_guc_max_memory_mb;
+extern bool tdc_guc_stats;
+extern int	tdc_guc_max_result_bytes;
+
+/* tdc_delaunay.max_memory in bytes, 0 when unlimited. */
+extern uint64 tdc_max_memory_bytes(void);
+
+/*
+ * Vertices collected from geometry values: interleaved x,y (what the core
+ * takes) plus, for XYZ input, one Z per vertex.  The arrays live in "cxt" and
+ * grow with huge allocations, so a buffer may exceed 1 GB.
+ */
+typedef struct TdcPointBuf
+{
+	MemoryContext cxt;
+	double	   *xy;				/* 2 * cap doubles */
+	double	   *z;				/* cap doubles when hasz, else NULL */
+	uint64		n;				/* vertices stored */
+	uint64		cap;			/* vertices allocated */
+	bool		have_first;		/* srid and hasz come from a first input */
+	bool		hasz;
+	int32		srid;
+} TdcPointBuf;
+
+/* gserialized.c */
+extern void tdc_pointbuf_init(TdcPointBuf *buf, MemoryContext cxt);
+extern void tdc_pointbuf_reserve(TdcPointBuf *buf, uint64 extra,
+								 const char *fname);
+extern uint64 tdc_pointbuf_bytes(const TdcPointBuf *buf);
+extern void tdc_pointbuf_check_meta(TdcPointBuf *buf, int32 srid, bool hasz,
+									const char *fname);
+extern void tdc_pointbuf_append_buf(TdcPointBuf *dst, const TdcPointBuf *src,
+									const char *fname);
+extern void tdc_gser_append(TdcPointBuf *buf, const struct varlena *geom,
+							const char *fname);
+extern uint64 tdc_gser_result_size(const tdc_job *job, int flags, bool hasz);
+extern uint64 tdc_gser_result_bound(uint64 n, int flags, bool hasz);
+extern struct varlena *tdc_gser_result(const tdc_job *job, int flags,
+									   const TdcPointBuf *buf,
+									   const char *fname);
+extern struct varlena *tdc_gser_empty(int flags, int32 srid);
+extern Size tdc_gser_triangle_size(bool hasz);
+extern void tdc_gser_write_triangle(struct varlena *out, const tdc_job *job,
+									const uint32 v[3], const TdcPointBuf *buf);
+extern void tdc_gser_check_result_size(uint64 size, const char *fname);
+
+/* tdc_funcs.c */
+typedef struct TdcRun
+{
+	tdc_job    *job;			/* NULL once freed */
+} TdcRun;
+
+extern void tdc_check_params(double tolerance, int flags, const char *fname);
+extern TdcRun *tdc_run(const TdcPointBuf *buf, double tolerance,
+					   uint64 result_bytes, const char *fname);
+extern void tdc_run_free(TdcRun *run);
+extern Datum tdc_triangulate_to_datum(const TdcPointBuf *buf, double tolerance,
+									  int flags, const char *fname);
+
+#endif							/* TDC_PG_H */
