@@ -77,6 +77,8 @@ PG_CONFIG ?= pg_config
 PGXS := $(shell $(PG_CONFIG) --pgxs 2>/dev/null)
 ifneq ($(PGXS),)
 include $(PGXS)
+# Plain `make` builds the extension (the first rule above is ./tdc).
+.DEFAULT_GOAL := all
 # Core objects inside the extension are built with the core's language level.
 src/core/%.o: src/core/%.c $(wildcard src/core/*.h)
 	$(CC) $(CFLAGS) -std=c11 -D_GNU_SOURCE -ffp-contract=off -pthread -Isrc/core -c -o $@ $<
