@@ -300,11 +300,17 @@ test_lattice(int n)
 	for (i = 0; i < n; i++)
 	{
 		int			t = (int) rng_int(0, N_TRANSFORMS - 1);
-		long		r = (i & 1) ? 3 : 12;
+		static const long radii[] = {3, 12, 3, 12, 2047, 2048, 4096, 70000,
+		(1L << 25) - 1, 1L << 25, 1L << 30};
+		long		r = radii[rng_int(0, 10)];
 		double		a[2],
 					b[2],
 					c[2],
 					d[2];
+
+		/* keep coordinates below 2^199 < 1e60 */
+		while (r > 4096 && transforms[t].k > 160)
+			t = (int) rng_int(0, N_TRANSFORMS - 1);
 
 		transform(a, rng_int(-r, r), rng_int(-r, r), t);
 		transform(b, rng_int(-r, r), rng_int(-r, r), t);
@@ -314,7 +320,7 @@ test_lattice(int n)
 		if (i % 8 == 0)
 			check_symmetry(a, b, c, d);
 	}
-	CHECK(n_orient_zero + n_incircle_zero - zeros_before > n / 4,
+	CHECK(n_orient_zero + n_incircle_zero - zeros_before > n / 8,
 		  "lattice: too few degenerate cases (%ld)",
 		  n_orient_zero + n_incircle_zero - zeros_before);
 }
@@ -349,32 +355,51 @@ test_collinear(int n)
 	CHECK(zeros > n * 3 / 4, "collinear: only %ld of %d exactly collinear", zeros, n);
 }
 
-/* Lattice points on circles x^2 + y^2 = r^2 for r = 5, 25, 65, 1105. */
-static long circle_pts[4][200][2];
-static int	circle_npts[4];
-static const long circle_r[4] = {5, 25, 65, 1105};
+/*
+ * Lattice points on circles x^2 + y^2 = r^2.  Radii up to 1105 keep the
+ * differences below 2^12 (the exact function's small-lattice shortcut); the
+ * two largest force the expansion arithmetic on exactly cocircular input.
+ */
+#define N_CIRCLES 6
+static long circle_pts[N_CIRCLES][400][2];
+static int	circle_npts[N_CIRCLES];
+static const long circle_r[N_CIRCLES] = {5, 25, 65, 1105, 5525, 32045};
 
 static void
 build_circles(void)
 {
 	int			ci;
 
-	for (ci = 0; ci < 4; ci++)
+	for (ci = 0; ci < N_CIRCLES; ci++)
 	{
 		long		r = circle_r[ci],
-					x,
-					y;
+					x;
 
 		circle_npts[ci] = 0;
 		for (x = -r; x <= r; x++)
-			for (y = -r; y <= r; y++)
-				if (x * x + y * y == r * r && circle_npts[ci] < 200)
-				{
-					circle_pts[ci][circle_npts[ci]][0] = x;
-					circle_pts[ci][circle_npts[ci]][1] = y;
-					circle_npts[ci]++;
-				}
+		{
+			long		y = (long) sqrt((double) (r * r - x * x));
+
+			while (y * y > r * r - x * x)
+				y--;
+			while ((y + 1) * (y + 1) <= r * r - x * x)
+				y++;
+			if (x * x + y * y != r * r || circle_npts[ci] >= 398)
+				continue;
+			circle_pts[ci][circle_npts[ci]][0] = x;
+			circle_pts[ci][circle_npts[ci]][1] = y;
+			circle_npts[ci]++;
+			if (y != 0)
+			{
+				circle_pts[ci][circle_npts[ci]][0] = x;
+				circle_pts[ci][circle_npts[ci]][1] = -y;
+				circle_npts[ci]++;
+			}
+		}
 	}
+	CHECK(circle_npts[0] == 12 && circle_npts[3] == 108 && circle_npts[5] == 324,
+		  "lattice circles: %d %d %d points", circle_npts[0], circle_npts[3],
+		  circle_npts[5]);
 }
 
 static void
@@ -386,7 +411,7 @@ test_cocircular(int n)
 	build_circles();
 	for (i = 0; i < n; i++)
 	{
-		int			ci = (int) rng_int(0, 3);
+		int			ci = (int) rng_int(0, N_CIRCLES - 1);
 		int			t = (int) rng_int(0, N_TRANSFORMS - 1);
 		long		cx = rng_int(-10, 10),
 					cy = rng_int(-10, 10);

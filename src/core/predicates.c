@@ -32,6 +32,11 @@
  *    clustered near-degenerate points and lattice points take this route.
  *    The products involved have degree at most 4 and small expansions.
  *
+ *    Before building expansions, route 1 tries a shortcut for lattice data
+ *    (integer grids, coordinates snapped to a power-of-two grid): if the
+ *    differences, scaled by a power of two, are small integers, the plain
+ *    double evaluation of the determinant is exact (see small_lattice_scale).
+ *
  * 2. Otherwise we evaluate the determinant on the raw coordinates, with the
  *    translation folded into the algebra (orient2d as a sum of three 2x2
  *    minors, incircle as the 4x4 lifted determinant expanded along its lift
@@ -66,6 +71,8 @@
  * code never allocates and keeps no state.
  */
 #include <float.h>
+#include <stdint.h>
+#include <string.h>
 
 #include "predicates.h"
 
@@ -74,6 +81,15 @@
 #endif
 #if !defined(FLT_EVAL_METHOD) || FLT_EVAL_METHOD != 0
 #error "predicates.c needs FLT_EVAL_METHOD == 0 (no extended precision intermediates)"
+#endif
+
+/*
+ * Belt and braces for builds that forget -ffp-contract=off: clang honours
+ * the standard pragma (GCC ignores it, but contracts only in GNU mode, and
+ * the core is built with -std=c11).
+ */
+#if defined(__clang__)
+#pragma STDC FP_CONTRACT OFF
 #endif
 
 /* 2^27 + 1: Veltkamp splitting of a 53-bit significand into two 26-bit halves */
@@ -308,6 +324,81 @@ expansion_sign(int elen, const double *e)
 }
 
 /* ------------------------------------------------------------------------
+ * Small-lattice shortcut
+ * ------------------------------------------------------------------------
+ */
+
+/*
+ * Given the largest magnitude m of a set of differences and a bit budget
+ * nbits, return the power of two s such that m * s < 2^nbits <= 2 * m * s,
+ * or 0 if m is zero, subnormal or so extreme that s would not be a normal
+ * double.  The exponent is read from the bits: frexp/ldexp are library calls
+ * and would cost more than the arithmetic they enable.
+ */
+static inline double
+lattice_scale(double m, int nbits)
+{
+	uint64_t	bits;
+	int			biased;
+	int			sexp;
+	double		s;
+
+	memcpy(&bits, &m, sizeof(bits));
+	biased = (int) ((bits >> 52) & 0x7ff);
+	if (biased == 0 || biased == 0x7ff)
+		return 0.0;
+	/* m in [2^E, 2^(E+1)) with E = biased - 1023; s = 2^(nbits - 1 - E) */
+	sexp = 1023 + (nbits - 1 - (biased - 1023));
+	if (sexp < 1 || sexp > 2046)
+		return 0.0;
+	bits = (uint64_t) sexp << 52;
+	memcpy(&s, &bits, sizeof(s));
+	return s;
+}
+
+/*
+ * Scale the n values v[] by s and report whether all of them became
+ * integers.  Multiplying by a power of two is exact unless the result leaves
+ * the normal range; a nonzero integer result is normal, and a nonzero input
+ * that underflowed to zero is rejected explicitly, so an accepted scaling is
+ * exact for any finite input.  Every scaled magnitude is below 2^nbits <=
+ * 2^26, so the conversion to int64_t is well defined.
+ */
+static inline int
+scale_to_integers(double *v, int n, double s)
+{
+	int			i;
+
+	for (i = 0; i < n; i++)
+	{
+		double		x = v[i] * s;
+
+		if ((double) (int64_t) x != x || (x == 0.0 && v[i] != 0.0))
+			return 0;
+		v[i] = x;
+	}
+	return 1;
+}
+
+static inline double
+max_abs(const double *v, int n)
+{
+	double		m = 0.0;
+	int			i;
+
+	for (i = 0; i < n; i++)
+		if (__builtin_fabs(v[i]) > m)
+			m = __builtin_fabs(v[i]);
+	return m;
+}
+
+static inline double
+sign_of(double x)
+{
+	return (x > 0.0) ? 1.0 : (x < 0.0) ? -1.0 : 0.0;
+}
+
+/* ------------------------------------------------------------------------
  * Determinant building blocks
  * ------------------------------------------------------------------------
  */
@@ -523,6 +614,16 @@ tdc_orient2d_exact(const double *a, const double *b, const double *c)
 
 	if (acxtail == 0.0 && acytail == 0.0 && bcxtail == 0.0 && bcytail == 0.0)
 	{
+		double		v[4] = {acx, bcy, acy, bcx};
+		double		s = lattice_scale(max_abs(v, 4), 26);
+
+		/*
+		 * Lattice shortcut: integers below 2^26 have products below 2^52,
+		 * whose difference is below 2^53 and therefore exact.
+		 */
+		if (s != 0.0 && scale_to_integers(v, 4, s))
+			return sign_of(v[0] * v[1] - v[2] * v[3]);
+
 		/* Route 1: exact differences, one 2x2 minor of up to 4 components. */
 		detlen = product_diff(acx, bcy, acy, bcx, det);
 		return expansion_sign(detlen, det);
@@ -565,7 +666,27 @@ tdc_incircle_exact(const double *a, const double *b, const double *c,
 
 	if (adxtail == 0.0 && adytail == 0.0 && bdxtail == 0.0 &&
 		bdytail == 0.0 && cdxtail == 0.0 && cdytail == 0.0)
+	{
+		double		v[6] = {adx, ady, bdx, bdy, cdx, cdy};
+		double		s = lattice_scale(max_abs(v, 6), 12);
+
+		/*
+		 * Lattice shortcut: with integers below 2^12 the lifts and minors
+		 * are below 2^25, each lifted term below 2^50 and their sum below
+		 * 3 * 2^50: every operation is exact.
+		 */
+		if (s != 0.0 && scale_to_integers(v, 6, s))
+		{
+			double		alift = v[0] * v[0] + v[1] * v[1],
+						blift = v[2] * v[2] + v[3] * v[3],
+						clift = v[4] * v[4] + v[5] * v[5];
+
+			return sign_of(alift * (v[2] * v[5] - v[4] * v[3])
+						   + blift * (v[4] * v[1] - v[0] * v[5])
+						   + clift * (v[0] * v[3] - v[2] * v[1]));
+		}
 		return incircle_from_differences(adx, ady, bdx, bdy, cdx, cdy);
+	}
 
 	return incircle_from_raw(a, b, c, d);
 }
