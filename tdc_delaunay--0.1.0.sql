@@ -107,3 +107,14 @@ LANGUAGE C VOLATILE STRICT PARALLEL UNSAFE;
 COMMENT ON FUNCTION ST_TDCDelaunayDump(text, float8) IS
 'Runs a query returning one geometry column (with the caller''s rights), triangulates the vertices of all rows '
 'and returns one POLYGON row per triangle, numbered from 1; not bound by the 1 GB limit of a single value.';
+
+-- Diagnostics
+
+CREATE FUNCTION _st_tdcdelaunay_state_check(bytea)
+RETURNS bigint
+AS 'MODULE_PATHNAME', '_st_tdcdelaunay_state_check'
+LANGUAGE C IMMUTABLE STRICT PARALLEL SAFE;
+
+COMMENT ON FUNCTION _st_tdcdelaunay_state_check(bytea) IS
+'Diagnostic: validates a serialized ST_TDCDelaunay aggregate state as the parallel deserialization function does '
+'(raising an error when it is corrupt) and returns its vertex count.';

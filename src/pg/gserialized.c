@@ -340,13 +340,13 @@ tdc_pointbuf_check_meta(TdcPointBuf *buf, int32 srid, bool hasz,
 		ereport(ERROR,
 				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
 				 errmsg("%s: geometries have mixed SRIDs %d and %d",
-						fname, buf->srid, srid),
+						fname, Min(buf->srid, srid), Max(buf->srid, srid)),
 				 errhint("Transform them to one SRID with ST_Transform or set it with ST_SetSRID.")));
 	if (buf->hasz != hasz)
 		ereport(ERROR,
 				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
-				 errmsg("%s: geometries have mixed dimensions (%s and %s)",
-						fname, buf->hasz ? "XYZ" : "XY", hasz ? "XYZ" : "XY"),
+				 errmsg("%s: geometries have mixed dimensions (XY and XYZ)",
+						fname),
 				 errhint("Use ST_Force2D or ST_Force3DZ to give all inputs the same dimensions.")));
 }
 

@@ -337,3 +337,21 @@ st_tdcdelaunay_finalfn(PG_FUNCTION_ARGS)
 	PG_RETURN_DATUM(tdc_triangulate_to_datum(&st->pts, st->tolerance,
 											 st->flags, AGG_NAME));
 }
+
+PG_FUNCTION_INFO_V1(_st_tdcdelaunay_state_check);
+
+/*
+ * _st_tdcdelaunay_state_check(bytea) RETURNS bigint
+ *		Diagnostic: validate a serialized ST_TDCDelaunay state (as produced
+ *		by st_tdcdelaunay_serialfn) and return its vertex count.  The
+ *		deserialization function itself cannot be called from SQL; this
+ *		runs the same checks so that they can be tested.
+ */
+Datum
+_st_tdcdelaunay_state_check(PG_FUNCTION_ARGS)
+{
+	TdcAggState *st = state_deserialize(PG_GETARG_BYTEA_P(0),
+										CurrentMemoryContext);
+
+	PG_RETURN_INT64((int64) st->pts.n);
+}

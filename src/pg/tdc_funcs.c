@@ -14,11 +14,13 @@
  * processed while the job keeps running.
  *
  * The job is malloc'd memory that PostgreSQL knows nothing about.  Every job
- * is owned by a TdcRun registered with a reset callback on the current memory
- * context: whatever ERROR is raised after tdc_job_start (cancel, out of
- * memory while building the result, a corrupt value in a later row...), the
+ * is owned by a TdcRun registered with a reset callback on the memory context
+ * of the input buffer (the workers read the buffer until they finish, so the
+ * job must go first): whatever ERROR is raised after tdc_job_start (out of
+ * memory while building the result, an error in a later row...), the
  * context is reset during error recovery and the callback cancels, joins and
- * frees the job.  On success tdc_run_free frees it right away and clears the
+ * frees the job.  While the job runs, a PG_TRY around the wait loop does the
+ * same at once.  On success tdc_run_free frees it right away and clears the
  * pointer, so the callback has nothing left to do.
  *
  * Memory limit.  tdc_delaunay.max_memory caps the collected vertices, the
@@ -223,7 +225,8 @@ tdc_run(const TdcPointBuf *buf, double tolerance, uint64 result_bytes,
 	cb = palloc0(sizeof(MemoryContextCallback));
 	cb->func = run_reset_callback;
 	cb->arg = run;
-	MemoryContextRegisterResetCallback(CurrentMemoryContext, cb);
+	/* on the buffer's context: it must not be freed before the job is */
+	MemoryContextRegisterResetCallback(buf->cxt, cb);
 
 	err[0] = '\0';
 	rc = tdc_job_start(buf->xy, (size_t) buf->n, &opt, &run->job, err,
@@ -234,26 +237,44 @@ tdc_run(const TdcPointBuf *buf, double tolerance, uint64 result_bytes,
 		report_core_error(rc, err, fname);
 	}
 
-	while ((rc = tdc_job_wait(run->job, 10)) == TDC_RUNNING)
+	/*
+	 * The workers read buf->xy until they finish: whatever ERROR leaves this
+	 * loop, stop and free the job before the stack (and maybe the buffer)
+	 * goes away.
+	 */
+	PG_TRY();
 	{
-		if (!InterruptPending)
-			continue;
-		if (QueryCancelPending || ProcDiePending)
+		while ((rc = tdc_job_wait(run->job, 10)) == TDC_RUNNING)
 		{
-			/* stop the workers before the error unwinds this stack */
-			tdc_job_cancel(run->job);
-			(void) tdc_job_wait(run->job, -1);
+			if (!InterruptPending)
+				continue;
+			if (QueryCancelPending || ProcDiePending)
+			{
+				/* stop the workers before the error unwinds this stack */
+				tdc_job_cancel(run->job);
+				(void) tdc_job_wait(run->job, -1);
+				tdc_job_free(run->job);
+				run->job = NULL;
+				CHECK_FOR_INTERRUPTS();
+				/* interrupts are held off: still, we have no result */
+				ereport(ERROR,
+						(errcode(ERRCODE_QUERY_CANCELED),
+						 errmsg("%s: triangulation canceled", fname)));
+			}
+			/* anything else: process it, the job keeps running */
+			CHECK_FOR_INTERRUPTS();
+		}
+	}
+	PG_CATCH();
+	{
+		if (run->job != NULL)
+		{
 			tdc_job_free(run->job);
 			run->job = NULL;
-			CHECK_FOR_INTERRUPTS();
-			/* interrupts are held off: still, we have no result */
-			ereport(ERROR,
-					(errcode(ERRCODE_QUERY_CANCELED),
-					 errmsg("%s: triangulation canceled", fname)));
 		}
-		/* anything else: process it, the job keeps running */
-		CHECK_FOR_INTERRUPTS();
+		PG_RE_THROW();
 	}
+	PG_END_TRY();
 
 	if (rc != TDC_OK)
 	{
