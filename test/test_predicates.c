@@ -711,6 +711,68 @@ test_ulp_neighbours(int n)
 	}
 }
 
+/*
+ * Rectangles: the four corners (x1,y1), (x2,y1), (x2,y2), (x1,y2) are exactly
+ * cocircular whatever the doubles are, so rounded decimal coordinates (a
+ * millimetre grid at 5e6, lon/lat in 1e-7 degrees) still give exact zeros.
+ */
+static void
+test_rectangles(int n)
+{
+	int			i;
+	long		zeros = 0;
+
+	for (i = 0; i < n; i++)
+	{
+		double		x1,
+					x2,
+					y1,
+					y2;
+		int			kind = (int) rng_int(0, 3);
+
+		if (kind == 0)
+		{
+			x1 = 5e6 + 1e-3 * (double) rng_int(0, 100000);
+			x2 = 5e6 + 1e-3 * (double) rng_int(0, 100000);
+			y1 = 4e6 + 1e-3 * (double) rng_int(0, 100000);
+			y2 = 4e6 + 1e-3 * (double) rng_int(0, 100000);
+		}
+		else if (kind == 1)
+		{
+			x1 = 1e-7 * (double) rng_int(-1800000000, 1800000000);
+			x2 = x1 + 1e-7 * (double) rng_int(-100, 100);
+			y1 = 1e-7 * (double) rng_int(-900000000, 900000000);
+			y2 = y1 + 1e-7 * (double) rng_int(-100, 100);
+		}
+		else if (kind == 2)
+		{
+			x1 = rng_wide();
+			x2 = rng_wide();
+			y1 = rng_wide();
+			y2 = rng_wide();
+		}
+		else
+		{
+			x1 = rng_wide();
+			x2 = ulps(x1, (int) rng_int(1, 1000));
+			y1 = rng_range(-1, 1);
+			y2 = y1 * 3.0;
+		}
+		{
+			double		a[2] = {x1, y1},
+						b[2] = {x2, y1},
+						c[2] = {x2, y2},
+						d[2] = {x1, y2};
+
+			if (check_incircle(a, b, c, d, "rectangle") == 0)
+				zeros++;
+			check_incircle(a, c, d, b, "rectangle");
+			check_orient(a, b, c, "rectangle");
+		}
+	}
+	CHECK(zeros == n, "rectangles: %ld of %d cocircular", zeros, n);
+}
+
 /* A few hand-made cases with known answers. */
 static void
 test_known(void)
@@ -756,6 +818,7 @@ test_predicates(void)
 	test_wide(20000 / q);
 	test_extremes(10000 / q);
 	test_ulp_neighbours(10000 / q);
+	test_rectangles(10000 / q);
 
 	printf("predicates: %ld orient2d cases (%ld exactly 0), %ld incircle cases (%ld exactly 0), %ld failures\n",
 		   n_orient, n_orient_zero, n_incircle, n_incircle_zero,

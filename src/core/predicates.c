@@ -33,9 +33,10 @@
  *    The products involved have degree at most 4 and small expansions.
  *
  *    Before building expansions, route 1 tries a shortcut for lattice data
- *    (integer grids, coordinates snapped to a power-of-two grid): if the
- *    differences, scaled by a power of two, are small integers, the plain
- *    double evaluation of the determinant is exact (see small_lattice_scale).
+ *    (integer grids, or any grid far from the origin, whose differences are
+ *    multiples of the coordinates' ulp): if the differences, scaled by a
+ *    power of two, are integers below 2^26, most of the determinant can be
+ *    evaluated exactly in plain doubles (see incircle_small_integers).
  *
  * 2. Otherwise we evaluate the determinant on the raw coordinates, with the
  *    translation folded into the algebra (orient2d as a sum of three 2x2
@@ -357,7 +358,7 @@ lattice_scale(double m, int nbits)
 }
 
 /*
- * Scale the n values v[] by s and report whether all of them became
+ * Scale the n values v[] by s into w[] and report whether all of them became
  * integers.  Multiplying by a power of two is exact unless the result leaves
  * the normal range; a nonzero integer result is normal, and a nonzero input
  * that underflowed to zero is rejected explicitly, so an accepted scaling is
@@ -365,7 +366,7 @@ lattice_scale(double m, int nbits)
  * 2^26, so the conversion to int64_t is well defined.
  */
 static inline int
-scale_to_integers(double *v, int n, double s)
+scale_to_integers(const double *v, double *w, int n, double s)
 {
 	int			i;
 
@@ -375,7 +376,7 @@ scale_to_integers(double *v, int n, double s)
 
 		if ((double) (int64_t) x != x || (x == 0.0 && v[i] != 0.0))
 			return 0;
-		v[i] = x;
+		w[i] = x;
 	}
 	return 1;
 }
@@ -501,6 +502,50 @@ incircle_from_differences(double adx, double ady, double bdx, double bdy,
 }
 
 /*
+ * Lattice shortcut of route 1: v[] holds adx, ady, bdx, bdy, cdx, cdy scaled
+ * by a power of two to integers of magnitude below 2^26.  Then every square
+ * and product of two of them is an integer below 2^52, so the lifts and the
+ * 2x2 minors (sums or differences of two such) are integers below 2^53 and
+ * are computed exactly in plain doubles.  Only the three products lift *
+ * minor need Two-Product, and the six resulting components are summed as
+ * expansions.  This handles integer grids and coordinates snapped to a
+ * millimetre grid far from the origin (whose differences are multiples of
+ * the coordinates' ulp) several times faster than the general path.
+ */
+static double
+incircle_small_integers(const double *v)
+{
+	double		alift = v[0] * v[0] + v[1] * v[1],
+				blift = v[2] * v[2] + v[3] * v[3],
+				clift = v[4] * v[4] + v[5] * v[5];
+	double		bc = v[2] * v[5] - v[4] * v[3],
+				ca = v[4] * v[1] - v[0] * v[5],
+				ab = v[0] * v[3] - v[2] * v[1];
+	double		x,
+				y;
+	double		e[2],
+				f[2],
+				g[2],
+				ef[4],
+				det[6];
+	int			elen,
+				flen,
+				glen,
+				eflen,
+				detlen;
+
+	two_product(alift, bc, &x, &y);
+	elen = pack2(x, y, e);
+	two_product(blift, ca, &x, &y);
+	flen = pack2(x, y, f);
+	two_product(clift, ab, &x, &y);
+	glen = pack2(x, y, g);
+	eflen = expansion_sum(elen, e, flen, f, ef);
+	detlen = expansion_sum(eflen, ef, glen, g, det);
+	return expansion_sign(detlen, det);
+}
+
+/*
  * Route 2 of incircle, on raw coordinates.  With l(p) = px^2 + py^2 and the
  * 4x4 determinant |x y l 1| of a, b, c, d (equal to the translated 3x3 one:
  * subtracting row d from the others and then 2*dx times column x and 2*dy
@@ -615,14 +660,15 @@ tdc_orient2d_exact(const double *a, const double *b, const double *c)
 	if (acxtail == 0.0 && acytail == 0.0 && bcxtail == 0.0 && bcytail == 0.0)
 	{
 		double		v[4] = {acx, bcy, acy, bcx};
+		double		w[4];
 		double		s = lattice_scale(max_abs(v, 4), 26);
 
 		/*
 		 * Lattice shortcut: integers below 2^26 have products below 2^52,
 		 * whose difference is below 2^53 and therefore exact.
 		 */
-		if (s != 0.0 && scale_to_integers(v, 4, s))
-			return sign_of(v[0] * v[1] - v[2] * v[3]);
+		if (s != 0.0 && scale_to_integers(v, w, 4, s))
+			return sign_of(w[0] * w[1] - w[2] * w[3]);
 
 		/* Route 1: exact differences, one 2x2 minor of up to 4 components. */
 		detlen = product_diff(acx, bcy, acy, bcx, det);
@@ -668,23 +714,24 @@ tdc_incircle_exact(const double *a, const double *b, const double *c,
 		bdytail == 0.0 && cdxtail == 0.0 && cdytail == 0.0)
 	{
 		double		v[6] = {adx, ady, bdx, bdy, cdx, cdy};
-		double		s = lattice_scale(max_abs(v, 6), 12);
+		double		w[6];
+		double		m = max_abs(v, 6);
+		double		s = lattice_scale(m, 12);
 
 		/*
-		 * Lattice shortcut: with integers below 2^12 the lifts and minors
-		 * are below 2^25, each lifted term below 2^50 and their sum below
-		 * 3 * 2^50: every operation is exact.
+		 * Lattice shortcut, small: with integers below 2^12 the lifts and
+		 * minors are below 2^25, each lifted term below 2^50 and their sum
+		 * below 3 * 2^50, so plain double evaluation is exact.
 		 */
-		if (s != 0.0 && scale_to_integers(v, 6, s))
-		{
-			double		alift = v[0] * v[0] + v[1] * v[1],
-						blift = v[2] * v[2] + v[3] * v[3],
-						clift = v[4] * v[4] + v[5] * v[5];
+		if (s != 0.0 && scale_to_integers(v, w, 6, s))
+			return sign_of((w[0] * w[0] + w[1] * w[1]) * (w[2] * w[5] - w[4] * w[3])
+						   + (w[2] * w[2] + w[3] * w[3]) * (w[4] * w[1] - w[0] * w[5])
+						   + (w[4] * w[4] + w[5] * w[5]) * (w[0] * w[3] - w[2] * w[1]));
 
-			return sign_of(alift * (v[2] * v[5] - v[4] * v[3])
-						   + blift * (v[4] * v[1] - v[0] * v[5])
-						   + clift * (v[0] * v[3] - v[2] * v[1]));
-		}
+		/* Lattice shortcut, large: integers below 2^26. */
+		s = lattice_scale(m, 26);
+		if (s != 0.0 && scale_to_integers(v, w, 6, s))
+			return incircle_small_integers(w);
 		return incircle_from_differences(adx, ady, bdx, bdy, cdx, cdy);
 	}
 
