@@ -5,7 +5,8 @@
  *	gen_points KIND N SEED OUT.bin
  *
  * Writes N points as raw little-endian float64 x,y pairs (16 bytes per
- * point, no header).  KIND is one of
+ * point, no header), or, when OUT ends in ".tsv", as "x<TAB>y" text lines
+ * (%.17g, reads back exactly) for COPY.  KIND is one of
  *
  *	uniform		uniform in [0,1000)^2
  *	clustered	Gaussian clusters: ~sqrt(N)/4 centres uniform in [0,1000)^2,
@@ -227,7 +228,17 @@ main(int argc, char **argv)
 		fprintf(stderr, "gen_points: cannot open %s: %s\n", argv[4], strerror(errno));
 		return 1;
 	}
-	if (fwrite(xy, 2 * sizeof(double), n, f) != n || fclose(f) != 0)
+	if (strlen(argv[4]) > 4 && strcmp(argv[4] + strlen(argv[4]) - 4, ".tsv") == 0)
+	{
+		for (size_t i = 0; i < n; i++)
+			fprintf(f, "%.17g\t%.17g\n", xy[2 * i], xy[2 * i + 1]);
+		if (ferror(f) || fclose(f) != 0)
+		{
+			fprintf(stderr, "gen_points: write error on %s\n", argv[4]);
+			return 1;
+		}
+	}
+	else if (fwrite(xy, 2 * sizeof(double), n, f) != n || fclose(f) != 0)
 	{
 		fprintf(stderr, "gen_points: write error on %s\n", argv[4]);
 		return 1;
