@@ -79,7 +79,7 @@ RUNS_HDR="set,rep,tool,threads_req,n,unique,triangles,threads,sort,subdivide,lea
 run_tdc() {
 	local set=$1 file=$2 rep=$3 thr=$4 st=ok
 	timeout "$TMO" /usr/bin/time -f 'time_rss_kb=%M time_wall=%e' -o "$WORK/time" \
-		"$ROOT/tdc" -t "$thr" --stats -o /dev/null "$file" > /dev/null 2> "$WORK/err" || st=fail
+		"$ROOT/tdc" -t "$thr" --stats "$file" > /dev/null 2> "$WORK/err" || st=fail
 	grep -q '^n=' "$WORK/err" || st=fail
 	if [ $st = fail ]; then
 		log "tdc -t $thr $set failed: $(tail -3 "$WORK/err" | tr '\n' ' ')"

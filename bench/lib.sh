@@ -116,8 +116,12 @@ ensure_tdc() {
 		return 1
 	fi
 	if ! make -C "$ROOT" -s tdc >&2; then
-		log "make tdc failed"
-		return 1
+		if [ -x "$ROOT/tdc" ]; then
+			log "WARNING: make tdc failed; using the existing ./tdc built $(date -u -r "$ROOT/tdc" '+%H:%M UTC')"
+		else
+			log "make tdc failed"
+			return 1
+		fi
 	fi
 	[ -x "$ROOT/tdc" ]
 }
