@@ -76,10 +76,11 @@ extern void tdc_options_init(tdc_options *opt);
 extern size_t tdc_estimate_memory(size_t n);
 
 /*
- * Start triangulating n points given as interleaved x,y doubles.  The engine
- * copies what it needs; xy may be freed once this returns.  Signals are
- * blocked in the worker threads.  On failure returns an error code, *job is
- * NULL and err holds a message.
+ * Start triangulating n points given as interleaved x,y doubles.  The workers
+ * copy them in parallel, so xy must stay valid and unchanged until
+ * tdc_job_wait() has returned a final status or tdc_job_free() was called.
+ * Signals are blocked in the worker threads.  On failure returns an error
+ * code, *job is NULL and err holds a message.
  */
 extern int	tdc_job_start(const double *xy, size_t n, const tdc_options *opt,
 						  tdc_job **job, char *err, size_t errlen);

@@ -1,0 +1,275 @@
+/*
+ * tdc.c
+ *		./tdc: the command-line front end of the core.
+ *
+ *	./tdc [-t THREADS] [-g GRID] [-l LEVELS] [--tolerance T] [-o OUT] [--stats] INPUT
+ *
+ * INPUT is a .bin file of little-endian float64 x,y pairs, or any other file
+ * (or - for stdin) of text lines "x y" or "x y z".  -o writes one triangle
+ * per line, counter-clockwise, each vertex "x y" (plus z when the input had
+ * z), %.17g.  --stats prints one line of counts and phase times to stderr.
+ * This interface is fixed: scripts depend on it.
+ */
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/resource.h>
+
+#include "tdc.h"
+
+static const char usage[] =
+"usage: ./tdc [-t THREADS] [-g GRID] [-l LEVELS] [--tolerance T] [-o OUT] [--stats] INPUT\n"
+"  INPUT  .bin file of little-endian float64 x,y pairs, or a text file of\n"
+"         'x y' or 'x y z' lines ('-' reads stdin)\n"
+"  -t     worker threads (0 = all online CPUs, the default)\n"
+"  -g     auxiliary grid size s (0 = auto)\n"
+"  -l     subdivision levels d, 2^d subsets (0 = auto, -1 = none)\n"
+"  --tolerance T  drop sites closer than T to an already kept site\n"
+"  -o     write triangles, one per line, counter-clockwise, %.17g\n"
+"  --stats  print counts and phase times (seconds) to stderr\n";
+
+static void
+die(int code, const char *fmt, const char *arg)
+{
+	fprintf(stderr, "tdc: ");
+	fprintf(stderr, fmt, arg);
+	fputc('\n', stderr);
+	exit(code);
+}
+
+static long
+parse_int(const char *s, const char *what)
+{
+	char	   *end;
+	long		v;
+
+	errno = 0;
+	v = strtol(s, &end, 10);
+	if (errno || *s == '\0' || *end != '\0')
+		die(2, "invalid value for %s", what);
+	return v;
+}
+
+static int
+ends_with(const char *s, const char *suffix)
+{
+	size_t		a = strlen(s),
+				b = strlen(suffix);
+
+	return a >= b && strcmp(s + a - b, suffix) == 0;
+}
+
+static double *
+read_bin(const char *path, size_t *n)
+{
+	FILE	   *f = fopen(path, "rb");
+	long		size;
+	double	   *xy;
+
+	if (f == NULL)
+		die(1, "cannot open %s", path);
+	if (fseek(f, 0, SEEK_END) != 0 || (size = ftell(f)) < 0 || fseek(f, 0, SEEK_SET) != 0)
+		die(1, "cannot read %s", path);
+	if (size % 16 != 0)
+		die(1, "%s: size is not a multiple of 16 bytes (x,y float64 pairs)", path);
+	*n = (size_t) size / 16;
+	xy = malloc((size_t) size + 16);
+	if (xy == NULL)
+		die(1, "out of memory reading %s", path);
+	if (fread(xy, 16, *n, f) != *n)
+		die(1, "short read on %s", path);
+	fclose(f);
+	return xy;
+}
+
+static double *
+read_text(const char *path, size_t *n, double **zout)
+{
+	FILE	   *f = strcmp(path, "-") == 0 ? stdin : fopen(path, "r");
+	char	   *line = NULL;
+	size_t		cap = 0,
+				alloc = 1024,
+				lineno = 0;
+	int			dims = 0;
+	double	   *xy = malloc(alloc * 2 * sizeof(double)),
+			   *z = NULL;
+
+	if (f == NULL)
+		die(1, "cannot open %s", path);
+	*n = 0;
+	while (getline(&line, &cap, f) >= 0)
+	{
+		double		v[3];
+		int			k = 0;
+		char	   *p = line,
+				   *end;
+
+		lineno++;
+		while (k < 4)
+		{
+			while (*p == ' ' || *p == '\t' || *p == ',' || *p == '\r' || *p == '\n')
+				p++;
+			if (*p == '\0' || *p == '#')
+				break;
+			if (k == 3)
+			{
+				k = 4;
+				break;
+			}
+			v[k] = strtod(p, &end);
+			if (end == p)
+			{
+				char		msg[64];
+
+				snprintf(msg, sizeof(msg), "%zu", lineno);
+				die(1, "line %s: expected numbers 'x y' or 'x y z'", msg);
+			}
+			p = end;
+			k++;
+		}
+		if (k == 0)
+			continue;
+		if (k == 1 || k == 4 || (dims && k != dims))
+		{
+			char		msg[64];
+
+			snprintf(msg, sizeof(msg), "%zu", lineno);
+			die(1, "line %s: every line must hold 'x y' or every line 'x y z'", msg);
+		}
+		dims = k;
+		if (*n == alloc)
+		{
+			alloc *= 2;
+			xy = realloc(xy, alloc * 2 * sizeof(double));
+			if (dims == 3)
+				z = realloc(z, alloc * sizeof(double));
+		}
+		if (dims == 3 && z == NULL)
+			z = malloc(alloc * sizeof(double));
+		if (xy == NULL || (dims == 3 && z == NULL))
+			die(1, "out of memory reading %s", path);
+		xy[2 * *n] = v[0];
+		xy[2 * *n + 1] = v[1];
+		if (dims == 3)
+			z[*n] = v[2];
+		(*n)++;
+	}
+	free(line);
+	if (f != stdin)
+		fclose(f);
+	*zout = z;
+	return xy;
+}
+
+int
+main(int argc, char **argv)
+{
+	tdc_options opt;
+	const char *input = NULL,
+			   *outpath = NULL;
+	int			stats = 0,
+				rc;
+	size_t		n;
+	double	   *xy,
+			   *z = NULL;
+	tdc_job    *job;
+	char		err[512];
+
+	tdc_options_init(&opt);
+	for (int i = 1; i < argc; i++)
+	{
+		const char *a = argv[i];
+
+		if (strcmp(a, "-h") == 0 || strcmp(a, "--help") == 0)
+		{
+			fputs(usage, stdout);
+			return 0;
+		}
+		else if (strcmp(a, "--stats") == 0)
+			stats = 1;
+		else if (strcmp(a, "-t") == 0 || strcmp(a, "-g") == 0 || strcmp(a, "-l") == 0 ||
+				 strcmp(a, "-o") == 0 || strcmp(a, "--tolerance") == 0)
+		{
+			if (i + 1 >= argc)
+				die(2, "option %s needs a value", a);
+			if (a[1] == 't')
+				opt.threads = (int) parse_int(argv[++i], "-t");
+			else if (a[1] == 'g')
+				opt.grid_size = (int) parse_int(argv[++i], "-g");
+			else if (a[1] == 'l')
+				opt.levels = (int) parse_int(argv[++i], "-l");
+			else if (a[1] == 'o')
+				outpath = argv[++i];
+			else
+			{
+				char	   *end;
+
+				opt.tolerance = strtod(argv[++i], &end);
+				if (*argv[i] == '\0' || *end != '\0')
+					die(2, "invalid value for %s", "--tolerance");
+			}
+		}
+		else if (a[0] == '-' && a[1] != '\0')
+			die(2, "unknown option %s (see ./tdc --help)", a);
+		else if (input)
+			die(2, "more than one INPUT given: %s", a);
+		else
+			input = a;
+	}
+	if (input == NULL)
+		die(2, "no INPUT given (see ./tdc --help)%s", "");
+
+	xy = ends_with(input, ".bin") ? read_bin(input, &n) : read_text(input, &n, &z);
+
+	rc = tdc_triangulate(xy, n, &opt, &job, err, sizeof(err));
+	if (rc != TDC_OK)
+	{
+		tdc_job_free(job);
+		die(1, "%s", err);
+	}
+
+	if (outpath)
+	{
+		FILE	   *f = strcmp(outpath, "-") == 0 ? stdout : fopen(outpath, "w");
+		tdc_iter	it = {0};
+		uint32_t	v[3];
+
+		if (f == NULL)
+			die(1, "cannot write %s", outpath);
+		while (tdc_next_triangle(job, &it, v))
+		{
+			for (int k = 0; k < 3; k++)
+			{
+				const double *p = tdc_site_xy(job, v[k]);
+
+				if (z)
+					fprintf(f, k ? " %.17g %.17g %.17g" : "%.17g %.17g %.17g", p[0], p[1],
+							z[tdc_site_input(job, v[k])]);
+				else
+					fprintf(f, k ? " %.17g %.17g" : "%.17g %.17g", p[0], p[1]);
+			}
+			fputc('\n', f);
+		}
+		if (f != stdout && fclose(f) != 0)
+			die(1, "error writing %s", outpath);
+	}
+
+	if (stats)
+	{
+		tdc_times	t;
+		struct rusage ru;
+
+		tdc_job_times(job, &t);
+		getrusage(RUSAGE_SELF, &ru);
+		fprintf(stderr,
+				"n=%zu unique=%zu triangles=%zu threads=%d sort=%.6f subdivide=%.6f leaves=%.6f merge=%.6f total=%.6f peak_rss_mb=%.1f\n",
+				tdc_num_input(job), tdc_num_sites(job), tdc_num_triangles(job),
+				tdc_threads_used(job), t.sort, t.subdivide, t.leaves, t.merge, t.total,
+				ru.ru_maxrss / 1024.0);
+	}
+	tdc_job_free(job);
+	free(xy);
+	free(z);
+	return 0;
+}

@@ -1,0 +1,730 @@
+/*
+ * driver.c
+ *		The job: options, memory, threads, the three phases of Wu et al.
+ *		2014, and access to the result.
+ *
+ * tdc_job_start() checks the options and the memory bound, then starts a
+ * driver thread with every signal blocked, and returns.  The driver creates
+ * the pool and runs the phases, each a parallel loop on the pool:
+ *
+ *	copy		copy and validate the input, bounding box (sort time)
+ *	tolerance	optional sequential filter (sites.c)
+ *	step 1		subdivision into 2^d subsets, level by level (subdivide.c)
+ *	sort		sort and de-duplicate each subset (sites.c)
+ *	step 2		Guibas-Stolfi in each subset (leaf.c)
+ *	step 3		merge up the tree, level by level (merge.c)
+ *
+ * The caller's thread only waits (tdc_job_wait) and may cancel: every task
+ * polls the flag and the driver stops between phases, so a cancel is
+ * answered within milliseconds.  Errors inside tasks are recorded once and
+ * turn into the job's status; nothing exits or aborts.
+ *
+ * Memory, beyond the caller's coordinates, per input point: 16 bytes of
+ * coordinates, 4 of input index, 4 of input->site map and 72 of mesh (six
+ * 12-byte half-edges), 96 in all, plus one subset-sized sort buffer per
+ * thread.
+ */
+#include <errno.h>
+#include <math.h>
+#include <signal.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "job.h"
+
+#define LEAF_TARGET		65536	/* largest subset the auto depth allows */
+#define CELL_TARGET		4.0		/* points per grid cell the auto grid aims at */
+#define MAX_AUTO_GRID	8192
+#define MIN_PARALLEL	20000	/* below this one subset is fastest */
+#define CHECK_CHUNK		65536
+#define MAX_LEVELS		24
+
+static double
+now_sec(void)
+{
+	struct timespec ts;
+
+	clock_gettime(CLOCK_MONOTONIC, &ts);
+	return ts.tv_sec + ts.tv_nsec * 1e-9;
+}
+
+void
+tdc_job_fail(tdc_job *job, int code, const char *fmt,...)
+{
+	int			expected = 0;
+
+	if (atomic_compare_exchange_strong(&job->failed, &expected, code))
+	{
+		va_list		ap;
+
+		va_start(ap, fmt);
+		vsnprintf(job->task_err, sizeof(job->task_err), fmt, ap);
+		va_end(ap);
+	}
+	atomic_store(&job->cancel, 1);
+}
+
+void
+tdc_options_init(tdc_options *opt)
+{
+	memset(opt, 0, sizeof(*opt));
+}
+
+size_t
+tdc_estimate_memory(size_t n)
+{
+	return n * (16 + 4 + 4 + 72) + (n / 16) * 24 + ((size_t) 1 << 20);
+}
+
+static int
+online_cpus(void)
+{
+	long		c = sysconf(_SC_NPROCESSORS_ONLN);
+
+	return c < 1 ? 1 : (c > 256 ? 256 : (int) c);
+}
+
+/* --- copy and validation --- */
+
+typedef struct copy_arg
+{
+	tdc_job    *job;
+	double	   *bounds;			/* 4 per chunk: minx, miny, maxx, maxy */
+	size_t	   *bad;			/* first bad point per chunk, or SIZE_MAX */
+} copy_arg;
+
+static inline bool
+coord_ok(double v)
+{
+	double		a = fabs(v);
+
+	return v == 0 || (a >= TDC_COORD_MIN && a <= TDC_COORD_MAX);
+}
+
+/* Validate a chunk of the input and take its bounding box. */
+static void
+check_task(void *arg, size_t c, int worker)
+{
+	copy_arg   *ca = arg;
+	tdc_job    *job = ca->job;
+	size_t		lo = c * CHECK_CHUNK,
+				hi = lo + CHECK_CHUNK < job->n ? lo + CHECK_CHUNK : job->n;
+	double		mnx = INFINITY,
+				mny = INFINITY,
+				mxx = -INFINITY,
+				mxy = -INFINITY;
+
+	ca->bad[c] = SIZE_MAX;
+	for (size_t i = lo; i < hi; i++)
+	{
+		double		x = job->input[2 * i],
+					y = job->input[2 * i + 1];
+
+		if (!coord_ok(x) || !coord_ok(y))
+		{
+			ca->bad[c] = i;
+			return;
+		}
+		mnx = x < mnx ? x : mnx;
+		mxx = x > mxx ? x : mxx;
+		mny = y < mny ? y : mny;
+		mxy = y > mxy ? y : mxy;
+	}
+	ca->bounds[4 * c] = mnx;
+	ca->bounds[4 * c + 1] = mny;
+	ca->bounds[4 * c + 2] = mxx;
+	ca->bounds[4 * c + 3] = mxy;
+}
+
+static int
+check_input(tdc_job *job)
+{
+	size_t		nchunks = (job->n + CHECK_CHUNK - 1) / CHECK_CHUNK;
+	copy_arg	ca;
+
+	ca.job = job;
+	ca.bounds = malloc(nchunks * 4 * sizeof(double) + 1);
+	ca.bad = malloc(nchunks * sizeof(size_t) + 1);
+	if (!ca.bounds || !ca.bad)
+	{
+		free(ca.bounds);
+		free(ca.bad);
+		tdc_job_fail(job, TDC_ENOMEM, "out of memory");
+		return TDC_ENOMEM;
+	}
+	tdc_pool_for(job->pool, nchunks, check_task, &ca);
+	job->bmin[0] = job->bmin[1] = INFINITY;
+	job->bmax[0] = job->bmax[1] = -INFINITY;
+	for (size_t c = 0; c < nchunks; c++)
+	{
+		if (ca.bad[c] != SIZE_MAX)
+		{
+			size_t		i = ca.bad[c];
+			double		x = job->input[2 * i],
+						y = job->input[2 * i + 1];
+
+			if (!isfinite(x) || !isfinite(y))
+				tdc_job_fail(job, TDC_EINVAL,
+							 "point %zu has a non-finite coordinate (%g %g): NaN and Infinity are not allowed",
+							 i, x, y);
+			else
+				tdc_job_fail(job, TDC_EINVAL,
+							 "point %zu (%.17g %.17g) has a coordinate outside the supported magnitude range [%g, %g] (zero is allowed)",
+							 i, x, y, TDC_COORD_MIN, TDC_COORD_MAX);
+			break;
+		}
+		job->bmin[0] = fmin(job->bmin[0], ca.bounds[4 * c]);
+		job->bmin[1] = fmin(job->bmin[1], ca.bounds[4 * c + 1]);
+		job->bmax[0] = fmax(job->bmax[0], ca.bounds[4 * c + 2]);
+		job->bmax[1] = fmax(job->bmax[1], ca.bounds[4 * c + 3]);
+	}
+	free(ca.bounds);
+	free(ca.bad);
+	return atomic_load(&job->failed);
+}
+
+/* --- steps 2 and 3 --- */
+
+static void
+leaf_task(void *arg, size_t i, int worker)
+{
+	tdc_job    *job = arg;
+	size_t		k = ((size_t) 1 << job->d) + i;
+
+	if (atomic_load_explicit(&job->cancel, memory_order_relaxed))
+		return;
+	tdc_triangulate_leaf(job, k, &job->subs[k]);
+}
+
+typedef struct merge_arg
+{
+	tdc_job    *job;
+	int			level;
+} merge_arg;
+
+static void
+merge_task(void *arg, size_t i, int worker)
+{
+	merge_arg  *ma = arg;
+	tdc_job    *job = ma->job;
+	size_t		k = ((size_t) 1 << ma->level) + i;
+	tdc_mesh	m = {job->xy, job->he, &job->cancel};
+	tdc_sub    *L = &job->subs[2 * k],
+			   *R = &job->subs[2 * k + 1],
+			   *out = &job->subs[k];
+
+	if (atomic_load_explicit(&job->cancel, memory_order_relaxed))
+		return;
+	out->fl = L->fl;
+	tdc_freelist_concat(&m, &out->fl, &R->fl);
+	tdc_merge(&m, &out->fl, L, R, job->node_axis[k], out);
+}
+
+/* Walk the convex hull once: sizes the result without scanning the mesh. */
+static void
+count_result(tdc_job *job)
+{
+	tdc_mesh	m = {job->xy, job->he, &job->cancel};
+	const tdc_sub *root = &job->subs[1];
+	size_t		u = root->nsites,
+				h = 0;
+
+	job->nsites = u;
+	job->hull3 = false;
+	if (u < 2)
+	{
+		job->ntri = job->nedges = 0;
+		return;
+	}
+	for (uint32_t e = root->ext[0];;)
+	{
+		h++;
+		e = tdc_rprev(&m, e);
+		if (e == root->ext[0])
+			break;
+	}
+	if (h == 2 * (u - 1))
+	{
+		/* a chain: every site collinear */
+		job->ntri = 0;
+		job->nedges = u - 1;
+	}
+	else
+	{
+		job->ntri = 2 * u - 2 - h;
+		job->nedges = 3 * u - 3 - h;
+		job->hull3 = (h == 3);
+	}
+}
+
+static int
+choose_levels(const tdc_job *job)
+{
+	int			d = 0;
+
+	if (job->opt.levels > 0)
+		d = job->opt.levels;
+	else if (job->opt.levels == 0 && job->nin >= MIN_PARALLEL)
+	{
+		/* enough subsets to balance the threads, none larger than the target */
+		size_t		leaves = (size_t) job->threads * 8;
+
+		while (leaves * LEAF_TARGET < job->nin)
+			leaves *= 2;
+		while (((size_t) 1 << d) < leaves)
+			d++;
+	}
+	if (d > MAX_LEVELS)
+		d = MAX_LEVELS;
+	/* no more levels than halvings of the input */
+	while (d > 0 && ((size_t) 1 << d) > job->nin)
+		d--;
+	return d;
+}
+
+static int
+run(tdc_job *job)
+{
+	double		t0 = now_sec(),
+				t;
+	size_t		nnodes;
+	int			rc;
+
+	rc = tdc_pool_create(&job->pool, job->threads);
+	if (rc != 0)
+	{
+		tdc_job_fail(job, rc, rc == TDC_ETHREAD ? "could not create worker threads: %s" : "out of memory%s",
+					 rc == TDC_ETHREAD ? strerror(errno) : "");
+		return rc;
+	}
+
+	/* validate; tolerance */
+	t = now_sec();
+	job->xy = malloc(job->n * 2 * sizeof(double) + 16);
+	job->idx = malloc(job->n * sizeof(uint32_t) + 4);
+	job->map = malloc(job->n * sizeof(uint32_t) + 4);
+	if (!job->xy || !job->idx || !job->map)
+	{
+		tdc_job_fail(job, TDC_ENOMEM, "out of memory for %zu points", job->n);
+		return TDC_ENOMEM;
+	}
+	job->nin = job->n;
+	if (job->n > 0 && check_input(job) != 0)
+		return atomic_load(&job->failed);
+	if (job->opt.tolerance > 0 && job->n > 0)
+	{
+		job->tol_to = malloc(job->n * sizeof(uint32_t));
+		if (job->tol_to == NULL)
+		{
+			tdc_job_fail(job, TDC_ENOMEM, "out of memory for the tolerance pass");
+			return TDC_ENOMEM;
+		}
+		memcpy(job->xy, job->input, job->n * 2 * sizeof(double));
+		for (size_t i = 0; i < job->n; i++)
+			job->idx[i] = (uint32_t) i;
+		if (tdc_tolerance_filter(job) != 0)
+		{
+			tdc_job_fail(job, TDC_ENOMEM, "out of memory for the tolerance pass");
+			return TDC_ENOMEM;
+		}
+	}
+	job->times.sort = now_sec() - t;
+	if (atomic_load(&job->cancel))
+		return TDC_ECANCELED;
+
+	/* step 1 */
+	t = now_sec();
+	job->d = choose_levels(job);
+	if (job->opt.grid_size > 0)
+		job->s = job->opt.grid_size;
+	else
+	{
+		job->s = (int) ceil(sqrt((double) job->nin / CELL_TARGET));
+		job->s = job->s < 1 ? 1 : (job->s > MAX_AUTO_GRID ? MAX_AUTO_GRID : job->s);
+	}
+	for (int a = 0; a < 2; a++)
+	{
+		double		extent = job->bmax[a] - job->bmin[a];
+
+		job->gscale[a] = extent > 0 ? job->s / extent : 0;
+		if (!isfinite(job->gscale[a]))
+			job->gscale[a] = 0;	/* extent below the smallest normal: one cell */
+	}
+	nnodes = (size_t) 2 << job->d;
+	job->node_rect = malloc(nnodes * sizeof(tdc_rect));
+	job->node_axis = calloc(nnodes, 1);
+	job->node_lo = malloc(nnodes * sizeof(uint32_t));
+	job->node_hi = malloc(nnodes * sizeof(uint32_t));
+	job->subs = malloc(nnodes * sizeof(tdc_sub));
+	if (!job->node_rect || !job->node_axis || !job->node_lo || !job->node_hi || !job->subs)
+	{
+		tdc_job_fail(job, TDC_ENOMEM, "out of memory for the subdivision tree");
+		return TDC_ENOMEM;
+	}
+	tdc_subdivide(job);
+	job->times.subdivide = now_sec() - t;
+	if (atomic_load(&job->cancel))
+		return TDC_ECANCELED;
+
+	job->he = malloc(job->nin * 6 * sizeof(tdc_he) + sizeof(tdc_he));
+	if (job->he == NULL)
+	{
+		tdc_job_fail(job, TDC_ENOMEM, "out of memory for the mesh of %zu points (%zu bytes)",
+					 job->nin, job->nin * 6 * sizeof(tdc_he));
+		return TDC_ENOMEM;
+	}
+
+	/* step 2, removing duplicates on the way */
+	t = now_sec();
+	tdc_pool_for(job->pool, (size_t) 1 << job->d, leaf_task, job);
+	job->times.leaves = now_sec() - t;
+	if (atomic_load(&job->cancel))
+		return TDC_ECANCELED;
+	if (job->tol_to)
+		for (size_t i = 0; i < job->n; i++)
+			job->map[i] = job->map[job->tol_to[i]];
+
+	/* step 3 */
+	t = now_sec();
+	for (int level = job->d - 1; level >= 0; level--)
+	{
+		merge_arg	ma = {job, level};
+
+		tdc_pool_for(job->pool, (size_t) 1 << level, merge_task, &ma);
+		if (atomic_load(&job->cancel))
+			return TDC_ECANCELED;
+	}
+	job->times.merge = now_sec() - t;
+
+	count_result(job);
+	job->times.total = now_sec() - t0;
+	return TDC_OK;
+}
+
+static void *
+driver_main(void *arg)
+{
+	tdc_job    *job = arg;
+	int			rc = run(job);
+
+	tdc_pool_destroy(job->pool);
+	job->pool = NULL;
+
+	pthread_mutex_lock(&job->lock);
+	if (atomic_load(&job->failed))
+	{
+		job->status = atomic_load(&job->failed);
+		snprintf(job->err, sizeof(job->err), "%s", job->task_err);
+	}
+	else if (rc == TDC_ECANCELED || (rc == TDC_OK && atomic_load(&job->cancel)))
+	{
+		job->status = TDC_ECANCELED;
+		snprintf(job->err, sizeof(job->err), "triangulation cancelled");
+	}
+	else
+		job->status = rc;
+	job->finished = true;
+	pthread_cond_broadcast(&job->done);
+	pthread_mutex_unlock(&job->lock);
+	return NULL;
+}
+
+static void
+free_arrays(tdc_job *job)
+{
+	free(job->xy);
+	free(job->idx);
+	free(job->map);
+	free(job->tol_to);
+	free(job->he);
+	free(job->node_rect);
+	free(job->node_axis);
+	free(job->prefix);
+	free(job->node_lo);
+	free(job->node_hi);
+	free(job->subs);
+}
+
+int
+tdc_job_start(const double *xy, size_t n, const tdc_options *opt, tdc_job **out,
+			  char *err, size_t errlen)
+{
+	tdc_job    *job;
+	tdc_options o;
+	sigset_t	all,
+				old;
+	pthread_condattr_t ca;
+	int			rc;
+
+	*out = NULL;
+	if (opt)
+		o = *opt;
+	else
+		tdc_options_init(&o);
+	if (err && errlen)
+		err[0] = '\0';
+
+#define FAIL(code, ...) do { if (err && errlen) snprintf(err, errlen, __VA_ARGS__); return (code); } while (0)
+	if (n > TDC_MAX_POINTS)
+		FAIL(TDC_ETOOBIG, "%zu points exceed the limit of %zu points per triangulation (32-bit mesh indices)",
+			 n, TDC_MAX_POINTS);
+	if (o.threads < 0 || o.threads > 1024)
+		FAIL(TDC_EINVAL, "threads must be between 0 and 1024, not %d", o.threads);
+	if (o.grid_size < 0 || o.grid_size > 65536)
+		FAIL(TDC_EINVAL, "grid size must be between 0 and 65536, not %d", o.grid_size);
+	if (o.levels < -1 || o.levels > MAX_LEVELS)
+		FAIL(TDC_EINVAL, "levels must be between -1 and %d, not %d", MAX_LEVELS, o.levels);
+	if (!(o.tolerance >= 0) || isinf(o.tolerance))
+		FAIL(TDC_EINVAL, "tolerance must be a finite number >= 0, not %g", o.tolerance);
+	if (n > 0 && xy == NULL)
+		FAIL(TDC_EINVAL, "no coordinates given for %zu points", n);
+	if (o.max_memory > 0 && tdc_estimate_memory(n) > o.max_memory)
+		FAIL(TDC_EMEMLIMIT, "triangulating %zu points needs about %zu MB, more than the limit of %zu MB",
+			 n, tdc_estimate_memory(n) >> 20, o.max_memory >> 20);
+
+	job = calloc(1, sizeof(tdc_job));
+	if (job == NULL)
+		FAIL(TDC_ENOMEM, "out of memory");
+	job->opt = o;
+	job->n = n;
+	job->input = xy;
+	job->threads = o.threads ? o.threads : online_cpus();
+	atomic_init(&job->cancel, 0);
+	atomic_init(&job->failed, 0);
+	pthread_mutex_init(&job->lock, NULL);
+	pthread_condattr_init(&ca);
+	pthread_condattr_setclock(&ca, CLOCK_MONOTONIC);
+	pthread_cond_init(&job->done, &ca);
+	pthread_condattr_destroy(&ca);
+
+	/* Workers must never take the host's signals: block them all around creation. */
+	sigfillset(&all);
+	pthread_sigmask(SIG_SETMASK, &all, &old);
+	rc = pthread_create(&job->driver, NULL, driver_main, job);
+	pthread_sigmask(SIG_SETMASK, &old, NULL);
+	if (rc != 0)
+	{
+		pthread_mutex_destroy(&job->lock);
+		pthread_cond_destroy(&job->done);
+		free(job);
+		FAIL(TDC_ETHREAD, "could not create a thread: %s", strerror(rc));
+	}
+	job->driver_started = true;
+	*out = job;
+	return TDC_OK;
+#undef FAIL
+}
+
+int
+tdc_job_wait(tdc_job *job, int timeout_ms)
+{
+	int			status;
+
+	pthread_mutex_lock(&job->lock);
+	if (timeout_ms < 0)
+	{
+		while (!job->finished)
+			pthread_cond_wait(&job->done, &job->lock);
+	}
+	else if (!job->finished)
+	{
+		struct timespec ts;
+
+		clock_gettime(CLOCK_MONOTONIC, &ts);
+		ts.tv_sec += timeout_ms / 1000;
+		ts.tv_nsec += (long) (timeout_ms % 1000) * 1000000L;
+		if (ts.tv_nsec >= 1000000000L)
+		{
+			ts.tv_sec++;
+			ts.tv_nsec -= 1000000000L;
+		}
+		while (!job->finished)
+			if (pthread_cond_timedwait(&job->done, &job->lock, &ts) == ETIMEDOUT)
+				break;
+	}
+	status = job->finished ? job->status : TDC_RUNNING;
+	pthread_mutex_unlock(&job->lock);
+	return status;
+}
+
+void
+tdc_job_cancel(tdc_job *job)
+{
+	if (job)
+		atomic_store(&job->cancel, 1);
+}
+
+const char *
+tdc_job_error(const tdc_job *job)
+{
+	return job->err;
+}
+
+void
+tdc_job_free(tdc_job *job)
+{
+	if (job == NULL)
+		return;
+	if (job->driver_started)
+	{
+		tdc_job_cancel(job);
+		pthread_join(job->driver, NULL);
+	}
+	pthread_mutex_destroy(&job->lock);
+	pthread_cond_destroy(&job->done);
+	free_arrays(job);
+	free(job);
+}
+
+int
+tdc_triangulate(const double *xy, size_t n, const tdc_options *opt, tdc_job **job,
+				char *err, size_t errlen)
+{
+	int			rc = tdc_job_start(xy, n, opt, job, err, errlen);
+
+	if (rc != TDC_OK)
+		return rc;
+	rc = tdc_job_wait(*job, -1);
+	if (rc != TDC_OK && err && errlen)
+		snprintf(err, errlen, "%s", tdc_job_error(*job));
+	return rc;
+}
+
+/* --- results --- */
+
+size_t
+tdc_num_input(const tdc_job *job)
+{
+	return job->n;
+}
+
+size_t
+tdc_num_sites(const tdc_job *job)
+{
+	return job->nsites;
+}
+
+size_t
+tdc_num_triangles(const tdc_job *job)
+{
+	return job->ntri;
+}
+
+size_t
+tdc_num_edges(const tdc_job *job)
+{
+	return job->nedges;
+}
+
+int
+tdc_threads_used(const tdc_job *job)
+{
+	return job->threads;
+}
+
+int
+tdc_levels_used(const tdc_job *job)
+{
+	return job->d;
+}
+
+int
+tdc_grid_used(const tdc_job *job)
+{
+	return job->s;
+}
+
+void
+tdc_job_times(const tdc_job *job, tdc_times *t)
+{
+	*t = job->times;
+}
+
+uint32_t
+tdc_site_id_limit(const tdc_job *job)
+{
+	return (uint32_t) job->nin;
+}
+
+const double *
+tdc_site_xy(const tdc_job *job, uint32_t site)
+{
+	return job->xy + 2 * (size_t) site;
+}
+
+size_t
+tdc_site_input(const tdc_job *job, uint32_t site)
+{
+	return job->idx[site];
+}
+
+uint32_t
+tdc_input_site(const tdc_job *job, size_t i)
+{
+	return job->map[i];
+}
+
+/*
+ * A face is a triangle of the result when Lnext returns to its start in three
+ * steps; it is reported from its smallest half-edge.  The only other face,
+ * the outer one, is a triangle only when the hull has three sites, and is
+ * then clockwise.
+ */
+int
+tdc_next_triangle(const tdc_job *job, tdc_iter *it, uint32_t v[3])
+{
+	tdc_mesh	m = {job->xy, job->he, NULL};
+	size_t		nhe = job->nin * 6;
+
+	if (job->ntri == 0)
+		return 0;
+	for (size_t h = it->pos; h < nhe; h++)
+	{
+		uint32_t	h1,
+					h2;
+
+		if (job->he[h].org == TDC_NIL)
+			continue;
+		h1 = tdc_lnext(&m, (uint32_t) h);
+		h2 = tdc_lnext(&m, h1);
+		if (h1 < h || h2 < h || tdc_lnext(&m, h2) != h)
+			continue;
+		v[0] = job->he[h].org;
+		v[1] = job->he[h1].org;
+		v[2] = job->he[h2].org;
+		if (job->hull3 &&
+			tdc_orient2d(tdc_pt(&m, v[0]), tdc_pt(&m, v[1]), tdc_pt(&m, v[2])) < 0)
+			continue;
+		it->pos = h + 1;
+		return 1;
+	}
+	it->pos = nhe;
+	return 0;
+}
+
+int
+tdc_next_edge(const tdc_job *job, tdc_iter *it, uint32_t v[2])
+{
+	size_t		nhe = job->nin * 6;
+
+	for (size_t h = it->pos; h < nhe; h += 2)
+	{
+		uint32_t	a = job->he[h].org,
+					b = job->he[h + 1].org;
+
+		if (a == TDC_NIL)
+			continue;
+		if (tdc_key_less(job->xy + 2 * (size_t) b, job->xy + 2 * (size_t) a, 0))
+			v[0] = b, v[1] = a;
+		else
+			v[0] = a, v[1] = b;
+		it->pos = h + 2;
+		return 1;
+	}
+	it->pos = nhe;
+	return 0;
+}

@@ -1,0 +1,95 @@
+/*
+ * job.h
+ *		The state of one triangulation, shared by driver.c, subdivide.c and
+ *		sites.c.  Not installed.
+ */
+#ifndef TDC_JOB_H
+#define TDC_JOB_H
+
+#include "internal.h"
+
+/* A rectangle of grid cells: rows [r0, r1), columns [c0, c1). */
+typedef struct tdc_rect
+{
+	uint32_t	r0,
+				r1,
+				c0,
+				c1;
+} tdc_rect;
+
+struct tdc_job
+{
+	tdc_options opt;
+	size_t		n;				/* input points */
+	const double *input;		/* caller's coordinates, valid until the job ends */
+
+	/*
+	 * Points entering the subdivision: coordinates and input index, permuted
+	 * in place by the subdivision and the subset sorts.  After the subset
+	 * sorts, position p of a subset's unique prefix is site p.
+	 */
+	size_t		nin;
+	double	   *xy;
+	uint32_t   *idx;
+	uint32_t   *map;			/* input index -> site id */
+	uint32_t   *tol_to;			/* tolerance: dropped input -> absorbing input */
+
+	tdc_he	   *he;				/* 6 half-edges per entering point */
+	int			d;				/* levels: 2^d subsets */
+	int			s;				/* grid size */
+	int			threads;
+	double		bmin[2],
+				bmax[2];		/* bounding box of the input */
+	double		gscale[2];		/* grid cells per unit along x and y */
+	uint32_t   *prefix;			/* (s+1)^2 2-D prefix sums of the cell counts */
+
+	/* the tree, heap-numbered from root 1, 2^(d+1) nodes */
+	tdc_rect   *node_rect;
+	uint8_t    *node_axis;		/* axis of the node's split (and merge) */
+	uint32_t   *node_lo;		/* point range */
+	uint32_t   *node_hi;
+	tdc_sub    *subs;
+
+	tdc_pool   *pool;
+	atomic_int	cancel;
+	atomic_int	failed;			/* first task error wins */
+	char		task_err[256];
+
+	/* results */
+	size_t		nsites;
+	size_t		ntri;
+	size_t		nedges;
+	bool		hull3;			/* outer face is a triangle: orientation tells */
+	tdc_times	times;
+
+	/* lifecycle */
+	pthread_t	driver;
+	bool		driver_started;
+	pthread_mutex_t lock;
+	pthread_cond_t done;
+	bool		finished;
+	int			status;
+	char		err[256];
+};
+
+/* Record the first error of a task and stop the others. */
+extern void tdc_job_fail(tdc_job *job, int code, const char *fmt,...);
+
+/* subdivide.c: step 1, the grid, the tree and the points in tree order. */
+extern void tdc_subdivide(tdc_job *job);
+extern uint32_t tdc_rect_count(const tdc_job *job, const tdc_rect *r);
+extern int	tdc_rect_split(const tdc_job *job, const tdc_rect *r, int axis,
+						   bool by_count, tdc_rect *a, tdc_rect *b);
+extern int	tdc_rect_split_inner(const tdc_job *job, const tdc_rect *r, int axis,
+								 tdc_rect *a, tdc_rect *b);
+
+/* sites.c */
+extern int	tdc_tolerance_filter(tdc_job *job);
+
+/*
+ * leaf.c: triangulate subset k (a leaf of the tree) down to its cells;
+ * removes duplicates and fills map[] for its points.
+ */
+extern void tdc_triangulate_leaf(tdc_job *job, size_t k, tdc_sub *out);
+
+#endif							/* TDC_JOB_H */

@@ -1,0 +1,295 @@
+/*
+ * merge.c
+ *		Merging two Delaunay triangulations separated along an axis
+ *		(Guibas & Stolfi 1985, section 9; step 3 of Wu et al. 2014).
+ *
+ * The twofold scheme of Wu et al. splits the sites alternately by x and by y,
+ * so the sub-triangulations are merged left-right and bottom-top.  Both are
+ * the same Guibas-Stolfi merge seen in another frame: a bottom-top merge is a
+ * left-right merge after rotating the plane by -90 degrees, (x, y) ->
+ * (y, -x).  A rotation keeps every orientation and in-circle sign, so the
+ * merge only needs to know which hull edges to start from.  Every subset
+ * therefore carries the counter-clockwise hull edge out of its extreme site
+ * in all four directions (the paper's leftmost, rightmost, bottommost and
+ * topmost edges); axis 0 orders sites by (x, y), axis 1 by (y, -x), both
+ * lexicographically so that ties on one coordinate are still separated.
+ *
+ * After a merge the hull of the union is the left part's chain from the upper
+ * tangent point l' down to the lower tangent point l, the lower tangent
+ * l -> r, the right part's chain from r up to r', and the upper tangent
+ * r' -> l'.  So the hull edge out of an extreme site is the one it had in
+ * its part, except at l (now the lower tangent) and at r' (now the upper
+ * tangent, the last base edge of the merge).
+ *
+ * Ties.  Four or more cocircular sites admit several Delaunay
+ * triangulations.  incircle_sos() decides exact zeros as if every site p were
+ * lifted to the paraboloid at |p|^2 + eps_p, with eps infinitesimal and
+ * larger for lexicographically smaller sites (simulation of simplicity,
+ * Edelsbrunner & Muecke 1990, applied to the lifting coordinate only).  The
+ * perturbed lift is in general position, so its lower hull, and hence the
+ * triangulation, depends on the site set alone: not on the input order, the
+ * thread count or the subdivision.
+ */
+#include <string.h>
+
+#include "internal.h"
+
+/* Is p strictly left of (counter-clockwise from) the directed line of h? */
+static inline bool
+left_of(const tdc_mesh *m, uint32_t p, uint32_t h)
+{
+	return tdc_orient2d(tdc_pt(m, p), tdc_pt(m, tdc_org(m, h)),
+						tdc_pt(m, tdc_dest(m, h))) > 0;
+}
+
+static inline bool
+right_of(const tdc_mesh *m, uint32_t p, uint32_t h)
+{
+	return tdc_orient2d(tdc_pt(m, p), tdc_pt(m, tdc_dest(m, h)),
+						tdc_pt(m, tdc_org(m, h))) > 0;
+}
+
+/*
+ * Exact in-circle of four distinct, exactly cocircular sites, decided by the
+ * perturbation described above.  Perturbing the lift of a, b, c, d by
+ * eps_a..eps_d adds
+ *		eps_a O(b,c,d) - eps_b O(a,c,d) + eps_c O(a,b,d) - eps_d O(a,b,c)
+ * to the in-circle determinant (expand along the lift column), where O is
+ * orient2d.  The term of the lexicographically smallest site dominates; its
+ * orientation is nonzero because no three distinct points of a circle are
+ * collinear.
+ */
+static bool
+incircle_tie(const tdc_mesh *m, uint32_t a, uint32_t b, uint32_t c, uint32_t d)
+{
+	const double *pa = tdc_pt(m, a),
+			   *pb = tdc_pt(m, b),
+			   *pc = tdc_pt(m, c),
+			   *pd = tdc_pt(m, d);
+	const double *lowest = pa;
+	double		s;
+
+	if (tdc_key_less(pb, lowest, 0))
+		lowest = pb;
+	if (tdc_key_less(pc, lowest, 0))
+		lowest = pc;
+	if (tdc_key_less(pd, lowest, 0))
+		lowest = pd;
+
+	if (lowest == pa)
+		s = tdc_orient2d(pb, pc, pd);
+	else if (lowest == pb)
+		s = -tdc_orient2d(pa, pc, pd);
+	else if (lowest == pc)
+		s = tdc_orient2d(pa, pb, pd);
+	else
+		s = -tdc_orient2d(pa, pb, pc);
+	return s > 0;
+}
+
+/* Is d inside the circle through counter-clockwise a, b, c (ties broken)? */
+static inline bool
+incircle_sos(const tdc_mesh *m, uint32_t a, uint32_t b, uint32_t c, uint32_t d)
+{
+	double		det;
+
+	if (d == a || d == b || d == c)
+		return false;
+	det = tdc_incircle(tdc_pt(m, a), tdc_pt(m, b), tdc_pt(m, c), tdc_pt(m, d));
+	if (det != 0)
+		return det > 0;
+	return incircle_tie(m, a, b, c, d);
+}
+
+/* Site of a subset that is extreme in direction k, and whether it beats q. */
+static inline bool
+beats(const tdc_mesh *m, uint32_t p, uint32_t q, int k)
+{
+	if (k & 1)
+		return tdc_key_less(tdc_pt(m, q), tdc_pt(m, p), k >> 1);
+	return tdc_key_less(tdc_pt(m, p), tdc_pt(m, q), k >> 1);
+}
+
+/*
+ * Fill out->ext from n (2 or 3) sites with their counter-clockwise hull
+ * edges.  Used by the base cases of the divide and conquer.
+ */
+void
+tdc_sub_from_sites(tdc_mesh *m, const uint32_t *v, const uint32_t *ccw, int n,
+				   tdc_sub *out)
+{
+	for (int k = 0; k < 4; k++)
+	{
+		int			best = 0;
+
+		for (int i = 1; i < n; i++)
+			if (beats(m, v[i], v[best], k))
+				best = i;
+		out->ext[k] = ccw[best];
+	}
+	out->vert = TDC_NIL;
+	out->nsites = n;
+}
+
+static inline uint32_t
+sub_site(const tdc_mesh *m, const tdc_sub *s, int k)
+{
+	return s->ext[k] == TDC_NIL ? s->vert : tdc_org(m, s->ext[k]);
+}
+
+/*
+ * Merge L and R, where every site of L precedes every site of R in the order
+ * of the axis, into out.  Edges come from and go back to fl.  If the job is
+ * cancelled mid-way the mesh is left inconsistent; callers must then stop.
+ */
+void
+tdc_merge(tdc_mesh *m, tdc_freelist *fl, const tdc_sub *L, const tdc_sub *R,
+		  int axis, tdc_sub *out)
+{
+	uint32_t	ldi,
+				rdi,
+				basel,
+				lt,
+				lsite,
+				rsite;
+	uint32_t	lext[4],
+				rext[4];
+	unsigned	steps = 0;
+
+	if (L->nsites == 0 || R->nsites == 0)
+	{
+		const tdc_sub *s = L->nsites ? L : R;
+
+		memcpy(out->ext, s->ext, sizeof(out->ext));
+		out->vert = s->vert;
+		out->nsites = s->nsites;
+		return;
+	}
+
+	/* The parts' extreme sites, read before the merge deletes their edges. */
+	for (int k = 0; k < 4; k++)
+	{
+		lext[k] = sub_site(m, L, k);
+		rext[k] = sub_site(m, R, k);
+	}
+
+	/*
+	 * Lower common tangent, then its edge basel from R to L.  A part of one
+	 * site has no hull edge; the tangent then only walks the other part.
+	 */
+	if (L->nsites == 1 && R->nsites == 1)
+		basel = tdc_make_edge(m, fl, R->vert, L->vert);
+	else if (L->nsites == 1)
+	{
+		uint32_t	v = L->vert;
+
+		rdi = R->ext[2 * axis];
+		while (right_of(m, v, rdi))
+			rdi = tdc_rprev(m, rdi);
+		basel = tdc_make_edge(m, fl, tdc_org(m, rdi), v);
+		tdc_splice(m, basel, tdc_oprev(m, rdi));
+	}
+	else if (R->nsites == 1)
+	{
+		uint32_t	w = R->vert;
+
+		ldi = tdc_oprev(m, L->ext[2 * axis + 1]);
+		while (left_of(m, w, ldi))
+			ldi = tdc_lnext(m, ldi);
+		basel = tdc_make_edge(m, fl, w, tdc_org(m, ldi));
+		tdc_splice(m, SYM(basel), ldi);
+	}
+	else
+	{
+		ldi = tdc_oprev(m, L->ext[2 * axis + 1]);
+		rdi = R->ext[2 * axis];
+		for (;;)
+		{
+			if (left_of(m, tdc_org(m, rdi), ldi))
+				ldi = tdc_lnext(m, ldi);
+			else if (right_of(m, tdc_org(m, ldi), rdi))
+				rdi = tdc_rprev(m, rdi);
+			else
+				break;
+		}
+		basel = tdc_connect(m, fl, SYM(rdi), ldi);
+	}
+	lt = SYM(basel);
+
+	/*
+	 * Zip upwards.  A candidate is valid when it lies strictly right of basel
+	 * (above it, basel running from R to L); candidates whose edge fails the
+	 * in-circle test against the next one around are deleted.
+	 */
+	for (;;)
+	{
+		uint32_t	bo = tdc_org(m, basel),
+					bd = tdc_dest(m, basel);
+		uint32_t	lcand = tdc_rprev(m, basel),
+					rcand = tdc_oprev(m, basel);
+		bool		lvalid,
+					rvalid;
+
+		if ((++steps & 0xffff) == 0 && tdc_cancelled(m))
+			return;
+
+		lvalid = right_of(m, tdc_dest(m, lcand), basel);
+		if (lvalid)
+		{
+			while (incircle_sos(m, bd, bo, tdc_dest(m, lcand),
+								tdc_dest(m, tdc_onext(m, lcand))))
+			{
+				uint32_t	t = tdc_onext(m, lcand);
+
+				tdc_delete_edge(m, fl, lcand);
+				lcand = t;
+			}
+			lvalid = right_of(m, tdc_dest(m, lcand), basel);
+		}
+		rvalid = right_of(m, tdc_dest(m, rcand), basel);
+		if (rvalid)
+		{
+			while (incircle_sos(m, bd, bo, tdc_dest(m, rcand),
+								tdc_dest(m, tdc_oprev(m, rcand))))
+			{
+				uint32_t	t = tdc_oprev(m, rcand);
+
+				tdc_delete_edge(m, fl, rcand);
+				rcand = t;
+			}
+			rvalid = right_of(m, tdc_dest(m, rcand), basel);
+		}
+		if (!lvalid && !rvalid)
+			break;
+		if (!lvalid ||
+			(rvalid && incircle_sos(m, tdc_dest(m, lcand), tdc_org(m, lcand),
+									tdc_org(m, rcand), tdc_dest(m, rcand))))
+			basel = tdc_connect(m, fl, rcand, SYM(basel));
+		else
+			basel = tdc_connect(m, fl, SYM(basel), SYM(lcand));
+	}
+
+	/* basel is now the upper tangent r' -> l'. */
+	lsite = tdc_org(m, lt);
+	rsite = tdc_org(m, basel);
+	for (int k = 0; k < 4; k++)
+	{
+		uint32_t	a = lext[k],
+					b = rext[k];
+		uint32_t	v;
+		const tdc_sub *from;
+
+		if (beats(m, b, a, k))
+			v = b, from = R;
+		else
+			v = a, from = L;
+		if (v == lsite)
+			out->ext[k] = lt;
+		else if (v == rsite)
+			out->ext[k] = basel;
+		else
+			out->ext[k] = from->ext[k];
+	}
+	out->vert = TDC_NIL;
+	out->nsites = L->nsites + R->nsites;
+}

@@ -1,0 +1,708 @@
+/*
+ * test_engine.c
+ *		Property tests of the engine through its public API.
+ *
+ * Every result goes through the exact validator (tdc_validate), and results
+ * that must be equal are compared as canonical triangle sets: each triangle
+ * as its three vertex coordinates, rotated so the lexicographically smallest
+ * comes first (orientation is part of the check), the list sorted.  The
+ * symbolic tie-break makes the set unique even for cocircular sites, so it
+ * must not depend on threads, grid size, levels or input order.
+ */
+#include <math.h>
+#include <stdbool.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "harness.h"
+#include "tdc.h"
+
+typedef struct canon
+{
+	size_t		ntri;
+	double	   *t;				/* 6 doubles per triangle */
+} canon;
+
+static uint64_t rng_state;
+
+static uint64_t
+rng(void)
+{
+	uint64_t	z = (rng_state += 0x9E3779B97F4A7C15ull);
+
+	z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+	z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+	return z ^ (z >> 31);
+}
+
+static double
+urand(void)
+{
+	return (rng() >> 11) * 0x1p-53;
+}
+
+static double
+nrand(void)
+{
+	double		u = urand() + 1e-300,
+				v = urand();
+
+	return sqrt(-2 * log(u)) * cos(2 * M_PI * v);
+}
+
+static int
+cmp_tri(const void *a, const void *b)
+{
+	const double *p = a,
+			   *q = b;
+
+	for (int i = 0; i < 6; i++)
+		if (p[i] != q[i])
+			return p[i] < q[i] ? -1 : 1;
+	return 0;
+}
+
+static int
+cmp_pt(const void *a, const void *b)
+{
+	return cmp_tri(a, b) == 0 ? 0 : 0;
+}
+
+static bool
+pt_less(const double *p, const double *q)
+{
+	return p[0] < q[0] || (p[0] == q[0] && p[1] < q[1]);
+}
+
+/* Number of distinct points, independently of the engine. */
+static int
+cmp_xy(const void *a, const void *b)
+{
+	const double *p = a,
+			   *q = b;
+
+	if (p[0] != q[0])
+		return p[0] < q[0] ? -1 : 1;
+	if (p[1] != q[1])
+		return p[1] < q[1] ? -1 : 1;
+	return 0;
+}
+
+static size_t
+count_unique(const double *xy, size_t n)
+{
+	double	   *c = malloc(16 * n + 16);
+	size_t		u = 0;
+
+	memcpy(c, xy, 16 * n);
+	qsort(c, n, 16, cmp_xy);
+	for (size_t i = 0; i < n; i++)
+		if (i == 0 || cmp_xy(c + 2 * i, c + 2 * (i - 1)) != 0)
+			u++;
+	free(c);
+	return u;
+}
+
+/*
+ * Triangulate, validate and canonicalise.  Returns false (after counting a
+ * failure) when the engine or the validator fails.
+ */
+static bool
+run_checked(const char *name, const double *xy, size_t n, const tdc_options *opt,
+			canon *out)
+{
+	tdc_job    *job;
+	char		err[512];
+	int			rc = tdc_triangulate(xy, n, opt, &job, err, sizeof(err));
+	uint32_t	lim,
+			   *compact,
+			   *tri,
+				v[3];
+	double	   *sites;
+	size_t		m = 0,
+				t = 0,
+				uniq;
+	tdc_iter	it = {0};
+	bool		ok;
+
+	out->ntri = 0;
+	out->t = NULL;
+	if (rc != TDC_OK)
+	{
+		CHECK(0, "%s: engine failed: %s", name, err);
+		tdc_job_free(job);
+		return false;
+	}
+	uniq = count_unique(xy, n);
+	CHECK(tdc_num_sites(job) == uniq || opt->tolerance > 0,
+		  "%s: %zu unique sites reported, %zu expected", name, tdc_num_sites(job), uniq);
+
+	/* the used sites, compacted, via the input map (covers collinear input) */
+	lim = tdc_site_id_limit(job);
+	compact = malloc(sizeof(uint32_t) * (lim + 1));
+	sites = malloc(16 * (size_t) (tdc_num_sites(job) + 1));
+	tri = malloc(12 * (tdc_num_triangles(job) + 1));
+	for (uint32_t s = 0; s < lim; s++)
+		compact[s] = UINT32_MAX;
+	for (size_t i = 0; i < n; i++)
+	{
+		uint32_t	s = tdc_input_site(job, i);
+
+		if (s >= lim)
+		{
+			CHECK(0, "%s: input %zu maps to site %u beyond %u", name, i, s, lim);
+			goto fail;
+		}
+		if (compact[s] == UINT32_MAX)
+		{
+			compact[s] = (uint32_t) m;
+			memcpy(sites + 2 * m, tdc_site_xy(job, s), 16);
+			m++;
+		}
+	}
+	CHECK(m == tdc_num_sites(job), "%s: map reaches %zu sites, engine reports %zu",
+		  name, m, tdc_num_sites(job));
+	while (tdc_next_triangle(job, &it, v))
+	{
+		if (t >= tdc_num_triangles(job))
+		{
+			CHECK(0, "%s: more triangles iterated than the %zu reported", name,
+				  tdc_num_triangles(job));
+			goto fail;
+		}
+		for (int k = 0; k < 3; k++)
+		{
+			if (compact[v[k]] == UINT32_MAX)
+			{
+				CHECK(0, "%s: triangle uses a site no input maps to", name);
+				goto fail;
+			}
+			tri[3 * t + k] = compact[v[k]];
+		}
+		t++;
+	}
+	CHECK(t == tdc_num_triangles(job), "%s: iterated %zu triangles, reported %zu", name,
+		  t, tdc_num_triangles(job));
+	ok = tdc_validate(sites, m, tri, t, err, sizeof(err)) == 0;
+	CHECK(ok, "%s: validator: %s", name, err);
+	if (!ok)
+		goto fail;
+
+	out->ntri = t;
+	out->t = malloc(48 * (t + 1));
+	for (size_t i = 0; i < t; i++)
+	{
+		int			lo = 0;
+
+		for (int k = 1; k < 3; k++)
+			if (pt_less(sites + 2 * tri[3 * i + k], sites + 2 * tri[3 * i + lo]))
+				lo = k;
+		for (int k = 0; k < 3; k++)
+			memcpy(out->t + 6 * i + 2 * k, sites + 2 * tri[3 * i + (lo + k) % 3], 16);
+	}
+	qsort(out->t, t, 48, cmp_tri);
+	free(compact);
+	free(sites);
+	free(tri);
+	tdc_job_free(job);
+	return true;
+
+fail:
+	free(compact);
+	free(sites);
+	free(tri);
+	tdc_job_free(job);
+	return false;
+}
+
+static bool
+canon_equal(const canon *a, const canon *b)
+{
+	return a->ntri == b->ntri &&
+		(a->ntri == 0 || memcmp(a->t, b->t, 48 * a->ntri) == 0);
+}
+
+/*
+ * Validate one input under many settings and require the same triangle set
+ * from all of them, and from the input shuffled.
+ */
+static void
+check_settings(const char *name, double *xy, size_t n, size_t expect_tri)
+{
+	static const struct
+	{
+		int			threads,
+					grid,
+					levels;
+	}			settings[] = {
+		{1, 0, 0}, {2, 0, 0}, {3, 0, 0}, {4, 0, 0}, {8, 0, 0},
+		{1, 0, -1}, {2, 0, 1}, {2, 16, 3}, {4, 1000, 5}, {8, 7, 8}, {5, 0, 2},
+	};
+	canon		ref,
+				c;
+	tdc_options opt;
+	char		label[256];
+	double	   *shuffled;
+
+	tdc_options_init(&opt);
+	if (!run_checked(name, xy, n, &opt, &ref))
+		return;
+	if (expect_tri != SIZE_MAX)
+		CHECK(ref.ntri == expect_tri, "%s: %zu triangles, expected %zu", name, ref.ntri, expect_tri);
+	for (size_t s = 0; s < sizeof(settings) / sizeof(settings[0]); s++)
+	{
+		if (tdc_test_quick && settings[s].threads > 4)
+			continue;
+		opt.threads = settings[s].threads;
+		opt.grid_size = settings[s].grid;
+		opt.levels = settings[s].levels;
+		snprintf(label, sizeof(label), "%s [t=%d g=%d l=%d]", name, opt.threads,
+				 opt.grid_size, opt.levels);
+		if (run_checked(label, xy, n, &opt, &c))
+		{
+			CHECK(canon_equal(&ref, &c), "%s: triangle set differs from the default run", label);
+			free(c.t);
+		}
+	}
+	/* input order */
+	shuffled = malloc(16 * n + 16);
+	memcpy(shuffled, xy, 16 * n);
+	for (size_t i = n; i > 1; i--)
+	{
+		size_t		j = rng() % i;
+		double		tx = shuffled[2 * (i - 1)],
+					ty = shuffled[2 * (i - 1) + 1];
+
+		shuffled[2 * (i - 1)] = shuffled[2 * j];
+		shuffled[2 * (i - 1) + 1] = shuffled[2 * j + 1];
+		shuffled[2 * j] = tx;
+		shuffled[2 * j + 1] = ty;
+	}
+	tdc_options_init(&opt);
+	opt.threads = 2;
+	snprintf(label, sizeof(label), "%s [shuffled]", name);
+	if (run_checked(label, shuffled, n, &opt, &c))
+	{
+		CHECK(canon_equal(&ref, &c), "%s: triangle set depends on input order", label);
+		free(c.t);
+	}
+	free(shuffled);
+	free(ref.t);
+}
+
+/* --- generators --- */
+
+static double *
+gen_uniform(size_t n, double scale, double ox, double oy)
+{
+	double	   *xy = malloc(16 * n + 16);
+
+	for (size_t i = 0; i < n; i++)
+	{
+		xy[2 * i] = ox + urand() * scale;
+		xy[2 * i + 1] = oy + urand() * scale;
+	}
+	return xy;
+}
+
+static double *
+gen_clustered(size_t n)
+{
+	double	   *xy = malloc(16 * n + 16);
+	double		cx = 0,
+				cy = 0;
+
+	for (size_t i = 0; i < n; i++)
+	{
+		if (i % 500 == 0)
+		{
+			cx = urand() * 1000;
+			cy = urand() * 1000;
+		}
+		xy[2 * i] = cx + nrand() * 3;
+		xy[2 * i + 1] = cy + nrand() * 3;
+	}
+	return xy;
+}
+
+static double *
+gen_grid(size_t side, double step, double ox, double oy)
+{
+	double	   *xy = malloc(16 * side * side + 16);
+
+	for (size_t i = 0; i < side; i++)
+		for (size_t j = 0; j < side; j++)
+		{
+			xy[2 * (i * side + j)] = ox + i * step;
+			xy[2 * (i * side + j) + 1] = oy + j * step;
+		}
+	return xy;
+}
+
+/* All lattice points on circles x^2 + y^2 = r^2 with many representations. */
+static double *
+gen_circles(size_t *n)
+{
+	static const long radii[] = {5, 25, 65, 325, 1105, 5525};
+	size_t		cap = 1 << 16,
+				k = 0;
+	double	   *xy = malloc(16 * cap);
+
+	for (size_t r = 0; r < sizeof(radii) / sizeof(radii[0]); r++)
+	{
+		long		R = radii[r];
+
+		for (long x = -R; x <= R; x++)
+		{
+			long		y2 = R * R - x * x;
+			long		y = (long) llround(sqrt((double) y2));
+
+			if (y * y != y2)
+				continue;
+			xy[2 * k] = x;
+			xy[2 * k + 1] = y;
+			k++;
+			if (y != 0)
+			{
+				xy[2 * k] = x;
+				xy[2 * k + 1] = -y;
+				k++;
+			}
+		}
+	}
+	*n = k;
+	return xy;
+}
+
+static size_t
+hull_with_collinear_rect(size_t side)
+{
+	return 4 * (side - 1);
+}
+
+static void
+test_small_and_degenerate(void)
+{
+	double		pts[] = {0, 0, 1, 0, 0, 1, 1, 1, 0.5, 0.5};
+	double		line[2 * 50];
+	double		dup[2 * 40];
+	canon		c;
+	tdc_options opt;
+
+	tdc_options_init(&opt);
+	CHECK(run_checked("0 sites", pts, 0, &opt, &c) && c.ntri == 0, "0 sites");
+	CHECK(run_checked("1 site", pts, 1, &opt, &c) && c.ntri == 0, "1 site");
+	CHECK(run_checked("2 sites", pts, 2, &opt, &c) && c.ntri == 0, "2 sites");
+	CHECK(run_checked("3 sites", pts, 3, &opt, &c) && c.ntri == 1, "3 sites");
+	free(c.t);
+	check_settings("square (cocircular)", pts, 4, 2);
+	check_settings("square + centre", pts, 5, 4);
+
+	for (int i = 0; i < 50; i++)
+	{
+		line[2 * i] = 3 + 0.25 * ((i * 17) % 50);
+		line[2 * i + 1] = -2 + 0.5 * ((i * 17) % 50);
+	}
+	check_settings("collinear (no triangles)", line, 50, 0);
+	for (int i = 0; i < 40; i++)
+	{
+		dup[2 * i] = 7.5;
+		dup[2 * i + 1] = -1.25;
+	}
+	check_settings("all duplicates", dup, 40, 0);
+	dup[2] = 8;
+	check_settings("duplicates + 1", dup, 40, 0);
+	dup[5] = 3;
+	check_settings("duplicates + 2", dup, 40, 1);
+}
+
+static void
+test_random_sets(void)
+{
+	size_t		big = tdc_test_quick ? 20000 : 200000;
+	double	   *xy;
+	size_t		n;
+
+	rng_state = 42;
+	for (size_t sz = 3; sz <= 40; sz++)
+	{
+		char		name[64];
+
+		snprintf(name, sizeof(name), "uniform %zu", sz);
+		xy = gen_uniform(sz, 1000, 0, 0);
+		check_settings(name, xy, sz, SIZE_MAX);
+		free(xy);
+	}
+	xy = gen_uniform(5000, 1000, 0, 0);
+	check_settings("uniform 5000", xy, 5000, SIZE_MAX);
+	free(xy);
+	xy = gen_uniform(big, 1000, 0, 0);
+	check_settings("uniform large", xy, big, SIZE_MAX);
+	free(xy);
+	xy = gen_clustered(big / 4);
+	check_settings("clustered", xy, big / 4, SIZE_MAX);
+	free(xy);
+
+	/* integer grid: every lattice square is cocircular; hull keeps collinear sites */
+	xy = gen_grid(70, 1, 0, 0);
+	check_settings("integer grid 70x70", xy, 4900, 2 * 4900 - 2 - hull_with_collinear_rect(70));
+	free(xy);
+	xy = gen_grid(40, 0.125, 5e6, 6e6);
+	check_settings("grid at 5e6 offsets", xy, 1600, 2 * 1600 - 2 - hull_with_collinear_rect(40));
+	free(xy);
+	xy = gen_circles(&n);
+	check_settings("cocircular lattice points", xy, n, SIZE_MAX);
+	free(xy);
+
+	/* projected coordinates with sub-millimetre offsets */
+	xy = gen_uniform(20000, 0.001, 5e6, 4.2e6);
+	check_settings("5e6 + sub-millimetre", xy, 20000, SIZE_MAX);
+	free(xy);
+	/* lon/lat */
+	xy = gen_uniform(20000, 1, 0, 0);
+	for (size_t i = 0; i < 20000; i++)
+	{
+		xy[2 * i] = -180 + 360 * xy[2 * i];
+		xy[2 * i + 1] = -90 + 180 * xy[2 * i + 1];
+	}
+	check_settings("lon/lat", xy, 20000, SIZE_MAX);
+	free(xy);
+	/* huge and tiny scales */
+	xy = gen_uniform(5000, 1e55, 0, 0);
+	check_settings("huge scale 1e55", xy, 5000, SIZE_MAX);
+	free(xy);
+	xy = gen_uniform(5000, 1e-50, 1e-45, 1e-45);
+	check_settings("tiny scale 1e-50", xy, 5000, SIZE_MAX);
+	free(xy);
+
+	/* sites one ulp apart, and near-duplicates */
+	xy = malloc(16 * 3000);
+	for (size_t i = 0; i < 1000; i++)
+	{
+		double		x = 1 + urand(),
+					y = 1 + urand();
+
+		xy[6 * i] = x;
+		xy[6 * i + 1] = y;
+		xy[6 * i + 2] = nextafter(x, 3);
+		xy[6 * i + 3] = y;
+		xy[6 * i + 4] = x;
+		xy[6 * i + 5] = nextafter(y, 0);
+	}
+	check_settings("one ulp apart", xy, 3000, SIZE_MAX);
+	free(xy);
+
+	/* many exact duplicates among random points */
+	xy = gen_uniform(30000, 100, 0, 0);
+	for (size_t i = 10000; i < 30000; i++)
+	{
+		size_t		j = rng() % 10000;
+
+		xy[2 * i] = xy[2 * j];
+		xy[2 * i + 1] = xy[2 * j + 1];
+	}
+	check_settings("duplicates in random", xy, 30000, SIZE_MAX);
+	free(xy);
+
+	/* all collinear along a diagonal, and along the axes */
+	xy = malloc(16 * 10000);
+	for (size_t i = 0; i < 10000; i++)
+	{
+		xy[2 * i] = (double) (rng() % 5000);
+		xy[2 * i + 1] = 2 * xy[2 * i] + 1;
+	}
+	check_settings("collinear diagonal 10000", xy, 10000, 0);
+	for (size_t i = 0; i < 10000; i++)
+		xy[2 * i + 1] = 3;
+	check_settings("collinear horizontal", xy, 10000, 0);
+	free(xy);
+
+	/* collinear sites along the hull: points on a rectangle's border + interior */
+	xy = malloc(16 * 2000);
+	for (size_t i = 0; i < 1000; i++)
+	{
+		double		f = (double) (i % 250);
+
+		switch (i / 250)
+		{
+			case 0:
+				xy[2 * i] = f, xy[2 * i + 1] = 0;
+				break;
+			case 1:
+				xy[2 * i] = 250, xy[2 * i + 1] = f;
+				break;
+			case 2:
+				xy[2 * i] = 250 - f, xy[2 * i + 1] = 250;
+				break;
+			default:
+				xy[2 * i] = 0, xy[2 * i + 1] = 250 - f;
+		}
+	}
+	for (size_t i = 1000; i < 2000; i++)
+	{
+		xy[2 * i] = 1 + urand() * 248;
+		xy[2 * i + 1] = 1 + urand() * 248;
+	}
+	check_settings("collinear hull sites", xy, 2000, 2 * 2000 - 2 - 1000);
+	free(xy);
+}
+
+static void
+test_map_and_tolerance(void)
+{
+	double		pts[] = {5, 5, 6, 0, 7, 9, 8, 9, 5, 5, 7, 9};
+	tdc_options opt;
+	tdc_job    *job;
+	char		err[256];
+
+	tdc_options_init(&opt);
+	CHECK(tdc_triangulate(pts, 6, &opt, &job, err, sizeof(err)) == TDC_OK, "map: %s", err);
+	CHECK(tdc_num_sites(job) == 4, "map: 4 unique sites");
+	CHECK(tdc_input_site(job, 4) == tdc_input_site(job, 0), "map: duplicate follows first");
+	CHECK(tdc_input_site(job, 5) == tdc_input_site(job, 2), "map: duplicate follows first");
+	CHECK(tdc_site_input(job, tdc_input_site(job, 4)) == 0, "map: first occurrence kept");
+	CHECK(tdc_site_input(job, tdc_input_site(job, 5)) == 2, "map: first occurrence kept");
+	tdc_job_free(job);
+
+	/* PostGIS case: tolerance 2 drops (8 9), within 1 of (7 9) */
+	opt.tolerance = 2;
+	CHECK(tdc_triangulate(pts, 4, &opt, &job, err, sizeof(err)) == TDC_OK, "tol: %s", err);
+	CHECK(tdc_num_sites(job) == 3 && tdc_num_triangles(job) == 1,
+		  "tolerance 2: %zu sites %zu triangles", tdc_num_sites(job), tdc_num_triangles(job));
+	CHECK(tdc_input_site(job, 3) == tdc_input_site(job, 2), "tolerance: dropped maps to absorbing site");
+	tdc_job_free(job);
+
+	/* tolerance: no two kept sites closer than it, and deterministic */
+	{
+		double	   *xy = gen_uniform(20000, 100, 0, 0);
+		canon		a,
+					b;
+
+		opt.tolerance = 0.5;
+		opt.threads = 1;
+		if (run_checked("tolerance 0.5", xy, 20000, &opt, &a))
+		{
+			opt.threads = 4;
+			opt.levels = 4;
+			if (run_checked("tolerance 0.5 t4", xy, 20000, &opt, &b))
+			{
+				CHECK(canon_equal(&a, &b), "tolerance result independent of threads");
+				free(b.t);
+			}
+			free(a.t);
+		}
+		free(xy);
+	}
+}
+
+static void
+test_errors(void)
+{
+	double		bad[] = {0, 0, 1, 1, NAN, 2};
+	double		inf[] = {0, 0, INFINITY, 1, 2, 2};
+	double		far[] = {0, 0, 1e61, 1, 2, 2};
+	double		tiny[] = {0, 0, 1e-61, 1, 2, 2};
+	tdc_options opt;
+	tdc_job    *job;
+	char		err[256];
+
+	tdc_options_init(&opt);
+	CHECK(tdc_triangulate(bad, 3, &opt, &job, err, sizeof(err)) == TDC_EINVAL &&
+		  strstr(err, "non-finite"), "NaN rejected: %s", err);
+	tdc_job_free(job);
+	CHECK(tdc_triangulate(inf, 3, &opt, &job, err, sizeof(err)) == TDC_EINVAL &&
+		  strstr(err, "non-finite"), "Infinity rejected: %s", err);
+	tdc_job_free(job);
+	CHECK(tdc_triangulate(far, 3, &opt, &job, err, sizeof(err)) == TDC_EINVAL &&
+		  strstr(err, "magnitude"), "1e61 rejected: %s", err);
+	tdc_job_free(job);
+	CHECK(tdc_triangulate(tiny, 3, &opt, &job, err, sizeof(err)) == TDC_EINVAL,
+		  "1e-61 rejected: %s", err);
+	tdc_job_free(job);
+	opt.max_memory = 1000;
+	CHECK(tdc_job_start(bad, 3, &opt, &job, err, sizeof(err)) == TDC_EMEMLIMIT && job == NULL,
+		  "memory limit: %s", err);
+	tdc_options_init(&opt);
+	CHECK(tdc_job_start(bad, TDC_MAX_POINTS + 1, &opt, &job, err, sizeof(err)) == TDC_ETOOBIG &&
+		  strstr(err, "700000000"), "too many points: %s", err);
+	opt.threads = -1;
+	CHECK(tdc_job_start(bad, 3, &opt, &job, err, sizeof(err)) == TDC_EINVAL, "bad threads");
+	tdc_options_init(&opt);
+	opt.tolerance = -1;
+	CHECK(tdc_job_start(bad, 3, &opt, &job, err, sizeof(err)) == TDC_EINVAL, "negative tolerance");
+}
+
+static double
+now(void)
+{
+	struct timespec ts;
+
+	clock_gettime(CLOCK_MONOTONIC, &ts);
+	return ts.tv_sec + ts.tv_nsec * 1e-9;
+}
+
+/* Cancel at several moments of a large run: answered well within 50 ms. */
+static void
+test_cancel_and_concurrency(void)
+{
+	size_t		n = tdc_test_quick ? 200000 : 2000000;
+	double	   *xy = gen_uniform(n, 1000, 0, 0);
+	tdc_options opt;
+	double		worst = 0;
+
+	tdc_options_init(&opt);
+	for (int delay = 0; delay <= 60; delay += 15)
+	{
+		tdc_job    *job;
+		char		err[256];
+		double		t;
+		int			rc;
+
+		opt.levels = delay == 60 ? -1 : 0;	/* one subset: cancel inside one recursion */
+		CHECK(tdc_job_start(xy, n, &opt, &job, err, sizeof(err)) == TDC_OK, "start: %s", err);
+		if (job == NULL)
+			continue;
+		tdc_job_wait(job, delay);
+		t = now();
+		tdc_job_cancel(job);
+		rc = tdc_job_wait(job, -1);
+		t = now() - t;
+		worst = t > worst ? t : worst;
+		CHECK(rc == TDC_ECANCELED || rc == TDC_OK, "cancel after %d ms: status %d", delay, rc);
+		tdc_job_free(job);
+	}
+	/* sanitizer builds (--quick) run several times slower */
+	CHECK(worst < (tdc_test_quick ? 0.25 : 0.05), "cancel answered in %.1f ms (limit %d)",
+		  worst * 1e3, tdc_test_quick ? 250 : 50);
+	printf("cancel latency, worst of 5: %.2f ms\n", worst * 1e3);
+
+	/* two triangulations at once in one process */
+	{
+		tdc_job    *a,
+				   *b;
+		char		err[256];
+
+		opt.levels = 0;
+		opt.threads = 2;
+		CHECK(tdc_job_start(xy, n / 4, &opt, &a, err, sizeof(err)) == TDC_OK, "job a");
+		CHECK(tdc_job_start(xy + n / 2, n / 4, &opt, &b, err, sizeof(err)) == TDC_OK, "job b");
+		CHECK(tdc_job_wait(a, -1) == TDC_OK && tdc_job_wait(b, -1) == TDC_OK, "both finish");
+		CHECK(tdc_num_triangles(a) > n / 4 && tdc_num_triangles(b) > n / 4, "both triangulated");
+		tdc_job_free(a);
+		tdc_job_free(b);
+	}
+	free(xy);
+}
+
+void
+test_engine(void)
+{
+	(void) cmp_pt;
+	test_small_and_degenerate();
+	test_map_and_tolerance();
+	test_errors();
+	test_random_sets();
+	test_cancel_and_concurrency();
+}

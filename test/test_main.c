@@ -1,0 +1,31 @@
+/*
+ * test_main.c
+ *		Runs the core suite: predicates, engine properties, conformance cases.
+ *		Prints "N passed, N failed"; exits non-zero on any failure.
+ *		--quick shrinks the largest inputs (sanitizer builds).
+ */
+#include <stdio.h>
+#include <string.h>
+
+#include "harness.h"
+
+long		tdc_test_passed;
+long		tdc_test_failed;
+int			tdc_test_quick;
+
+int
+main(int argc, char **argv)
+{
+	for (int i = 1; i < argc; i++)
+		if (strcmp(argv[i], "--quick") == 0)
+			tdc_test_quick = 1;
+	setvbuf(stdout, NULL, _IOLBF, 0);
+
+	test_predicates();
+	printf("predicates: %ld passed, %ld failed so far\n", tdc_test_passed, tdc_test_failed);
+	test_engine();
+	printf("engine: %ld passed, %ld failed so far\n", tdc_test_passed, tdc_test_failed);
+	test_conformance();
+	printf("%ld passed, %ld failed\n", tdc_test_passed, tdc_test_failed);
+	return tdc_test_failed ? 1 : 0;
+}
