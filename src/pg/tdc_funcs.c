@@ -221,8 +221,9 @@ tdc_run(const TdcPointBuf *buf, double tolerance, uint64 result_bytes,
 		opt.max_memory = (size_t) (limit - have);
 	}
 
-	run = palloc0(sizeof(TdcRun));
-	cb = palloc0(sizeof(MemoryContextCallback));
+	/* both live as long as the context they are registered with */
+	run = MemoryContextAllocZero(buf->cxt, sizeof(TdcRun));
+	cb = MemoryContextAllocZero(buf->cxt, sizeof(MemoryContextCallback));
 	cb->func = run_reset_callback;
 	cb->arg = run;
 	/* on the buffer's context: it must not be freed before the job is */
