@@ -15,6 +15,7 @@
 # points as the core benchmark), on a 1M random subset of the GSHHG vertices,
 # and on the GSHHG coastlines (211,907 LINESTRINGs, 10.64M vertices):
 #   tdc_dump  CREATE TABLE bench.tin AS SELECT * FROM ST_TDCDelaunayDump('SELECT geom FROM bench.coastlines')
+#   tdc_dump_count  SELECT count(*) FROM ST_TDCDelaunayDump(...)  (the same without writing the table)
 #   tdc, postgis  the aggregate forms above (expected to fail: 1 GB value limit)
 # Every statement runs under statement_timeout (BENCH_SQL_TIMEOUT, default 600 s);
 # failures are recorded with their error message and elapsed time.
@@ -309,6 +310,8 @@ if [ "$COAST" = 1 ]; then
 		sql -c "DROP TABLE IF EXISTS bench.tin" >/dev/null
 		timed coastlines "$n" tdc_dump 1 "SET tdc_delaunay.threads = 0" \
 			"CREATE TABLE bench.tin AS SELECT * FROM ST_TDCDelaunayDump('SELECT geom FROM bench.coastlines')"
+		timed coastlines "$n" tdc_dump_count 1 "SET tdc_delaunay.threads = 0" \
+			"SELECT count(*) FROM ST_TDCDelaunayDump('SELECT geom FROM bench.coastlines')"
 		if [ "$TDC_COAST_AGG" = 1 ]; then
 			timed coastlines "$n" tdc 1 "SET tdc_delaunay.threads = 0" "$(printf "$TDC_Q" coastlines)"
 		fi
