@@ -40,7 +40,8 @@ tdc_server_up
 
 if ((!TDC_EXISTING)); then
 	# A fresh database in the throw-away cluster for every run.
-	tdc_psql -q -d postgres -c 'DROP DATABASE IF EXISTS tdc_demo' -c 'CREATE DATABASE tdc_demo'
+	tdc_psql -q -d postgres -c 'SET client_min_messages = warning' \
+		-c 'DROP DATABASE IF EXISTS tdc_demo' -c 'CREATE DATABASE tdc_demo'
 	export PGDATABASE=tdc_demo
 fi
 
@@ -57,7 +58,7 @@ CREATE EXTENSION IF NOT EXISTS postgis;
 CREATE EXTENSION IF NOT EXISTS tdc_delaunay;
 \pset footer off
 
-SELECT setseed(0.2014);
+SELECT setseed(0.2014) \gset
 CREATE TEMP TABLE tdc_demo_points AS
 	SELECT i AS id, ST_MakePoint(random() * 10000, random() * 10000) AS geom
 	FROM generate_series(1, :npoints) AS i;

@@ -87,13 +87,17 @@ tdc_build_install() {
 	[ -x "$PG_CONFIG" ] || tdc_die "no pg_config at $PG_CONFIG (package postgresql-server-dev-15; or set PG_CONFIG)"
 	local jobs
 	jobs=$(nproc 2>/dev/null || echo 2)
-	tdc_say "building the extension (make -j$jobs PG_CONFIG=$PG_CONFIG)"
-	make -C "$TDC_ROOT" --no-print-directory -j"$jobs" PG_CONFIG="$PG_CONFIG" || return 1
+	tdc_say "building the extension (make -j$jobs PG_CONFIG=$PG_CONFIG all)"
+	make -C "$TDC_ROOT" --no-print-directory -j"$jobs" PG_CONFIG="$PG_CONFIG" all || return 1
 	tdc_say "installing into $("$PG_CONFIG" --pkglibdir) and $("$PG_CONFIG" --sharedir)/extension"
-	if [ -w "$("$PG_CONFIG" --pkglibdir)" ]; then
-		make -C "$TDC_ROOT" --no-print-directory PG_CONFIG="$PG_CONFIG" install || return 1
-	else
-		tdc_as_root make -C "$TDC_ROOT" --no-print-directory PG_CONFIG="$PG_CONFIG" install || return 1
+	local as=()
+	[ -w "$("$PG_CONFIG" --pkglibdir)" ] || as=(tdc_as_root)
+	mkdir -p "$TDC_LOGDIR"
+	if ! "${as[@]}" make -C "$TDC_ROOT" --no-print-directory PG_CONFIG="$PG_CONFIG" install \
+		>"$TDC_LOGDIR/install.log" 2>&1; then
+		cat "$TDC_LOGDIR/install.log" >&2
+		tdc_warn "make install failed"
+		return 1
 	fi
 }
 
@@ -238,7 +242,6 @@ tdc_cluster_start() {
 		full_page_writes = off
 		max_wal_size = 2GB
 		shared_buffers = 256MB
-		max_parallel_workers_per_gather = 0
 	EOF
 	tdc_say "starting it on port $port (socket in $TDC_PGRUN, no TCP)"
 	if ! tdc_as_owner "$TDC_PGBIN/pg_ctl" -D "$TDC_PGDATA" -l "$TDC_PGRUN/postgres.log" -w -t 120 start >/dev/null; then
