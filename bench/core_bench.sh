@@ -13,6 +13,7 @@
 #   core.csv       medians per set
 #   phases.csv     phase times for threads 1..N on the phase set (1e7 uniform)
 #   core.txt       the printed tables
+#   docs/core.png  seconds vs n for the synthetic sets
 #
 # Environment knobs:
 #   BENCH_SIZES="1e5 1e6 1e7"  BENCH_SETS="uniform clustered grid"
@@ -255,4 +256,37 @@ if [ $HAVE_TDC = 1 ]; then
 fi
 
 echo "# load average at end: $(cut -d' ' -f1-3 /proc/loadavg)" | tee -a "$TXT"
+
+# docs/core.png: seconds vs n (log-log) per synthetic set, tdc 1 thread / all threads / CGAL
+if command -v gnuplot >/dev/null; then
+	mkdir -p "$ROOT/docs"
+	pl=()
+	colors=("#1f77b4" "#2ca02c" "#9467bd")
+	ci=0
+	for k in $SETS; do
+		awk -F, -v k="$k" 'NR > 1 && index($1, k "_") == 1 { print $2, $8, $11, $13 }' "$CSV" | sort -g > "$WORK/plot.$k"
+		[ -s "$WORK/plot.$k" ] || continue
+		c=${colors[$((ci % 3))]}
+		ci=$((ci + 1))
+		[ $HAVE_TDC = 1 ] && pl+=("'$WORK/plot.$k' using 1:2 with linespoints lw 2 pt 7 lc rgb '$c' title 'tdc 1 thread, $k'"
+			"'$WORK/plot.$k' using 1:3 with linespoints lw 1 dt 2 pt 6 lc rgb '$c' title 'tdc $NCPU threads, $k'")
+		pl+=("'$WORK/plot.$k' using 1:4 with linespoints lw 2 dt 3 pt 4 lc rgb '$c' title 'CGAL, $k'")
+	done
+	if [ ${#pl[@]} -gt 0 ]; then
+		{
+			echo "set terminal pngcairo size 800,560 font 'DejaVu Sans,10'"
+			echo "set output '$ROOT/docs/core.png'"
+			echo "set logscale xy"
+			echo "set format x '10^{%L}'"
+			echo "set xlabel 'points n'"
+			echo "set ylabel 'seconds'"
+			echo "set title 'Core: ./tdc vs CGAL Delaunay\\_triangulation\\_2 (medians, $NCPU CPUs)'"
+			echo "set grid"
+			echo "set key top left"
+			printf 'plot '
+			(IFS=,; echo "${pl[*]}")
+		} > "$WORK/core.gp"
+		gnuplot "$WORK/core.gp" || log "gnuplot failed"
+	fi
+fi
 log "wrote $CSV, $RUNS$([ $HAVE_TDC = 1 ] && echo ", $PHASES"), $TXT"

@@ -105,7 +105,8 @@ make_plots() {
 		awk -F, -v t="$tool" 'NR > 1 && $4 == t && $1 == "gshhg_1m" && $6 != "-" { print $2, $6 }' "$CSV" > "$WORK/$tool.g1m.dat"
 	done
 	awk -F, 'NR > 1 && $1 == "coastlines" && $4 == "tdc_dump" && $6 != "-" { print $2, $6 }' "$CSV" > "$WORK/dump.dat"
-	pgfail=$(awk -F, 'NR > 1 && $1 == "coastlines" && $4 == "postgis" && $7 != "ok" { printf "%s %.3f\n", $2, $5 / 1000 }' "$RUNS")
+	awk -F, 'NR > 1 && $1 == "coastlines" && $4 == "tdc_dump_count" && $6 != "-" { print $2, $6 }' "$CSV" > "$WORK/dumpc.dat"
+	pgfail=$(awk -F, 'NR > 1 && $1 == "coastlines" && $3 == "postgis" && $7 != "ok" { printf "%s %.3f\n", $2, $5 / 1000 }' "$RUNS")
 	echo "$pgfail" | awk 'NF == 2' > "$WORK/pgfail.dat"
 
 	plotcmds=()
@@ -117,7 +118,8 @@ make_plots() {
 	addplot "$WORK/postgis.clustered.dat" "with linespoints lw 2 pt 5 lc rgb '#ff7f0e' title 'PostGIS, clustered'"
 	addplot "$WORK/tdc.g1m.dat" "with points pt 9 ps 2 lc rgb '#1f77b4' title 'tdc\\_delaunay, 1M coastline vertices'"
 	addplot "$WORK/postgis.g1m.dat" "with points pt 9 ps 2 lc rgb '#d62728' title 'PostGIS, 1M coastline vertices'"
-	addplot "$WORK/dump.dat" "with points pt 13 ps 2.5 lc rgb '#2ca02c' title 'tdc\\_delaunay Dump, GSHHG coastlines (10.6M)'"
+	addplot "$WORK/dump.dat" "with points pt 13 ps 2.5 lc rgb '#2ca02c' title 'tdc\\_delaunay Dump into a table, GSHHG coastlines (10.6M)'"
+	addplot "$WORK/dumpc.dat" "with points pt 12 ps 2.5 lw 2 lc rgb '#2ca02c' title 'tdc\\_delaunay Dump, count(*) only'"
 	addplot "$WORK/pgfail.dat" "with points pt 2 ps 3 lw 2 lc rgb '#d62728' title 'PostGIS on coastlines: failed after this time'"
 	if [ ${#plotcmds[@]} -gt 0 ]; then
 		{
