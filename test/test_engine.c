@@ -392,11 +392,15 @@ test_small_and_degenerate(void)
 	tdc_options opt;
 
 	tdc_options_init(&opt);
-	CHECK(run_checked("0 sites", pts, 0, &opt, &c) && c.ntri == 0, "0 sites");
-	CHECK(run_checked("1 site", pts, 1, &opt, &c) && c.ntri == 0, "1 site");
-	CHECK(run_checked("2 sites", pts, 2, &opt, &c) && c.ntri == 0, "2 sites");
-	CHECK(run_checked("3 sites", pts, 3, &opt, &c) && c.ntri == 1, "3 sites");
-	free(c.t);
+	for (size_t k = 0; k <= 3; k++)
+	{
+		char		name[32];
+
+		snprintf(name, sizeof(name), "%zu sites", k);
+		CHECK(run_checked(name, pts, k, &opt, &c) && c.ntri == (k == 3),
+			  "%s: %zu triangles", name, c.ntri);
+		free(c.t);
+	}
 	check_settings("square (cocircular)", pts, 4, 2);
 	check_settings("square + centre", pts, 5, 4);
 

@@ -49,6 +49,13 @@ right_of(const tdc_mesh *m, uint32_t p, uint32_t h)
 						tdc_pt(m, tdc_org(m, h))) > 0;
 }
 
+/* Is site p strictly right of the base edge from bo to bd, i.e. above it? */
+static inline bool
+above(const tdc_mesh *m, uint32_t p, const double *bo, const double *bd)
+{
+	return tdc_orient2d(tdc_pt(m, p), bd, bo) > 0;
+}
+
 /*
  * Exact in-circle of four distinct, exactly cocircular sites, decided by the
  * perturbation described above.  Perturbing the lift of a, b, c, d by
@@ -88,7 +95,7 @@ incircle_tie(const tdc_mesh *m, uint32_t a, uint32_t b, uint32_t c, uint32_t d)
 }
 
 /* Is d inside the circle through counter-clockwise a, b, c (ties broken)? */
-static inline bool
+static inline __attribute__((always_inline)) bool
 incircle_sos(const tdc_mesh *m, uint32_t a, uint32_t b, uint32_t c, uint32_t d)
 {
 	double		det;
@@ -225,6 +232,8 @@ tdc_merge(tdc_mesh *m, tdc_freelist *fl, const tdc_sub *L, const tdc_sub *R,
 	{
 		uint32_t	bo = tdc_org(m, basel),
 					bd = tdc_dest(m, basel);
+		const double *pbo = tdc_pt(m, bo),
+				   *pbd = tdc_pt(m, bd);
 		uint32_t	lcand = tdc_rprev(m, basel),
 					rcand = tdc_oprev(m, basel);
 		bool		lvalid,
@@ -233,9 +242,11 @@ tdc_merge(tdc_mesh *m, tdc_freelist *fl, const tdc_sub *L, const tdc_sub *R,
 		if ((++steps & 0xffff) == 0 && tdc_cancelled(m))
 			return;
 
-		lvalid = right_of(m, tdc_dest(m, lcand), basel);
+		lvalid = above(m, tdc_dest(m, lcand), pbo, pbd);
 		if (lvalid)
 		{
+			bool		deleted = false;
+
 			while (incircle_sos(m, bd, bo, tdc_dest(m, lcand),
 								tdc_dest(m, tdc_onext(m, lcand))))
 			{
@@ -243,12 +254,16 @@ tdc_merge(tdc_mesh *m, tdc_freelist *fl, const tdc_sub *L, const tdc_sub *R,
 
 				tdc_delete_edge(m, fl, lcand);
 				lcand = t;
+				deleted = true;
 			}
-			lvalid = right_of(m, tdc_dest(m, lcand), basel);
+			if (deleted)
+				lvalid = above(m, tdc_dest(m, lcand), pbo, pbd);
 		}
-		rvalid = right_of(m, tdc_dest(m, rcand), basel);
+		rvalid = above(m, tdc_dest(m, rcand), pbo, pbd);
 		if (rvalid)
 		{
+			bool		deleted = false;
+
 			while (incircle_sos(m, bd, bo, tdc_dest(m, rcand),
 								tdc_dest(m, tdc_oprev(m, rcand))))
 			{
@@ -256,8 +271,10 @@ tdc_merge(tdc_mesh *m, tdc_freelist *fl, const tdc_sub *L, const tdc_sub *R,
 
 				tdc_delete_edge(m, fl, rcand);
 				rcand = t;
+				deleted = true;
 			}
-			rvalid = right_of(m, tdc_dest(m, rcand), basel);
+			if (deleted)
+				rvalid = above(m, tdc_dest(m, rcand), pbo, pbd);
 		}
 		if (!lvalid && !rvalid)
 			break;
