@@ -1,0 +1,85 @@
+#!/usr/bin/env bash
+# test/cli.sh: the fixed command-line interface of ./tdc.
+#   bash test/cli.sh        (after `make tdc`; prints "N passed, N failed")
+set -u
+cd "$(dirname "$0")/.."
+TDC=./tdc
+pass=0; fail=0
+tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
+ok()   { pass=$((pass + 1)); }
+bad()  { fail=$((fail + 1)); echo "FAIL: $*" >&2; }
+check() { if eval "$2"; then ok; else bad "$1"; fi; }
+
+[ -x "$TDC" ] || make -s tdc >/dev/null || { echo "cannot build ./tdc"; echo "0 passed, 1 failed"; exit 1; }
+
+# text input, 4 points, one per line; -o writes CCW triangles with %.17g
+printf '0 0\n1 0\n0 1\n1 1\n' > "$tmp/sq.txt"
+$TDC -o "$tmp/sq.out" --stats "$tmp/sq.txt" 2> "$tmp/sq.err"
+check "square: exit 0" "[ $? -eq 0 ]"
+check "square: 2 triangles written" "[ \$(wc -l < $tmp/sq.out) -eq 2 ]"
+check "square: stats line fields" "grep -qE '^n=4 unique=4 triangles=2 threads=[0-9]+ sort=[0-9.]+ subdivide=[0-9.]+ leaves=[0-9.]+ merge=[0-9.]+ total=[0-9.]+ peak_rss_mb=[0-9.]+$' $tmp/sq.err"
+check "square: each line has 6 numbers" "awk 'NF != 6 { exit 1 }' $tmp/sq.out"
+check "square: counter-clockwise" "awk '{ if ((\$3-\$1)*(\$6-\$2) - (\$4-\$2)*(\$5-\$1) <= 0) exit 1 }' $tmp/sq.out"
+
+# z values follow the first input point with that x,y
+printf '0 0 5\n1 0 6\n0 1 7\n0 0 99\n' > "$tmp/z.txt"
+$TDC -o "$tmp/z.out" "$tmp/z.txt"
+check "z: 9 numbers per line" "awk 'NF != 9 { exit 1 }' $tmp/z.out"
+check "z: first occurrence kept" "grep -q ' 5\\b\\|^0 0 5' $tmp/z.out && ! grep -q 99 $tmp/z.out"
+
+# stdin, comments, blank lines, %.17g round trip
+printf '# a comment\n\n0.1 0.2\n0.30000000000000004 0.2\n0.1 0.7\n' | $TDC -o "$tmp/in.out" -
+check "stdin: one triangle" "[ \$(wc -l < $tmp/in.out) -eq 1 ]"
+check "stdin: %.17g output" "grep -q '0.30000000000000004' $tmp/in.out"
+
+# .bin input equals the same points as text
+printf '0 0\n2 0\n1 3\n1 1\n' > "$tmp/b.txt"
+python3 -c 1 2>/dev/null && true
+awk '{ printf "%s %s\n", $1, $2 }' "$tmp/b.txt" > /dev/null
+perl -e 'open F, "<", $ARGV[0]; while (<F>) { @a = split; print pack("d<d<", @a) }' "$tmp/b.txt" > "$tmp/b.bin"
+$TDC -o "$tmp/b1.out" "$tmp/b.bin"; $TDC -o "$tmp/b2.out" "$tmp/b.txt"
+check ".bin equals text" "cmp -s <(sort $tmp/b1.out) <(sort $tmp/b2.out)"
+check ".bin: 3 triangles" "[ \$(wc -l < $tmp/b1.out) -eq 3 ]"
+
+# options: same triangle set for threads / grid / levels
+perl -e 'srand(7); for (1..20000) { printf "%.17g %.17g\n", rand(1000), rand(1000) }' > "$tmp/r.txt"
+$TDC -t 1 -o "$tmp/r1.out" "$tmp/r.txt"
+$TDC -t 2 -g 16 -l 3 -o "$tmp/r2.out" "$tmp/r.txt"
+$TDC -t 4 -l -1 -o "$tmp/r3.out" "$tmp/r.txt"
+canon() { awk '{ # rotate so the smallest vertex comes first
+  best = 0; for (k = 1; k < 3; k++) if ($(2*k+1) < $(2*best+1) || ($(2*k+1) == $(2*best+1) && $(2*k+2) < $(2*best+2))) best = k;
+  s = ""; for (k = 0; k < 3; k++) { j = (best + k) % 3; s = s $(2*j+1) " " $(2*j+2) " " } print s }' "$1" | sort; }
+check "threads/grid/levels give one triangle set" "cmp -s <(canon $tmp/r1.out) <(canon $tmp/r2.out) && cmp -s <(canon $tmp/r1.out) <(canon $tmp/r3.out)"
+check "2n-2-h bound" "[ \$(wc -l < $tmp/r1.out) -gt 39900 ] && [ \$(wc -l < $tmp/r1.out) -lt 39998 ]"
+
+# tolerance (PostGIS case: (8 9) within 2 of (7 9) is dropped)
+printf '5 5\n6 0\n7 9\n8 9\n' > "$tmp/t.txt"
+$TDC --tolerance 2 -o "$tmp/t.out" "$tmp/t.txt"
+check "tolerance 2: one triangle" "[ \$(wc -l < $tmp/t.out) -eq 1 ] && ! grep -q '^8 9\\| 8 9' $tmp/t.out"
+
+# errors: non-zero exit and a one-line message
+expect_error() {
+	local name=$1; shift
+	"$@" > "$tmp/e.out" 2> "$tmp/e.err"; local rc=$?
+	check "$name: non-zero exit" "[ $rc -ne 0 ]"
+	check "$name: one-line message" "[ \$(wc -l < $tmp/e.err) -eq 1 ] && grep -q '^tdc: ' $tmp/e.err"
+}
+expect_error "no input" $TDC
+expect_error "unknown option" $TDC --frobnicate "$tmp/sq.txt"
+expect_error "missing file" $TDC "$tmp/nope.txt"
+expect_error "bad -t" $TDC -t abc "$tmp/sq.txt"
+expect_error "negative tolerance" $TDC --tolerance -1 "$tmp/sq.txt"
+printf '1 2\nfoo bar\n' > "$tmp/bad.txt"; expect_error "garbage line" $TDC "$tmp/bad.txt"
+printf '1 2\n3 4 5\n' > "$tmp/mix.txt"; expect_error "mixed dimensions" $TDC "$tmp/mix.txt"
+printf '1 2\nnan 4\n5 5\n' > "$tmp/nan.txt"; expect_error "NaN" $TDC "$tmp/nan.txt"
+printf '1 2 3 4\n' > "$tmp/four.txt"; expect_error "four columns" $TDC "$tmp/four.txt"
+head -c 17 /dev/zero > "$tmp/odd.bin"; expect_error "truncated .bin" $TDC "$tmp/odd.bin"
+
+# degenerate input: no output lines, exit 0
+printf '1 1\n2 2\n3 3\n' > "$tmp/col.txt"; $TDC -o "$tmp/col.out" "$tmp/col.txt"
+check "collinear: exit 0, no triangles" "[ $? -eq 0 ] && [ ! -s $tmp/col.out ]"
+: > "$tmp/empty.txt"; $TDC -o "$tmp/empty.out" "$tmp/empty.txt"
+check "empty input: exit 0, no triangles" "[ $? -eq 0 ] && [ ! -s $tmp/empty.out ]"
+
+echo "$pass passed, $fail failed"
+[ "$fail" -eq 0 ]
