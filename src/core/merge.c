@@ -150,9 +150,12 @@ sub_site(const tdc_mesh *m, const tdc_sub *s, int k)
  * cancelled mid-way the mesh is left inconsistent; callers must then stop.
  */
 void
-tdc_merge(tdc_mesh *m, tdc_freelist *fl, const tdc_sub *L, const tdc_sub *R,
+tdc_merge(tdc_mesh *mesh, tdc_freelist *fl, const tdc_sub *L, const tdc_sub *R,
 		  int axis, tdc_sub *out)
 {
+	/* a private copy: its pointers stay in registers across the mesh stores */
+	tdc_mesh	local = *mesh;
+	tdc_mesh   *m = &local;
 	uint32_t	ldi,
 				rdi,
 				basel,
