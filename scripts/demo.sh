@@ -52,7 +52,7 @@ echo "    world's coastlines, GSHHG from Debian's gmt-gshhg-full, is \`make benc
 echo
 
 # Everything lives in temporary tables, so that nothing is left in your database.
-tdc_psql -q -v npoints="$NPOINTS" <<'SQL'
+tdc_psql -q -v npoints="$NPOINTS" -v cpus="$(nproc)" <<'SQL'
 SET client_min_messages = warning;
 CREATE EXTENSION IF NOT EXISTS postgis;
 CREATE EXTENSION IF NOT EXISTS tdc_delaunay;
@@ -91,7 +91,7 @@ SELECT round((SELECT seconds FROM tdc_demo_result WHERE method LIKE 'ST_Delaunay
 			 / nullif((SELECT seconds FROM tdc_demo_result WHERE method LIKE 'ST_TDC%'), 0)::numeric, 1)
 		   AS "speed-up",
 	   postgis_lib_version() AS postgis, split_part(postgis_geos_version(), '-', 1) AS geos,
-	   current_setting('tdc_delaunay.threads', true) AS "tdc_delaunay.threads";
+	   current_setting('tdc_delaunay.threads', true) AS "tdc_delaunay.threads", :'cpus' AS "CPUs";
 SQL
 
 echo "    (PostGIS before GEOS 3.13 misses some hull triangles: its count can be below the exact one)"

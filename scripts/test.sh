@@ -2,7 +2,7 @@
 # scripts/test.sh (`make test`): every test of tdc_delaunay, from a bare Debian 12.
 #
 #   1. apt-get installs the missing Debian packages (scripts/lib.sh lists them)
-#   2. builds and installs the extension
+#   2. builds and installs the extension, and builds ./tdc
 #   3. the core suite: make check-core, check-core-asan, check-core-tsan
 #   4. starts a throw-away PostgreSQL 15 cluster (or uses yours, see README.md)
 #      and runs pg_regress against it (make installcheck)
@@ -130,6 +130,8 @@ built=0
 run_step build+install tdc_build_install && built=1
 
 MAKE=(make --no-print-directory PG_CONFIG="$PG_CONFIG")
+# ./tdc for the harnesses in test/*.sh (an old binary would test old code).
+run_step "make tdc" "${MAKE[@]}" tdc || true
 run_part check-core plain "${MAKE[@]}" check-core
 run_part check-core-asan plain "${MAKE[@]}" check-core-asan
 run_part check-core-tsan plain "${MAKE[@]}" check-core-tsan
