@@ -304,9 +304,9 @@ run(tdc_job *job)
 
 	/* validate; tolerance */
 	t = now_sec();
-	job->xy = tdc_alloc_big(job->n * 2 * sizeof(double) + 16);
-	job->idx = tdc_alloc_big(job->n * sizeof(uint32_t) + 4);
-	job->map = tdc_alloc_big(job->n * sizeof(uint32_t) + 4);
+	job->xy = malloc(job->n * 2 * sizeof(double) + 16);
+	job->idx = malloc(job->n * sizeof(uint32_t) + 4);
+	job->map = malloc(job->n * sizeof(uint32_t) + 4);
 	if (!job->xy || !job->idx || !job->map)
 	{
 		tdc_job_fail(job, TDC_ENOMEM, "out of memory for %zu points", job->n);
@@ -370,7 +370,7 @@ run(tdc_job *job)
 	if (atomic_load(&job->cancel))
 		return TDC_ECANCELED;
 
-	job->he = tdc_alloc_big(job->nin * 6 * sizeof(tdc_he) + sizeof(tdc_he));
+	job->he = malloc(job->nin * 6 * sizeof(tdc_he) + sizeof(tdc_he));
 	if (job->he == NULL)
 	{
 		tdc_job_fail(job, TDC_ENOMEM, "out of memory for the mesh of %zu points (%zu bytes)",

@@ -70,13 +70,6 @@ typedef struct tdc_mesh
 	const atomic_int *cancel;
 } tdc_mesh;
 
-/*
- * Large arrays (pool.c): aligned to 2 MB and advised as huge pages, since a
- * page fault per 4 kB dominates filling a gigabyte on some virtual machines.
- * Free with free().
- */
-extern void *tdc_alloc_big(size_t size);
-
 /* Thread pool (pool.c): a parallel-for on which the calling thread helps. */
 typedef struct tdc_pool tdc_pool;
 typedef void (*tdc_task_fn) (void *arg, size_t i, int worker);

@@ -15,27 +15,8 @@
  * for the host process (a PostgreSQL backend).
  */
 #include <stdlib.h>
-#include <sys/mman.h>
 
 #include "internal.h"
-
-#define HUGE_PAGE	((size_t) 2 << 20)
-
-void *
-tdc_alloc_big(size_t size)
-{
-	void	   *p;
-
-	if (size < 4 * HUGE_PAGE)
-		return malloc(size);
-	size = (size + HUGE_PAGE - 1) & ~(HUGE_PAGE - 1);
-	if (posix_memalign(&p, HUGE_PAGE, size) != 0)
-		return NULL;
-#ifdef MADV_HUGEPAGE
-	madvise(p, size, MADV_HUGEPAGE);
-#endif
-	return p;
-}
 
 struct tdc_pool
 {

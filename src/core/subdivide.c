@@ -263,15 +263,15 @@ tdc_subdivide(tdc_job *job)
 		copyidx = job->idx;
 		ga.src = copy;
 		ga.src_idx = copyidx;
-		job->xy = tdc_alloc_big(job->nin * 2 * sizeof(double) + 16);
-		job->idx = tdc_alloc_big(job->nin * sizeof(uint32_t) + 4);
+		job->xy = malloc(job->nin * 2 * sizeof(double) + 16);
+		job->idx = malloc(job->nin * sizeof(uint32_t) + 4);
 		if (!job->xy || !job->idx)
 			goto oom;
 	}
 
-	ga.cell = tdc_alloc_big(ga.n * sizeof(uint32_t) + 4);
-	ga.hist = tdc_alloc_big((size_t) T * ga.ncells * sizeof(uint32_t));
-	ga.cell_start = tdc_alloc_big(ga.ncells * sizeof(uint32_t));
+	ga.cell = malloc(ga.n * sizeof(uint32_t) + 4);
+	ga.hist = malloc((size_t) T * ga.ncells * sizeof(uint32_t));
+	ga.cell_start = malloc(ga.ncells * sizeof(uint32_t));
 	job->prefix = calloc(w * w, sizeof(uint32_t));
 	if (!ga.cell || !ga.hist || !ga.cell_start || !job->prefix)
 		goto oom;
