@@ -1,0 +1,223 @@
+/*
+ * fuzz_state.c
+ *		libFuzzer target for the serialized ST_TDCDelaunay aggregate state
+ *		(src/pg/tdc_agg.c: state_deserialize, state_serialize, state_merge),
+ *		the bytes that travel between parallel workers.
+ *
+ * tdc_agg.c is compiled into this file (its state functions are static),
+ * against the real server headers and the shims of pg_shim.c.
+ *
+ * Input: uint16 little-endian length L, then L bytes of a first serialized
+ * state (without the varlena header), then the rest as a second state.
+ *
+ * Checks:
+ *	- deserializing never crashes; it raises an ERROR exactly when an
+ *	  independent check of the documented format (ref_valid) rejects;
+ *	- an accepted state serializes back to the input, up to the fields
+ *	  the format ignores (srid without vertices/dimensions, tolerance and
+ *	  flags when no parameters were set);
+ *	- when both states are accepted, the combine step either raises an ERROR
+ *	  (mixed SRID, dimensions or parameters) or concatenates the vertices,
+ *	  and the merged state survives another serialize/deserialize round.
+ */
+#include "../src/pg/tdc_agg.c"
+
+#include <stdlib.h>
+
+#include "pg_shim.h"
+
+/* tdc_funcs.c is not linked: the final function is not fuzzed here. */
+void
+tdc_check_params(double tolerance, int flags, const char *fname)
+{
+	abort();
+}
+
+Datum
+tdc_triangulate_to_datum(const TdcPointBuf *buf, double tolerance, int flags,
+						 const char *fname)
+{
+	abort();
+}
+
+static void
+fail(const char *what, const char *detail)
+{
+	fprintf(stderr, "fuzz_state: %s%s%s\n", what, detail ? ": " : "",
+			detail ? detail : "");
+	abort();
+}
+
+static bytea *
+make_bytea(const uint8 *data, size_t size)
+{
+	bytea	   *v = malloc(VARHDRSZ + size);
+
+	SET_VARSIZE(v, VARHDRSZ + size);
+	memcpy(VARDATA(v), data, size);
+	return v;
+}
+
+/* The documented format, checked independently. */
+static bool
+ref_valid(const uint8 *d, size_t len)
+{
+	uint32		magic,
+				version,
+				bits,
+				pad;
+	int32		flags;
+	double		tol;
+	uint64		n,
+				per;
+
+	if (len < 40)
+		return false;
+	memcpy(&magic, d, 4);
+	memcpy(&version, d + 4, 4);
+	memcpy(&bits, d + 8, 4);
+	memcpy(&flags, d + 16, 4);
+	memcpy(&pad, d + 20, 4);
+	memcpy(&tol, d + 24, 8);
+	memcpy(&n, d + 32, 8);
+	if (magic != 0x41434454 || version != 1 || bits > 7 || pad != 0)
+		return false;
+	if (!(bits & 1) && ((bits & 2) || n != 0))
+		return false;
+	if ((bits & 4) && (flags < 0 || flags > 2 || !(tol >= 0) || isinf(tol)))
+		return false;
+	per = (bits & 2) ? 24 : 16;
+	if (n > TDC_MAX_POINTS || n * per != len - 40)
+		return false;
+	for (uint64 i = 0; i < 2 * n; i++)
+	{
+		double		c;
+
+		memcpy(&c, d + 40 + 8 * i, 8);
+		if (!isfinite(c))
+			return false;
+	}
+	return true;
+}
+
+/* What state_serialize must give back for an accepted input. */
+static void
+normalize(uint8 *d)
+{
+	uint32		bits;
+
+	memcpy(&bits, d + 8, 4);
+	if (!(bits & 1))
+		memset(d + 12, 0, 4);	/* srid */
+	if (!(bits & 4))
+	{
+		memset(d + 16, 0, 4);	/* flags */
+		memset(d + 24, 0, 8);	/* tolerance */
+	}
+}
+
+static TdcAggState *
+try_deserialize(const uint8 *data, size_t size, bool *ok)
+{
+	bytea	   *v = make_bytea(data, size);
+	sigjmp_buf	jb;
+	TdcAggState *volatile st = NULL;
+
+	*ok = false;
+	if (sigsetjmp(jb, 0) == 0)
+	{
+		fuzz_pg_jmp = &jb;
+		st = state_deserialize(v, CurrentMemoryContext);
+		*ok = true;
+	}
+	fuzz_pg_jmp = NULL;
+	free(v);
+	if (*ok != ref_valid(data, size))
+		fail(*ok ? "accepted a state the format check rejects" :
+			 "rejected a state the format check accepts", fuzz_pg_message);
+	if (*ok)
+	{
+		bytea	   *out = state_serialize(st);
+		uint8	   *norm = malloc(size);
+
+		memcpy(norm, data, size);
+		normalize(norm);
+		if (VARSIZE(out) != VARHDRSZ + size ||
+			memcmp(VARDATA(out), norm, size) != 0)
+			fail("serialize(deserialize(x)) differs from x", NULL);
+		free(norm);
+	}
+	return st;
+}
+
+int			LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
+
+int
+LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
+{
+	uint16		split = 0;
+	const uint8 *a,
+			   *b;
+	size_t		alen,
+				blen;
+	TdcAggState *sa,
+			   *sb;
+	bool		oka,
+				okb;
+
+	fuzz_pg_stack_base(&split);
+	fuzz_pg_max_memory_mb = 0;
+	if (size < 2)
+		return 0;
+	memcpy(&split, data, 2);
+	a = data + 2;
+	alen = Min((size_t) split, size - 2);
+	b = a + alen;
+	blen = size - 2 - alen;
+
+	sa = try_deserialize(a, alen, &oka);
+	sb = blen > 0 ? try_deserialize(b, blen, &okb) : NULL;
+
+	if (sa != NULL && sb != NULL)
+	{
+		sigjmp_buf	jb;
+		uint64		na = sa->pts.n,
+					nb = sb->pts.n;
+		double	   *axy = malloc(16 * na + 16);
+		volatile bool merged = false;
+
+		memcpy(axy, sa->pts.xy ? sa->pts.xy : axy, 16 * na);
+		if (sigsetjmp(jb, 0) == 0)
+		{
+			fuzz_pg_jmp = &jb;
+			state_merge(sa, sb);
+			merged = true;
+		}
+		fuzz_pg_jmp = NULL;
+		if (!merged && fuzz_pg_sqlstate != ERRCODE_INVALID_PARAMETER_VALUE)
+			fail("combine failed with an unexpected error", fuzz_pg_message);
+		if (merged)
+		{
+			bytea	   *ser;
+			bool		ok2;
+
+			if (sa->pts.n != na + nb)
+				fail("combined state has the wrong vertex count", NULL);
+			if (na > 0 && memcmp(sa->pts.xy, axy, 16 * na) != 0)
+				fail("combine changed the first state's vertices", NULL);
+			if (nb > 0 && memcmp(sa->pts.xy + 2 * na, sb->pts.xy, 16 * nb) != 0)
+				fail("combine did not append the second state's vertices", NULL);
+			if (nb > 0 && sa->pts.hasz &&
+				memcmp(sa->pts.z + na, sb->pts.z, 8 * nb) != 0)
+				fail("combine did not append the second state's Z values", NULL);
+			ser = state_serialize(sa);
+			(void) try_deserialize((const uint8 *) VARDATA(ser),
+								   VARSIZE(ser) - VARHDRSZ, &ok2);
+			if (!ok2)
+				fail("combined state does not deserialize", NULL);
+		}
+		free(axy);
+	}
+	fuzz_pg_reset();
+	return 0;
+}

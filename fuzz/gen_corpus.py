@@ -1,0 +1,359 @@
+#!/usr/bin/env python3
+"""fuzz/gen_corpus.py: (re)generate the seed corpora in fuzz/corpus/.
+
+    python3 fuzz/gen_corpus.py [CONFORMANCE_DIR]   (default /work/shared/conformance)
+
+Seeds come from the conformance inputs (PostGIS, GEOS and delaunator cases)
+and from hand-made edge cases.  Formats:
+
+  fuzz_core         see fuzz/fuzz_core.c (mode, options, grid, tolerance, data)
+  fuzz_gserialized  a PostGIS GSERIALIZED value without its 4-byte varlena
+                    header (the harness adds it), written by gser() below
+  fuzz_state        fuzz/fuzz_state.c: uint16 split, then one or two serialized
+                    ST_TDCDelaunay states (without varlena headers)
+
+The output is deterministic; files are named by content hash.
+"""
+import hashlib
+import json
+import math
+import os
+import re
+import struct
+import sys
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+CONF = sys.argv[1] if len(sys.argv) > 1 else "/work/shared/conformance"
+OUT = os.path.join(HERE, "corpus")
+
+
+def put(target, data):
+    d = os.path.join(OUT, target)
+    os.makedirs(d, exist_ok=True)
+    name = hashlib.sha1(data).hexdigest()[:16]
+    with open(os.path.join(d, name), "wb") as f:
+        f.write(data)
+
+
+# ---------------------------------------------------------------- WKT parser
+TOK = re.compile(r"\s*([A-Za-z]+|\(|\)|,|[-+0-9.eE]+|nan|inf)")
+
+
+def tokens(s):
+    pos = 0
+    out = []
+    while pos < len(s):
+        m = TOK.match(s, pos)
+        if not m:
+            if s[pos:].strip() == "":
+                break
+            raise ValueError("bad WKT at %r" % s[pos:pos + 20])
+        out.append(m.group(1))
+        pos = m.end()
+    return out
+
+
+def parse_wkt(s):
+    """Returns (type, dims, payload): payload nested lists of vertex tuples."""
+    t = tokens(s)
+    i = [0]
+
+    def peek():
+        return t[i[0]].upper() if i[0] < len(t) else None
+
+    def take():
+        i[0] += 1
+        return t[i[0] - 1]
+
+    def coords():
+        v = []
+        while peek() not in (",", ")"):
+            v.append(float(take()))
+        return tuple(v)
+
+    def ptlist():
+        take()  # (
+        pts = []
+        while True:
+            pts.append(coords())
+            if take() == ")":
+                return pts
+
+    def body(typ):
+        if peek() == "EMPTY":
+            take()
+            return (typ, None, [])
+        if typ == "POINT":
+            take()
+            c = coords()
+            take()
+            return (typ, len(c), [c])
+        if typ == "LINESTRING":
+            pts = ptlist()
+            return (typ, len(pts[0]), pts)
+        if typ in ("POLYGON", "TRIANGLE"):
+            take()
+            rings = []
+            while True:
+                rings.append(ptlist())
+                if take() == ")":
+                    break
+            if typ == "TRIANGLE":
+                return (typ, len(rings[0][0]), rings[0])
+            return (typ, len(rings[0][0]), rings)
+        if typ == "MULTIPOINT":
+            take()
+            parts = []
+            while True:
+                if peek() == "(":
+                    take()
+                    c = coords()
+                    take()
+                else:
+                    c = coords()
+                parts.append(("POINT", len(c), [c]))
+                if take() == ")":
+                    break
+            return (typ, parts[0][1], parts)
+        sub = {"MULTILINESTRING": "LINESTRING", "MULTIPOLYGON": "POLYGON",
+               "TIN": "TRIANGLE", "POLYHEDRALSURFACE": "POLYGON"}.get(typ)
+        if sub is None and typ != "GEOMETRYCOLLECTION":
+            raise ValueError("unsupported type " + typ)
+        take()
+        parts = []
+        while True:
+            parts.append(body(sub) if sub else tagged())
+            if take() == ")":
+                break
+        d = next((p[1] for p in parts if p[1]), 2)
+        return (typ, d, parts)
+
+    def tagged():
+        typ = take().upper()
+        if peek() in ("Z", "M", "ZM"):
+            take()
+        return body(typ)
+
+    return tagged()
+
+
+TYPES = {"POINT": 1, "LINESTRING": 2, "POLYGON": 3, "MULTIPOINT": 4,
+         "MULTILINESTRING": 5, "MULTIPOLYGON": 6, "GEOMETRYCOLLECTION": 7,
+         "POLYHEDRALSURFACE": 13, "TRIANGLE": 14, "TIN": 15}
+
+
+def body(g, nd):
+    typ, _, pl = g
+    out = struct.pack("<II", TYPES[typ], len(pl) if typ != "TRIANGLE" else len(pl))
+    if typ in ("POINT", "LINESTRING", "TRIANGLE"):
+        for c in pl:
+            out += struct.pack("<%dd" % nd, *(list(c) + [0.0] * nd)[:nd])
+    elif typ == "POLYGON":
+        for r in pl:
+            out += struct.pack("<I", len(r))
+        if len(pl) % 2:
+            out += b"\0\0\0\0"
+        for r in pl:
+            for c in r:
+                out += struct.pack("<%dd" % nd, *(list(c) + [0.0] * nd)[:nd])
+    else:
+        for p in pl:
+            out += body(p, nd)
+    return out
+
+
+def gser(g, srid=0, z=False, m=False, bbox=None, version=2):
+    nd = 2 + z + m
+    flags = (1 if z else 0) | (2 if m else 0) | (0x40 if version == 2 else 0)
+    if bbox is not None:
+        flags |= 4
+    s = srid & 0x1FFFFF
+    out = bytes([(s >> 16) & 0x1F, (s >> 8) & 0xFF, s & 0xFF, flags])
+    if bbox is not None:
+        out += struct.pack("<%df" % len(bbox), *bbox)
+    return out + body(g, nd)
+
+
+def all_coords(g):
+    typ, _, pl = g
+    if typ in ("POINT", "LINESTRING", "TRIANGLE"):
+        return list(pl)
+    if typ == "POLYGON":
+        return [c for r in pl for c in r]
+    return [c for p in pl for c in all_coords(p)]
+
+
+# ---------------------------------------------------------------- inputs
+def conformance_wkts():
+    wkts = []
+    for fn in ("postgis-cases.txt", "geos-cases.txt"):
+        p = os.path.join(CONF, fn)
+        if not os.path.exists(p):
+            continue
+        for line in open(p, encoding="utf-8", errors="replace"):
+            m = re.match(r"\s*input:\s*'?([A-Z][A-Z ]*\s*\(.*?\)|[A-Z]+ EMPTY)'?(\s|$)", line)
+            if not m:
+                continue
+            w = m.group(1)
+            # balance the parentheses of the greedy-free match
+            depth = 0
+            for k, ch in enumerate(line[line.index(w):]):
+                depth += ch == "("
+                depth -= ch == ")"
+                if depth == 0 and ch == ")":
+                    w = line[line.index(w):line.index(w) + k + 1]
+                    break
+            try:
+                wkts.append((w, parse_wkt(w)))
+            except (ValueError, IndexError, struct.error):
+                pass
+    return wkts
+
+
+def delaunator_sets():
+    d = os.path.join(CONF, "delaunator")
+    out = []
+    if os.path.isdir(d):
+        for fn in sorted(os.listdir(d)):
+            pts = json.load(open(os.path.join(d, fn)))
+            out.append((fn, [tuple(map(float, p[:2])) for p in pts]))
+    return out
+
+
+def core(mode, opt, grid, tol, data):
+    return bytes([mode, opt, grid, tol]) + data
+
+
+def raw_pairs(pts):
+    return b"".join(struct.pack("<dd", x, y) for x, y in pts)
+
+
+def main():
+    wkts = conformance_wkts()
+    dl = delaunator_sets()
+
+    # ---- fuzz_core
+    for k, (w, g) in enumerate(wkts):
+        pts = [c[:2] for c in all_coords(g)]
+        if pts:
+            put("fuzz_core", core(0, (k % 4) | ((k % 6) << 2) | (0x20 if k % 3 == 0 else 0),
+                                  (k * 7) % 65, 0, raw_pairs(pts[:1024])))
+    for k, (fn, pts) in enumerate(dl):
+        put("fuzz_core", core(0, 0x20 | (k % 4) | (((k + 2) % 6) << 2), 0, 0, raw_pairs(pts[:1000])))
+    # small integers, collinear, magnitudes, palette, ulps, float32, circle, expanded
+    put("fuzz_core", core(1, 0x21, 0, 0, bytes(range(256))))
+    put("fuzz_core", core(1, 0x2f, 3, 0, bytes([0, 1, 16, 17, 0, 1, 255, 34])))
+    put("fuzz_core", core(2, 0x25, 0, 0, bytes([5, 6, 0, 0, 0]) + bytes(range(0, 200, 3))))
+    put("fuzz_core", core(2, 0x25, 0, 0, bytes([5, 6, 9, 0, 0]) + bytes(range(0, 200, 3))))
+    put("fuzz_core", core(2, 0x33, 4, 0, bytes([4, 4, 0, 0, 0]) + bytes(range(0, 50))))
+    put("fuzz_core", core(3, 0x2a, 0, 0, bytes([119, 0x85]) + os.urandom(0) + bytes(range(120))))
+    put("fuzz_core", core(3, 0x2a, 0, 0, bytes([0, 0x7f]) + bytes(range(120))))
+    put("fuzz_core", core(4, 0x26, 0, 0, bytes([0, 1, 2, 3, 4, 5, 6, 7] * 5)))
+    put("fuzz_core", core(4, 0x20, 0, 0, bytes([0, 5, 0, 5, 1, 2])))
+    put("fuzz_core", core(5, 0x2e, 2, 0, bytes(range(256))))
+    put("fuzz_core", core(6, 0x21, 0, 0, struct.pack("<8f", 0, 0, 1, 0, 0, 1, 3.4e38, -3.4e38)))
+    put("fuzz_core", core(7, 0x2d, 0, 0, bytes([0, 0]) + bytes(range(0, 100))))
+    put("fuzz_core", core(7, 0x29, 0, 0, bytes([3, 250]) + bytes(range(0, 120, 2)) + bytes([255])))
+    for kind in range(3):
+        put("fuzz_core", core(8, 0x20 | kind, 0, 0, bytes([kind]) + struct.pack("<HQ", 25000, 42 + kind)))
+    put("fuzz_core", core(8, 0x1b, 0, 0, bytes([0]) + struct.pack("<HQ", 3000, 7) + bytes(range(60))))
+    # tolerance
+    put("fuzz_core", core(1, 0x25, 0, 2, bytes(range(0, 256, 5))))
+    put("fuzz_core", core(0, 0x21, 0, 5 | 0x70, raw_pairs([(0, 0), (1, 0), (0, 1), (1e-3, 1e-3), (5, 5)])))
+    # invalid: NaN, Inf, too large, too small, bad options
+    put("fuzz_core", core(0, 0x00, 0, 0, raw_pairs([(0, 0), (1, 0), (float("nan"), 1)])))
+    put("fuzz_core", core(0, 0x00, 0, 0, raw_pairs([(0, 0), (1, float("inf")), (0, 1)])))
+    put("fuzz_core", core(0, 0x00, 0, 0, raw_pairs([(0, 0), (1e61, 0), (0, 1)])))
+    put("fuzz_core", core(0, 0x00, 0, 0, raw_pairs([(0, 0), (1e-61, 0), (0, 1)])))
+    put("fuzz_core", core(0, 0x01, 0, 0, raw_pairs([(-1e60, -1e60), (1e60, -1e60), (0, 1e60), (1e-60, 0), (-0.0, 0)])))
+    for b in range(8):
+        put("fuzz_core", core(1, 0x40, 0, b << 5, bytes(range(10))))
+
+    # ---- fuzz_gserialized
+    for k, (w, g) in enumerate(wkts):
+        z = g[1] == 3 and "Z" in w.upper().split("(")[0]
+        try:
+            put("fuzz_gserialized", gser(g, srid=4326 if k % 2 else 0, z=z,
+                                         bbox=[0, 1, 0, 1] + ([0, 1] if z else []) if k % 3 == 0 else None))
+        except struct.error:
+            pass
+    for fn, pts in dl[:4]:
+        put("fuzz_gserialized", gser(("MULTIPOINT", 2, [("POINT", 2, [p]) for p in pts[:200]])))
+    hand = [
+        "POINT EMPTY", "GEOMETRYCOLLECTION EMPTY", "POINT(1 2)",
+        "LINESTRING(0 0,1 1,2 0)", "POLYGON((0 0,4 0,4 4,0 4,0 0),(1 1,2 1,2 2,1 1))",
+        "POLYGON((0 0,1 0,0 1,0 0))",
+        "MULTIPOLYGON(((0 0,1 0,0 1,0 0)),((5 5,6 5,5 6,5 5),(5.1 5.1,5.2 5.1,5.1 5.2,5.1 5.1)))",
+        "GEOMETRYCOLLECTION(POINT(0 0),GEOMETRYCOLLECTION(LINESTRING(1 1,2 2),POINT EMPTY),MULTIPOINT((3 3)))",
+        "TIN(((0 0,1 0,0 1,0 0)),((1 0,1 1,0 1,1 0)))",
+        "POLYHEDRALSURFACE(((0 0,1 0,0 1,0 0)))",
+        "TRIANGLE((0 0,1 0,0 1,0 0))",
+        "MULTILINESTRING((0 0,1 1),EMPTY_PLACEHOLDER)".replace(",EMPTY_PLACEHOLDER", ""),
+    ]
+    for w in hand:
+        g = parse_wkt(w)
+        put("fuzz_gserialized", gser(g))
+        put("fuzz_gserialized", gser(g, version=1, srid=-1))
+    g = parse_wkt("MULTIPOINT(0 0 1,1 0 2,0 1 3)")
+    put("fuzz_gserialized", gser(g, z=True, srid=3857))
+    put("fuzz_gserialized", gser(parse_wkt("MULTIPOINT(0 0 1 7,1 0 2 7,0 1 3 7)"), z=True, m=True,
+                                 bbox=[0, 1, 0, 1, 1, 3, 7, 7]))
+    put("fuzz_gserialized", gser(parse_wkt("MULTIPOINT(0 0 7,1 0 7,0 1 7)"), m=True))
+    # geodetic bbox, extended flags
+    b = bytearray(gser(parse_wkt("POINT(1 2)")))
+    put("fuzz_gserialized", bytes(b[:3]) + bytes([0x40 | 0x04 | 0x08]) + struct.pack("<6f", *[0] * 6) + bytes(b[4:]))
+    put("fuzz_gserialized", bytes(b[:3]) + bytes([0x40 | 0x10]) + b"\0" * 8 + bytes(b[4:]))
+    # curves (rejected), unknown type, NaN, truncation
+    put("fuzz_gserialized", bytes([0, 0, 0, 0x40]) + struct.pack("<II6d", 8, 3, 0, 0, 1, 1, 2, 0))
+    put("fuzz_gserialized", bytes([0, 0, 0, 0x40]) + struct.pack("<II", 9, 0))
+    put("fuzz_gserialized", bytes([0, 0, 0, 0x40]) + struct.pack("<II", 99, 0))
+    put("fuzz_gserialized", bytes([0, 0, 0, 0x40]) + struct.pack("<II2d", 1, 1, float("nan"), 0))
+    put("fuzz_gserialized", bytes([0, 0, 0, 0x40]) + struct.pack("<II2d", 2, 5, 0, 0))
+    put("fuzz_gserialized", bytes([0, 0, 0, 0x40]) + struct.pack("<II", 7, 0xFFFFFFFF))
+    put("fuzz_gserialized", bytes([0, 0, 0, 0x40]) + struct.pack("<III", 3, 3, 1))
+    nest = b""
+    for _ in range(40):
+        nest += struct.pack("<II", 7, 1)
+    put("fuzz_gserialized", bytes([0, 0, 0, 0x40]) + nest + struct.pack("<II2d", 1, 1, 3, 4))
+
+    # ---- fuzz_state
+    def state(have_first=True, hasz=False, params=True, srid=0, flags=0, tol=0.0, pts=(), zs=None,
+              magic=0x41434454, version=1, pad=0, n=None):
+        bits = (1 if have_first else 0) | (2 if hasz else 0) | (4 if params else 0)
+        n = len(pts) if n is None else n
+        out = struct.pack("<IIIiiIdQ", magic, version, bits, srid, flags, pad, tol, n)
+        out += b"".join(struct.pack("<dd", *p) for p in pts)
+        if hasz:
+            out += b"".join(struct.pack("<d", z) for z in (zs or [0.0] * len(pts)))
+        return out
+
+    def st2(a, b=b""):
+        return struct.pack("<H", len(a)) + a + b
+
+    sq = [(0, 0), (1, 0), (0, 1), (1, 1)]
+    put("fuzz_state", st2(state(pts=sq)))
+    put("fuzz_state", st2(state(pts=sq), state(pts=[(5, 5), (6, 6)])))
+    put("fuzz_state", st2(state(pts=sq, hasz=True, zs=[1, 2, 3, 4], srid=4326),
+                          state(pts=[(5, 5)], hasz=True, srid=4326)))
+    put("fuzz_state", st2(state(pts=sq, srid=4326), state(pts=sq, srid=3857)))
+    put("fuzz_state", st2(state(pts=sq), state(pts=sq, hasz=True)))
+    put("fuzz_state", st2(state(pts=sq, flags=1, tol=0.5), state(pts=sq, flags=2, tol=0.5)))
+    put("fuzz_state", st2(state(have_first=False, params=False, pts=[])))
+    put("fuzz_state", st2(state(have_first=False, params=True, pts=[]), state(pts=sq)))
+    put("fuzz_state", st2(state(pts=sq, magic=0)))
+    put("fuzz_state", st2(state(pts=sq, version=2)))
+    put("fuzz_state", st2(state(pts=sq, pad=1)))
+    put("fuzz_state", st2(state(pts=sq, n=5)))
+    put("fuzz_state", st2(state(pts=sq, n=(1 << 64) - 1)))
+    put("fuzz_state", st2(state(pts=sq, n=(1 << 60))))
+    put("fuzz_state", st2(state(pts=[(float("nan"), 0)])))
+    put("fuzz_state", st2(state(pts=sq, flags=7)))
+    put("fuzz_state", st2(state(pts=sq, tol=-1.0)))
+    put("fuzz_state", st2(state(pts=sq, tol=float("inf"))))
+    put("fuzz_state", st2(state(pts=sq)[:30]))
+    for fn, pts in dl[:3]:
+        put("fuzz_state", st2(state(pts=pts[:200])))
+
+
+if __name__ == "__main__":
+    main()
