@@ -52,6 +52,10 @@ canon() { awk '{ # rotate so the smallest vertex comes first
 check "threads/grid/levels give one triangle set" "cmp -s <(canon $tmp/r1.out) <(canon $tmp/r2.out) && cmp -s <(canon $tmp/r1.out) <(canon $tmp/r3.out)"
 check "2n-2-h bound" "[ \$(wc -l < $tmp/r1.out) -gt 39900 ] && [ \$(wc -l < $tmp/r1.out) -lt 39998 ]"
 
+# --validate runs the exact validator on the result
+$TDC --validate "$tmp/r.txt" 2> "$tmp/v.err"
+check "--validate: exit 0 and says valid" "[ $? -eq 0 ] && grep -q '^valid: 20000 sites' $tmp/v.err"
+
 # tolerance (PostGIS case: (8 9) within 2 of (7 9) is dropped)
 printf '5 5\n6 0\n7 9\n8 9\n' > "$tmp/t.txt"
 $TDC --tolerance 2 -o "$tmp/t.out" "$tmp/t.txt"

@@ -4,6 +4,9 @@
  *
  *	./tdc [-t THREADS] [-g GRID] [-l LEVELS] [--tolerance T] [-o OUT] [--stats] INPUT
  *
+ * and, beyond the fixed interface, --validate: check the result with the
+ * exact validator (slow, and about 60 more bytes per point).
+ *
  * INPUT is a .bin file of little-endian float64 x,y pairs, or any other file
  * (or - for stdin) of text lines "x y" or "x y z".  -o writes one triangle
  * per line, counter-clockwise, each vertex "x y" (plus z when the input had
@@ -19,7 +22,7 @@
 #include "tdc.h"
 
 static const char usage[] =
-"usage: ./tdc [-t THREADS] [-g GRID] [-l LEVELS] [--tolerance T] [-o OUT] [--stats] INPUT\n"
+"usage: ./tdc [-t THREADS] [-g GRID] [-l LEVELS] [--tolerance T] [-o OUT] [--stats] [--validate] INPUT\n"
 "  INPUT  .bin file of little-endian float64 x,y pairs, or a text file of\n"
 "         'x y' or 'x y z' lines ('-' reads stdin)\n"
 "  -t     worker threads (0 = all online CPUs, the default)\n"
@@ -27,7 +30,8 @@ static const char usage[] =
 "  -l     subdivision levels d, 2^d subsets (0 = auto, -1 = none)\n"
 "  --tolerance T  drop sites closer than T to an already kept site\n"
 "  -o     write triangles, one per line, counter-clockwise, %.17g\n"
-"  --stats  print counts and phase times (seconds) to stderr\n";
+"  --stats  print counts and phase times (seconds) to stderr\n"
+"  --validate  check the result with the exact validator; exit 1 if invalid\n";
 
 static void
 die(int code, const char *fmt, const char *arg)
@@ -36,6 +40,53 @@ die(int code, const char *fmt, const char *arg)
 	fprintf(stderr, fmt, arg);
 	fputc('\n', stderr);
 	exit(code);
+}
+
+/*
+ * Hand the unique sites and the triangles, renumbered densely, to the exact
+ * validator.  Returns 0 when valid.
+ */
+static int
+validate_result(const tdc_job *job, size_t n, char *err, size_t errlen)
+{
+	uint32_t	lim = tdc_site_id_limit(job),
+			   *dense = malloc(sizeof(uint32_t) * ((size_t) lim + 1)),
+			   *tri = malloc(12 * (tdc_num_triangles(job) + 1)),
+				v[3];
+	double	   *sites = malloc(16 * (tdc_num_sites(job) + 1));
+	size_t		m = 0,
+				t = 0;
+	tdc_iter	it = {0};
+	int			rc;
+
+	if (!dense || !tri || !sites)
+	{
+		snprintf(err, errlen, "out of memory for validation");
+		return -1;
+	}
+	for (uint32_t s = 0; s < lim; s++)
+		dense[s] = UINT32_MAX;
+	for (size_t i = 0; i < n; i++)
+	{
+		uint32_t	s = tdc_input_site(job, i);
+
+		if (dense[s] == UINT32_MAX)
+		{
+			dense[s] = (uint32_t) m;
+			memcpy(sites + 2 * m++, tdc_site_xy(job, s), 16);
+		}
+	}
+	while (tdc_next_triangle(job, &it, v))
+	{
+		for (int k = 0; k < 3; k++)
+			tri[3 * t + k] = dense[v[k]];
+		t++;
+	}
+	rc = tdc_validate(sites, m, tri, t, err, errlen);
+	free(dense);
+	free(tri);
+	free(sites);
+	return rc;
 }
 
 static long
@@ -169,6 +220,7 @@ main(int argc, char **argv)
 	const char *input = NULL,
 			   *outpath = NULL;
 	int			stats = 0,
+				validate = 0,
 				rc;
 	size_t		n;
 	double	   *xy,
@@ -188,6 +240,8 @@ main(int argc, char **argv)
 		}
 		else if (strcmp(a, "--stats") == 0)
 			stats = 1;
+		else if (strcmp(a, "--validate") == 0)
+			validate = 1;
 		else if (strcmp(a, "-t") == 0 || strcmp(a, "-g") == 0 || strcmp(a, "-l") == 0 ||
 				 strcmp(a, "-o") == 0 || strcmp(a, "--tolerance") == 0)
 		{
@@ -267,6 +321,16 @@ main(int argc, char **argv)
 				tdc_num_input(job), tdc_num_sites(job), tdc_num_triangles(job),
 				tdc_threads_used(job), t.sort, t.subdivide, t.leaves, t.merge, t.total,
 				ru.ru_maxrss / 1024.0);
+	}
+	if (validate)
+	{
+		if (validate_result(job, n, err, sizeof(err)) != 0)
+		{
+			tdc_job_free(job);
+			die(1, "INVALID triangulation: %s", err);
+		}
+		fprintf(stderr, "valid: %zu sites, %zu triangles, checked exactly\n",
+				tdc_num_sites(job), tdc_num_triangles(job));
 	}
 	tdc_job_free(job);
 	free(xy);
