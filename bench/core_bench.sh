@@ -74,17 +74,17 @@ if [ "$COAST" = 1 ]; then
 fi
 
 # ---------------------------------------------------------------- running
-RUNS_HDR="set,rep,tool,threads_req,n,unique,triangles,threads,sort,subdivide,leaves,merge,total,peak_rss_mb,time_rss_mb,wall,status"
+RUNS_HDR="set,rep,tool,threads_req,n,unique,triangles,threads,sort,subdivide,leaves,merge,total,peak_rss_mb,time_rss_mb,wall,cpu,status"
 
 # run_tdc SET FILE REP THREADS: one ./tdc --stats run, appended to $RUNS
 run_tdc() {
 	local set=$1 file=$2 rep=$3 thr=$4 st=ok
-	timeout "$TMO" /usr/bin/time -f 'time_rss_kb=%M time_wall=%e' -o "$WORK/time" \
+	timeout "$TMO" /usr/bin/time -f 'time_rss_kb=%M time_wall=%e time_user=%U time_sys=%S' -o "$WORK/time" \
 		"$ROOT/tdc" -t "$thr" --stats "$file" > /dev/null 2> "$WORK/err" || st=fail
 	grep -q '^n=' "$WORK/err" || st=fail
 	if [ $st = fail ]; then
 		log "tdc -t $thr $set failed: $(tail -3 "$WORK/err" | tr '\n' ' ')"
-		echo "$set,$rep,tdc,$thr,,,,,,,,,,,,,fail" >> "$RUNS"
+		echo "$set,$rep,tdc,$thr,,,,,,,,,,,,,,fail" >> "$RUNS"
 		return 0
 	fi
 	grep '^n=' "$WORK/err" | tail -1 > "$WORK/stats"
@@ -93,8 +93,9 @@ run_tdc() {
 	for f in n unique triangles threads sort subdivide leaves merge total peak_rss_mb; do
 		printf ',%s' "$(kv "$WORK/stats" $f)" >> "$RUNS"
 	done
-	printf ',%s,%s,ok\n' "$(awk '{ print $1 / 1024 }' <<< "$(kv "$WORK/time" time_rss_kb)")" \
-		"$(kv "$WORK/time" time_wall)" >> "$RUNS"
+	printf ',%s,%s,%s,ok\n' "$(awk '{ print $1 / 1024 }' <<< "$(kv "$WORK/time" time_rss_kb)")" \
+		"$(kv "$WORK/time" time_wall)" \
+		"$(awk -v u="$(kv "$WORK/time" time_user)" -v s="$(kv "$WORK/time" time_sys)" 'BEGIN { print u + s }')" >> "$RUNS"
 }
 
 # run_cgal SET FILE REP
@@ -105,14 +106,14 @@ run_cgal() {
 	grep -q '^n=' "$WORK/out" || st=fail
 	if [ $st = fail ]; then
 		log "cgal $set failed: $(tail -3 "$WORK/err" | tr '\n' ' ')"
-		echo "$set,$rep,cgal,1,,,,,,,,,,,,,fail" >> "$RUNS"
+		echo "$set,$rep,cgal,1,,,,,,,,,,,,,,fail" >> "$RUNS"
 		return 0
 	fi
 	local o=$WORK/out
-	printf '%s,%s,cgal,1,%s,%s,%s,1,,,,,%s,%s,%s,%s,ok\n' "$set" "$rep" \
+	printf '%s,%s,cgal,1,%s,%s,%s,1,,,,,%s,%s,%s,%s,%s,ok\n' "$set" "$rep" \
 		"$(kv "$o" n)" "$(kv "$o" vertices)" "$(kv "$o" faces)" "$(kv "$o" seconds)" \
 		"$(kv "$o" peak_rss_mb)" "$(awk '{ print $1 / 1024 }' <<< "$(kv "$WORK/time" time_rss_kb)")" \
-		"$(kv "$WORK/time" time_wall)" >> "$RUNS"
+		"$(kv "$WORK/time" time_wall)" "$(kv "$o" cpu_seconds)" >> "$RUNS"
 }
 
 # med SET TOOL THREADS_REQ FIELD: median of a column over the ok runs
@@ -188,13 +189,13 @@ if [ $HAVE_TDC = 1 ]; then
 fi
 
 # ---------------------------------------------------------------- tables
-echo "set,n,unique,triangles,cgal_faces,triangles_match,reps,tdc1_total_s,tdc1_ns_per_point,tdcN_threads,tdcN_total_s,speedup,cgal_s,cgal_ns_per_point,ratio_tdc1_cgal,ratio_tdcN_cgal,tdc1_peak_rss_mb,tdcN_peak_rss_mb,cgal_peak_rss_mb,tdc1_sort,tdc1_subdivide,tdc1_leaves,tdc1_merge,tdcN_sort,tdcN_subdivide,tdcN_leaves,tdcN_merge,tdc1_wall_s,tdcN_wall_s,cgal_wall_s,failures" > "$CSV"
+echo "set,n,unique,triangles,cgal_faces,triangles_match,reps,tdc1_total_s,tdc1_ns_per_point,tdcN_threads,tdcN_total_s,speedup,cgal_s,cgal_ns_per_point,ratio_tdc1_cgal,ratio_tdcN_cgal,tdc1_peak_rss_mb,tdcN_peak_rss_mb,cgal_peak_rss_mb,tdc1_sort,tdc1_subdivide,tdc1_leaves,tdc1_merge,tdcN_sort,tdcN_subdivide,tdcN_leaves,tdcN_merge,tdc1_wall_s,tdcN_wall_s,cgal_wall_s,tdc1_cpu_s,cgal_cpu_s,ratio_cpu_tdc1_cgal,failures" > "$CSV"
 
 {
 	echo
 	echo "Core benchmark (medians; seconds; RSS = peak resident set of the whole process, /usr/bin/time)"
-	printf '%-15s %9s %9s %6s %9s %7s %9s %8s %8s %8s %7s %7s %7s %s\n' \
-		set n unique tri=? tdc1_s tdc1_ns tdcN_s speedup cgal_s cgal_ns 1/cgal rss1MB rssCG phases_1thread[sort/sub/leaves/merge]
+	printf '%-15s %9s %9s %6s %9s %7s %9s %8s %8s %8s %7s %7s %7s %7s %s\n' \
+		set n unique tri=? tdc1_s tdc1_ns tdcN_s speedup cgal_s cgal_ns 1/cgal cpu1/cg rss1MB rssCG phases_1thread[sort/sub/leaves/merge]
 } | tee -a "$TXT"
 
 for set in "${SET_NAMES[@]}"; do
@@ -218,11 +219,12 @@ for set in "${SET_NAMES[@]}"; do
 		ph[1$p]=$(med "$set" tdc 1 $p); ph[N$p]=$(med "$set" tdc 0 $p)
 	done
 	w1=$(med "$set" tdc 1 wall); wN=$(med "$set" tdc 0 wall); wc=$(med "$set" cgal 1 wall)
+	c1=$(med "$set" tdc 1 cpu); cc=$(med "$set" cgal 1 cpu); rc=$(div "$c1" "$cc")
 	fails=$(( $(nfail "$set" tdc 1) + $(nfail "$set" tdc 0) + $(nfail "$set" cgal 1) ))
-	echo "$set,$n,$uniq,$tri,$cf,$match,$reps,$t1,$t1ns,$thrN,$tN,$sp,$cg,$cgns,$r1,$rN,$(med "$set" tdc 1 peak_rss_mb),$(med "$set" tdc 0 peak_rss_mb),$(med "$set" cgal 1 peak_rss_mb),${ph[1sort]},${ph[1subdivide]},${ph[1leaves]},${ph[1merge]},${ph[Nsort]},${ph[Nsubdivide]},${ph[Nleaves]},${ph[Nmerge]},$w1,$wN,$wc,$fails" >> "$CSV"
-	printf '%-15s %9s %9s %6s %9s %7s %9s %8s %8s %8s %7s %7s %7s %s/%s/%s/%s%s\n' "$set" "$n" "${uniq:--}" "${match:--}" \
+	echo "$set,$n,$uniq,$tri,$cf,$match,$reps,$t1,$t1ns,$thrN,$tN,$sp,$cg,$cgns,$r1,$rN,$(med "$set" tdc 1 peak_rss_mb),$(med "$set" tdc 0 peak_rss_mb),$(med "$set" cgal 1 peak_rss_mb),${ph[1sort]},${ph[1subdivide]},${ph[1leaves]},${ph[1merge]},${ph[Nsort]},${ph[Nsubdivide]},${ph[Nleaves]},${ph[Nmerge]},$w1,$wN,$wc,$c1,$cc,$rc,$fails" >> "$CSV"
+	printf '%-15s %9s %9s %6s %9s %7s %9s %8s %8s %8s %7s %7s %7s %7s %s/%s/%s/%s%s\n' "$set" "$n" "${uniq:--}" "${match:--}" \
 		"$(fmt "$t1" %.3f)" "$(fmt "$t1ns" %.0f)" "$(fmt "$tN" %.3f)" "$(fmt "$sp" %.2fx)" \
-		"$(fmt "$cg" %.3f)" "$(fmt "$cgns" %.0f)" "$(fmt "$r1" %.2f)" "$(fmt "$rss1" %.0f)" "$(fmt "$rssc" %.0f)" \
+		"$(fmt "$cg" %.3f)" "$(fmt "$cgns" %.0f)" "$(fmt "$r1" %.2f)" "$(fmt "$rc" %.2f)" "$(fmt "$rss1" %.0f)" "$(fmt "$rssc" %.0f)" \
 		"$(fmt "${ph[1sort]}" %.3f)" "$(fmt "${ph[1subdivide]}" %.3f)" "$(fmt "${ph[1leaves]}" %.3f)" "$(fmt "${ph[1merge]}" %.3f)" \
 		"$([ "$fails" -gt 0 ] && echo "  ($fails failed runs)")" | tee -a "$TXT"
 	unset ph
@@ -231,7 +233,9 @@ done
 {
 	echo
 	echo "columns: tri=? tdc triangle count equals CGAL's finite face count; tdc1 = ./tdc -t 1, tdcN = ./tdc -t 0 (all $NCPU CPUs);"
-	echo "         *_ns = ns per input point; 1/cgal = tdc1_s / cgal_s (< 1: tdc faster); rss = /usr/bin/time max RSS (MB)"
+	echo "         *_ns = ns per input point; 1/cgal = tdc1_s / cgal_s (< 1: tdc faster); rss = /usr/bin/time max RSS (MB);"
+	echo "         cpu1/cg = CPU seconds of the whole ./tdc -t 1 process (user+sys, file reading included) / CPU seconds of CGAL's insert"
+	echo "                   (less sensitive than wall time to other load on the machine)"
 } | tee -a "$TXT"
 
 if [ $HAVE_TDC = 1 ]; then
