@@ -10,7 +10,10 @@
  * must not depend on threads, grid size, levels or input order.
  */
 #include <math.h>
+#include <pthread.h>
+#include <signal.h>
 #include <stdbool.h>
+#include <unistd.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
@@ -710,6 +713,73 @@ test_cancel_and_concurrency(void)
 	free(xy);
 }
 
+static pthread_t main_thread;
+static volatile sig_atomic_t signals_seen;
+static volatile sig_atomic_t signals_on_worker;
+
+static void
+on_usr1(int sig)
+{
+	signals_seen++;
+	if (!pthread_equal(pthread_self(), main_thread))
+		signals_on_worker++;
+}
+
+/*
+ * A host process (a PostgreSQL backend) relies on its signals reaching its
+ * own thread: process-directed signals sent while a job runs must never be
+ * taken by a worker.
+ */
+static void
+test_signals_stay_on_caller(void)
+{
+	size_t		n = tdc_test_quick ? 200000 : 1000000;
+	double	   *xy = gen_uniform(n, 1000, 0, 0);
+	struct sigaction sa,
+				old;
+	tdc_options opt;
+	tdc_job    *job;
+	char		err[256];
+	int			sent = 0;
+
+	main_thread = pthread_self();
+	memset(&sa, 0, sizeof(sa));
+	sa.sa_handler = on_usr1;
+	sigemptyset(&sa.sa_mask);
+	sigaction(SIGUSR1, &sa, &old);
+	tdc_options_init(&opt);
+	opt.threads = 4;
+	CHECK(tdc_job_start(xy, n, &opt, &job, err, sizeof(err)) == TDC_OK, "signals: start: %s", err);
+	if (job)
+	{
+		sigset_t	usr1;
+
+		/*
+		 * Linux hands a process-directed signal to the main thread when it
+		 * can take it, so block it here: now only a worker that failed to
+		 * block it could, and otherwise it stays pending for us.
+		 */
+		sigemptyset(&usr1);
+		sigaddset(&usr1, SIGUSR1);
+		pthread_sigmask(SIG_BLOCK, &usr1, NULL);
+		while (tdc_job_wait(job, 1) == TDC_RUNNING && sent < 200)
+		{
+			kill(getpid(), SIGUSR1);
+			sent++;
+		}
+		CHECK(tdc_job_wait(job, -1) == TDC_OK, "signals: job finishes despite signals");
+		tdc_job_free(job);
+		CHECK(signals_on_worker == 0 && signals_seen == 0,
+			  "signals: %d taken by worker threads while the caller blocked them",
+			  (int) signals_on_worker);
+		pthread_sigmask(SIG_UNBLOCK, &usr1, NULL);
+	}
+	sigaction(SIGUSR1, &old, NULL);
+	CHECK(sent > 0 && signals_seen > 0 && signals_on_worker == 0,
+		  "signals: %d sent, %d reached the caller once unblocked", sent, (int) signals_seen);
+	free(xy);
+}
+
 void
 test_engine(void)
 {
@@ -719,4 +789,5 @@ test_engine(void)
 	test_errors();
 	test_random_sets();
 	test_cancel_and_concurrency();
+	test_signals_stay_on_caller();
 }

@@ -159,6 +159,7 @@ typedef struct grid_arg
 	uint32_t   *cell_start;		/* first position of each cell */
 	size_t		ncells;
 	int			nslices;
+	int			level;			/* tree level being split */
 } grid_arg;
 
 static void
@@ -203,6 +204,33 @@ scatter_task(void *arg, size_t t, int worker)
 		job->xy[2 * (size_t) p + 1] = ga->src[2 * i + 1];
 		job->idx[p] = ga->src_idx ? ga->src_idx[i] : (uint32_t) i;
 	}
+}
+
+/* Split node i of the current level by count; a single cell keeps all. */
+static void
+split_task(void *arg, size_t i, int worker)
+{
+	grid_arg   *ga = arg;
+	tdc_job    *job = ga->job;
+	int			level = ga->level;
+	size_t		k = ((size_t) 1 << level) + i;
+	tdc_rect   *r = &job->node_rect[k],
+			   *a = &job->node_rect[2 * k],
+			   *b = &job->node_rect[2 * k + 1];
+	int			axis = tdc_rect_split(job, r, level & 1, true, a, b);
+
+	if (axis < 0)
+	{
+		*a = *r;
+		*b = *r;
+		b->r0 = b->r1;			/* empty */
+		axis = level & 1;
+	}
+	job->node_axis[k] = (uint8_t) axis;
+	job->node_lo[2 * k] = job->node_lo[k];
+	job->node_hi[2 * k] = job->node_lo[k] + tdc_rect_count(job, a);
+	job->node_lo[2 * k + 1] = job->node_hi[2 * k];
+	job->node_hi[2 * k + 1] = job->node_hi[k];
 }
 
 /* Number the cells of r in depth-first order of the inner splits. */
@@ -299,32 +327,16 @@ tdc_subdivide(tdc_job *job)
 		}
 	}
 
-	/* the top d levels, split by count */
+	/* the top d levels, split by count, level by level on the pool */
 	job->node_rect[1].r0 = job->node_rect[1].c0 = 0;
 	job->node_rect[1].r1 = job->node_rect[1].c1 = job->s;
 	job->node_lo[1] = 0;
 	job->node_hi[1] = (uint32_t) ga.n;
 	for (int level = 0; level < job->d; level++)
-		for (size_t k = (size_t) 1 << level; k < ((size_t) 2 << level); k++)
-		{
-			tdc_rect   *r = &job->node_rect[k];
-			tdc_rect   *a = &job->node_rect[2 * k],
-					   *b = &job->node_rect[2 * k + 1];
-			int			axis = tdc_rect_split(job, r, level & 1, true, a, b);
-
-			if (axis < 0)
-			{
-				*a = *r;
-				*b = *r;
-				b->r0 = b->r1;	/* empty */
-				axis = level & 1;
-			}
-			job->node_axis[k] = (uint8_t) axis;
-			job->node_lo[2 * k] = job->node_lo[k];
-			job->node_hi[2 * k] = job->node_lo[k] + tdc_rect_count(job, a);
-			job->node_lo[2 * k + 1] = job->node_hi[2 * k];
-			job->node_hi[2 * k + 1] = job->node_hi[k];
-		}
+	{
+		ga.level = level;
+		tdc_pool_for(job->pool, (size_t) 1 << level, split_task, &ga);
+	}
 
 	/* cell positions in tree order, then per-slice write positions */
 	tdc_pool_for(job->pool, (size_t) 1 << job->d, number_task, &ga);
