@@ -36,7 +36,7 @@ print_summary() {
 	echo
 	echo "==================== tdc_delaunay test summary ===================="
 	printf '%s\n' "${SUMMARY[@]}"
-	echo "==================================================================="
+	echo "=================================================== $SECONDS s in all ==="
 	echo "$TOTAL_PASSED passed, $TOTAL_FAILED failed"
 }
 
@@ -62,7 +62,7 @@ trap 'exit 143' TERM
 run_part() {	# name counts command...
 	local name=$1 counts=$2
 	shift 2
-	local log=$TDC_LOGDIR/$name.log rc p=0 f=0 line note=""
+	local log=$TDC_LOGDIR/$name.log rc p=0 f=0 line note="" t0=$SECONDS
 	tdc_say "[$name] $*"
 	# In the background so that Ctrl-C reaches the trap at once (timeout runs
 	# the part in a process group of its own and relays the TERM we send it).
@@ -103,7 +103,7 @@ run_part() {	# name counts command...
 		f=1
 		note="(exit $rc after reporting no failure)"
 	fi
-	record "$name" "$p" "$f" "$note"
+	record "$name" "$p" "$f" "$((SECONDS - t0)) s $note"
 	return 0
 }
 
