@@ -1,0 +1,78 @@
+--
+-- tdc_guc: the tdc_delaunay.* settings.
+--
+-- The settings exist once the library is loaded (by any function call).
+SELECT ST_NumGeometries(ST_TDCDelaunayTriangles('MULTIPOINT(0 0, 1 0, 0 1)')) AS loaded;
+SELECT name, setting, unit, context, vartype, min_val, max_val
+FROM pg_settings WHERE name LIKE 'tdc_delaunay.%' ORDER BY name;
+
+-- The prefix is reserved: typos are errors, not silent placeholders.
+SET tdc_delaunay.thread = 2;
+
+-- Out of range.
+SET tdc_delaunay.threads = -1;
+SET tdc_delaunay.levels = -2;
+SET tdc_delaunay.max_result_bytes = 10;
+
+-- threads, levels and grid size change how, not what.
+CREATE TABLE tdc_guc_pts AS SELECT id, geom FROM tdc_random_points(5000, 3);
+CREATE TABLE tdc_guc_ref AS SELECT tdc_norm(ST_TDCDelaunay(geom)) AS t FROM tdc_guc_pts;
+SET tdc_delaunay.threads = 1;
+SELECT tdc_norm(ST_TDCDelaunay(geom)) = (SELECT t FROM tdc_guc_ref) AS threads_1 FROM tdc_guc_pts;
+SET tdc_delaunay.threads = 3;
+SELECT tdc_norm(ST_TDCDelaunay(geom)) = (SELECT t FROM tdc_guc_ref) AS threads_3 FROM tdc_guc_pts;
+SET tdc_delaunay.levels = -1;
+SELECT tdc_norm(ST_TDCDelaunay(geom)) = (SELECT t FROM tdc_guc_ref) AS no_subdivision FROM tdc_guc_pts;
+SET tdc_delaunay.levels = 4;
+SET tdc_delaunay.grid_size = 16;
+SELECT tdc_norm(ST_TDCDelaunay(geom)) = (SELECT t FROM tdc_guc_ref) AS levels_4_grid_16 FROM tdc_guc_pts;
+RESET tdc_delaunay.levels;
+RESET tdc_delaunay.grid_size;
+-- the superuser ceiling applies
+SET tdc_delaunay.max_threads = 1;
+SET tdc_delaunay.threads = 0;
+SELECT tdc_norm(ST_TDCDelaunay(geom)) = (SELECT t FROM tdc_guc_ref) AS max_threads_1 FROM tdc_guc_pts;
+RESET tdc_delaunay.max_threads;
+RESET tdc_delaunay.threads;
+
+-- stats: a NOTICE with the counts (timings and threads go to the DETAIL).
+\set VERBOSITY terse
+SET tdc_delaunay.stats = on;
+SELECT ST_NumGeometries(ST_TDCDelaunayTriangles('MULTIPOINT(0 0, 1 0, 0 1, 1 1, 1 1, 0.5 0.4)')) AS triangles;
+SELECT count(*) FROM ST_TDCDelaunayDump('SELECT geom FROM tdc_guc_pts WHERE id <= 100');
+RESET tdc_delaunay.stats;
+\set VERBOSITY default
+
+-- max_memory: a clear error before allocating past it, both while
+-- collecting rows and before starting the engine.
+SET tdc_delaunay.max_memory = '1MB';
+SELECT ST_NumGeometries(ST_TDCDelaunay(geom)) FROM tdc_guc_pts WHERE id <= 100;
+SELECT ST_NumGeometries(ST_TDCDelaunay(geom)) FROM tdc_guc_pts;
+SELECT ST_NumGeometries(ST_TDCDelaunay(g)) FROM (SELECT ST_MakePoint(i, i % 7) g FROM generate_series(1, 100000) i) s;
+SELECT count(*) FROM ST_TDCDelaunayDump('SELECT ST_MakePoint(i, i % 7) FROM generate_series(1, 100000) i');
+SET tdc_delaunay.max_memory = '64MB';
+SELECT ST_NumGeometries(ST_TDCDelaunay(geom)) = tdc_expected_triangles(ST_Collect(geom)) AS fits FROM tdc_guc_pts;
+RESET tdc_delaunay.max_memory;
+
+-- max_result_bytes (test only): results over the limit of one value point
+-- to ST_TDCDelaunayDump.  A 2D triangle takes 80 bytes.
+SET tdc_delaunay.max_result_bytes = 1000;
+SELECT ST_NumGeometries(ST_TDCDelaunayTriangles('MULTIPOINT(0 0, 1 0, 0 1, 1 1)')) AS small_fits;
+SELECT ST_TDCDelaunay(geom) FROM tdc_guc_pts WHERE id <= 100;
+SELECT ST_TDCDelaunayTriangles(ST_Collect(geom), 0, 1) FROM tdc_guc_pts WHERE id <= 100;
+SELECT count(*) = tdc_expected_triangles((SELECT ST_Collect(geom) FROM tdc_guc_pts WHERE id <= 100)) AS dump_unaffected
+FROM ST_TDCDelaunayDump('SELECT geom FROM tdc_guc_pts WHERE id <= 100');
+RESET tdc_delaunay.max_result_bytes;
+
+-- superuser-only settings
+CREATE ROLE tdc_guc_user;
+SET ROLE tdc_guc_user;
+SET tdc_delaunay.max_threads = 64;
+SET tdc_delaunay.max_result_bytes = 100;
+SET tdc_delaunay.threads = 2;
+SHOW tdc_delaunay.threads;
+RESET ROLE;
+DROP ROLE tdc_guc_user;
+RESET tdc_delaunay.threads;
+
+DROP TABLE tdc_guc_pts, tdc_guc_ref;
