@@ -22,6 +22,8 @@
 #   BENCH_PHASE_SET=uniform_1e7   BENCH_PHASE_REPS=3
 #   BENCH_TIMEOUT=900 (seconds per single run)
 #   BENCH_NO_TDC=1   only CGAL (e.g. before the core exists)
+#   BENCH_DOCS=DIR   where core.png goes (default docs/)
+#   BENCH_PLOT_ONLY=1  only redraw docs/core.png from build/bench/core.csv
 set -euo pipefail
 
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
@@ -56,6 +58,48 @@ if [ "${BENCH_NO_TDC:-0}" = 1 ]; then
 elif ! ensure_tdc; then
 	log "running the CGAL half only"
 	HAVE_TDC=0
+fi
+
+# make_plot: docs/core.png (seconds vs n, log-log) from core.csv, per synthetic set:
+# tdc 1 thread / all threads / CGAL
+make_plot() {
+	if command -v gnuplot >/dev/null; then
+		DOCS=${BENCH_DOCS:-$ROOT/docs}
+		mkdir -p "$DOCS"
+		pl=()
+		colors=("#1f77b4" "#2ca02c" "#9467bd")
+		ci=0
+		for k in $SETS; do
+			awk -F, -v k="$k" 'NR > 1 && index($1, k "_") == 1 { print $2, $8, $11, $13 }' "$CSV" | sort -g > "$WORK/plot.$k"
+			[ -s "$WORK/plot.$k" ] || continue
+			c=${colors[$((ci % 3))]}
+			ci=$((ci + 1))
+			[ $HAVE_TDC = 1 ] && pl+=("'$WORK/plot.$k' using 1:2 with linespoints lw 2 pt 7 lc rgb '$c' title 'tdc 1 thread, $k'"
+				"'$WORK/plot.$k' using 1:3 with linespoints lw 1 dt 2 pt 6 lc rgb '$c' title 'tdc $NCPU threads, $k'")
+			pl+=("'$WORK/plot.$k' using 1:4 with linespoints lw 2 dt 3 pt 4 lc rgb '$c' title 'CGAL, $k'")
+		done
+		if [ ${#pl[@]} -gt 0 ]; then
+			{
+				echo "set terminal pngcairo size 800,560 font 'DejaVu Sans,10'"
+				echo "set output '$DOCS/core.png'"
+				echo "set logscale xy"
+				echo "set format x '10^{%L}'"
+				echo "set xlabel 'points n'"
+				echo "set ylabel 'seconds'"
+				echo "set title 'Core: ./tdc vs CGAL Delaunay\\_triangulation\\_2 (medians, $NCPU CPUs)'"
+				echo "set grid"
+				echo "set key top left"
+				printf 'plot '
+				(IFS=,; echo "${pl[*]}")
+			} > "$WORK/core.gp"
+			gnuplot "$WORK/core.gp" || log "gnuplot failed"
+		fi
+	fi
+}
+
+if [ "${BENCH_PLOT_ONLY:-0}" = 1 ]; then
+	make_plot
+	exit 0
 fi
 
 # ---------------------------------------------------------------- inputs
@@ -261,36 +305,5 @@ fi
 
 echo "# load average at end: $(cut -d' ' -f1-3 /proc/loadavg)" | tee -a "$TXT"
 
-# docs/core.png: seconds vs n (log-log) per synthetic set, tdc 1 thread / all threads / CGAL
-if command -v gnuplot >/dev/null; then
-	mkdir -p "$ROOT/docs"
-	pl=()
-	colors=("#1f77b4" "#2ca02c" "#9467bd")
-	ci=0
-	for k in $SETS; do
-		awk -F, -v k="$k" 'NR > 1 && index($1, k "_") == 1 { print $2, $8, $11, $13 }' "$CSV" | sort -g > "$WORK/plot.$k"
-		[ -s "$WORK/plot.$k" ] || continue
-		c=${colors[$((ci % 3))]}
-		ci=$((ci + 1))
-		[ $HAVE_TDC = 1 ] && pl+=("'$WORK/plot.$k' using 1:2 with linespoints lw 2 pt 7 lc rgb '$c' title 'tdc 1 thread, $k'"
-			"'$WORK/plot.$k' using 1:3 with linespoints lw 1 dt 2 pt 6 lc rgb '$c' title 'tdc $NCPU threads, $k'")
-		pl+=("'$WORK/plot.$k' using 1:4 with linespoints lw 2 dt 3 pt 4 lc rgb '$c' title 'CGAL, $k'")
-	done
-	if [ ${#pl[@]} -gt 0 ]; then
-		{
-			echo "set terminal pngcairo size 800,560 font 'DejaVu Sans,10'"
-			echo "set output '$ROOT/docs/core.png'"
-			echo "set logscale xy"
-			echo "set format x '10^{%L}'"
-			echo "set xlabel 'points n'"
-			echo "set ylabel 'seconds'"
-			echo "set title 'Core: ./tdc vs CGAL Delaunay\\_triangulation\\_2 (medians, $NCPU CPUs)'"
-			echo "set grid"
-			echo "set key top left"
-			printf 'plot '
-			(IFS=,; echo "${pl[*]}")
-		} > "$WORK/core.gp"
-		gnuplot "$WORK/core.gp" || log "gnuplot failed"
-	fi
-fi
+make_plot
 log "wrote $CSV, $RUNS$([ $HAVE_TDC = 1 ] && echo ", $PHASES"), $TXT"

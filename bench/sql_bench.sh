@@ -11,6 +11,7 @@
 #   tdc      SELECT ST_NumGeometries(ST_TDCDelaunay(geom)) FROM t           (tdc_delaunay.threads = 0: all CPUs)
 #   tdc_1t   the same with SET tdc_delaunay.threads = 1
 #   postgis  SELECT ST_NumGeometries(ST_DelaunayTriangles(ST_Collect(geom))) FROM t
+#   collect  SELECT ST_NumGeometries(ST_Collect(geom)) FROM t   (baseline: reading and aggregating the points only)
 # on uniform and clustered points (n = 1e4, 1e5, 1e6; the same deterministic
 # points as the core benchmark), on a 1M random subset of the GSHHG vertices,
 # and on the GSHHG coastlines (211,907 LINESTRINGs, 10.64M vertices):
@@ -30,6 +31,7 @@
 #        BENCH_SQL_COAST=1  BENCH_SQL_PG_COAST=1 (try PostGIS on the coastlines)
 #        BENCH_SQL_TDC_COAST_AGG=1 (try the ST_TDCDelaunay aggregate there)
 #        BENCH_SQL_HULLCHECK=1 (count unique vertices and hull vertices in SQL)
+#        BENCH_DOCS=DIR (where the PNGs go, default docs/)  BENCH_SQL_PLOT_ONLY=1 (replot from the CSVs)
 set -euo pipefail
 
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
@@ -46,7 +48,7 @@ TDC_COAST_AGG=${BENCH_SQL_TDC_COAST_AGG:-1}
 HULLCHECK=${BENCH_SQL_HULLCHECK:-1}
 TIMEOUT=${BENCH_SQL_TIMEOUT:-600}
 RELOAD=${BENCH_SQL_RELOAD:-0}
-DOCS=$ROOT/docs
+DOCS=${BENCH_DOCS:-$ROOT/docs}
 
 mkdir -p "$BENCH_OUT" "$DOCS"
 RUNS=$BENCH_OUT/sql_runs.csv
@@ -292,9 +294,11 @@ for s in "${PT_SETS[@]}"; do
 	sql -c "SELECT count(*) FROM bench.$s" >/dev/null
 	for rep in $(seq 1 "$reps"); do
 		# alternate the order between repetitions
-		if [ $((rep % 2)) = 1 ]; then tools="tdc tdc_1t postgis"; else tools="postgis tdc_1t tdc"; fi
+		if [ $((rep % 2)) = 1 ]; then tools="tdc tdc_1t postgis collect"; else tools="collect postgis tdc_1t tdc"; fi
 		for tool in $tools; do
-			if [ $tool = postgis ]; then
+			if [ $tool = collect ]; then
+				timed "$s" "$n" collect "$rep" "" "SELECT ST_NumGeometries(ST_Collect(geom)) FROM bench.$s"
+			elif [ $tool = postgis ]; then
 				timed "$s" "$n" postgis "$rep" "" "$(printf "$PG_Q" "$s")"
 			elif [ $HAVE_TDC = 1 ]; then
 				thr=0
@@ -350,13 +354,14 @@ echo "set,n,exact_triangles,tool,runs,median_s,min_s,max_s,triangles,triangles_e
 	echo "# tdc_delaunay SQL benchmark, $(date -u '+%Y-%m-%d %H:%M UTC')"
 	echo "# server: $(sql -c "SELECT split_part(version(), ' on ', 1)"), PostGIS $(sql -c "SELECT extversion FROM pg_extension WHERE extname = 'postgis'") (GEOS $(sql -c "SELECT split_part(postgis_geos_version(), '-', 1)")), tdc_delaunay $(sql -c "SELECT coalesce((SELECT extversion FROM pg_extension WHERE extname = 'tdc_delaunay'), 'absent')")"
 	echo "# host: $(nproc) CPUs, load average at report: $(cut -d' ' -f1-3 /proc/loadavg); shared_buffers=$(sql -c 'SHOW shared_buffers') work_mem=$(sql -c 'SHOW work_mem'); statement_timeout=${TIMEOUT}s"
-	echo "# times: server-side (clock_timestamp around EXECUTE), medians; tdc = all CPUs, tdc_1t = tdc_delaunay.threads=1, postgis = ST_DelaunayTriangles(ST_Collect(geom))"
+	echo "# times: server-side (clock_timestamp around EXECUTE), medians; tdc = all CPUs, tdc_1t = tdc_delaunay.threads=1, postgis = ST_DelaunayTriangles(ST_Collect(geom)),"
+	echo "#        collect = ST_Collect(geom) alone (cost of reading + aggregating the input, a floor for both)"
 	echo "# exact = 2n-2-h from CGAL (exact predicates) on the same coordinates"
 	if [ "$COAST" = 1 ]; then
 		echo "# GSHHG coastlines: $COAST_LINES LINESTRINGs, $COAST_VERTS vertices (SRID 4326); $(cat "$BENCH_DATA/gshhg.meta")"
 	fi
 	echo
-	printf '%-16s %9s %10s  %-8s %4s %9s %9s %9s %10s %6s  %s\n' set n exact tool runs median_s min_s max_s triangles =exact note
+	printf '%-14s %9s %10s  %-14s %4s %9s %9s %9s %10s %6s  %s\n' set n exact tool runs median_s min_s max_s triangles =exact note
 } | tee "$TXT"
 
 tools_of() { awk -F, -v s="$1" 'NR > 1 && $1 == s && !seen[$3]++ { print $3 }' "$RUNS"; }
@@ -370,12 +375,12 @@ for s in "${PT_SETS[@]}" $([ "$COAST" = 1 ] && echo coastlines); do
 		tri=$(resof "$s" "$tool")
 		ex=${EXACT_TRI[$s]:-}
 		eq=""
-		[ -n "$tri" ] && [ -n "$ex" ] && { [ "$tri" = "$ex" ] && eq=yes || eq="NO($((tri - ex)))"; }
+		[ -n "$tri" ] && [ -n "$ex" ] && [ "$tool" != collect ] && { [ "$tri" = "$ex" ] && eq=yes || eq="NO($((tri - ex)))"; }
 		note=$(failof "$s" "$tool")
 		status=ok
 		[ -n "$note" ] && status=$(awk -F, -v s="$s" -v t="$tool" '$1 == s && $3 == t && $7 != "ok" { print $7; exit }' "$RUNS")
 		echo "$s,$n,$ex,$tool,$runs,$(sec "$m"),$(sec "$mn"),$(sec "$mx"),$tri,$eq,$status" >> "$CSV"
-		printf '%-16s %9s %10s  %-8s %4s %9s %9s %9s %10s %6s  %s\n' "$s" "$n" "${ex:--}" "$tool" "$runs" \
+		printf '%-14s %9s %10s  %-14s %4s %9s %9s %9s %10s %6s  %s\n' "$s" "$n" "${ex:--}" "$tool" "$runs" \
 			"$(sec "$m")" "$(sec "$mn")" "$(sec "$mx")" "${tri:--}" "${eq:--}" "$note" | tee -a "$TXT"
 	done
 done
