@@ -13,14 +13,14 @@
 # "N passed, N failed".  Exits non-zero if anything failed.  The throw-away
 # server is always stopped on exit.
 #
-# TDC_PART_TIMEOUT=SECONDS bounds each part (default 1500).
+# TDC_PART_TIMEOUT=SECONDS bounds each part (default 900).
 set -euo pipefail
 # shellcheck source=scripts/lib.sh
 source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
 cd "$TDC_ROOT"
 mkdir -p "$TDC_LOGDIR"
 
-PART_TIMEOUT=${TDC_PART_TIMEOUT:-1500}
+PART_TIMEOUT=${TDC_PART_TIMEOUT:-900}
 TOTAL_PASSED=0
 TOTAL_FAILED=0
 SUMMARY=()
