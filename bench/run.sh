@@ -18,7 +18,7 @@ ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 # shellcheck source=bench/lib.sh
 . "$ROOT/bench/lib.sh"
 
-mkdir -p "$BENCH_OUT"
+mkdir -p "$BENCH_OUT" "${BENCH_DOCS:-$ROOT/docs}"
 log "tdc_delaunay benchmarks; results in $BENCH_OUT"
 
 if [ "${BENCH_SKIP_CORE:-0}" != 1 ]; then
@@ -59,6 +59,8 @@ elif [ -f "$ROOT/scripts/lib.sh" ]; then
 	install_ext
 	TDC_USE_EXISTING=0
 	TDC_EXISTING=0
+	# a cluster of our own: never reuse (and then stop) the one make test runs
+	export TDC_PGDIR=${TDC_PGDIR:-$BENCH_OUT/pgcluster}
 	trap 'tdc_server_down' EXIT
 	tdc_server_up
 	export PGDATABASE=postgres
@@ -100,5 +102,5 @@ fi
 	echo '![time vs n](bench.png)'
 	echo
 	echo '![Strait of Gibraltar TIN](coast_tin.png)'
-} > "$ROOT/docs/benchmarks.md"
-log "done: $BENCH_OUT/core.txt, $BENCH_OUT/sql.txt, docs/benchmarks.md, docs/bench.png, docs/coast_tin.png"
+} > "${BENCH_DOCS:-$ROOT/docs}/benchmarks.md"
+log "done: $BENCH_OUT/core.txt, $BENCH_OUT/sql.txt, ${BENCH_DOCS:-$ROOT/docs}/{benchmarks.md,core.png,bench.png,coast_tin.png}"
