@@ -46,7 +46,7 @@ case "${1:-status}" in
 		;;
 	env)
 		port=$(running_port) || tdc_die "not running: bash scripts/cluster.sh start"
-		printf 'export PGHOST=%q PGPORT=%q PGUSER=%q\n' "$TDC_PGRUN" "$port" "$TDC_OWNER"
+		printf 'export PGHOST=%q PGPORT=%q PGUSER=%q PGDATABASE=postgres\n' "$TDC_PGRUN" "$port" "$TDC_OWNER"
 		;;
 	psql)
 		shift

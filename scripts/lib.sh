@@ -197,7 +197,7 @@ tdc_cluster_running() {
 }
 
 tdc_cluster_export() {
-	export PGHOST=$TDC_PGRUN PGPORT=$1 PGUSER=$TDC_OWNER
+	export PGHOST=$TDC_PGRUN PGPORT=$1 PGUSER=$TDC_OWNER PGDATABASE=postgres
 	unset PGSERVICE PGHOSTADDR PGPASSWORD
 }
 
