@@ -94,14 +94,15 @@ incircle_tie(const tdc_mesh *m, uint32_t a, uint32_t b, uint32_t c, uint32_t d)
 	return s > 0;
 }
 
-/* Is d inside the circle through counter-clockwise a, b, c (ties broken)? */
+/*
+ * Is d inside the circle through counter-clockwise a, b, c (ties broken)?
+ * The four sites must be distinct; the callers make sure of it.
+ */
 static inline __attribute__((always_inline)) bool
 incircle_sos(const tdc_mesh *m, uint32_t a, uint32_t b, uint32_t c, uint32_t d)
 {
 	double		det;
 
-	if (d == a || d == b || d == c)
-		return false;
 	det = tdc_incircle(tdc_pt(m, a), tdc_pt(m, b), tdc_pt(m, c), tdc_pt(m, d));
 	if (det != 0)
 		return det > 0;
@@ -250,7 +251,12 @@ tdc_merge(tdc_mesh *mesh, tdc_freelist *fl, const tdc_sub *L, const tdc_sub *R,
 		{
 			bool		deleted = false;
 
-			while (incircle_sos(m, bd, bo, tdc_dest(m, lcand),
+			/*
+			 * The next edge around bd ends at bo only when it is basel
+			 * itself, and then no site can be inside.
+			 */
+			while (tdc_onext(m, lcand) != SYM(basel) &&
+				   incircle_sos(m, bd, bo, tdc_dest(m, lcand),
 								tdc_dest(m, tdc_onext(m, lcand))))
 			{
 				uint32_t	t = tdc_onext(m, lcand);
@@ -267,7 +273,8 @@ tdc_merge(tdc_mesh *mesh, tdc_freelist *fl, const tdc_sub *L, const tdc_sub *R,
 		{
 			bool		deleted = false;
 
-			while (incircle_sos(m, bd, bo, tdc_dest(m, rcand),
+			while (tdc_oprev(m, rcand) != basel &&
+				   incircle_sos(m, bd, bo, tdc_dest(m, rcand),
 								tdc_dest(m, tdc_oprev(m, rcand))))
 			{
 				uint32_t	t = tdc_oprev(m, rcand);
