@@ -255,7 +255,8 @@ def main():
     put("fuzz_core", core(7, 0x2d, 0, 0, bytes([0, 0]) + bytes(range(0, 100))))
     put("fuzz_core", core(7, 0x29, 0, 0, bytes([3, 250]) + bytes(range(0, 120, 2)) + bytes([255])))
     for kind in range(3):
-        put("fuzz_core", core(8, 0x20 | kind, 0, 0, bytes([kind]) + struct.pack("<HQ", 25000, 42 + kind)))
+        put("fuzz_core", core(8, 0x20 | kind, 0, 0, bytes([kind]) + struct.pack("<HQ", 5000, 42 + kind)))
+    put("fuzz_core", core(8, 0x01, 0, 0, bytes([0x81]) + struct.pack("<HQ", 25000, 45)))
     put("fuzz_core", core(8, 0x1b, 0, 0, bytes([0]) + struct.pack("<HQ", 3000, 7) + bytes(range(60))))
     # tolerance
     put("fuzz_core", core(1, 0x25, 0, 2, bytes(range(0, 256, 5))))

@@ -1,0 +1,128 @@
+#!/usr/bin/env bash
+# test/hardening/concurrency.sh: concurrent sessions triangulating at once,
+# each with worker threads on.
+#
+#   PGHOST=... PGPORT=... PGUSER=... PGDATABASE=... bash test/hardening/concurrency.sh
+#
+# SESSIONS (8) psql sessions run RUNS (50) triangulations each of the same
+# POINTS (100000) point table tdc_hard.pts100k, all at the same time, with
+# tdc_delaunay.threads = THREADS (4: more threads than cores on purpose):
+#   sessions 1..3   SELECT ST_TDCDelaunay(geom) FROM ...             (serial plan)
+#   sessions 4..6   the same with a parallel aggregate plan allowed (partial
+#                   states serialized between processes, when the server has
+#                   background workers to spare)
+#   sessions 7..8   ST_TDCDelaunayDump('SELECT geom FROM ...')
+# Every run prints a digest: triangle count and md5 of the result's WKB (for
+# Dump, of the rows' WKB in id order).  Checked:
+#   - no errors, every run completed;
+#   - every aggregate run has the same digest and so has every Dump run; runs
+#     whose md5 differs only in triangle order are compared normalized
+#     (sorted ST_Normalize text of the triangles), which must then agree;
+#   - the result is valid: 2n - 2 - h triangles (h: hull vertices including
+#     collinear ones), area equal to the convex hull's, all triangles CCW;
+#   - pg_postmaster_start_time() unchanged (no backend crashed).
+# QUICK=1: 5 runs per session (CI).  Prints figures and "N passed, N failed".
+set -euo pipefail
+HERE=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
+# shellcheck source=test/hardening/lib.sh
+source "$HERE/lib.sh"
+
+QUICK=${QUICK:-0}
+SESSIONS=${SESSIONS:-8}
+if ((QUICK)); then RUNS=${RUNS:-5}; else RUNS=${RUNS:-50}; fi
+POINTS=${POINTS:-100000}
+THREADS=${THREADS:-4}
+TABLE=tdc_hard.conc$POINTS
+WORK=$(mktemp -d "${TMPDIR:-/tmp}/tdc_conc.XXXXXX")
+PIDS=()
+cleanup() {
+	local p
+	for p in "${PIDS[@]+"${PIDS[@]}"}"; do
+		kill "$p" 2>/dev/null || true
+	done
+	rm -rf "$WORK"
+}
+trap cleanup EXIT
+
+echo "== concurrency.sh: $SESSIONS sessions x $RUNS runs, $POINTS points, tdc_delaunay.threads = $THREADS"
+require_server
+START0=$(postmaster_start)
+make_points "${TABLE#tdc_hard.}" "$POINTS"
+
+# expected triangle count and hull area, independently of tdc_delaunay
+read -r EXPECT HULL_AREA <<<"$(hpsql -F ' ' -c "
+	WITH hull AS MATERIALIZED (
+		SELECT ST_Boundary(ST_ConvexHull(ST_Collect(geom))) AS b, ST_Area(ST_ConvexHull(ST_Collect(geom))) AS a
+		FROM $TABLE),
+	sites AS MATERIALIZED (SELECT DISTINCT ST_X(geom) AS x, ST_Y(geom) AS y FROM $TABLE)
+	SELECT 2 * (SELECT count(*) FROM sites) - 2
+		   - (SELECT count(*) FROM sites, hull WHERE ST_Intersects(ST_MakePoint(x, y), hull.b)),
+		   (SELECT a FROM hull)")"
+echo "expected triangles $EXPECT, hull area $HULL_AREA"
+
+AGG_DIGEST="SELECT 'agg ' || ST_NumGeometries(t) || ' ' || md5(ST_AsBinary(t)) FROM (SELECT ST_TDCDelaunay(geom) AS t FROM $TABLE) s;"
+DUMP_DIGEST="SELECT 'dump ' || count(*) || ' ' || md5(string_agg(ST_AsBinary(geom), ''::bytea ORDER BY id)) FROM ST_TDCDelaunayDump('SELECT geom FROM $TABLE');"
+PARALLEL="SET max_parallel_workers_per_gather = 2; SET parallel_setup_cost = 0; SET parallel_tuple_cost = 0; SET min_parallel_table_scan_size = 0;"
+
+t0=$(date +%s%N)
+for ((s = 1; s <= SESSIONS; s++)); do
+	{
+		echo "SET tdc_delaunay.threads = $THREADS;"
+		if ((s >= 4 && s <= 6)); then echo "$PARALLEL"; fi
+		for ((r = 1; r <= RUNS; r++)); do
+			if ((s >= 7)); then echo "$DUMP_DIGEST"; else echo "$AGG_DIGEST"; fi
+		done
+	} >"$WORK/s$s.sql"
+	psql -X -A -t -q -v ON_ERROR_STOP=0 -f "$WORK/s$s.sql" >"$WORK/s$s.out" 2>"$WORK/s$s.err" &
+	PIDS+=($!)
+done
+rcs=0
+for p in "${PIDS[@]}"; do
+	wait "$p" || rcs=$((rcs + 1))
+done
+PIDS=()
+t1=$(date +%s%N)
+wall_ms=$(((t1 - t0) / 1000000))
+
+cat "$WORK"/s*.out >"$WORK/all.out"
+cat "$WORK"/s*.err >"$WORK/all.err"
+total=$((SESSIONS * RUNS))
+done_runs=$(grep -c '^\(agg\|dump\) ' "$WORK/all.out" || true)
+echo "completed $done_runs of $total triangulations in $wall_ms ms ($(awk -v n="$done_runs" -v ms="$wall_ms" 'BEGIN { printf "%.1f", (ms > 0 ? n * 1000 / ms : 0) }') per second)"
+echo "distinct digests:"
+sort "$WORK/all.out" | uniq -c | sed 's/^/    /'
+
+check "all sessions exited cleanly" test "$rcs" -eq 0
+check "no errors" test ! -s "$WORK/all.err"
+[ ! -s "$WORK/all.err" ] || sort "$WORK/all.err" | uniq -c | sort -rn | head -5 | sed 's/^/        /'
+check "all $total triangulations completed" test "$done_runs" -eq "$total"
+
+nagg=$(grep '^agg ' "$WORK/all.out" | sort -u | wc -l)
+ndump=$(grep '^dump ' "$WORK/all.out" | sort -u | wc -l)
+counts=$(awk '{ print $2 }' "$WORK/all.out" | sort -u | tr '\n' ' ')
+check "every run has the expected $EXPECT triangles (saw: $counts)" test "$counts" = "$EXPECT "
+check "all Dump runs identical ($ndump distinct)" test "$ndump" -le 1
+if ((nagg <= 1)); then
+	pass "all aggregate runs identical (1 distinct)"
+else
+	# same triangles in another order?  Compare the sets normalized.
+	norms=$(hpsql -c "SET tdc_delaunay.threads = $THREADS;
+		SELECT md5(string_agg(x, ',' ORDER BY x)) FROM (
+			SELECT ST_AsText(ST_Normalize((ST_Dump(ST_TDCDelaunay(geom))).geom)) AS x FROM $TABLE) s;
+		SET max_parallel_workers_per_gather = 2; SET parallel_setup_cost = 0; SET parallel_tuple_cost = 0;
+		SET min_parallel_table_scan_size = 0;
+		SELECT md5(string_agg(x, ',' ORDER BY x)) FROM (
+			SELECT ST_AsText(ST_Normalize((ST_Dump(t)).geom)) AS x FROM (SELECT ST_TDCDelaunay(geom) AS t FROM $TABLE) a) s;" | sort -u | wc -l)
+	check "aggregate runs differ only in triangle order ($nagg distinct md5s, $norms distinct normalized sets)" test "$norms" -eq 1
+fi
+
+# validity of the result itself
+read -r ntri area ccw <<<"$(hpsql -F ' ' -c "SET tdc_delaunay.threads = $THREADS;
+	SELECT count(*), sum(ST_Area(d.geom)), bool_and(ST_IsPolygonCCW(d.geom))
+	FROM (SELECT ST_TDCDelaunay(geom) AS t FROM $TABLE) s, ST_Dump(s.t) d")"
+check "result has $EXPECT triangles ($ntri)" test "$ntri" = "$EXPECT"
+check "triangles tile the convex hull (area $area vs $HULL_AREA)" \
+	awk -v a="$area" -v b="$HULL_AREA" 'BEGIN { d = a - b; if (d < 0) d = -d; exit !(d <= 1e-9 * b) }'
+check "all triangles counter-clockwise" test "$ccw" = t
+check "postmaster not restarted" test "$(postmaster_start)" = "$START0"
+finish
