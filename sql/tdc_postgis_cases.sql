@@ -32,11 +32,14 @@ SELECT ST_IsPolygonCCW(ST_GeometryN(ST_TDCDelaunayTriangles('MULTIPOINT(5 5, 6 0
 
 -- pg_cunit_triangulate_1
 SELECT tdc_norm(ST_TDCDelaunayTriangles('MULTIPOINT(10 0, 20 0, 5 5)')) AS cunit,
-	   tdc_norm(ST_TDCDelaunayTriangles('MULTIPOINT(10 0, 20 0, 5 5)')) = 'GEOMETRYCOLLECTION(POLYGON((5 5,20 0,10 0,5 5)))' AS as_expected;
+	   tdc_norm(ST_TDCDelaunayTriangles('MULTIPOINT(10 0, 20 0, 5 5)')) = 'GEOMETRYCOLLECTION(POLYGON((5 5,20 0,10 0,5 5)))' AS as_expected,
+	   tdc_norm(ST_TDCDelaunayTriangles('MULTIPOINT(10 0, 20 0, 5 5)')) = tdc_norm(ST_DelaunayTriangles('MULTIPOINT(10 0, 20 0, 5 5)')) AS same_as_postgis;
 
 -- pg_doc_z_4pts
 SELECT tdc_norm(ST_TDCDelaunayTriangles('MULTIPOINT Z(14 14 10, 150 14 100, 34 6 25, 20 10 150)')) =
-	   tdc_norm('GEOMETRYCOLLECTION Z (POLYGON Z ((14 14 10,20 10 150,34 6 25,14 14 10)),POLYGON Z ((14 14 10,34 6 25,150 14 100,14 14 10)))') AS doc_z;
+	   tdc_norm('GEOMETRYCOLLECTION Z (POLYGON Z ((14 14 10,20 10 150,34 6 25,14 14 10)),POLYGON Z ((14 14 10,34 6 25,150 14 100,14 14 10)))') AS doc_z,
+	   tdc_norm(ST_TDCDelaunayTriangles('MULTIPOINT Z(14 14 10, 150 14 100, 34 6 25, 20 10 150)')) =
+	   tdc_norm(ST_DelaunayTriangles('MULTIPOINT Z(14 14 10, 150 14 100, 34 6 25, 20 10 150)')) AS same_as_postgis;
 
 -- pg_doc_lshape_42pts: 41 unique sites, long collinear rows and cocircular
 -- quadruples.  Exactly 55 triangles, all CCW, empty circumcircles.  Where
