@@ -18,7 +18,7 @@ SELECT p.oid::regprocedure AS function, p.provolatile, p.proisstrict, p.proparal
 FROM pg_proc p
 JOIN pg_depend d ON d.objid = p.oid AND d.classid = 'pg_proc'::regclass AND d.deptype = 'e'
 JOIN pg_extension e ON e.oid = d.refobjid AND e.extname = 'tdc_delaunay'
-ORDER BY 1::text;
+ORDER BY p.oid::regprocedure::text COLLATE "C";
 
 -- Test helpers (superuser only, LANGUAGE internal): byteacat(x, '') returns x
 -- unchanged, so these reinterpret a geometry's serialized bytes as bytea and

@@ -4,7 +4,7 @@
 -- The settings exist once the library is loaded (by any function call).
 SELECT ST_NumGeometries(ST_TDCDelaunayTriangles('MULTIPOINT(0 0, 1 0, 0 1)')) AS loaded;
 SELECT name, setting, unit, context, vartype, min_val, max_val
-FROM pg_settings WHERE name LIKE 'tdc_delaunay.%' ORDER BY name;
+FROM pg_settings WHERE name LIKE 'tdc_delaunay.%' ORDER BY name COLLATE "C";
 
 -- The prefix is reserved: typos are errors, not silent placeholders.
 SET tdc_delaunay.thread = 2;
