@@ -239,7 +239,7 @@ echo "set,n,unique,triangles,cgal_faces,triangles_match,reps,tdc1_total_s,tdc1_n
 	echo
 	echo "Core benchmark (medians; seconds; RSS = peak resident set of the whole process, /usr/bin/time)"
 	printf '%-15s %9s %9s %6s %9s %7s %9s %8s %8s %8s %7s %7s %7s %7s %s\n' \
-		set n unique tri=? tdc1_s tdc1_ns tdcN_s speedup cgal_s cgal_ns 1/cgal cpu1/cg rss1MB rssCG phases_1thread[sort/sub/leaves/merge]
+		set n unique tri=? tdc1_s tdc1_ns tdcN_s speedup cgal_s cgal_ns 1/cgal cpu1/cg rss1MB rssCG "phases_1thread(sort/sub/leaves/merge)"
 } | tee -a "$TXT"
 
 for set in "${SET_NAMES[@]}"; do
@@ -257,7 +257,7 @@ for set in "${SET_NAMES[@]}"; do
 	t1ns=$(div "$t1" "$n"); [ -n "$t1ns" ] && t1ns=$(awk -v x="$t1ns" 'BEGIN { printf "%.1f", x * 1e9 }')
 	cgns=$(div "$cg" "$n"); [ -n "$cgns" ] && cgns=$(awk -v x="$cgns" 'BEGIN { printf "%.1f", x * 1e9 }')
 	sp=$(div "$t1" "$tN"); r1=$(div "$t1" "$cg"); rN=$(div "$tN" "$cg")
-	rss1=$(med "$set" tdc 1 time_rss_mb); rssN=$(med "$set" tdc 0 time_rss_mb); rssc=$(med "$set" cgal 1 time_rss_mb)
+	rss1=$(med "$set" tdc 1 time_rss_mb); rssc=$(med "$set" cgal 1 time_rss_mb)
 	declare -A ph=()
 	for p in sort subdivide leaves merge; do
 		ph[1$p]=$(med "$set" tdc 1 $p); ph[N$p]=$(med "$set" tdc 0 $p)

@@ -1,3 +1,4 @@
+# shellcheck shell=bash
 # bench/lib.sh -- helpers shared by bench/core_bench.sh and bench/sql_bench.sh.
 # Sourced, not executed.  Expects ROOT (the repository root) to be set.
 #

@@ -296,14 +296,14 @@ for s in "${PT_SETS[@]}"; do
 		# alternate the order between repetitions
 		if [ $((rep % 2)) = 1 ]; then tools="tdc tdc_1t postgis collect"; else tools="collect postgis tdc_1t tdc"; fi
 		for tool in $tools; do
-			if [ $tool = collect ]; then
+			if [ "$tool" = collect ]; then
 				timed "$s" "$n" collect "$rep" "" "SELECT ST_NumGeometries(ST_Collect(geom)) FROM bench.$s"
-			elif [ $tool = postgis ]; then
+			elif [ "$tool" = postgis ]; then
 				timed "$s" "$n" postgis "$rep" "" "$(printf "$PG_Q" "$s")"
 			elif [ $HAVE_TDC = 1 ]; then
 				thr=0
-				[ $tool = tdc_1t ] && thr=1
-				timed "$s" "$n" $tool "$rep" "SET tdc_delaunay.threads = $thr" "$(printf "$TDC_Q" "$s")"
+				[ "$tool" = tdc_1t ] && thr=1
+				timed "$s" "$n" "$tool" "$rep" "SET tdc_delaunay.threads = $thr" "$(printf "$TDC_Q" "$s")"
 			fi
 		done
 	done
