@@ -26,7 +26,7 @@ BEGIN
 	RETURN 'not canceled';
 EXCEPTION WHEN query_canceled THEN
 	RETURN 'canceled: ' || SQLERRM || CASE
-		WHEN clock_timestamp() - t0 < make_interval(secs => (timeout_ms + 250) / 1000.0)
+		WHEN clock_timestamp() - t0 < make_interval(secs => (timeout_ms + 400) / 1000.0)
 		THEN ', promptly' ELSE ', too late: ' || (clock_timestamp() - t0)::text END;
 END $$;
 
