@@ -575,6 +575,8 @@ tdc_gser_result(const tdc_job *job, int flags, const TdcPointBuf *buf,
 		{
 			if (written++ >= m)
 				elog(ERROR, "%s: core returned more edges than it counted", fname);
+			if ((written & 0xffff) == 0)
+				CHECK_FOR_INTERRUPTS();
 			p = put_u32(p, G_LINE);
 			p = put_u32(p, 2);
 			p = put_vertex(p, job, v[0], buf, hasz);
@@ -589,6 +591,8 @@ tdc_gser_result(const tdc_job *job, int flags, const TdcPointBuf *buf,
 		{
 			if (written++ >= m)
 				elog(ERROR, "%s: core returned more triangles than it counted", fname);
+			if ((written & 0xffff) == 0)
+				CHECK_FOR_INTERRUPTS();
 			if (flags == TDC_OUT_POLYGONS)
 			{
 				p = put_u32(p, G_POLYGON);
