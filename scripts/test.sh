@@ -3,7 +3,8 @@
 #
 #   1. apt-get installs the missing Debian packages (scripts/lib.sh lists them)
 #   2. builds and installs the extension, and builds ./tdc
-#   3. the core suite: make check-core, check-core-asan, check-core-tsan
+#   3. the core suite: make check-core, check-core-asan, check-core-tsan, and
+#      a short run of the libFuzzer targets (make fuzz-run)
 #   4. starts a throw-away PostgreSQL 15 cluster (or uses yours, see README.md)
 #      and runs pg_regress against it (make installcheck)
 #   5. every executable test/*.sh, with the server's PG* settings exported
@@ -14,6 +15,7 @@
 # server is always stopped on exit.
 #
 # TDC_PART_TIMEOUT=SECONDS bounds each part (default 900).
+# TDC_FUZZ_SECONDS=SECONDS per fuzz target (default 20; 0 skips fuzzing).
 set -euo pipefail
 # shellcheck source=scripts/lib.sh
 source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
@@ -135,6 +137,12 @@ run_step "make tdc" "${MAKE[@]}" tdc || true
 run_part check-core plain "${MAKE[@]}" check-core
 run_part check-core-asan plain "${MAKE[@]}" check-core-asan
 run_part check-core-tsan plain "${MAKE[@]}" check-core-tsan
+
+# libFuzzer targets (fuzz/), a short run from their seed corpora.
+FUZZ_SECONDS=${TDC_FUZZ_SECONDS:-20}
+if grep -q '^fuzz-run:' Makefile && ((FUZZ_SECONDS > 0)); then
+	run_part fuzz plain "${MAKE[@]}" fuzz-run FUZZ_SECONDS="$FUZZ_SECONDS"
+fi
 
 server=0
 if tdc_use_existing || (tdc_cluster_paths && [ -x "$TDC_PGBIN/initdb" ]) >/dev/null 2>&1; then
