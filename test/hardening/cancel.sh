@@ -66,8 +66,12 @@ make_points "${TABLE#tdc_hard.}" "$POINTS"
 # count sampled every 2 ms: "reading" (no engine threads seen yet),
 # "engine" (worker threads running), "writing" (after them).
 hpsql >/dev/null <<'EOF'
-CREATE OR REPLACE FUNCTION tdc_hard.threads(p int) RETURNS int LANGUAGE sql AS $$
-	SELECT coalesce(substring(pg_read_file('/proc/' || p || '/status', 0, 8192, true) FROM 'Threads:\s*(\d+)')::int, 0) $$;
+CREATE OR REPLACE FUNCTION tdc_hard.threads(p int) RETURNS int LANGUAGE plpgsql AS $$
+BEGIN
+	RETURN coalesce(substring(pg_read_file('/proc/' || p || '/status', 0, 8192, true) FROM 'Threads:\s*(\d+)')::int, 0);
+EXCEPTION WHEN others THEN
+	RETURN 0;					-- the process is gone (ESRCH)
+END $$;
 
 CREATE OR REPLACE FUNCTION tdc_hard.hit(tag text, delay_ms float8, kind text)
 RETURNS text LANGUAGE plpgsql AS $$
@@ -199,7 +203,11 @@ lat_phase=()
 missed=0
 for r in "${runs[@]}"; do
 	read -r k kind d <<<"$r"
-	read -r lat phase <<<"$(hpsql -c "SELECT tdc_hard.hit('run:$k:', $d, '$kind')")"
+	read -r lat phase <<<"$(hpsql -c "SELECT tdc_hard.hit('run:$k:', $d, '$kind')" || true)"
+	if [ -z "${lat:-}" ]; then
+		fail "$kind at $d ms: the watcher failed"
+		continue
+	fi
 	if [ "$lat" = "-1" ]; then
 		echo "  run $k: $kind at $d ms: the statement had already finished"
 		missed=$((missed + 1))
@@ -235,9 +243,13 @@ for d in "${TERM_DELAYS[@]}"; do
 	psql -X -A -t -v ON_ERROR_STOP=1 -c "$BIGQ WHERE 'run:$k:' <> ''" >"$WORK/term$k.out" 2>"$WORK/term$k.err" &
 	BG+=($!)
 	tp=$!
-	read -r lat phase <<<"$(hpsql -c "SELECT tdc_hard.hit('run:$k:', $d, 'terminate')")"
+	read -r lat phase <<<"$(hpsql -c "SELECT tdc_hard.hit('run:$k:', $d, 'terminate')" || true)"
 	rc=0
 	wait "$tp" || rc=$?
+	if [ -z "${lat:-}" ]; then
+		fail "terminate at $d ms: the watcher failed"
+		continue
+	fi
 	if [ "$lat" = "-1" ]; then
 		echo "  run $k: terminate at $d ms: the statement had already finished"
 		continue
@@ -256,6 +268,10 @@ done
 script=$WORK/rss.sql
 {
 	echo "SELECT 'start ' || ($STATUS);"
+	# one complete run first: the allocator (glibc raises its mmap threshold
+	# after freeing big blocks, worker threads get their arenas) settles
+	echo "$BIGQ;"
+	echo "SELECT 'warm ' || ($STATUS);"
 	for ((k = 1; k <= RSS_RUNS; k++)); do
 		echo "SELECT tdc_hard.wait_for_watcher('rss:$k:');"
 		echo "$BIGQ WHERE 'rss:$k:' <> '';"
@@ -266,16 +282,14 @@ psql -X -A -t -v ON_ERROR_STOP=0 -f "$script" >"$WORK/rss.out" 2>"$WORK/rss.err"
 BG+=($!)
 rss_pid=$!
 rss_cancelled=0
-# phases cycle: the first run stops in the engine, so that the worker
-# threads' malloc arenas are warm in the reference figure; then reading,
-# late engine, writing
+# phases cycle: engine, reading, late engine, writing
 RSS_PCTS=(40 20 60 80)
 for ((k = 1; k <= RSS_RUNS; k++)); do
 	pct=${RSS_PCTS[$(((k - 1) % ${#RSS_PCTS[@]}))]}
 	d=$((T_MS * pct / 100))
-	read -r lat phase <<<"$(hpsql -c "SELECT tdc_hard.hit('rss:$k:', $d, 'cancel')")"
-	echo "  rss run $k: cancel at $d ms ($phase): $lat ms"
-	if [ "$lat" != "-1" ]; then
+	read -r lat phase <<<"$(hpsql -c "SELECT tdc_hard.hit('rss:$k:', $d, 'cancel')" || true)"
+	echo "  rss run $k: cancel at $d ms (${phase:-?}): ${lat:-?} ms"
+	if [ -n "${lat:-}" ] && [ "$lat" != "-1" ]; then
 		rss_cancelled=$((rss_cancelled + 1))
 		lat_cancel+=("$lat")
 		lat_phase+=("$phase $lat")
@@ -283,11 +297,13 @@ for ((k = 1; k <= RSS_RUNS; k++)); do
 done
 wait "$rss_pid" || true
 rss_start=$(awk '/^start/ { print $2 }' "$WORK/rss.out")
+rss_warm=$(awk '/^warm/ { print $2 }' "$WORK/rss.out")
+anon_warm=$(awk '/^warm/ { print $4 }' "$WORK/rss.out")
 rss1=$(awk '/^rss 1 / { print $3 }' "$WORK/rss.out")
 rssN=$(awk -v n="$RSS_RUNS" '$1 == "rss" && $2 == n { print $3 }' "$WORK/rss.out")
 anon1=$(awk '/^rss 1 / { print $5 }' "$WORK/rss.out")
 anonN=$(awk -v n="$RSS_RUNS" '$1 == "rss" && $2 == n { print $5 }' "$WORK/rss.out")
-echo "  backend VmRSS: start ${rss_start:-?} kB, after 1 cancelled run ${rss1:-?} kB, after $RSS_RUNS ${rssN:-?} kB ($rss_cancelled of $RSS_RUNS runs cancelled)"
+echo "  backend VmRSS: start ${rss_start:-?} kB, after a complete run ${rss_warm:-?} kB (RssAnon ${anon_warm:-?} kB), after 1 cancelled run ${rss1:-?} kB, after $RSS_RUNS ${rssN:-?} kB ($rss_cancelled of $RSS_RUNS runs cancelled)"
 echo "  backend RssAnon: after 1 ${anon1:-?} kB, after $RSS_RUNS ${anonN:-?} kB"
 echo "  VmRSS by run (kB):   $(awk '/^rss/ { printf "%s ", $3 }' "$WORK/rss.out")"
 echo "  RssAnon by run (kB): $(awk '/^rss/ { printf "%s ", $5 }' "$WORK/rss.out")"
