@@ -42,53 +42,6 @@ die(int code, const char *fmt, const char *arg)
 	exit(code);
 }
 
-/*
- * Hand the unique sites and the triangles, renumbered densely, to the exact
- * validator.  Returns 0 when valid.
- */
-static int
-validate_result(const tdc_job *job, size_t n, char *err, size_t errlen)
-{
-	uint32_t	lim = tdc_site_id_limit(job),
-			   *dense = malloc(sizeof(uint32_t) * ((size_t) lim + 1)),
-			   *tri = malloc(12 * (tdc_num_triangles(job) + 1)),
-				v[3];
-	double	   *sites = malloc(16 * (tdc_num_sites(job) + 1));
-	size_t		m = 0,
-				t = 0;
-	tdc_iter	it = {0};
-	int			rc;
-
-	if (!dense || !tri || !sites)
-	{
-		snprintf(err, errlen, "out of memory for validation");
-		return -1;
-	}
-	for (uint32_t s = 0; s < lim; s++)
-		dense[s] = UINT32_MAX;
-	for (size_t i = 0; i < n; i++)
-	{
-		uint32_t	s = tdc_input_site(job, i);
-
-		if (dense[s] == UINT32_MAX)
-		{
-			dense[s] = (uint32_t) m;
-			memcpy(sites + 2 * m++, tdc_site_xy(job, s), 16);
-		}
-	}
-	while (tdc_next_triangle(job, &it, v))
-	{
-		for (int k = 0; k < 3; k++)
-			tri[3 * t + k] = dense[v[k]];
-		t++;
-	}
-	rc = tdc_validate(sites, m, tri, t, err, errlen);
-	free(dense);
-	free(tri);
-	free(sites);
-	return rc;
-}
-
 static long
 parse_int(const char *s, const char *what)
 {
@@ -324,7 +277,7 @@ main(int argc, char **argv)
 	}
 	if (validate)
 	{
-		if (validate_result(job, n, err, sizeof(err)) != 0)
+		if (tdc_validate_job(job, err, sizeof(err)) != 0)
 		{
 			tdc_job_free(job);
 			die(1, "INVALID triangulation: %s", err);

@@ -145,4 +145,11 @@ extern int	tdc_next_edge(const tdc_job *job, tdc_iter *it, uint32_t v[2]);
 extern int	tdc_validate(const double *sites, size_t m, const uint32_t *tri,
 						 size_t ntri, char *err, size_t errlen);
 
+/*
+ * Validate a finished job's result: its unique sites (reached through the
+ * input map, so collinear input counts too) and triangles, renumbered
+ * densely, through tdc_validate().  Needs about 60 bytes per point.
+ */
+extern int	tdc_validate_job(const tdc_job *job, char *err, size_t errlen);
+
 #endif							/* TDC_H */

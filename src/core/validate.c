@@ -278,3 +278,79 @@ done:
 #undef P
 #undef BAIL
 }
+
+int
+tdc_validate_job(const tdc_job *job, char *err, size_t errlen)
+{
+	size_t		n = tdc_num_input(job),
+				m = 0,
+				t = 0;
+	uint32_t	lim = tdc_site_id_limit(job),
+			   *dense = malloc(sizeof(uint32_t) * ((size_t) lim + 1)),
+			   *tri = malloc(12 * (tdc_num_triangles(job) + 1)),
+				v[3];
+	double	   *sites = malloc(16 * (tdc_num_sites(job) + 1));
+	tdc_iter	it = {0};
+	int			rc;
+
+	if (!dense || !tri || !sites)
+	{
+		rc = fail(err, errlen, "out of memory for validation");
+		goto done;
+	}
+	for (uint32_t s = 0; s < lim; s++)
+		dense[s] = UINT32_MAX;
+	for (size_t i = 0; i < n; i++)
+	{
+		uint32_t	s = tdc_input_site(job, i);
+
+		if (s >= lim)
+		{
+			rc = fail(err, errlen, "input %zu maps to site %u, beyond %u", i, s, lim);
+			goto done;
+		}
+		if (dense[s] == UINT32_MAX)
+		{
+			if (m == tdc_num_sites(job))
+			{
+				rc = fail(err, errlen, "more sites reached from the input than the %zu reported",
+						  tdc_num_sites(job));
+				goto done;
+			}
+			dense[s] = (uint32_t) m;
+			memcpy(sites + 2 * m++, tdc_site_xy(job, s), 16);
+		}
+	}
+	if (m != tdc_num_sites(job))
+	{
+		rc = fail(err, errlen, "the input reaches %zu sites, %zu reported", m, tdc_num_sites(job));
+		goto done;
+	}
+	while (tdc_next_triangle(job, &it, v))
+	{
+		if (t == tdc_num_triangles(job))
+		{
+			rc = fail(err, errlen, "more triangles than the %zu reported", tdc_num_triangles(job));
+			goto done;
+		}
+		for (int k = 0; k < 3; k++)
+		{
+			if (v[k] >= lim || dense[v[k]] == UINT32_MAX)
+			{
+				rc = fail(err, errlen, "a triangle uses site %u, which no input reaches", v[k]);
+				goto done;
+			}
+			tri[3 * t + k] = dense[v[k]];
+		}
+		t++;
+	}
+	if (t != tdc_num_triangles(job))
+		rc = fail(err, errlen, "%zu triangles iterated, %zu reported", t, tdc_num_triangles(job));
+	else
+		rc = tdc_validate(sites, m, tri, t, err, errlen);
+done:
+	free(dense);
+	free(tri);
+	free(sites);
+	return rc;
+}
