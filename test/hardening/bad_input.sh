@@ -12,7 +12,7 @@
 # collinear ones included, found with GEOS' exact point-on-line test), not
 # ST_DelaunayTriangles' count: GEOS drops sliver triangles next to the hull
 # on integer-lattice inputs (e.g. 11 points, 14 triangles, GEOS gives 13).
-# Takes well under a minute.  Prints "N passed, N failed".
+# Takes about a minute.  Prints "N passed, N failed".
 set -euo pipefail
 HERE=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
 # shellcheck source=test/hardening/lib.sh
@@ -136,8 +136,9 @@ expect_true "10000 copies of one point: empty" \
 	"SELECT ST_IsEmpty(ST_TDCDelaunay(g)) FROM (SELECT ST_MakePoint(7, 7) AS g FROM generate_series(1, 10000)) s"
 expect_true "10000 copies of two points, then a third: 1 triangle" \
 	"SELECT ST_NumGeometries(ST_TDCDelaunay(g)) = 1 FROM (SELECT ST_MakePoint(i % 2, 0) AS g FROM generate_series(1, 10000) i UNION ALL SELECT ST_MakePoint(0.5, 3)) s"
-expect_true "100000 collinear points: no triangles; edges as PostGIS" \
-	"SELECT ST_IsEmpty(ST_TDCDelaunay(g)) AND ST_NumGeometries(ST_TDCDelaunay(g, 0, 1)) = tdc_hard.postgis_count(ST_Collect(g), 1)
+# (not compared with PostGIS: GEOS needs minutes for this input)
+expect_true "100000 collinear points: no triangles, a chain of n - 1 edges" \
+	"SELECT ST_IsEmpty(ST_TDCDelaunay(g)) AND ST_NumGeometries(ST_TDCDelaunay(g, 0, 1)) = 99999
 	 FROM (SELECT ST_MakePoint(i * 3, i * 2) AS g FROM generate_series(1, 100000) i) s"
 expect_error "mixed SRIDs where the first row is empty" \
 	"SELECT ST_TDCDelaunay(g) FROM (VALUES ('SRID=4326;POINT EMPTY'::geometry), ('SRID=3857;POINT(0 0)')) v(g)" "mixed SRIDs"
@@ -147,8 +148,8 @@ expect_error "mixed dimensions where one side is empty" \
 echo "-- huge collections"
 expect_true "1,000,000 empty members and 3 points: 1 triangle" \
 	"SELECT ST_NumGeometries(ST_TDCDelaunayTriangles(ST_Collect(ARRAY(SELECT 'POINT EMPTY'::geometry FROM generate_series(1, 1000000)) || ARRAY['POINT(0 0)'::geometry, 'POINT(1 0)', 'POINT(0 1)']))) = 1"
-expect_true "one MULTIPOINT value of 1,000,000 points: 2n - 2 - h" \
-	"WITH p AS MATERIALIZED (SELECT ST_Collect(ST_MakePoint((hashint4(i) & 1048575), (hashint4(-i) & 1048575))) AS g FROM generate_series(1, 1000000) i),
+expect_true "one MULTIPOINT value of 400,000 points: 2n - 2 - h" \
+	"WITH p AS MATERIALIZED (SELECT ST_Collect(ST_MakePoint((hashint4(i) & 1048575), (hashint4(-i) & 1048575))) AS g FROM generate_series(1, 400000) i),
 		  u AS MATERIALIZED (SELECT DISTINCT ST_X(d.geom) AS x, ST_Y(d.geom) AS y FROM p, ST_Dump(p.g) d),
 		  h AS MATERIALIZED (SELECT ST_Boundary(ST_ConvexHull(g)) AS b FROM p)
 	 SELECT ST_NumGeometries(ST_TDCDelaunayTriangles(p.g)) = 2 * (SELECT count(*) FROM u) - 2 -
