@@ -21,7 +21,11 @@
  * context is reset during error recovery and the callback cancels, joins and
  * frees the job.  While the job runs, a PG_TRY around the wait loop does the
  * same at once.  On success tdc_run_free frees it right away and clears the
- * pointer, so the callback has nothing left to do.
+ * pointer, so the callback has nothing left to do.  Results are written with
+ * interrupt checks, and pending interrupts are processed before the job is
+ * freed: after a cancel the client gets its error before the job is freed
+ * (error recovery resets the context), and freeing a big job takes a while
+ * (about 0.1 s for 5 million points).
  *
  * Memory limit.  tdc_delaunay.max_memory caps the collected vertices, the
  * engine's own estimate (tdc_estimate_memory) and an upper bound of the
@@ -314,6 +318,8 @@ tdc_triangulate_to_datum(const TdcPointBuf *buf, double tolerance, int flags,
 	run = tdc_run(buf, tolerance,
 				  tdc_gser_result_bound(buf->n, flags, buf->hasz), fname);
 	result = tdc_gser_result(run->job, flags, buf, fname);
+	/* freeing a big job takes a while: let a pending cancel in first */
+	CHECK_FOR_INTERRUPTS();
 	tdc_run_free(run);
 	return PointerGetDatum(result);
 }
@@ -484,6 +490,7 @@ st_tdcdelaunaydump(PG_FUNCTION_ARGS)
 		if ((id & 0xffff) == 0)
 			CHECK_FOR_INTERRUPTS();
 	}
+	CHECK_FOR_INTERRUPTS();
 	tdc_run_free(run);
 	return (Datum) 0;
 }
