@@ -169,13 +169,20 @@ tdc_cluster_paths() {
 	TDC_PGBIN=$("$PG_CONFIG" --bindir)
 }
 
-# Is something already using this port?  A TCP listener on the loopback
-# addresses, or a PostgreSQL socket of that port in the usual directories.
+# Is something already using this port?  A PostgreSQL Unix socket of that
+# port anywhere (other throw-away clusters listen on sockets only), or in the
+# usual directories; a TCP listener on it (any address, or answering on the
+# loopback addresses).
 tdc_port_busy() {
-	local port=$1 d
+	local port=$1 d hex
 	for d in /var/run/postgresql /run/postgresql /tmp; do
 		[ -e "$d/.s.PGSQL.$port" ] || [ -e "$d/.s.PGSQL.$port.lock" ] && return 0
 	done
+	grep -q "/\.s\.PGSQL\.$port\$" /proc/net/unix 2>/dev/null && return 0
+	# /proc/net/tcp*: local address "ADDR:PORT" in hex, state 0A = LISTEN.
+	hex=$(printf '%04X' "$port")
+	awk -v p=":$hex" '$4 == "0A" && substr($2, length($2) - 4) == p { found = 1 } END { exit !found }' \
+		/proc/net/tcp /proc/net/tcp6 2>/dev/null && return 0
 	timeout 2 bash -c "exec 3<>/dev/tcp/127.0.0.1/$port" 2>/dev/null && return 0
 	timeout 2 bash -c "exec 3<>/dev/tcp/::1/$port" 2>/dev/null && return 0
 	return 1
