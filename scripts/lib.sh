@@ -1,4 +1,4 @@
-# shellcheck shell=bash
+# shellcheck shell=bash disable=SC2034  # variables set here are read by the scripts that source it
 # scripts/lib.sh: shared set-up for scripts/demo.sh, scripts/test.sh and
 # scripts/cluster.sh.  Source it; it defines functions only (plus a few
 # variables) and changes nothing until they are called.
