@@ -94,7 +94,7 @@ sort "$WORK/all.out" | uniq -c | sed 's/^/    /'
 
 check "all sessions exited cleanly" test "$rcs" -eq 0
 check "no errors" test ! -s "$WORK/all.err"
-[ ! -s "$WORK/all.err" ] || sort "$WORK/all.err" | uniq -c | sort -rn | head -5 | sed 's/^/        /'
+[ ! -s "$WORK/all.err" ] || { sort "$WORK/all.err" | uniq -c | sort -rn | head -5 | sed 's/^/        /' || true; }
 check "all $total triangulations completed" test "$done_runs" -eq "$total"
 
 nagg=$(grep '^agg ' "$WORK/all.out" | sort -u | wc -l)

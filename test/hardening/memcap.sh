@@ -87,7 +87,7 @@ for mode in "${MODES[@]}"; do
 	fi
 	summary=""
 	seen_ok=0
-	first_ok=$(for mb in "${!OUTCOME[@]}"; do [[ ${OUTCOME[$mb]} == res* ]] && echo "$mb"; done | sort -n | head -n1)
+	first_ok=$(for mb in "${!OUTCOME[@]}"; do if [[ ${OUTCOME[$mb]} == res* ]]; then echo "$mb"; fi; done | sort -n | head -n1) || true
 	for mb in $(printf '%s\n' "${!OUTCOME[@]}" | sort -n); do
 		r=${OUTCOME[$mb]}
 		if [[ $r == res* ]]; then
