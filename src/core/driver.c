@@ -20,9 +20,9 @@
  * turn into the job's status; nothing exits or aborts.
  *
  * Memory, beyond the caller's coordinates, per input point: 16 bytes of
- * coordinates, 4 of input index, 4 of input->site map and 72 of mesh (six
- * 12-byte half-edges), 96 in all, plus one subset-sized sort buffer per
- * thread.
+ * coordinates, 4 of input index, 4 of position->site and 72 of mesh (six
+ * 12-byte half-edges), 96 in all, plus the grid (about 3 bytes per point).
+ * The input->site map costs 4 more, and only if asked for.
  */
 #include <errno.h>
 #include <math.h>
@@ -306,8 +306,8 @@ run(tdc_job *job)
 	t = now_sec();
 	job->xy = malloc(job->n * 2 * sizeof(double) + 16);
 	job->idx = malloc(job->n * sizeof(uint32_t) + 4);
-	job->map = malloc(job->n * sizeof(uint32_t) + 4);
-	if (!job->xy || !job->idx || !job->map)
+	job->site_of = malloc(job->n * sizeof(uint32_t) + 4);
+	if (!job->xy || !job->idx || !job->site_of)
 	{
 		tdc_job_fail(job, TDC_ENOMEM, "out of memory for %zu points", job->n);
 		return TDC_ENOMEM;
@@ -384,9 +384,6 @@ run(tdc_job *job)
 	job->times.leaves = now_sec() - t;
 	if (atomic_load(&job->cancel))
 		return TDC_ECANCELED;
-	if (job->tol_to)
-		for (size_t i = 0; i < job->n; i++)
-			job->map[i] = job->map[job->tol_to[i]];
 
 	/* step 3 */
 	t = now_sec();
@@ -438,6 +435,7 @@ free_arrays(tdc_job *job)
 {
 	free(job->xy);
 	free(job->idx);
+	free(job->site_of);
 	free(job->map);
 	free(job->tol_to);
 	free(job->he);
@@ -662,9 +660,44 @@ tdc_site_input(const tdc_job *job, uint32_t site)
 	return job->idx[site];
 }
 
+/*
+ * Invert idx[] (position -> input) through site_of[], then send the points a
+ * tolerance dropped to the site of the point that absorbed them.  Built once,
+ * under the job's lock; the job is otherwise read-only after it finished.
+ */
+static bool
+build_input_map(tdc_job *job)
+{
+	bool		ok;
+
+	pthread_mutex_lock(&job->lock);
+	if (job->map == NULL)
+	{
+		uint32_t   *map = malloc(job->n * sizeof(uint32_t) + 4);
+
+		if (map != NULL)
+		{
+			for (size_t p = 0; p < job->nin; p++)
+				map[job->idx[p]] = job->site_of[p];
+			if (job->tol_to)
+				for (size_t i = 0; i < job->n; i++)
+					if (job->tol_to[i] != i)
+						map[i] = map[job->tol_to[i]];
+			job->map = map;
+		}
+	}
+	ok = job->map != NULL;
+	pthread_mutex_unlock(&job->lock);
+	return ok;
+}
+
 uint32_t
 tdc_input_site(const tdc_job *job, size_t i)
 {
+	tdc_job    *j = (tdc_job *) job;
+
+	if (job->map == NULL && !build_input_map(j))
+		return UINT32_MAX;
 	return job->map[i];
 }
 

@@ -31,7 +31,8 @@ struct tdc_job
 	size_t		nin;
 	double	   *xy;
 	uint32_t   *idx;
-	uint32_t   *map;			/* input index -> site id */
+	uint32_t   *site_of;		/* position -> site (its own position if a site) */
+	uint32_t   *map;			/* input index -> site, built on first request */
 	uint32_t   *tol_to;			/* tolerance: dropped input -> absorbing input */
 
 	tdc_he	   *he;				/* 6 half-edges per entering point */
@@ -88,7 +89,7 @@ extern int	tdc_tolerance_filter(tdc_job *job);
 
 /*
  * leaf.c: triangulate subset k (a leaf of the tree) down to its cells;
- * removes duplicates and fills map[] for its points.
+ * removes duplicates and fills site_of[] for its points.
  */
 extern void tdc_triangulate_leaf(tdc_job *job, size_t k, tdc_sub *out);
 

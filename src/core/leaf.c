@@ -23,7 +23,9 @@
  * (sorted there by x, y, input index) or in a range that no split can
  * separate because all its points are equal.  Either way the point with the
  * smallest input index is kept as the site, at the lowest position, and
- * map[] sends every input index to its site.
+ * site_of[] records, at each position of the range, its site: writes that
+ * stay in the subset's own memory.  The input-indexed map is only built if a
+ * caller asks for it (tdc_input_site).
  *
  * Edge slots: the subset owns 3 per point of [lo, hi), more than a planar
  * graph on its sites can use.  Deleted edges are reused first, then
@@ -38,7 +40,7 @@ typedef struct leaf_ctx
 	tdc_mesh	m;
 	double	   *xy;
 	uint32_t   *idx;
-	uint32_t   *map;
+	uint32_t   *site_of;		/* position -> position of its site */
 } leaf_ctx;
 
 static inline bool
@@ -146,7 +148,7 @@ single_site(leaf_ctx *c, uint32_t lo, uint32_t n, tdc_sub *out)
 			best = i;
 	swap_pt(c->xy, c->idx, lo, best);
 	for (uint32_t i = lo; i < lo + n; i++)
-		c->map[c->idx[i]] = lo;
+		c->site_of[i] = lo;
 	empty_sub(out);
 	out->vert = lo;
 	out->nsites = 1;
@@ -171,13 +173,14 @@ base_case(leaf_ctx *c, tdc_freelist *fl, uint32_t lo, uint32_t n, tdc_sub *out)
 			swap_pt(c->xy, c->idx, lo + u, i);
 			u++;
 		}
-		c->map[c->idx[lo + u - 1]] = lo + u - 1;
 	}
-	/* duplicates sit after the sites now; map them to their site */
+	/* sites first, then their duplicates, which no longer move */
+	for (uint32_t k = lo; k < lo + u; k++)
+		c->site_of[k] = k;
 	for (uint32_t i = lo + u; i < lo + n; i++)
 		for (uint32_t k = lo; k < lo + u; k++)
 			if (same_point(c->xy, i, k))
-				c->map[c->idx[i]] = k;
+				c->site_of[i] = k;
 
 	if (u == 1)
 	{
@@ -333,7 +336,7 @@ tdc_triangulate_leaf(tdc_job *job, size_t k, tdc_sub *out)
 	c.m.cancel = &job->cancel;
 	c.xy = job->xy;
 	c.idx = job->idx;
-	c.map = job->map;
+	c.site_of = job->site_of;
 
 	fl.head = TDC_NIL;
 	fl.tail = TDC_NIL;

@@ -123,7 +123,11 @@ extern const double *tdc_site_xy(const tdc_job *job, uint32_t site);
 /* Input index of the first input point with this site's coordinates. */
 extern size_t tdc_site_input(const tdc_job *job, uint32_t site);
 
-/* Site that input point i became (duplicates and tolerance drops included). */
+/*
+ * Site that input point i became (duplicates and tolerance drops included).
+ * The first call builds the map: O(n) time and 4 bytes per input point;
+ * returns UINT32_MAX if that allocation fails.  Safe from several threads.
+ */
 extern uint32_t tdc_input_site(const tdc_job *job, size_t i);
 
 /*
