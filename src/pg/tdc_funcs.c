@@ -8,9 +8,12 @@
  * 10 ms (tdc_job_wait with a timeout) and between slices looks at
  * InterruptPending.  A query cancel, statement_timeout or terminate request
  * cancels the job, waits for the workers to stop (they poll their cancel
- * flag every few ms), frees the job and only then lets CHECK_FOR_INTERRUPTS
- * raise the error, so the error arrives within about 10 ms plus the workers'
- * reaction time, and no thread outlives the statement.  Other interrupts are
+ * flag every few ms) and only then lets CHECK_FOR_INTERRUPTS raise the
+ * error, so the error arrives within about 10 ms plus the workers' reaction
+ * time, and no thread outlives the statement.  The stopped job's memory is
+ * left to the reset callback below: PostgreSQL reports an error to the
+ * client before it aborts the transaction and resets its contexts, so the
+ * client does not wait for a gigabyte to be unmapped.  Other interrupts are
  * processed while the job keeps running.
  *
  * The job is malloc'd memory that PostgreSQL knows nothing about.  Every job
@@ -19,8 +22,8 @@
  * job must go first): whatever ERROR is raised after tdc_job_start (out of
  * memory while building the result, an error in a later row...), the
  * context is reset during error recovery and the callback cancels, joins and
- * frees the job.  While the job runs, a PG_TRY around the wait loop does the
- * same at once.  On success tdc_run_free frees it right away and clears the
+ * frees the job.  While the job runs, a PG_TRY around the wait loop stops
+ * the workers at once, before the stack unwinds.  On success tdc_run_free frees it right away and clears the
  * pointer, so the callback has nothing left to do.  Results are written with
  * interrupt checks, and pending interrupts are processed before the job is
  * freed: after a cancel the client gets its error before the job is freed
@@ -117,6 +120,14 @@ report_core_error(int rc, const char *msg, const char *fname)
 			(errcode(code),
 			 errmsg("%s: %s", fname, msg),
 			 hint ? errhint("%s", hint) : 0));
+}
+
+/* Cancel the workers and wait until none is left; the memory stays. */
+static void
+stop_job(TdcRun *run)
+{
+	tdc_job_cancel(run->job);
+	(void) tdc_job_wait(run->job, -1);
 }
 
 static void
@@ -244,8 +255,8 @@ tdc_run(const TdcPointBuf *buf, double tolerance, uint64 result_bytes,
 
 	/*
 	 * The workers read buf->xy until they finish: whatever ERROR leaves this
-	 * loop, stop and free the job before the stack (and maybe the buffer)
-	 * goes away.
+	 * loop, stop them before the stack unwinds.  Freeing is left to the
+	 * reset callback, which runs after the error went to the client.
 	 */
 	PG_TRY();
 	{
@@ -255,11 +266,7 @@ tdc_run(const TdcPointBuf *buf, double tolerance, uint64 result_bytes,
 				continue;
 			if (QueryCancelPending || ProcDiePending)
 			{
-				/* stop the workers before the error unwinds this stack */
-				tdc_job_cancel(run->job);
-				(void) tdc_job_wait(run->job, -1);
-				tdc_job_free(run->job);
-				run->job = NULL;
+				stop_job(run);
 				CHECK_FOR_INTERRUPTS();
 				/* interrupts are held off: still, we have no result */
 				ereport(ERROR,
@@ -273,10 +280,7 @@ tdc_run(const TdcPointBuf *buf, double tolerance, uint64 result_bytes,
 	PG_CATCH();
 	{
 		if (run->job != NULL)
-		{
-			tdc_job_free(run->job);
-			run->job = NULL;
-		}
+			stop_job(run);
 		PG_RE_THROW();
 	}
 	PG_END_TRY();
