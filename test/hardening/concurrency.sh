@@ -20,6 +20,9 @@
 #     (sorted ST_Normalize text of the triangles), which must then agree;
 #   - the result is valid: 2n - 2 - h triangles (h: hull vertices including
 #     collinear ones), area equal to the convex hull's, all triangles CCW;
+#   - cancel storm: 6 sessions run the same statements while two random
+#     active ones are cancelled every 0-80 ms; each statement ends with the
+#     right count or the cancel error, nothing else;
 #   - pg_postmaster_start_time() unchanged (no backend crashed).
 # QUICK=1: 5 runs per session (CI).  Prints figures and "N passed, N failed".
 set -euo pipefail
@@ -124,5 +127,50 @@ check "result has $EXPECT triangles ($ntri)" test "$ntri" = "$EXPECT"
 check "triangles tile the convex hull (area $area vs $HULL_AREA)" \
 	awk -v a="$area" -v b="$HULL_AREA" 'BEGIN { d = a - b; if (d < 0) d = -d; exit !(d <= 1e-9 * b) }'
 check "all triangles counter-clockwise" test "$ccw" = t
+# --- cancel storm: the same load while random statements get cancelled ------
+# 6 sessions (3 serial, 2 parallel-plan aggregates, 1 Dump) x STORM_RUNS,
+# two random active ones cancelled every 0-80 ms.  Every statement must end
+# with the right triangle count or with the cancel error, nothing else.
+STORM_RUNS=${STORM_RUNS:-$((QUICK ? 5 : 20))}
+PIDS=()
+for ((s = 1; s <= 6; s++)); do
+	{
+		echo "SET tdc_delaunay.threads = $THREADS;"
+		if ((s == 4 || s == 5)); then echo "$PARALLEL"; fi
+		for ((r = 1; r <= STORM_RUNS; r++)); do
+			if ((s == 6)); then
+				echo "SELECT 'storm ' || count(*) AS storm_marker FROM ST_TDCDelaunayDump('SELECT geom FROM $TABLE');"
+			else
+				echo "SELECT 'storm ' || ST_NumGeometries(ST_TDCDelaunay(geom)) AS storm_marker FROM $TABLE;"
+			fi
+		done
+	} >"$WORK/storm$s.sql"
+	psql -X -A -t -q -v ON_ERROR_STOP=0 -f "$WORK/storm$s.sql" >"$WORK/storm$s.out" 2>&1 &
+	PIDS+=($!)
+done
+ncancel_sent=0
+while :; do
+	running=0
+	for p in "${PIDS[@]}"; do
+		if kill -0 "$p" 2>/dev/null; then running=1; fi
+	done
+	((running)) || break
+	sent=$(hpsql -c "SELECT count(*) FILTER (WHERE pg_cancel_backend(pid)) FROM (
+		SELECT pid FROM pg_stat_activity WHERE state = 'active' AND pid <> pg_backend_pid()
+		AND query LIKE '%storm_marker%' AND query NOT LIKE '%pg_stat_activity%' ORDER BY random() LIMIT 2) s" 2>/dev/null) || sent=0
+	ncancel_sent=$((ncancel_sent + ${sent:-0}))
+	sleep "0.0$((RANDOM % 9))"
+done
+for p in "${PIDS[@]}"; do wait "$p" || true; done
+PIDS=()
+cat "$WORK"/storm*.out >"$WORK/storm.all"
+storm_ok=$(grep -c "^storm $EXPECT\$" "$WORK/storm.all" || true)
+storm_cancel=$(grep -c 'ERROR:  canceling statement due to user request' "$WORK/storm.all" || true)
+storm_other=$(grep -v "^storm $EXPECT\$" "$WORK/storm.all" | grep -v 'canceling statement due to user request\|^CONTEXT:  query of ST_TDCDelaunayDump' || true)
+echo "cancel storm: $ncancel_sent cancels sent; $storm_ok statements completed, $storm_cancel cancelled, of $((6 * STORM_RUNS))"
+check "cancel storm: every statement completed correctly or was cancelled" \
+	test $((storm_ok + storm_cancel)) -eq $((6 * STORM_RUNS)) -a -z "$storm_other"
+[ -z "$storm_other" ] || { printf '%s\n' "$storm_other" | head -n 5 | sed 's/^/        /' || true; }
+check "cancel storm: some statements were cancelled and some completed" test "$storm_cancel" -gt 0 -a "$storm_ok" -gt 0
 check "postmaster not restarted" test "$(postmaster_start)" = "$START0"
 finish
