@@ -116,7 +116,7 @@ for f in "$DIR"/vg.*.log; do
 	total=$((total + ${n:-0}))
 done
 awk '
-	/^==[0-9]+== [A-Z][a-z]/ && !/ERROR SUMMARY|HEAP SUMMARY|Memcheck|Copyright|Using Valgrind|Command:|Parent PID|For lists|For counts|Rerun with|Use --/ {
+	/^==[0-9]+== [A-Z][a-z]/ && !/ERROR SUMMARY|HEAP SUMMARY|Memcheck|Copyright|Using Valgrind|Command:|Parent PID|== For |Rerun with|Use --|Warning: / {
 		if (blk != "") print blk "\n--"; blk = $0; next }
 	/^==[0-9]+== +(at|by) / { if (blk != "") blk = blk "\n" $0; next }
 	/^==[0-9]+== *$/ { if (blk != "") print blk "\n--"; blk = ""; next }
@@ -127,8 +127,10 @@ if ((ours > 0)); then
 	awk 'BEGIN { RS = "\n--\n" } /tdc_delaunay\.so|tdc_[a-z_]+ \(|src\/(core|pg)\// { print; print "--"; if (++n >= 5) exit }' "$DIR/errors.txt" | sed 's/^/      /'
 fi
 if ((total > ours)); then
-	echo "  other (PostgreSQL/PostGIS) error kinds:"
-	{ grep -h '^==[0-9]*== [A-Z]' "$DIR/errors.txt" | sed 's/^==[0-9]*== //' | sort | uniq -c | sort -rn | head -n 5 | sed 's/^/      /'; } || true
+	echo "  other (PostgreSQL/PostGIS/glibc) errors, by kind and innermost frame:"
+	{ awk 'BEGIN { RS = "\n--\n" } { split($0, l, "\n"); k = l[1]; f = l[2];
+			sub(/^==[0-9]+== /, "", k); sub(/^==[0-9]+== +at 0x[0-9A-F]+: /, "", f); print k " | " f }' "$DIR/errors.txt" |
+		sort | uniq -c | sort -rn | head -n 8 | sed 's/^/      /'; } || true
 fi
 check "no valgrind error in tdc_delaunay code" test "$ours" -eq 0
 finish
