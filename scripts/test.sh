@@ -8,6 +8,8 @@
 #   4. starts a throw-away PostgreSQL 15 cluster (or uses yours, see README.md)
 #      and runs pg_regress against it (make installcheck)
 #   5. every executable test/*.sh, with the server's PG* settings exported
+#   6. the CI-sized hardening scripts in test/hardening/ (bad_input, memcap,
+#      concurrency and cancel with QUICK=1), on the throw-away cluster
 #
 # Each part prints "N passed, N failed" (pg_regress: "All N tests passed." or
 # "N of M tests failed."); they are added up into the last line of output,
@@ -173,6 +175,22 @@ for t in test/*.sh; do
 	[ -f "$t" ] && [ -x "$t" ] || continue
 	run_part "$(basename "$t" .sh)" plain "./$t"
 done
+
+# The CI-sized hardening scripts (test/hardening/README.md), on the throw-away
+# cluster only: they need a superuser and keep tables in a schema tdc_hard.
+# TDC_HARDENING=0 skips them, =1 runs them on your server too.
+hardening=${TDC_HARDENING:-$((!TDC_EXISTING))}
+if ((hardening && built && server)) && [ -d test/hardening ]; then
+	for h in bad_input memcap concurrency cancel; do
+		[ -f "test/hardening/$h.sh" ] || continue
+		case $h in
+			concurrency) run_part "hardening-$h" plain env QUICK=1 bash "test/hardening/$h.sh" ;;
+			cancel) run_part "hardening-$h" plain env QUICK=1 MAX_LATENCY_MS="${TDC_CANCEL_MAX_MS:-1000}" \
+				bash "test/hardening/$h.sh" ;;
+			*) run_part "hardening-$h" plain bash "test/hardening/$h.sh" ;;
+		esac
+	done
+fi
 
 tdc_server_down
 FINISHED=1
