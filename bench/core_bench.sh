@@ -184,6 +184,7 @@ echo "$RUNS_HDR" > "$RUNS"
 	echo "# tdc_delaunay core benchmark, $(date -u '+%Y-%m-%d %H:%M UTC')"
 	echo "# host: $(uname -srm), $NCPU CPUs ($(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ *//')), $(free -g | awk '/Mem:/ { print $2 }') GB RAM"
 	echo "# load average at start: $(cut -d' ' -f1-3 /proc/loadavg)"
+	echo "# tree: git $(git -C "$ROOT" rev-parse --short HEAD 2>/dev/null || echo '?')$(git -C "$ROOT" diff --quiet HEAD -- src 2>/dev/null || echo ' + uncommitted changes in src/'); ./tdc built $(date -u -r "$ROOT/tdc" '+%H:%M UTC' 2>/dev/null || echo '-')"
 	echo "# CGAL $(awk '$2 == "CGAL_VERSION" { print $3 }' /usr/include/CGAL/version.h 2>/dev/null), Epick, range insert; g++ -O2 -DNDEBUG -DCGAL_NDEBUG"
 	if [ "$COAST" = 1 ]; then echo "# GSHHG full resolution (gmt coast -Rd -Df -W -M): $GSHHG_META"; fi
 	echo "# times: tdc = engine 'total' from --stats (file reading excluded), CGAL = dt.insert only; both single-process, medians"

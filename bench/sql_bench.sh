@@ -353,6 +353,7 @@ echo "set,n,exact_triangles,tool,runs,median_s,min_s,max_s,triangles,triangles_e
 {
 	echo "# tdc_delaunay SQL benchmark, $(date -u '+%Y-%m-%d %H:%M UTC')"
 	echo "# server: $(sql -c "SELECT split_part(version(), ' on ', 1)"), PostGIS $(sql -c "SELECT extversion FROM pg_extension WHERE extname = 'postgis'") (GEOS $(sql -c "SELECT split_part(postgis_geos_version(), '-', 1)")), tdc_delaunay $(sql -c "SELECT coalesce((SELECT extversion FROM pg_extension WHERE extname = 'tdc_delaunay'), 'absent')")"
+	echo "# tree: git $(git -C "$ROOT" rev-parse --short HEAD 2>/dev/null || echo '?'); tdc_delaunay.so installed $(date -u -r "$(pg_config --pkglibdir 2>/dev/null)/tdc_delaunay.so" '+%H:%M UTC' 2>/dev/null || echo '?') (if this server uses that pkglibdir)"
 	echo "# host: $(nproc) CPUs, load average at report: $(cut -d' ' -f1-3 /proc/loadavg); shared_buffers=$(sql -c 'SHOW shared_buffers') work_mem=$(sql -c 'SHOW work_mem'); statement_timeout=${TIMEOUT}s"
 	echo "# times: server-side (clock_timestamp around EXECUTE), medians; tdc = all CPUs, tdc_1t = tdc_delaunay.threads=1, postgis = ST_DelaunayTriangles(ST_Collect(geom)),"
 	echo "#        collect = ST_Collect(geom) alone (cost of reading + aggregating the input, a floor for both)"
