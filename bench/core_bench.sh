@@ -59,6 +59,9 @@ elif ! ensure_tdc; then
 	log "running the CGAL half only"
 	HAVE_TDC=0
 fi
+# time a private copy: a concurrent `make tdc` must not swap the binary mid-run
+TDC_BIN=$WORK/tdc
+[ $HAVE_TDC = 1 ] && cp -p "$ROOT/tdc" "$TDC_BIN"
 
 # make_plot: docs/core.png (seconds vs n, log-log) from core.csv, per synthetic set:
 # tdc 1 thread / all threads / CGAL
@@ -124,7 +127,7 @@ RUNS_HDR="set,rep,tool,threads_req,n,unique,triangles,threads,sort,subdivide,lea
 run_tdc() {
 	local set=$1 file=$2 rep=$3 thr=$4 st=ok
 	timeout "$TMO" /usr/bin/time -f 'time_rss_kb=%M time_wall=%e time_user=%U time_sys=%S' -o "$WORK/time" \
-		"$ROOT/tdc" -t "$thr" --stats "$file" > /dev/null 2> "$WORK/err" || st=fail
+		"$TDC_BIN" -t "$thr" --stats "$file" > /dev/null 2> "$WORK/err" || st=fail
 	grep -q '^n=' "$WORK/err" || st=fail
 	if [ $st = fail ]; then
 		log "tdc -t $thr $set failed: $(tail -3 "$WORK/err" | tr '\n' ' ')"
@@ -184,7 +187,7 @@ echo "$RUNS_HDR" > "$RUNS"
 	echo "# tdc_delaunay core benchmark, $(date -u '+%Y-%m-%d %H:%M UTC')"
 	echo "# host: $(uname -srm), $NCPU CPUs ($(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ *//')), $(free -g | awk '/Mem:/ { print $2 }') GB RAM"
 	echo "# load average at start: $(cut -d' ' -f1-3 /proc/loadavg)"
-	echo "# tree: git $(git -C "$ROOT" rev-parse --short HEAD 2>/dev/null || echo '?')$(git -C "$ROOT" diff --quiet HEAD -- src 2>/dev/null || echo ' + uncommitted changes in src/'); ./tdc built $(date -u -r "$ROOT/tdc" '+%H:%M UTC' 2>/dev/null || echo '-')"
+	echo "# tree: git $(git -C "$ROOT" rev-parse --short HEAD 2>/dev/null || echo '?')$(git -C "$ROOT" diff --quiet HEAD -- src 2>/dev/null || echo ' + uncommitted changes in src/'); ./tdc built $(date -u -r "$TDC_BIN" '+%H:%M UTC' 2>/dev/null || echo '-')"
 	echo "# CGAL $(awk '$2 == "CGAL_VERSION" { print $3 }' /usr/include/CGAL/version.h 2>/dev/null), Epick, range insert; g++ -O2 -DNDEBUG -DCGAL_NDEBUG"
 	if [ "$COAST" = 1 ]; then echo "# GSHHG full resolution (gmt coast -Rd -Df -W -M): $GSHHG_META"; fi
 	echo "# times: tdc = engine 'total' from --stats (file reading excluded), CGAL = dt.insert only; both single-process, medians"
