@@ -272,7 +272,7 @@ wait "$sweep_pid" || true
 missed=0
 for r in "${runs[@]}"; do
 	read -r k kind base off <<<"$r"
-	read -r lat phase <<<"${RESULT[$k]}"
+	read -r lat phase _ <<<"${RESULT[$k]}"
 	# what the session printed for this run, between its markers
 	block=$(sed -n "/^begin $k\$/,/^after $k /p" "$sweep.out")
 	errs=$(grep 'ERROR' <<<"$block" || true)
@@ -358,7 +358,7 @@ rss_cancelled=0
 for ((k = 1; k <= RSS_RUNS; k++)); do
 	read -r base off <<<"${RSS_AT[$(((k - 1) % ${#RSS_AT[@]}))]}"
 	res=$(hpsql -c "SELECT tdc_hard.hit('rss:$k:', '$base', $off, 'cancel')" 2>&1) || res="error"
-	read -r lat phase <<<"$res"
+	read -r lat phase _ <<<"$res"
 	echo "  rss run $k: cancel at $base+$off ms ($phase): $lat ms"
 	if [ "$lat" != -1 ] && [ "$lat" != error ]; then
 		rss_cancelled=$((rss_cancelled + 1))
