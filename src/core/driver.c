@@ -21,7 +21,8 @@
  *
  * Memory, beyond the caller's coordinates, per input point: 16 bytes of
  * coordinates, 4 of input index, 4 of position->site and 72 of mesh (six
- * 12-byte half-edges), 96 in all, plus the grid (about 3 bytes per point).
+ * 12-byte half-edges), 96 in all, plus the grid (about 3 bytes per point)
+ * and a bit per half-edge marking the outer face.
  * The input->site map costs 4 more, and only if asked for.
  */
 #include <errno.h>
@@ -224,8 +225,12 @@ merge_task(void *arg, size_t i, int worker)
 	tdc_merge(&m, &out->fl, L, R, job->node_axis[k], out);
 }
 
-/* Walk the convex hull once: sizes the result without scanning the mesh. */
-static void
+/*
+ * Walk the convex hull once: it sizes the result without scanning the mesh,
+ * and marks the half-edges of the outer face (the reverse of every hull
+ * edge), so the triangle iterator needs no face walk to tell it apart.
+ */
+static int
 count_result(tdc_job *job)
 {
 	tdc_mesh	m = {job->xy, job->he, &job->cancel};
@@ -234,11 +239,10 @@ count_result(tdc_job *job)
 				h = 0;
 
 	job->nsites = u;
-	job->hull3 = false;
 	if (u < 2)
 	{
 		job->ntri = job->nedges = 0;
-		return;
+		return TDC_OK;
 	}
 	for (uint32_t e = root->ext[0];;)
 	{
@@ -252,13 +256,26 @@ count_result(tdc_job *job)
 		/* a chain: every site collinear */
 		job->ntri = 0;
 		job->nedges = u - 1;
+		return TDC_OK;
 	}
-	else
+	job->ntri = 2 * u - 2 - h;
+	job->nedges = 3 * u - 3 - h;
+	job->outer = calloc((job->nin * 6 + 63) / 64 + 1, sizeof(uint64_t));
+	if (job->outer == NULL)
 	{
-		job->ntri = 2 * u - 2 - h;
-		job->nedges = 3 * u - 3 - h;
-		job->hull3 = (h == 3);
+		tdc_job_fail(job, TDC_ENOMEM, "out of memory marking the convex hull");
+		return TDC_ENOMEM;
 	}
+	for (uint32_t e = root->ext[0];;)
+	{
+		uint32_t	o = SYM(e);
+
+		job->outer[o >> 6] |= (uint64_t) 1 << (o & 63);
+		e = tdc_rprev(&m, e);
+		if (e == root->ext[0])
+			break;
+	}
+	return TDC_OK;
 }
 
 static int
@@ -397,7 +414,8 @@ run(tdc_job *job)
 	}
 	job->times.merge = now_sec() - t;
 
-	count_result(job);
+	if (count_result(job) != TDC_OK)
+		return TDC_ENOMEM;
 	job->times.total = now_sec() - t0;
 	return TDC_OK;
 }
@@ -437,6 +455,7 @@ free_arrays(tdc_job *job)
 	free(job->idx);
 	free(job->site_of);
 	free(job->map);
+	free(job->outer);
 	free(job->tol_to);
 	free(job->he);
 	free(job->node_rect);
@@ -702,10 +721,10 @@ tdc_input_site(const tdc_job *job, size_t i)
 }
 
 /*
- * A face is a triangle of the result when Lnext returns to its start in three
- * steps; it is reported from its smallest half-edge.  The only other face,
- * the outer one, is a triangle only when the hull has three sites, and is
- * then clockwise.
+ * Every face but the outer one is a triangle, reported from its smallest
+ * half-edge.  Lnext(h) lies in h's own cache line, so most half-edges are
+ * rejected without touching another part of the mesh; the outer face's
+ * half-edges are marked in job->outer.
  */
 int
 tdc_next_triangle(const tdc_job *job, tdc_iter *it, uint32_t v[3])
@@ -720,18 +739,18 @@ tdc_next_triangle(const tdc_job *job, tdc_iter *it, uint32_t v[3])
 		uint32_t	h1,
 					h2;
 
-		if (job->he[h].org == TDC_NIL)
+		if (job->he[h].org == TDC_NIL ||
+			(job->outer[h >> 6] >> (h & 63)) & 1)
 			continue;
 		h1 = tdc_lnext(&m, (uint32_t) h);
+		if (h1 < h)
+			continue;
 		h2 = tdc_lnext(&m, h1);
-		if (h1 < h || h2 < h || tdc_lnext(&m, h2) != h)
+		if (h2 < h)
 			continue;
 		v[0] = job->he[h].org;
 		v[1] = job->he[h1].org;
 		v[2] = job->he[h2].org;
-		if (job->hull3 &&
-			tdc_orient2d(tdc_pt(&m, v[0]), tdc_pt(&m, v[1]), tdc_pt(&m, v[2])) < 0)
-			continue;
 		it->pos = h + 1;
 		return 1;
 	}

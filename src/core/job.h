@@ -60,7 +60,7 @@ struct tdc_job
 	size_t		nsites;
 	size_t		ntri;
 	size_t		nedges;
-	bool		hull3;			/* outer face is a triangle: orientation tells */
+	uint64_t   *outer;			/* bitmap: half-edges of the outer face */
 	tdc_times	times;
 
 	/* lifecycle */
