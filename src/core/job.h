@@ -74,7 +74,8 @@ struct tdc_job
 };
 
 /* Record the first error of a task and stop the others. */
-extern void tdc_job_fail(tdc_job *job, int code, const char *fmt,...);
+extern void tdc_job_fail(tdc_job *job, int code, const char *fmt,...)
+			__attribute__((format(printf, 3, 4)));
 
 /* subdivide.c: step 1, the grid, the tree and the points in tree order. */
 extern void tdc_subdivide(tdc_job *job);

@@ -145,19 +145,12 @@ run_reset_callback(void *arg)
 static int
 effective_threads(void)
 {
-	int			t = tdc_guc_threads;
+	long		ncpu = sysconf(_SC_NPROCESSORS_ONLN);
+	int			cpus = ncpu > 0 ? (int) Min(ncpu, 1024) : 1;
+	int			ceiling = tdc_guc_max_threads > 0 ? tdc_guc_max_threads : cpus;
+	int			t = tdc_guc_threads > 0 ? tdc_guc_threads : cpus;
 
-	if (tdc_guc_max_threads > 0)
-	{
-		if (t == 0)
-		{
-			long		ncpu = sysconf(_SC_NPROCESSORS_ONLN);
-
-			t = ncpu > 0 ? (int) Min(ncpu, 1024) : 1;
-		}
-		t = Min(t, tdc_guc_max_threads);
-	}
-	return t;
+	return Min(t, ceiling);
 }
 
 static void

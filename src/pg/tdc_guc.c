@@ -7,7 +7,8 @@
  *
  *	tdc_delaunay.threads		worker threads per triangulation, 0 = one per
  *								online CPU (default 0)
- *	tdc_delaunay.max_threads	superuser-only ceiling on the above, 0 = none
+ *	tdc_delaunay.max_threads	superuser-only ceiling on the above, 0 = the
+ *								number of online CPUs (default 0)
  *	tdc_delaunay.grid_size		s of the s x s subdivision grid, 0 = automatic
  *	tdc_delaunay.levels			subdivision depth d, 0 = automatic, -1 = none
  *	tdc_delaunay.max_memory		MB one triangulation (input buffer, engine,
@@ -17,8 +18,10 @@
  *								limit of a single result value so that the
  *								"use ST_TDCDelaunayDump" error can be tested
  *
- * Threads are real threads inside the backend: on a busy server set
- * tdc_delaunay.max_threads to leave CPUs for other sessions.
+ * Threads are real threads inside the backend, and every backend's threads
+ * count against the server user's process limit: so by default no session
+ * may use more threads than there are CPUs, and only a superuser can raise
+ * (or, on a busy server, lower) that ceiling with tdc_delaunay.max_threads.
  */
 #include "postgres.h"
 
@@ -60,7 +63,7 @@ _PG_init(void)
 							NULL, NULL, NULL);
 
 	DefineCustomIntVariable("tdc_delaunay.max_threads",
-							"Ceiling on worker threads per triangulation (0 = no ceiling).",
+							"Ceiling on worker threads per triangulation (0 = the number of online CPUs).",
 							NULL,
 							&tdc_guc_max_threads,
 							0, 0, 1024,
