@@ -29,6 +29,9 @@
 #include "tdc.h"
 #include "predicates.h"
 
+static int	fail(char *err, size_t errlen, const char *fmt,...)
+			__attribute__((format(printf, 3, 4)));
+
 static int
 fail(char *err, size_t errlen, const char *fmt,...)
 {
