@@ -17,7 +17,7 @@
 # server is always stopped on exit.
 #
 # TDC_PART_TIMEOUT=SECONDS bounds each part (default 900).
-# TDC_FUZZ_SECONDS=SECONDS per fuzz target (default 20; 0 skips fuzzing).
+# TDC_FUZZ_SECONDS=SECONDS per fuzz target (default 60; 0 skips fuzzing).
 set -euo pipefail
 # shellcheck source=scripts/lib.sh
 source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
@@ -141,7 +141,7 @@ run_part check-core-asan plain "${MAKE[@]}" check-core-asan
 run_part check-core-tsan plain "${MAKE[@]}" check-core-tsan
 
 # libFuzzer targets (fuzz/), a short run from their seed corpora.
-FUZZ_SECONDS=${TDC_FUZZ_SECONDS:-20}
+FUZZ_SECONDS=${TDC_FUZZ_SECONDS:-60}
 if grep -q '^fuzz-run:' Makefile && ((FUZZ_SECONDS > 0)); then
 	run_part fuzz plain "${MAKE[@]}" fuzz-run FUZZ_SECONDS="$FUZZ_SECONDS"
 fi
