@@ -13,6 +13,8 @@
 #include <pthread.h>
 #include <signal.h>
 #include <stdbool.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
 #include <unistd.h>
 #include <stdint.h>
 #include <stdlib.h>
@@ -780,6 +782,96 @@ test_signals_stay_on_caller(void)
 	free(xy);
 }
 
+/* Virtual memory of this process, in bytes (first field of /proc/self/statm). */
+static size_t
+vm_size(void)
+{
+	FILE	   *f = fopen("/proc/self/statm", "r");
+	unsigned long pages = 0;
+
+	if (f)
+	{
+		if (fscanf(f, "%lu", &pages) != 1)
+			pages = 0;
+		fclose(f);
+	}
+	return (size_t) pages * (size_t) sysconf(_SC_PAGESIZE);
+}
+
+/*
+ * Every allocation the engine makes must fail into TDC_ENOMEM (or, for a
+ * thread's stack, TDC_ETHREAD), never a crash.  Each run is a child process
+ * with its address space capped a little above what it already uses, so
+ * that one allocation or another fails; the caps step up until the run
+ * succeeds.  Skipped under sanitizers (--quick), whose shadow memory needs
+ * an unlimited address space.
+ */
+static void
+test_out_of_memory(void)
+{
+	static const size_t extra_mb[] = {1, 4, 16, 40, 80, 120, 160, 220, 400, 4000};
+	size_t		n = 1000000,
+				ref_tri;
+	double	   *xy;
+	int			enomem = 0,
+				ok = 0;
+	tdc_options ref_opt;
+	tdc_job    *ref;
+	char		ref_err[256];
+
+	if (tdc_test_quick)
+		return;
+	xy = gen_uniform(n, 1000, 0, 0);
+	tdc_options_init(&ref_opt);
+	CHECK(tdc_triangulate(xy, n, &ref_opt, &ref, ref_err, sizeof(ref_err)) == TDC_OK,
+		  "out of memory: reference run: %s", ref_err);
+	ref_tri = tdc_num_triangles(ref);
+	tdc_job_free(ref);
+	for (size_t k = 0; k < sizeof(extra_mb) / sizeof(extra_mb[0]); k++)
+	{
+		pid_t		pid;
+		int			status;
+
+		fflush(NULL);
+		pid = fork();
+		if (pid == 0)
+		{
+			struct rlimit rl;
+			tdc_options opt;
+			tdc_job    *job;
+			char		err[256];
+			int			rc;
+
+			rl.rlim_cur = rl.rlim_max = vm_size() + (extra_mb[k] << 20);
+			setrlimit(RLIMIT_AS, &rl);
+			tdc_options_init(&opt);
+			opt.threads = 2;
+			rc = tdc_triangulate(xy, n, &opt, &job, err, sizeof(err));
+			if (rc == TDC_OK && tdc_num_triangles(job) != ref_tri)
+				rc = 99;		/* an incomplete result is as bad as a crash */
+			tdc_job_free(job);
+			_exit(rc == TDC_OK ? 0 : rc == TDC_ENOMEM ? 1 : rc == TDC_ETHREAD ? 2 : 3);
+		}
+		CHECK(pid > 0, "out of memory: fork failed");
+		if (pid <= 0)
+			break;
+		waitpid(pid, &status, 0);
+		CHECK(WIFEXITED(status) && WEXITSTATUS(status) <= 2,
+			  "out of memory: cap +%zu MB: %s %d", extra_mb[k],
+			  WIFEXITED(status) ? "exit" : "killed by signal",
+			  WIFEXITED(status) ? WEXITSTATUS(status) : WTERMSIG(status));
+		if (WIFEXITED(status) && WEXITSTATUS(status) == 1)
+			enomem++;
+		if (WIFEXITED(status) && WEXITSTATUS(status) == 0)
+			ok++;
+	}
+	CHECK(enomem >= 3, "out of memory: only %d capped runs failed with TDC_ENOMEM", enomem);
+	CHECK(ok >= 1, "out of memory: no capped run succeeded");
+	printf("out of memory: %d capped runs ended in TDC_ENOMEM, %d succeeded, none crashed\n",
+		   enomem, ok);
+	free(xy);
+}
+
 void
 test_engine(void)
 {
@@ -790,4 +882,5 @@ test_engine(void)
 	test_random_sets();
 	test_cancel_and_concurrency();
 	test_signals_stay_on_caller();
+	test_out_of_memory();
 }

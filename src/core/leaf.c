@@ -346,8 +346,13 @@ tdc_triangulate_leaf(tdc_job *job, size_t k, tdc_sub *out)
 	/* the same first axis as the layout in subdivide.c */
 	rect_recurse(&c, &fl, &job->node_rect[k], job->d & 1, lo, out);
 
-	/* Leftover slots go on the list: the merges above have no bump range. */
-	while (fl.bump < fl.limit)
-		tdc_free_edge(&c.m, &fl, 2 * fl.bump++);
+	/*
+	 * Leftover slots go on the list: the merges above have no bump range.
+	 * Not after a cancel, when the mesh is thrown away: that would touch
+	 * most of a subset's untouched slots.
+	 */
+	if (!tdc_cancelled(&c.m))
+		while (fl.bump < fl.limit)
+			tdc_free_edge(&c.m, &fl, 2 * fl.bump++);
 	out->fl = fl;
 }
