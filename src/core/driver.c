@@ -260,7 +260,7 @@ count_result(tdc_job *job)
 	}
 	job->ntri = 2 * u - 2 - h;
 	job->nedges = 3 * u - 3 - h;
-	job->outer = calloc((job->nin * 6 + 63) / 64 + 1, sizeof(uint64_t));
+	job->outer = tdc_big_alloc(((job->nin * 6 + 63) / 64 + 1) * sizeof(uint64_t));
 	if (job->outer == NULL)
 	{
 		tdc_job_fail(job, TDC_ENOMEM, "out of memory marking the convex hull");
@@ -321,9 +321,9 @@ run(tdc_job *job)
 
 	/* validate; tolerance */
 	t = now_sec();
-	job->xy = malloc(job->n * 2 * sizeof(double) + 16);
-	job->idx = malloc(job->n * sizeof(uint32_t) + 4);
-	job->site_of = malloc(job->n * sizeof(uint32_t) + 4);
+	job->xy = tdc_big_alloc(job->n * 2 * sizeof(double) + 16);
+	job->idx = tdc_big_alloc(job->n * sizeof(uint32_t) + 4);
+	job->site_of = tdc_big_alloc(job->n * sizeof(uint32_t) + 4);
 	if (!job->xy || !job->idx || !job->site_of)
 	{
 		tdc_job_fail(job, TDC_ENOMEM, "out of memory for %zu points", job->n);
@@ -334,7 +334,7 @@ run(tdc_job *job)
 		return atomic_load(&job->failed);
 	if (job->opt.tolerance > 0 && job->n > 0)
 	{
-		job->tol_to = malloc(job->n * sizeof(uint32_t));
+		job->tol_to = tdc_big_alloc(job->n * sizeof(uint32_t));
 		if (job->tol_to == NULL)
 		{
 			tdc_job_fail(job, TDC_ENOMEM, "out of memory for the tolerance pass");
@@ -387,7 +387,7 @@ run(tdc_job *job)
 	if (atomic_load(&job->cancel))
 		return TDC_ECANCELED;
 
-	job->he = malloc(job->nin * 6 * sizeof(tdc_he) + sizeof(tdc_he));
+	job->he = tdc_big_alloc(job->nin * 6 * sizeof(tdc_he) + sizeof(tdc_he));
 	if (job->he == NULL)
 	{
 		tdc_job_fail(job, TDC_ENOMEM, "out of memory for the mesh of %zu points (%zu bytes)",
@@ -451,16 +451,16 @@ driver_main(void *arg)
 static void
 free_arrays(tdc_job *job)
 {
-	free(job->xy);
-	free(job->idx);
-	free(job->site_of);
-	free(job->map);
-	free(job->outer);
-	free(job->tol_to);
-	free(job->he);
+	tdc_big_free(job->xy);
+	tdc_big_free(job->idx);
+	tdc_big_free(job->site_of);
+	tdc_big_free(job->map);
+	tdc_big_free(job->outer);
+	tdc_big_free(job->tol_to);
+	tdc_big_free(job->he);
+	tdc_big_free(job->prefix);
 	free(job->node_rect);
 	free(job->node_axis);
-	free(job->prefix);
 	free(job->node_lo);
 	free(job->node_hi);
 	free(job->subs);
@@ -692,7 +692,7 @@ build_input_map(tdc_job *job)
 	pthread_mutex_lock(&job->lock);
 	if (job->map == NULL)
 	{
-		uint32_t   *map = malloc(job->n * sizeof(uint32_t) + 4);
+		uint32_t   *map = tdc_big_alloc(job->n * sizeof(uint32_t) + 4);
 
 		if (map != NULL)
 		{

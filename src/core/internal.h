@@ -70,6 +70,16 @@ typedef struct tdc_mesh
 	const atomic_int *cancel;
 } tdc_mesh;
 
+/*
+ * Arrays that grow with the input (pool.c): mapped and unmapped directly, so
+ * their memory goes back to the system as soon as a job is freed, whatever
+ * malloc's thresholds have drifted to in a long-lived host process (a
+ * PostgreSQL backend).  The memory comes zeroed.  NULL on failure;
+ * tdc_big_free(NULL) does nothing.
+ */
+extern void *tdc_big_alloc(size_t size);
+extern void tdc_big_free(void *p);
+
 /* Thread pool (pool.c): a parallel-for on which the calling thread helps. */
 typedef struct tdc_pool tdc_pool;
 typedef void (*tdc_task_fn) (void *arg, size_t i, int worker);

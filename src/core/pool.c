@@ -15,8 +15,38 @@
  * for the host process (a PostgreSQL backend).
  */
 #include <stdlib.h>
+#include <sys/mman.h>
 
 #include "internal.h"
+
+/* The mapping's size is kept in front of the block, which stays 64-aligned. */
+#define BIG_HEADER	64
+
+void *
+tdc_big_alloc(size_t size)
+{
+	size_t		total = size + BIG_HEADER;
+	char	   *p;
+
+	if (total < size)
+		return NULL;
+	p = mmap(NULL, total, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+	if (p == MAP_FAILED)
+		return NULL;
+	*(size_t *) p = total;
+	return p + BIG_HEADER;
+}
+
+void
+tdc_big_free(void *ptr)
+{
+	char	   *p;
+
+	if (ptr == NULL)
+		return;
+	p = (char *) ptr - BIG_HEADER;
+	munmap(p, *(size_t *) p);
+}
 
 struct tdc_pool
 {

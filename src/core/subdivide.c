@@ -294,16 +294,16 @@ tdc_subdivide(tdc_job *job)
 		copyidx = job->idx;
 		ga.src = copy;
 		ga.src_idx = copyidx;
-		job->xy = malloc(job->nin * 2 * sizeof(double) + 16);
-		job->idx = malloc(job->nin * sizeof(uint32_t) + 4);
+		job->xy = tdc_big_alloc(job->nin * 2 * sizeof(double) + 16);
+		job->idx = tdc_big_alloc(job->nin * sizeof(uint32_t) + 4);
 		if (!job->xy || !job->idx)
 			goto oom;
 	}
 
-	ga.cell = malloc(ga.n * sizeof(uint32_t) + 4);
-	ga.hist = malloc((size_t) T * ga.ncells * sizeof(uint32_t));
-	ga.cell_start = malloc(ga.ncells * sizeof(uint32_t));
-	job->prefix = calloc(w * w, sizeof(uint32_t));
+	ga.cell = tdc_big_alloc(ga.n * sizeof(uint32_t) + 4);
+	ga.hist = tdc_big_alloc((size_t) T * ga.ncells * sizeof(uint32_t));
+	ga.cell_start = tdc_big_alloc(ga.ncells * sizeof(uint32_t));
+	job->prefix = tdc_big_alloc(w * w * sizeof(uint32_t));
 	if (!ga.cell || !ga.hist || !ga.cell_start || !job->prefix)
 		goto oom;
 
@@ -364,9 +364,9 @@ oom:
 	tdc_job_fail(job, TDC_ENOMEM, "out of memory for the subdivision grid (%d x %d cells)",
 				 job->s, job->s);
 done:
-	free(copy);
-	free(copyidx);
-	free(ga.cell);
-	free(ga.hist);
-	free(ga.cell_start);
+	tdc_big_free(copy);
+	tdc_big_free(copyidx);
+	tdc_big_free(ga.cell);
+	tdc_big_free(ga.hist);
+	tdc_big_free(ga.cell_start);
 }

@@ -35,7 +35,9 @@
 #             frees; worker threads get their arenas).
 #   postmaster  pg_postmaster_start_time() unchanged: no backend crashed
 #
-# QUICK=1: 1M points, fewer signal points, 6 runs for the RSS comparison.
+# QUICK=1: 1M points, fewer signal points, 6 runs for the RSS comparison,
+# which then allows 10% + 48 MB between the peaks of the first and second
+# half of the runs (allocator swings at this size; a leak is ~100 MB a run).
 # Prints the figures and "N passed, N failed"; exits non-zero on a failure.
 # Needs a superuser (pg_read_file of /proc/PID/status, signalling backends)
 # and a server on this machine.  About 3-5 minutes for 5M points.
@@ -382,8 +384,24 @@ echo "  backend RssAnon: after a complete run ${anon_warm:-?} kB, after 1 cancel
 echo "  VmRSS by run (kB):   $(awk '/^rss / { printf "%s ", $3 }' "$rss.out")"
 echo "  RssAnon by run (kB): $(awk '/^rss / { printf "%s ", $5 }' "$rss.out")"
 check "RSS runs cancelled ($rss_cancelled of $RSS_RUNS)" test "$rss_cancelled" -ge $((RSS_RUNS * 3 / 4))
-check "private RSS (RssAnon) after $RSS_RUNS cancelled runs within 10% of after 1 (${anon1:-?} -> ${anonN:-?} kB)" \
-	awk -v a="${anon1:-0}" -v b="${anonN:-0}" 'BEGIN { exit !(a > 0 && b > 0 && b <= a * 1.10) }'
+if ((QUICK)); then
+	# A few runs of 1M points: where a cancel lands decides how far the
+	# backend's point buffer had grown, and the allocator keeps some of it, so
+	# private memory swings between about 4 and 35 MB from run to run, more
+	# than 10% of the first run.  A leak of the engine's arrays would add about
+	# 100 MB per run at this size; so here the peak of the second half of the
+	# runs may exceed the first half's by 10% plus 48 MB, no more.  The full
+	# run (QUICK=0, 5M points, 20 runs) checks the plain 10%.
+	halves=$(awk '/^rss / { v[++n] = $5 } END { h = int(n / 2); a = b = 0;
+		for (i = 1; i <= h; i++) if (v[i] > a) a = v[i];
+		for (i = h + 1; i <= n; i++) if (v[i] > b) b = v[i]; print a, b }' "$rss.out")
+	read -r first_half second_half <<<"$halves"
+	check "private RSS (RssAnon) peak of the last $((RSS_RUNS - RSS_RUNS / 2)) cancelled runs within 10% + 48 MB of the first $((RSS_RUNS / 2)) ($first_half -> $second_half kB)" \
+		awk -v a="${first_half:-0}" -v b="${second_half:-0}" 'BEGIN { exit !(a > 0 && b > 0 && b <= a * 1.10 + 49152) }'
+else
+	check "private RSS (RssAnon) after $RSS_RUNS cancelled runs within 10% of after 1 (${anon1:-?} -> ${anonN:-?} kB)" \
+		awk -v a="${anon1:-0}" -v b="${anonN:-0}" 'BEGIN { exit !(a > 0 && b > 0 && b <= a * 1.10) }'
+fi
 if awk -v a="${rss1:-0}" -v b="${rssN:-0}" 'BEGIN { exit !(a > 0 && b > 0 && b <= a * 1.10) }'; then
 	echo "  (VmRSS within 10% as well)"
 else
