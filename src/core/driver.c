@@ -7,11 +7,12 @@
  * driver thread with every signal blocked, and returns.  The driver creates
  * the pool and runs the phases, each a parallel loop on the pool:
  *
- *	copy		copy and validate the input, bounding box (sort time)
- *	tolerance	optional sequential filter (sites.c)
- *	step 1		subdivision into 2^d subsets, level by level (subdivide.c)
- *	sort		sort and de-duplicate each subset (sites.c)
- *	step 2		Guibas-Stolfi in each subset (leaf.c)
+ *	check		validate the input, bounding box (reported as sort time)
+ *	tolerance	optional sequential filter (sites.c, also sort time)
+ *	step 1		grid counts, the tree of 2^d subsets level by level, and one
+ *				counting sort of the points into tree order (subdivide.c)
+ *	step 2		Guibas-Stolfi in each subset, down to its grid cells,
+ *				removing duplicates on the way (leaf.c)
  *	step 3		merge up the tree, level by level (merge.c)
  *
  * The caller's thread only waits (tdc_job_wait) and may cancel: every task

@@ -10,7 +10,8 @@
  * thread stays free to notice interrupts (query cancel) and call
  * tdc_job_cancel(); the workers poll the cancel flag and stop within a few ms.
  *
- * Site ids: the engine copies the input, sorts and de-duplicates it.  The
+ * Site ids: the engine copies the input into its own order and removes
+ * duplicates.  The
  * surviving sites are identified by "site ids" in [0, tdc_site_id_limit()).
  * Ids are not dense (removed duplicates leave holes) and their order depends
  * on the subdivision, so only compare triangle sets by coordinates.
@@ -56,7 +57,7 @@ typedef struct tdc_options
 /* Phase timings in seconds, as in Table 1 of the paper. */
 typedef struct tdc_times
 {
-	double		sort;			/* copy, validation, tolerance pass, leaf sort + dedup */
+	double		sort;			/* validation and the tolerance pass; no subset is sorted */
 	double		subdivide;		/* step 1: grid subdivision into 2^d subsets */
 	double		leaves;			/* step 2: Guibas-Stolfi inside every subset */
 	double		merge;			/* step 3: merging up the tree */
