@@ -11,8 +11,8 @@
  * tdc_job_cancel(); the workers poll the cancel flag and stop within a few ms.
  *
  * Site ids: the engine copies the input into its own order and removes
- * duplicates.  The
- * surviving sites are identified by "site ids" in [0, tdc_site_id_limit()).
+ * duplicates.  The surviving sites are identified by "site ids" in
+ * [0, tdc_site_id_limit()).
  * Ids are not dense (removed duplicates leave holes) and their order depends
  * on the subdivision, so only compare triangle sets by coordinates.
  */
