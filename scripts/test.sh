@@ -181,7 +181,7 @@ done
 # TDC_HARDENING=0 skips them, =1 runs them on your server too.
 hardening=${TDC_HARDENING:-$((!TDC_EXISTING))}
 if ((hardening && built && server)) && [ -d test/hardening ]; then
-	for h in bad_input memcap concurrency cancel; do
+	for h in settings bad_input memcap concurrency cancel; do
 		[ -f "test/hardening/$h.sh" ] || continue
 		case $h in
 			concurrency) run_part "hardening-$h" plain env QUICK=1 bash "test/hardening/$h.sh" ;;

@@ -54,6 +54,23 @@ SET tdc_delaunay.max_memory = '64MB';
 SELECT ST_NumGeometries(ST_TDCDelaunay(geom)) = tdc_expected_triangles(ST_Collect(geom)) AS fits FROM tdc_guc_pts;
 RESET tdc_delaunay.max_memory;
 
+-- memory_ceiling (superuser) bounds max_memory: a user's own limit only
+-- lowers it, and the error names the setting that applied.
+SET tdc_delaunay.memory_ceiling = '1MB';
+SELECT ST_NumGeometries(ST_TDCDelaunay(geom)) FROM tdc_guc_pts;
+SET tdc_delaunay.max_memory = '64MB';
+SELECT ST_NumGeometries(ST_TDCDelaunay(geom)) FROM tdc_guc_pts;
+SELECT count(*) FROM ST_TDCDelaunayDump('SELECT geom FROM tdc_guc_pts');
+SET tdc_delaunay.memory_ceiling = '64MB';
+SET tdc_delaunay.max_memory = '1MB';
+SELECT ST_NumGeometries(ST_TDCDelaunay(geom)) FROM tdc_guc_pts;
+RESET tdc_delaunay.max_memory;
+SELECT ST_NumGeometries(ST_TDCDelaunay(geom)) = tdc_expected_triangles(ST_Collect(geom)) AS fits_ceiling FROM tdc_guc_pts;
+-- -1: no ceiling at all
+SET tdc_delaunay.memory_ceiling = -1;
+SELECT ST_NumGeometries(ST_TDCDelaunay(geom)) = tdc_expected_triangles(ST_Collect(geom)) AS no_ceiling FROM tdc_guc_pts;
+RESET tdc_delaunay.memory_ceiling;
+
 -- max_result_bytes (test only): results over the limit of one value point
 -- to ST_TDCDelaunayDump.  A 2D triangle takes 80 bytes.
 SET tdc_delaunay.max_result_bytes = 1000;
@@ -66,12 +83,25 @@ RESET tdc_delaunay.max_result_bytes;
 
 -- superuser-only settings
 CREATE ROLE tdc_guc_user;
+GRANT SELECT ON tdc_guc_pts TO tdc_guc_user;
 SET ROLE tdc_guc_user;
 SET tdc_delaunay.max_threads = 64;
 SET tdc_delaunay.max_result_bytes = 100;
+SET tdc_delaunay.memory_ceiling = -1;
+SET tdc_delaunay.memory_ceiling = '100GB';
 SET tdc_delaunay.threads = 2;
 SHOW tdc_delaunay.threads;
+-- a user may ask for more than the ceiling; the ceiling still applies
+SET tdc_delaunay.max_memory = '100GB';
+SHOW tdc_delaunay.max_memory;
 RESET ROLE;
+SET tdc_delaunay.memory_ceiling = '1MB';
+SET ROLE tdc_guc_user;
+SELECT ST_NumGeometries(ST_TDCDelaunay(geom)) FROM tdc_guc_pts;
+RESET ROLE;
+RESET tdc_delaunay.memory_ceiling;
+RESET tdc_delaunay.max_memory;
+REVOKE SELECT ON tdc_guc_pts FROM tdc_guc_user;
 DROP ROLE tdc_guc_user;
 RESET tdc_delaunay.threads;
 

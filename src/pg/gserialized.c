@@ -299,12 +299,10 @@ tdc_pointbuf_reserve(TdcPointBuf *buf, uint64 extra, const char *fname)
 	if (limit > 0 && pointbuf_bytes_for(newcap, buf->hasz) > limit)
 		newcap = Max(need, limit / ((buf->hasz ? 3 : 2) * sizeof(double)));
 	if (limit > 0 && pointbuf_bytes_for(newcap, buf->hasz) > limit)
-		ereport(ERROR,
-				(errcode(ERRCODE_PROGRAM_LIMIT_EXCEEDED),
-				 errmsg("%s: input of %llu vertices needs more than tdc_delaunay.max_memory (%d MB)",
-						fname, (unsigned long long) need,
-						tdc_guc_max_memory_mb),
-				 errhint("Raise tdc_delaunay.max_memory or triangulate fewer points.")));
+		tdc_report_memory_limit(fname,
+								psprintf("the input of %llu vertices",
+										 (unsigned long long) need),
+								pointbuf_bytes_for(need, buf->hasz));
 
 	if (buf->xy == NULL)
 	{

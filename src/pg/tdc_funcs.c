@@ -30,7 +30,8 @@
  * (error recovery resets the context), and freeing a big job takes a while
  * (about 0.1 s for 5 million points).
  *
- * Memory limit.  tdc_delaunay.max_memory caps the collected vertices, the
+ * Memory limit.  tdc_delaunay.max_memory (within the superuser's
+ * tdc_delaunay.memory_ceiling) caps the collected vertices, the
  * engine's own estimate (tdc_estimate_memory) and an upper bound of the
  * result; the check happens before the engine allocates, and the engine
  * gets what is left as its own max_memory.
@@ -96,8 +97,15 @@ report_core_error(int rc, const char *msg, const char *fname)
 			code = ERRCODE_OUT_OF_MEMORY;
 			break;
 		case TDC_EMEMLIMIT:
-			code = ERRCODE_PROGRAM_LIMIT_EXCEEDED;
-			hint = "Raise tdc_delaunay.max_memory or triangulate fewer points.";
+			{
+				const char *setting;
+
+				(void) tdc_memory_limit_mb(&setting);
+				code = ERRCODE_PROGRAM_LIMIT_EXCEEDED;
+				hint = strcmp(setting, "tdc_delaunay.max_memory") == 0 ?
+					"Raise tdc_delaunay.max_memory or triangulate fewer points." :
+					"tdc_delaunay.memory_ceiling caps tdc_delaunay.max_memory and only a superuser can raise it; or triangulate fewer points.";
+			}
 			break;
 		case TDC_EINVAL:
 			code = ERRCODE_INVALID_PARAMETER_VALUE;
@@ -219,13 +227,10 @@ tdc_run(const TdcPointBuf *buf, double tolerance, uint64 result_bytes,
 		uint64		have = tdc_pointbuf_bytes(buf) + result_bytes;
 
 		if (have + engine > limit)
-			ereport(ERROR,
-					(errcode(ERRCODE_PROGRAM_LIMIT_EXCEEDED),
-					 errmsg("%s: triangulating %llu vertices needs about %llu MB, more than tdc_delaunay.max_memory (%d MB)",
-							fname, (unsigned long long) buf->n,
-							(unsigned long long) ((have + engine + (1 << 20) - 1) >> 20),
-							tdc_guc_max_memory_mb),
-					 errhint("Raise tdc_delaunay.max_memory or triangulate fewer points.")));
+			tdc_report_memory_limit(fname,
+									psprintf("triangulating %llu vertices",
+											 (unsigned long long) buf->n),
+									have + engine);
 		opt.max_memory = (size_t) (limit - have);
 	}
 

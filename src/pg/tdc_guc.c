@@ -12,7 +12,10 @@
  *	tdc_delaunay.grid_size		s of the s x s subdivision grid, 0 = automatic
  *	tdc_delaunay.levels			subdivision depth d, 0 = automatic, -1 = none
  *	tdc_delaunay.max_memory		MB one triangulation (input buffer, engine,
- *								result) may use, 0 = unlimited (default)
+ *								result) may use, 0 = up to the ceiling (default)
+ *	tdc_delaunay.memory_ceiling	superuser-only ceiling on the above, 0 = half
+ *								of the machine's physical memory (default),
+ *								-1 = none
  *	tdc_delaunay.stats			NOTICE with counts, DETAIL with timings
  *	tdc_delaunay.max_result_bytes  test-only, superuser: lowers the 1 GB
  *								limit of a single result value so that the
@@ -22,10 +25,18 @@
  * count against the server user's process limit: so by default no session
  * may use more threads than there are CPUs, and only a superuser can raise
  * (or, on a busy server, lower) that ceiling with tdc_delaunay.max_threads.
+ *
+ * Memory is the same story with a worse ending: a backend that asks for more
+ * than the machine has is killed by the kernel, and the postmaster then
+ * restarts every session.  So no triangulation may plan past
+ * tdc_delaunay.memory_ceiling, by default half of the physical memory (one
+ * big triangulation plus shared buffers and everyone else fits), and users
+ * may only lower their own limit with tdc_delaunay.max_memory.
  */
 #include "postgres.h"
 
 #include <limits.h>
+#include <unistd.h>
 
 #include "fmgr.h"
 #include "utils/guc.h"
@@ -40,13 +51,68 @@ int			tdc_guc_max_threads = 0;
 int			tdc_guc_grid_size = 0;
 int			tdc_guc_levels = 0;
 int			tdc_guc_max_memory_mb = 0;
+int			tdc_guc_memory_ceiling_mb = 0;
 bool		tdc_guc_stats = false;
 int			tdc_guc_max_result_bytes = (int) MaxAllocSize;
+
+/* Half the physical memory in MB, or 0 when the system does not say. */
+static uint64
+default_ceiling_mb(void)
+{
+	long		pages = sysconf(_SC_PHYS_PAGES);
+	long		pagesize = sysconf(_SC_PAGESIZE);
+
+	if (pages <= 0 || pagesize <= 0)
+		return 0;
+	return (uint64) pages / 2 * (uint64) pagesize / (1024 * 1024);
+}
+
+uint64
+tdc_memory_limit_mb(const char **setting)
+{
+	uint64		ceiling;
+
+	if (tdc_guc_memory_ceiling_mb > 0)
+		ceiling = (uint64) tdc_guc_memory_ceiling_mb;
+	else if (tdc_guc_memory_ceiling_mb == 0)
+		ceiling = default_ceiling_mb();
+	else
+		ceiling = 0;
+
+	if (tdc_guc_max_memory_mb > 0 &&
+		(ceiling == 0 || (uint64) tdc_guc_max_memory_mb <= ceiling))
+	{
+		*setting = "tdc_delaunay.max_memory";
+		return (uint64) tdc_guc_max_memory_mb;
+	}
+	*setting = "tdc_delaunay.memory_ceiling";
+	return ceiling;
+}
 
 uint64
 tdc_max_memory_bytes(void)
 {
-	return (uint64) tdc_guc_max_memory_mb * 1024 * 1024;
+	const char *setting;
+
+	return tdc_memory_limit_mb(&setting) * 1024 * 1024;
+}
+
+void
+tdc_report_memory_limit(const char *fname, const char *what, uint64 need)
+{
+	const char *setting;
+	uint64		limit = tdc_memory_limit_mb(&setting);
+	bool		ceiling = strcmp(setting, "tdc_delaunay.memory_ceiling") == 0;
+
+	ereport(ERROR,
+			(errcode(ERRCODE_PROGRAM_LIMIT_EXCEEDED),
+			 errmsg("%s: %s needs about %llu MB, more than %s (%llu MB)",
+					fname, what,
+					(unsigned long long) ((need + (1 << 20) - 1) >> 20),
+					setting, (unsigned long long) limit),
+			 ceiling ?
+			 errhint("tdc_delaunay.memory_ceiling caps tdc_delaunay.max_memory and only a superuser can raise it; or triangulate fewer points.") :
+			 errhint("Raise tdc_delaunay.max_memory or triangulate fewer points.")));
 }
 
 void		_PG_init(void);
@@ -87,11 +153,19 @@ _PG_init(void)
 							NULL, NULL, NULL);
 
 	DefineCustomIntVariable("tdc_delaunay.max_memory",
-							"Memory one triangulation may use (0 = unlimited).",
+							"Memory one triangulation may use (0 = up to tdc_delaunay.memory_ceiling).",
 							"Counts the collected vertices, the engine's estimate and the result.",
 							&tdc_guc_max_memory_mb,
 							0, 0, INT_MAX,
 							PGC_USERSET, GUC_UNIT_MB,
+							NULL, NULL, NULL);
+
+	DefineCustomIntVariable("tdc_delaunay.memory_ceiling",
+							"Ceiling on tdc_delaunay.max_memory (0 = half the physical memory, -1 = none).",
+							NULL,
+							&tdc_guc_memory_ceiling_mb,
+							0, -1, INT_MAX,
+							PGC_SUSET, GUC_UNIT_MB,
 							NULL, NULL, NULL);
 
 	DefineCustomBoolVariable("tdc_delaunay.stats",

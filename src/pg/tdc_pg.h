@@ -33,11 +33,20 @@ extern int	tdc_guc_max_threads;
 extern int	tdc_guc_grid_size;
 extern int	tdc_guc_levels;
 extern int	tdc_guc_max_memory_mb;
+extern int	tdc_guc_memory_ceiling_mb;
 extern bool tdc_guc_stats;
 extern int	tdc_guc_max_result_bytes;
 
-/* tdc_delaunay.max_memory in bytes, 0 when unlimited. */
+/*
+ * The memory limit of one triangulation: tdc_delaunay.max_memory within
+ * tdc_delaunay.memory_ceiling.  In MB with the name of the setting that
+ * bounds it, or in bytes; 0 when unlimited.
+ */
+extern uint64 tdc_memory_limit_mb(const char **setting);
 extern uint64 tdc_max_memory_bytes(void);
+/* ERROR: "what" needs "need" bytes, more than the limit. */
+extern void tdc_report_memory_limit(const char *fname, const char *what,
+									uint64 need) pg_attribute_noreturn();
 
 /*
  * Vertices collected from geometry values: interleaved x,y (what the core
