@@ -32,14 +32,17 @@
  *		kind byte is set, so that automatic levels (from 20000 points) and
  *		many subsets are reached
  *
- * On TDC_OK the result goes through the exact validator exactly as
- * test/test_engine.c run_checked() does: used sites are compacted through
- * tdc_input_site(), triangles through tdc_next_triangle().  Any validator
- * failure, inconsistent count, unexpected status, or (when byte 1 bit 5 is
- * set) a triangle set that differs from the reference run aborts, which
- * libFuzzer reports as a crash with the input saved.
+ * On TDC_OK the result must pass tdc_validate_job(), the core's exact check
+ * of a finished job (site map, counts, triangles through tdc_validate()).
+ * The harness adds what that check cannot know or does not look at: the
+ * input it was given (point count; without tolerance, the number of unique
+ * points and each point's site coordinates) and the edges (count, endpoints,
+ * order).  Any failure, unexpected status, or (when byte 1 bit 5 is set) a
+ * triangle set that differs from the reference run aborts, which libFuzzer
+ * reports as a crash with the input saved.
  */
 #include <math.h>
+#include <stdarg.h>
 #include <stdbool.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -51,11 +54,17 @@
 #define MAX_RAW_POINTS		4096
 #define MAX_EXPANDED		30000
 
+static void die(const char *fmt,...) __attribute__((format(printf, 1, 2), noreturn));
+
 static void
-die(const char *fmt, const char *a, const char *b)
+die(const char *fmt,...)
 {
+	va_list		ap;
+
 	fprintf(stderr, "fuzz_core: ");
-	fprintf(stderr, fmt, a, b);
+	va_start(ap, fmt);
+	vfprintf(stderr, fmt, ap);
+	va_end(ap);
 	fprintf(stderr, "\n");
 	abort();
 }
@@ -364,6 +373,7 @@ coord_ok(double c)
 	return c >= TDC_COORD_MIN && c <= TDC_COORD_MAX;
 }
 
+/* Lexicographic x, y; -0 equals 0, as it does for the engine. */
 static int
 cmp_xy(const void *a, const void *b)
 {
@@ -377,15 +387,20 @@ cmp_xy(const void *a, const void *b)
 	return 0;
 }
 
+/* Triangles as three points each, as canonical_triangles() makes them. */
 static int
 cmp_tri(const void *a, const void *b)
 {
 	const double *p = a,
 			   *q = b;
 
-	for (int i = 0; i < 6; i++)
-		if (p[i] != q[i])
-			return p[i] < q[i] ? -1 : 1;
+	for (int k = 0; k < 3; k++)
+	{
+		int			c = cmp_xy(p + 2 * k, q + 2 * k);
+
+		if (c != 0)
+			return c;
+	}
 	return 0;
 }
 
@@ -405,125 +420,94 @@ count_unique(const double *xy, size_t n)
 }
 
 /*
- * Validate a successful job; returns the canonical triangle set (6 doubles
- * per triangle, rotated to start at the smallest vertex, sorted), *ntri set.
+ * Check a successful job: tdc_validate_job() for the sites and triangles,
+ * then what it cannot know (the input we passed) or does not look at (edges).
  */
-static double *
-check_job(tdc_job *job, const double *xy, size_t n, const tdc_options *opt,
-		  size_t *ntri_out)
+static void
+check_job(const tdc_job *job, const double *xy, size_t n, const tdc_options *opt)
 {
 	uint32_t	lim = tdc_site_id_limit(job);
 	size_t		nsites = tdc_num_sites(job);
 	size_t		ntri = tdc_num_triangles(job);
-	uint32_t   *compact = malloc(sizeof(uint32_t) * ((size_t) lim + 1));
-	double	   *sites = malloc(16 * (nsites + 1));
-	uint32_t   *tri = malloc(12 * (ntri + 1));
-	double	   *canon = malloc(48 * (ntri + 1));
-	size_t		m = 0,
-				t = 0;
-	uint32_t	v[3];
+	size_t		nedges = tdc_num_edges(job);
+	size_t		ne = 0;
+	unsigned char *reached;
 	tdc_iter	it = {0};
+	uint32_t	e[2];
 	char		err[512];
-	char		num[64];
 
+	/* the validator walks tdc_num_input() points: it must be all of ours */
 	if (tdc_num_input(job) != n)
-		die("num_input %s != %s", "?", "n");
+		die("num_input %zu, %zu points given", tdc_num_input(job), n);
+	if (tdc_validate_job(job, err, sizeof(err)) != 0)
+		die("validator: %s", err);
+
+	/*
+	 * The validator takes the kept sites as given.  Without a tolerance they
+	 * must be exactly the distinct input points, each point mapped to the
+	 * site with its own coordinates.  tdc_validate_job() has checked that
+	 * every input maps below lim, so the lookups below are in range.
+	 */
 	if (opt->tolerance == 0 && nsites != count_unique(xy, n))
-	{
-		snprintf(num, sizeof(num), "%zu vs %zu", nsites, count_unique(xy, n));
-		die("unique site count differs: %s%s", num, "");
-	}
-	for (uint32_t s = 0; s < lim; s++)
-		compact[s] = UINT32_MAX;
+		die("%zu sites, but %zu unique input points", nsites, count_unique(xy, n));
+	reached = calloc((size_t) lim + 1, 1);
 	for (size_t i = 0; i < n; i++)
 	{
 		uint32_t	s = tdc_input_site(job, i);
-		const double *sxy;
+		const double *sxy = tdc_site_xy(job, s);
 
-		if (s >= lim)
-			die("input maps to site beyond limit%s%s", "", "");
-		sxy = tdc_site_xy(job, s);
-		/* without tolerance a site is exactly the input point */
 		if (opt->tolerance == 0 && (sxy[0] != xy[2 * i] || sxy[1] != xy[2 * i + 1]))
-			die("input point maps to a site with other coordinates%s%s", "", "");
-		if (compact[s] == UINT32_MAX)
-		{
-			if (m >= nsites)
-				die("more sites reached than reported%s%s", "", "");
-			compact[s] = (uint32_t) m;
-			memcpy(sites + 2 * m, sxy, 16);
-			m++;
-		}
+			die("input %zu (%.17g %.17g) maps to site %u at (%.17g %.17g)",
+				i, xy[2 * i], xy[2 * i + 1], s, sxy[0], sxy[1]);
+		reached[s] = 1;
 	}
-	if (m != nsites)
-		die("input map reaches fewer sites than reported%s%s", "", "");
-	while (tdc_next_triangle(job, &it, v))
+
+	/*
+	 * Edges.  The triangulation of m sites is a connected plane graph with
+	 * t + 1 faces (a path when the sites are collinear), so Euler's formula
+	 * fixes the edge count at m + t - 1; t itself has been validated.
+	 */
+	if (nedges != (nsites > 0 ? nsites + ntri - 1 : 0))
+		die("%zu edges reported, Euler wants %zu sites + %zu triangles - 1",
+			nedges, nsites, ntri);
+	while (tdc_next_edge(job, &it, e))
 	{
-		if (t >= ntri)
-			die("more triangles iterated than reported%s%s", "", "");
-		for (int k = 0; k < 3; k++)
-		{
-			if (v[k] >= lim || compact[v[k]] == UINT32_MAX)
-				die("triangle uses a site no input maps to%s%s", "", "");
-			tri[3 * t + k] = compact[v[k]];
-		}
-		t++;
+		if (ne++ == nedges)
+			die("more edges iterated than the %zu reported", nedges);
+		if (e[0] >= lim || e[1] >= lim || !reached[e[0]] || !reached[e[1]])
+			die("edge %u-%u uses a site no input reaches", e[0], e[1]);
+		if (cmp_xy(tdc_site_xy(job, e[0]), tdc_site_xy(job, e[1])) >= 0)
+			die("edge %u-%u is not in lexicographic order", e[0], e[1]);
 	}
-	if (t != ntri)
-		die("fewer triangles iterated than reported%s%s", "", "");
-	if (tdc_validate(sites, m, tri, t, err, sizeof(err)) != 0)
-		die("validator: %s%s", err, "");
-
-	/* edges: count must match and every edge must join two used sites */
-	{
-		uint32_t	e[2];
-		size_t		ne = 0;
-
-		it.pos = 0;
-		while (tdc_next_edge(job, &it, e))
-		{
-			if (e[0] >= lim || e[1] >= lim ||
-				compact[e[0]] == UINT32_MAX || compact[e[1]] == UINT32_MAX)
-				die("edge uses a site no input maps to%s%s", "", "");
-			if (ne++ > tdc_num_edges(job))
-				die("more edges iterated than reported%s%s", "", "");
-		}
-		if (ne != tdc_num_edges(job))
-			die("edge count differs from the reported one%s%s", "", "");
-		/* Euler: a triangulation with t > 0 has e = (3t + h) / 2 */
-		if (t > 0 && ne < t)
-			die("fewer edges than triangles%s%s", "", "");
-	}
-
-	for (size_t i = 0; i < t; i++)
-	{
-		const double *p[3];
-		int			k0 = 0;
-
-		for (int k = 0; k < 3; k++)
-			p[k] = sites + 2 * tri[3 * i + k];
-		for (int k = 1; k < 3; k++)
-			if (cmp_xy(p[k], p[k0]) < 0)
-				k0 = k;
-		for (int k = 0; k < 3; k++)
-			memcpy(canon + 6 * i + 2 * k, p[(k0 + k) % 3], 16);
-	}
-	qsort(canon, t, 48, cmp_tri);
-	free(compact);
-	free(sites);
-	free(tri);
-	*ntri_out = t;
-	return canon;
+	if (ne != nedges)
+		die("%zu edges iterated, %zu reported", ne, nedges);
+	free(reached);
 }
 
-/* Equal sets; == so that -0 and 0 (one site) compare equal. */
-static bool
-same_set(const double *a, const double *b, size_t ntri)
+/*
+ * The triangle set by coordinates, comparable between runs whose site ids
+ * differ: each triangle's vertices sorted, then the triangles sorted.
+ * Sorting the vertices drops the orientation, but only validated jobs come
+ * here and the validator demands counter-clockwise triangles, so a vertex
+ * set stands for exactly one oriented triangle.
+ */
+static double *
+canonical_triangles(const tdc_job *job)
 {
-	for (size_t i = 0; i < 6 * ntri; i++)
-		if (a[i] != b[i])
-			return false;
-	return true;
+	size_t		ntri = tdc_num_triangles(job);
+	double	   *c = malloc(48 * (ntri + 1));
+	tdc_iter	it = {0};
+	uint32_t	v[3];
+
+	/* validated: the iterator yields exactly ntri triangles */
+	for (size_t t = 0; t < ntri && tdc_next_triangle(job, &it, v); t++)
+	{
+		for (int k = 0; k < 3; k++)
+			memcpy(c + 6 * t + 2 * k, tdc_site_xy(job, v[k]), 16);
+		qsort(c + 6 * t, 3, 16, cmp_xy);
+	}
+	qsort(c, ntri, 48, cmp_tri);
+	return c;
 }
 
 int			LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
@@ -611,12 +595,8 @@ LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 	{
 		/* n == 0 with a bad option may fail either way; both are errors */
 		if (rc != TDC_EINVAL && !(n == 0 && !bad_option && rc == TDC_OK))
-		{
-			char		num[64];
-
-			snprintf(num, sizeof(num), "status %d, n %zu", rc, n);
-			die("invalid input or option not rejected with TDC_EINVAL (%s): %s", num, err);
-		}
+			die("invalid input or option not rejected with TDC_EINVAL (status %d, n %zu): %s",
+				rc, n, err);
 		/* tdc_triangulate keeps the job (with its message) when it failed late */
 		if (job != NULL && strcmp(tdc_job_error(job), err) != 0)
 			die("job message differs from err: %s / %s", tdc_job_error(job), err);
@@ -625,35 +605,40 @@ LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 		return 0;
 	}
 	if (rc != TDC_OK)
-		die("valid input failed: %s%s", err, "");
+		die("valid input failed: %s", err);
+	check_job(job, xy, n, &opt);
 
+	if (compare)
 	{
-		size_t		nt;
-		double	   *canon = check_job(job, xy, n, &opt, &nt);
+		/*
+		 * The symbolic tie-break makes the Delaunay triangulation unique, so
+		 * a single-threaded, undivided run must give the same set.
+		 */
+		size_t		nt = tdc_num_triangles(job);
+		double	   *canon = canonical_triangles(job);
+		double	   *canon2;
+		tdc_options ref;
 
 		tdc_job_free(job);
-		if (compare)
-		{
-			tdc_options ref;
-			tdc_job    *job2 = NULL;
-			size_t		nt2;
-			double	   *canon2;
-
-			tdc_options_init(&ref);
-			ref.threads = 1;
-			ref.levels = -1;
-			ref.tolerance = opt.tolerance;
-			rc = tdc_triangulate(n > 0 ? xy : NULL, n, &ref, &job2, err, sizeof(err));
-			if (rc != TDC_OK)
-				die("reference run failed: %s%s", err, "");
-			canon2 = check_job(job2, xy, n, &ref, &nt2);
-			tdc_job_free(job2);
-			if (nt != nt2 || !same_set(canon, canon2, nt))
-				die("triangle set depends on threads/levels/grid%s%s", "", "");
-			free(canon2);
-		}
+		job = NULL;
+		tdc_options_init(&ref);
+		ref.threads = 1;
+		ref.levels = -1;
+		ref.tolerance = opt.tolerance;
+		rc = tdc_triangulate(n > 0 ? xy : NULL, n, &ref, &job, err, sizeof(err));
+		if (rc != TDC_OK)
+			die("reference run failed: %s", err);
+		check_job(job, xy, n, &ref);
+		if (tdc_num_triangles(job) != nt)
+			die("%zu triangles, %zu in the reference run", nt, tdc_num_triangles(job));
+		canon2 = canonical_triangles(job);
+		for (size_t t = 0; t < nt; t++)
+			if (cmp_tri(canon + 6 * t, canon2 + 6 * t) != 0)
+				die("triangle set depends on threads/levels/grid");
 		free(canon);
+		free(canon2);
 	}
+	tdc_job_free(job);
 	free(xy);
 	return 0;
 }
