@@ -57,20 +57,10 @@ fi
 MAX_LATENCY_MS=${MAX_LATENCY_MS:-200}
 TABLE=tdc_hard.pts$((POINTS / 1000000))m
 ((POINTS % 1000000 == 0)) || TABLE=tdc_hard.pts$POINTS
-WORK=$(mktemp -d "${TMPDIR:-/tmp}/tdc_cancel.XXXXXX")
-BG=()
-cleanup() {
-	local p
-	for p in "${BG[@]+"${BG[@]}"}"; do
-		kill "$p" 2>/dev/null || true
-	done
-	rm -rf "$WORK"
-}
-trap cleanup EXIT
+work_dir cancel
 
 echo "== cancel.sh: $POINTS points ($TABLE), latency limit ${MAX_LATENCY_MS} ms"
-require_server
-START0=$(postmaster_start)
+server_begin
 make_points "${TABLE#tdc_hard.}" "$POINTS"
 
 # tdc_hard.hit(tag, base, offset_ms, kind): find the active statement whose
@@ -190,10 +180,9 @@ PROBE="SELECT ST_NumGeometries(ST_TDCDelaunayTriangles('MULTIPOINT(0 0, 1 0, 0 1
 STATUS="SELECT substring(s FROM 'VmRSS:\\s*(\\d+)') || ' ' || substring(s FROM 'Threads:\\s*(\\d+)') || ' ' || substring(s FROM 'RssAnon:\\s*(\\d+)') FROM pg_read_file('/proc/' || pg_backend_pid() || '/status') s"
 
 # run_session FILE: the session under test runs FILE; stdout and stderr go to
-# one file, in order
+# one file, FILE.out, in order
 run_session() {
-	psql -X -A -t -v ON_ERROR_STOP=0 -f "$1" >"$1.out" 2>&1 &
-	BG+=($!)
+	bg_psql "$1" "$1.out" -
 }
 
 within() {
@@ -218,7 +207,7 @@ for k in 1 2; do
 	echo "calibration run $k: end, engine start, engine end (ms): $w"
 	if [ -z "$best" ] || (($(cut -d' ' -f1 <<<"$w") < $(cut -d' ' -f1 <<<"$best"))); then best=$w; fi
 done
-wait "${BG[-1]}" || true
+wait "${HARD_BG[-1]}" || true
 read -r T_MS E0 E1 <<<"$best"
 check "uncancelled runs return a result" test "$(grep -c '^[0-9]\{6,\}$' "$cal.out")" -eq 2
 check "calibration saw the engine phase ($E0 .. $E1 of $T_MS ms)" test "$E0" -gt 0 -a "$E1" -gt "$E0"
@@ -263,7 +252,7 @@ runs=()
 	done
 } >"$sweep"
 run_session "$sweep"
-sweep_pid=${BG[-1]}
+sweep_pid=${HARD_BG[-1]}
 declare -A RESULT=()
 for r in "${runs[@]}"; do
 	read -r k kind base off <<<"$r"
@@ -317,7 +306,7 @@ for at in "${TERM_AT[@]}"; do
 		psql -X -A -t -v ON_ERROR_STOP=1 -c "$BIGQ WHERE 'run:$k:' <> ''" >"$WORK/term$k.out" 2>&1 || true
 		date +%s%N >"$WORK/term$k.end"
 	) &
-	BG+=($!)
+	HARD_BG+=($!)
 	tp=$!
 	res=$(hpsql -c "SELECT tdc_hard.hit('run:$k:', '$base', $off, 'terminate')" 2>&1) || res="error ${res//$'\n'/ }"
 	wait "$tp" || true
@@ -355,7 +344,7 @@ rss=$WORK/rss.sql
 	done
 } >"$rss"
 run_session "$rss"
-rss_pid=${BG[-1]}
+rss_pid=${HARD_BG[-1]}
 rss_cancelled=0
 for ((k = 1; k <= RSS_RUNS; k++)); do
 	read -r base off <<<"${RSS_AT[$(((k - 1) % ${#RSS_AT[@]}))]}"
@@ -416,7 +405,7 @@ echo "terminate, until the backend was gone (ms): $(printf '%s\n' "${lat_gone[@]
 for ph in reading engine writing; do
 	echo "latency in phase $ph (ms): $(printf '%s\n' "${lat_all[@]+"${lat_all[@]}"}" | awk -v p="$ph" '$2 == p { print $3 }' | stats_line)"
 done
-check "postmaster not restarted" test "$(postmaster_start)" = "$START0"
+check_postmaster
 if [ -z "${KEEP:-}" ]; then
 	hpsql -c "DROP FUNCTION tdc_hard.hit(text, text, float8, text), tdc_hard.wait_for_watcher(text),
 		tdc_hard.threads(int), tdc_hard.active(int, timestamptz)" >/dev/null

@@ -36,20 +36,10 @@ if ((QUICK)); then RUNS=${RUNS:-5}; else RUNS=${RUNS:-50}; fi
 POINTS=${POINTS:-100000}
 THREADS=${THREADS:-4}
 TABLE=tdc_hard.conc$POINTS
-WORK=$(mktemp -d "${TMPDIR:-/tmp}/tdc_conc.XXXXXX")
-PIDS=()
-cleanup() {
-	local p
-	for p in "${PIDS[@]+"${PIDS[@]}"}"; do
-		kill "$p" 2>/dev/null || true
-	done
-	rm -rf "$WORK"
-}
-trap cleanup EXIT
+work_dir conc
 
 echo "== concurrency.sh: $SESSIONS sessions x $RUNS runs, $POINTS points, tdc_delaunay.threads = $THREADS"
-require_server
-START0=$(postmaster_start)
+server_begin
 make_points "${TABLE#tdc_hard.}" "$POINTS"
 
 # expected triangle count and hull area, independently of tdc_delaunay
@@ -76,14 +66,13 @@ for ((s = 1; s <= SESSIONS; s++)); do
 			if ((s >= 7)); then echo "$DUMP_DIGEST"; else echo "$AGG_DIGEST"; fi
 		done
 	} >"$WORK/s$s.sql"
-	psql -X -A -t -q -v ON_ERROR_STOP=0 -f "$WORK/s$s.sql" >"$WORK/s$s.out" 2>"$WORK/s$s.err" &
-	PIDS+=($!)
+	bg_psql "$WORK/s$s.sql" "$WORK/s$s.out" "$WORK/s$s.err" -q
 done
 rcs=0
-for p in "${PIDS[@]}"; do
+for p in "${HARD_BG[@]}"; do
 	wait "$p" || rcs=$((rcs + 1))
 done
-PIDS=()
+HARD_BG=()
 t1=$(date +%s%N)
 wall_ms=$(((t1 - t0) / 1000000))
 
@@ -132,7 +121,7 @@ check "all triangles counter-clockwise" test "$ccw" = t
 # two random active ones cancelled every 0-80 ms.  Every statement must end
 # with the right triangle count or with the cancel error, nothing else.
 STORM_RUNS=${STORM_RUNS:-$((QUICK ? 5 : 20))}
-PIDS=()
+HARD_BG=()
 for ((s = 1; s <= 6; s++)); do
 	{
 		echo "SET tdc_delaunay.threads = $THREADS;"
@@ -145,13 +134,12 @@ for ((s = 1; s <= 6; s++)); do
 			fi
 		done
 	} >"$WORK/storm$s.sql"
-	psql -X -A -t -q -v ON_ERROR_STOP=0 -f "$WORK/storm$s.sql" >"$WORK/storm$s.out" 2>&1 &
-	PIDS+=($!)
+	bg_psql "$WORK/storm$s.sql" "$WORK/storm$s.out" - -q
 done
 ncancel_sent=0
 while :; do
 	running=0
-	for p in "${PIDS[@]}"; do
+	for p in "${HARD_BG[@]}"; do
 		if kill -0 "$p" 2>/dev/null; then running=1; fi
 	done
 	((running)) || break
@@ -161,8 +149,8 @@ while :; do
 	ncancel_sent=$((ncancel_sent + ${sent:-0}))
 	sleep "0.0$((RANDOM % 9))"
 done
-for p in "${PIDS[@]}"; do wait "$p" || true; done
-PIDS=()
+for p in "${HARD_BG[@]}"; do wait "$p" || true; done
+HARD_BG=()
 cat "$WORK"/storm*.out >"$WORK/storm.all"
 storm_ok=$(grep -c "^storm $EXPECT\$" "$WORK/storm.all" || true)
 storm_cancel=$(grep -c 'ERROR:  canceling statement due to user request' "$WORK/storm.all" || true)
@@ -172,5 +160,5 @@ check "cancel storm: every statement completed correctly or was cancelled" \
 	test $((storm_ok + storm_cancel)) -eq $((6 * STORM_RUNS)) -a -z "$storm_other"
 [ -z "$storm_other" ] || { printf '%s\n' "$storm_other" | head -n 5 | sed 's/^/        /' || true; }
 check "cancel storm: some statements were cancelled and some completed" test "$storm_cancel" -gt 0 -a "$storm_ok" -gt 0
-check "postmaster not restarted" test "$(postmaster_start)" = "$START0"
+check_postmaster
 finish

@@ -61,6 +61,52 @@ postmaster_start() {
 	hpsql -c 'SELECT pg_postmaster_start_time()'
 }
 
+# server_begin: require_server, then note the postmaster's start time in
+# START0.  A backend crash makes the postmaster reinitialise, which resets
+# that time, so check_postmaster at the end catches crashes that no client
+# saw (a session killed between two checks).
+server_begin() {
+	require_server
+	START0=$(postmaster_start)
+}
+
+check_postmaster() {
+	check "postmaster not restarted" test "$(postmaster_start)" = "$START0"
+}
+
+# work_dir NAME: a scratch directory $WORK, removed on exit together with
+# the background sessions in HARD_BG, so that an aborted script (set -e, ^C)
+# leaves no psql running against the server.
+HARD_BG=()
+work_dir() {
+	WORK=$(mktemp -d "${TMPDIR:-/tmp}/tdc_$1.XXXXXX")
+	trap cleanup_work EXIT
+}
+
+cleanup_work() {
+	local p
+	for p in "${HARD_BG[@]+"${HARD_BG[@]}"}"; do
+		kill "$p" 2>/dev/null || true
+	done
+	rm -rf "$WORK"
+}
+
+# bg_psql FILE OUT ERR [PSQL-OPTION...]: run the statements of FILE in a
+# background session, stdout to OUT and stderr to ERR (ERR "-": both to OUT,
+# in order); its pid is appended to HARD_BG.  The session carries on after
+# an ERROR: a statement's error is an outcome the scripts check, not a
+# reason to skip the rest.
+bg_psql() {
+	local file=$1 out=$2 err=$3
+	shift 3
+	if [ "$err" = - ]; then
+		psql -X -A -t -v ON_ERROR_STOP=0 "$@" -f "$file" >"$out" 2>&1 &
+	else
+		psql -X -A -t -v ON_ERROR_STOP=0 "$@" -f "$file" >"$out" 2>"$err" &
+	fi
+	HARD_BG+=($!)
+}
+
 # A table tdc_hard.NAME(id, geom) of N pseudo-random points in a 1e6 square
 # (hashint4, so the same on every run); reused when it already has N rows.
 make_points() {
