@@ -715,6 +715,91 @@ test_cancel_and_concurrency(void)
 	free(xy);
 }
 
+/* Private resident memory of this process in kB (RssAnon). */
+static long
+rss_anon_kb(void)
+{
+	FILE	   *f = fopen("/proc/self/status", "r");
+	char		line[256];
+	long		kb = -1;
+
+	if (f == NULL)
+		return -1;
+	while (fgets(line, sizeof(line), f))
+		if (sscanf(line, "RssAnon: %ld", &kb) == 1)
+			break;
+	fclose(f);
+	return kb;
+}
+
+/*
+ * tdc_job_free_background: whatever moment a job is dropped at, the caller
+ * gets back at once and the memory still goes back to the system.  A job
+ * that was never unmapped would leave ~100 MB per run resident here.
+ */
+static void
+test_free_background(void)
+{
+	size_t		n = tdc_test_quick ? 200000 : 1000000;
+	double	   *xy = gen_uniform(n, 1000, 0, 0);
+	tdc_options opt;
+	long		base,
+				after = -1;
+	double		bg_worst = 0,
+				sync_total = 0,	/* tdc_job_free of finished jobs */
+				bg_total = 0;	/* tdc_job_free_background of as many */
+	int			runs = tdc_test_quick ? 6 : 20;
+
+	tdc_options_init(&opt);
+	opt.threads = 2;
+	base = rss_anon_kb();
+	for (int r = 0; r < runs; r++)
+	{
+		tdc_job    *job;
+		char		err[256];
+		double		t;
+		int			done;
+
+		CHECK(tdc_job_start(xy, n, &opt, &job, err, sizeof(err)) == TDC_OK, "background free: start: %s", err);
+		if (job == NULL)
+			continue;
+		/* every other run is dropped while it works, the rest once done */
+		done = r % 2;
+		tdc_job_wait(job, done ? -1 : 10 * (r % 7));
+		t = now();
+		if (done && r % 4 == 1)
+		{
+			tdc_job_free(job);
+			sync_total += now() - t;
+			continue;
+		}
+		tdc_job_free_background(job);
+		t = now() - t;
+		if (done)
+			bg_total += t;
+		bg_worst = t > bg_worst ? t : bg_worst;
+	}
+	/* the reapers run on: give them a moment to unmap */
+	for (int i = 0; i < 100; i++)
+	{
+		after = rss_anon_kb();
+		if (after - base < 64 * 1024)
+			break;
+		usleep(20000);
+	}
+	printf("background free: worst caller wait %.2f ms; finished jobs: %.2f ms in place vs %.2f ms in the background (%d each); RssAnon %ld kB before, %ld kB after %d jobs\n",
+		   bg_worst * 1e3, sync_total * 1e3, bg_total * 1e3, runs / 4, base, after, runs);
+	if (!tdc_test_quick)
+	{
+		CHECK(base > 0 && after - base < 64 * 1024,
+			  "background free: RssAnon grew from %ld to %ld kB over %d jobs", base, after, runs);
+		CHECK(bg_total < sync_total / 4,
+			  "background free: %d finished jobs took %.1f ms to drop, not under a quarter of freeing them in place (%.1f ms)",
+			  runs / 4, bg_total * 1e3, sync_total * 1e3);
+	}
+	free(xy);
+}
+
 static pthread_t main_thread;
 static volatile sig_atomic_t signals_seen;
 static volatile sig_atomic_t signals_on_worker;
@@ -881,6 +966,7 @@ test_engine(void)
 	test_errors();
 	test_random_sets();
 	test_cancel_and_concurrency();
+	test_free_background();
 	test_signals_stay_on_caller();
 	test_out_of_memory();
 }

@@ -598,6 +598,59 @@ tdc_job_free(tdc_job *job)
 	free(job);
 }
 
+static void *
+reaper_main(void *arg)
+{
+	tdc_job    *job = arg;
+
+	free_arrays(job);
+	free(job);
+	return NULL;
+}
+
+/*
+ * Returning a big job's pages to the kernel takes a while (about 10 ms per
+ * million points, several times that on a loaded machine), and a host that
+ * frees while unwinding from a cancel makes its user wait for it.  The
+ * workers are stopped and joined here, so the detached thread only unmaps
+ * memory no one else can reach; if it cannot start, the caller frees.
+ */
+void
+tdc_job_free_background(tdc_job *job)
+{
+	pthread_attr_t attr;
+	pthread_t	reaper;
+	sigset_t	all,
+				old;
+	int			rc;
+
+	if (job == NULL)
+		return;
+	if (job->driver_started)
+	{
+		tdc_job_cancel(job);
+		pthread_join(job->driver, NULL);
+		job->driver_started = false;
+	}
+	pthread_mutex_destroy(&job->lock);
+	pthread_cond_destroy(&job->done);
+
+	if (pthread_attr_init(&attr) != 0)
+		rc = -1;
+	else
+	{
+		pthread_attr_setdetachstate(&attr, PTHREAD_CREATE_DETACHED);
+		pthread_attr_setstacksize(&attr, 64 * 1024);
+		sigfillset(&all);
+		pthread_sigmask(SIG_SETMASK, &all, &old);
+		rc = pthread_create(&reaper, &attr, reaper_main, job);
+		pthread_sigmask(SIG_SETMASK, &old, NULL);
+		pthread_attr_destroy(&attr);
+	}
+	if (rc != 0)
+		(void) reaper_main(job);
+}
+
 int
 tdc_triangulate(const double *xy, size_t n, const tdc_options *opt, tdc_job **job,
 				char *err, size_t errlen)

@@ -101,6 +101,13 @@ extern const char *tdc_job_error(const tdc_job *job);
 /* Cancel if running, join threads, free everything.  NULL is allowed. */
 extern void tdc_job_free(tdc_job *job);
 
+/*
+ * The same, but the memory is returned to the system by a detached thread
+ * (signals blocked), so the caller does not wait for it: for error paths
+ * where a user waits.  The job must not be used afterwards.
+ */
+extern void tdc_job_free_background(tdc_job *job);
+
 /* Convenience: start + wait forever. */
 extern int	tdc_triangulate(const double *xy, size_t n, const tdc_options *opt,
 							tdc_job **job, char *err, size_t errlen);

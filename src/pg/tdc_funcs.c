@@ -10,25 +10,24 @@
  * cancels the job, waits for the workers to stop (they poll their cancel
  * flag every few ms) and only then lets CHECK_FOR_INTERRUPTS raise the
  * error, so the error arrives within about 10 ms plus the workers' reaction
- * time, and no thread outlives the statement.  The stopped job's memory is
- * left to the reset callback below: PostgreSQL reports an error to the
- * client before it aborts the transaction and resets its contexts, so the
- * client does not wait for a gigabyte to be unmapped.  Other interrupts are
+ * time, and no thread outlives the statement.  Other interrupts are
  * processed while the job keeps running.
  *
  * The job is malloc'd memory that PostgreSQL knows nothing about.  Every job
  * is owned by a TdcRun registered with a reset callback on the memory context
  * of the input buffer (the workers read the buffer until they finish, so the
- * job must go first): whatever ERROR is raised after tdc_job_start (out of
- * memory while building the result, an error in a later row...), the
- * context is reset during error recovery and the callback cancels, joins and
- * frees the job.  While the job runs, a PG_TRY around the wait loop stops
- * the workers at once, before the stack unwinds.  On success tdc_run_free frees it right away and clears the
- * pointer, so the callback has nothing left to do.  Results are written with
- * interrupt checks, and pending interrupts are processed before the job is
- * freed: after a cancel the client gets its error before the job is freed
- * (error recovery resets the context), and freeing a big job takes a while
- * (about 0.1 s for 5 million points).
+ * job must go first): whatever ERROR is raised after tdc_job_start (a cancel,
+ * out of memory while building the result, an error in a later row...), the
+ * context is reset during error recovery and the callback cancels and joins
+ * the job and hands its memory to a detached core thread to unmap.  The
+ * client sees the error only once the transaction is aborted (psql waits for
+ * ReadyForQuery), and unmapping a 5-million-point job takes about 50 ms on a
+ * quiet machine and several times that on a loaded one, so the cancel does
+ * not wait for it.  While the job runs, a PG_TRY around the wait loop stops
+ * the workers at once, before the stack unwinds.  On success tdc_run_free
+ * frees the job in place and clears the pointer, so the callback has nothing
+ * left to do.  Results are written with interrupt checks, and pending
+ * interrupts are processed before that free.
  *
  * Memory limit.  tdc_delaunay.max_memory (within the superuser's
  * tdc_delaunay.memory_ceiling) caps the collected vertices, the
@@ -143,9 +142,10 @@ run_reset_callback(void *arg)
 {
 	TdcRun	   *run = (TdcRun *) arg;
 
+	/* only errors and cancels get here: the client is waiting */
 	if (run->job != NULL)
 	{
-		tdc_job_free(run->job);
+		tdc_job_free_background(run->job);
 		run->job = NULL;
 	}
 }
