@@ -17,7 +17,9 @@
  *	  SRID, Z flag and bit-identical coordinates (the only accepted
  *	  differences are the stack-depth and memory-limit errors the reference
  *	  does not model);
- *	- appending the value twice to one buffer doubles it;
+ *	- appending the value twice to one buffer doubles it; the second time
+ *	  with a 1-byte varlena header when it fits, as stored small values
+ *	  arrive (PG_DETOAST_DATUM_PACKED);
  *	- writer round trip: for 3..4000 acceptable vertices the core
  *	  triangulates them; every result kind (tdc_gser_result, flags 0, 1,
  *	  2), one triangle (tdc_gser_write_triangle) and the empty results are
@@ -202,6 +204,23 @@ make_value(const uint8 *data, size_t size)
 	return v;
 }
 
+/*
+ * The same value with a 1-byte header, as PostgreSQL stores small values on
+ * disk and hands them to PG_DETOAST_DATUM_PACKED callers; NULL when too long.
+ */
+static struct varlena *
+make_short_value(const uint8 *data, size_t size)
+{
+	struct varlena *v;
+
+	if (VARHDRSZ_SHORT + size > VARATT_SHORT_MAX)
+		return NULL;
+	v = malloc(VARHDRSZ_SHORT + size);
+	SET_VARSIZE_SHORT(v, VARHDRSZ_SHORT + size);
+	memcpy(VARDATA_SHORT(v), data, size);
+	return v;
+}
+
 static void
 fail(const char *what, const char *detail)
 {
@@ -299,6 +318,7 @@ int
 LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
 	struct varlena *v = make_value(data, size);
+	struct varlena *sv = make_short_value(data, size);
 	TdcPointBuf buf;
 	sigjmp_buf	jb;
 	Ref			ref;
@@ -325,7 +345,8 @@ LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 		tdc_gser_append(&buf, v, "fuzz");
 		stage = 1;
 		n1 = buf.n;
-		tdc_gser_append(&buf, v, "fuzz");
+		/* again, packed when short enough: it must read the same */
+		tdc_gser_append(&buf, sv ? sv : v, "fuzz");
 		stage = 2;
 	}
 	fuzz_pg_jmp = NULL;
@@ -390,5 +411,6 @@ LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 	}
 	fuzz_pg_reset();
 	free(v);
+	free(sv);
 	return 0;
 }

@@ -386,6 +386,12 @@ pg_detoast_datum(struct varlena *datum)
 	return datum;
 }
 
+struct varlena *
+pg_detoast_datum_packed(struct varlena *datum)
+{
+	return datum;
+}
+
 int			tdc_guc_max_result_bytes = MaxAllocSize;
 
 int			tdc_guc_max_memory_mb;
@@ -395,4 +401,16 @@ tdc_max_memory_bytes(void)
 {
 	tdc_guc_max_memory_mb = fuzz_pg_max_memory_mb;
 	return (uint64) fuzz_pg_max_memory_mb << 20;
+}
+
+/* Same error as tdc_guc.c, with the limit the fuzzer picked. */
+void
+tdc_report_memory_limit(const char *fname, const char *what, uint64 need)
+{
+	ereport(ERROR,
+			(errcode(ERRCODE_PROGRAM_LIMIT_EXCEEDED),
+			 errmsg("%s: %s needs about %llu MB, more than tdc_delaunay.max_memory (%d MB)",
+					fname, what, (unsigned long long) ((need + (1 << 20) - 1) >> 20),
+					fuzz_pg_max_memory_mb)));
+	pg_unreachable();
 }

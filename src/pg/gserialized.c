@@ -78,6 +78,7 @@ typedef struct GserWalk
 {
 	const char *start;			/* first byte after the varlena header */
 	const char *end;			/* one past the last byte */
+	int			hdrsz;			/* bytes of the varlena header */
 	int			ndims;			/* doubles per vertex */
 	bool		hasz;
 	uint64		count;			/* vertices seen so far */
@@ -111,8 +112,8 @@ corrupt(const GserWalk *w, const char *p, const char *what)
 	ereport(ERROR,
 			(errcode(ERRCODE_DATA_CORRUPTED),
 			 errmsg("%s: corrupt geometry value: %s at byte %ld of %ld",
-					w->fname, what, (long) (p - w->start) + VARHDRSZ,
-					(long) (w->end - w->start) + VARHDRSZ)));
+					w->fname, what, (long) (p - w->start) + w->hdrsz,
+					(long) (w->end - w->start) + w->hdrsz)));
 }
 
 static inline uint32
@@ -371,7 +372,10 @@ tdc_pointbuf_append_buf(TdcPointBuf *dst, const TdcPointBuf *src,
  */
 
 /*
- * Append the vertices of one detoasted geometry value to buf.
+ * Append the vertices of one geometry value to buf.  The value must be
+ * detoasted but may keep a short (1-byte) header: small values such as
+ * points are stored that way, and PG_DETOAST_DATUM_PACKED spares a palloc
+ * and copy per row.  Nothing here needs alignment, every read is a memcpy.
  */
 void
 tdc_gser_append(TdcPointBuf *buf, const struct varlena *geom,
@@ -386,12 +390,13 @@ tdc_gser_append(TdcPointBuf *buf, const struct varlena *geom,
 	const char *after;
 	uint64		count;
 
-	Assert(!VARATT_IS_EXTENDED(geom));
+	Assert(!VARATT_IS_EXTERNAL(geom) && !VARATT_IS_COMPRESSED(geom));
 	memset(&w, 0, sizeof(w));
 	w.fname = fname;
-	w.start = VARDATA(geom);
-	w.end = (const char *) geom + VARSIZE(geom);
-	if (VARSIZE(geom) < VARHDRSZ + G_HEADER)
+	w.start = VARDATA_ANY(geom);
+	w.end = (const char *) geom + VARSIZE_ANY(geom);
+	w.hdrsz = (int) (w.start - (const char *) geom);
+	if (VARSIZE_ANY_EXHDR(geom) < G_HEADER)
 		corrupt(&w, w.start, "value shorter than its header");
 
 	hdr = (const unsigned char *) w.start;

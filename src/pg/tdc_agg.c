@@ -268,7 +268,7 @@ st_tdcdelaunay_transfn(PG_FUNCTION_ARGS)
 		st = state_new(aggcxt);
 	state_set_params(st, tolerance, flags);
 
-	geom = PG_DETOAST_DATUM(PG_GETARG_DATUM(1));
+	geom = PG_DETOAST_DATUM_PACKED(PG_GETARG_DATUM(1));
 	tdc_gser_append(&st->pts, geom, AGG_NAME);
 	PG_FREE_IF_COPY(geom, 1);
 	PG_RETURN_POINTER(st);

@@ -396,7 +396,7 @@ dump_collect(TdcPointBuf *buf, const char *query, Oid geomoid,
 
 			if (isnull)
 				continue;
-			g = PG_DETOAST_DATUM(d);
+			g = PG_DETOAST_DATUM_PACKED(d);
 			tdc_gser_append(buf, g, fname);
 			if ((Pointer) g != DatumGetPointer(d))
 				pfree(g);
@@ -425,7 +425,7 @@ Datum
 st_tdcdelaunaytriangles(PG_FUNCTION_ARGS)
 {
 	const char *fname = "ST_TDCDelaunayTriangles";
-	struct varlena *geom = PG_DETOAST_DATUM(PG_GETARG_DATUM(0));
+	struct varlena *geom = PG_DETOAST_DATUM_PACKED(PG_GETARG_DATUM(0));
 	double		tolerance = PG_NARGS() > 1 ? PG_GETARG_FLOAT8(1) : 0.0;
 	int32		flags = PG_NARGS() > 2 ? PG_GETARG_INT32(2) : 0;
 	TdcPointBuf buf;
