@@ -281,10 +281,11 @@ tdc_pointbuf_reserve(TdcPointBuf *buf, uint64 extra, const char *fname)
 {
 	uint64		need = buf->n + extra;
 	uint64		newcap;
-	uint64		limit = tdc_max_memory_bytes();
+	uint64		limit;
 
 	if (need <= buf->cap)
 		return;
+	limit = tdc_max_memory_bytes();
 	if (need > TDC_MAX_POINTS)
 		ereport(ERROR,
 				(errcode(ERRCODE_PROGRAM_LIMIT_EXCEEDED),

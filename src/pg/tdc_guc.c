@@ -55,9 +55,15 @@ int			tdc_guc_memory_ceiling_mb = 0;
 bool		tdc_guc_stats = false;
 int			tdc_guc_max_result_bytes = (int) MaxAllocSize;
 
-/* Half the physical memory in MB, or 0 when the system does not say. */
+/*
+ * Half the physical memory in MB, or 0 when the system does not say.  Read
+ * once at load: sysconf(_SC_PHYS_PAGES) is a sysinfo() system call, far too
+ * slow for the per-row checks.
+ */
+static uint64 default_ceiling = 0;
+
 static uint64
-default_ceiling_mb(void)
+half_physical_memory_mb(void)
 {
 	long		pages = sysconf(_SC_PHYS_PAGES);
 	long		pagesize = sysconf(_SC_PAGESIZE);
@@ -75,7 +81,7 @@ tdc_memory_limit_mb(const char **setting)
 	if (tdc_guc_memory_ceiling_mb > 0)
 		ceiling = (uint64) tdc_guc_memory_ceiling_mb;
 	else if (tdc_guc_memory_ceiling_mb == 0)
-		ceiling = default_ceiling_mb();
+		ceiling = default_ceiling;
 	else
 		ceiling = 0;
 
@@ -120,6 +126,8 @@ void		_PG_init(void);
 void
 _PG_init(void)
 {
+	default_ceiling = half_physical_memory_mb();
+
 	DefineCustomIntVariable("tdc_delaunay.threads",
 							"Worker threads per triangulation (0 = one per online CPU).",
 							"Capped by tdc_delaunay.max_threads.",
