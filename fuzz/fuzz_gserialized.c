@@ -24,7 +24,9 @@
  *	  triangulates them; every result kind (tdc_gser_result, flags 0, 1,
  *	  2), one triangle (tdc_gser_write_triangle) and the empty results are
  *	  read back with tdc_gser_append and must have the announced size,
- *	  SRID, dimensions and vertex count.
+ *	  SRID, dimensions and vertex count; the triangle results written by
+ *	  the core's threads (tdc_gser_emit) must be byte-identical to the
+ *	  serial writer's.
  */
 #include "postgres.h"
 
@@ -269,7 +271,7 @@ writer_roundtrip(const TdcPointBuf *buf)
 			return;
 	}
 	tdc_options_init(&opt);
-	opt.threads = 1;
+	opt.threads = 2;			/* the parallel writer below runs on these */
 	rc = tdc_triangulate(buf->xy, (size_t) buf->n, &opt, &job, err, sizeof(err));
 	if (rc != TDC_OK)
 		fail("core failed on reader output", err);
@@ -288,6 +290,19 @@ writer_roundtrip(const TdcPointBuf *buf)
 		got = read_back(out, buf->srid, buf->hasz && m > 0, "result read back");
 		if (got != m * per)
 			fail("result vertex count differs", NULL);
+		/* written in parallel by the core's threads: the same bytes */
+		if (flags != TDC_OUT_EDGES && m > 0)
+		{
+			TdcGserWriter w;
+			struct varlena *par = tdc_gser_result_alloc(job, flags, buf, "writer", &w);
+
+			memset(w.members, 0xAA, (size_t) (m * w.member_size));
+			if (tdc_job_emit_start(job, tdc_gser_emit, &w, err, sizeof(err)) != TDC_OK ||
+				tdc_job_wait(job, -1) != TDC_OK)
+				fail("parallel writer failed", err);
+			if (VARSIZE(par) != VARSIZE(out) || memcmp(par, out, VARSIZE(out)) != 0)
+				fail("parallel writer's bytes differ from the serial writer's", NULL);
+		}
 	}
 	{
 		tdc_iter	it = {0};

@@ -12,6 +12,7 @@
 #include <math.h>
 #include <pthread.h>
 #include <signal.h>
+#include <stdatomic.h>
 #include <stdbool.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
@@ -715,6 +716,137 @@ test_cancel_and_concurrency(void)
 	free(xy);
 }
 
+typedef struct emit_sink
+{
+	uint32_t   *tri;			/* 3 per triangle, by triangle number */
+	size_t		ntri;
+	atomic_size_t calls;
+	atomic_int	bad;			/* a range outside [0, ntri) */
+} emit_sink;
+
+static void
+emit_collect(void *arg, size_t first, size_t count, const uint32_t *v)
+{
+	emit_sink  *s = arg;
+
+	atomic_fetch_add(&s->calls, 1);
+	if (first + count > s->ntri || count == 0)
+	{
+		atomic_store(&s->bad, 1);
+		return;
+	}
+	memcpy(s->tri + 3 * first, v, 3 * count * sizeof(uint32_t));
+}
+
+/*
+ * tdc_job_emit_start hands over exactly the triangles of tdc_next_triangle,
+ * numbered in its order, whatever the thread count; it refuses unfinished
+ * jobs, does nothing for collinear ones, and stops on cancel.
+ */
+static void
+test_emit(void)
+{
+	size_t		sizes[] = {3, 1000, 70000, tdc_test_quick ? 150000 : 600000};
+	int			threads[] = {1, 2, 3, 7};
+
+	for (size_t si = 0; si < sizeof(sizes) / sizeof(sizes[0]); si++)
+	{
+		size_t		n = sizes[si];
+		double	   *xy = gen_uniform(n, 1000, 0, 0);
+
+		for (size_t ti = 0; ti < sizeof(threads) / sizeof(threads[0]); ti++)
+		{
+			tdc_options opt;
+			tdc_job    *job;
+			char		err[256];
+			emit_sink	sink;
+			uint32_t	v[3];
+			tdc_iter	it = {0};
+			size_t		k = 0;
+			int			same = 1;
+
+			tdc_options_init(&opt);
+			opt.threads = threads[ti];
+			CHECK(tdc_triangulate(xy, n, &opt, &job, err, sizeof(err)) == TDC_OK,
+				  "emit: triangulate %zu: %s", n, err);
+			if (job == NULL)
+				continue;
+			memset(&sink, 0, sizeof(sink));
+			sink.ntri = tdc_num_triangles(job);
+			sink.tri = malloc((3 * sink.ntri + 1) * sizeof(uint32_t));
+			memset(sink.tri, 0xff, 3 * sink.ntri * sizeof(uint32_t));
+			CHECK(tdc_job_emit_start(job, emit_collect, &sink, err, sizeof(err)) == TDC_OK,
+				  "emit: start: %s", err);
+			CHECK(tdc_job_wait(job, -1) == TDC_OK, "emit: %zu points, %d threads: %s",
+				  n, threads[ti], tdc_job_error(job));
+			CHECK(!atomic_load(&sink.bad), "emit: a range past the triangle count");
+			while (tdc_next_triangle(job, &it, v))
+			{
+				if (k >= sink.ntri || memcmp(sink.tri + 3 * k, v, sizeof(v)) != 0)
+					same = 0;
+				k++;
+			}
+			CHECK(same && k == sink.ntri,
+				  "emit: %zu points, %d threads: triangles differ from tdc_next_triangle", n, threads[ti]);
+			/* a second round gives the same again */
+			CHECK(tdc_job_emit_start(job, emit_collect, &sink, err, sizeof(err)) == TDC_OK &&
+				  tdc_job_wait(job, -1) == TDC_OK, "emit: second round");
+			free(sink.tri);
+			tdc_job_free(job);
+		}
+		free(xy);
+	}
+
+	/* collinear: no triangles, no calls */
+	{
+		double		line[] = {0, 0, 1, 1, 2, 2, 3, 3};
+		tdc_job    *job;
+		char		err[256];
+		emit_sink	sink;
+
+		memset(&sink, 0, sizeof(sink));
+		CHECK(tdc_triangulate(line, 4, NULL, &job, err, sizeof(err)) == TDC_OK, "emit: collinear");
+		CHECK(tdc_job_emit_start(job, emit_collect, &sink, err, sizeof(err)) == TDC_OK &&
+			  tdc_job_wait(job, -1) == TDC_OK && atomic_load(&sink.calls) == 0,
+			  "emit: collinear input emits nothing");
+		tdc_job_free(job);
+	}
+
+	/* refused while running; cancelled while emitting */
+	{
+		size_t		n = tdc_test_quick ? 300000 : 2000000;
+		double	   *xy = gen_uniform(n, 1000, 0, 0);
+		tdc_options opt;
+		tdc_job    *job;
+		char		err[256];
+		emit_sink	sink;
+		double		t;
+		int			rc;
+
+		tdc_options_init(&opt);
+		opt.threads = 2;
+		CHECK(tdc_job_start(xy, n, &opt, &job, err, sizeof(err)) == TDC_OK, "emit: start big");
+		CHECK(tdc_job_emit_start(job, emit_collect, &sink, err, sizeof(err)) == TDC_EINVAL,
+			  "emit: refused while the triangulation runs");
+		CHECK(tdc_job_wait(job, -1) == TDC_OK, "emit: big job");
+		memset(&sink, 0, sizeof(sink));
+		sink.ntri = tdc_num_triangles(job);
+		sink.tri = malloc((3 * sink.ntri + 1) * sizeof(uint32_t));
+		CHECK(tdc_job_emit_start(job, emit_collect, &sink, err, sizeof(err)) == TDC_OK, "emit: start: %s", err);
+		tdc_job_wait(job, 2);
+		t = now();
+		tdc_job_cancel(job);
+		rc = tdc_job_wait(job, -1);
+		t = now() - t;
+		CHECK(rc == TDC_ECANCELED || rc == TDC_OK, "emit: cancelled: status %d", rc);
+		CHECK(t < (tdc_test_quick ? 0.25 : 0.05), "emit: cancel answered in %.1f ms", t * 1e3);
+		printf("emit: cancel during the hand-over answered in %.2f ms (status %d)\n", t * 1e3, rc);
+		free(sink.tri);
+		tdc_job_free(job);
+		free(xy);
+	}
+}
+
 /* Private resident memory of this process in kB (RssAnon). */
 static long
 rss_anon_kb(void)
@@ -966,6 +1098,7 @@ test_engine(void)
 	test_errors();
 	test_random_sets();
 	test_cancel_and_concurrency();
+	test_emit();
 	test_free_background();
 	test_signals_stay_on_caller();
 	test_out_of_memory();

@@ -425,7 +425,7 @@ static void *
 driver_main(void *arg)
 {
 	tdc_job    *job = arg;
-	int			rc = run(job);
+	int			rc = job->phase(job);
 
 	tdc_pool_destroy(job->pool);
 	job->pool = NULL;
@@ -467,14 +467,28 @@ free_arrays(tdc_job *job)
 	free(job->subs);
 }
 
+/* Workers must never take the host's signals: block them all around creation. */
+static int
+start_driver(tdc_job *job)
+{
+	sigset_t	all,
+				old;
+	int			rc;
+
+	sigfillset(&all);
+	pthread_sigmask(SIG_SETMASK, &all, &old);
+	rc = pthread_create(&job->driver, NULL, driver_main, job);
+	pthread_sigmask(SIG_SETMASK, &old, NULL);
+	job->driver_started = rc == 0;
+	return rc;
+}
+
 int
 tdc_job_start(const double *xy, size_t n, const tdc_options *opt, tdc_job **out,
 			  char *err, size_t errlen)
 {
 	tdc_job    *job;
 	tdc_options o;
-	sigset_t	all,
-				old;
 	pthread_condattr_t ca;
 	int			rc;
 
@@ -519,11 +533,8 @@ tdc_job_start(const double *xy, size_t n, const tdc_options *opt, tdc_job **out,
 	pthread_cond_init(&job->done, &ca);
 	pthread_condattr_destroy(&ca);
 
-	/* Workers must never take the host's signals: block them all around creation. */
-	sigfillset(&all);
-	pthread_sigmask(SIG_SETMASK, &all, &old);
-	rc = pthread_create(&job->driver, NULL, driver_main, job);
-	pthread_sigmask(SIG_SETMASK, &old, NULL);
+	job->phase = run;
+	rc = start_driver(job);
 	if (rc != 0)
 	{
 		pthread_mutex_destroy(&job->lock);
@@ -531,10 +542,55 @@ tdc_job_start(const double *xy, size_t n, const tdc_options *opt, tdc_job **out,
 		free(job);
 		FAIL(TDC_ETHREAD, "could not create a thread: %s", strerror(rc));
 	}
-	job->driver_started = true;
 	*out = job;
 	return TDC_OK;
 #undef FAIL
+}
+
+/*
+ * The second phase a finished job can run: its triangles handed to the
+ * host's callback on the pool (emit.c).  Same lifecycle as the first: the
+ * host waits with tdc_job_wait and may cancel.
+ */
+int
+tdc_job_emit_start(tdc_job *job, tdc_emit_fn emit, void *arg, char *err,
+				   size_t errlen)
+{
+	int			rc;
+
+	if (err && errlen)
+		err[0] = '\0';
+	pthread_mutex_lock(&job->lock);
+	rc = job->finished ? job->status : TDC_RUNNING;
+	pthread_mutex_unlock(&job->lock);
+	if (rc != TDC_OK)
+	{
+		if (err && errlen)
+			snprintf(err, errlen, "the job has not finished successfully");
+		return TDC_EINVAL;
+	}
+	/* the driver that ran the triangulation is done: reap it */
+	if (job->driver_started)
+	{
+		pthread_join(job->driver, NULL);
+		job->driver_started = false;
+	}
+	job->emit = emit;
+	job->emit_arg = arg;
+	job->phase = tdc_emit_phase;
+	job->finished = false;
+	job->status = TDC_RUNNING;
+	rc = start_driver(job);
+	if (rc != 0)
+	{
+		/* the triangulation stays valid; only the handing-over failed */
+		job->finished = true;
+		job->status = TDC_OK;
+		if (err && errlen)
+			snprintf(err, errlen, "could not create a thread: %s", strerror(rc));
+		return TDC_ETHREAD;
+	}
+	return TDC_OK;
 }
 
 int
@@ -783,30 +839,17 @@ tdc_input_site(const tdc_job *job, size_t i)
 int
 tdc_next_triangle(const tdc_job *job, tdc_iter *it, uint32_t v[3])
 {
-	tdc_mesh	m = {job->xy, job->he, NULL};
 	size_t		nhe = job->nin * 6;
 
 	if (job->ntri == 0)
 		return 0;
 	for (size_t h = it->pos; h < nhe; h++)
 	{
-		uint32_t	h1,
-					h2;
-
-		if (job->he[h].org == TDC_NIL ||
-			(job->outer[h >> 6] >> (h & 63)) & 1)
-			continue;
-		h1 = tdc_lnext(&m, (uint32_t) h);
-		if (h1 < h)
-			continue;
-		h2 = tdc_lnext(&m, h1);
-		if (h2 < h)
-			continue;
-		v[0] = job->he[h].org;
-		v[1] = job->he[h1].org;
-		v[2] = job->he[h2].org;
-		it->pos = h + 1;
-		return 1;
+		if (tdc_tri_at(job, h, v))
+		{
+			it->pos = h + 1;
+			return 1;
+		}
 	}
 	it->pos = nhe;
 	return 0;

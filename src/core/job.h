@@ -63,7 +63,12 @@ struct tdc_job
 	uint64_t   *outer;			/* bitmap: half-edges of the outer face */
 	tdc_times	times;
 
+	/* tdc_job_emit_start */
+	tdc_emit_fn emit;
+	void	   *emit_arg;
+
 	/* lifecycle */
+	int			(*phase) (struct tdc_job *job);	/* what the driver thread runs */
 	pthread_t	driver;
 	bool		driver_started;
 	pthread_mutex_t lock;
@@ -72,6 +77,31 @@ struct tdc_job
 	int			status;
 	char		err[256];
 };
+
+/* driver.c: does half-edge h start a triangle (its smallest half-edge)? */
+static inline bool
+tdc_tri_at(const tdc_job *job, size_t h, uint32_t v[3])
+{
+	const tdc_he *he = job->he;
+	uint32_t	h1,
+				h2;
+
+	if (he[h].org == TDC_NIL || (job->outer[h >> 6] >> (h & 63)) & 1)
+		return false;
+	h1 = he[SYM(h)].prev;		/* lnext */
+	if (h1 < h)
+		return false;
+	h2 = he[SYM(h1)].prev;
+	if (h2 < h)
+		return false;
+	v[0] = he[h].org;
+	v[1] = he[h1].org;
+	v[2] = he[h2].org;
+	return true;
+}
+
+/* emit.c: the driver phase of tdc_job_emit_start. */
+extern int	tdc_emit_phase(tdc_job *job);
 
 /* Record the first error of a task and stop the others. */
 extern void tdc_job_fail(tdc_job *job, int code, const char *fmt,...)

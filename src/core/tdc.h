@@ -108,6 +108,25 @@ extern void tdc_job_free(tdc_job *job);
  */
 extern void tdc_job_free_background(tdc_job *job);
 
+/*
+ * Hand every triangle of a finished job (tdc_job_wait returned TDC_OK) to
+ * "emit" on the job's worker threads, for hosts that write big results:
+ * emit(arg, first, count, v) receives count triangles, v holding 3 * count
+ * site ids, that are triangles first .. first + count - 1 in the order of
+ * tdc_next_triangle.  Calls for different ranges run concurrently, on threads
+ * with every signal blocked, so emit must be thread-safe and must not call
+ * into the host (a PostgreSQL backend: no palloc, no elog).  Runs like the
+ * triangulation: tdc_job_wait then returns TDC_OK once every triangle was
+ * handed over, or TDC_ECANCELED after tdc_job_cancel, in which case some
+ * ranges were never emitted and the job's results must not be used again.
+ * Returns TDC_EINVAL for a job that has not finished successfully,
+ * TDC_ETHREAD when no thread could be started (the job stays usable).
+ */
+typedef void (*tdc_emit_fn) (void *arg, size_t first, size_t count,
+							 const uint32_t *v);
+extern int	tdc_job_emit_start(tdc_job *job, tdc_emit_fn emit, void *arg,
+							   char *err, size_t errlen);
+
 /* Convenience: start + wait forever. */
 extern int	tdc_triangulate(const double *xy, size_t n, const tdc_options *opt,
 							tdc_job **job, char *err, size_t errlen);

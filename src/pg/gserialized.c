@@ -543,83 +543,136 @@ put_vertex(char *p, const tdc_job *job, uint32 site, const TdcPointBuf *buf,
 	return p;
 }
 
+/* One triangle as a member of a collection (POLYGON) or of a TIN (TRIANGLE). */
+static inline char *
+put_triangle(char *p, const TdcGserWriter *w, const uint32 *v)
+{
+	if (w->flags == TDC_OUT_POLYGONS)
+	{
+		p = put_u32(p, G_POLYGON);
+		p = put_u32(p, 1);
+		p = put_u32(p, 4);
+		p = put_u32(p, 0);		/* padding */
+	}
+	else
+	{
+		p = put_u32(p, G_TRIANGLE);
+		p = put_u32(p, 4);
+	}
+	p = put_vertex(p, w->job, v[0], w->buf, w->hasz);
+	p = put_vertex(p, w->job, v[1], w->buf, w->hasz);
+	p = put_vertex(p, w->job, v[2], w->buf, w->hasz);
+	return put_vertex(p, w->job, v[0], w->buf, w->hasz);
+}
+
 /*
- * The whole triangulation as one geometry value: GEOMETRYCOLLECTION of
- * POLYGON, MULTILINESTRING or TIN.  Empty results are 2D, like PostGIS.
+ * Allocate the whole result value and write its header and member count;
+ * the members are left to tdc_gser_emit or tdc_gser_fill.  Every member of a
+ * result has the same size, so member k starts at a known offset and the
+ * members can be written in any order, by any thread.
  */
 struct varlena *
-tdc_gser_result(const tdc_job *job, int flags, const TdcPointBuf *buf,
-				const char *fname)
+tdc_gser_result_alloc(const tdc_job *job, int flags, const TdcPointBuf *buf,
+					  const char *fname, TdcGserWriter *w)
 {
 	uint64		m = member_count(job, flags);
 	bool		hasz = buf->hasz && m > 0;
 	uint64		size = tdc_gser_result_size(job, flags, buf->hasz);
 	char	   *out;
 	char	   *p;
-	tdc_iter	it;
-	uint64		written = 0;
-	uint32		type;
 
 	tdc_gser_check_result_size(size, fname);
 
 	out = palloc((Size) size);
 	write_header(out, (Size) size, buf->srid, hasz);
 	p = VARDATA(out) + G_HEADER;
-	type = flags == TDC_OUT_POLYGONS ? G_COLLECTION :
-		flags == TDC_OUT_EDGES ? G_MULTILINE : G_TIN;
-	p = put_u32(p, type);
+	p = put_u32(p, flags == TDC_OUT_POLYGONS ? G_COLLECTION :
+				flags == TDC_OUT_EDGES ? G_MULTILINE : G_TIN);
 	p = put_u32(p, (uint32) m);
 
+	w->job = job;
+	w->buf = buf;
+	w->flags = flags;
+	w->hasz = hasz;
+	w->members = p;
+	w->member_size = member_size(flags, hasz);
+	w->count = m;
+	w->fname = fname;
+	return (struct varlena *) out;
+}
+
+/*
+ * tdc_emit_fn for triangle results: runs on the core's worker threads, so it
+ * only copies bytes; the ranges it gets are disjoint and within the count
+ * the value was sized for (the core checks both).
+ */
+void
+tdc_gser_emit(void *arg, size_t first, size_t count, const uint32 *v)
+{
+	const TdcGserWriter *w = arg;
+	char	   *p = w->members + first * w->member_size;
+
+	for (size_t i = 0; i < count; i++)
+		p = put_triangle(p, w, v + 3 * i);
+}
+
+/* Write all members on this thread, checking for interrupts as it goes. */
+void
+tdc_gser_fill(const TdcGserWriter *w)
+{
+	char	   *p = w->members;
+	tdc_iter	it;
+	uint64		written = 0;
+
 	it.pos = 0;
-	if (flags == TDC_OUT_EDGES)
+	if (w->flags == TDC_OUT_EDGES)
 	{
 		uint32		v[2];
 
-		while (tdc_next_edge(job, &it, v))
+		while (tdc_next_edge(w->job, &it, v))
 		{
-			if (written++ >= m)
-				elog(ERROR, "%s: core returned more edges than it counted", fname);
+			if (written++ >= w->count)
+				elog(ERROR, "%s: core returned more edges than it counted", w->fname);
 			if ((written & 0xffff) == 0)
 				CHECK_FOR_INTERRUPTS();
 			p = put_u32(p, G_LINE);
 			p = put_u32(p, 2);
-			p = put_vertex(p, job, v[0], buf, hasz);
-			p = put_vertex(p, job, v[1], buf, hasz);
+			p = put_vertex(p, w->job, v[0], w->buf, w->hasz);
+			p = put_vertex(p, w->job, v[1], w->buf, w->hasz);
 		}
 	}
 	else
 	{
 		uint32		v[3];
 
-		while (tdc_next_triangle(job, &it, v))
+		while (tdc_next_triangle(w->job, &it, v))
 		{
-			if (written++ >= m)
-				elog(ERROR, "%s: core returned more triangles than it counted", fname);
+			if (written++ >= w->count)
+				elog(ERROR, "%s: core returned more triangles than it counted", w->fname);
 			if ((written & 0xffff) == 0)
 				CHECK_FOR_INTERRUPTS();
-			if (flags == TDC_OUT_POLYGONS)
-			{
-				p = put_u32(p, G_POLYGON);
-				p = put_u32(p, 1);
-				p = put_u32(p, 4);
-				p = put_u32(p, 0);	/* padding */
-			}
-			else
-			{
-				p = put_u32(p, G_TRIANGLE);
-				p = put_u32(p, 4);
-			}
-			p = put_vertex(p, job, v[0], buf, hasz);
-			p = put_vertex(p, job, v[1], buf, hasz);
-			p = put_vertex(p, job, v[2], buf, hasz);
-			p = put_vertex(p, job, v[0], buf, hasz);
+			p = put_triangle(p, w, v);
 		}
 	}
-	if (written != m || p != out + size)
-		elog(ERROR, "%s: core returned %llu of %llu counted %s", fname,
-			 (unsigned long long) written, (unsigned long long) m,
-			 flags == TDC_OUT_EDGES ? "edges" : "triangles");
-	return (struct varlena *) out;
+	if (written != w->count || p != w->members + w->count * w->member_size)
+		elog(ERROR, "%s: core returned %llu of %llu counted %s", w->fname,
+			 (unsigned long long) written, (unsigned long long) w->count,
+			 w->flags == TDC_OUT_EDGES ? "edges" : "triangles");
+}
+
+/*
+ * The whole triangulation as one geometry value, written on this thread:
+ * GEOMETRYCOLLECTION of POLYGON, MULTILINESTRING or TIN.
+ */
+struct varlena *
+tdc_gser_result(const tdc_job *job, int flags, const TdcPointBuf *buf,
+				const char *fname)
+{
+	TdcGserWriter w;
+	struct varlena *out = tdc_gser_result_alloc(job, flags, buf, fname, &w);
+
+	tdc_gser_fill(&w);
+	return out;
 }
 
 /* An empty result of the given kind (2D, like PostGIS). */

@@ -179,6 +179,59 @@ report_stats(const tdc_job *job, const char *fname)
 					   t.total * 1000.0)));
 }
 
+/*
+ * Wait for the job's current phase (the triangulation, or the hand-over of
+ * its triangles) while watching for interrupts.  Returns when it succeeded;
+ * any failure, cancel included, is an ERROR after the workers stopped.
+ */
+static void
+wait_for_job(TdcRun *run, const char *fname)
+{
+	char		err[256];
+	int			rc;
+
+	/*
+	 * The workers read the input buffer (and may write the result) until
+	 * they finish: whatever ERROR leaves this loop, stop them before the
+	 * stack unwinds.  Freeing is left to the reset callback, which runs
+	 * after the error went to the client.
+	 */
+	PG_TRY();
+	{
+		while ((rc = tdc_job_wait(run->job, 10)) == TDC_RUNNING)
+		{
+			if (!InterruptPending)
+				continue;
+			if (QueryCancelPending || ProcDiePending)
+			{
+				stop_job(run);
+				CHECK_FOR_INTERRUPTS();
+				/* interrupts are held off: still, we have no result */
+				ereport(ERROR,
+						(errcode(ERRCODE_QUERY_CANCELED),
+						 errmsg("%s: triangulation canceled", fname)));
+			}
+			/* anything else: process it, the job keeps running */
+			CHECK_FOR_INTERRUPTS();
+		}
+	}
+	PG_CATCH();
+	{
+		if (run->job != NULL)
+			stop_job(run);
+		PG_RE_THROW();
+	}
+	PG_END_TRY();
+
+	if (rc != TDC_OK)
+	{
+		strlcpy(err, tdc_job_error(run->job), sizeof(err));
+		tdc_job_free(run->job);
+		run->job = NULL;
+		report_core_error(rc, err, fname);
+	}
+}
+
 /* ----------------------------------------------------------------
  *		shared helpers
  * ----------------------------------------------------------------
@@ -250,50 +303,32 @@ tdc_run(const TdcPointBuf *buf, double tolerance, uint64 result_bytes,
 		run->job = NULL;
 		report_core_error(rc, err, fname);
 	}
-
-	/*
-	 * The workers read buf->xy until they finish: whatever ERROR leaves this
-	 * loop, stop them before the stack unwinds.  Freeing is left to the
-	 * reset callback, which runs after the error went to the client.
-	 */
-	PG_TRY();
-	{
-		while ((rc = tdc_job_wait(run->job, 10)) == TDC_RUNNING)
-		{
-			if (!InterruptPending)
-				continue;
-			if (QueryCancelPending || ProcDiePending)
-			{
-				stop_job(run);
-				CHECK_FOR_INTERRUPTS();
-				/* interrupts are held off: still, we have no result */
-				ereport(ERROR,
-						(errcode(ERRCODE_QUERY_CANCELED),
-						 errmsg("%s: triangulation canceled", fname)));
-			}
-			/* anything else: process it, the job keeps running */
-			CHECK_FOR_INTERRUPTS();
-		}
-	}
-	PG_CATCH();
-	{
-		if (run->job != NULL)
-			stop_job(run);
-		PG_RE_THROW();
-	}
-	PG_END_TRY();
-
-	if (rc != TDC_OK)
-	{
-		strlcpy(err, tdc_job_error(run->job), sizeof(err));
-		tdc_job_free(run->job);
-		run->job = NULL;
-		report_core_error(rc, err, fname);
-	}
+	wait_for_job(run, fname);
 
 	if (tdc_guc_stats)
 		report_stats(run->job, fname);
 	return run;
+}
+
+/*
+ * Hand the finished job's triangles to emit on the core's threads (the
+ * result is written in parallel), waiting as for the triangulation.
+ * Returns false, with nothing emitted, when no thread could be started:
+ * the caller then writes on its own.
+ */
+bool
+tdc_run_emit(TdcRun *run, tdc_emit_fn emit, void *arg, const char *fname)
+{
+	char		err[256];
+	int			rc;
+
+	rc = tdc_job_emit_start(run->job, emit, arg, err, sizeof(err));
+	if (rc == TDC_ETHREAD)
+		return false;
+	if (rc != TDC_OK)
+		report_core_error(rc, err, fname);
+	wait_for_job(run, fname);
+	return true;
 }
 
 void
@@ -313,13 +348,17 @@ tdc_triangulate_to_datum(const TdcPointBuf *buf, double tolerance, int flags,
 {
 	TdcRun	   *run;
 	struct varlena *result;
+	TdcGserWriter w;
 
 	if (buf->n == 0)
 		return PointerGetDatum(tdc_gser_empty(flags, buf->srid));
 
 	run = tdc_run(buf, tolerance,
 				  tdc_gser_result_bound(buf->n, flags, buf->hasz), fname);
-	result = tdc_gser_result(run->job, flags, buf, fname);
+	result = tdc_gser_result_alloc(run->job, flags, buf, fname, &w);
+	if (flags == TDC_OUT_EDGES || w.count == 0 ||
+		!tdc_run_emit(run, tdc_gser_emit, &w, fname))
+		tdc_gser_fill(&w);
 	/* freeing a big job takes a while: let a pending cancel in first */
 	CHECK_FOR_INTERRUPTS();
 	tdc_run_free(run);

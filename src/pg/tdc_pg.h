@@ -81,6 +81,27 @@ extern uint64 tdc_gser_result_bound(uint64 n, int flags, bool hasz);
 extern struct varlena *tdc_gser_result(const tdc_job *job, int flags,
 									   const TdcPointBuf *buf,
 									   const char *fname);
+
+/* A result value being written: member k starts at members + k * member_size. */
+typedef struct TdcGserWriter
+{
+	const tdc_job *job;
+	const TdcPointBuf *buf;
+	int			flags;
+	bool		hasz;
+	char	   *members;
+	uint64		member_size;
+	uint64		count;
+	const char *fname;
+} TdcGserWriter;
+
+extern struct varlena *tdc_gser_result_alloc(const tdc_job *job, int flags,
+											 const TdcPointBuf *buf,
+											 const char *fname,
+											 TdcGserWriter *w);
+extern void tdc_gser_emit(void *arg, size_t first, size_t count,
+						  const uint32 *v);
+extern void tdc_gser_fill(const TdcGserWriter *w);
 extern struct varlena *tdc_gser_empty(int flags, int32 srid);
 extern Size tdc_gser_triangle_size(bool hasz);
 extern void tdc_gser_write_triangle(struct varlena *out, const tdc_job *job,
@@ -96,6 +117,8 @@ typedef struct TdcRun
 extern void tdc_check_params(double tolerance, int flags, const char *fname);
 extern TdcRun *tdc_run(const TdcPointBuf *buf, double tolerance,
 					   uint64 result_bytes, const char *fname);
+extern bool tdc_run_emit(TdcRun *run, tdc_emit_fn emit, void *arg,
+						 const char *fname);
 extern void tdc_run_free(TdcRun *run);
 extern Datum tdc_triangulate_to_datum(const TdcPointBuf *buf, double tolerance,
 									  int flags, const char *fname);
