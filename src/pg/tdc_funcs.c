@@ -11,7 +11,9 @@
  * flag every few ms) and only then lets CHECK_FOR_INTERRUPTS raise the
  * error, so the error arrives within about 10 ms plus the workers' reaction
  * time, and no thread outlives the statement.  Other interrupts are
- * processed while the job keeps running.
+ * processed while the job keeps running.  A result value is written the
+ * same way: the job's threads put the triangles at their offsets
+ * (tdc_job_emit_start) while the main thread waits and watches.
  *
  * The job is malloc'd memory that PostgreSQL knows nothing about.  Every job
  * is owned by a TdcRun registered with a reset callback on the memory context
@@ -25,8 +27,8 @@
  * quiet machine and several times that on a loaded one, so the cancel does
  * not wait for it.  While the job runs, a PG_TRY around the wait loop stops
  * the workers at once, before the stack unwinds.  On success tdc_run_free
- * frees the job in place and clears the pointer, so the callback has nothing
- * left to do.  Results are written with interrupt checks, and pending
+ * frees the job in place (no thread outlives a successful statement) and
+ * clears the pointer, so the callback has nothing left to do.  Pending
  * interrupts are processed before that free.
  *
  * Memory limit.  tdc_delaunay.max_memory (within the superuser's
