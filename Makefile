@@ -82,6 +82,8 @@ include $(PGXS)
 # Core objects inside the extension are built with the core's language level.
 src/core/%.o: src/core/%.c $(wildcard src/core/*.h)
 	$(CC) $(CFLAGS) -std=c11 -D_GNU_SOURCE -ffp-contract=off -pthread -Isrc/core -c -o $@ $<
+# PGXS does not track headers: a changed struct must rebuild every user.
+$(PG_SRCS:.c=.o): src/pg/tdc_pg.h src/core/tdc.h
 else
 all: tdc
 endif

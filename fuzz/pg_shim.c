@@ -153,9 +153,26 @@ shim_realloc(void *p, Size size, bool huge)
 	return n;
 }
 
+/* Reset callbacks of the one context, newest first, as PostgreSQL runs them. */
+static MemoryContextCallback *callbacks = NULL;
+
+void
+MemoryContextRegisterResetCallback(MemoryContext context, MemoryContextCallback *cb)
+{
+	cb->next = callbacks;
+	callbacks = cb;
+}
+
 void
 fuzz_pg_reset(void)
 {
+	while (callbacks)
+	{
+		MemoryContextCallback *cb = callbacks;
+
+		callbacks = cb->next;
+		cb->func(cb->arg);
+	}
 	while (chunks)
 	{
 		ShimChunk  *c = chunks;

@@ -40,6 +40,7 @@
 #include "postgres.h"
 
 #include <math.h>
+#include <sys/mman.h>
 
 #include "miscadmin.h"
 #include "utils/memutils.h"
@@ -256,6 +257,47 @@ read_srid(const unsigned char *s)
  * ----------------------------------------------------------------
  */
 
+/*
+ * The coordinate arrays are mapped directly, not palloc'd: a big aggregate
+ * grows them to hundreds of megabytes, and once freed, malloc keeps blocks
+ * below its (self-raising) mmap threshold in the backend's heap, so a
+ * session's memory would depend on the sizes of the inputs it saw before.
+ * Mappings grow with mremap, which moves pages instead of copying bytes,
+ * and go back to the system when the buffer's context is reset or deleted.
+ * The release callback is registered before any triangulation job's (whose
+ * workers read the array) and so runs after it.
+ */
+static void
+pointmap_release(void *arg)
+{
+	TdcPointMap *map = (TdcPointMap *) arg;
+
+	if (map->xy != NULL)
+		munmap(map->xy, map->xy_bytes);
+	if (map->z != NULL)
+		munmap(map->z, map->z_bytes);
+	map->xy = map->z = NULL;
+}
+
+static double *
+pointmap_grow(double **ptr, Size *bytes, Size want)
+{
+	void	   *p;
+
+	if (*ptr == NULL)
+		p = mmap(NULL, want, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+	else
+		p = mremap(*ptr, *bytes, want, MREMAP_MAYMOVE);
+	if (p == MAP_FAILED)
+		ereport(ERROR,
+				(errcode(ERRCODE_OUT_OF_MEMORY),
+				 errmsg("out of memory"),
+				 errdetail("Failed on request of size %zu for input vertices.", want)));
+	*ptr = p;
+	*bytes = want;
+	return p;
+}
+
 void
 tdc_pointbuf_init(TdcPointBuf *buf, MemoryContext cxt)
 {
@@ -306,20 +348,21 @@ tdc_pointbuf_reserve(TdcPointBuf *buf, uint64 extra, const char *fname)
 										 (unsigned long long) need),
 								pointbuf_bytes_for(need, buf->hasz));
 
-	if (buf->xy == NULL)
+	if (buf->map == NULL)
 	{
-		buf->xy = MemoryContextAllocHuge(buf->cxt,
-										 (Size) newcap * 2 * sizeof(double));
-		if (buf->hasz)
-			buf->z = MemoryContextAllocHuge(buf->cxt,
-											(Size) newcap * sizeof(double));
+		MemoryContextCallback *cb;
+
+		buf->map = MemoryContextAllocZero(buf->cxt, sizeof(TdcPointMap));
+		cb = MemoryContextAllocZero(buf->cxt, sizeof(MemoryContextCallback));
+		cb->func = pointmap_release;
+		cb->arg = buf->map;
+		MemoryContextRegisterResetCallback(buf->cxt, cb);
 	}
-	else
-	{
-		buf->xy = repalloc_huge(buf->xy, (Size) newcap * 2 * sizeof(double));
-		if (buf->hasz)
-			buf->z = repalloc_huge(buf->z, (Size) newcap * sizeof(double));
-	}
+	buf->xy = pointmap_grow(&buf->map->xy, &buf->map->xy_bytes,
+							(Size) newcap * 2 * sizeof(double));
+	if (buf->hasz)
+		buf->z = pointmap_grow(&buf->map->z, &buf->map->z_bytes,
+							   (Size) newcap * sizeof(double));
 	buf->cap = newcap;
 }
 

@@ -48,14 +48,24 @@ extern uint64 tdc_max_memory_bytes(void);
 extern void tdc_report_memory_limit(const char *fname, const char *what,
 									uint64 need) pg_attribute_noreturn();
 
+/* The mappings behind a point buffer, released with its context. */
+typedef struct TdcPointMap
+{
+	double	   *xy;
+	Size		xy_bytes;
+	double	   *z;
+	Size		z_bytes;
+} TdcPointMap;
+
 /*
  * Vertices collected from geometry values: interleaved x,y (what the core
- * takes) plus, for XYZ input, one Z per vertex.  The arrays live in "cxt" and
- * grow with huge allocations, so a buffer may exceed 1 GB.
+ * takes) plus, for XYZ input, one Z per vertex.  The arrays are mappings
+ * that belong to "cxt" (see gserialized.c), so a buffer may exceed 1 GB.
  */
 typedef struct TdcPointBuf
 {
 	MemoryContext cxt;
+	TdcPointMap *map;			/* NULL until the first vertex */
 	double	   *xy;				/* 2 * cap doubles */
 	double	   *z;				/* cap doubles when hasz, else NULL */
 	uint64		n;				/* vertices stored */

@@ -344,6 +344,8 @@ for at in "${TERM_AT[@]}"; do
 		fail "$label: the watcher failed: $res"
 	elif [ "$lat" = -1 ]; then
 		echo "  $label: the statement ended before the signal"
+	elif [ "$phase" = writing ] && grep -q '^[0-9]\{6,\}$' "$WORK/term$k.out"; then
+		echo "  $label: the result was complete before the signal took effect"
 	elif ! grep -q 'terminating connection due to administrator command' "$WORK/term$k.out"; then
 		fail "$label ($phase): no FATAL seen by the client: $(head -n1 "$WORK/term$k.out")"
 	else
