@@ -118,7 +118,7 @@ extern void tdc_job_free_background(tdc_job *job);
  * into the host (a PostgreSQL backend: no palloc, no elog).  Runs like the
  * triangulation: tdc_job_wait then returns TDC_OK once every triangle was
  * handed over, or TDC_ECANCELED after tdc_job_cancel, in which case some
- * ranges were never emitted and the job's results must not be used again.
+ * ranges were never emitted and the job keeps that status (free it).
  * Returns TDC_EINVAL for a job that has not finished successfully,
  * TDC_ETHREAD when no thread could be started (the job stays usable).
  */
