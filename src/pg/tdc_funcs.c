@@ -98,15 +98,8 @@ report_core_error(int rc, const char *msg, const char *fname)
 			code = ERRCODE_OUT_OF_MEMORY;
 			break;
 		case TDC_EMEMLIMIT:
-			{
-				const char *setting;
-
-				(void) tdc_memory_limit_mb(&setting);
-				code = ERRCODE_PROGRAM_LIMIT_EXCEEDED;
-				hint = strcmp(setting, "tdc_delaunay.max_memory") == 0 ?
-					"Raise tdc_delaunay.max_memory or triangulate fewer points." :
-					"tdc_delaunay.memory_ceiling caps tdc_delaunay.max_memory and only a superuser can raise it; or triangulate fewer points.";
-			}
+			code = ERRCODE_PROGRAM_LIMIT_EXCEEDED;
+			hint = tdc_memory_limit_hint();
 			break;
 		case TDC_EINVAL:
 			code = ERRCODE_INVALID_PARAMETER_VALUE;

@@ -103,12 +103,22 @@ tdc_max_memory_bytes(void)
 	return tdc_memory_limit_mb(&setting) * 1024 * 1024;
 }
 
+const char *
+tdc_memory_limit_hint(void)
+{
+	const char *setting;
+
+	(void) tdc_memory_limit_mb(&setting);
+	if (strcmp(setting, "tdc_delaunay.memory_ceiling") == 0)
+		return "tdc_delaunay.memory_ceiling caps tdc_delaunay.max_memory and only a superuser can raise it; or triangulate fewer points.";
+	return "Raise tdc_delaunay.max_memory or triangulate fewer points.";
+}
+
 void
 tdc_report_memory_limit(const char *fname, const char *what, uint64 need)
 {
 	const char *setting;
 	uint64		limit = tdc_memory_limit_mb(&setting);
-	bool		ceiling = strcmp(setting, "tdc_delaunay.memory_ceiling") == 0;
 
 	ereport(ERROR,
 			(errcode(ERRCODE_PROGRAM_LIMIT_EXCEEDED),
@@ -116,9 +126,7 @@ tdc_report_memory_limit(const char *fname, const char *what, uint64 need)
 					fname, what,
 					(unsigned long long) ((need + (1 << 20) - 1) >> 20),
 					setting, (unsigned long long) limit),
-			 ceiling ?
-			 errhint("tdc_delaunay.memory_ceiling caps tdc_delaunay.max_memory and only a superuser can raise it; or triangulate fewer points.") :
-			 errhint("Raise tdc_delaunay.max_memory or triangulate fewer points.")));
+			 errhint("%s", tdc_memory_limit_hint())));
 }
 
 void		_PG_init(void);

@@ -44,6 +44,8 @@ extern int	tdc_guc_max_result_bytes;
  */
 extern uint64 tdc_memory_limit_mb(const char **setting);
 extern uint64 tdc_max_memory_bytes(void);
+/* The HINT for an input over the limit: what the user can do about it. */
+extern const char *tdc_memory_limit_hint(void);
 /* ERROR: "what" needs "need" bytes, more than the limit. */
 extern void tdc_report_memory_limit(const char *fname, const char *what,
 									uint64 need) pg_attribute_noreturn();
