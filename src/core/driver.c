@@ -467,9 +467,14 @@ free_arrays(tdc_job *job)
 	free(job->subs);
 }
 
-/* Workers must never take the host's signals: block them all around creation. */
+/*
+ * Our threads must never take the host's signals: block them all around
+ * creation, so the new thread inherits the full mask (and the pool threads
+ * the driver starts inherit it in turn).
+ */
 static int
-start_driver(tdc_job *job)
+create_masked_thread(pthread_t *thread, const pthread_attr_t *attr,
+					 void *(*fn) (void *), void *arg)
 {
 	sigset_t	all,
 				old;
@@ -477,10 +482,32 @@ start_driver(tdc_job *job)
 
 	sigfillset(&all);
 	pthread_sigmask(SIG_SETMASK, &all, &old);
-	rc = pthread_create(&job->driver, NULL, driver_main, job);
+	rc = pthread_create(thread, attr, fn, arg);
 	pthread_sigmask(SIG_SETMASK, &old, NULL);
+	return rc;
+}
+
+static int
+start_driver(tdc_job *job)
+{
+	int			rc = create_masked_thread(&job->driver, NULL, driver_main, job);
+
 	job->driver_started = rc == 0;
 	return rc;
+}
+
+/* Stop and join the driver, if any; then nothing but memory is left. */
+static void
+stop_driver(tdc_job *job)
+{
+	if (job->driver_started)
+	{
+		tdc_job_cancel(job);
+		pthread_join(job->driver, NULL);
+		job->driver_started = false;
+	}
+	pthread_mutex_destroy(&job->lock);
+	pthread_cond_destroy(&job->done);
 }
 
 int
@@ -643,13 +670,7 @@ tdc_job_free(tdc_job *job)
 {
 	if (job == NULL)
 		return;
-	if (job->driver_started)
-	{
-		tdc_job_cancel(job);
-		pthread_join(job->driver, NULL);
-	}
-	pthread_mutex_destroy(&job->lock);
-	pthread_cond_destroy(&job->done);
+	stop_driver(job);
 	free_arrays(job);
 	free(job);
 }
@@ -676,20 +697,11 @@ tdc_job_free_background(tdc_job *job)
 {
 	pthread_attr_t attr;
 	pthread_t	reaper;
-	sigset_t	all,
-				old;
 	int			rc;
 
 	if (job == NULL)
 		return;
-	if (job->driver_started)
-	{
-		tdc_job_cancel(job);
-		pthread_join(job->driver, NULL);
-		job->driver_started = false;
-	}
-	pthread_mutex_destroy(&job->lock);
-	pthread_cond_destroy(&job->done);
+	stop_driver(job);
 
 	if (pthread_attr_init(&attr) != 0)
 		rc = -1;
@@ -697,10 +709,7 @@ tdc_job_free_background(tdc_job *job)
 	{
 		pthread_attr_setdetachstate(&attr, PTHREAD_CREATE_DETACHED);
 		pthread_attr_setstacksize(&attr, 64 * 1024);
-		sigfillset(&all);
-		pthread_sigmask(SIG_SETMASK, &all, &old);
-		rc = pthread_create(&reaper, &attr, reaper_main, job);
-		pthread_sigmask(SIG_SETMASK, &old, NULL);
+		rc = create_masked_thread(&reaper, &attr, reaper_main, job);
 		pthread_attr_destroy(&attr);
 	}
 	if (rc != 0)
