@@ -110,9 +110,30 @@ SELECT ST_IsValid(g) AS valid, ST_SRID(g) AS srid, ST_NDims(g) AS ndims, ST_Zmfl
 	   ST_Equals(g, ST_GeomFromWKB(ST_AsBinary(g), 3857)) AS wkb_equals,
 	   g = ST_GeomFromEWKB(ST_AsEWKB(g)) AS eq_operator
 FROM r;
--- Exact bytes of a result: header (SRID 4326, flags 0x40 = version 2, no
--- box), GEOMETRYCOLLECTION (7) of 1 POLYGON (3) of 1 ring of 4 points, padded.
-SELECT substr(tdc_raw(ST_TDCDelaunayTriangles('SRID=4326;MULTIPOINT(0 0, 1 0, 0 1)'), ''), 1, 24) AS header;
+-- Exact bytes of a result: header (SRID 4326, flags 0x44 = version 2 with a
+-- box), the float box xmin, xmax, ymin, ymax (0, 1, 0, 1), GEOMETRYCOLLECTION
+-- (7) of 1 POLYGON (3) of 1 ring of 4 points, padded.
+SELECT substr(tdc_raw(ST_TDCDelaunayTriangles('SRID=4326;MULTIPOINT(0 0, 1 0, 0 1)'), ''), 1, 40) AS header;
+-- The box is the one PostGIS writes for its own result: float bounds rounded
+-- outward (1.1 and 1.3 are not floats), Z included; without it every
+-- PostGIS function reading the result would first compute it from all
+-- vertices.  Empty results have none, like PostGIS's.
+SELECT postgis_hasbbox(t) AS has_box, postgis_getbbox(t)::text AS box,
+	   postgis_getbbox(t) = postgis_getbbox(p) AS box_as_postgis,
+	   ST_XMax(t) AS exact_xmax
+FROM (SELECT ST_TDCDelaunayTriangles(g) AS t, ST_DelaunayTriangles(g) AS p
+	  FROM (SELECT 'MULTIPOINT(-2.7 0, 1.1 0, 0 1.3, 0.5 -0.1)'::geometry AS g) s) r;
+SELECT postgis_hasbbox(ST_TDCDelaunayTriangles('MULTIPOINT(0 0, 1.1 0, 0 1.3)', 0, 1)) AS edges_box,
+	   postgis_hasbbox(ST_TDCDelaunayTriangles('MULTIPOINT(0 0, 1.1 0, 0 1.3)', 0, 2)) AS tin_box,
+	   postgis_hasbbox(ST_TDCDelaunayTriangles('MULTIPOINT(0 0, 1.1 0)')) AS empty_box;
+-- Z range: over the Z that the result keeps (the first of each XY), so the
+-- later duplicate's 100 is outside it; 3D box text is BOX3D.
+SELECT substr(tdc_raw(ST_TDCDelaunayTriangles('MULTIPOINT Z(0 0 -5, 1 0 7, 0 1 9, 0 0 100)'), ''), 5, 24) AS box_3d,
+	   ST_ZMax(ST_TDCDelaunayTriangles('MULTIPOINT Z(0 0 -5, 1 0 7, 0 1 9, 0 0 100)')) AS zmax;
+-- With a tolerance the box is that of the kept sites: (10.01 10.01) is
+-- absorbed by (10 10), so the box ends at 10.
+SELECT postgis_getbbox(ST_TDCDelaunayTriangles('MULTIPOINT(0 0, 10 0, 0 10, 10 10, 10.01 10.01)', 0.1))::text AS tolerance_box,
+	   postgis_getbbox(ST_TDCDelaunayTriangles('MULTIPOINT(0 0, 10 0, 0 10, 10 10, 10.01 10.01)'))::text AS no_tolerance_box;
 SELECT length(tdc_raw(ST_TDCDelaunayTriangles('SRID=4326;MULTIPOINT(0 0, 1 0, 0 1)'), '')) AS bytes_2d,
 	   length(tdc_raw(ST_TDCDelaunayTriangles('MULTIPOINT Z(0 0 0, 1 0 0, 0 1 0)'), '')) AS bytes_3d;
 SELECT tdc_raw(ST_TDCDelaunayTriangles('SRID=999999;POINT(1 1)'), '') AS empty_collection,

@@ -566,6 +566,8 @@ test_map_and_tolerance(void)
 	tdc_options opt;
 	tdc_job    *job;
 	char		err[256];
+	double		lo[2],
+				hi[2];
 
 	tdc_options_init(&opt);
 	CHECK(tdc_triangulate(pts, 6, &opt, &job, err, sizeof(err)) == TDC_OK, "map: %s", err);
@@ -574,6 +576,9 @@ test_map_and_tolerance(void)
 	CHECK(tdc_input_site(job, 5) == tdc_input_site(job, 2), "map: duplicate follows first");
 	CHECK(tdc_site_input(job, tdc_input_site(job, 4)) == 0, "map: first occurrence kept");
 	CHECK(tdc_site_input(job, tdc_input_site(job, 5)) == 2, "map: first occurrence kept");
+	tdc_site_extent(job, lo, hi);
+	CHECK(lo[0] == 5 && lo[1] == 0 && hi[0] == 8 && hi[1] == 9,
+		  "extent: (%g %g, %g %g)", lo[0], lo[1], hi[0], hi[1]);
 	tdc_job_free(job);
 
 	/* PostGIS case: tolerance 2 drops (8 9), within 1 of (7 9) */
@@ -582,6 +587,10 @@ test_map_and_tolerance(void)
 	CHECK(tdc_num_sites(job) == 3 && tdc_num_triangles(job) == 1,
 		  "tolerance 2: %zu sites %zu triangles", tdc_num_sites(job), tdc_num_triangles(job));
 	CHECK(tdc_input_site(job, 3) == tdc_input_site(job, 2), "tolerance: dropped maps to absorbing site");
+	/* the dropped (8 9) was the input's xmax: the extent is the kept sites' */
+	tdc_site_extent(job, lo, hi);
+	CHECK(lo[0] == 5 && lo[1] == 0 && hi[0] == 7 && hi[1] == 9,
+		  "tolerance extent: (%g %g, %g %g)", lo[0], lo[1], hi[0], hi[1]);
 	tdc_job_free(job);
 
 	/* tolerance: no two kept sites closer than it, and deterministic */

@@ -792,6 +792,33 @@ tdc_site_xy(const tdc_job *job, uint32_t site)
 	return job->xy + 2 * (size_t) site;
 }
 
+void
+tdc_site_extent(const tdc_job *job, double lo[2], double hi[2])
+{
+	/*
+	 * check_input's box covers every input point, and without a tolerance
+	 * each input point is a site or an exact duplicate of one.  The
+	 * tolerance pass may drop extreme points, so then the survivors (the
+	 * first nin entries of xy, in whatever order the sorts left them) are
+	 * scanned instead.
+	 */
+	if (!(job->opt.tolerance > 0))
+	{
+		lo[0] = job->bmin[0], lo[1] = job->bmin[1];
+		hi[0] = job->bmax[0], hi[1] = job->bmax[1];
+		return;
+	}
+	lo[0] = lo[1] = INFINITY;
+	hi[0] = hi[1] = -INFINITY;
+	for (size_t p = 0; p < job->nin; p++)
+	{
+		lo[0] = fmin(lo[0], job->xy[2 * p]);
+		hi[0] = fmax(hi[0], job->xy[2 * p]);
+		lo[1] = fmin(lo[1], job->xy[2 * p + 1]);
+		hi[1] = fmax(hi[1], job->xy[2 * p + 1]);
+	}
+}
+
 size_t
 tdc_site_input(const tdc_job *job, uint32_t site)
 {

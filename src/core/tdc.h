@@ -147,6 +147,13 @@ extern uint32_t tdc_site_id_limit(const tdc_job *job);
 /* Coordinates (x, y) of a site. */
 extern const double *tdc_site_xy(const tdc_job *job, uint32_t site);
 
+/*
+ * Exact bounding box of the kept sites, which are the vertices of every
+ * non-empty result: lo = (xmin, ymin), hi = (xmax, ymax).  O(1) without a
+ * tolerance, one pass over the sites with one.
+ */
+extern void tdc_site_extent(const tdc_job *job, double lo[2], double hi[2]);
+
 /* Input index of the first input point with this site's coordinates. */
 extern size_t tdc_site_input(const tdc_job *job, uint32_t site);
 

@@ -33,9 +33,12 @@
  * them into segments first, with a precision we should not guess for the
  * user, so we ask for an explicit ST_CurveToLine.
  *
- * Results are written in version 2 without a bounding box (PostGIS computes
- * one when it needs it), with the Z flag when the input had Z.  All parts of
- * the format are multiples of 8 bytes, so the doubles stay aligned.
+ * Results are written in version 2 with the Z flag when the input had Z.
+ * Non-empty collections carry a bounding box, as PostGIS writes them: float
+ * bounds rounded outward from the exact extent of the vertices.  Without
+ * one, every PostGIS function that deserializes the result (even
+ * ST_NumGeometries) first walks all its vertices to compute it.  All parts
+ * of the format are multiples of 8 bytes, so the doubles stay aligned.
  */
 #include "postgres.h"
 
@@ -516,6 +519,13 @@ member_count(const tdc_job *job, int flags)
 	return flags == TDC_OUT_EDGES ? tdc_num_edges(job) : tdc_num_triangles(job);
 }
 
+/* Bytes of the float bounding box: min and max per dimension. */
+static uint64
+box_size(bool hasz)
+{
+	return (hasz ? 6 : 4) * sizeof(float);
+}
+
 /* Size of the whole result value, header included. */
 uint64
 tdc_gser_result_size(const tdc_job *job, int flags, bool hasz)
@@ -523,8 +533,8 @@ tdc_gser_result_size(const tdc_job *job, int flags, bool hasz)
 	uint64		m = member_count(job, flags);
 
 	if (m == 0)
-		hasz = false;
-	return VARHDRSZ + G_HEADER + 8 + m * member_size(flags, hasz);
+		return VARHDRSZ + G_HEADER + 8;
+	return VARHDRSZ + G_HEADER + box_size(hasz) + 8 + m * member_size(flags, hasz);
 }
 
 /* Upper bound of the result size for n input vertices (2n triangles, 3n edges). */
@@ -533,7 +543,7 @@ tdc_gser_result_bound(uint64 n, int flags, bool hasz)
 {
 	uint64		m = (flags == TDC_OUT_EDGES ? 3 : 2) * n;
 
-	return VARHDRSZ + G_HEADER + 8 + m * member_size(flags, hasz);
+	return VARHDRSZ + G_HEADER + box_size(hasz) + 8 + m * member_size(flags, hasz);
 }
 
 void
@@ -549,7 +559,7 @@ tdc_gser_check_result_size(uint64 size, const char *fname)
 }
 
 static void
-write_header(char *out, Size size, int32 srid, bool hasz)
+write_header(char *out, Size size, int32 srid, bool hasz, bool hasbox)
 {
 	unsigned char *h = (unsigned char *) VARDATA(out);
 	uint32		s = (uint32) srid & 0x1fffff;
@@ -558,7 +568,76 @@ write_header(char *out, Size size, int32 srid, bool hasz)
 	h[0] = (unsigned char) (s >> 16);
 	h[1] = (unsigned char) (s >> 8);
 	h[2] = (unsigned char) s;
-	h[3] = GF_VERSION | (hasz ? GF_Z : 0);
+	h[3] = GF_VERSION | (hasz ? GF_Z : 0) | (hasbox ? GF_BBOX : 0);
+}
+
+/*
+ * The largest float not above d, and the smallest not below it: a float box
+ * must contain the double coordinates it bounds.  Beyond the float range
+ * they give +-FLT_MAX and +-Inf, still bounds.
+ */
+static float
+float_down(double d)
+{
+	float		f = (float) d;
+
+	return (double) f <= d ? f : nextafterf(f, -INFINITY);
+}
+
+static float
+float_up(double d)
+{
+	float		f = (float) d;
+
+	return (double) f >= d ? f : nextafterf(f, INFINITY);
+}
+
+/*
+ * Write the bounding box of a non-empty result at p: xmin, xmax, ymin, ymax
+ * and with Z zmin, zmax.  The vertices of a result are exactly the kept
+ * sites, and the Z written for a site is that of its first input point, so
+ * the Z range is taken over those inputs only: input i is one when the site
+ * it became names it as its first.
+ */
+static char *
+put_box(char *p, const tdc_job *job, const TdcPointBuf *buf, bool hasz,
+		const char *fname)
+{
+	double		lo[2],
+				hi[2];
+	float		box[6];
+
+	tdc_site_extent(job, lo, hi);
+	box[0] = float_down(lo[0]);
+	box[1] = float_up(hi[0]);
+	box[2] = float_down(lo[1]);
+	box[3] = float_up(hi[1]);
+	if (hasz)
+	{
+		double		zlo = INFINITY,
+					zhi = -INFINITY;
+
+		for (uint64 i = 0; i < buf->n; i++)
+		{
+			uint32		site = tdc_input_site(job, (size_t) i);
+
+			if (site == UINT32_MAX)
+				ereport(ERROR,
+						(errcode(ERRCODE_OUT_OF_MEMORY),
+						 errmsg("%s: out of memory for the input-to-site map", fname)));
+			if (tdc_site_input(job, site) == i)
+			{
+				zlo = Min(zlo, buf->z[i]);
+				zhi = Max(zhi, buf->z[i]);
+			}
+			if ((i & 0xfffff) == 0)
+				CHECK_FOR_INTERRUPTS();
+		}
+		box[4] = float_down(zlo);
+		box[5] = float_up(zhi);
+	}
+	memcpy(p, box, box_size(hasz));
+	return p + box_size(hasz);
 }
 
 static inline char *
@@ -627,8 +706,10 @@ tdc_gser_result_alloc(const tdc_job *job, int flags, const TdcPointBuf *buf,
 	tdc_gser_check_result_size(size, fname);
 
 	out = palloc((Size) size);
-	write_header(out, (Size) size, buf->srid, hasz);
+	write_header(out, (Size) size, buf->srid, hasz, m > 0);
 	p = VARDATA(out) + G_HEADER;
+	if (m > 0)
+		p = put_box(p, job, buf, hasz, fname);
 	p = put_u32(p, flags == TDC_OUT_POLYGONS ? G_COLLECTION :
 				flags == TDC_OUT_EDGES ? G_MULTILINE : G_TIN);
 	p = put_u32(p, (uint32) m);
@@ -726,7 +807,7 @@ tdc_gser_empty(int flags, int32 srid)
 	char	   *out = palloc(size);
 	char	   *p;
 
-	write_header(out, size, srid, false);
+	write_header(out, size, srid, false, false);
 	p = VARDATA(out) + G_HEADER;
 	p = put_u32(p, flags == TDC_OUT_POLYGONS ? G_COLLECTION :
 				flags == TDC_OUT_EDGES ? G_MULTILINE : G_TIN);
@@ -749,7 +830,7 @@ tdc_gser_write_triangle(struct varlena *out, const tdc_job *job,
 	char	   *p;
 
 	write_header((char *) out, tdc_gser_triangle_size(buf->hasz), buf->srid,
-				 buf->hasz);
+				 buf->hasz, false);
 	p = VARDATA(out) + G_HEADER;
 	p = put_u32(p, G_POLYGON);
 	p = put_u32(p, 1);
