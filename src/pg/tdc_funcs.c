@@ -220,7 +220,7 @@ wait_for_job(TdcRun *run, const char *fname)
 
 	if (rc != TDC_OK)
 	{
-		strlcpy(err, tdc_job_error(run->job), sizeof(err));
+		snprintf(err, sizeof(err), "%s", tdc_job_error(run->job));
 		tdc_job_free(run->job);
 		run->job = NULL;
 		report_core_error(rc, err, fname);

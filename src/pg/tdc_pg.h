@@ -20,6 +20,9 @@
 #include "postgres.h"
 
 #include "fmgr.h"
+#if PG_VERSION_NUM >= 160000
+#include "varatt.h"				/* VARSIZE and friends left postgres.h in 16 */
+#endif
 #include "tdc.h"
 
 /* Output kinds, the "flags" argument of ST_DelaunayTriangles. */
@@ -47,8 +50,14 @@ extern uint64 tdc_max_memory_bytes(void);
 /* The HINT for an input over the limit: what the user can do about it. */
 extern const char *tdc_memory_limit_hint(void);
 /* ERROR: "what" needs "need" bytes, more than the limit. */
+#if PG_VERSION_NUM >= 180000
+/* 18 replaced the trailing pg_attribute_noreturn() by a leading pg_noreturn */
+extern pg_noreturn void tdc_report_memory_limit(const char *fname, const char *what,
+												uint64 need);
+#else
 extern void tdc_report_memory_limit(const char *fname, const char *what,
 									uint64 need) pg_attribute_noreturn();
+#endif
 
 /* The mappings behind a point buffer, released with its context. */
 typedef struct TdcPointMap
