@@ -77,6 +77,10 @@ PG_CONFIG ?= pg_config
 PGXS := $(shell $(PG_CONFIG) --pgxs 2>/dev/null)
 ifneq ($(PGXS),)
 include $(PGXS)
+# pg_regress 17 no longer creates missing parents of --outputdir.
+installcheck: | build/regress
+build/regress:
+	mkdir -p $@
 # Plain `make` builds the extension (the first rule above is ./tdc).
 .DEFAULT_GOAL := all
 # Core objects inside the extension are built with the core's language level.

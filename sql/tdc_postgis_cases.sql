@@ -121,7 +121,8 @@ FROM (VALUES
 
 -- Documented difference 1: GEOS 3.11 (PostGIS 3.3) misses triangles along
 -- the convex hull on larger random inputs.  On 100k uniform points ours has
--- exactly 2n - 2 - h triangles, PostGIS fewer.
+-- exactly 2n - 2 - h triangles, PostGIS fewer.  GEOS 3.13 (Debian 13's
+-- PostGIS 3.5) has them all: there only "not more than exact" is asserted.
 CREATE TABLE tdc_100k AS SELECT ST_Collect(geom) AS g FROM tdc_random_points(100000, 1);
 CREATE TABLE tdc_100k_res AS
 	SELECT ST_NumGeometries(ST_TDCDelaunayTriangles(g)) AS ours,
@@ -129,7 +130,9 @@ CREATE TABLE tdc_100k_res AS
 		   2 * ST_NPoints(g) - 2 - (ST_NPoints(ST_ConvexHull(g)) - 1) AS exact_t,
 		   ST_Area(ST_TDCDelaunayTriangles(g)) AS area, ST_Area(ST_ConvexHull(g)) AS hull_area
 	FROM tdc_100k;
-SELECT ours = exact_t AS ours_exact, postgis < exact_t AS postgis_fewer,
+SELECT ours = exact_t AS ours_exact,
+	   CASE WHEN postgis_geos_version() LIKE '3.11.%' THEN postgis < exact_t
+			ELSE postgis <= exact_t END AS postgis_fewer,
 	   abs(area - hull_area) < 1e-9 AS ours_covers_hull
 FROM tdc_100k_res;
 

@@ -1,0 +1,61 @@
+#!/usr/bin/env bash
+# scripts/check-pg17.sh: build the extension against PostgreSQL 17 and run
+# its pg_regress suite there, with PostGIS 3.5 and GEOS 3.13.
+#
+# Debian 12 packages only PostgreSQL 15, so this builds a Debian 13 (trixie)
+# root with debootstrap, installs postgresql-17, postgresql-server-dev-17 and
+# postgresql-17-postgis-3 from Debian's own archive inside it, clones the
+# committed HEAD into it and runs `make installcheck` on a throw-away
+# cluster.  Needs root (debootstrap, chroot, mount) and a Debian mirror;
+# takes about 5 minutes.  Not part of `make test`.
+#
+#   bash scripts/check-pg17.sh            uses /tmp/tdc-trixie (kept for reruns)
+#   TDC_TRIXIE_ROOT=DIR bash scripts/check-pg17.sh
+set -euo pipefail
+# shellcheck source=scripts/lib.sh
+source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
+
+((EUID == 0)) || tdc_die "run as root: it uses debootstrap, chroot and mount"
+root=${TDC_TRIXIE_ROOT:-/tmp/tdc-trixie}
+mirror=http://deb.debian.org/debian
+pgbin=/usr/lib/postgresql/17/bin
+
+command -v debootstrap >/dev/null ||
+	DEBIAN_FRONTEND=noninteractive apt-get install -y -q debootstrap >/dev/null
+if [ ! -x "$root/usr/bin/apt-get" ]; then
+	tdc_say "debootstrap trixie into $root"
+	debootstrap --variant=minbase trixie "$root" "$mirror" >/dev/null
+fi
+cp /etc/resolv.conf "$root/etc/"
+cleanup() {
+	chroot "$root" su postgres -c "$pgbin/pg_ctl -D /tmp/pg/data stop -m fast" >/dev/null 2>&1 || true
+	umount "$root/dev/shm" "$root/dev" "$root/proc" 2>/dev/null || true
+}
+trap cleanup EXIT
+mountpoint -q "$root/proc" || mount -t proc proc "$root/proc"
+mountpoint -q "$root/dev" || mount --bind /dev "$root/dev"
+mountpoint -q "$root/dev/shm" || mount --bind /dev/shm "$root/dev/shm"
+
+tdc_say "installing PostgreSQL 17 and PostGIS in the trixie root"
+chroot "$root" bash -c 'apt-get update -qq &&
+	DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends \
+		make gcc git ca-certificates postgresql-17 postgresql-server-dev-17 \
+		postgresql-17-postgis-3 >/tmp/apt.log 2>&1 || { tail -20 /tmp/apt.log; exit 1; }'
+
+rm -rf "$root/root/tdc"
+git clone -q "$TDC_ROOT" "$root/root/tdc"
+[ -d "$TDC_ROOT/../shared" ] && rm -rf "$root/root/shared" && cp -r "$TDC_ROOT/../shared" "$root/root/shared"
+
+tdc_say "build, install, pg_regress on PostgreSQL 17"
+chroot "$root" bash -s <<EOF
+set -euo pipefail
+cd /root/tdc
+make -s PG_CONFIG=$pgbin/pg_config all
+make -s PG_CONFIG=$pgbin/pg_config install >/dev/null
+rm -rf /tmp/pg && mkdir -p /tmp/pg && chown postgres /tmp/pg
+su postgres -c "$pgbin/initdb -D /tmp/pg/data -A trust >/dev/null"
+su postgres -c "$pgbin/pg_ctl -D /tmp/pg/data -o '-p 5417 -k /tmp/pg' -l /tmp/pg/log -w start >/dev/null"
+su postgres -c "psql -h /tmp/pg -p 5417 -X -At -c 'SELECT version()' -c 'CREATE EXTENSION postgis' -c 'SELECT postgis_full_version()'" | sed 's/^/    /'
+make PG_CONFIG=$pgbin/pg_config installcheck PGHOST=/tmp/pg PGPORT=5417 PGUSER=postgres
+EOF
+tdc_say "PostgreSQL 17: pg_regress passed"
