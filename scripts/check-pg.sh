@@ -19,8 +19,10 @@ source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
 
 major=${1:-17}
 case $major in
-	17) suite=trixie ;;
-	18) suite=sid ;;
+	17) suite=trixie aptopt="" ;;
+	# sid's Release file is valid for a week only; a mirror that lags
+	# (or a snapshot) serves an expired one
+	18) suite=sid aptopt="-o Acquire::Check-Valid-Until=false" ;;
 	*) tdc_die "usage: check-pg.sh 17|18 (the majors a Debian release packages, besides 15)" ;;
 esac
 ((EUID == 0)) || tdc_die "run as root: it uses debootstrap, chroot and mount"
@@ -45,8 +47,8 @@ mountpoint -q "$root/dev" || mount --bind /dev "$root/dev"
 mountpoint -q "$root/dev/shm" || mount --bind /dev/shm "$root/dev/shm"
 
 tdc_say "installing PostgreSQL $major and PostGIS in the $suite root"
-chroot "$root" bash -c "apt-get update -qq &&
-	DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends \
+chroot "$root" bash -c "apt-get $aptopt update -qq &&
+	DEBIAN_FRONTEND=noninteractive apt-get $aptopt install -y -qq --no-install-recommends \
 		make gcc git ca-certificates postgresql-$major postgresql-server-dev-$major \
 		postgresql-$major-postgis-3 >/tmp/apt.log 2>&1 || { tail -20 /tmp/apt.log; exit 1; }"
 
