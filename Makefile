@@ -39,14 +39,14 @@ TEST_SRCS = $(sort $(wildcard test/test_*.c))
 tdc: src/cli/tdc.c $(CORE_SRCS) $(wildcard src/core/*.h)
 	$(CC_CORE) $(CORE_CFLAGS) -o $@ src/cli/tdc.c $(CORE_SRCS) -lm
 
-build/test_core: $(TEST_SRCS) test/harness.h $(CORE_SRCS) $(wildcard src/core/*.h)
+build/test_core: $(TEST_SRCS) $(wildcard test/*.h) $(CORE_SRCS) $(wildcard src/core/*.h)
 	@mkdir -p build
 	$(CC_CORE) $(CORE_CFLAGS) -Itest -o $@ $(TEST_SRCS) $(CORE_SRCS) -lgmp -lm
 
 check-core: build/test_core
 	build/test_core
 
-build/test_core_asan: $(TEST_SRCS) test/harness.h $(CORE_SRCS) $(wildcard src/core/*.h)
+build/test_core_asan: $(TEST_SRCS) $(wildcard test/*.h) $(CORE_SRCS) $(wildcard src/core/*.h)
 	@mkdir -p build
 	clang $(filter-out -O2,$(CORE_CFLAGS)) -O1 -fno-omit-frame-pointer \
 		-fsanitize=address,undefined -fno-sanitize-recover=all -Itest -o $@ \
@@ -55,7 +55,7 @@ build/test_core_asan: $(TEST_SRCS) test/harness.h $(CORE_SRCS) $(wildcard src/co
 check-core-asan: build/test_core_asan
 	build/test_core_asan --quick
 
-build/test_core_tsan: $(TEST_SRCS) test/harness.h $(CORE_SRCS) $(wildcard src/core/*.h)
+build/test_core_tsan: $(TEST_SRCS) $(wildcard test/*.h) $(CORE_SRCS) $(wildcard src/core/*.h)
 	@mkdir -p build
 	clang $(filter-out -O2,$(CORE_CFLAGS)) -O1 -fsanitize=thread -Itest -o $@ \
 		$(TEST_SRCS) $(CORE_SRCS) -lgmp -lm
@@ -115,7 +115,7 @@ FUZZ_CORE_DEPS = $(CORE_SRCS) $(wildcard src/core/*.h)
 
 fuzz: $(addprefix build/fuzz/,$(FUZZ_TARGETS))
 
-build/fuzz/fuzz_core: fuzz/fuzz_core.c $(FUZZ_CORE_DEPS)
+build/fuzz/fuzz_core: fuzz/fuzz_core.c test/xy_oracle.h $(FUZZ_CORE_DEPS)
 	@mkdir -p build/fuzz
 	$(FUZZ_CC) $(FUZZ_CFLAGS) -std=c11 -Isrc/core -o $@ fuzz/fuzz_core.c $(CORE_SRCS) -lm
 

@@ -50,6 +50,7 @@
 #include <string.h>
 
 #include "tdc.h"
+#include "../test/xy_oracle.h"
 
 #define MAX_RAW_POINTS		4096
 #define MAX_EXPANDED		30000
@@ -373,20 +374,6 @@ coord_ok(double c)
 	return c >= TDC_COORD_MIN && c <= TDC_COORD_MAX;
 }
 
-/* Lexicographic x, y; -0 equals 0, as it does for the engine. */
-static int
-cmp_xy(const void *a, const void *b)
-{
-	const double *p = a,
-			   *q = b;
-
-	if (p[0] != q[0])
-		return p[0] < q[0] ? -1 : 1;
-	if (p[1] != q[1])
-		return p[1] < q[1] ? -1 : 1;
-	return 0;
-}
-
 /* Triangles as three points each, as canonical_triangles() makes them. */
 static int
 cmp_tri(const void *a, const void *b)
@@ -402,21 +389,6 @@ cmp_tri(const void *a, const void *b)
 			return c;
 	}
 	return 0;
-}
-
-static size_t
-count_unique(const double *xy, size_t n)
-{
-	double	   *c = malloc(16 * n + 16);
-	size_t		u = 0;
-
-	memcpy(c, xy, 16 * n);
-	qsort(c, n, 16, cmp_xy);
-	for (size_t i = 0; i < n; i++)
-		if (i == 0 || cmp_xy(c + 2 * i, c + 2 * (i - 1)) != 0)
-			u++;
-	free(c);
-	return u;
 }
 
 /*

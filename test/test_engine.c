@@ -24,6 +24,7 @@
 
 #include "harness.h"
 #include "tdc.h"
+#include "xy_oracle.h"
 
 typedef struct canon
 {
@@ -70,45 +71,10 @@ cmp_tri(const void *a, const void *b)
 	return 0;
 }
 
-static int
-cmp_pt(const void *a, const void *b)
-{
-	return cmp_tri(a, b) == 0 ? 0 : 0;
-}
-
 static bool
 pt_less(const double *p, const double *q)
 {
 	return p[0] < q[0] || (p[0] == q[0] && p[1] < q[1]);
-}
-
-/* Number of distinct points, independently of the engine. */
-static int
-cmp_xy(const void *a, const void *b)
-{
-	const double *p = a,
-			   *q = b;
-
-	if (p[0] != q[0])
-		return p[0] < q[0] ? -1 : 1;
-	if (p[1] != q[1])
-		return p[1] < q[1] ? -1 : 1;
-	return 0;
-}
-
-static size_t
-count_unique(const double *xy, size_t n)
-{
-	double	   *c = malloc(16 * n + 16);
-	size_t		u = 0;
-
-	memcpy(c, xy, 16 * n);
-	qsort(c, n, 16, cmp_xy);
-	for (size_t i = 0; i < n; i++)
-		if (i == 0 || cmp_xy(c + 2 * i, c + 2 * (i - 1)) != 0)
-			u++;
-	free(c);
-	return u;
 }
 
 /*
@@ -1101,7 +1067,6 @@ test_out_of_memory(void)
 void
 test_engine(void)
 {
-	(void) cmp_pt;
 	test_small_and_degenerate();
 	test_map_and_tolerance();
 	test_errors();
