@@ -28,9 +28,17 @@ CREATE FUNCTION tdc_raw(geometry, bytea) RETURNS bytea
 CREATE FUNCTION tdc_mkgeom(bytea, bytea) RETURNS geometry
 	LANGUAGE internal IMMUTABLE STRICT AS 'byteacat';
 
--- Triangles as a canonical text: the same set gives the same text.
+-- Triangles as a canonical text: the same set gives the same text.  A TIN
+-- is first made a GEOMETRYCOLLECTION of its triangles as polygons, which is
+-- what ST_Normalize does with one up to PostGIS 3.5 (3.7 keeps the TIN), so
+-- the text is the same on every PostGIS.
 CREATE FUNCTION tdc_norm(g geometry) RETURNS text
-	LANGUAGE sql IMMUTABLE STRICT AS $$ SELECT ST_AsText(ST_Normalize(g)) $$;
+	LANGUAGE sql IMMUTABLE STRICT AS $$
+	SELECT ST_AsText(ST_Normalize(CASE WHEN GeometryType(g) = 'TIN' THEN
+		(SELECT coalesce(ST_ForceCollection(ST_Collect(ST_MakePolygon(ST_ExteriorRing(d.geom)))),
+						 'GEOMETRYCOLLECTION EMPTY'::geometry)
+		 FROM ST_Dump(g) d)
+		ELSE g END)) $$;
 
 -- Triangles of a result that are not counter-clockwise, not closed 4-point
 -- rings, or not valid polygons.
@@ -84,9 +92,11 @@ CREATE FUNCTION tdc_random_points(n int, seed int DEFAULT 0) RETURNS TABLE(id in
 --
 SELECT tdc_norm(ST_TDCDelaunayTriangles('MULTIPOINT(5 5, 6 0, 7 9, 8 9)'));
 SELECT tdc_norm(ST_TDCDelaunayTriangles('MULTIPOINT(5 5, 6 0, 7 9, 8 9)', 0, 1));
-SELECT ST_AsText(ST_TDCDelaunayTriangles('MULTIPOINT(5 5, 6 0, 7 9, 8 9)', 0, 2)) LIKE 'TIN(((%' AS is_tin,
-	   ST_NumGeometries(ST_TDCDelaunayTriangles('MULTIPOINT(5 5, 6 0, 7 9, 8 9)', 0, 2)) AS triangles,
-	   ST_GeometryType(ST_GeometryN(ST_TDCDelaunayTriangles('MULTIPOINT(5 5, 6 0, 7 9, 8 9)', 0, 2), 1)) AS member;
+-- (members through ST_Dump: PostGIS 3.7's ST_NumGeometries counts a TIN as one)
+SELECT ST_AsText(t) LIKE 'TIN(((%' AS is_tin,
+	   (SELECT count(*) FROM ST_Dump(t)) AS triangles,
+	   (SELECT min(ST_GeometryType(geom)) FROM ST_Dump(t)) AS member
+FROM (SELECT ST_TDCDelaunayTriangles('MULTIPOINT(5 5, 6 0, 7 9, 8 9)', 0, 2) AS t) s;
 SELECT tdc_bad_triangles(ST_TDCDelaunayTriangles('MULTIPOINT(5 5, 6 0, 7 9, 8 9)')) AS bad;
 
 -- Triangles are counter-clockwise with a closed 4-point ring; TIN members too.
