@@ -44,6 +44,7 @@
 
 #include <math.h>
 #include <sys/mman.h>
+#include <unistd.h>
 
 #include "miscadmin.h"
 #include "utils/memutils.h"
@@ -726,6 +727,27 @@ tdc_gser_result_alloc(const tdc_job *job, int flags, const TdcPointBuf *buf,
 }
 
 /*
+ * A result of two million triangles is 160 MB of fresh memory, and taking it
+ * one page fault at a time cost a third of the writing.  Asking the kernel
+ * for a batch's pages in one call (MADV_POPULATE_WRITE, Linux 5.14) does the
+ * same work without a trap per page.  Where the call is unknown or fails,
+ * the writes fault the pages in as before; pages shared with a neighbouring
+ * batch are simply populated by whichever thread comes first, without
+ * touching their contents.
+ */
+static inline void
+prefault(char *p, size_t len)
+{
+#ifdef MADV_POPULATE_WRITE
+	uintptr_t	page = (uintptr_t) sysconf(_SC_PAGESIZE);
+	uintptr_t	a = (uintptr_t) p & ~(page - 1);
+	uintptr_t	b = ((uintptr_t) p + len + page - 1) & ~(page - 1);
+
+	(void) madvise((void *) a, b - a, MADV_POPULATE_WRITE);
+#endif
+}
+
+/*
  * tdc_emit_fn for triangle results: runs on the core's worker threads, so it
  * only copies bytes; the ranges it gets are disjoint and within the count
  * the value was sized for (the core checks both).
@@ -736,6 +758,7 @@ tdc_gser_emit(void *arg, size_t first, size_t count, const uint32 *v)
 	const TdcGserWriter *w = arg;
 	char	   *p = w->members + first * w->member_size;
 
+	prefault(p, count * w->member_size);
 	for (size_t i = 0; i < count; i++)
 		p = put_triangle(p, w, v + 3 * i);
 }
