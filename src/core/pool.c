@@ -16,6 +16,7 @@
  */
 #include <stdlib.h>
 #include <sys/mman.h>
+#include <unistd.h>
 
 #include "internal.h"
 
@@ -46,6 +47,19 @@ tdc_big_free(void *ptr)
 		return;
 	p = (char *) ptr - BIG_HEADER;
 	munmap(p, *(size_t *) p);
+}
+
+void
+tdc_big_prefault(void *ptr, size_t len)
+{
+#ifdef MADV_POPULATE_WRITE
+	uintptr_t	page = (uintptr_t) sysconf(_SC_PAGESIZE);
+	uintptr_t	a = (uintptr_t) ptr & ~(page - 1);
+	uintptr_t	b = ((uintptr_t) ptr + len + page - 1) & ~(page - 1);
+
+	if (len > 0)
+		(void) madvise((void *) a, b - a, MADV_POPULATE_WRITE);
+#endif
 }
 
 struct tdc_pool
