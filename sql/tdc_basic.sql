@@ -208,6 +208,16 @@ SELECT tdc_norm(ST_TDCDelaunayTriangles('MULTIPOINT Z(0 0 9, 0 0 1, 1 0 0, 0 1 0
 -- M is dropped: XYM -> XY, XYZM -> XYZ.
 SELECT tdc_norm(ST_TDCDelaunayTriangles('MULTIPOINT M(0 0 5, 1 0 5, 0 1 5)')) AS m_dropped,
 	   tdc_norm(ST_TDCDelaunayTriangles('MULTIPOINT ZM(0 0 1 5, 1 0 2 5, 0 1 3 5)')) AS zm_to_z;
+-- The same through the aggregate, one point per row (its own read path):
+-- the results must equal the one-value ones above.
+SELECT tdc_norm(ST_TDCDelaunay(g ORDER BY i)) AS agg_first_z
+FROM (VALUES (1, 'POINT Z(0 0 1)'::geometry), (2, 'POINT Z(0 0 9)'), (3, 'POINT Z(1 0 0)'), (4, 'POINT Z(0 1 0)')) v(i, g);
+SELECT tdc_norm(ST_TDCDelaunay(g)) AS agg_m_dropped
+FROM (VALUES ('POINT M(0 0 5)'::geometry), ('POINT M(1 0 5)'), ('POINT M(0 1 5)')) v(g);
+SELECT tdc_norm(ST_TDCDelaunay(g ORDER BY i)) AS agg_zm_to_z
+FROM (VALUES (1, 'POINT ZM(0 0 1 5)'::geometry), (2, 'POINT ZM(1 0 2 5)'), (3, 'POINT ZM(0 1 3 5)')) v(i, g);
+SELECT ST_SRID(ST_TDCDelaunay(g)) AS agg_srid, ST_NumGeometries(ST_TDCDelaunay(g)) AS agg_point_empty_skipped
+FROM (VALUES ('SRID=3857;POINT(0 0)'::geometry), ('SRID=3857;POINT EMPTY'), ('SRID=3857;POINT(1 0)'), ('SRID=3857;POINT(0 1)')) v(g);
 SELECT tdc_norm(ST_TDCDelaunayTriangles('MULTIPOINT Z(0 0 1, 1 0 2, 0 1 3)', 0, 1)) AS z_edges,
 	   tdc_norm(ST_TDCDelaunayTriangles('MULTIPOINT Z(0 0 1, 1 0 2, 0 1 3)', 0, 2)) AS z_tin,
 	   ST_AsText(ST_TDCDelaunayTriangles('MULTIPOINT Z(0 0 1, 1 1 2)')) AS z_empty;

@@ -43,6 +43,13 @@ SELECT ST_TDCDelaunayTriangles(ST_Collect(ST_MakePoint('NaN', 0), ST_MakePoint(1
 SELECT ST_TDCDelaunayTriangles(ST_Collect(ST_MakePoint(0, 'Infinity'), ST_MakePoint(1, 1)));
 SELECT ST_TDCDelaunayTriangles(ST_Collect(ST_MakePoint(0, 0, '-Infinity'), ST_MakePoint(1, 1, 1)));
 SELECT ST_TDCDelaunay(g) FROM (VALUES (ST_MakePoint(0, 0)), (ST_MakePoint('NaN', 'NaN'))) v(g);
+SELECT ST_TDCDelaunay(g) FROM (VALUES (ST_MakePoint(0, 0, 1)), (ST_MakePoint(1, 0, 'Infinity'))) v(g);
+SELECT ST_TDCDelaunay(g) FROM (VALUES (ST_MakePointM(0, 0, 1)), (ST_MakePointM(1, 'Infinity', 1))) v(g);
+-- an M that is not finite is dropped, not checked (as in a MULTIPOINT M)
+SELECT ST_NumGeometries(ST_TDCDelaunay(g)) AS m_nan_ignored
+FROM (VALUES (ST_MakePointM(0, 0, 'NaN')), (ST_MakePointM(1, 0, 1)), (ST_MakePointM(0, 1, 1))) v(g);
+-- mixed SRIDs are reported before a bad coordinate, as for any other value
+SELECT ST_TDCDelaunay(g) FROM (VALUES (ST_SetSRID(ST_MakePoint(0, 0), 4326)), (ST_MakePoint('NaN', 0))) v(g);
 -- out of the core's exact range
 SELECT ST_TDCDelaunayTriangles('MULTIPOINT(0 0, 1e200 0, 0 1)');
 

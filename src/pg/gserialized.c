@@ -419,6 +419,27 @@ tdc_pointbuf_append_buf(TdcPointBuf *dst, const TdcPointBuf *src,
  * ----------------------------------------------------------------
  */
 
+/* Store the one vertex at v of a point value (tdc_gser_append's fast path). */
+static void
+append_point(TdcPointBuf *buf, const GserWalk *w, int32 srid, const char *v)
+{
+	double		c[3];
+
+	tdc_pointbuf_check_meta(buf, srid, w->hasz, w->fname);
+	memcpy(c, v, (w->hasz ? 3 : 2) * sizeof(double));
+	if (!isfinite(c[0]) || !isfinite(c[1]) || (w->hasz && !isfinite(c[2])))
+		ereport(ERROR,
+				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
+				 errmsg("%s: input has a non-finite coordinate (NaN or Infinity)",
+						w->fname)));
+	tdc_pointbuf_reserve(buf, 1, w->fname);
+	buf->xy[2 * buf->n] = c[0];
+	buf->xy[2 * buf->n + 1] = c[1];
+	if (w->hasz)
+		buf->z[buf->n] = c[2];
+	buf->n++;
+}
+
 /*
  * Append the vertices of one geometry value to buf.  The value must be
  * detoasted but may keep a short (1-byte) header: small values such as
@@ -469,6 +490,18 @@ tdc_gser_append(TdcPointBuf *buf, const struct varlena *geom,
 		if ((size_t) (w.end - p) < boxbytes)
 			corrupt(&w, p, "truncated bounding box");
 		p += boxbytes;
+	}
+
+	/*
+	 * A lone point, one row of a point table, is by far the commonest input:
+	 * its exact length already proves what the walk would check, so it is
+	 * stored directly (a tenth of the time of reading a point table).
+	 */
+	if (w.end - p == 8 + w.ndims * (long) sizeof(double) &&
+		read_u32(p) == G_POINT && read_u32(p + 4) == 1)
+	{
+		append_point(buf, &w, srid, p + 8);
+		return;
 	}
 
 	/* pass 1: validate and count */
