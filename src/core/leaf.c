@@ -69,7 +69,7 @@ swap_pt(double *xy, uint32_t *idx, size_t i, size_t j)
  * rank r by the axis key, smaller-or-equal ones before it, greater-or-equal
  * ones after (Hoare 1961).
  */
-static void
+static inline __attribute__((always_inline)) void
 select_rank(double *xy, uint32_t *idx, size_t a, size_t b, size_t r, int axis)
 {
 	size_t		k = a + r;
@@ -255,7 +255,10 @@ gs_recurse(leaf_ctx *c, tdc_freelist *fl, uint32_t lo, uint32_t n, int axis,
 
 	/* median split; duplicates of the median stay on its left */
 	med = lo + n / 2;
-	select_rank(c->xy, c->idx, lo, hi, n / 2, axis);
+	if (axis == 0)
+		select_rank(c->xy, c->idx, lo, hi, n / 2, 0);
+	else
+		select_rank(c->xy, c->idx, lo, hi, n / 2, 1);
 	mid = med + 1;
 	for (uint32_t i = mid; i < hi; i++)
 		if (same_point(c->xy, i, med))
