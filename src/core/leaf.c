@@ -14,10 +14,11 @@
  * axis of their split.
  *
  * Inside a cell, which holds a handful of points unless the data cluster,
- * the alternation goes on by median along the axis key (x, y) or (y, -x):
- * the median of a few samples when that splits well enough (sample_split),
- * else the exact one by quickselect; the halves are triangulated along the
- * other axis and merged along this one, down to at most three points.
+ * the alternation goes on along the axis key (x, y) or (y, -x), cutting at
+ * the middle of the range's extent when that splits well enough
+ * (range_split), else at the exact median by quickselect; the halves are
+ * triangulated along the other axis and merged along this one, down to at
+ * most three points.
  *
  * Duplicates.  Exact duplicates have equal keys, and a split keeps equal
  * keys together, so they end up in one base case of at most three points
@@ -35,8 +36,7 @@
  */
 #include "job.h"
 
-#define SPLIT_SAMPLE_MIN	12	/* below, quickselect's exact median is cheap */
-#define SPLIT_SAMPLES		5	/* odd */
+#define SPLIT_MIN		12		/* below, quickselect's exact median is cheap */
 
 typedef struct leaf_ctx
 {
@@ -121,55 +121,48 @@ select_rank(double *xy, uint32_t *idx, size_t a, size_t b, size_t r, int axis)
 }
 
 /*
- * Split [lo, hi) by the median key of a few evenly spaced samples: one
- * partition pass instead of quickselect's expected three or so.  Clustered
- * data leave cells of hundreds or thousands of points, where the exact
- * median took a fifth of the engine's time.  The halves need only be
- * separated along the axis, not equal: balance bounds the recursion's cost
- * and depth, so a split leaving less than an eighth of the points on a side
- * is refused (false) and the caller takes the exact median instead, which
- * keeps the worst case O(n log n).  Keys <= pivot go left, > pivot right,
- * so equal keys, exact duplicates among them, stay on one side.  On true,
+ * Split [lo, hi) at the middle of its extent along the axis: two passes (the
+ * extent, then one partition) instead of quickselect's expected three or so
+ * for the exact median.  Clustered data leave cells of tens to thousands of
+ * points, where the exact median took a fifth of the engine's time.  The
+ * halves need only be separated along the axis, not equal: balance bounds
+ * the recursion's cost and depth, so a split leaving less than an eighth of
+ * the points on a side is refused (false) and the caller takes the exact
+ * median instead, which keeps the worst case O(n log n).  The cut depends on
+ * the set of points only, never on their positions, so neither does the
+ * recursion, and the output stays the same for any input order.  Points
+ * whose first coordinate is at most the cut go left: every key on the left
+ * is below every key on the right, and duplicates stay together.  On true,
  * *mid is the first position of the right half.
  */
 static bool
-sample_split(leaf_ctx *c, uint32_t lo, uint32_t hi, int axis, uint32_t *mid)
+range_split(leaf_ctx *c, uint32_t lo, uint32_t hi, int axis, uint32_t *mid)
 {
 	double	   *xy = c->xy;
 	uint32_t	n = hi - lo;
-	double		smp[SPLIT_SAMPLES][2];
-	double		p[2];
+	double		mn = xy[2 * (size_t) lo + axis],
+				mx = mn,
+				cut;
 	size_t		i,
 				j;
 
-	for (int k = 0; k < SPLIT_SAMPLES; k++)
+	for (i = lo + 1; i < hi; i++)
 	{
-		size_t		at = lo + ((size_t) (2 * k + 1) * n) / (2 * SPLIT_SAMPLES);
+		double		v = xy[2 * i + axis];
 
-		smp[k][0] = xy[2 * at];
-		smp[k][1] = xy[2 * at + 1];
-		for (int m = k; m > 0 && tdc_key_less(smp[m], smp[m - 1], axis); m--)
-		{
-			double		t0 = smp[m][0],
-						t1 = smp[m][1];
-
-			smp[m][0] = smp[m - 1][0];
-			smp[m][1] = smp[m - 1][1];
-			smp[m - 1][0] = t0;
-			smp[m - 1][1] = t1;
-		}
+		mn = v < mn ? v : mn;
+		mx = v > mx ? v : mx;
 	}
-	p[0] = smp[SPLIT_SAMPLES / 2][0];
-	p[1] = smp[SPLIT_SAMPLES / 2][1];
+	cut = mn + (mx - mn) / 2;	/* coordinates are below 1e60: no overflow */
 
-	/* afterwards [lo, i) <= p < [i, hi) */
+	/* afterwards [lo, i) <= cut < [i, hi) */
 	i = lo;
 	j = hi;
 	for (;;)
 	{
-		while (i < j && !tdc_key_less(p, &xy[2 * i], axis))
+		while (i < j && xy[2 * i + axis] <= cut)
 			i++;
-		while (i < j && tdc_key_less(p, &xy[2 * (j - 1)], axis))
+		while (i < j && xy[2 * (j - 1) + axis] > cut)
 			j--;
 		if (i >= j)
 			break;
@@ -320,9 +313,9 @@ gs_recurse(leaf_ctx *c, tdc_freelist *fl, uint32_t lo, uint32_t n, int axis,
 		return;
 	}
 
-	if (n >= SPLIT_SAMPLE_MIN &&
-		(axis == 0 ? sample_split(c, lo, hi, 0, &mid) :
-		 sample_split(c, lo, hi, 1, &mid)))
+	if (n >= SPLIT_MIN &&
+		(axis == 0 ? range_split(c, lo, hi, 0, &mid) :
+		 range_split(c, lo, hi, 1, &mid)))
 		goto split;
 
 	/* median split; duplicates of the median stay on its left */
