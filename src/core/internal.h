@@ -80,13 +80,6 @@ typedef struct tdc_mesh
 extern void *tdc_big_alloc(size_t size);
 extern void tdc_big_free(void *p);
 
-/*
- * Map in the pages of [p, p + len) of such an array in one call, for a task
- * about to write all of them: cheaper than a page fault per page.  Only a
- * hint; on a kernel without it the writes fault the pages in as usual.
- */
-extern void tdc_big_prefault(void *p, size_t len);
-
 /* Thread pool (pool.c): a parallel-for on which the calling thread helps. */
 typedef struct tdc_pool tdc_pool;
 typedef void (*tdc_task_fn) (void *arg, size_t i, int worker);

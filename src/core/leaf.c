@@ -413,7 +413,7 @@ tdc_triangulate_leaf(tdc_job *job, size_t k, tdc_sub *out)
 	fl.limit = 3 * hi;
 
 	/* the subset writes every one of its slots, at the latest below */
-	tdc_big_prefault(job->he + 6 * (size_t) lo, 6 * (size_t) (hi - lo) * sizeof(tdc_he));
+	tdc_prefault(job->he + 6 * (size_t) lo, 6 * (size_t) (hi - lo) * sizeof(tdc_he));
 
 	/* the same first axis as the layout in subdivide.c */
 	rect_recurse(&c, &fl, &job->node_rect[k], job->d & 1, lo, out);

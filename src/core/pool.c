@@ -50,15 +50,19 @@ tdc_big_free(void *ptr)
 }
 
 void
-tdc_big_prefault(void *ptr, size_t len)
+tdc_prefault(void *ptr, size_t len)
 {
 #ifdef MADV_POPULATE_WRITE
-	uintptr_t	page = (uintptr_t) sysconf(_SC_PAGESIZE);
+	long		ps = sysconf(_SC_PAGESIZE);
+	uintptr_t	page = ps > 0 ? (uintptr_t) ps : 4096;
 	uintptr_t	a = (uintptr_t) ptr & ~(page - 1);
 	uintptr_t	b = ((uintptr_t) ptr + len + page - 1) & ~(page - 1);
 
 	if (len > 0)
 		(void) madvise((void *) a, b - a, MADV_POPULATE_WRITE);
+#else
+	(void) ptr;
+	(void) len;
 #endif
 }
 

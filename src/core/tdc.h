@@ -127,6 +127,16 @@ typedef void (*tdc_emit_fn) (void *arg, size_t first, size_t count,
 extern int	tdc_job_emit_start(tdc_job *job, tdc_emit_fn emit, void *arg,
 							   char *err, size_t errlen);
 
+/*
+ * Map in the pages of [p, p + len) of freshly allocated memory in one call,
+ * for a caller about to write all of it: cheaper than a page fault per page
+ * (Linux 5.14's MADV_POPULATE_WRITE).  An emit callback writing a big result
+ * may call it for its range.  Only a hint, safe from any thread and on pages
+ * shared with other writers (their contents are not touched); without the
+ * kernel's support the writes fault the pages in as usual.
+ */
+extern void tdc_prefault(void *p, size_t len);
+
 /* Convenience: start + wait forever. */
 extern int	tdc_triangulate(const double *xy, size_t n, const tdc_options *opt,
 							tdc_job **job, char *err, size_t errlen);
