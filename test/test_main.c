@@ -25,6 +25,8 @@ main(int argc, char **argv)
 	printf("predicates: %ld passed, %ld failed so far\n", tdc_test_passed, tdc_test_failed);
 	test_engine();
 	printf("engine: %ld passed, %ld failed so far\n", tdc_test_passed, tdc_test_failed);
+	test_memory();
+	printf("memory: %ld passed, %ld failed so far\n", tdc_test_passed, tdc_test_failed);
 	test_conformance();
 	printf("%ld passed, %ld failed\n", tdc_test_passed, tdc_test_failed);
 	return tdc_test_failed ? 1 : 0;

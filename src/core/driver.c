@@ -43,9 +43,8 @@
 #define LEAF_TARGET		65536	/* largest subset the auto depth allows */
 #define CELL_TARGET		4.0		/* points per grid cell the auto grid aims at */
 #define MAX_AUTO_GRID	8192
-#define MIN_PARALLEL	20000	/* below this one subset is fastest */
+#define MIN_PARALLEL	TDC_INLINE_MAX	/* below this one subset is fastest */
 #define CHECK_CHUNK		65536
-#define MAX_LEVELS		24
 
 static double
 now_sec(void)
@@ -78,18 +77,140 @@ tdc_options_init(tdc_options *opt)
 	memset(opt, 0, sizeof(*opt));
 }
 
-size_t
-tdc_estimate_memory(size_t n)
-{
-	return n * (16 + 4 + 4 + 72 + 24) + (n / 16) * 24 + ((size_t) 1 << 20);
-}
-
 static int
 online_cpus(void)
 {
 	long		c = sysconf(_SC_NPROCESSORS_ONLN);
 
 	return c < 1 ? 1 : (c > 256 ? 256 : (int) c);
+}
+
+/*
+ * The plan of a job (threads, grid, levels) is a function of n and the
+ * options alone, so that tdc_estimate_memory() can size exactly what a job
+ * will allocate before it starts.  The driver plans with the number of
+ * points that reach the subdivision (fewer after a tolerance pass), and each
+ * figure is non-decreasing in n, so the estimate for n bounds it.
+ */
+
+/* Below TDC_INLINE_MAX points a job runs on the caller's thread. */
+static bool
+plan_inline(size_t n)
+{
+	return n < TDC_INLINE_MAX;
+}
+
+static int
+plan_threads(size_t n, const tdc_options *o)
+{
+	if (plan_inline(n))
+		return 1;
+	return o->threads > 0 ? o->threads : online_cpus();
+}
+
+/*
+ * s of the s x s grid.  A grid with more cells than about two per point
+ * separates nothing more and only costs memory (a user's grid_size of 65536
+ * would be 16 GB of counters), so a requested size is capped by n.
+ */
+static int
+plan_grid(size_t n, const tdc_options *o)
+{
+	int			cap = (int) ceil(sqrt(2.0 * (double) n));
+	int			s;
+
+	if (o->grid_size > 0)
+		s = o->grid_size < cap ? o->grid_size : cap;
+	else
+	{
+		s = (int) ceil(sqrt((double) n / CELL_TARGET));
+		s = s > MAX_AUTO_GRID ? MAX_AUTO_GRID : s;
+	}
+	return s < 1 ? 1 : s;
+}
+
+static int
+plan_levels(size_t n, const tdc_options *o, int threads)
+{
+	int			d = 0;
+
+	if (o->levels > 0)
+		d = o->levels;
+	else if (o->levels == 0 && n >= MIN_PARALLEL)
+	{
+		/* enough subsets to balance the threads, none larger than the target */
+		size_t		leaves = (size_t) threads * 8;
+
+		while (leaves * LEAF_TARGET < n)
+			leaves *= 2;
+		while (((size_t) 1 << d) < leaves)
+			d++;
+	}
+	if (d > TDC_MAX_LEVELS)
+		d = TDC_MAX_LEVELS;
+	/* no more levels than halvings of the input */
+	while (d > 0 && ((size_t) 1 << d) > n)
+		d--;
+	return d;
+}
+
+/*
+ * Every allocation of a job of n points, at the peak of each phase; the
+ * largest is the estimate.  The phases and what is alive in each:
+ *
+ *	all		xy 16, idx 4, site_of 4 bytes per point; tol_to 4 with a
+ *			tolerance; the tree (2^(d+1) nodes, d <= log2 n); the prefix sums
+ *			((s+1)^2 counters) from step 1 on
+ *	tolerance	its sort records and hash table (sites.c)
+ *	step 1	the survivors' copy (20 per point, with a tolerance), the cell of
+ *			each point (4), one histogram of s^2 counters per slice (at most
+ *			TDC_GRID_SLICES, whatever the thread count) and the cell starts
+ *	steps 2-3	the mesh (72 per point) and the outer-face bitmap
+ *	results	the input map (4 per point, built on request) and emit.c's
+ *			triangle list (12 per triangle plus a chunk per range)
+ *
+ * Threads add their stacks' touched pages and malloc arenas; a generous
+ * 256 KB each is counted.
+ */
+size_t
+tdc_estimate_memory(size_t n, const tdc_options *opt)
+{
+	tdc_options o;
+	int			threads,
+				s,
+				d;
+	size_t		cells,
+				prefix,
+				tree,
+				common,
+				tol,
+				step1,
+				mesh,
+				results,
+				peak;
+
+	if (opt)
+		o = *opt;
+	else
+		tdc_options_init(&o);
+	threads = plan_threads(n, &o);
+	s = plan_grid(n, &o);
+	d = plan_levels(n, &o, threads);
+	cells = (size_t) s * s;
+	prefix = ((size_t) s + 1) * ((size_t) s + 1) * sizeof(uint32_t);
+	tree = ((size_t) 2 << d) * (sizeof(tdc_rect) + 1 + 2 * sizeof(uint32_t) + sizeof(tdc_sub));
+	common = n * (16 + 4 + 4) + tree + (o.tolerance > 0 ? n * 4 : 0);
+
+	tol = o.tolerance > 0 ? tdc_tolerance_memory(n) : 0;
+	step1 = (o.tolerance > 0 ? n * 20 : 0) + n * 4 +
+		((size_t) (threads < TDC_GRID_SLICES ? threads : TDC_GRID_SLICES) + 1) * cells * sizeof(uint32_t) +
+		prefix;
+	mesh = prefix + n * 6 * sizeof(tdc_he) + (n * 6 / 64 + 2) * sizeof(uint64_t);
+	results = n * 4 + tdc_emit_memory(n, threads);
+
+	peak = tol > step1 ? tol : step1;
+	peak = peak > mesh + results ? peak : mesh + results;
+	return common + peak + (size_t) threads * (256 << 10) + ((size_t) 1 << 20);
 }
 
 /* --- copy and validation --- */
@@ -282,31 +403,6 @@ count_result(tdc_job *job)
 }
 
 static int
-choose_levels(const tdc_job *job)
-{
-	int			d = 0;
-
-	if (job->opt.levels > 0)
-		d = job->opt.levels;
-	else if (job->opt.levels == 0 && job->nin >= MIN_PARALLEL)
-	{
-		/* enough subsets to balance the threads, none larger than the target */
-		size_t		leaves = (size_t) job->threads * 8;
-
-		while (leaves * LEAF_TARGET < job->nin)
-			leaves *= 2;
-		while (((size_t) 1 << d) < leaves)
-			d++;
-	}
-	if (d > MAX_LEVELS)
-		d = MAX_LEVELS;
-	/* no more levels than halvings of the input */
-	while (d > 0 && ((size_t) 1 << d) > job->nin)
-		d--;
-	return d;
-}
-
-static int
 run(tdc_job *job)
 {
 	double		t0 = now_sec(),
@@ -358,14 +454,8 @@ run(tdc_job *job)
 
 	/* step 1 */
 	t = now_sec();
-	job->d = choose_levels(job);
-	if (job->opt.grid_size > 0)
-		job->s = job->opt.grid_size;
-	else
-	{
-		job->s = (int) ceil(sqrt((double) job->nin / CELL_TARGET));
-		job->s = job->s < 1 ? 1 : (job->s > MAX_AUTO_GRID ? MAX_AUTO_GRID : job->s);
-	}
+	job->d = plan_levels(job->nin, &job->opt, job->threads);
+	job->s = plan_grid(job->nin, &job->opt);
 	for (int a = 0; a < 2; a++)
 	{
 		double		extent = job->bmax[a] - job->bmin[a];
@@ -423,12 +513,10 @@ run(tdc_job *job)
 	return TDC_OK;
 }
 
-static void *
-driver_main(void *arg)
+/* Publish the status of the phase that just ended; the pool goes first. */
+static void
+finish_phase(tdc_job *job, int rc)
 {
-	tdc_job    *job = arg;
-	int			rc = job->phase(job);
-
 	tdc_pool_destroy(job->pool);
 	job->pool = NULL;
 
@@ -448,6 +536,14 @@ driver_main(void *arg)
 	job->finished = true;
 	pthread_cond_broadcast(&job->done);
 	pthread_mutex_unlock(&job->lock);
+}
+
+static void *
+driver_main(void *arg)
+{
+	tdc_job    *job = arg;
+
+	finish_phase(job, job->phase(job));
 	return NULL;
 }
 
@@ -537,15 +633,15 @@ tdc_job_start(const double *xy, size_t n, const tdc_options *opt, tdc_job **out,
 		FAIL(TDC_EINVAL, "threads must be between 0 and 1024, not %d", o.threads);
 	if (o.grid_size < 0 || o.grid_size > 65536)
 		FAIL(TDC_EINVAL, "grid size must be between 0 and 65536, not %d", o.grid_size);
-	if (o.levels < -1 || o.levels > MAX_LEVELS)
-		FAIL(TDC_EINVAL, "levels must be between -1 and %d, not %d", MAX_LEVELS, o.levels);
+	if (o.levels < -1 || o.levels > TDC_MAX_LEVELS)
+		FAIL(TDC_EINVAL, "levels must be between -1 and %d, not %d", TDC_MAX_LEVELS, o.levels);
 	if (!(o.tolerance >= 0) || isinf(o.tolerance))
 		FAIL(TDC_EINVAL, "tolerance must be a finite number >= 0, not %g", o.tolerance);
 	if (n > 0 && xy == NULL)
 		FAIL(TDC_EINVAL, "no coordinates given for %zu points", n);
-	if (o.max_memory > 0 && tdc_estimate_memory(n) > o.max_memory)
+	if (o.max_memory > 0 && tdc_estimate_memory(n, &o) > o.max_memory)
 		FAIL(TDC_EMEMLIMIT, "triangulating %zu points needs about %zu MB, more than the limit of %zu MB",
-			 n, tdc_estimate_memory(n) >> 20, o.max_memory >> 20);
+			 n, tdc_estimate_memory(n, &o) >> 20, o.max_memory >> 20);
 
 	job = calloc(1, sizeof(tdc_job));
 	if (job == NULL)
@@ -553,7 +649,8 @@ tdc_job_start(const double *xy, size_t n, const tdc_options *opt, tdc_job **out,
 	job->opt = o;
 	job->n = n;
 	job->input = xy;
-	job->threads = o.threads ? o.threads : online_cpus();
+	job->inline_run = plan_inline(n);
+	job->threads = plan_threads(n, &o);
 	atomic_init(&job->cancel, 0);
 	atomic_init(&job->failed, 0);
 	pthread_mutex_init(&job->lock, NULL);
@@ -563,6 +660,12 @@ tdc_job_start(const double *xy, size_t n, const tdc_options *opt, tdc_job **out,
 	pthread_condattr_destroy(&ca);
 
 	job->phase = run;
+	if (job->inline_run)
+	{
+		finish_phase(job, run(job));
+		*out = job;
+		return TDC_OK;
+	}
 	rc = start_driver(job);
 	if (rc != 0)
 	{
@@ -609,6 +712,11 @@ tdc_job_emit_start(tdc_job *job, tdc_emit_fn emit, void *arg, char *err,
 	job->phase = tdc_emit_phase;
 	job->finished = false;
 	job->status = TDC_RUNNING;
+	if (job->inline_run)
+	{
+		finish_phase(job, tdc_emit_phase(job));
+		return TDC_OK;
+	}
 	rc = start_driver(job);
 	if (rc != 0)
 	{

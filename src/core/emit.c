@@ -158,6 +158,27 @@ plan_free(emit_plan *p)
 	tdc_big_free(p->tri);
 }
 
+/* Ranges of half-edges to collect from: several per thread, none tiny. */
+static size_t
+plan_ranges(size_t nhe, int threads)
+{
+	size_t		nranges = (size_t) threads * RANGES_PER_THREAD;
+
+	if (nranges > nhe / RANGE_MIN)
+		nranges = nhe / RANGE_MIN;
+	return nranges < 1 ? 1 : nranges;
+}
+
+size_t
+tdc_emit_memory(size_t n, int threads)
+{
+	size_t		nranges = plan_ranges(n * 6, threads),
+				nchunks = 2 * n / CHUNK + nranges;
+
+	return nchunks * (3 * CHUNK * sizeof(uint32_t) + sizeof(uint32_t)) +
+		nranges * (sizeof(size_t) + sizeof(uint32_t)) + 2 * sizeof(size_t);
+}
+
 /*
  * Runs on the driver thread.  The triangle count must come out as the one
  * count_result() found; anything else means the mesh is not what the
@@ -180,11 +201,7 @@ tdc_emit_phase(tdc_job *job)
 	memset(&p, 0, sizeof(p));
 	p.job = job;
 	p.nhe = job->nin * 6;
-	p.nranges = (size_t) job->threads * RANGES_PER_THREAD;
-	if (p.nranges > p.nhe / RANGE_MIN)
-		p.nranges = p.nhe / RANGE_MIN;
-	if (p.nranges < 1)
-		p.nranges = 1;
+	p.nranges = plan_ranges(p.nhe, job->threads);
 	p.nchunks = job->ntri / CHUNK + p.nranges;
 	atomic_init(&p.claimed, 0);
 	p.first = calloc(p.nranges + 1, sizeof(size_t));

@@ -71,11 +71,12 @@ typedef struct tdc_mesh
 } tdc_mesh;
 
 /*
- * Arrays that grow with the input (pool.c): mapped and unmapped directly, so
- * their memory goes back to the system as soon as a job is freed, whatever
- * malloc's thresholds have drifted to in a long-lived host process (a
- * PostgreSQL backend).  The memory comes zeroed.  NULL on failure;
- * tdc_big_free(NULL) does nothing.
+ * Arrays that grow with the input (pool.c): big ones are mapped and unmapped
+ * directly, so their memory goes back to the system as soon as a job is
+ * freed, whatever malloc's thresholds have drifted to in a long-lived host
+ * process (a PostgreSQL backend); small ones come from malloc.  The memory
+ * comes zeroed and 64-aligned.  NULL on failure; tdc_big_free(NULL) does
+ * nothing.
  */
 extern void *tdc_big_alloc(size_t size);
 extern void tdc_big_free(void *p);

@@ -68,6 +68,7 @@ struct tdc_job
 	void	   *emit_arg;
 
 	/* lifecycle */
+	bool		inline_run;		/* phases run on the caller's thread (TDC_INLINE_MAX) */
 	int			(*phase) (struct tdc_job *job);	/* what the driver thread runs */
 	pthread_t	driver;
 	bool		driver_started;
@@ -117,6 +118,17 @@ extern int	tdc_rect_split_inner(const tdc_job *job, const tdc_rect *r, int axis,
 
 /* sites.c */
 extern int	tdc_tolerance_filter(tdc_job *job);
+extern size_t tdc_tolerance_memory(size_t n);
+
+/* emit.c: bytes tdc_emit_phase allocates for up to 2n triangles. */
+extern size_t tdc_emit_memory(size_t n, int threads);
+
+/*
+ * subdivide.c counts the cells in at most this many slices, each with its
+ * own s x s histogram: enough to keep the counting parallel, and a bound
+ * on the grid's memory that does not grow with the thread count.
+ */
+#define TDC_GRID_SLICES		8
 
 /*
  * leaf.c: triangulate subset k (a leaf of the tree) down to its cells;

@@ -15,38 +15,73 @@
  * for the host process (a PostgreSQL backend).
  */
 #include <stdlib.h>
+#include <string.h>
 #include <sys/mman.h>
 #include <unistd.h>
 
 #include "internal.h"
 
-/* The mapping's size is kept in front of the block, which stays 64-aligned. */
+/*
+ * The block's size and origin are kept in a header in front of it, which
+ * keeps the block 64-aligned.  Blocks below BIG_MAP_MIN come from malloc:
+ * a small job's arrays are cheaper to take from the heap than to map, fault
+ * in and unmap.  The bound stays low because a host's malloc may keep what
+ * it is given back (a backend's thresholds rise after big frees), and what
+ * it keeps must not add up with the next phase's mappings.
+ */
 #define BIG_HEADER	64
+#define BIG_MAP_MIN	((size_t) 256 << 10)
+
+typedef struct big_header
+{
+	size_t		total;
+	void	   *heap;			/* malloc'd block to free, or NULL: mapped */
+} big_header;
 
 void *
 tdc_big_alloc(size_t size)
 {
 	size_t		total = size + BIG_HEADER;
 	char	   *p;
+	big_header *h;
 
 	if (total < size)
 		return NULL;
-	p = mmap(NULL, total, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
-	if (p == MAP_FAILED)
-		return NULL;
-	*(size_t *) p = total;
+	if (total < BIG_MAP_MIN)
+	{
+		char	   *raw = malloc(total + BIG_HEADER);
+
+		if (raw == NULL)
+			return NULL;
+		p = (char *) (((uintptr_t) raw + BIG_HEADER - 1) & ~(uintptr_t) (BIG_HEADER - 1));
+		memset(p, 0, total);
+		h = (big_header *) p;
+		h->heap = raw;
+	}
+	else
+	{
+		p = mmap(NULL, total, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+		if (p == MAP_FAILED)
+			return NULL;
+		h = (big_header *) p;
+		h->heap = NULL;
+	}
+	h->total = total;
 	return p + BIG_HEADER;
 }
 
 void
 tdc_big_free(void *ptr)
 {
-	char	   *p;
+	big_header *h;
 
 	if (ptr == NULL)
 		return;
-	p = (char *) ptr - BIG_HEADER;
-	munmap(p, *(size_t *) p);
+	h = (big_header *) ((char *) ptr - BIG_HEADER);
+	if (h->heap)
+		free(h->heap);
+	else
+		munmap(h, h->total);
 }
 
 void

@@ -158,15 +158,16 @@ tdc_tolerance_filter(tdc_job *job)
 
 	while (cap < 2 * n)
 		cap <<= 1;
-	r = malloc(n * sizeof(rec));
-	chain = malloc(n * sizeof(uint32_t));
-	t.kx = malloc(cap * sizeof(int64_t));
-	t.ky = malloc(cap * sizeof(int64_t));
-	t.head = malloc(cap * sizeof(uint32_t));
+	/* mapped, not malloc'd: a backend's raised malloc thresholds would keep them */
+	r = tdc_big_alloc(n * sizeof(rec));
+	chain = tdc_big_alloc(n * sizeof(uint32_t));
+	t.kx = tdc_big_alloc(cap * sizeof(int64_t));
+	t.ky = tdc_big_alloc(cap * sizeof(int64_t));
+	t.head = tdc_big_alloc(cap * sizeof(uint32_t));
 	t.mask = cap - 1;
 	if (!r || !chain || !t.kx || !t.ky || !t.head)
 	{
-		free(r), free(chain), free(t.kx), free(t.ky), free(t.head);
+		tdc_big_free(r), tdc_big_free(chain), tdc_big_free(t.kx), tdc_big_free(t.ky), tdc_big_free(t.head);
 		return TDC_ENOMEM;
 	}
 	memset(t.head, 0xff, cap * sizeof(uint32_t));
@@ -229,6 +230,17 @@ tdc_tolerance_filter(tdc_job *job)
 	}
 	job->nin = kept;
 done:
-	free(r), free(chain), free(t.kx), free(t.ky), free(t.head);
+	tdc_big_free(r), tdc_big_free(chain), tdc_big_free(t.kx), tdc_big_free(t.ky), tdc_big_free(t.head);
 	return 0;
+}
+
+/* Bytes tdc_tolerance_filter allocates for n points, at most. */
+size_t
+tdc_tolerance_memory(size_t n)
+{
+	size_t		cap = 16;
+
+	while (cap < 2 * n)
+		cap <<= 1;
+	return n * (sizeof(rec) + sizeof(uint32_t)) + cap * (2 * sizeof(int64_t) + sizeof(uint32_t));
 }

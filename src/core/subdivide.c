@@ -282,7 +282,7 @@ tdc_subdivide(tdc_job *job)
 
 	memset(&ga, 0, sizeof(ga));
 	ga.job = job;
-	ga.nslices = T;
+	ga.nslices = T < TDC_GRID_SLICES ? T : TDC_GRID_SLICES;
 	ga.ncells = (size_t) job->s * job->s;
 	ga.n = job->nin;
 	ga.src = job->input;
@@ -301,13 +301,13 @@ tdc_subdivide(tdc_job *job)
 	}
 
 	ga.cell = tdc_big_alloc(ga.n * sizeof(uint32_t) + 4);
-	ga.hist = tdc_big_alloc((size_t) T * ga.ncells * sizeof(uint32_t));
+	ga.hist = tdc_big_alloc((size_t) ga.nslices * ga.ncells * sizeof(uint32_t));
 	ga.cell_start = tdc_big_alloc(ga.ncells * sizeof(uint32_t));
 	job->prefix = tdc_big_alloc(w * w * sizeof(uint32_t));
 	if (!ga.cell || !ga.hist || !ga.cell_start || !job->prefix)
 		goto oom;
 
-	tdc_pool_for(job->pool, T, cell_task, &ga);
+	tdc_pool_for(job->pool, ga.nslices, cell_task, &ga);
 	if (atomic_load(&job->cancel))
 		goto done;
 
@@ -323,7 +323,7 @@ tdc_subdivide(tdc_job *job)
 		{
 			uint32_t	cnt = 0;
 
-			for (int t = 0; t < T; t++)
+			for (int t = 0; t < ga.nslices; t++)
 				cnt += ga.hist[t * ga.ncells + r * job->s + c];
 			rowsum += cnt;
 			job->prefix[(r + 1) * w + c + 1] = job->prefix[r * w + c + 1] + rowsum;
@@ -349,7 +349,7 @@ tdc_subdivide(tdc_job *job)
 	{
 		uint32_t	p = ga.cell_start[c];
 
-		for (int t = 0; t < T; t++)
+		for (int t = 0; t < ga.nslices; t++)
 		{
 			uint32_t	cnt = ga.hist[t * ga.ncells + c];
 
@@ -357,7 +357,7 @@ tdc_subdivide(tdc_job *job)
 			p += cnt;
 		}
 	}
-	tdc_pool_for(job->pool, T, scatter_task, &ga);
+	tdc_pool_for(job->pool, ga.nslices, scatter_task, &ga);
 	goto done;
 
 oom:

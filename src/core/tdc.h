@@ -38,6 +38,18 @@
  */
 #define TDC_MAX_POINTS		((size_t) 700000000)
 
+/* Deepest subdivision: options.levels is within [-1, TDC_MAX_LEVELS]. */
+#define TDC_MAX_LEVELS		24
+
+/*
+ * Jobs of fewer points run on the caller's thread inside tdc_job_start(),
+ * with no thread and no mapping: they finish in milliseconds, where starting
+ * threads would cost more than the triangulation.  They are not cancellable
+ * (tdc_job_cancel has nothing left to stop), and give the same triangles as
+ * a threaded job would.
+ */
+#define TDC_INLINE_MAX		20000
+
 /*
  * Coordinates must be 0 or of magnitude within [TDC_COORD_MIN, TDC_COORD_MAX];
  * inside that range every predicate is evaluated exactly.
@@ -73,8 +85,13 @@ typedef struct tdc_iter
 
 extern void tdc_options_init(tdc_options *opt);
 
-/* Bytes the engine will allocate for n input points (for memory caps). */
-extern size_t tdc_estimate_memory(size_t n);
+/*
+ * Bytes a job of n input points with these options (NULL: the defaults)
+ * allocates at most, counting every array, the grid, the tree, the result
+ * hand-over, the input map and the threads: what options.max_memory is
+ * checked against.
+ */
+extern size_t tdc_estimate_memory(size_t n, const tdc_options *opt);
 
 /*
  * Start triangulating n points given as interleaved x,y doubles.  The workers

@@ -148,11 +148,19 @@ run_reset_callback(void *arg)
 static int
 effective_threads(void)
 {
-	long		ncpu = sysconf(_SC_NPROCESSORS_ONLN);
-	int			cpus = ncpu > 0 ? (int) Min(ncpu, 1024) : 1;
-	int			ceiling = tdc_guc_max_threads > 0 ? tdc_guc_max_threads : cpus;
-	int			t = tdc_guc_threads > 0 ? tdc_guc_threads : cpus;
+	/* sysconf reads /sys on every call: once per backend is enough */
+	static int	cpus = 0;
+	int			ceiling,
+				t;
 
+	if (cpus == 0)
+	{
+		long		ncpu = sysconf(_SC_NPROCESSORS_ONLN);
+
+		cpus = ncpu > 0 ? (int) Min(ncpu, 1024) : 1;
+	}
+	ceiling = tdc_guc_max_threads > 0 ? tdc_guc_max_threads : cpus;
+	t = tdc_guc_threads > 0 ? tdc_guc_threads : cpus;
 	return Min(t, ceiling);
 }
 
@@ -271,7 +279,7 @@ tdc_run(const TdcPointBuf *buf, double tolerance, uint64 result_bytes,
 	opt.tolerance = tolerance;
 	if (limit > 0)
 	{
-		uint64		engine = tdc_estimate_memory((size_t) buf->n);
+		uint64		engine = tdc_estimate_memory((size_t) buf->n, &opt);
 		uint64		have = tdc_pointbuf_bytes(buf) + result_bytes;
 
 		if (have + engine > limit)
