@@ -182,6 +182,7 @@ main(int argc, char **argv)
 	char		err[512];
 
 	tdc_options_init(&opt);
+	opt.times = 1;
 	for (int i = 1; i < argc; i++)
 	{
 		const char *a = argv[i];

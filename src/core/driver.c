@@ -45,6 +45,8 @@
 #define MAX_AUTO_GRID	8192
 #define MIN_PARALLEL	TDC_INLINE_MAX	/* below this one subset is fastest */
 #define CHECK_CHUNK		65536
+#define EMIT_INLINE_BATCH	256	/* triangles per callback of a small job */
+#define NO_GRID_MAX		128	/* below this the auto grid is one cell */
 
 static double
 now_sec(void)
@@ -53,6 +55,13 @@ now_sec(void)
 
 	clock_gettime(CLOCK_MONOTONIC, &ts);
 	return ts.tv_sec + ts.tv_nsec * 1e-9;
+}
+
+/* Phase times cost a clock read each: only when asked for (options.times). */
+static double
+job_clock(const tdc_job *job)
+{
+	return job->opt.times ? now_sec() : 0;
 }
 
 void
@@ -121,6 +130,8 @@ plan_grid(size_t n, const tdc_options *o)
 
 	if (o->grid_size > 0)
 		s = o->grid_size < cap ? o->grid_size : cap;
+	else if (n < NO_GRID_MAX)
+		s = 1;					/* a few points: sorting them beats binning */
 	else
 	{
 		s = (int) ceil(sqrt((double) n / CELL_TARGET));
@@ -405,7 +416,7 @@ count_result(tdc_job *job)
 static int
 run(tdc_job *job)
 {
-	double		t0 = now_sec(),
+	double		t0 = job_clock(job),
 				t;
 	size_t		nnodes;
 	int			rc;
@@ -419,7 +430,7 @@ run(tdc_job *job)
 	}
 
 	/* validate; tolerance */
-	t = now_sec();
+	t = job_clock(job);
 	job->xy = tdc_big_alloc(job->n * 2 * sizeof(double) + 16);
 	job->idx = tdc_big_alloc(job->n * sizeof(uint32_t) + 4);
 	job->site_of = tdc_big_alloc(job->n * sizeof(uint32_t) + 4);
@@ -448,12 +459,12 @@ run(tdc_job *job)
 			return TDC_ENOMEM;
 		}
 	}
-	job->times.sort = now_sec() - t;
+	job->times.sort = job_clock(job) - t;
 	if (atomic_load(&job->cancel))
 		return TDC_ECANCELED;
 
 	/* step 1 */
-	t = now_sec();
+	t = job_clock(job);
 	job->d = plan_levels(job->nin, &job->opt, job->threads);
 	job->s = plan_grid(job->nin, &job->opt);
 	for (int a = 0; a < 2; a++)
@@ -476,7 +487,7 @@ run(tdc_job *job)
 		return TDC_ENOMEM;
 	}
 	tdc_subdivide(job);
-	job->times.subdivide = now_sec() - t;
+	job->times.subdivide = job_clock(job) - t;
 	if (atomic_load(&job->cancel))
 		return TDC_ECANCELED;
 
@@ -489,14 +500,14 @@ run(tdc_job *job)
 	}
 
 	/* step 2, removing duplicates on the way */
-	t = now_sec();
+	t = job_clock(job);
 	tdc_pool_for(job->pool, (size_t) 1 << job->d, leaf_task, job);
-	job->times.leaves = now_sec() - t;
+	job->times.leaves = job_clock(job) - t;
 	if (atomic_load(&job->cancel))
 		return TDC_ECANCELED;
 
 	/* step 3 */
-	t = now_sec();
+	t = job_clock(job);
 	for (int level = job->d - 1; level >= 0; level--)
 	{
 		merge_arg	ma = {job, level};
@@ -505,11 +516,11 @@ run(tdc_job *job)
 		if (atomic_load(&job->cancel))
 			return TDC_ECANCELED;
 	}
-	job->times.merge = now_sec() - t;
+	job->times.merge = job_clock(job) - t;
 
 	if (count_result(job) != TDC_OK)
 		return TDC_ENOMEM;
-	job->times.total = now_sec() - t0;
+	job->times.total = job_clock(job) - t0;
 	return TDC_OK;
 }
 
@@ -680,6 +691,32 @@ tdc_job_start(const double *xy, size_t n, const tdc_options *opt, tdc_job **out,
 }
 
 /*
+ * A small job's triangles, handed over on the caller's thread in batches in
+ * the order of tdc_next_triangle, with none of emit.c's planning.
+ */
+static int
+emit_inline(tdc_job *job)
+{
+	uint32_t	v[3 * EMIT_INLINE_BATCH];
+	tdc_iter	it = {0};
+	size_t		first = 0,
+				k = 0;
+
+	while (tdc_next_triangle(job, &it, v + 3 * k))
+	{
+		if (++k == EMIT_INLINE_BATCH)
+		{
+			job->emit(job->emit_arg, first, k, v);
+			first += k;
+			k = 0;
+		}
+	}
+	if (k > 0)
+		job->emit(job->emit_arg, first, k, v);
+	return first + k == job->ntri ? TDC_OK : TDC_EINVAL;
+}
+
+/*
  * The second phase a finished job can run: its triangles handed to the
  * host's callback on the pool (emit.c).  Same lifecycle as the first: the
  * host waits with tdc_job_wait and may cancel.
@@ -714,7 +751,7 @@ tdc_job_emit_start(tdc_job *job, tdc_emit_fn emit, void *arg, char *err,
 	job->status = TDC_RUNNING;
 	if (job->inline_run)
 	{
-		finish_phase(job, tdc_emit_phase(job));
+		finish_phase(job, emit_inline(job));
 		return TDC_OK;
 	}
 	rc = start_driver(job);
@@ -736,7 +773,9 @@ tdc_job_wait(tdc_job *job, int timeout_ms)
 	int			status;
 
 	pthread_mutex_lock(&job->lock);
-	if (timeout_ms < 0)
+	if (job->finished)
+		;						/* an inline job: no clock to read */
+	else if (timeout_ms < 0)
 	{
 		while (!job->finished)
 			pthread_cond_wait(&job->done, &job->lock);

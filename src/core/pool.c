@@ -31,6 +31,7 @@
  */
 #define BIG_HEADER	64
 #define BIG_MAP_MIN	((size_t) 256 << 10)
+#define PREFAULT_MIN	((size_t) 64 << 10)
 
 typedef struct big_header
 {
@@ -88,13 +89,19 @@ void
 tdc_prefault(void *ptr, size_t len)
 {
 #ifdef MADV_POPULATE_WRITE
-	long		ps = sysconf(_SC_PAGESIZE);
-	uintptr_t	page = ps > 0 ? (uintptr_t) ps : 4096;
-	uintptr_t	a = (uintptr_t) ptr & ~(page - 1);
-	uintptr_t	b = ((uintptr_t) ptr + len + page - 1) & ~(page - 1);
+	long		ps;
+	uintptr_t	page,
+				a,
+				b;
 
-	if (len > 0)
-		(void) madvise((void *) a, b - a, MADV_POPULATE_WRITE);
+	/* a system call costs more than faulting in a few pages */
+	if (len < PREFAULT_MIN)
+		return;
+	ps = sysconf(_SC_PAGESIZE);
+	page = ps > 0 ? (uintptr_t) ps : 4096;
+	a = (uintptr_t) ptr & ~(page - 1);
+	b = ((uintptr_t) ptr + len + page - 1) & ~(page - 1);
+	(void) madvise((void *) a, b - a, MADV_POPULATE_WRITE);
 #else
 	(void) ptr;
 	(void) len;

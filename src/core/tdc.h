@@ -64,6 +64,7 @@ typedef struct tdc_options
 	int			levels;			/* d: up to 2^d subsets; 0 = auto, -1 = none */
 	double		tolerance;		/* > 0: drop a site closer than this to a kept one */
 	size_t		max_memory;		/* bytes the engine may allocate; 0 = no limit */
+	int			times;			/* measure phase times for tdc_job_times; 0 = zeros */
 } tdc_options;
 
 /* Phase timings in seconds, as in Table 1 of the paper. */

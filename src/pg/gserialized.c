@@ -261,7 +261,7 @@ read_srid(const unsigned char *s)
  */
 
 /*
- * The coordinate arrays are mapped directly, not palloc'd: a big aggregate
+ * Big coordinate arrays are mapped directly, not palloc'd: a big aggregate
  * grows them to hundreds of megabytes, and once freed, malloc keeps blocks
  * below its (self-raising) mmap threshold in the backend's heap, so a
  * session's memory would depend on the sizes of the inputs it saw before.
@@ -269,28 +269,45 @@ read_srid(const unsigned char *s)
  * and go back to the system when the buffer's context is reset or deleted.
  * The release callback is registered before any triangulation job's (whose
  * workers read the array) and so runs after it.
+ *
+ * Arrays below POINTMAP_MIN_BYTES are palloc'd in the buffer's context
+ * instead: one call per row on a small geometry would otherwise pay a map,
+ * its page faults and an unmap (with a TLB flush on every CPU the process
+ * ran threads on) for a few dozen bytes of coordinates.
  */
+#define POINTMAP_MIN_BYTES	((Size) 256 * 1024)
+
 static void
 pointmap_release(void *arg)
 {
 	TdcPointMap *map = (TdcPointMap *) arg;
 
-	if (map->xy != NULL)
+	/* palloc'd arrays go with the context */
+	if (map->xy != NULL && map->xy_bytes >= POINTMAP_MIN_BYTES)
 		munmap(map->xy, map->xy_bytes);
-	if (map->z != NULL)
+	if (map->z != NULL && map->z_bytes >= POINTMAP_MIN_BYTES)
 		munmap(map->z, map->z_bytes);
 	map->xy = map->z = NULL;
 }
 
 static double *
-pointmap_grow(double **ptr, Size *bytes, Size want)
+pointmap_grow(MemoryContext cxt, double **ptr, Size *bytes, Size want)
 {
 	void	   *p;
 
-	if (*ptr == NULL)
-		p = mmap(NULL, want, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
-	else
+	if (want < POINTMAP_MIN_BYTES)
+		p = *ptr == NULL ? MemoryContextAlloc(cxt, want) : repalloc(*ptr, want);
+	else if (*ptr != NULL && *bytes >= POINTMAP_MIN_BYTES)
 		p = mremap(*ptr, *bytes, want, MREMAP_MAYMOVE);
+	else
+	{
+		p = mmap(NULL, want, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+		if (p != MAP_FAILED && *ptr != NULL)
+		{
+			memcpy(p, *ptr, *bytes);
+			pfree(*ptr);
+		}
+	}
 	if (p == MAP_FAILED)
 		ereport(ERROR,
 				(errcode(ERRCODE_OUT_OF_MEMORY),
@@ -337,7 +354,7 @@ tdc_pointbuf_reserve(TdcPointBuf *buf, uint64 extra, const char *fname)
 				 errmsg("%s: too many input vertices (more than %zu)",
 						fname, (size_t) TDC_MAX_POINTS)));
 
-	newcap = Max(buf->cap, 1024);
+	newcap = Max(buf->cap, 16);
 	while (newcap < need)
 		newcap *= 2;
 	if (newcap > TDC_MAX_POINTS)
@@ -361,10 +378,10 @@ tdc_pointbuf_reserve(TdcPointBuf *buf, uint64 extra, const char *fname)
 		cb->arg = buf->map;
 		MemoryContextRegisterResetCallback(buf->cxt, cb);
 	}
-	buf->xy = pointmap_grow(&buf->map->xy, &buf->map->xy_bytes,
+	buf->xy = pointmap_grow(buf->cxt, &buf->map->xy, &buf->map->xy_bytes,
 							(Size) newcap * 2 * sizeof(double));
 	if (buf->hasz)
-		buf->z = pointmap_grow(&buf->map->z, &buf->map->z_bytes,
+		buf->z = pointmap_grow(buf->cxt, &buf->map->z, &buf->map->z_bytes,
 							   (Size) newcap * sizeof(double));
 	buf->cap = newcap;
 }

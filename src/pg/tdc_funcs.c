@@ -277,6 +277,7 @@ tdc_run(const TdcPointBuf *buf, double tolerance, uint64 result_bytes,
 	opt.grid_size = tdc_guc_grid_size;
 	opt.levels = tdc_guc_levels;
 	opt.tolerance = tolerance;
+	opt.times = tdc_guc_stats;
 	if (limit > 0)
 	{
 		uint64		engine = tdc_estimate_memory((size_t) buf->n, &opt);

@@ -68,6 +68,7 @@ main(int argc, char **argv)
 	}
 	tdc_options_init(&opt);
 	opt.threads = threads;
+	opt.times = 1;
 	if (tdc_triangulate(xy, n, &opt, &job, err, sizeof(err)) != TDC_OK)
 	{
 		fprintf(stderr, "reference run failed: %s\n", err);
