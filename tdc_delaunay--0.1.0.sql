@@ -10,7 +10,11 @@ CREATE FUNCTION ST_TDCDelaunayTriangles(g1 geometry,
 										flags int4 DEFAULT 0)
 RETURNS geometry
 AS 'MODULE_PATHNAME', 'st_tdcdelaunaytriangles'
-LANGUAGE C IMMUTABLE STRICT PARALLEL SAFE;
+LANGUAGE C IMMUTABLE STRICT PARALLEL SAFE
+-- A call costs microseconds to seconds, far above an operator: as for
+-- ST_DelaunayTriangles, the planner should prefer plans that call it less
+-- often and spread its calls over parallel workers.
+COST 1000;
 
 COMMENT ON FUNCTION ST_TDCDelaunayTriangles(geometry, float8, int4) IS
 'Exact Delaunay triangulation of the vertices of a geometry, drop-in for ST_DelaunayTriangles. '
@@ -102,7 +106,8 @@ COMMENT ON AGGREGATE ST_TDCDelaunay(geometry, float8, int4) IS
 CREATE FUNCTION ST_TDCDelaunayDump(query text, tolerance float8 DEFAULT 0.0)
 RETURNS TABLE(id bigint, geom geometry)
 AS 'MODULE_PATHNAME', 'st_tdcdelaunaydump'
-LANGUAGE C VOLATILE STRICT PARALLEL UNSAFE;
+LANGUAGE C VOLATILE STRICT PARALLEL UNSAFE
+COST 10000 ROWS 100000;
 
 COMMENT ON FUNCTION ST_TDCDelaunayDump(text, float8) IS
 'Runs a query returning one geometry column (with the caller''s rights), triangulates the vertices of all rows '
