@@ -12,6 +12,12 @@ SET tdc_delaunay.thread = 2;
 -- Out of range.
 SET tdc_delaunay.threads = -1;
 SET tdc_delaunay.levels = -2;
+-- the engine's limit (TDC_MAX_LEVELS): a SET error, not a failure of every
+-- later triangulation
+SET tdc_delaunay.levels = 25;
+SHOW tdc_delaunay.levels;
+SELECT ST_NumGeometries(ST_TDCDelaunayTriangles('MULTIPOINT(0 0, 1 0, 0 1)')) AS after_levels_25;
+RESET tdc_delaunay.levels;
 SET tdc_delaunay.max_result_bytes = 10;
 
 -- threads, levels and grid size change how, not what.
@@ -26,6 +32,9 @@ SELECT tdc_norm(ST_TDCDelaunay(geom)) = (SELECT t FROM tdc_guc_ref) AS no_subdiv
 SET tdc_delaunay.levels = 4;
 SET tdc_delaunay.grid_size = 16;
 SELECT tdc_norm(ST_TDCDelaunay(geom)) = (SELECT t FROM tdc_guc_ref) AS levels_4_grid_16 FROM tdc_guc_pts;
+-- the largest depth is accepted (the engine then stops at 2^d <= points)
+SET tdc_delaunay.levels = 24;
+SELECT tdc_norm(ST_TDCDelaunay(geom)) = (SELECT t FROM tdc_guc_ref) AS levels_24 FROM tdc_guc_pts;
 RESET tdc_delaunay.levels;
 RESET tdc_delaunay.grid_size;
 -- the superuser ceiling applies
