@@ -55,11 +55,12 @@
 #          BENCH_SWEEP_AGG_SIZES ("n ...") replace the lists above
 #          BENCH_SWEEP_PNG=FILE  BENCH_SWEEP_PLOT_ONLY=1 (redraw from the CSVs)
 #
-# jit=off by default: ST_DelaunayTriangles is declared COST 10000 and ours
-# COST 1, so with the server's jit=on the PostGIS statements over 10,000 rows
-# (but not ours) pass jit_above_cost and pay for JIT compilation in every run;
-# that measures the planner's cost constants, not the triangulations.
-# BENCH_SWEEP_SETTINGS="" keeps the server's settings.
+# jit=off by default: ST_DelaunayTriangles is declared COST 10000, ours less
+# (the header prints both), so with the server's jit=on the PostGIS statements
+# over 10,000 rows (and not ours) pass jit_above_cost and pay for JIT
+# compilation in every run; that would measure the planner's cost constants,
+# not the triangulations.  BENCH_SWEEP_SETTINGS="" keeps the server's settings.
+# The plan of every statement (parallel workers, JIT) is recorded.
 set -euo pipefail
 
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
@@ -487,6 +488,7 @@ setting() { sql -c "$SET_SQL" -c "SELECT current_setting('$1', true)" | tail -1;
 	if [ "$SO_START" != "$SO_END" ]; then
 		echo "- **WARNING: tdc_delaunay.so was replaced during the run ($SO_START -> $SO_END): the figures mix two builds; run again.**"
 	fi
+	echo "- function costs (pg_proc.procost): $(sql -c "SELECT string_agg(proname || ' ' || procost, ', ' ORDER BY proname) FROM pg_proc WHERE proname IN ('st_delaunaytriangles', 'st_tdcdelaunaytriangles', 'st_tdcdelaunay_finalfn')")"
 	echo "- settings: shared_buffers=$(setting shared_buffers) work_mem=$(setting work_mem) jit=$(setting jit) max_parallel_workers_per_gather=$(setting max_parallel_workers_per_gather) tdc_delaunay.threads=${THREADS:-?} statement_timeout=${TIMEOUT}s${SETTINGS:+ (set for the runs: $SETTINGS)}"
 	echo "- timing: server side (clock_timestamp() around EXECUTE in plpgsql), one session per cell, each statement run $WARM time(s) untimed first, then $REPS runs interleaved PostGIS, ours, PostGIS, ...; medians. Points uniform in [0,1)^2."
 	echo "- per row: \`SELECT count(ST_DelaunayTriangles(g)) FROM t\` vs \`SELECT count(ST_TDCDelaunayTriangles(g)) FROM t\`, t = rows of one MULTIPOINT of k points"
