@@ -121,7 +121,7 @@ fi
 		echo
 		echo "## SQL size sweep: tdc_delaunay vs PostGIS, 3 to 10^7 points per call"
 		echo
-		sed '1{/^###/d}' "$BENCH_OUT/sweep.txt"
+		sed '1,2{/^###/d;/^$/d}' "$BENCH_OUT/sweep.txt"
 		if [ -s "${BENCH_DOCS:-$ROOT/docs}/sweep.png" ]; then
 			echo
 			echo '![size sweep](sweep.png)'
