@@ -1,6 +1,6 @@
 --
 -- tdc_postgis_cases: the PostGIS ST_DelaunayTriangles regression, unit and
--- documentation cases (see ../shared/conformance/postgis-cases.txt), each
+-- documentation cases (see test/fixtures/postgis-cases.txt), each
 -- compared with ST_DelaunayTriangles on this server as a set of triangles
 -- (ST_Normalize), plus the documented differences asserted explicitly.
 --
