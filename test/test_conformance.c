@@ -2047,8 +2047,9 @@ test_conformance(void)
 	bug_jts477_flat_triangle_lost();
 	bug_near_duplicates_kept();
 
-	printf("conformance: %d cases from %s: %d passed, %d failed, %d SQL-only "
-		   "(sql/tdc_postgis_cases.sql); %ld checks passed, %ld failed\n",
+	/* (not "N passed, N failed": scripts/test.sh reads the last such line) */
+	printf("conformance: %d cases from %s: %d pass, %d fail, %d SQL-only "
+		   "(sql/tdc_postgis_cases.sql); checks: %ld pass, %ld fail\n",
 		   ncases, conf_dir, cases_ok, cases_failed, cases_sql,
 		   tdc_test_passed - passed_before, tdc_test_failed - failed_before);
 
