@@ -43,12 +43,14 @@ RESET tdc_delaunay.grid_size;
 -- The timings differ from run to run and psql cannot filter a notice, so a
 -- second session (the same server and database) runs the statement and only
 -- the thread figure is printed.  A superuser's max_threads is not bound by
--- the CPU count, so the figures do not depend on the machine.
+-- the CPU count, so the figures do not depend on the machine.  (30000
+-- points: below TDC_INLINE_MAX, 20000, a job runs on one thread whatever
+-- the settings.)
 \setenv PGDATABASE :DBNAME
-\! psql -X -q -c "SET tdc_delaunay.stats = on; SET tdc_delaunay.max_threads = 1; SET tdc_delaunay.threads = 0; SELECT ST_TDCDelaunay(geom) IS NOT NULL FROM tdc_guc_pts" 2>&1 | sed -n 's/^DETAIL: *\(threads [0-9]*\),.*/max_threads 1, threads 0: \1/p'
-\! psql -X -q -c "SET tdc_delaunay.stats = on; SET tdc_delaunay.max_threads = 1; SET tdc_delaunay.threads = 3; SELECT ST_TDCDelaunay(geom) IS NOT NULL FROM tdc_guc_pts" 2>&1 | sed -n 's/^DETAIL: *\(threads [0-9]*\),.*/max_threads 1, threads 3: \1/p'
-\! psql -X -q -c "SET tdc_delaunay.stats = on; SET tdc_delaunay.max_threads = 2; SET tdc_delaunay.threads = 3; SELECT ST_TDCDelaunay(geom) IS NOT NULL FROM tdc_guc_pts" 2>&1 | sed -n 's/^DETAIL: *\(threads [0-9]*\),.*/max_threads 2, threads 3: \1/p'
-\! psql -X -q -c "SET tdc_delaunay.stats = on; SET tdc_delaunay.max_threads = 3; SET tdc_delaunay.threads = 2; SELECT ST_TDCDelaunay(geom) IS NOT NULL FROM tdc_guc_pts" 2>&1 | sed -n 's/^DETAIL: *\(threads [0-9]*\),.*/max_threads 3, threads 2: \1/p'
+\! psql -X -q -c "SET tdc_delaunay.stats = on; SET tdc_delaunay.max_threads = 1; SET tdc_delaunay.threads = 0; SELECT ST_TDCDelaunay(geom) IS NOT NULL FROM tdc_random_points(30000, 3)" 2>&1 | sed -n 's/^DETAIL: *\(threads [0-9]*\),.*/max_threads 1, threads 0: \1/p'
+\! psql -X -q -c "SET tdc_delaunay.stats = on; SET tdc_delaunay.max_threads = 1; SET tdc_delaunay.threads = 3; SELECT ST_TDCDelaunay(geom) IS NOT NULL FROM tdc_random_points(30000, 3)" 2>&1 | sed -n 's/^DETAIL: *\(threads [0-9]*\),.*/max_threads 1, threads 3: \1/p'
+\! psql -X -q -c "SET tdc_delaunay.stats = on; SET tdc_delaunay.max_threads = 2; SET tdc_delaunay.threads = 3; SELECT ST_TDCDelaunay(geom) IS NOT NULL FROM tdc_random_points(30000, 3)" 2>&1 | sed -n 's/^DETAIL: *\(threads [0-9]*\),.*/max_threads 2, threads 3: \1/p'
+\! psql -X -q -c "SET tdc_delaunay.stats = on; SET tdc_delaunay.max_threads = 3; SET tdc_delaunay.threads = 2; SELECT ST_TDCDelaunay(geom) IS NOT NULL FROM tdc_random_points(30000, 3)" 2>&1 | sed -n 's/^DETAIL: *\(threads [0-9]*\),.*/max_threads 3, threads 2: \1/p'
 -- and the result under the ceiling is still the same
 SET tdc_delaunay.max_threads = 1;
 SET tdc_delaunay.threads = 0;
