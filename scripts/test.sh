@@ -33,7 +33,7 @@ PART_TIMEOUT=${TDC_PART_TIMEOUT:-900}
 # test/hardening/ scripts run here: without a server, and on the throw-away
 # cluster (their README's CI column must say the same; --self-test checks).
 HARDENING_CORE=(core_cancel)
-HARDENING_SERVER=(settings bad_input memcap concurrency cancel)
+HARDENING_SERVER=(settings bad_input memcap concurrency cancel leak)
 TOTAL_PASSED=0
 TOTAL_FAILED=0
 SUMMARY=()
