@@ -28,6 +28,7 @@ extern long tdc_test_failed;
 extern void test_predicates(void);
 extern void test_engine(void);
 extern void test_conformance(void);
+extern void test_tolerance(void);
 
 /* Set by --quick (sanitizer runs): smaller sizes. */
 extern int	tdc_test_quick;

@@ -1,6 +1,7 @@
 /*
  * test_main.c
- *		Runs the core suite: predicates, engine properties, conformance cases.
+ *		Runs the core suite: predicates, engine properties, conformance cases,
+ *		the tolerance rule.
  *		Prints "N passed, N failed"; exits non-zero on any failure.
  *		--quick shrinks the largest inputs (sanitizer builds).
  */
@@ -26,6 +27,8 @@ main(int argc, char **argv)
 	test_engine();
 	printf("engine: %ld passed, %ld failed so far\n", tdc_test_passed, tdc_test_failed);
 	test_conformance();
+	printf("conformance: %ld passed, %ld failed so far\n", tdc_test_passed, tdc_test_failed);
+	test_tolerance();
 	printf("%ld passed, %ld failed\n", tdc_test_passed, tdc_test_failed);
 	return tdc_test_failed ? 1 : 0;
 }
