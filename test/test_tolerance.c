@@ -348,7 +348,11 @@ test_issue_reproduction(void)
 	CHECK(check_against_reference("issue 16 with -1", xy, 4, 1e-10, 1, true) == 0,
 		  "issue 16 with -1: one of the near points is dropped");
 
-	/* random trials of the shape: a far point, one off the axis, a near pair */
+	/*
+	 * Random trials of the shape: a point 1e6 to 4e6 away, where the
+	 * coordinates' ulp is a few times the tolerance, one off the axis, a
+	 * near pair.
+	 */
 	rng_state = 16;
 	for (int t = 0; t < trials; t++)
 	{
@@ -356,13 +360,13 @@ test_issue_reproduction(void)
 					p[8];
 		long		r;
 
-		p[0] = -pow(10, 3 + 6 * urand());
+		p[0] = -(1e6 + urand() * 3e6);
 		p[1] = 0;
 		p[2] = 0;
 		p[3] = 0.001;
 		p[4] = a;
 		p[5] = 0;
-		p[6] = a + (urand() * 2 - 1) * 1.2e-10;
+		p[6] = a + (urand() * 2 - 1) * 1e-10;
 		p[7] = (t & 1) ? (urand() - 0.5) * 1e-10 : 0;
 		r = check_against_reference("issue 16 shape", p, 4, 1e-10, 1, fails == 0);
 		fails += r != 0;
@@ -373,51 +377,79 @@ test_issue_reproduction(void)
 }
 
 /*
- * Sites at distance ~t from p, so that "D < t^2" is decided by the last
- * bits; and sites at nearly equal distances below t, so that the choice of
- * the nearest is.  Coordinates carry large offsets (projected data), which
- * is where rounded evaluation goes wrong.
+ * A random coordinate whose ulp is 2^e, with room for +-2^40 ulps inside
+ * its binade, so that adding k 2^e to it (|k| < 2^40) is exact.
+ */
+static double
+coord_with_ulp(int e)
+{
+	double		v = ldexp(1.25 + 0.5 * urand(), e + 52);
+
+	return (rng() & 1) ? -v : v;
+}
+
+/*
+ * Near ties, built exactly.  Boundary: p and a site q = p + 2^e (-k1, k2)
+ * with D = 2^2e (k1^2 + k2^2) exact but not a double (k up to 2^30), and t
+ * within a few ulps of sqrt(D): "D < t^2" is decided in the last bits.
+ * Candidates: two sites p + 2^e (-|Re w|, Im w) for w = g h and w = g conj(h)
+ * (Gaussian integers), whose squared distances to p are exactly equal,
+ * |g|^2 |h|^2, but round differently: the earlier kept must win.  Both at
+ * every scale of the coordinate range.
  */
 static void
 test_near_ties(void)
 {
-	int			trials = tdc_test_quick ? 150 : 500;
-	long		fails = 0;
+	int			trials = tdc_test_quick ? 300 : 1000;
+	long		fails = 0,
+				tried = 0;
 
 	rng_state = 1616;
 	for (int t = 0; t < trials; t++)
 	{
-		double		base[2] = {(urand() - 0.5) * 2e7, (urand() - 0.5) * 2e7},
-					tol = (t % 3 == 0) ? 1 : pow(2, -20 + 40 * urand()),
-					xy[2 * 8];
-		int			n = 0,
-					k = 2 + (int) (rng() % 3);
-		bool		boundary = (t & 1) != 0;
+		int			e = (t % 4 == 0) ? -251 + (int) (rng() % 399) : -30 + (int) (rng() % 40);
+		double		s = ldexp(1, e),
+					p[2] = {coord_with_ulp(e), coord_with_ulp(e)},
+					xy[2 * 6],
+					tol;
+		int			n = 0;
 
-		/* p last in x order among them: sites at angles in (100, 260) degrees */
-		for (int j = 0; j < k; j++)
+		if (t & 1)
 		{
-			double		th = (100 + j * (160.0 / (k - 1)) + (urand() - 0.5) * 4) * M_PI / 180,
-						r = boundary ? 1 + ldexp(urand() - 0.5, -50) : 0.9 * (1 + ldexp(urand() - 0.5, -48));
+			double		k1 = (double) (1 + rng() % (1u << 30)),
+						k2 = (double) (int64_t) (rng() % (1u << 31)) - (double) (1u << 30),
+						d = s * s * (k1 * k1 + k2 * k2);
 
-			xy[2 * n] = base[0] + tol * r * cos(th);
-			xy[2 * n + 1] = base[1] + tol * r * sin(th);
-			n++;
+			tol = sqrt(d);
+			for (int j = (int) (rng() % 5) - 2; j != 0; j += j > 0 ? -1 : 1)
+				tol = nextafter(tol, j > 0 ? INFINITY : 0);
+			xy[2 * n] = p[0] - k1 * s, xy[2 * n + 1] = p[1] + k2 * s, n++;
 		}
-		xy[2 * n] = base[0];
-		xy[2 * n + 1] = base[1];
-		n++;
-		/* a second round one ulp-ish off p, and a duplicate */
-		xy[2 * n] = nextafter(base[0], INFINITY);
-		xy[2 * n + 1] = base[1];
-		n++;
-		xy[2 * n] = base[0];
-		xy[2 * n + 1] = base[1];
-		n++;
+		else
+		{
+			int64_t		a = 1 + (int64_t) (rng() % 32768),
+						b = 1 + (int64_t) (rng() % 32768),
+						c = 1 + (int64_t) (rng() % 32768),
+						d = 1 + (int64_t) (rng() % 32768);
+			double		w1[2] = {(double) (a * c - b * d), (double) (a * d + b * c)},
+						w2[2] = {(double) (a * c + b * d), (double) (b * c - a * d)},
+						r = sqrt(w1[0] * w1[0] + w1[1] * w1[1]);
+
+			tol = 1.05 * r * s;
+			/* both must be kept: farther apart than the tolerance */
+			if (w1[0] == 0 || w2[0] == 0 ||
+				hypot(fabs(w1[0]) - fabs(w2[0]), w1[1] - w2[1]) < 1.1 * r)
+				continue;
+			xy[2 * n] = p[0] - fabs(w1[0]) * s, xy[2 * n + 1] = p[1] + w1[1] * s, n++;
+			xy[2 * n] = p[0] - fabs(w2[0]) * s, xy[2 * n + 1] = p[1] + w2[1] * s, n++;
+		}
+		xy[2 * n] = p[0], xy[2 * n + 1] = p[1], n++;
+		xy[2 * n] = p[0], xy[2 * n + 1] = p[1], n++;	/* a duplicate */
+		tried++;
 		if (check_against_reference("near ties", xy, n, tol, 1, fails == 0) != 0)
 			fails++;
 	}
-	CHECK(fails == 0, "near ties: %ld of %d trials differ from the exact rule", fails, trials);
+	CHECK(fails == 0, "near ties: %ld of %ld trials differ from the exact rule", fails, tried);
 }
 
 /* Integer lattices: many exact ties of D against t^2 and between sites. */
@@ -731,26 +763,40 @@ test_tiny_tolerance_cost(void)
 				1e-200, 1, 8);
 	check_ratio("50k points in 1000^2, tolerance 1e-15", xy, xy, n, 1e-15, 1, 8);
 	check_ratio("50k UTM points over 1000 km, tolerance 1e-14", utm, utm, n, 1e-14, 1000, 8);
+
+	/*
+	 * Many distinct doubles in one spot (any grid fine enough for the box is
+	 * too coarse for them), and in one column.
+	 */
+	for (size_t i = 0; i < n; i++)
+	{
+		utm[2 * i] = 1 + (double) (rng() % 4096) * 0x1p-40;
+		utm[2 * i + 1] = 1 + (double) (rng() % 4096) * 0x1p-40;
+	}
+	utm[0] = utm[1] = -1000;
+	check_ratio("50k points within 2^-28 and one 1000 away, tolerance 1e-300", utm, xy, n,
+				1e-300, 1, 8);
+	for (size_t i = 0; i < n; i++)
+	{
+		utm[2 * i] = 5;
+		utm[2 * i + 1] = urand() * 1000;
+	}
+	check_ratio("50k points in one column, tolerance 1e-300", utm, xy, n, 1e-300, 1, 8);
 	free(xy);
 	free(utm);
 }
 
 /*
- * A cancel during a tolerance pass with a tiny tolerance must be noticed
- * within a fraction of a second (it used to be polled every 65536 points of
- * a quadratic pass: seconds).
+ * A cancel during a job with a tiny tolerance must be noticed within a
+ * fraction of a second, whichever phase it lands in (the tolerance pass used
+ * to be quadratic there and polled the flag every 65536 points: seconds).
  */
 static void
 test_tiny_tolerance_cancel(void)
 {
 	size_t		n = tdc_test_quick ? 200000 : 400000;
-	double	   *xy = malloc(16 * n),
-				t0,
-				stop;
-	tdc_options opt;
-	tdc_job    *job;
-	char		err[256];
-	int			rc;
+	double	   *xy = malloc(16 * n);
+	static const int delays_ms[] = {50, 250, 1000};
 
 	rng_state = 4;
 	for (size_t i = 0; i < n; i++)
@@ -758,18 +804,33 @@ test_tiny_tolerance_cancel(void)
 		xy[2 * i] = urand() * 1000;
 		xy[2 * i + 1] = urand() * 1000;
 	}
-	tdc_options_init(&opt);
-	opt.tolerance = 1e-200;
-	opt.threads = 1;
-	CHECK(tdc_job_start(xy, n, &opt, &job, err, sizeof(err)) == TDC_OK, "start: %s", err);
-	usleep(20000);
-	t0 = now();
-	tdc_job_cancel(job);
-	rc = tdc_job_wait(job, 20000);
-	stop = now() - t0;
-	CHECK((rc == TDC_ECANCELED || rc == TDC_OK) && stop < 0.5,
-		  "cancel during a tiny-tolerance pass of %zu points: status %d after %.3f s", n, rc, stop);
-	tdc_job_free(job);
+	for (int d = 0; d < 3; d++)
+	{
+		tdc_options opt;
+		tdc_job    *job;
+		char		err[256];
+		double		t0,
+					stop;
+		int			rc;
+
+		tdc_options_init(&opt);
+		opt.tolerance = 1e-200;
+		opt.threads = 1;
+		if (tdc_job_start(xy, n, &opt, &job, err, sizeof(err)) != TDC_OK)
+		{
+			CHECK(0, "start: %s", err);
+			continue;
+		}
+		usleep(delays_ms[d] * 1000);
+		t0 = now();
+		tdc_job_cancel(job);
+		rc = tdc_job_wait(job, 30000);
+		stop = now() - t0;
+		CHECK((rc == TDC_ECANCELED || rc == TDC_OK) && stop < 1.0,
+			  "cancel %d ms into a tiny-tolerance job of %zu points: status %d after %.3f s",
+			  delays_ms[d], n, rc, stop);
+		tdc_job_free(job);
+	}
 	free(xy);
 }
 

@@ -10,9 +10,9 @@
  * on exact ties of the distance.  So no two kept sites are closer than t and
  * every dropped point lies closer than t to its site, for every input.  A
  * rule evaluated in rounded arithmetic, or a search whose rounding can hide a
- * neighbour, would keep pairs closer than t or not depending on where the
- * data lies (how far from the origin of a hash grid, for one), which nobody
- * can document usefully.  The greedy rule is sequential, so it runs once
+ * neighbour, keeps pairs closer than t or not depending on where the data
+ * lies (how far from the corner of a hash grid, for one), and no simple rule
+ * describes that.  The greedy rule is sequential, so it runs once
  * before the subdivision, and its survivors then go through the parallel
  * pipeline like any input.
  *
@@ -69,16 +69,26 @@
  * are skipped.
  *
  * Cancellation is polled by work done (records moved, bit-set steps,
- * candidates examined), every TOL_POLL_WORK units, so the pass stops within
- * a fraction of a millisecond of tdc_job_cancel at any point.
+ * candidates examined), every TOL_POLL_WORK units, not by points: the cost
+ * of a point varies (one point can expire many kept sites), and a poll per
+ * fixed amount of work bounds the time to notice tdc_job_cancel wherever the
+ * pass is.
  */
 #include <stdlib.h>
 #include <string.h>
 
 #include "job.h"
 
-/* Units of work between two polls of the cancel flag: well under 1 ms. */
-#define TOL_POLL_WORK	(1u << 16)
+/*
+ * Units of work between two polls of the cancel flag.  A unit is a record
+ * moved or a bit-set step (nanoseconds) or a candidate examined (at worst an
+ * exact comparison, well under a microsecond), so polls are at most a few
+ * milliseconds apart and usually a small fraction of one.
+ */
+#define TOL_POLL_WORK	(1u << 14)
+
+/* Records mapped in per tdc_prefault call: a few ms, between cancel polls. */
+#define TOL_PREFAULT_RECS	((size_t) 1 << 18)
 
 /* The tolerance clamp of the header. */
 #define TOL_CLAMP_MIN	0x1p-252
@@ -95,7 +105,7 @@ typedef struct rec
 	uint32_t	yr;				/* rank in (y, i) order, set by sort_recs */
 } rec;
 
-typedef struct poll
+typedef struct tol_poll
 {
 	unsigned	work;
 	const atomic_int *cancel;
@@ -239,7 +249,7 @@ rankset_init(rankset *s, size_t n)
 		l++;
 	} while (m > 1 && l < RS_LEVELS);
 	s->top = l - 1;
-	s->mem = calloc(total, sizeof(uint64_t));
+	s->mem = tdc_big_alloc(total * sizeof(uint64_t));	/* zeroed */
 	if (s->mem == NULL)
 		return false;
 	total = 0;
@@ -396,27 +406,40 @@ tdc_tolerance_filter(tdc_job *job)
 	size_t		n = job->nin,
 				kept = 0,
 				head = 0;		/* oldest active kept site */
-	rec		   *r = tdc_big_alloc(n * sizeof(rec)),
-			   *tmp = tdc_big_alloc(n * sizeof(rec)),
+	rec		   *r,
+			   *tmp,
 			   *sorted = NULL;
 	uint32_t   *krank = NULL,	/* kept site -> its rank */
 			   *site_at = NULL; /* rank -> kept site (while active) */
 	rankset		rs = {.mem = NULL};
-	tol_poll		pl = {0, &job->cancel};
+	tol_poll	pl = {0, &job->cancel};
 	tol_ctx		c;
 	double		t2;
 	bool		oom = false;
 
+	if (n == 0)
+		return 0;
+	r = tdc_big_alloc(n * sizeof(rec));
+	tmp = tdc_big_alloc(n * sizeof(rec));
 	if (r == NULL || tmp == NULL)
 		goto nomem;
-	/* both are written in full: one call maps them in, not a fault a page */
-	tdc_prefault(r, n * sizeof(rec));
-	tdc_prefault(tmp, n * sizeof(rec));
-	for (size_t k = 0; k < n; k++)
+	if (atomic_load_explicit(&job->cancel, memory_order_relaxed))
+		goto stop;
+	for (size_t k0 = 0; k0 < n; k0 += TOL_PREFAULT_RECS)
 	{
-		r[k].x = job->xy[2 * k];
-		r[k].y = job->xy[2 * k + 1];
-		r[k].i = job->idx[k];
+		size_t		k1 = n - k0 < TOL_PREFAULT_RECS ? n : k0 + TOL_PREFAULT_RECS;
+
+		/* both are written in full: map them in by the chunk, not a fault a page */
+		tdc_prefault(r + k0, (k1 - k0) * sizeof(rec));
+		tdc_prefault(tmp + k0, (k1 - k0) * sizeof(rec));
+		for (size_t k = k0; k < k1; k++)
+		{
+			r[k].x = job->xy[2 * k];
+			r[k].y = job->xy[2 * k + 1];
+			r[k].i = job->idx[k];
+			if (poll_cancelled(&pl))
+				goto stop;
+		}
 	}
 	if (!sort_recs(r, tmp, n, &sorted, &pl, &oom))
 		goto stop;
@@ -426,8 +449,8 @@ tdc_tolerance_filter(tdc_job *job)
 		tdc_big_free(r), r = tmp;
 	tmp = NULL;
 
-	krank = malloc(n * sizeof(uint32_t));
-	site_at = malloc(n * sizeof(uint32_t));
+	krank = tdc_big_alloc(n * sizeof(uint32_t));
+	site_at = tdc_big_alloc(n * sizeof(uint32_t));
 	if (krank == NULL || site_at == NULL || !rankset_init(&rs, n))
 		goto nomem;
 
@@ -503,7 +526,8 @@ tdc_tolerance_filter(tdc_job *job)
 	job->nin = kept;
 
 stop:
-	tdc_big_free(r), tdc_big_free(tmp), free(krank), free(site_at), free(rs.mem);
+	tdc_big_free(r), tdc_big_free(tmp), tdc_big_free(krank), tdc_big_free(site_at);
+	tdc_big_free(rs.mem);
 	return oom ? TDC_ENOMEM : 0;
 
 nomem:
