@@ -205,7 +205,11 @@ sort_recs(rec *r, rec *tmp, size_t n, rec **out, tol_poll *pl, bool *oom)
 		}
 		if (c == 1)
 			for (size_t k = 0; k < n; k++)
+			{
 				src[k].yr = (uint32_t) k;
+				if (poll_cancelled(pl))
+					goto cancelled;
+			}
 	}
 	free(hist);
 	*out = src;
