@@ -493,7 +493,7 @@ test_extreme_tolerances(void)
 		0x1p-251, 0x1.8p-250, 3e-76, 1e-75, 1e-70, 1e100, 1e154, 1e155, 1e200,
 		1e300, 1.7976931348623157e308};
 	long		fails = 0;
-	double		xy[2 * 40];
+	double		xy[2 * 210];
 	int			n = 0;
 
 	/* points spaced by 2^-252 (the ulp there) around 1.2e-60 and 1e-60 */
@@ -527,12 +527,15 @@ test_extreme_tolerances(void)
 	}
 	CHECK(fails == 0, "extreme tolerances: %ld cases differ from the exact rule", fails);
 
-	/* ulp-spaced cluster far from the box corner: the ratio to t is ~2^58 */
+	/*
+	 * A row of points one ulp (2^-252) apart, far from the box corner: the
+	 * ratio to t is ~2^58, and x - xmin rounds to multiples of 2^-246.
+	 */
 	n = 0;
 	xy[2 * n] = -4e-59, xy[2 * n + 1] = 0, n++;
-	for (int k = 0; k < 12; k++)
+	for (int k = 0; k < 200; k++)
 	{
-		xy[2 * n] = 1e-60 + (k / 2) * 0x1p-252;
+		xy[2 * n] = 1e-60 + k * 0x1p-252;
 		xy[2 * n + 1] = 1e-60 + (k % 2) * 0x1p-252;
 		n++;
 	}
