@@ -39,7 +39,7 @@ SELECT tdc_norm(ST_TDCDelaunayTriangles('MULTIPOINT(0 0, 2 0, 0 2, 2 2, 1 1, 1.0
 -- The same sites on both sides of the switch: n points (small path) and the
 -- same n points plus duplicates up to 20,000 or more (thread pool) give the
 -- same triangles, at n = 5, 1,000 and 19,999.
-CREATE TEMP TABLE sw AS
+CREATE TABLE sw AS
 SELECT i, ST_MakePoint((hashint4(i) & 65535)::float8 / 65.536,
 					   (hashint4(-i) & 65535)::float8 / 65.536) AS geom
 FROM generate_series(1, 19999) i;
@@ -56,6 +56,39 @@ FROM (VALUES (5), (1000), (19999)) v(n),
 ORDER BY n;
 RESET tdc_delaunay.threads;
 
+-- Parallel aggregation pays a worker's start and copies of every point for a
+-- share of the reading; the serialization functions' costs keep the planner
+-- from it for tables of millions of rows or fewer, even when starting
+-- workers is free.  (With the default cost of 1 it picked a partial
+-- aggregate here, which measured slower.)
+ANALYZE sw;
+SET parallel_setup_cost = 0;
+SET min_parallel_table_scan_size = 0;
+SET max_parallel_workers_per_gather = 2;
+EXPLAIN (COSTS OFF) SELECT ST_TDCDelaunay(geom) FROM sw;
+CREATE FUNCTION pg_temp.plan_has_gather(q text) RETURNS boolean
+	LANGUAGE plpgsql AS $$
+DECLARE
+	l text;
+BEGIN
+	FOR l IN EXECUTE 'EXPLAIN (COSTS OFF) ' || q LOOP
+		IF l LIKE '%Gather%' THEN
+			RETURN true;
+		END IF;
+	END LOOP;
+	RETURN false;
+END $$;
+SELECT pg_temp.plan_has_gather('SELECT ST_TDCDelaunay(geom) FROM sw GROUP BY i % 100') AS group_by_parallel;
+-- the same with the default cost: a partial aggregate
+BEGIN;
+ALTER FUNCTION st_tdcdelaunay_serialfn(internal) COST 1;
+ALTER FUNCTION st_tdcdelaunay_deserialfn(bytea, internal) COST 1;
+EXPLAIN (COSTS OFF) SELECT ST_TDCDelaunay(geom) FROM sw;
+ROLLBACK;
+RESET parallel_setup_cost;
+RESET min_parallel_table_scan_size;
+RESET max_parallel_workers_per_gather;
+
 -- One call per row, many rows: every row's result is its own.
 SELECT count(*) AS rows, sum(ST_NumGeometries(t)) AS triangles,
 	   sum(tdc_bad_triangles(t)) AS bad
@@ -63,3 +96,5 @@ FROM (SELECT ST_TDCDelaunayTriangles(ST_Collect(geom)) AS t
 	  FROM sw WHERE i <= 5000 GROUP BY i % 1000) s;
 SELECT count(*) AS groups, sum(ST_NumGeometries(t)) AS triangles
 FROM (SELECT ST_TDCDelaunay(geom) AS t FROM sw WHERE i <= 5000 GROUP BY i % 1000) s;
+
+DROP TABLE sw;
