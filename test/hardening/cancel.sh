@@ -6,7 +6,7 @@
 #
 # Input: tdc_hard.pts5m, 5 million points, one row each (created once and
 # reused; POINTS=N for another size).  The statement is
-#   SELECT pg_column_size(ST_TDCDelaunay(geom)) FROM tdc_hard.pts5m
+#   SELECT 'result TAG ' || pg_column_size(ST_TDCDelaunay(geom)) FROM tdc_hard.pts5m WHERE 'TAG' <> ''
 # and its phases are: reading the rows into the aggregate state, the engine
 # (worker threads: sort, subdivision, leaves, merge, then writing the
 # ~800 MB result value, which the same threads do), and "writing": the
@@ -18,17 +18,40 @@
 # machine's load.  statement_timeout can only be relative to the statement
 # start: its delays come from two calibration runs (the faster one).
 #
+# One signal, one statement.  The watcher signals a backend only in the
+# query that also checks, in pg_stat_activity, that the backend is still
+# running the statement under test (state active, the statement's TAG in
+# its text, the query_start the watcher found).  That leaves the instant
+# between the check and the kill, in which the statement may finish: so in
+# the session under test every such statement is followed by
+# tdc_hard.watcher_done(TAG), which returns only once the watcher has
+# finished, and the probes come after it.  A signal that arrives after the
+# statement's end is dropped by the idle backend or cancels that guard,
+# never a probe.  Such a run, and one that ended before its signal time, is
+# "too late": a note with a count, not a failure, unless the statement went
+# on for more than MAX_LATENCY_MS after the signal and then completed, which
+# means the signal was ignored.  psql reports each error with the line of
+# its statement, so every error is matched to the statement it hit.
+#
 # Checked:
 #   latency   from pg_cancel_backend (or the moment statement_timeout fires)
-#             until the backend has left the statement (pg_stat_activity no
-#             longer shows it active), and from pg_terminate_backend until
-#             the client has its FATAL: <= MAX_LATENCY_MS (200), reported per
-#             phase; a terminated backend must also be gone within 1 s
-#   errors    each signalled run ended with the cancel / timeout error (or,
-#             for a terminate, the connection), nothing else; the session
-#             still works afterwards and has no engine threads left (the
-#             thread that unmaps a cancelled job's memory must be gone
-#             within 5 s)
+#             until the backend has left the statement (the state_change
+#             the backend itself stamps in pg_stat_activity as it goes idle,
+#             so the watcher's own polling delay does not count), and from
+#             pg_terminate_backend until the client has its FATAL:
+#             <= MAX_LATENCY_MS (200; `make test` passes 1000: load on 2
+#             cores stays well below it, a missing cancel check costs
+#             seconds).  Printed per kind and phase, with how many stayed
+#             within STRICT_MS (200, the quiet machine's figure), which is
+#             reported, not checked.  A terminated backend must also be
+#             gone within GONE_MS (twice MAX_LATENCY_MS, at least 1000).
+#   errors    each cancelled run ended with the cancel / timeout error (or,
+#             for a terminate, the connection), nothing else, and no other
+#             statement of the session saw an error; the session still
+#             works afterwards and has no engine threads left (the thread
+#             that unmaps a cancelled job's memory must be gone within 5 s);
+#             at least half of the signalled runs were cancelled (else the
+#             calibration is off and nothing was measured)
 #   RSS       the backend's memory after RSS_RUNS (20) cancelled runs, in
 #             one session, within 10% of after the first.  The figure
 #             checked is RssAnon (private memory); VmRSS is printed too but
@@ -59,11 +82,14 @@ else
 	RSS_RUNS=${RSS_RUNS:-20}
 fi
 MAX_LATENCY_MS=${MAX_LATENCY_MS:-200}
+STRICT_MS=${STRICT_MS:-200}
+GONE_MS=${GONE_MS:-$((MAX_LATENCY_MS * 2 > 1000 ? MAX_LATENCY_MS * 2 : 1000))}
 TABLE=tdc_hard.pts$((POINTS / 1000000))m
 ((POINTS % 1000000 == 0)) || TABLE=tdc_hard.pts$POINTS
 work_dir cancel
 
-echo "== cancel.sh: $POINTS points ($TABLE), latency limit ${MAX_LATENCY_MS} ms"
+echo "== cancel.sh: $POINTS points ($TABLE), latency limit ${MAX_LATENCY_MS} ms (terminated backend gone: ${GONE_MS} ms)"
+echo "   load: $(uptime | sed 's/.*load average/load average/')"
 server_begin
 make_points "${TABLE#tdc_hard.}" "$POINTS"
 
@@ -71,10 +97,14 @@ make_points "${TABLE#tdc_hard.}" "$POINTS"
 # text holds 'tag' <>, wait until offset_ms after base (start: statement
 # start; engine: worker threads first seen; writing: threads gone again),
 # then
-#   kind cancel / terminate: signal it, return "<ms until it left> <phase>"
+#   kind cancel / terminate: signal it if it is still running, return
+#     "<ms from the signal until it left> <phase> <signal time, epoch ms>";
+#     the first figure is negative when the statement had ended before the
+#     signal went out
 #   kind timeout: (base start) return "<ms from start + offset until it left> <phase>"
+#     (negative: it ended before the timeout)
 #   kind watch: no signal, return "<end> <engine start> <engine end>" in ms
-# "-1 <phase>" when the statement ended before the signal.
+# "-1 ended" when the statement had ended before the signal time.
 hpsql >/dev/null <<'EOF'
 CREATE OR REPLACE FUNCTION tdc_hard.threads(p int) RETURNS int LANGUAGE plpgsql AS $$
 BEGIN
@@ -93,10 +123,27 @@ BEGIN
 	RETURN (extract(epoch FROM clock_timestamp() - t0) * 1000)::int;
 END $$;
 
-CREATE OR REPLACE FUNCTION tdc_hard.active(p int, qs timestamptz) RETURNS bool LANGUAGE plpgsql AS $$
+-- NULL while backend p still runs the statement that started at qs, else
+-- when it left it: the state_change the backend stamped as it went idle, or
+-- the start of its next statement (an upper bound), or now if the backend
+-- is gone.  The backend's own stamps do not depend on how promptly the
+-- caller polls.
+CREATE OR REPLACE FUNCTION tdc_hard.ended(p int, qs timestamptz) RETURNS timestamptz LANGUAGE plpgsql AS $$
+DECLARE
+	st text;
+	q timestamptz;
+	sc timestamptz;
 BEGIN
 	PERFORM pg_stat_clear_snapshot();
-	RETURN EXISTS (SELECT 1 FROM pg_stat_activity a WHERE a.pid = p AND a.state = 'active' AND a.query_start = qs);
+	SELECT a.state, a.query_start, a.state_change INTO st, q, sc FROM pg_stat_activity a WHERE a.pid = p;
+	IF NOT FOUND THEN
+		RETURN clock_timestamp();
+	ELSIF q IS DISTINCT FROM qs THEN
+		RETURN q;
+	ELSIF st = 'active' THEN
+		RETURN NULL;
+	END IF;
+	RETURN sc;
 END $$;
 
 CREATE OR REPLACE FUNCTION tdc_hard.hit(tag text, base text, offset_ms float8, kind text)
@@ -105,11 +152,13 @@ DECLARE
 	p int;
 	qs timestamptz;
 	t0 timestamptz;
+	t_end timestamptz;
 	th int := 0;
 	e_start timestamptz;
 	e_end timestamptz;
 	b timestamptz;
 	phase text;
+	sent bool;
 	pat text := '%''' || tag || ''' <>%';
 	deadline timestamptz := clock_timestamp() + interval '300 s';
 BEGIN
@@ -132,9 +181,10 @@ BEGIN
 		END IF;
 		b := CASE base WHEN 'start' THEN qs WHEN 'engine' THEN e_start WHEN 'writing' THEN e_end END;
 		EXIT WHEN kind <> 'watch' AND b IS NOT NULL AND clock_timestamp() >= b + offset_ms * interval '1 ms';
-		IF NOT tdc_hard.active(p, qs) THEN
+		t_end := tdc_hard.ended(p, qs);
+		IF t_end IS NOT NULL THEN
 			IF kind = 'watch' THEN
-				RETURN round(extract(epoch FROM clock_timestamp() - qs) * 1000) || ' ' ||
+				RETURN round(extract(epoch FROM t_end - qs) * 1000) || ' ' ||
 					   coalesce(round(extract(epoch FROM e_start - qs) * 1000), -1) || ' ' ||
 					   coalesce(round(extract(epoch FROM e_end - qs) * 1000), -1);
 			ELSIF kind <> 'timeout' THEN
@@ -150,22 +200,28 @@ BEGIN
 	phase := CASE WHEN th > 1 THEN 'engine' WHEN e_start IS NOT NULL THEN 'writing' ELSE 'reading' END;
 	IF kind = 'timeout' THEN
 		t0 := qs + offset_ms * interval '1 ms';
-	ELSE
-		t0 := clock_timestamp();
-		IF kind = 'cancel' THEN
-			PERFORM pg_cancel_backend(p);
-		ELSE
-			PERFORM pg_terminate_backend(p);
+	ELSIF t_end IS NULL THEN
+		-- the check and the signal in one query: only this backend, only
+		-- while it still runs this statement
+		PERFORM pg_stat_clear_snapshot();
+		SELECT clock_timestamp(),
+			   CASE kind WHEN 'cancel' THEN pg_cancel_backend(a.pid) ELSE pg_terminate_backend(a.pid) END
+		INTO t0, sent
+		FROM pg_stat_activity a
+		WHERE a.pid = p AND a.state = 'active' AND a.query_start = qs AND a.query LIKE pat;
+		IF t0 IS NULL THEN
+			RETURN '-1 ended';
 		END IF;
 	END IF;
 	LOOP
-		EXIT WHEN NOT tdc_hard.active(p, qs);
+		t_end := coalesce(t_end, tdc_hard.ended(p, qs));
+		EXIT WHEN t_end IS NOT NULL;
 		IF clock_timestamp() > t0 + interval '300 s' THEN
 			RAISE EXCEPTION 'statement tagged % still running', tag;
 		END IF;
 		PERFORM pg_sleep(0.0005);
 	END LOOP;
-	RETURN greatest(0, round((extract(epoch FROM clock_timestamp() - t0) * 1000)::numeric, 1)) || ' ' || phase
+	RETURN round((extract(epoch FROM t_end - t0) * 1000)::numeric, 1) || ' ' || phase
 		|| ' ' || round((extract(epoch FROM t0) * 1000)::numeric, 1);
 END $$;
 
@@ -187,14 +243,55 @@ BEGIN
 		PERFORM pg_sleep(0.001);
 	END LOOP;
 END $$;
+
+-- ... and this right after it: it returns once hit() for the tag has
+-- finished, i.e. has sent its one signal (or decided not to) and seen the
+-- statement end.  A signal that arrives after the statement had already
+-- finished lands here (or on the idle backend, which drops it), never on
+-- the statements that follow.
+CREATE OR REPLACE FUNCTION tdc_hard.watcher_done(tag text)
+RETURNS text LANGUAGE plpgsql AS $$
+DECLARE
+	pat text := '%hit(''' || tag || '%';
+	deadline timestamptz := clock_timestamp() + interval '300 s';
+BEGIN
+	LOOP
+		PERFORM pg_stat_clear_snapshot();
+		EXIT WHEN NOT EXISTS (SELECT 1 FROM pg_stat_activity a
+							  WHERE a.pid <> pg_backend_pid() AND a.state = 'active' AND a.query LIKE pat);
+		IF clock_timestamp() > deadline THEN
+			RAISE EXCEPTION 'the watcher of % never finished', tag;
+		END IF;
+		PERFORM pg_sleep(0.001);
+	END LOOP;
+	RETURN 'watched ' || tag;
+END $$;
 EOF
 
-BIGQ="SELECT pg_column_size(ST_TDCDelaunay(geom)) FROM $TABLE"
+# bigq TAG: the statement under test, tagged; it prints "result TAG <size>"
+bigq() {
+	echo "SELECT 'result $1 ' || pg_column_size(ST_TDCDelaunay(geom)) FROM $TABLE WHERE '$1' <> ''"
+}
 PROBE="SELECT ST_NumGeometries(ST_TDCDelaunayTriangles('MULTIPOINT(0 0, 1 0, 0 1, 1 1)'))"
 # After a cancel the core hands the stopped job's memory to a detached thread
 # that unmaps it (tdc_job_free_background) while the error goes out; the
 # status is read once that thread is gone, and its lifetime reported last.
 STATUS="SELECT substring(s FROM 'VmRSS:\\s*(\\d+)') || ' ' || substring(s FROM 'Threads:\\s*(\\d+)') || ' ' || substring(s FROM 'RssAnon:\\s*(\\d+)') || ' ' || w FROM tdc_hard.settle() w, LATERAL pg_read_file('/proc/' || pg_backend_pid() || '/status', 0, 8192 + 0 * w) s"
+
+# sql_open FILE, then sql ROLE K STATEMENT...: write the session's statements
+# one per line, noting "LINE ROLE K" in FILE.map, so that the errors psql
+# reports ("psql:FILE:LINE: ERROR: ...") can be told apart by statement.
+sql_open() {
+	SQLF=$1
+	SQLN=0
+	: >"$SQLF"
+	: >"$SQLF.map"
+}
+sql() {
+	SQLN=$((SQLN + 1))
+	printf '%s;\n' "$3" >>"$SQLF"
+	echo "$SQLN $1 $2" >>"$SQLF.map"
+}
 
 # run_session FILE: the session under test runs FILE; stdout and stderr go to
 # one file, FILE.out, in order
@@ -202,24 +299,96 @@ run_session() {
 	bg_psql "$1" "$1.out" -
 }
 
-within() {
-	awk -v l="$1" -v m="$MAX_LATENCY_MS" 'BEGIN { exit !(l <= m) }'
+# run_errors FILE K: "ROLE MESSAGE" for every ERROR or FATAL that psql
+# reported for a statement of run K
+run_errors() {
+	awk -v k="$2" 'NR == FNR { if ($3 == k) role[$1] = $2; next }
+		match($0, /^psql:[^:]*:[0-9]+: (ERROR|FATAL): +/) {
+			split($0, f, ":")
+			if (f[3] in role) print role[f[3]], substr($0, RSTART + RLENGTH)
+		}' "$1.map" "$1.out"
 }
 
+within() {	# within MS LIMIT
+	awk -v l="$1" -v m="$2" 'BEGIN { exit !(l <= m) }'
+}
+
+# late_words MS: how a completed statement relates to its signal
+late_words() {
+	awk -v l="$1" 'BEGIN { if (l < 0) printf "the statement had ended %.1f ms before the signal", -l
+		else printf "the statement finished first, %.1f ms after the signal", l }'
+}
+
+CANCEL_RE='canceling statement due to \(user request\|statement timeout\)\|triangulation canceled'
 lat_all=()					# "kind phase ms"
 lat_gone=()					# terminate: until the backend was gone
+n_signalled=0
+n_measured=0
+n_late=0
+
+# judge LABEL KIND WATCHER-ANSWER FILE K TAG: the outcome of run K (tagged
+# TAG) of the session that ran FILE, from the watcher's answer and the
+# statements' errors and output.  Passes or fails the run and counts it as
+# measured or too late; a measured latency goes to lat_all.
+judge() {
+	local label=$1 kind=$2 res=$3 f=$4 k=$5 tag=$6
+	local lat phase errs target late other complete
+	read -r lat phase _ <<<"$res"
+	errs=$(run_errors "$f" "$k")
+	target=$(awk '$1 == "target" { sub(/^[^ ]* /, ""); print }' <<<"$errs")
+	late=$(awk '$1 == "guard" || $1 == "reset" { sub(/^[^ ]* /, ""); print }' <<<"$errs")
+	other=$(awk '$1 != "target" && $1 != "guard" && $1 != "reset"' <<<"$errs")
+	complete=0
+	! grep -q "^result $tag [0-9]" "$f.out" || complete=1
+	n_signalled=$((n_signalled + 1))
+	if [ "$lat" = error ]; then
+		fail "$label: the watcher failed: $res"
+	elif [ -n "$other" ]; then
+		fail "$label: another statement of the session got an error: $other"
+	elif [ -n "$late" ] && ! grep -q "$CANCEL_RE" <<<"$late"; then
+		fail "$label: the statement after it failed: $late"
+	elif [ -n "$target" ]; then
+		if ((complete)) || [ -n "$late" ] || [ "$(wc -l <<<"$target")" -ne 1 ] || ! grep -q "$CANCEL_RE" <<<"$target"; then
+			fail "$label ($phase): the session did not see exactly one cancel error: $target${late:+; then: $late}"
+		elif [ "$phase" = ended ]; then
+			fail "$label: cancelled although the watcher sent nothing: $target"
+		else
+			n_measured=$((n_measured + 1))
+			lat_all+=("$kind $phase $lat")
+			if within "$lat" "$MAX_LATENCY_MS"; then
+				pass "$label ($phase): answered in $lat ms"
+			else
+				fail "$label ($phase): answered in $lat ms (> $MAX_LATENCY_MS ms)"
+			fi
+		fi
+	elif ((!complete)); then
+		fail "$label: neither a result nor an error: $(grep -v '^\(begin\|after\|watched\|rss\) ' "$f.out" | tail -n 2 | tr '\n' ' ')"
+	elif [ "$phase" = ended ] || ! within "$lat" "$MAX_LATENCY_MS"; then
+		# ended before the signal time, or finished quickly after a signal
+		# that came too late; but a statement that runs on for longer than
+		# the limit after its signal and then completes ignored it
+		if [ "$phase" = ended ]; then
+			n_late=$((n_late + 1))
+			echo "  $label: too late, the statement had ended before the signal time"
+		else
+			fail "$label ($phase): the signal was ignored, the statement completed $lat ms after it"
+		fi
+	else
+		n_late=$((n_late + 1))
+		echo "  $label ($phase): too late, $(late_words "$lat")${late:+; the signal then cancelled the guard statement}"
+	fi
+}
 
 # --- 1. calibration: two uncancelled runs ------------------------------------
 cal=$WORK/cal.sql
-{
-	for k in 1 2; do
-		echo "SELECT tdc_hard.wait_for_watcher('cal:$k:');"
-		echo "$BIGQ WHERE 'cal:$k:' <> '';"
-		# a big job is unmapped on a thread of its own after the statement:
-		# let it go, or the next run's watcher takes it for the engine
-		echo "SELECT tdc_hard.settle();"
-	done
-} >"$cal"
+sql_open "$cal"
+for k in 1 2; do
+	sql wait "$k" "SELECT tdc_hard.wait_for_watcher('cal:$k:')"
+	sql target "$k" "$(bigq "cal:$k:")"
+	# a big job is unmapped on a thread of its own after the statement:
+	# let it go, or the next run's watcher takes it for the engine
+	sql settle "$k" "SELECT tdc_hard.settle()"
+done
 run_session "$cal"
 best=
 for k in 1 2; do
@@ -229,7 +398,7 @@ for k in 1 2; do
 done
 wait "${HARD_BG[-1]}" || true
 read -r T_MS E0 E1 <<<"$best"
-check "uncancelled runs return a result" test "$(grep -c '^[0-9]\{6,\}$' "$cal.out")" -eq 2
+check "uncancelled runs return a result" test "$(grep -c '^result cal:[12]: [0-9]\{6,\}$' "$cal.out")" -eq 2
 check "calibration saw the engine phase ($E0 .. $E1 of $T_MS ms)" test "$E0" -gt 0 -a "$E1" -gt "$E0"
 ED=$((E1 - E0))
 WD=$((T_MS - E1))
@@ -250,27 +419,27 @@ fi
 # --- 2. cancel and statement_timeout in one session -------------------------
 sweep=$WORK/sweep.sql
 runs=()
-{
-	echo "SELECT 'pid ' || pg_backend_pid();"
-	k=0
-	for at in "${POINTS_AT[@]}"; do
-		k=$((k + 1))
-		runs+=("$k cancel $at")
-	done
-	for d in "${TIMEOUTS[@]}"; do
-		k=$((k + 1))
-		runs+=("$k timeout start $d")
-	done
-	for r in "${runs[@]}"; do
-		read -r k kind base off <<<"$r"
-		echo "SELECT 'begin $k';"
-		echo "SELECT tdc_hard.wait_for_watcher('run:$k:');"
-		[ "$kind" != timeout ] || echo "SET statement_timeout = $off;"
-		echo "$BIGQ WHERE 'run:$k:' <> '';"
-		echo "RESET statement_timeout;"
-		echo "SELECT 'after $k ' || ($PROBE) || ' ' || ($STATUS);"
-	done
-} >"$sweep"
+k=0
+for at in "${POINTS_AT[@]}"; do
+	k=$((k + 1))
+	runs+=("$k cancel $at")
+done
+for d in "${TIMEOUTS[@]}"; do
+	k=$((k + 1))
+	runs+=("$k timeout start $d")
+done
+sql_open "$sweep"
+sql pid 0 "SELECT 'pid ' || pg_backend_pid()"
+for r in "${runs[@]}"; do
+	read -r k kind base off <<<"$r"
+	sql begin "$k" "SELECT 'begin $k'"
+	sql wait "$k" "SELECT tdc_hard.wait_for_watcher('run:$k:')"
+	[ "$kind" != timeout ] || sql set "$k" "SET statement_timeout = $off"
+	sql target "$k" "$(bigq "run:$k:")"
+	[ "$kind" != timeout ] || sql reset "$k" "RESET statement_timeout"
+	sql guard "$k" "SELECT tdc_hard.watcher_done('run:$k:')"
+	sql probe "$k" "SELECT 'after $k ' || ($PROBE) || ' ' || ($STATUS)"
+done
 run_session "$sweep"
 sweep_pid=${HARD_BG[-1]}
 declare -A RESULT=()
@@ -280,37 +449,9 @@ for r in "${runs[@]}"; do
 	RESULT[$k]=$res
 done
 wait "$sweep_pid" || true
-missed=0
 for r in "${runs[@]}"; do
 	read -r k kind base off <<<"$r"
-	read -r lat phase _ <<<"${RESULT[$k]}"
-	# what the session printed for this run, between its markers
-	block=$(sed -n "/^begin $k\$/,/^after $k /p" "$sweep.out")
-	errs=$(grep 'ERROR' <<<"$block" || true)
-	label="$kind at $base+$off ms"
-	if [ "$lat" = error ]; then
-		fail "$label: the watcher failed: ${RESULT[$k]}"
-	elif [ "$lat" = -1 ] || { [ "$kind" = timeout ] && [ -z "$errs" ]; }; then
-		echo "  $label: the statement ended before the signal"
-		missed=$((missed + 1))
-		[ -z "$errs" ] || fail "$label: ended before the signal but the session saw: $errs"
-	elif [ -z "$errs" ] && [ "$phase" = writing ] && grep -q '^[0-9]\{6,\}$' <<<"$block"; then
-		# the worker threads are gone and the value is being handed back:
-		# a cancel that lands after the statement's last interrupt check
-		# finds it complete.  Only here; in the other phases it must stop it.
-		echo "  $label: the result was complete before the signal took effect"
-		missed=$((missed + 1))
-	elif ! grep -q 'canceling statement due to \(user request\|statement timeout\)\|triangulation canceled' <<<"$errs" ||
-		[ "$(wc -l <<<"$errs")" -ne 1 ]; then
-		fail "$label ($phase): the session did not see exactly one cancel error: ${errs:-none}"
-	else
-		lat_all+=("$kind $phase $lat")
-		if within "$lat"; then
-			pass "$label ($phase): answered in $lat ms"
-		else
-			fail "$label ($phase): answered in $lat ms (> $MAX_LATENCY_MS ms)"
-		fi
-	fi
+	judge "$kind at $base+$off ms" "$kind" "${RESULT[$k]}" "$sweep" "$k" "run:$k:"
 done
 nafter=$(grep -c '^after [0-9]* 2 ' "$sweep.out" || true)
 check "session usable after every run ($nafter of ${#runs[@]} probes)" test "$nafter" -eq "${#runs[@]}"
@@ -318,21 +459,22 @@ threads_left=$(awk '/^after/ { print $5 }' "$sweep.out" | sort -u | tr '\n' ' ')
 reaper_max=$(awk '/^after/ && $7 > m { m = $7 } END { print m + 0 }' "$sweep.out")
 echo "  the detached thread unmapping a cancelled job's memory was gone within $reaper_max ms of the next statement"
 check "no engine threads left after a cancel, the unmapping thread gone within 5 s (Threads: $threads_left)" test "$threads_left" = "1 "
-((missed <= ${#runs[@]} / 4)) || fail "too many runs ended before their signal ($missed): the calibration is off"
 
 # --- 3. terminate, one session per run ---------------------------------------
 # Two figures: until the client got the FATAL (psql exits when its
 # connection is closed; its exit time is taken on the same clock as the
-# server's), which is the latency the limit applies to, and until the
-# backend is gone from pg_stat_activity (it still aborts its transaction and
-# frees its memory after sending the FATAL), which must stay under 1 s.
+# server's, with bash's $EPOCHREALTIME, no process to start), which is the
+# latency the limit applies to, and until the backend is gone from
+# pg_stat_activity (it still aborts its transaction and frees its memory
+# after sending the FATAL), which must stay under GONE_MS.  The watcher polls
+# for that, so on a loaded machine this figure carries its delay too.
 k=100
 for at in "${TERM_AT[@]}"; do
 	k=$((k + 1))
 	read -r base off <<<"$at"
 	(
-		psql -X -A -t -v ON_ERROR_STOP=1 -c "$BIGQ WHERE 'run:$k:' <> ''" >"$WORK/term$k.out" 2>&1 || true
-		date +%s%N >"$WORK/term$k.end"
+		psql -X -A -t -v ON_ERROR_STOP=1 -c "$(bigq "run:$k:")" >"$WORK/term$k.out" 2>&1 || true
+		echo "${EPOCHREALTIME/,/.}" >"$WORK/term$k.end"
 	) &
 	HARD_BG+=($!)
 	tp=$!
@@ -340,54 +482,64 @@ for at in "${TERM_AT[@]}"; do
 	wait "$tp" || true
 	read -r lat phase t0ms <<<"$res"
 	label="terminate at $base+$off ms"
+	n_signalled=$((n_signalled + 1))
 	if [ "$lat" = error ]; then
 		fail "$label: the watcher failed: $res"
-	elif [ "$lat" = -1 ]; then
-		echo "  $label: the statement ended before the signal"
-	elif [ "$phase" = writing ] && grep -q '^[0-9]\{6,\}$' "$WORK/term$k.out"; then
-		echo "  $label: the result was complete before the signal took effect"
-	elif ! grep -q 'terminating connection due to administrator command' "$WORK/term$k.out"; then
-		fail "$label ($phase): no FATAL seen by the client: $(head -n1 "$WORK/term$k.out")"
-	else
-		client=$(awk -v e="$(cat "$WORK/term$k.end")" -v t="$t0ms" 'BEGIN { printf "%.1f", e / 1e6 - t }')
+	elif grep -q "^result run:$k: [0-9]" "$WORK/term$k.out"; then
+		# completed: the signal came too late, unless the statement ran on
+		# for longer than the limit after it
+		if [ "$phase" = ended ]; then
+			n_late=$((n_late + 1))
+			echo "  $label: too late, the statement had ended before the signal time"
+		elif within "$lat" "$MAX_LATENCY_MS"; then
+			n_late=$((n_late + 1))
+			echo "  $label ($phase): too late, $(late_words "$lat")"
+		else
+			fail "$label ($phase): the signal was ignored, the statement completed $lat ms after it"
+		fi
+	elif grep -q 'terminating connection due to administrator command' "$WORK/term$k.out"; then
+		client=$(awk -v e="$(cat "$WORK/term$k.end")" -v t="$t0ms" 'BEGIN { printf "%.1f", e * 1000 - t }')
+		n_measured=$((n_measured + 1))
 		lat_all+=("terminate $phase $client")
 		lat_gone+=("$lat")
-		if within "$client" && awk -v l="$lat" 'BEGIN { exit !(l <= 1000) }'; then
+		if [ "$phase" != ended ] && within "$client" "$MAX_LATENCY_MS" && within "$lat" "$GONE_MS"; then
 			pass "$label ($phase): client saw the FATAL after $client ms, backend gone after $lat ms"
 		else
-			fail "$label ($phase): client saw the FATAL after $client ms, backend gone after $lat ms (limits $MAX_LATENCY_MS / 1000 ms)"
+			fail "$label ($phase): client saw the FATAL after $client ms, backend gone after $lat ms (limits $MAX_LATENCY_MS / $GONE_MS ms)"
 		fi
+	else
+		fail "$label ($phase): neither the FATAL nor a result: $(head -n1 "$WORK/term$k.out")"
 	fi
 done
 
 # --- 4. RSS after 1 and after RSS_RUNS cancelled runs ------------------------
 RSS_AT=("engine $((ED / 3))" "start $((E0 / 2))" "engine $((ED * 4 / 5))" "writing $((WD / 3))")
 rss=$WORK/rss.sql
-{
-	echo "SELECT 'start ' || ($STATUS);"
-	echo "$BIGQ;"
-	echo "SELECT 'warm ' || ($STATUS);"
-	for ((k = 1; k <= RSS_RUNS; k++)); do
-		echo "SELECT tdc_hard.wait_for_watcher('rss:$k:');"
-		echo "$BIGQ WHERE 'rss:$k:' <> '';"
-		echo "SELECT 'rss $k ' || ($STATUS);"
-	done
-} >"$rss"
+sql_open "$rss"
+sql status 0 "SELECT 'start ' || ($STATUS)"
+sql warm 0 "$(bigq warm)"
+sql status 0 "SELECT 'warm ' || ($STATUS)"
+for ((k = 1; k <= RSS_RUNS; k++)); do
+	sql wait "$k" "SELECT tdc_hard.wait_for_watcher('rss:$k:')"
+	sql target "$k" "$(bigq "rss:$k:")"
+	sql guard "$k" "SELECT tdc_hard.watcher_done('rss:$k:')"
+	sql status "$k" "SELECT 'rss $k ' || ($STATUS)"
+done
 run_session "$rss"
 rss_pid=${HARD_BG[-1]}
-rss_cancelled=0
+declare -A RSS_RES=()
 for ((k = 1; k <= RSS_RUNS; k++)); do
 	read -r base off <<<"${RSS_AT[$(((k - 1) % ${#RSS_AT[@]}))]}"
-	res=$(hpsql -c "SELECT tdc_hard.hit('rss:$k:', '$base', $off, 'cancel')" 2>&1) || res="error"
-	read -r lat phase _ <<<"$res"
-	echo "  rss run $k: cancel at $base+$off ms ($phase): $lat ms"
-	if [ "$lat" != -1 ] && [ "$lat" != error ]; then
-		rss_cancelled=$((rss_cancelled + 1))
-		lat_all+=("cancel $phase $lat")
-		within "$lat" || fail "rss run $k: cancel at $base+$off ms ($phase) answered in $lat ms (> $MAX_LATENCY_MS ms)"
-	fi
+	res=$(hpsql -c "SELECT tdc_hard.hit('rss:$k:', '$base', $off, 'cancel')" 2>&1) || res="error ${res//$'\n'/ }"
+	RSS_RES[$k]=$res
 done
 wait "$rss_pid" || true
+m0=$n_measured
+for ((k = 1; k <= RSS_RUNS; k++)); do
+	read -r base off <<<"${RSS_AT[$(((k - 1) % ${#RSS_AT[@]}))]}"
+	judge "rss run $k: cancel at $base+$off ms" cancel "${RSS_RES[$k]}" "$rss" "$k" "rss:$k:"
+done
+rss_cancelled=$((n_measured - m0))
 field() {	# field LINE-PREFIX N
 	awk -v p="$1" -v n="$2" 'index($0, p) == 1 { print $n }' "$rss.out" | tail -n1
 }
@@ -398,11 +550,14 @@ rss1=$(field 'rss 1 ' 3)
 anon1=$(field 'rss 1 ' 5)
 rssN=$(field "rss $RSS_RUNS " 3)
 anonN=$(field "rss $RSS_RUNS " 5)
-echo "  backend VmRSS: start ${rss_start:-?} kB, after a complete run ${rss_warm:-?} kB, after 1 cancelled run ${rss1:-?} kB, after $RSS_RUNS ${rssN:-?} kB"
-echo "  backend RssAnon: after a complete run ${anon_warm:-?} kB, after 1 cancelled run ${anon1:-?} kB, after $RSS_RUNS ${anonN:-?} kB"
+echo "  backend VmRSS: start ${rss_start:-?} kB, after a complete run ${rss_warm:-?} kB, after 1 run ${rss1:-?} kB, after $RSS_RUNS ${rssN:-?} kB"
+echo "  backend RssAnon: after a complete run ${anon_warm:-?} kB, after 1 run ${anon1:-?} kB, after $RSS_RUNS ${anonN:-?} kB"
 echo "  VmRSS by run (kB):   $(awk '/^rss / { printf "%s ", $3 }' "$rss.out")"
 echo "  RssAnon by run (kB): $(awk '/^rss / { printf "%s ", $5 }' "$rss.out")"
-check "RSS runs cancelled ($rss_cancelled of $RSS_RUNS)" test "$rss_cancelled" -ge $((RSS_RUNS * 3 / 4))
+check "status read after every RSS run ($(grep -c '^rss ' "$rss.out" || true) of $RSS_RUNS)" test "$(grep -c '^rss ' "$rss.out" || true)" -eq "$RSS_RUNS"
+# a run whose signal came too late completed instead: it still frees all
+# its memory, so it does not spoil the comparison; but most must be cancels
+check "RSS runs cancelled ($rss_cancelled of $RSS_RUNS, at least half)" test $((rss_cancelled * 2)) -ge "$RSS_RUNS"
 if ((QUICK)); then
 	# A few runs of 1M points: where a cancel lands decides how far the
 	# backend's point buffer had grown, and the allocator keeps some of it, so
@@ -415,7 +570,7 @@ if ((QUICK)); then
 		for (i = 1; i <= h; i++) if (v[i] > a) a = v[i];
 		for (i = h + 1; i <= n; i++) if (v[i] > b) b = v[i]; print a, b }' "$rss.out")
 	read -r first_half second_half <<<"$halves"
-	check "private RSS (RssAnon) peak of the last $((RSS_RUNS - RSS_RUNS / 2)) cancelled runs within 10% + 48 MB of the first $((RSS_RUNS / 2)) ($first_half -> $second_half kB)" \
+	check "private RSS (RssAnon) peak of the last $((RSS_RUNS - RSS_RUNS / 2)) runs within 10% + 48 MB of the first $((RSS_RUNS / 2)) ($first_half -> $second_half kB)" \
 		awk -v a="${first_half:-0}" -v b="${second_half:-0}" 'BEGIN { exit !(a > 0 && b > 0 && b <= a * 1.10 + 49152) }'
 else
 	check "private RSS (RssAnon) after $RSS_RUNS cancelled runs within 10% of after 1 (${anon1:-?} -> ${anonN:-?} kB)" \
@@ -428,6 +583,8 @@ else
 fi
 
 # --- 5. figures, postmaster ---------------------------------------------------
+echo "signals: $n_signalled sent, $n_measured cancelled the statement, $n_late too late (the statement finished first: a note, not a failure)"
+check "at least half of the signalled runs were cancelled ($n_measured of $n_signalled)" test $((n_measured * 2)) -ge "$n_signalled"
 for kind in cancel timeout terminate; do
 	echo "latency $kind (ms): $(printf '%s\n' "${lat_all[@]+"${lat_all[@]}"}" | awk -v k="$kind" '$1 == k { print $3 }' | stats_line)"
 done
@@ -435,9 +592,11 @@ echo "terminate, until the backend was gone (ms): $(printf '%s\n' "${lat_gone[@]
 for ph in reading engine writing; do
 	echo "latency in phase $ph (ms): $(printf '%s\n' "${lat_all[@]+"${lat_all[@]}"}" | awk -v p="$ph" '$2 == p { print $3 }' | stats_line)"
 done
+echo "within the quiet machine's ${STRICT_MS} ms (reported, not checked; the limit is ${MAX_LATENCY_MS} ms):" \
+	"$(printf '%s\n' "${lat_all[@]+"${lat_all[@]}"}" | awk -v s="$STRICT_MS" 'NF == 3 { n++; if ($3 <= s) w++ } END { printf "%d of %d", w, n }')"
 check_postmaster
 if [ -z "${KEEP:-}" ]; then
 	hpsql -c "DROP FUNCTION tdc_hard.hit(text, text, float8, text), tdc_hard.wait_for_watcher(text),
-		tdc_hard.threads(int), tdc_hard.active(int, timestamptz)" >/dev/null
+		tdc_hard.watcher_done(text), tdc_hard.threads(int), tdc_hard.settle(), tdc_hard.ended(int, timestamptz)" >/dev/null
 fi
 finish
