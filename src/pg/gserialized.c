@@ -107,6 +107,9 @@ typedef struct GserWalk
  */
 #define WALK_BATCH			65536
 
+/* Vertices worth a system call to map in their pages ahead (64 kB). */
+#define PREFAULT_MIN		4096
+
 static const char *
 curve_name(uint32 type)
 {
@@ -219,10 +222,26 @@ read_bytes(GserWalk *w, void *dst, uint64 n)
 }
 
 /*
- * Store n vertices of the value, read at v, at xy (and z): x and y for the
- * core, z aside, m dropped.  Returns false when a coordinate kept is not
- * finite (the caller raises the error: this loop has no branch to leave).
+ * Store the vertex at v at xy (and z): x and y for the core, z aside, m
+ * dropped.  Returns false when a coordinate kept is not finite (the caller
+ * raises the error, so that loops over many vertices have no branch).
  */
+static inline bool
+store_vertex(const char *v, double *xy, double *z)
+{
+	double		c[3];
+
+	memcpy(c, v, 2 * sizeof(double));
+	xy[0] = c[0];
+	xy[1] = c[1];
+	if (z == NULL)
+		return isfinite(c[0]) & isfinite(c[1]);
+	memcpy(&c[2], v + 2 * sizeof(double), sizeof(double));
+	z[0] = c[2];
+	return isfinite(c[0]) & isfinite(c[1]) & isfinite(c[2]);
+}
+
+/* The same for n vertices in a row. */
 static bool
 store_vertices(const GserWalk *w, const char *v, Size n, double *xy,
 			   double *z)
@@ -237,20 +256,23 @@ store_vertices(const GserWalk *w, const char *v, Size n, double *xy,
 		return ok;
 	}
 	for (Size i = 0; i < n; i++)
-	{
-		double		c[3];
-
-		memcpy(c, v + i * w->vsize, (w->hasz ? 3 : 2) * sizeof(double));
-		xy[2 * i] = c[0];
-		xy[2 * i + 1] = c[1];
-		ok &= isfinite(c[0]) & isfinite(c[1]);
-		if (z != NULL)
-		{
-			z[i] = c[2];
-			ok &= isfinite(c[2]);
-		}
-	}
+		ok &= store_vertex(v + i * w->vsize, xy + 2 * i, z ? z + i : NULL);
 	return ok;
+}
+
+/*
+ * About to store n vertices at the end of a big buffer: map in their pages
+ * in one call, not one page fault at a time, which took a fifth of the time
+ * of reading a big value.  Small batches are left to fault as usual.
+ */
+static void
+prefault_batch(const TdcPointBuf *buf, Size n)
+{
+	if (n < PREFAULT_MIN)
+		return;
+	tdc_prefault(buf->xy + 2 * buf->n, n * 2 * sizeof(double));
+	if (buf->z != NULL)
+		tdc_prefault(buf->z + buf->n, n * sizeof(double));
 }
 
 /* The vertices of one point list, appended to the buffer. */
@@ -278,6 +300,7 @@ walk_points(GserWalk *w, uint32 npoints)
 		k = Min(Min((Size) left, WALK_BATCH), (Size) (w->pend - w->p) / w->vsize);
 		if (k > 0)
 		{
+			prefault_batch(buf, k);
 			ok = store_vertices(w, w->p, k, xy, z);
 			w->p += k * w->vsize;
 		}
@@ -328,6 +351,7 @@ walk_multipoint(GserWalk *w, uint32 count)
 		bool		ok = true;
 
 		tdc_pointbuf_reserve(buf, k, w->fname);
+		prefault_batch(buf, k);
 		xy = buf->xy + 2 * buf->n;
 		z = w->hasz ? buf->z + buf->n : NULL;
 		for (i = 0; i < k; i++)
@@ -336,7 +360,7 @@ walk_multipoint(GserWalk *w, uint32 count)
 
 			if (read_u32(m) != G_POINT || read_u32(m + 4) != 1)
 				break;
-			ok &= store_vertices(w, m + 8, 1, xy + 2 * i, z ? z + i : NULL);
+			ok &= store_vertex(m + 8, xy + 2 * i, z ? z + i : NULL);
 		}
 		if (!ok)
 			nonfinite(w);

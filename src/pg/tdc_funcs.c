@@ -791,6 +791,24 @@ compressed_next(TdcGserSource *src, const char **data, Size *len)
 	return true;
 }
 
+/* CONTEXT of an ERROR (a cancel included) raised while reading a value. */
+static void
+toast_read_context(void *arg)
+{
+	const ToastReader *r = arg;
+	const char *method = r->method == TOAST_LZ4_COMPRESSION_ID ? "lz4" : "pglz";
+
+	if (r->toastrel != NULL && r->method == -1)
+		errcontext("reading a geometry value of %llu bytes stored out of line",
+				   (unsigned long long) r->rawsize);
+	else if (r->toastrel != NULL)
+		errcontext("reading a geometry value of %llu bytes stored out of line, compressed with %s",
+				   (unsigned long long) r->rawsize, method);
+	else
+		errcontext("reading a geometry value of %llu bytes compressed with %s",
+				   (unsigned long long) r->rawsize, method);
+}
+
 /*
  * Read a value stored out of line or compressed into buf, a slice at a time
  * (see the top of this file); returns false, having read nothing, for any
@@ -800,6 +818,7 @@ static bool
 read_toasted_value(TdcPointBuf *buf, struct varlena *attr, const char *fname)
 {
 	ToastReader r;
+	ErrorContextCallback errcb;
 
 	memset(&r, 0, sizeof(r));
 	r.fname = fname;
@@ -833,6 +852,12 @@ read_toasted_value(TdcPointBuf *buf, struct varlena *attr, const char *fname)
 	}
 	else
 		return false;
+
+	/* from here on an ERROR, a cancel included, says what was being read */
+	errcb.callback = toast_read_context;
+	errcb.arg = &r;
+	errcb.previous = error_context_stack;
+	error_context_stack = &errcb;
 
 	r.src.size = r.rawsize;
 	if (r.method == -1)
@@ -876,6 +901,8 @@ read_toasted_value(TdcPointBuf *buf, struct varlena *attr, const char *fname)
 		if (r.step != LZ4_END || r.in != r.in_end || r.fetched != r.stored)
 			toast_corrupt(&r);
 	}
+	error_context_stack = errcb.previous;
+
 	if (r.toastrel != NULL)
 		table_close(r.toastrel, AccessShareLock);
 	if (r.slice)
