@@ -56,6 +56,7 @@
 #include "executor/spi.h"
 #include "funcapi.h"
 #include "miscadmin.h"
+#include "portability/instr_time.h"
 #include "utils/builtins.h"
 #include "utils/lsyscache.h"
 #include "utils/memutils.h"
@@ -169,22 +170,58 @@ effective_threads(void)
 	return Min(t, ceiling);
 }
 
-static void
-report_stats(const tdc_job *job, const char *fname)
+/* What the stats NOTICE reports of a finished job, kept past its free. */
+typedef struct RunStats
 {
+	size_t		input;
+	size_t		sites;
+	size_t		triangles;
+	size_t		edges;
+	int			threads;
+	int			levels;
+	int			grid;
 	tdc_times	t;
+} RunStats;
 
-	tdc_job_times(job, &t);
+static void
+stats_take(const tdc_job *job, RunStats *st)
+{
+	st->input = tdc_num_input(job);
+	st->sites = tdc_num_sites(job);
+	st->triangles = tdc_num_triangles(job);
+	st->edges = tdc_num_edges(job);
+	st->threads = tdc_threads_used(job);
+	st->levels = tdc_levels_used(job);
+	st->grid = tdc_grid_used(job);
+	tdc_job_times(job, &st->t);
+}
+
+/*
+ * The stats NOTICE.  phases: more figures, measured outside the core
+ * (reading, writing, freeing), appended to the DETAIL; "" for none.
+ */
+static void
+stats_report(const RunStats *st, const char *fname, const char *phases)
+{
 	ereport(NOTICE,
 			(errmsg("%s: %zu input points, %zu sites, %zu triangles, %zu edges",
-					fname, tdc_num_input(job), tdc_num_sites(job),
-					tdc_num_triangles(job), tdc_num_edges(job)),
-			 errdetail("threads %d, levels %d, grid %d; sort %.3f ms, subdivide %.3f ms, leaves %.3f ms, merge %.3f ms, total %.3f ms",
-					   tdc_threads_used(job), tdc_levels_used(job),
-					   tdc_grid_used(job),
-					   t.sort * 1000.0, t.subdivide * 1000.0,
-					   t.leaves * 1000.0, t.merge * 1000.0,
-					   t.total * 1000.0)));
+					fname, st->input, st->sites, st->triangles, st->edges),
+			 errdetail("threads %d, levels %d, grid %d; sort %.3f ms, subdivide %.3f ms, leaves %.3f ms, merge %.3f ms, total %.3f ms%s",
+					   st->threads, st->levels, st->grid,
+					   st->t.sort * 1000.0, st->t.subdivide * 1000.0,
+					   st->t.leaves * 1000.0, st->t.merge * 1000.0,
+					   st->t.total * 1000.0, phases)));
+}
+
+/* Milliseconds since "start" (set with INSTR_TIME_SET_CURRENT). */
+static double
+ms_since(instr_time start)
+{
+	instr_time	now;
+
+	INSTR_TIME_SET_CURRENT(now);
+	INSTR_TIME_SUBTRACT(now, start);
+	return INSTR_TIME_GET_MILLISEC(now);
 }
 
 /*
@@ -313,9 +350,6 @@ tdc_run(const TdcPointBuf *buf, double tolerance, uint64 result_bytes,
 		report_core_error(rc, err, fname);
 	}
 	wait_for_job(run, fname);
-
-	if (tdc_guc_stats)
-		report_stats(run->job, fname);
 	return run;
 }
 
@@ -350,28 +384,65 @@ tdc_run_free(TdcRun *run)
 	}
 }
 
-/* Triangulate buf into one geometry value of the given kind. */
-Datum
-tdc_triangulate_to_datum(const TdcPointBuf *buf, double tolerance, int flags,
-						 const char *fname)
+/*
+ * Triangulate buf into one geometry value of the given kind.  read_ms: how
+ * long reading the input took, for the stats (< 0: not known).
+ */
+static Datum
+triangulate_to_datum(const TdcPointBuf *buf, double tolerance, int flags,
+					 const char *fname, double read_ms)
 {
 	TdcRun	   *run;
 	struct varlena *result;
 	TdcGserWriter w;
+	RunStats	st;
+	instr_time	start;
+	double		write_ms = 0;
 
 	if (buf->n == 0)
 		return PointerGetDatum(tdc_gser_empty(flags, buf->srid));
 
 	run = tdc_run(buf, tolerance,
 				  tdc_gser_result_bound(buf->n, flags, buf->hasz), fname);
+	if (tdc_guc_stats)
+	{
+		stats_take(run->job, &st);
+		INSTR_TIME_SET_CURRENT(start);
+	}
 	result = tdc_gser_result_alloc(run->job, flags, buf, fname, &w);
 	if (flags == TDC_OUT_EDGES || w.count == 0 ||
 		!tdc_run_emit(run, tdc_gser_emit, &w, fname))
 		tdc_gser_fill(&w);
 	/* freeing a big job takes a while: let a pending cancel in first */
 	CHECK_FOR_INTERRUPTS();
+	if (tdc_guc_stats)
+	{
+		write_ms = ms_since(start);
+		INSTR_TIME_SET_CURRENT(start);
+	}
 	tdc_run_free(run);
+	if (tdc_guc_stats)
+	{
+		char		phases[128];
+		double		free_ms = ms_since(start);
+
+		if (read_ms >= 0)
+			snprintf(phases, sizeof(phases), "; read %.3f ms, write %.3f ms, free %.3f ms",
+					 read_ms, write_ms, free_ms);
+		else
+			snprintf(phases, sizeof(phases), "; write %.3f ms, free %.3f ms",
+					 write_ms, free_ms);
+		stats_report(&st, fname, phases);
+	}
 	return PointerGetDatum(result);
+}
+
+/* Triangulate buf into one geometry value of the given kind. */
+Datum
+tdc_triangulate_to_datum(const TdcPointBuf *buf, double tolerance, int flags,
+						 const char *fname)
+{
+	return triangulate_to_datum(buf, tolerance, flags, fname, -1);
 }
 
 /* ----------------------------------------------------------------
@@ -934,12 +1005,17 @@ st_tdcdelaunaytriangles(PG_FUNCTION_ARGS)
 	int32		flags = PG_NARGS() > 2 ? PG_GETARG_INT32(2) : 0;
 	TdcPointBuf buf;
 
+	instr_time	start;
+
 	tdc_check_params(tolerance, flags, fname);
+	if (tdc_guc_stats)
+		INSTR_TIME_SET_CURRENT(start);
 	tdc_pointbuf_init(&buf, CurrentMemoryContext);
 	if (!read_toasted_value(&buf, arg, fname))
 		tdc_gser_append(&buf, PG_DETOAST_DATUM_PACKED(PointerGetDatum(arg)),
 						fname);
-	PG_RETURN_DATUM(tdc_triangulate_to_datum(&buf, tolerance, flags, fname));
+	PG_RETURN_DATUM(triangulate_to_datum(&buf, tolerance, flags, fname,
+										 tdc_guc_stats ? ms_since(start) : -1));
 }
 
 PG_FUNCTION_INFO_V1(st_tdcdelaunaydump);
@@ -986,6 +1062,13 @@ st_tdcdelaunaydump(PG_FUNCTION_ARGS)
 		return (Datum) 0;
 
 	run = tdc_run(&buf, tolerance, 0, fname);
+	if (tdc_guc_stats)
+	{
+		RunStats	st;
+
+		stats_take(run->job, &st);
+		stats_report(&st, fname, "");
+	}
 
 	tri = palloc(tdc_gser_triangle_size(buf.hasz));
 	it.pos = 0;
