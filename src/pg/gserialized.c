@@ -345,28 +345,32 @@ walk_multipoint(GserWalk *w, uint32 count)
 	{
 		Size		k = Min(Min((Size) left, WALK_BATCH),
 							(Size) (w->pend - w->p) / msize);
-		Size		i;
-		double	   *xy;
-		double	   *z;
-		bool		ok = true;
+		Size		i = 0;
 
-		tdc_pointbuf_reserve(buf, k, w->fname);
-		prefault_batch(buf, k);
-		xy = buf->xy + 2 * buf->n;
-		z = w->hasz ? buf->z + buf->n : NULL;
-		for (i = 0; i < k; i++)
+		if (k > 0)
 		{
-			const char *m = w->p + i * msize;
+			double	   *xy;
+			double	   *z;
+			bool		ok = true;
 
-			if (read_u32(m) != G_POINT || read_u32(m + 4) != 1)
-				break;
-			ok &= store_vertex(m + 8, xy + 2 * i, z ? z + i : NULL);
+			tdc_pointbuf_reserve(buf, k, w->fname);
+			prefault_batch(buf, k);
+			xy = buf->xy + 2 * buf->n;
+			z = w->hasz ? buf->z + buf->n : NULL;
+			for (; i < k; i++)
+			{
+				const char *m = w->p + i * msize;
+
+				if (read_u32(m) != G_POINT || read_u32(m + 4) != 1)
+					break;
+				ok &= store_vertex(m + 8, xy + 2 * i, z ? z + i : NULL);
+			}
+			if (!ok)
+				nonfinite(w);
+			w->p += i * msize;
+			buf->n += i;
+			left -= (uint32) i;
 		}
-		if (!ok)
-			nonfinite(w);
-		w->p += i * msize;
-		buf->n += i;
-		left -= (uint32) i;
 		if (i < k || k == 0)
 		{
 			/* one member the loop does not take */
