@@ -37,6 +37,29 @@
  * result; the check happens before the engine allocates, and the engine
  * gets what is left as its own max_memory.
  *
+ * Reading a big value.  ST_TDCDelaunayTriangles gets its argument as a
+ * TOAST pointer when the value is stored out of line (any value over about
+ * 2 kB unless it compresses below that; a collection of 5 million points is
+ * 120 MB, about 90 MB with pglz).  Detoasting it (PG_DETOAST_DATUM) would
+ * fetch all its chunks into one buffer, decompress it into a second, and
+ * only then let the walker copy the vertices into a third, all without an
+ * interrupt check: a cancel arriving then waited for the whole read, about a
+ * second for that value.  Instead the stored bytes are fetched a slice at a
+ * time (table_relation_fetch_toast_slice, 128 chunks, about 250 kB), and
+ * handed to the walker (gserialized.c) as they come; compressed bytes,
+ * stored out of line or in line, are decompressed a piece at a time into a
+ * window that keeps the last 4 kB (pglz) or 64 kB (lz4) of output, which is
+ * as far back as either format refers.  PostgreSQL offers no incremental
+ * decompression (its slice functions decompress from the start each time),
+ * so both formats are decoded here, with every length and offset checked
+ * against the input left, the output produced and the raw size announced:
+ * corrupt data is an ERROR, never a read or write outside the buffers.
+ * Interrupts are checked before every slice and piece (a few ms of work).
+ * Other values (in line and uncompressed, or an expanded or indirect datum,
+ * or compressed with a method this code does not know) are detoasted as
+ * before.  An ERROR raised while reading carries a CONTEXT line saying how
+ * the value was stored.
+ *
  * ST_TDCDelaunayDump runs a query through SPI (as the calling user: the
  * function is not SECURITY DEFINER), reads its single geometry column with a
  * cursor in batches, triangulates, and returns one POLYGON row per triangle

@@ -39,6 +39,13 @@
 #             frees; worker threads get their arenas).
 #   postmaster  pg_postmaster_start_time() unchanged: no backend crashed
 #
+# VALUE=1: the same for one big value instead of rows: tdc_hard.val5m holds
+# the points of tdc_hard.pts5m as one MULTIPOINT (ST_Collect, ~120 MB, which
+# PostgreSQL stores out of line, compressed with pglz), and the statement is
+#   SELECT pg_column_size(ST_TDCDelaunayTriangles(g)) FROM tdc_hard.val5m
+# whose "reading" phase is reading that value a slice at a time (fetching,
+# decompressing, parsing); the other phases are as above.
+#
 # QUICK=1: 1M points, fewer signal points, 6 runs for the RSS comparison,
 # which then allows 10% + 48 MB between the peaks of the first and second
 # half of the runs (allocator swings at this size; a leak is ~100 MB a run).
@@ -59,13 +66,24 @@ else
 	RSS_RUNS=${RSS_RUNS:-20}
 fi
 MAX_LATENCY_MS=${MAX_LATENCY_MS:-200}
+VALUE=${VALUE:-0}
 TABLE=tdc_hard.pts$((POINTS / 1000000))m
 ((POINTS % 1000000 == 0)) || TABLE=tdc_hard.pts$POINTS
 work_dir cancel
 
-echo "== cancel.sh: $POINTS points ($TABLE), latency limit ${MAX_LATENCY_MS} ms"
 server_begin
 make_points "${TABLE#tdc_hard.}" "$POINTS"
+if ((VALUE)); then
+	VTABLE=${TABLE/pts/val}
+	if [ -z "$(hpsql -c "SELECT to_regclass('$VTABLE')")" ] ||
+		[ "$(hpsql -c "SELECT ST_NPoints(g) FROM $VTABLE")" != "$POINTS" ]; then
+		hpsql -c "DROP TABLE IF EXISTS $VTABLE;
+			CREATE UNLOGGED TABLE $VTABLE AS SELECT ST_Collect(geom ORDER BY id) AS g FROM $TABLE" >/dev/null
+	fi
+	echo "== cancel.sh: one value of $POINTS points ($VTABLE: $(hpsql -c "SELECT pg_column_size(g) || ' bytes stored, ' || coalesce(pg_column_compression(g), 'uncompressed') FROM $VTABLE")), latency limit ${MAX_LATENCY_MS} ms"
+else
+	echo "== cancel.sh: $POINTS points ($TABLE), latency limit ${MAX_LATENCY_MS} ms"
+fi
 
 # tdc_hard.hit(tag, base, offset_ms, kind): find the active statement whose
 # text holds 'tag' <>, wait until offset_ms after base (start: statement
@@ -189,7 +207,11 @@ BEGIN
 END $$;
 EOF
 
-BIGQ="SELECT pg_column_size(ST_TDCDelaunay(geom)) FROM $TABLE"
+if ((VALUE)); then
+	BIGQ="SELECT pg_column_size(ST_TDCDelaunayTriangles(g)) FROM $VTABLE"
+else
+	BIGQ="SELECT pg_column_size(ST_TDCDelaunay(geom)) FROM $TABLE"
+fi
 PROBE="SELECT ST_NumGeometries(ST_TDCDelaunayTriangles('MULTIPOINT(0 0, 1 0, 0 1, 1 1)'))"
 # After a cancel the core hands the stopped job's memory to a detached thread
 # that unmaps it (tdc_job_free_background) while the error goes out; the
