@@ -33,6 +33,9 @@ CORE_CFLAGS = -std=c11 -D_GNU_SOURCE -O2 -g -Wall -Wextra -Wno-unused-parameter 
 CC_CORE ?= cc
 
 TEST_SRCS = $(sort $(wildcard test/test_*.c))
+# The core suite reads test/fixtures; the tree's own path makes it find them
+# from any current directory.
+TEST_CFLAGS = -Itest -DTDC_SOURCE_DIR='"$(CURDIR)"'
 
 .PHONY: check-core check-core-asan check-core-tsan test demo bench
 
@@ -41,7 +44,7 @@ tdc: src/cli/tdc.c $(CORE_SRCS) $(wildcard src/core/*.h)
 
 build/test_core: $(TEST_SRCS) $(wildcard test/*.h) $(CORE_SRCS) $(wildcard src/core/*.h)
 	@mkdir -p build
-	$(CC_CORE) $(CORE_CFLAGS) -Itest -o $@ $(TEST_SRCS) $(CORE_SRCS) -lgmp -lm
+	$(CC_CORE) $(CORE_CFLAGS) $(TEST_CFLAGS) -o $@ $(TEST_SRCS) $(CORE_SRCS) -lgmp -lm
 
 check-core: build/test_core
 	build/test_core
@@ -49,7 +52,7 @@ check-core: build/test_core
 build/test_core_asan: $(TEST_SRCS) $(wildcard test/*.h) $(CORE_SRCS) $(wildcard src/core/*.h)
 	@mkdir -p build
 	clang $(filter-out -O2,$(CORE_CFLAGS)) -O1 -fno-omit-frame-pointer \
-		-fsanitize=address,undefined -fno-sanitize-recover=all -Itest -o $@ \
+		-fsanitize=address,undefined -fno-sanitize-recover=all $(TEST_CFLAGS) -o $@ \
 		$(TEST_SRCS) $(CORE_SRCS) -lgmp -lm
 
 check-core-asan: build/test_core_asan
@@ -57,7 +60,7 @@ check-core-asan: build/test_core_asan
 
 build/test_core_tsan: $(TEST_SRCS) $(wildcard test/*.h) $(CORE_SRCS) $(wildcard src/core/*.h)
 	@mkdir -p build
-	clang $(filter-out -O2,$(CORE_CFLAGS)) -O1 -fsanitize=thread -Itest -o $@ \
+	clang $(filter-out -O2,$(CORE_CFLAGS)) -O1 -fsanitize=thread $(TEST_CFLAGS) -o $@ \
 		$(TEST_SRCS) $(CORE_SRCS) -lgmp -lm
 
 check-core-tsan: build/test_core_tsan

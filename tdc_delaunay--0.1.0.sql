@@ -10,7 +10,11 @@ CREATE FUNCTION ST_TDCDelaunayTriangles(g1 geometry,
 										flags int4 DEFAULT 0)
 RETURNS geometry
 AS 'MODULE_PATHNAME', 'st_tdcdelaunaytriangles'
-LANGUAGE C IMMUTABLE STRICT PARALLEL SAFE;
+LANGUAGE C IMMUTABLE STRICT PARALLEL SAFE
+-- A call costs microseconds to seconds, far above an operator: as for
+-- ST_DelaunayTriangles, the planner should prefer plans that call it less
+-- often and spread its calls over parallel workers.
+COST 1000;
 
 COMMENT ON FUNCTION ST_TDCDelaunayTriangles(geometry, float8, int4) IS
 'Exact Delaunay triangulation of the vertices of a geometry, drop-in for ST_DelaunayTriangles. '
@@ -44,10 +48,19 @@ LANGUAGE C IMMUTABLE PARALLEL SAFE;
 COMMENT ON FUNCTION st_tdcdelaunay_combinefn(internal, internal) IS
 'Combine function of ST_TDCDelaunay: appends the vertices of one partial state to another.';
 
+-- Parallel aggregation pays, per partial state, a worker's start (loading
+-- PostGIS and this library), a copy of its points into a bytea, the trip
+-- through the tuple queue and two copies in the leader, while it saves only
+-- part of the reading: the triangulation runs once, in the leader, either
+-- way.  Measured on 2 cores, the parallel plan was slower up to millions of
+-- rows.  These costs (counted per partial state, or per group and worker)
+-- let the planner choose a parallel plan only for tables of about ten
+-- million rows and more, and not for GROUP BY over many groups.
 CREATE FUNCTION st_tdcdelaunay_serialfn(internal)
 RETURNS bytea
 AS 'MODULE_PATHNAME', 'st_tdcdelaunay_serialfn'
-LANGUAGE C IMMUTABLE STRICT PARALLEL SAFE;
+LANGUAGE C IMMUTABLE STRICT PARALLEL SAFE
+COST 10000000;
 
 COMMENT ON FUNCTION st_tdcdelaunay_serialfn(internal) IS
 'Serialization function of ST_TDCDelaunay for parallel aggregation.';
@@ -55,7 +68,8 @@ COMMENT ON FUNCTION st_tdcdelaunay_serialfn(internal) IS
 CREATE FUNCTION st_tdcdelaunay_deserialfn(bytea, internal)
 RETURNS internal
 AS 'MODULE_PATHNAME', 'st_tdcdelaunay_deserialfn'
-LANGUAGE C IMMUTABLE STRICT PARALLEL SAFE;
+LANGUAGE C IMMUTABLE STRICT PARALLEL SAFE
+COST 10000000;
 
 COMMENT ON FUNCTION st_tdcdelaunay_deserialfn(bytea, internal) IS
 'Deserialization function of ST_TDCDelaunay for parallel aggregation; checks the header and length.';
@@ -102,7 +116,8 @@ COMMENT ON AGGREGATE ST_TDCDelaunay(geometry, float8, int4) IS
 CREATE FUNCTION ST_TDCDelaunayDump(query text, tolerance float8 DEFAULT 0.0)
 RETURNS TABLE(id bigint, geom geometry)
 AS 'MODULE_PATHNAME', 'st_tdcdelaunaydump'
-LANGUAGE C VOLATILE STRICT PARALLEL UNSAFE;
+LANGUAGE C VOLATILE STRICT PARALLEL UNSAFE
+COST 10000 ROWS 100000;
 
 COMMENT ON FUNCTION ST_TDCDelaunayDump(text, float8) IS
 'Runs a query returning one geometry column (with the caller''s rights), triangulates the vertices of all rows '

@@ -1,17 +1,19 @@
 #!/usr/bin/env bash
-# bench/run.sh -- `make bench`: the core benchmark, then the SQL benchmark.
+# bench/run.sh -- `make bench`: the core benchmark, the SQL benchmark, then
+# the SQL size sweep.
 #
 #   A  bench/core_bench.sh   ./tdc (1 thread, all threads) vs CGAL   -> build/bench/core*.csv
 #   B  bench/sql_bench.sh    tdc_delaunay vs PostGIS in PostgreSQL   -> build/bench/sql*.csv, docs/*.png
+#   C  bench/sweep_bench.sh  the same from 3 to 10^7 points per call -> build/bench/sweep*, docs/sweep.png
 #
-# B runs against the server the PG* variables point at when one answers;
+# B and C run against the server the PG* variables point at when one answers;
 # otherwise the extension is built and installed and a throw-away cluster is
 # started with scripts/lib.sh (or, if that is absent, in build/bench/pg as the
 # postgres user on a free port) and stopped afterwards.
 #
-#   BENCH_SKIP_CORE=1   only B          BENCH_SKIP_SQL=1   only A
-#   BENCH_NO_INSTALL=1  do not run make install before B
-# The knobs of the two scripts (BENCH_SIZES, BENCH_SQL_SIZES, ...) pass through.
+#   BENCH_SKIP_CORE=1   skip A          BENCH_SKIP_SQL=1   skip B
+#   BENCH_SKIP_SWEEP=1  skip C          BENCH_NO_INSTALL=1 do not run make install before B and C
+# The knobs of the scripts (BENCH_SIZES, BENCH_SQL_SIZES, BENCH_SWEEP_*, ...) pass through.
 set -euo pipefail
 
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
@@ -26,8 +28,19 @@ if [ "${BENCH_SKIP_CORE:-0}" != 1 ]; then
 	bash "$ROOT/bench/core_bench.sh"
 fi
 
-if [ "${BENCH_SKIP_SQL:-0}" != 1 ]; then
-log "=== B: SQL benchmark"
+# sql_parts: B and C, against the server the PG* variables now point at
+sql_parts() {
+	if [ "${BENCH_SKIP_SQL:-0}" != 1 ]; then
+		log "=== B: SQL benchmark"
+		bash "$ROOT/bench/sql_bench.sh"
+	fi
+	if [ "${BENCH_SKIP_SWEEP:-0}" != 1 ]; then
+		log "=== C: SQL size sweep"
+		bash "$ROOT/bench/sweep_bench.sh"
+	fi
+}
+
+if [ "${BENCH_SKIP_SQL:-0}" != 1 ] || [ "${BENCH_SKIP_SWEEP:-0}" != 1 ]; then
 PGBIN=/usr/lib/postgresql/15/bin
 OWN_PGDIR=""
 stop_own() {
@@ -51,7 +64,7 @@ if [ -n "${PGHOST:-}${PGPORT:-}${PGDATABASE:-}" ] && psql -X -q -c 'SELECT 1' >/
 	log "using the server at PGHOST=${PGHOST:-} PGPORT=${PGPORT:-} (database ${PGDATABASE:-default})"
 	[ -f "$ROOT/scripts/lib.sh" ] && . "$ROOT/scripts/lib.sh"
 	install_ext
-	bash "$ROOT/bench/sql_bench.sh"
+	sql_parts
 elif [ -f "$ROOT/scripts/lib.sh" ]; then
 	# the infrastructure's throw-away cluster (scripts/lib.sh)
 	. "$ROOT/scripts/lib.sh"
@@ -63,7 +76,7 @@ elif [ -f "$ROOT/scripts/lib.sh" ]; then
 	trap 'tdc_server_down' EXIT
 	tdc_server_up
 	export PGDATABASE=postgres
-	bash "$ROOT/bench/sql_bench.sh"
+	sql_parts
 else
 	# fallback: our own throw-away cluster, postgres user, first free port from 5492
 	install_ext
@@ -80,7 +93,7 @@ else
 	trap stop_own EXIT
 	su postgres -c "$PGBIN/pg_ctl -D '$OWN_PGDIR/data' -w -l '$OWN_PGDIR/log' -o \"-p $port -k '$OWN_PGDIR' -c listen_addresses='' -c max_wal_size=4GB -c fsync=off -c shared_buffers=256MB\" start" >/dev/null
 	export PGHOST=$OWN_PGDIR PGPORT=$port PGUSER=postgres PGDATABASE=postgres
-	bash "$ROOT/bench/sql_bench.sh"
+	sql_parts
 fi
 fi
 
@@ -103,5 +116,16 @@ fi
 	echo '![time vs n](bench.png)'
 	echo
 	echo '![Strait of Gibraltar TIN](coast_tin.png)'
+	if [ -s "$BENCH_OUT/sweep.txt" ]; then
+		# already Markdown (its own heading and table)
+		echo
+		echo "## SQL size sweep: tdc_delaunay vs PostGIS, 3 to 10^7 points per call"
+		echo
+		sed '1,2{/^###/d;/^$/d}' "$BENCH_OUT/sweep.txt"
+		if [ -s "${BENCH_DOCS:-$ROOT/docs}/sweep.png" ]; then
+			echo
+			echo '![size sweep](sweep.png)'
+		fi
+	fi
 } > "${BENCH_DOCS:-$ROOT/docs}/benchmarks.md"
-log "done: $BENCH_OUT/core.txt, $BENCH_OUT/sql.txt, ${BENCH_DOCS:-$ROOT/docs}/{benchmarks.md,core.png,bench.png,coast_tin.png}"
+log "done: $BENCH_OUT/{core,sql,sweep}.txt, ${BENCH_DOCS:-$ROOT/docs}/{benchmarks.md,core.png,bench.png,coast_tin.png,sweep.png}"

@@ -80,8 +80,16 @@ SELECT ST_TDCDelaunayTriangles(tdc_mkgeom('\x00000040010000000100000000000000000
 SELECT ST_TDCDelaunayTriangles(tdc_mkgeom('\x0000004402000000', ''));
 -- extended flags bit without the 8 bytes
 SELECT ST_TDCDelaunayTriangles(tdc_mkgeom('\x00000050', ''));
--- deep nesting is bounded by the stack check, not a crash
-SELECT ST_TDCDelaunayTriangles(tdc_mkgeom(('\x00000040' || repeat('0700000001000000', 200000) || '0100000000000000')::bytea, ''));
+-- deep nesting is bounded by the stack check, not a crash.  (Caught, so
+-- that the output does not show the HINT, which quotes the server's
+-- max_stack_depth; any other error, or none, shows up as a difference.)
+DO $$
+BEGIN
+	PERFORM ST_TDCDelaunayTriangles(tdc_mkgeom(('\x00000040' || repeat('0700000001000000', 200000) || '0100000000000000')::bytea, ''));
+	RAISE NOTICE 'no error';
+EXCEPTION WHEN statement_too_complex THEN
+	RAISE NOTICE '%: %', SQLSTATE, SQLERRM;
+END $$;
 -- the same raw reader accepts well-formed hand-made values, v1 and v2
 SELECT ST_AsText(ST_TDCDelaunayTriangles(tdc_mkgeom('\x000000400400000003000000010000000100000000000000000000000000000000000000010000000100000000000000000000400000000000000000010000000100000000000000000000000000000000000040', '')));
 SELECT ST_AsText(ST_TDCDelaunayTriangles(tdc_mkgeom('\x000000000400000003000000010000000100000000000000000000000000000000000000010000000100000000000000000000400000000000000000010000000100000000000000000000000000000000000040', ''))) AS v1;

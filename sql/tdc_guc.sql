@@ -12,6 +12,12 @@ SET tdc_delaunay.thread = 2;
 -- Out of range.
 SET tdc_delaunay.threads = -1;
 SET tdc_delaunay.levels = -2;
+-- the engine's limit (TDC_MAX_LEVELS): a SET error, not a failure of every
+-- later triangulation
+SET tdc_delaunay.levels = 25;
+SHOW tdc_delaunay.levels;
+SELECT ST_NumGeometries(ST_TDCDelaunayTriangles('MULTIPOINT(0 0, 1 0, 0 1)')) AS after_levels_25;
+RESET tdc_delaunay.levels;
 SET tdc_delaunay.max_result_bytes = 10;
 
 -- threads, levels and grid size change how, not what.
@@ -26,9 +32,26 @@ SELECT tdc_norm(ST_TDCDelaunay(geom)) = (SELECT t FROM tdc_guc_ref) AS no_subdiv
 SET tdc_delaunay.levels = 4;
 SET tdc_delaunay.grid_size = 16;
 SELECT tdc_norm(ST_TDCDelaunay(geom)) = (SELECT t FROM tdc_guc_ref) AS levels_4_grid_16 FROM tdc_guc_pts;
+-- the largest depth is accepted (the engine then stops at 2^d <= points)
+SET tdc_delaunay.levels = 24;
+SELECT tdc_norm(ST_TDCDelaunay(geom)) = (SELECT t FROM tdc_guc_ref) AS levels_24 FROM tdc_guc_pts;
 RESET tdc_delaunay.levels;
 RESET tdc_delaunay.grid_size;
--- the superuser ceiling applies
+-- the superuser ceiling applies.  The triangle set is the same for any
+-- thread count, so what is asserted is the thread count the engine was
+-- given, from the stats DETAIL ("threads N, levels L, grid G; <timings>").
+-- The timings differ from run to run and psql cannot filter a notice, so a
+-- second session (the same server and database) runs the statement and only
+-- the thread figure is printed.  A superuser's max_threads is not bound by
+-- the CPU count, so the figures do not depend on the machine.  (30000
+-- points: below TDC_INLINE_MAX, 20000, a job runs on one thread whatever
+-- the settings.)
+\setenv PGDATABASE :DBNAME
+\! psql -X -q -c "SET tdc_delaunay.stats = on; SET tdc_delaunay.max_threads = 1; SET tdc_delaunay.threads = 0; SELECT ST_TDCDelaunay(geom) IS NOT NULL FROM tdc_random_points(30000, 3)" 2>&1 | sed -n 's/^DETAIL: *\(threads [0-9]*\),.*/max_threads 1, threads 0: \1/p'
+\! psql -X -q -c "SET tdc_delaunay.stats = on; SET tdc_delaunay.max_threads = 1; SET tdc_delaunay.threads = 3; SELECT ST_TDCDelaunay(geom) IS NOT NULL FROM tdc_random_points(30000, 3)" 2>&1 | sed -n 's/^DETAIL: *\(threads [0-9]*\),.*/max_threads 1, threads 3: \1/p'
+\! psql -X -q -c "SET tdc_delaunay.stats = on; SET tdc_delaunay.max_threads = 2; SET tdc_delaunay.threads = 3; SELECT ST_TDCDelaunay(geom) IS NOT NULL FROM tdc_random_points(30000, 3)" 2>&1 | sed -n 's/^DETAIL: *\(threads [0-9]*\),.*/max_threads 2, threads 3: \1/p'
+\! psql -X -q -c "SET tdc_delaunay.stats = on; SET tdc_delaunay.max_threads = 3; SET tdc_delaunay.threads = 2; SELECT ST_TDCDelaunay(geom) IS NOT NULL FROM tdc_random_points(30000, 3)" 2>&1 | sed -n 's/^DETAIL: *\(threads [0-9]*\),.*/max_threads 3, threads 2: \1/p'
+-- and the result under the ceiling is still the same
 SET tdc_delaunay.max_threads = 1;
 SET tdc_delaunay.threads = 0;
 SELECT tdc_norm(ST_TDCDelaunay(geom)) = (SELECT t FROM tdc_guc_ref) AS max_threads_1 FROM tdc_guc_pts;

@@ -29,6 +29,8 @@ extern void test_predicates(void);
 extern void test_engine(void);
 extern void test_conformance(void);
 extern void test_memory(void);
+extern void test_concurrency(void);
+extern void test_tolerance(void);
 
 /* Set by --quick (sanitizer runs): smaller sizes. */
 extern int	tdc_test_quick;

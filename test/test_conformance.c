@@ -1,10 +1,12 @@
 /*
  * test_conformance.c
  *		Runs the public test cases of PostGIS, GEOS and delaunator (the
- *		fixtures in ../shared/conformance) through the core.
+ *		repository's copy in test/fixtures, see its README.md) through the
+ *		core.
  *
- * Design.  Nothing is copied out of the fixture files: they are read at run
- * time and split into CASE blocks.  From each block the test takes
+ * Design.  Nothing is copied out of the fixture files into this source: they
+ * are read at run time and split into CASE blocks.  From each block the test
+ * takes
  *	- the input point set: a WKT geometry after "input:" (every vertex of
  *	  every part becomes a site; numbers beyond x, y -- Z or M -- are
  *	  ignored), a JSON array of [x, y] pairs inline or in "file:", or a slice
@@ -17,7 +19,9 @@
  * buffer, the stroked arc, the bare coordinate list of GEOS test 9, the
  * scaled robustness fixture); blocks that only concern the SQL layer (NULL,
  * flags, SRID, error text) are listed in sql_only_cases[].  Any other block
- * without a usable input counts as a failure, so no case is skipped silently.
+ * without a usable input counts as a failure, so no case is skipped silently;
+ * so does a file with another number of blocks than the copy holds, and a
+ * case that ran no check.  The summary line counts cases passed and failed.
  *
  * Every run is checked for: status TDC_OK; consistent site ids (each input
  * maps to a kept site with its own coordinates, or one within the tolerance);
@@ -1596,6 +1600,8 @@ check_determinism(const ccase *c, const double *xy, size_t n)
 	free(rev);
 }
 
+static void bug_robustness_scaled(void);
+
 static void
 run_case(const ccase *c)
 {
@@ -1614,8 +1620,11 @@ run_case(const ccase *c)
 		case_stroked_arc(c);
 		return;
 	}
-	if (strncmp(c->name, "delaunator_scaled_", 18) == 0)
-		return;					/* bug_robustness_scaled() */
+	if (strcmp(c->name, "delaunator_scaled_robustness1") == 0)
+	{
+		bug_robustness_scaled();
+		return;
+	}
 	if (strcmp(c->name, "geos_delaunay_test_9") == 0 && c->input)
 	{
 		/* "(150 200),(180 270),(275 163) -> envelope ...": a bare list */
@@ -1840,14 +1849,15 @@ bug_robustness_hull_points_kept(void)
 			  "delaunator_fixture_robustness4", 0, 1, 36, 63, 7);
 }
 
-/* test.js validates robustness1 scaled by 1e-9, 1e-2, 1e2 and 1e9. */
+/*
+ * test.js validates robustness1 scaled by 1e-9, 1e-2, 1e2 and 1e9.  Run as
+ * the case delaunator_scaled_robustness1, which has no input of its own.
+ */
 static void
 bug_robustness_scaled(void)
 {
 	static const double scales[] = {1e-9, 1e-2, 1e2, 1e9};
-	const ccase *c = find_case("delaunator_scaled_robustness1");
 
-	CHECK(c != NULL, "delaunator_scaled_robustness1: case missing from delaunator-cases.txt");
 	for (int i = 0; i < 4; i++)
 	{
 		char		label[128];
@@ -1917,45 +1927,114 @@ bug_near_duplicates_kept(void)
  * ------------------------------------------------------------------------
  */
 
+/*
+ * Where the fixtures are.  The repository carries them in test/fixtures; the
+ * Makefile compiles in its own directory as TDC_SOURCE_DIR, so the suite
+ * finds them whatever the current directory.  If the tree moved since the
+ * build, test/fixtures under the current directory is tried as well.
+ * TDC_FIXTURES_DIR, when set, is used alone (say, a newer copy of the
+ * cases): a wrong setting fails rather than quietly testing another copy.
+ */
+static const char *
+find_fixtures(const char *probe_name, char *buf, size_t bufsz)
+{
+	const char *env = getenv("TDC_FIXTURES_DIR");
+	const char *cands[3];
+	int			ncand = 0;
+
+	if (env != NULL && env[0] != '\0')
+		cands[ncand++] = env;
+	else
+	{
+#ifdef TDC_SOURCE_DIR
+		cands[ncand++] = TDC_SOURCE_DIR "/test/fixtures";
+#endif
+		cands[ncand++] = "test/fixtures";
+	}
+	for (int i = 0; i < ncand; i++)
+	{
+		char	   *probe = read_whole_file(cands[i], probe_name, NULL);
+
+		if (probe != NULL)
+		{
+			free(probe);
+			snprintf(buf, bufsz, "%s", cands[i]);
+			return buf;
+		}
+	}
+	fprintf(stderr, "test_conformance: %s not found in", probe_name);
+	for (int i = 0; i < ncand; i++)
+		fprintf(stderr, " %s%s", cands[i], i + 1 < ncand ? "," : "\n");
+	return NULL;
+}
+
+/* CASE blocks each file of the repository's copy holds (test/fixtures/README.md). */
+#define POSTGIS_CASES		25
+#define GEOS_CASES			28
+#define DELAUNATOR_CASES	16
+
 void
 test_conformance(void)
 {
-	static const char *const dirs[] = {"../shared/conformance", "../../shared/conformance", NULL};
 	static const char *const files[] = {"postgis-cases.txt", "geos-cases.txt",
 	"delaunator-cases.txt", NULL};
+	static const int file_cases[] = {POSTGIS_CASES, GEOS_CASES, DELAUNATOR_CASES};
 	char	   *bufs[3] = {NULL, NULL, NULL};
-	long		failed_before = tdc_test_failed;
+	char		dirbuf[1024];
+	long		failed_before = tdc_test_failed,
+				passed_before = tdc_test_passed;
+	int			cases_ok = 0,
+				cases_failed = 0,
+				cases_sql = 0;
 
 	verbose = getenv("TDC_TEST_VERBOSE") != NULL;
 
-	for (int d = 0; dirs[d] && conf_dir == NULL; d++)
-	{
-		char	   *probe = read_whole_file(dirs[d], files[0], NULL);
-
-		if (probe)
-		{
-			conf_dir = dirs[d];
-			free(probe);
-		}
-	}
+	conf_dir = find_fixtures(files[0], dirbuf, sizeof dirbuf);
 	if (conf_dir == NULL)
 	{
-		fprintf(stderr, "test_conformance: conformance fixtures not found: tried ../shared/conformance and ../../shared/conformance from the current directory\n");
-		CHECK(false, "conformance fixtures missing");
+		CHECK(false, "conformance fixtures missing: %d cases not run",
+			  POSTGIS_CASES + GEOS_CASES + DELAUNATOR_CASES);
 		return;
 	}
 
 	for (int f = 0; files[f]; f++)
 	{
+		int			before = ncases;
+
 		bufs[f] = read_whole_file(conf_dir, files[f], NULL);
 		CHECK(bufs[f] != NULL, "cannot read %s/%s", conf_dir, files[f]);
 		if (bufs[f])
 			split_cases(files[f], bufs[f]);
+		/* a block the splitter lost would otherwise go unnoticed */
+		CHECK(getenv("TDC_FIXTURES_DIR") != NULL || ncases - before == file_cases[f],
+			  "%s/%s: %d CASE blocks, want %d", conf_dir, files[f], ncases - before,
+			  file_cases[f]);
 	}
-	CHECK(ncases >= 60, "only %d CASE blocks found in %s", ncases, conf_dir);
 
 	for (int i = 0; i < ncases; i++)
+	{
+		long		f0 = tdc_test_failed,
+					p0 = tdc_test_passed;
+		bool		sql_only = false;
+
+		for (int k = 0; sql_only_cases[k]; k++)
+			if (strcmp(cases[i].name, sql_only_cases[k]) == 0)
+				sql_only = true;
 		run_case(&cases[i]);
+		if (sql_only)
+			cases_sql++;
+		else if (tdc_test_failed > f0)
+			cases_failed++;
+		else
+		{
+			/* every case the core runs must check something */
+			CHECK(tdc_test_passed > p0, "%s: no check ran", cases[i].name);
+			if (tdc_test_passed > p0)
+				cases_ok++;
+			else
+				cases_failed++;
+		}
+	}
 
 	bug_issue11_halfedges_flip_at_hull();
 	bug_issue13_cocircular_artifacts();
@@ -1963,14 +2042,16 @@ test_conformance(void)
 	bug_issue43_wrong_hull_near_collinear();
 	bug_issue44_stuck_hull_walk();
 	bug_robustness_hull_points_kept();
-	bug_robustness_scaled();
 	bug_ukraine_update();
 	bug_geos719_flat_hull_triangles();
 	bug_jts477_flat_triangle_lost();
 	bug_near_duplicates_kept();
 
-	printf("conformance: %d cases from %s, %ld failures\n", ncases, conf_dir,
-		   tdc_test_failed - failed_before);
+	/* (not "N passed, N failed": scripts/test.sh reads the last such line) */
+	printf("conformance: %d cases from %s: %d pass, %d fail, %d SQL-only "
+		   "(sql/tdc_postgis_cases.sql); checks: %ld pass, %ld fail\n",
+		   ncases, conf_dir, cases_ok, cases_failed, cases_sql,
+		   tdc_test_passed - passed_before, tdc_test_failed - failed_before);
 
 	for (int i = 0; i < ncases; i++)
 	{

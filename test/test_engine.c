@@ -931,7 +931,9 @@ test_emit(void)
 		rc = tdc_job_wait(job, -1);
 		t = now() - t;
 		CHECK(rc == TDC_ECANCELED || rc == TDC_OK, "emit: cancelled: status %d", rc);
-		CHECK(t < (tdc_test_quick ? 0.25 : 0.05), "emit: cancel answered in %.1f ms", t * 1e3);
+		/* quiet machine: about 1 ms; the limit is the load-proof one above */
+		CHECK(t < CANCEL_LIMIT_MS * 1e-3, "emit: cancel answered in %.1f ms (limit %d)", t * 1e3,
+			  CANCEL_LIMIT_MS);
 		printf("emit: cancel during the hand-over answered in %.2f ms (status %d)\n", t * 1e3, rc);
 		free(sink.tri);
 		tdc_job_free(job);

@@ -1,6 +1,7 @@
 /*
  * test_main.c
- *		Runs the core suite: predicates, engine properties, conformance cases.
+ *		Runs the core suite: predicates, engine properties, conformance cases,
+ *		concurrent use, the tolerance rule.
  *		Prints "N passed, N failed"; exits non-zero on any failure.
  *		--quick shrinks the largest inputs (sanitizer builds).
  */
@@ -28,6 +29,10 @@ main(int argc, char **argv)
 	test_memory();
 	printf("memory: %ld passed, %ld failed so far\n", tdc_test_passed, tdc_test_failed);
 	test_conformance();
+	printf("conformance: %ld passed, %ld failed so far\n", tdc_test_passed, tdc_test_failed);
+	test_concurrency();
+	printf("concurrency: %ld passed, %ld failed so far\n", tdc_test_passed, tdc_test_failed);
+	test_tolerance();
 	printf("%ld passed, %ld failed\n", tdc_test_passed, tdc_test_failed);
 	return tdc_test_failed ? 1 : 0;
 }

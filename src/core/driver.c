@@ -424,6 +424,7 @@ run(tdc_job *job)
 	rc = tdc_pool_create(&job->pool, job->threads);
 	if (rc != 0)
 	{
+		/* on TDC_ETHREAD the pool left pthread_create's error in errno */
 		tdc_job_fail(job, rc, rc == TDC_ETHREAD ? "could not create worker threads: %s" : "out of memory%s",
 					 rc == TDC_ETHREAD ? strerror(errno) : "");
 		return rc;
@@ -978,17 +979,23 @@ tdc_site_input(const tdc_job *job, uint32_t site)
  * Invert idx[] (position -> input) through site_of[], then send the points a
  * tolerance dropped to the site of the point that absorbed them.  Built once,
  * under the job's lock; the job is otherwise read-only after it finished.
+ * Returns the map, or NULL when it cannot be allocated.
+ *
+ * Invariant: job->map is NULL or the complete map.  It is only stored under
+ * the lock, with release order after the map's contents, so a thread that
+ * loads it with acquire order outside the lock sees the whole map; threads
+ * that race to build it queue on the lock and the later ones find it built.
  */
-static bool
+static uint32_t *
 build_input_map(tdc_job *job)
 {
-	bool		ok;
+	uint32_t   *map;
 
 	pthread_mutex_lock(&job->lock);
-	if (job->map == NULL)
+	map = atomic_load_explicit(&job->map, memory_order_relaxed);
+	if (map == NULL)
 	{
-		uint32_t   *map = tdc_big_alloc(job->n * sizeof(uint32_t) + 4);
-
+		map = tdc_big_alloc(job->n * sizeof(uint32_t) + 4);
 		if (map != NULL)
 		{
 			for (size_t p = 0; p < job->nin; p++)
@@ -997,22 +1004,22 @@ build_input_map(tdc_job *job)
 				for (size_t i = 0; i < job->n; i++)
 					if (job->tol_to[i] != i)
 						map[i] = map[job->tol_to[i]];
-			job->map = map;
+			atomic_store_explicit(&job->map, map, memory_order_release);
 		}
 	}
-	ok = job->map != NULL;
 	pthread_mutex_unlock(&job->lock);
-	return ok;
+	return map;
 }
 
 uint32_t
 tdc_input_site(const tdc_job *job, size_t i)
 {
 	tdc_job    *j = (tdc_job *) job;
+	uint32_t   *map = atomic_load_explicit(&j->map, memory_order_acquire);
 
-	if (job->map == NULL && !build_input_map(j))
+	if (map == NULL && (map = build_input_map(j)) == NULL)
 		return UINT32_MAX;
-	return job->map[i];
+	return map[i];
 }
 
 /*

@@ -27,6 +27,7 @@
  * cancel flag at least once per chunk, so a cancel is answered as fast as
  * during the triangulation.
  */
+#include <errno.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -195,7 +196,9 @@ tdc_emit_phase(tdc_job *job)
 	rc = tdc_pool_create(&job->pool, job->threads);
 	if (rc != 0)
 	{
-		tdc_job_fail(job, rc, "could not create worker threads");
+		/* on TDC_ETHREAD the pool left pthread_create's error in errno */
+		tdc_job_fail(job, rc, rc == TDC_ETHREAD ? "could not create worker threads: %s" : "out of memory%s",
+					 rc == TDC_ETHREAD ? strerror(errno) : "");
 		return rc;
 	}
 	memset(&p, 0, sizeof(p));

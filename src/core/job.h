@@ -32,7 +32,7 @@ struct tdc_job
 	double	   *xy;
 	uint32_t   *idx;
 	uint32_t   *site_of;		/* position -> site (its own position if a site) */
-	uint32_t   *map;			/* input index -> site, built on first request */
+	_Atomic(uint32_t *) map;	/* input index -> site, built on first request */
 	uint32_t   *tol_to;			/* tolerance: dropped input -> absorbing input */
 
 	tdc_he	   *he;				/* 6 half-edges per entering point */

@@ -14,6 +14,7 @@
  * blocked, so they inherit a full signal mask and never take a signal meant
  * for the host process (a PostgreSQL backend).
  */
+#include <errno.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/mman.h>
@@ -184,7 +185,10 @@ worker_main(void *p)
 
 /*
  * Create a pool of nthreads threads in all, the caller included.  Returns 0
- * or TDC_ENOMEM / TDC_ETHREAD with nothing left behind.
+ * or TDC_ENOMEM / TDC_ETHREAD with nothing left behind; after TDC_ETHREAD,
+ * errno holds pthread_create's error, which pthread_create returns instead
+ * of setting errno (errno then holds whatever its internals left, such as
+ * ENOMEM from the stack's mmap).
  */
 int
 tdc_pool_create(tdc_pool **out, int nthreads)
@@ -208,14 +212,17 @@ tdc_pool_create(tdc_pool **out, int nthreads)
 	for (int i = 0; i < pool->nthreads; i++)
 	{
 		worker_arg *wa = malloc(sizeof(worker_arg));
+		int			err = 0;
 
 		if (wa == NULL || (wa->pool = pool, wa->id = i + 1,
-						   pthread_create(&pool->threads[i], NULL, worker_main, wa) != 0))
+						   (err = pthread_create(&pool->threads[i], NULL, worker_main, wa)) != 0))
 		{
 			int			rc = wa == NULL ? TDC_ENOMEM : TDC_ETHREAD;
 
 			free(wa);
 			tdc_pool_destroy(pool);
+			if (rc == TDC_ETHREAD)
+				errno = err;	/* last: the clean-up may change errno */
 			return rc;
 		}
 		pool->started++;

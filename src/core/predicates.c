@@ -782,3 +782,82 @@ tdc_incircle_exact(const double *a, const double *b, const double *c,
 
 	return incircle_from_raw(a, b, c, d);
 }
+
+/* ------------------------------------------------------------------------
+ * Squared distances (the tolerance pass)
+ * ------------------------------------------------------------------------
+ */
+
+/*
+ * h = (a - b)^2 exactly, up to 6 components: with a - b = d + dt from
+ * Two-Diff, the square is d^2 + (2d) dt + dt^2, each term a Two-Product.
+ */
+static int
+square_of_difference(double a, double b, double *h)
+{
+	double		d,
+				dt,
+				x,
+				y,
+				e[2],
+				f[2],
+				g[4];
+	int			elen,
+				flen,
+				glen;
+
+	two_diff(a, b, &d, &dt);
+	two_product(d, d, &x, &y);
+	elen = pack2(x, y, e);
+	if (dt == 0.0)
+	{
+		memcpy(h, e, elen * sizeof(double));
+		return elen;
+	}
+	two_product(2.0 * d, dt, &x, &y);
+	flen = pack2(x, y, f);
+	glen = expansion_sum(elen, e, flen, f, g);
+	two_product(dt, dt, &x, &y);
+	elen = pack2(x, y, e);
+	return expansion_sum(glen, g, elen, e, h);
+}
+
+/*
+ * Why this is exact for coordinates that are 0 or of magnitude in
+ * [2^-252, 2^202] (the argument of the file header, on other bounds): every
+ * such coordinate is an integer multiple of 2^-304, and so are the
+ * differences, their Two-Diff tails and the Veltkamp halves (|values| below
+ * 2^231).  Every product and Two-Product error term is then a multiple of
+ * 2^-608, a normal number when nonzero, and below 2^410: no underflow, no
+ * overflow, so the expansion arithmetic is exact.
+ */
+int
+tdc_sqdist_cmp_exact(const double *a, const double *b, const double *c,
+					 const double *d)
+{
+	double		sx[6],
+				sy[6],
+				tx[6],
+				ty[6],
+				s[12],
+				t[12],
+				diff[24];
+	int			sxlen,
+				sylen,
+				txlen,
+				tylen,
+				slen,
+				tlen,
+				dlen;
+
+	sxlen = square_of_difference(a[0], b[0], sx);
+	sylen = square_of_difference(a[1], b[1], sy);
+	txlen = square_of_difference(c[0], d[0], tx);
+	tylen = square_of_difference(c[1], d[1], ty);
+	slen = expansion_sum(sxlen, sx, sylen, sy, s);
+	tlen = expansion_sum(txlen, tx, tylen, ty, t);
+	for (int i = 0; i < tlen; i++)
+		t[i] = -t[i];
+	dlen = expansion_sum(slen, s, tlen, t, diff);
+	return (int) expansion_sign(dlen, diff);
+}

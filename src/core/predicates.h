@@ -32,6 +32,15 @@ extern double tdc_orient2d_exact(const double *a, const double *b, const double 
 extern double tdc_incircle_exact(const double *a, const double *b,
 								 const double *c, const double *d);
 
+/*
+ * Exact sign (-1, 0 or +1) of |a - b|^2 - |c - d|^2, for the tolerance pass
+ * (sites.c), which filters in double arithmetic first.  Exact when every
+ * coordinate is 0 or of magnitude in [2^-252, 2^202]: a wider range than the
+ * input's, so that a clamped tolerance can be passed as a point (t, 0).
+ */
+extern int	tdc_sqdist_cmp_exact(const double *a, const double *b,
+								 const double *c, const double *d);
+
 static inline double
 tdc_orient2d(const double *a, const double *b, const double *c)
 {

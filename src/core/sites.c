@@ -3,244 +3,551 @@
  *		The optional tolerance filter.  (Exact duplicates are removed inside
  *		the subsets, see leaf.c.)
  *
- * Tolerance (options.tolerance > 0).  Rule: take the points in lexicographic
+ * The rule (options.tolerance = t > 0): take the points in lexicographic
  * (x, y) order, ties by input index; keep a point unless some already kept
- * site q satisfies dx*dx + dy*dy < tolerance*tolerance, computed in double
- * precision; a dropped point maps to the nearest such q (the earliest kept
- * on ties).  This greedy pass is inherently sequential, so it runs before
- * the subdivision on a hash grid of cell size = tolerance, and its survivors
- * then go through the parallel pipeline like any input.
+ * site q has (px - qx)^2 + (py - qy)^2 < t^2, evaluated exactly (in real
+ * arithmetic); a dropped point maps to the nearest such q, the earliest kept
+ * on exact ties of the distance.  So no two kept sites are closer than t and
+ * every dropped point lies closer than t to its site, for every input.  A
+ * rule evaluated in rounded arithmetic, or a search whose rounding can hide a
+ * neighbour, keeps pairs closer than t or not depending on where the data
+ * lies (how far from the corner of a hash grid, for one), and no simple rule
+ * describes that.  The greedy rule is sequential, so it runs once
+ * before the subdivision, and its survivors then go through the parallel
+ * pipeline like any input.
+ *
+ * Clamping t.  Input coordinates are 0 or of magnitude in [1e-60, 1e60]
+ * (driver.c), so they are multiples of 2^-252 below 2^200.  A nonzero squared
+ * distance D is then at least 2^-504 and always D < 2^404.  Hence for
+ * t <= 2^-252, "D < t^2" means D = 0 whatever t is, and for t >= 2^202 it
+ * always holds: replacing t by t' = min(max(t, 2^-252), 2^202) changes no
+ * decision, and t' * t' neither underflows nor overflows, which lets every
+ * bound below be stated for plain normal numbers.
+ *
+ * Deciding "D < t'^2" and "D1 < D2".  The double evaluation
+ * d = fl(fl(dx)^2 + fl(dy)^2) has no underflow (a nonzero fl(dx) is at least
+ * 2^-252) and no overflow, so each of its five operations has relative error
+ * at most u = 2^-53 and, all terms being nonnegative,
+ * D (1 - u)^4 <= d <= D (1 + u)^4, i.e. |d - D| <= 4.01 u D.  Likewise
+ * t2 = fl(t' t') = t'^2 (1 + e), |e| <= u.  With lo = fl(t2 (1 - 2^-49))
+ * <= t'^2 (1 + u)^2 (1 - 16u) < t'^2 (1 - 13u), d < lo gives
+ * D <= d / (1 - 4.01u) < t'^2; symmetrically hi = fl(t2 (1 + 2^-49))
+ * > t'^2 (1 + 13u) and d > hi gives D > t'^2.  Two candidates compare the
+ * same way: d1 < fl(d2 (1 - 2^-49)) proves D1 < D2 since
+ * (1 - 16u)(1 + u)(1 + 4.01u) < 1 - 4.01u.  Anything in between (in practice
+ * only near-ties) goes to tdc_sqdist_cmp_exact (predicates.c).
+ *
+ * Finding the candidates: a sweep, not a hash grid.  A grid of cell size h
+ * >= t only finds every neighbour if the rounded cell index never puts two
+ * points closer than t two cells apart, which forces h up to about the
+ * extent times 2^-40 when t is tiny; and then a single cell can hold any
+ * number of kept sites (many distinct doubles close together), so the pass
+ * is quadratic on such input however the cells are chosen.  Instead the
+ * points are swept in the rule's own order, which is increasing x: the
+ * active kept sites, those with fl(px - qx) <= t', sit in a bit set indexed
+ * by their rank in (y, input index) order, and the candidates of p are found
+ * by walking that set from p's own rank upwards while fl(qy - py) <= t' and
+ * downwards while fl(py - qy) <= t'.  Rounding is monotone and t' is a
+ * double, so a true |dx| or |dy| below t' never rounds above it: no site
+ * within t' is ever missed, and a site whose window test fails is farther
+ * than t' (the exact test above decides the rest).  Kept sites are pairwise
+ * at least t' apart, so disks of radius t'/2 around the walked candidates
+ * are disjoint inside a rectangle of about 2t' by 3t': at most 7 candidates,
+ * plus one failing test per direction.  Every point thus costs a bounded
+ * number of bit-set steps, each O(log_64 n), and every kept site is
+ * inserted and expired once: O(n log n) for every input, with no order or
+ * placement that degrades it.
+ *
+ * Sorting: a least-significant-digit radix sort on order-preserving 64-bit
+ * keys of the coordinates (-0 mapped to +0, since the rule compares values),
+ * first by y, then by x.  Its passes are stable, so starting from input
+ * order the ties fall by input index, as the rule wants; the order after the
+ * y passes is exactly the rank order the sweep needs, so the ranks come for
+ * free.  A radix sort does a fixed amount of work per pass whatever the input
+ * order, so no input (sorted, organ-pipe, or one built against a particular
+ * quicksort) can make it slow; passes in which every key has the same digit
+ * are skipped.
+ *
+ * Cancellation is polled by work done (records moved, bit-set steps,
+ * candidates examined), every TOL_POLL_WORK units, not by points: the cost
+ * of a point varies (one point can expire many kept sites), and a poll per
+ * fixed amount of work bounds the time to notice tdc_job_cancel wherever the
+ * pass is.
  */
-#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "job.h"
 
+/*
+ * Units of work between two polls of the cancel flag.  A unit is a record
+ * moved or a bit-set step (nanoseconds) or a candidate examined (at worst an
+ * exact comparison, well under a microsecond), so polls are at most a few
+ * milliseconds apart and usually a small fraction of one.
+ */
+#define TOL_POLL_WORK	(1u << 14)
+
+/* Records mapped in per tdc_prefault call: a few ms, between cancel polls. */
+#define TOL_PREFAULT_RECS	((size_t) 1 << 18)
+
+/* The tolerance clamp of the header. */
+#define TOL_CLAMP_MIN	0x1p-252
+#define TOL_CLAMP_MAX	0x1p202
+
+/* Relative slack of the filters: 2^-49 = 16u. */
+#define TOL_FILTER_SLACK	0x1p-49
+
 typedef struct rec
 {
 	double		x,
 				y;
-	uint32_t	i;
+	uint32_t	i;				/* input index */
+	uint32_t	yr;				/* rank in (y, i) order, set by sort_recs */
 } rec;
 
-static inline bool
-rec_less(const rec *a, const rec *b)
+typedef struct tol_poll
 {
-	if (a->x != b->x)
-		return a->x < b->x;
-	if (a->y != b->y)
-		return a->y < b->y;
-	return a->i < b->i;
+	unsigned	work;
+	const atomic_int *cancel;
+} tol_poll;
+
+/* Count one unit of work; true when the job was cancelled. */
+static inline bool
+poll_cancelled(tol_poll *p)
+{
+	if (++p->work < TOL_POLL_WORK)
+		return false;
+	p->work = 0;
+	return atomic_load_explicit(p->cancel, memory_order_relaxed) != 0;
+}
+
+/* --- sort --- */
+
+#define RADIX_BITS		11
+#define RADIX_SIZE		(1 << RADIX_BITS)
+#define RADIX_DIGITS	6		/* ceil(64 / RADIX_BITS) */
+
+/* Unsigned key in the order of the double's value; -0 and +0 get one key. */
+static inline uint64_t
+order_key(double v)
+{
+	uint64_t	b;
+
+	if (v == 0)
+		v = 0;
+	memcpy(&b, &v, sizeof(b));
+	return (b >> 63) ? ~b : b | ((uint64_t) 1 << 63);
+}
+
+static inline unsigned
+digit_of(const rec *r, int coord, int d)
+{
+	return (unsigned) (order_key(coord ? r->y : r->x) >> (d * RADIX_BITS)) & (RADIX_SIZE - 1);
 }
 
 /*
- * Introsort-free quicksort with median-of-three and insertion sort below 16:
- * subsets are small and the recursion depth is bounded by recursing on the
- * smaller side.  Checks the cancel flag on large ranges.
+ * Sort r[0..n) (in input-index order on entry) into (x, y, i) order, setting
+ * every yr on the way; tmp has room for n records.  *out is whichever of r
+ * and tmp holds the result.  Returns false if cancelled (or out of memory,
+ * then *oom is set).
  */
-static void
-sort_recs(rec *r, size_t n, const atomic_int *cancel)
+static bool
+sort_recs(rec *r, rec *tmp, size_t n, rec **out, tol_poll *pl, bool *oom)
 {
-	while (n > 16)
+	size_t	   *hist = calloc((size_t) 2 * RADIX_DIGITS * RADIX_SIZE, sizeof(size_t));
+	rec		   *src = r,
+			   *dst = tmp;
+
+	*oom = hist == NULL;
+	if (hist == NULL)
+		return false;
+
+	/* all histograms in one read of the data */
+	for (size_t k = 0; k < n; k++)
 	{
-		size_t		mid = n / 2,
-					i,
-					j;
-		rec			p,
-					t;
+		uint64_t	kx = order_key(r[k].x),
+					ky = order_key(r[k].y);
 
-		if (n > (1 << 16) && atomic_load_explicit(cancel, memory_order_relaxed))
-			return;
-		if (rec_less(&r[mid], &r[0]))
-			t = r[mid], r[mid] = r[0], r[0] = t;
-		if (rec_less(&r[n - 1], &r[0]))
-			t = r[n - 1], r[n - 1] = r[0], r[0] = t;
-		if (rec_less(&r[n - 1], &r[mid]))
-			t = r[n - 1], r[n - 1] = r[mid], r[mid] = t;
-		p = r[mid];
-		i = 0;
-		j = n - 1;
-		for (;;)
+		for (int d = 0; d < RADIX_DIGITS; d++)
 		{
-			while (rec_less(&r[i], &p))
-				i++;
-			while (rec_less(&p, &r[j]))
-				j--;
-			if (i >= j)
-				break;
-			t = r[i], r[i] = r[j], r[j] = t;
-			i++;
-			j--;
+			hist[d * RADIX_SIZE + ((kx >> (d * RADIX_BITS)) & (RADIX_SIZE - 1))]++;
+			hist[(RADIX_DIGITS + d) * RADIX_SIZE + ((ky >> (d * RADIX_BITS)) & (RADIX_SIZE - 1))]++;
 		}
-		/* [0, j] <= p <= [j + 1, n) */
-		if (j + 1 < n - j - 1)
-		{
-			sort_recs(r, j + 1, cancel);
-			r += j + 1;
-			n -= j + 1;
-		}
-		else
-		{
-			sort_recs(r + j + 1, n - j - 1, cancel);
-			n = j + 1;
-		}
+		if (poll_cancelled(pl))
+			goto cancelled;
 	}
-	for (size_t i = 1; i < n; i++)
+
+	/* y digits first (least significant first), then x */
+	for (int c = 1; c >= 0; c--)
 	{
-		rec			t = r[i];
-		size_t		j = i;
-
-		while (j > 0 && rec_less(&t, &r[j - 1]))
+		for (int d = 0; d < RADIX_DIGITS; d++)
 		{
-			r[j] = r[j - 1];
-			j--;
+			size_t	   *pos = hist + (c * RADIX_DIGITS + d) * RADIX_SIZE,
+						sum = 0;
+			rec		   *t;
+
+			if (pos[digit_of(&src[0], c, d)] == n)
+				continue;		/* one digit value: the pass would copy */
+			for (int b = 0; b < RADIX_SIZE; b++)
+			{
+				size_t		cnt = pos[b];
+
+				pos[b] = sum;
+				sum += cnt;
+			}
+			for (size_t k = 0; k < n; k++)
+			{
+				dst[pos[digit_of(&src[k], c, d)]++] = src[k];
+				if (poll_cancelled(pl))
+					goto cancelled;
+			}
+			t = src, src = dst, dst = t;
 		}
-		r[j] = t;
+		if (c == 1)
+			for (size_t k = 0; k < n; k++)
+			{
+				src[k].yr = (uint32_t) k;
+				if (poll_cancelled(pl))
+					goto cancelled;
+			}
+	}
+	free(hist);
+	*out = src;
+	return true;
+
+cancelled:
+	free(hist);
+	return false;
+}
+
+/* --- the set of active kept sites, by rank --- */
+
+/* 64^6 = 2^36 ranks: more than TDC_MAX_POINTS */
+#define RS_LEVELS	6
+
+/*
+ * A bit per rank (w[0]), and above it a bit per nonzero word of the level
+ * below, up to a single word (w[top]): successor and predecessor queries in
+ * O(levels), a few machine words each.
+ */
+typedef struct rankset
+{
+	uint64_t   *w[RS_LEVELS];
+	size_t		nw[RS_LEVELS];
+	int			top;
+	uint64_t   *mem;
+} rankset;
+
+static bool
+rankset_init(rankset *s, size_t n)
+{
+	size_t		m = n,
+				total = 0;
+	int			l = 0;
+
+	do
+	{
+		s->nw[l] = (m + 63) / 64;
+		total += s->nw[l];
+		m = s->nw[l];
+		l++;
+	} while (m > 1 && l < RS_LEVELS);
+	s->top = l - 1;
+	s->mem = tdc_big_alloc(total * sizeof(uint64_t));	/* zeroed */
+	if (s->mem == NULL)
+		return false;
+	total = 0;
+	for (l = 0; l <= s->top; l++)
+	{
+		s->w[l] = s->mem + total;
+		total += s->nw[l];
+	}
+	return true;
+}
+
+static inline void
+rankset_add(rankset *s, uint64_t i)
+{
+	for (int l = 0; l <= s->top; l++)
+	{
+		uint64_t	old = s->w[l][i >> 6];
+
+		s->w[l][i >> 6] = old | (uint64_t) 1 << (i & 63);
+		if (old != 0)
+			break;
+		i >>= 6;
 	}
 }
 
-/* --- tolerance --- */
-
-typedef struct cell_table
+static inline void
+rankset_remove(rankset *s, uint64_t i)
 {
-	int64_t    *kx,
-			   *ky;
-	uint32_t   *head;			/* first kept site of the cell, TDC_NIL if none */
-	size_t		mask;
-} cell_table;
-
-static inline size_t
-cell_hash(int64_t cx, int64_t cy, size_t mask)
-{
-	uint64_t	h = (uint64_t) cx * 0x9E3779B97F4A7C15ull ^ ((uint64_t) cy + 0x632BE59BD9B4E019ull) * 0xC2B2AE3D27D4EB4Full;
-
-	return (size_t) (h ^ (h >> 29)) & mask;
+	for (int l = 0; l <= s->top; l++)
+	{
+		if ((s->w[l][i >> 6] &= ~((uint64_t) 1 << (i & 63))) != 0)
+			break;
+		i >>= 6;
+	}
 }
 
-static inline size_t
-cell_find(const cell_table *t, int64_t cx, int64_t cy)
-{
-	size_t		h = cell_hash(cx, cy, t->mask);
-
-	while (t->head[h] != TDC_NIL && (t->kx[h] != cx || t->ky[h] != cy))
-		h = (h + 1) & t->mask;
-	return h;
-}
-
+/* Smallest member >= i, or -1. */
 static inline int64_t
-cell_of(double v, double origin, double tol)
+rankset_next(const rankset *s, int64_t i)
 {
-	double		c = floor((v - origin) / tol);
+	int			l = 0;
 
-	if (c > 4e18)
-		return (int64_t) 4e18;
-	if (c < -4e18)
-		return (int64_t) -4e18;
-	return (int64_t) c;
+	for (;;)
+	{
+		size_t		wi = (size_t) i >> 6;
+		uint64_t	m;
+
+		if (wi >= s->nw[l])
+			return -1;
+		m = s->w[l][wi] & (~(uint64_t) 0 << (i & 63));
+		if (m != 0)
+		{
+			i = (int64_t) (wi << 6) + __builtin_ctzll(m);
+			break;
+		}
+		if (l == s->top)
+			return -1;
+		i = (int64_t) wi + 1;
+		l++;
+	}
+	while (l > 0)
+	{
+		l--;
+		i = (i << 6) + __builtin_ctzll(s->w[l][i]);
+	}
+	return i;
 }
+
+/* Largest member <= i (i < n), or -1. */
+static inline int64_t
+rankset_prev(const rankset *s, int64_t i)
+{
+	int			l = 0;
+
+	if (i < 0)
+		return -1;
+	for (;;)
+	{
+		size_t		wi = (size_t) i >> 6;
+		uint64_t	m = s->w[l][wi] & (~(uint64_t) 0 >> (63 - (i & 63)));
+
+		if (m != 0)
+		{
+			i = (int64_t) (wi << 6) + 63 - __builtin_clzll(m);
+			break;
+		}
+		if (l == s->top || wi == 0)
+			return -1;
+		i = (int64_t) wi - 1;
+		l++;
+	}
+	while (l > 0)
+	{
+		l--;
+		i = (i << 6) + 63 - __builtin_clzll(s->w[l][i]);
+	}
+	return i;
+}
+
+/* --- exact distance decisions (the bounds are proved in the header) --- */
+
+typedef struct tol_ctx
+{
+	double		t;				/* the clamped tolerance t' */
+	double		lo,
+				hi;				/* d < lo: D < t'^2; d > hi: D > t'^2 */
+	double		tpt[2],
+				origin[2];		/* |tpt - origin| = t' for the exact test */
+} tol_ctx;
+
+static inline double
+sqdist(const double *p, const double *q)
+{
+	double		ex = p[0] - q[0],
+				ey = p[1] - q[1];
+
+	return ex * ex + ey * ey;
+}
+
+/* Is D(p, q) < t'^2 exactly?  d = sqdist(p, q). */
+static inline bool
+within(const tol_ctx *c, const double *p, const double *q, double d)
+{
+	if (d < c->lo)
+		return true;
+	if (d > c->hi)
+		return false;
+	return tdc_sqdist_cmp_exact(p, q, c->tpt, c->origin) < 0;
+}
+
+/* Exact sign of D(p, a) - D(p, b); da, db their sqdist. */
+static inline int
+closer(const double *p, const double *a, double da, const double *b, double db)
+{
+	if (da < db * (1 - TOL_FILTER_SLACK))
+		return -1;
+	if (db < da * (1 - TOL_FILTER_SLACK))
+		return 1;
+	return tdc_sqdist_cmp_exact(p, a, p, b);
+}
+
+/* --- the pass --- */
 
 /*
  * Apply the tolerance rule to all input points, leaving the survivors in
- * xy/idx (nin of them) and tol_to[] for the dropped ones.
+ * xy/idx (nin of them, in (x, y) order) and tol_to[] for the dropped ones.
+ * On entry xy/idx hold the input in input order (idx[k] == k; the sort's
+ * tie rule relies on it).  Returns TDC_ENOMEM or 0; on cancel returns 0
+ * with nin unchanged and xy/idx partly overwritten (the driver then stops).
  */
 int
 tdc_tolerance_filter(tdc_job *job)
 {
 	size_t		n = job->nin,
 				kept = 0,
-				cap = 16;
-	double		tol = job->opt.tolerance,
-				tol2 = tol * tol;
-	rec		   *r;
-	uint32_t   *chain;
-	cell_table	t;
+				head = 0;		/* oldest active kept site */
+	rec		   *r,
+			   *tmp,
+			   *sorted = NULL;
+	uint32_t   *krank = NULL,	/* kept site -> its rank */
+			   *site_at = NULL; /* rank -> kept site (while active) */
+	rankset		rs = {.mem = NULL};
+	tol_poll	pl = {0, &job->cancel};
+	tol_ctx		c;
+	double		t2;
+	bool		oom = false;
 
-	while (cap < 2 * n)
-		cap <<= 1;
-	/* mapped, not malloc'd: a backend's raised malloc thresholds would keep them */
+	if (n == 0)
+		return 0;
 	r = tdc_big_alloc(n * sizeof(rec));
-	chain = tdc_big_alloc(n * sizeof(uint32_t));
-	t.kx = tdc_big_alloc(cap * sizeof(int64_t));
-	t.ky = tdc_big_alloc(cap * sizeof(int64_t));
-	t.head = tdc_big_alloc(cap * sizeof(uint32_t));
-	t.mask = cap - 1;
-	if (!r || !chain || !t.kx || !t.ky || !t.head)
+	tmp = tdc_big_alloc(n * sizeof(rec));
+	if (r == NULL || tmp == NULL)
+		goto nomem;
+	if (atomic_load_explicit(&job->cancel, memory_order_relaxed))
+		goto stop;
+	for (size_t k0 = 0; k0 < n; k0 += TOL_PREFAULT_RECS)
 	{
-		tdc_big_free(r), tdc_big_free(chain), tdc_big_free(t.kx), tdc_big_free(t.ky), tdc_big_free(t.head);
-		return TDC_ENOMEM;
+		size_t		k1 = n - k0 < TOL_PREFAULT_RECS ? n : k0 + TOL_PREFAULT_RECS;
+
+		/* both are written in full: map them in by the chunk, not a fault a page */
+		tdc_prefault(r + k0, (k1 - k0) * sizeof(rec));
+		tdc_prefault(tmp + k0, (k1 - k0) * sizeof(rec));
+		for (size_t k = k0; k < k1; k++)
+		{
+			r[k].x = job->xy[2 * k];
+			r[k].y = job->xy[2 * k + 1];
+			r[k].i = job->idx[k];
+			if (poll_cancelled(&pl))
+				goto stop;
+		}
 	}
-	memset(t.head, 0xff, cap * sizeof(uint32_t));
+	if (!sort_recs(r, tmp, n, &sorted, &pl, &oom))
+		goto stop;
+	if (sorted == r)
+		tdc_big_free(tmp);
+	else
+		tdc_big_free(r), r = tmp;
+	tmp = NULL;
+
+	krank = tdc_big_alloc(n * sizeof(uint32_t));
+	site_at = tdc_big_alloc(n * sizeof(uint32_t));
+	if (krank == NULL || site_at == NULL || !rankset_init(&rs, n))
+		goto nomem;
+
+	c.t = job->opt.tolerance;
+	c.t = c.t < TOL_CLAMP_MIN ? TOL_CLAMP_MIN : (c.t > TOL_CLAMP_MAX ? TOL_CLAMP_MAX : c.t);
+	t2 = c.t * c.t;
+	c.lo = t2 * (1 - TOL_FILTER_SLACK);
+	c.hi = t2 * (1 + TOL_FILTER_SLACK);
+	c.tpt[0] = c.t;
+	c.tpt[1] = c.origin[0] = c.origin[1] = 0;
 
 	for (size_t k = 0; k < n; k++)
 	{
-		r[k].x = job->xy[2 * k];
-		r[k].y = job->xy[2 * k + 1];
-		r[k].i = job->idx[k];
-	}
-	sort_recs(r, n, &job->cancel);
-	if (atomic_load(&job->cancel))
-		goto done;
-
-	for (size_t k = 0; k < n; k++)
-	{
-		int64_t		cx = cell_of(r[k].x, job->bmin[0], tol),
-					cy = cell_of(r[k].y, job->bmin[1], tol);
+		const rec  *p = &r[k];
+		const double pt[2] = {p->x, p->y};
 		uint32_t	best = TDC_NIL;
 		double		bestd = 0;
-		size_t		h;
+		int64_t		q;
 
-		if ((k & 0xffff) == 0 && atomic_load_explicit(&job->cancel, memory_order_relaxed))
-			goto done;
+		/* expire: the kept sites are in x order, px only grows */
+		while (head < kept && p->x - job->xy[2 * head] > c.t)
+		{
+			rankset_remove(&rs, krank[head++]);
+			if (poll_cancelled(&pl))
+				goto stop;
+		}
 
-		for (int64_t dx = -1; dx <= 1; dx++)
-			for (int64_t dy = -1; dy <= 1; dy++)
+		/* walk up, then down, from p's rank while |dy| may be below t' */
+		for (int dir = 0; dir < 2; dir++)
+		{
+			q = dir == 0 ? rankset_next(&rs, (int64_t) p->yr + 1)
+				: rankset_prev(&rs, (int64_t) p->yr - 1);
+			while (q >= 0)
 			{
-				h = cell_find(&t, cx + dx, cy + dy);
-				for (uint32_t q = t.head[h]; q != TDC_NIL; q = chain[q])
-				{
-					double		ex = r[k].x - job->xy[2 * (size_t) q],
-								ey = r[k].y - job->xy[2 * (size_t) q + 1],
-								d2 = ex * ex + ey * ey;
+				uint32_t	s = site_at[q];
+				const double *sq = job->xy + 2 * (size_t) s;
+				double		d;
 
-					if (d2 < tol2 && (best == TDC_NIL || d2 < bestd ||
-									  (d2 == bestd && q < best)))
-						best = q, bestd = d2;
+				if (poll_cancelled(&pl))
+					goto stop;
+				if ((dir == 0 ? sq[1] - p->y : p->y - sq[1]) > c.t)
+					break;
+				d = sqdist(pt, sq);
+				if (within(&c, pt, sq, d))
+				{
+					int			cmp = best == TDC_NIL ? -1 :
+						closer(pt, sq, d, job->xy + 2 * (size_t) best, bestd);
+
+					if (cmp < 0 || (cmp == 0 && s < best))
+						best = s, bestd = d;
 				}
+				q = dir == 0 ? rankset_next(&rs, q + 1) : rankset_prev(&rs, q - 1);
 			}
+		}
+		if (poll_cancelled(&pl))
+			goto stop;
+
 		if (best != TDC_NIL)
 		{
-			job->tol_to[r[k].i] = job->idx[best];
+			job->tol_to[p->i] = job->idx[best];
 			continue;
 		}
-		/* keep: kept sites overwrite the front of xy/idx, already consumed */
-		job->xy[2 * kept] = r[k].x;
-		job->xy[2 * kept + 1] = r[k].y;
-		job->idx[kept] = r[k].i;
-		job->tol_to[r[k].i] = r[k].i;
-		h = cell_find(&t, cx, cy);
-		if (t.head[h] == TDC_NIL)
-		{
-			t.kx[h] = cx;
-			t.ky[h] = cy;
-		}
-		chain[kept] = t.head[h];
-		t.head[h] = (uint32_t) kept;
+		/* keep: kept sites overwrite the front of xy/idx, already copied to r */
+		job->xy[2 * kept] = p->x;
+		job->xy[2 * kept + 1] = p->y;
+		job->idx[kept] = p->i;
+		job->tol_to[p->i] = p->i;
+		krank[kept] = p->yr;
+		site_at[p->yr] = (uint32_t) kept;
+		rankset_add(&rs, p->yr);
 		kept++;
 	}
 	job->nin = kept;
-done:
-	tdc_big_free(r), tdc_big_free(chain), tdc_big_free(t.kx), tdc_big_free(t.ky), tdc_big_free(t.head);
-	return 0;
+
+stop:
+	tdc_big_free(r), tdc_big_free(tmp), tdc_big_free(krank), tdc_big_free(site_at);
+	tdc_big_free(rs.mem);
+	return oom ? TDC_ENOMEM : 0;
+
+nomem:
+	oom = true;
+	goto stop;
 }
 
-/* Bytes tdc_tolerance_filter allocates for n points, at most. */
+/*
+ * Bytes tdc_tolerance_filter allocates for n points, at most: the records
+ * and the radix sort's second buffer, the rank arrays and the rank set
+ * (counted as if all were alive at once), and the sort's histograms.
+ */
 size_t
 tdc_tolerance_memory(size_t n)
 {
-	size_t		cap = 16;
-
-	while (cap < 2 * n)
-		cap <<= 1;
-	return n * (sizeof(rec) + sizeof(uint32_t)) + cap * (2 * sizeof(int64_t) + sizeof(uint32_t));
+	return 2 * n * sizeof(rec) + 2 * n * sizeof(uint32_t) +
+		2 * (n / 64 + RS_LEVELS + 1) * sizeof(uint64_t) +
+		(size_t) 2 * RADIX_DIGITS * RADIX_SIZE * sizeof(size_t);
 }

@@ -84,13 +84,16 @@ radix_sort(uint64_t *key, uint32_t *val, size_t n)
 	return true;
 }
 
-static const double *sort_sites;
-
+/*
+ * Lexicographic (x, y) order of two site indices into the sites "s".  The
+ * sites come as qsort_r's argument, not through a static: validations may
+ * run in several threads at once.
+ */
 static int
-cmp_site(const void *a, const void *b)
+cmp_site(const void *a, const void *b, void *s)
 {
-	const double *p = sort_sites + 2 * (size_t) *(const uint32_t *) a;
-	const double *q = sort_sites + 2 * (size_t) *(const uint32_t *) b;
+	const double *p = (const double *) s + 2 * (size_t) *(const uint32_t *) a;
+	const double *q = (const double *) s + 2 * (size_t) *(const uint32_t *) b;
 
 	if (p[0] != q[0])
 		return p[0] < q[0] ? -1 : 1;
@@ -177,10 +180,9 @@ tdc_validate(const double *S, size_t m, const uint32_t *tri, size_t ntri,
 		BAIL("out of memory");
 	for (size_t i = 0; i < m; i++)
 		order[i] = (uint32_t) i;
-	sort_sites = S;
-	qsort(order, m, sizeof(uint32_t), cmp_site);
+	qsort_r(order, m, sizeof(uint32_t), cmp_site, (void *) S);
 	for (size_t i = 1; i < m; i++)
-		if (cmp_site(&order[i - 1], &order[i]) == 0)
+		if (cmp_site(&order[i - 1], &order[i], (void *) S) == 0)
 			BAIL("sites %u and %u are equal", order[i - 1], order[i]);
 	for (size_t i = 0; i < m; i++)
 	{

@@ -10,7 +10,8 @@
  *	tdc_delaunay.max_threads	superuser-only ceiling on the above, 0 = the
  *								number of online CPUs (default 0)
  *	tdc_delaunay.grid_size		s of the s x s subdivision grid, 0 = automatic
- *	tdc_delaunay.levels			subdivision depth d, 0 = automatic, -1 = none
+ *	tdc_delaunay.levels			subdivision depth d, 0 = automatic, -1 = none,
+ *								at most the core's TDC_MAX_LEVELS
  *	tdc_delaunay.max_memory		MB one triangulation (input buffer, engine,
  *								result) may use, 0 = up to the ceiling (default)
  *	tdc_delaunay.memory_ceiling	superuser-only ceiling on the above, 0 = half
@@ -164,7 +165,7 @@ _PG_init(void)
 							"Subdivision depth d, up to 2^d subsets (0 = automatic, -1 = no subdivision).",
 							NULL,
 							&tdc_guc_levels,
-							0, -1, 30,
+							0, -1, TDC_MAX_LEVELS,
 							PGC_USERSET, 0,
 							NULL, NULL, NULL);
 

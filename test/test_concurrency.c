@@ -1,0 +1,360 @@
+/*
+ * test_concurrency.c
+ *		The core's promise of no global mutable state, checked with threads
+ *		that use it at the same moment; and the message of a failed
+ *		pthread_create.
+ *
+ * Races rarely change a result on two cores, so the real check of the
+ * first two tests is `make check-core-tsan`: ThreadSanitizer reports any
+ * unsynchronised access between the threads, whatever they computed.
+ */
+#include <errno.h>
+#include <pthread.h>
+#include <stdatomic.h>
+#include <stdbool.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include "harness.h"
+#include "tdc.h"
+
+#define NTHREADS	4
+
+static double *
+random_points(size_t n, uint64_t seed)
+{
+	double	   *xy = malloc(2 * n * sizeof(double));
+
+	for (size_t i = 0; i < 2 * n; i++)
+	{
+		uint64_t	z = (seed += 0x9E3779B97F4A7C15ull);
+
+		z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+		z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+		xy[i] = ((z ^ (z >> 31)) >> 11) * 0x1p-53 * 1000;
+	}
+	return xy;
+}
+
+/*
+ * A finished job's triangulation as plain arrays for tdc_validate: the
+ * sites renumbered densely.  Returns false when anything is missing.
+ */
+typedef struct plain
+{
+	double	   *sites;
+	size_t		m;
+	uint32_t   *tri;
+	size_t		ntri;
+} plain;
+
+static bool
+to_plain(const tdc_job *job, plain *p)
+{
+	uint32_t	lim = tdc_site_id_limit(job),
+			   *dense = malloc(sizeof(uint32_t) * ((size_t) lim + 1)),
+				v[3];
+	tdc_iter	it = {0};
+
+	p->sites = malloc(16 * (tdc_num_sites(job) + 1));
+	p->tri = malloc(12 * (tdc_num_triangles(job) + 1));
+	p->m = p->ntri = 0;
+	if (!dense || !p->sites || !p->tri)
+	{
+		free(dense);
+		return false;
+	}
+	for (uint32_t s = 0; s < lim; s++)
+		dense[s] = UINT32_MAX;
+	while (tdc_next_triangle(job, &it, v))
+	{
+		for (int k = 0; k < 3; k++)
+		{
+			if (dense[v[k]] == UINT32_MAX)
+			{
+				dense[v[k]] = (uint32_t) p->m;
+				memcpy(p->sites + 2 * p->m++, tdc_site_xy(job, v[k]), 16);
+			}
+			p->tri[3 * p->ntri + k] = dense[v[k]];
+		}
+		p->ntri++;
+	}
+	free(dense);
+	return p->m == tdc_num_sites(job);
+}
+
+typedef struct validate_arg
+{
+	pthread_barrier_t *start;
+	const plain *p;
+	int			rc;
+	char		err[256];
+} validate_arg;
+
+static void *
+validate_main(void *a)
+{
+	validate_arg *va = a;
+
+	pthread_barrier_wait(va->start);
+	va->rc = tdc_validate(va->p->sites, va->p->m, va->p->tri, va->p->ntri,
+						  va->err, sizeof(va->err));
+	return NULL;
+}
+
+/*
+ * tdc_validate on different triangulations in several threads at once.  Its
+ * hull sorts the sites: a comparator reaching them through a shared static
+ * would sort one thread's sites by another's coordinates.
+ */
+static void
+test_concurrent_validate(void)
+{
+	size_t		n = tdc_test_quick ? 20000 : 100000;
+	plain		p[NTHREADS];
+	validate_arg va[NTHREADS];
+	pthread_t	th[NTHREADS];
+	pthread_barrier_t start;
+	bool		ready = true;
+
+	for (int k = 0; k < NTHREADS; k++)
+	{
+		/* different sizes, so a wrong site array is also out of bounds */
+		size_t		nk = n + (size_t) k * (n / 4);
+		double	   *xy = random_points(nk, 1000 + (uint64_t) k);
+		tdc_options opt;
+		tdc_job    *job;
+		char		err[256];
+
+		tdc_options_init(&opt);
+		opt.threads = 1;
+		CHECK(tdc_triangulate(xy, nk, &opt, &job, err, sizeof(err)) == TDC_OK,
+			  "concurrent validate: triangulation %d: %s", k, err);
+		if (!to_plain(job, &p[k]))
+			ready = false;
+		tdc_job_free(job);
+		free(xy);
+	}
+	CHECK(ready, "concurrent validate: could not list the triangles");
+	pthread_barrier_init(&start, NULL, NTHREADS);
+	for (int round = 0; ready && round < 3; round++)
+	{
+		for (int k = 0; k < NTHREADS; k++)
+		{
+			va[k].start = &start;
+			va[k].p = &p[k];
+			va[k].rc = -2;
+			va[k].err[0] = '\0';
+			pthread_create(&th[k], NULL, validate_main, &va[k]);
+		}
+		for (int k = 0; k < NTHREADS; k++)
+		{
+			pthread_join(th[k], NULL);
+			CHECK(va[k].rc == 0, "concurrent validate: round %d, thread %d: %s",
+				  round, k, va[k].err);
+		}
+	}
+	pthread_barrier_destroy(&start);
+	for (int k = 0; k < NTHREADS; k++)
+	{
+		free(p[k].sites);
+		free(p[k].tri);
+	}
+}
+
+typedef struct map_arg
+{
+	pthread_barrier_t *start;
+	const tdc_job *job;
+	uint32_t   *site;			/* what tdc_input_site said, per input */
+	int			rc;
+	char		err[256];
+} map_arg;
+
+static void *
+map_main(void *a)
+{
+	map_arg    *ma = a;
+	size_t		n = tdc_num_input(ma->job);
+
+	pthread_barrier_wait(ma->start);
+	for (size_t i = 0; i < n; i++)
+		ma->site[i] = tdc_input_site(ma->job, i);
+	/* and the validator, which reaches the sites through the same map */
+	ma->rc = tdc_validate_job(ma->job, ma->err, sizeof(ma->err));
+	return NULL;
+}
+
+/*
+ * The first calls of tdc_input_site build the input->site map lazily: from
+ * several threads at once on a fresh job, all must get the same complete
+ * map (one build, safely published).  Duplicates and a tolerance make the
+ * map more than a permutation.
+ */
+static void
+test_concurrent_input_site(void)
+{
+	size_t		n = tdc_test_quick ? 20000 : 100000;
+	double	   *xy = random_points(n, 77);
+	uint32_t   *site[NTHREADS];
+	map_arg		ma[NTHREADS];
+	pthread_t	th[NTHREADS];
+	pthread_barrier_t start;
+
+	for (size_t i = 0; i < n / 10; i++)
+		memcpy(xy + 2 * (n - 1 - i), xy + 2 * i, 16);	/* duplicates */
+	for (int k = 0; k < NTHREADS; k++)
+		site[k] = malloc(n * sizeof(uint32_t));
+	pthread_barrier_init(&start, NULL, NTHREADS);
+	for (int round = 0; round < 6; round++)
+	{
+		tdc_options opt;
+		tdc_job    *job;
+		char		err[256];
+
+		tdc_options_init(&opt);
+		opt.threads = 2;
+		opt.tolerance = round % 2 ? 0.01 : 0;
+		CHECK(tdc_triangulate(xy, n, &opt, &job, err, sizeof(err)) == TDC_OK,
+			  "concurrent input_site: triangulation: %s", err);
+		if (job == NULL)
+			continue;
+		for (int k = 0; k < NTHREADS; k++)
+		{
+			ma[k].start = &start;
+			ma[k].job = job;
+			ma[k].site = site[k];
+			ma[k].rc = -2;
+			ma[k].err[0] = '\0';
+			pthread_create(&th[k], NULL, map_main, &ma[k]);
+		}
+		for (int k = 0; k < NTHREADS; k++)
+			pthread_join(th[k], NULL);
+		for (int k = 0; k < NTHREADS; k++)
+		{
+			size_t		bad = 0;
+
+			CHECK(ma[k].rc == 0, "concurrent input_site: round %d, thread %d validates: %s",
+				  round, k, ma[k].err);
+			for (size_t i = 0; i < n; i++)
+				if (site[k][i] != site[0][i] || site[k][i] >= tdc_site_id_limit(job))
+					bad++;
+			CHECK(bad == 0, "concurrent input_site: round %d, thread %d: %zu inputs mapped differently or not at all",
+				  round, k, bad);
+		}
+		/* without a tolerance, duplicates follow their first occurrence */
+		CHECK(opt.tolerance > 0 || tdc_input_site(job, n - 1) == tdc_input_site(job, 0),
+			  "concurrent input_site: round %d: a duplicate maps elsewhere", round);
+		tdc_job_free(job);
+	}
+	pthread_barrier_destroy(&start);
+	for (int k = 0; k < NTHREADS; k++)
+		free(site[k]);
+	free(xy);
+}
+
+/* Virtual memory of this process in bytes (first field of /proc/self/statm). */
+static size_t
+vm_size(void)
+{
+	FILE	   *f = fopen("/proc/self/statm", "r");
+	unsigned long pages = 0;
+
+	if (f)
+	{
+		if (fscanf(f, "%lu", &pages) != 1)
+			pages = 0;
+		fclose(f);
+	}
+	return (size_t) pages * (size_t) sysconf(_SC_PAGESIZE);
+}
+
+/*
+ * When the pool cannot start its threads, the job's message must give
+ * pthread_create's own error, which it returns and does not leave in errno.
+ * The job is just big enough to run on a driver thread with a pool.
+ * A child process makes every thread stack 64 MB and caps its address space
+ * 512 MB above what it uses: the driver thread fits, a pool of 1024 threads
+ * does not, and glibc answers a stack it cannot map with EAGAIN.  Skipped
+ * under sanitizers (--quick), whose shadow memory and thread bookkeeping
+ * do not survive a capped address space.
+ */
+static void
+test_thread_error_message(void)
+{
+	size_t		n = TDC_INLINE_MAX;	/* smaller jobs run inline, without a pool */
+	double	   *xy;
+	int			fd[2];
+	pid_t		pid;
+	int			status;
+	char		msg[256] = "";
+	ssize_t		got;
+
+	if (tdc_test_quick)
+		return;
+	if (pipe(fd) != 0)
+	{
+		CHECK(false, "thread error: pipe: %s", strerror(errno));
+		return;
+	}
+	xy = random_points(n, 5);
+	fflush(NULL);
+	pid = fork();
+	if (pid == 0)
+	{
+		pthread_attr_t attr;
+		struct rlimit rl;
+		tdc_options opt;
+		tdc_job    *job = NULL;
+		char		err[256] = "";
+		int			rc;
+
+		close(fd[0]);
+		pthread_attr_init(&attr);
+		pthread_attr_setstacksize(&attr, (size_t) 64 << 20);
+		if (pthread_setattr_default_np(&attr) != 0)
+			_exit(10);
+		rl.rlim_cur = rl.rlim_max = vm_size() + ((size_t) 512 << 20);
+		if (setrlimit(RLIMIT_AS, &rl) != 0)
+			_exit(11);
+		tdc_options_init(&opt);
+		opt.threads = 1024;
+		rc = tdc_triangulate(xy, n, &opt, &job, err, sizeof(err));
+		if (job != NULL)
+			snprintf(err, sizeof(err), "%s", tdc_job_error(job));
+		if (write(fd[1], err, strlen(err)) < 0)
+			_exit(12);
+		_exit(rc == TDC_ETHREAD ? 0 : rc == TDC_OK ? 13 : 14);
+	}
+	close(fd[1]);
+	CHECK(pid > 0, "thread error: fork failed");
+	if (pid > 0)
+	{
+		got = read(fd[0], msg, sizeof(msg) - 1);
+		msg[got > 0 ? got : 0] = '\0';
+		waitpid(pid, &status, 0);
+		CHECK(WIFEXITED(status) && WEXITSTATUS(status) == 0,
+			  "thread error: the capped run ended with %s %d (0 = TDC_ETHREAD), message \"%s\"",
+			  WIFEXITED(status) ? "exit" : "signal",
+			  WIFEXITED(status) ? WEXITSTATUS(status) : WTERMSIG(status), msg);
+		CHECK(strstr(msg, strerror(EAGAIN)) != NULL && strstr(msg, strerror(0)) == NULL,
+			  "thread error: message \"%s\" does not give pthread_create's error (%s)",
+			  msg, strerror(EAGAIN));
+		printf("thread error: \"%s\"\n", msg);
+	}
+	close(fd[0]);
+	free(xy);
+}
+
+void
+test_concurrency(void)
+{
+	test_concurrent_validate();
+	test_concurrent_input_site();
+	test_thread_error_message();
+}
