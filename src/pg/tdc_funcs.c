@@ -37,6 +37,29 @@
  * result; the check happens before the engine allocates, and the engine
  * gets what is left as its own max_memory.
  *
+ * Reading a big value.  ST_TDCDelaunayTriangles gets its argument as a
+ * TOAST pointer when the value is stored out of line (any value over about
+ * 2 kB unless it compresses below that; a collection of 5 million points is
+ * 120 MB, about 90 MB with pglz).  Detoasting it (PG_DETOAST_DATUM) would
+ * fetch all its chunks into one buffer, decompress it into a second, and
+ * only then let the walker copy the vertices into a third, all without an
+ * interrupt check: a cancel arriving then waited for the whole read, about a
+ * second for that value.  Instead the stored bytes are fetched a slice at a
+ * time (table_relation_fetch_toast_slice, 128 chunks, about 250 kB), and
+ * handed to the walker (gserialized.c) as they come; compressed bytes,
+ * stored out of line or in line, are decompressed a piece at a time into a
+ * window that keeps the last 4 kB (pglz) or 64 kB (lz4) of output, which is
+ * as far back as either format refers.  PostgreSQL offers no incremental
+ * decompression (its slice functions decompress from the start each time),
+ * so both formats are decoded here, with every length and offset checked
+ * against the input left, the output produced and the raw size announced:
+ * corrupt data is an ERROR, never a read or write outside the buffers.
+ * Interrupts are checked before every slice and piece (a few ms of work).
+ * Other values (in line and uncompressed, or an expanded or indirect datum,
+ * or compressed with a method this code does not know) are detoasted as
+ * before.  An ERROR raised while reading carries a CONTEXT line saying how
+ * the value was stored.
+ *
  * ST_TDCDelaunayDump runs a query through SPI (as the calling user: the
  * function is not SECURITY DEFINER), reads its single geometry column with a
  * cursor in batches, triangulates, and returns one POLYGON row per triangle
@@ -48,9 +71,15 @@
 #include <math.h>
 #include <unistd.h>
 
+#include "access/detoast.h"
+#include "access/heaptoast.h"
+#include "access/table.h"
+#include "access/tableam.h"
+#include "access/toast_compression.h"
 #include "executor/spi.h"
 #include "funcapi.h"
 #include "miscadmin.h"
+#include "portability/instr_time.h"
 #include "utils/builtins.h"
 #include "utils/lsyscache.h"
 #include "utils/memutils.h"
@@ -164,22 +193,58 @@ effective_threads(void)
 	return Min(t, ceiling);
 }
 
-static void
-report_stats(const tdc_job *job, const char *fname)
+/* What the stats NOTICE reports of a finished job, kept past its free. */
+typedef struct RunStats
 {
+	size_t		input;
+	size_t		sites;
+	size_t		triangles;
+	size_t		edges;
+	int			threads;
+	int			levels;
+	int			grid;
 	tdc_times	t;
+} RunStats;
 
-	tdc_job_times(job, &t);
+static void
+stats_take(const tdc_job *job, RunStats *st)
+{
+	st->input = tdc_num_input(job);
+	st->sites = tdc_num_sites(job);
+	st->triangles = tdc_num_triangles(job);
+	st->edges = tdc_num_edges(job);
+	st->threads = tdc_threads_used(job);
+	st->levels = tdc_levels_used(job);
+	st->grid = tdc_grid_used(job);
+	tdc_job_times(job, &st->t);
+}
+
+/*
+ * The stats NOTICE.  phases: more figures, measured outside the core
+ * (reading, writing, freeing), appended to the DETAIL; "" for none.
+ */
+static void
+stats_report(const RunStats *st, const char *fname, const char *phases)
+{
 	ereport(NOTICE,
 			(errmsg("%s: %zu input points, %zu sites, %zu triangles, %zu edges",
-					fname, tdc_num_input(job), tdc_num_sites(job),
-					tdc_num_triangles(job), tdc_num_edges(job)),
-			 errdetail("threads %d, levels %d, grid %d; sort %.3f ms, subdivide %.3f ms, leaves %.3f ms, merge %.3f ms, total %.3f ms",
-					   tdc_threads_used(job), tdc_levels_used(job),
-					   tdc_grid_used(job),
-					   t.sort * 1000.0, t.subdivide * 1000.0,
-					   t.leaves * 1000.0, t.merge * 1000.0,
-					   t.total * 1000.0)));
+					fname, st->input, st->sites, st->triangles, st->edges),
+			 errdetail("threads %d, levels %d, grid %d; sort %.3f ms, subdivide %.3f ms, leaves %.3f ms, merge %.3f ms, total %.3f ms%s",
+					   st->threads, st->levels, st->grid,
+					   st->t.sort * 1000.0, st->t.subdivide * 1000.0,
+					   st->t.leaves * 1000.0, st->t.merge * 1000.0,
+					   st->t.total * 1000.0, phases)));
+}
+
+/* Milliseconds since "start" (set with INSTR_TIME_SET_CURRENT). */
+static double
+ms_since(instr_time start)
+{
+	instr_time	now;
+
+	INSTR_TIME_SET_CURRENT(now);
+	INSTR_TIME_SUBTRACT(now, start);
+	return INSTR_TIME_GET_MILLISEC(now);
 }
 
 /*
@@ -308,9 +373,6 @@ tdc_run(const TdcPointBuf *buf, double tolerance, uint64 result_bytes,
 		report_core_error(rc, err, fname);
 	}
 	wait_for_job(run, fname);
-
-	if (tdc_guc_stats)
-		report_stats(run->job, fname);
 	return run;
 }
 
@@ -345,28 +407,65 @@ tdc_run_free(TdcRun *run)
 	}
 }
 
-/* Triangulate buf into one geometry value of the given kind. */
-Datum
-tdc_triangulate_to_datum(const TdcPointBuf *buf, double tolerance, int flags,
-						 const char *fname)
+/*
+ * Triangulate buf into one geometry value of the given kind.  read_ms: how
+ * long reading the input took, for the stats (< 0: not known).
+ */
+static Datum
+triangulate_to_datum(const TdcPointBuf *buf, double tolerance, int flags,
+					 const char *fname, double read_ms)
 {
 	TdcRun	   *run;
 	struct varlena *result;
 	TdcGserWriter w;
+	RunStats	st;
+	instr_time	start;
+	double		write_ms = 0;
 
 	if (buf->n == 0)
 		return PointerGetDatum(tdc_gser_empty(flags, buf->srid));
 
 	run = tdc_run(buf, tolerance,
 				  tdc_gser_result_bound(buf->n, flags, buf->hasz), fname);
+	if (tdc_guc_stats)
+	{
+		stats_take(run->job, &st);
+		INSTR_TIME_SET_CURRENT(start);
+	}
 	result = tdc_gser_result_alloc(run->job, flags, buf, fname, &w);
 	if (flags == TDC_OUT_EDGES || w.count == 0 ||
 		!tdc_run_emit(run, tdc_gser_emit, &w, fname))
 		tdc_gser_fill(&w);
 	/* freeing a big job takes a while: let a pending cancel in first */
 	CHECK_FOR_INTERRUPTS();
+	if (tdc_guc_stats)
+	{
+		write_ms = ms_since(start);
+		INSTR_TIME_SET_CURRENT(start);
+	}
 	tdc_run_free(run);
+	if (tdc_guc_stats)
+	{
+		char		phases[128];
+		double		free_ms = ms_since(start);
+
+		if (read_ms >= 0)
+			snprintf(phases, sizeof(phases), "; read %.3f ms, write %.3f ms, free %.3f ms",
+					 read_ms, write_ms, free_ms);
+		else
+			snprintf(phases, sizeof(phases), "; write %.3f ms, free %.3f ms",
+					 write_ms, free_ms);
+		stats_report(&st, fname, phases);
+	}
 	return PointerGetDatum(result);
+}
+
+/* Triangulate buf into one geometry value of the given kind. */
+Datum
+tdc_triangulate_to_datum(const TdcPointBuf *buf, double tolerance, int flags,
+						 const char *fname)
+{
+	return triangulate_to_datum(buf, tolerance, flags, fname, -1);
 }
 
 /* ----------------------------------------------------------------
@@ -454,6 +553,462 @@ dump_collect(TdcPointBuf *buf, const char *query, Oid geomoid,
 }
 
 /* ----------------------------------------------------------------
+ *		reading big values
+ * ----------------------------------------------------------------
+ */
+
+/* Stored bytes fetched at a time: whole TOAST chunks, about 250 kB. */
+#define SLICE_BYTES			(128 * TOAST_MAX_CHUNK_SIZE)
+/* Decompressed bytes handed to the walker at a time. */
+#define PIECE_BYTES			((Size) 256 * 1024)
+/* Decompressed bytes kept for back-references: pglz's reach 4095 bytes. */
+#define PGLZ_HISTORY		((Size) 4096)
+/* lz4's reach 65535 bytes. */
+#define LZ4_HISTORY			((Size) 65536)
+/* A pglz group: a control byte and 8 items of at most 3 bytes... */
+#define PGLZ_GROUP_IN		25
+/* ...giving at most 8 matches of 273 bytes. */
+#define PGLZ_GROUP_OUT		(8 * 273)
+
+/* Where a lz4 decoder stopped: in which part of which sequence. */
+typedef enum Lz4Step
+{
+	LZ4_TOKEN,					/* at a sequence's token */
+	LZ4_LITLEN,					/* adding up literal length bytes */
+	LZ4_LITERALS,				/* copying literals */
+	LZ4_OFFSET,					/* at the match offset */
+	LZ4_MATCHLEN,				/* adding up match length bytes */
+	LZ4_MATCH,					/* copying the match */
+	LZ4_END						/* the block ended after its last literals */
+} Lz4Step;
+
+/*
+ * A TOASTed value read front to back.  The stored bytes (compressed or not)
+ * come from the TOAST table a slice at a time, or, for a value compressed
+ * in line, from memory; compressed bytes are decompressed a piece at a
+ * time into a window that keeps the last bytes for back-references.
+ */
+typedef struct ToastReader
+{
+	TdcGserSource src;			/* first: what the walker sees */
+	const char *fname;
+	int			method;			/* -1: not compressed, else a ToastCompressionId */
+
+	/* stored bytes */
+	Relation	toastrel;		/* NULL: all in memory, "in" .. "in_end" */
+	Oid			valueid;
+	int32		stored;			/* bytes stored */
+	int32		fetched;		/* bytes fetched so far */
+	struct varlena *slice;		/* fetch buffer of SLICE_BYTES */
+	char	   *inbuf;			/* compressed: a few bytes kept + one slice */
+	const uint8 *in;			/* compressed bytes not decoded yet */
+	const uint8 *in_end;
+
+	/* decompressed bytes */
+	uint8	   *out;			/* history + PIECE_BYTES */
+	Size		history;		/* bytes kept for back-references */
+	Size		out_pos;		/* bytes of out in use */
+	uint64		produced;		/* bytes decompressed so far */
+	uint64		rawsize;		/* bytes the value decompresses to */
+
+	/* lz4: where the current sequence is */
+	Lz4Step		step;
+	uint64		len;			/* literal or match bytes left */
+	uint32		off;			/* match offset */
+	int			matchnib;		/* match length field of the token */
+} ToastReader;
+
+static void
+toast_corrupt(const ToastReader *r)
+{
+	ereport(ERROR,
+			(errcode(ERRCODE_DATA_CORRUPTED),
+			 errmsg("%s: compressed %s data is corrupt", r->fname,
+					r->method == TOAST_LZ4_COMPRESSION_ID ? "lz4" : "pglz")));
+}
+
+/* Fetch the next slice of stored bytes into r->slice; returns its length. */
+static Size
+fetch_slice(ToastReader *r)
+{
+	int32		n = Min(r->stored - r->fetched, (int32) SLICE_BYTES);
+
+	CHECK_FOR_INTERRUPTS();
+	table_relation_fetch_toast_slice(r->toastrel, r->valueid, r->stored,
+									 r->fetched, n, r->slice);
+	r->fetched += n;
+	return (Size) n;
+}
+
+/*
+ * Make at least "want" compressed bytes available at r->in, fetching a
+ * slice when fewer remain; returns false when fewer than that are left in
+ * the whole value.  The bytes not decoded yet (fewer than "want") move to
+ * the front of the input buffer, and the slice goes after them.
+ */
+static bool
+toast_input(ToastReader *r, Size want)
+{
+	Size		keep = r->in_end - r->in;
+	Size		n;
+
+	if (keep >= want)
+		return true;
+	if (r->toastrel == NULL || r->fetched == r->stored)
+		return false;
+	memmove(r->inbuf, r->in, keep);
+	n = fetch_slice(r);
+	memcpy(r->inbuf + keep, VARDATA(r->slice), n);
+	r->in = (const uint8 *) r->inbuf;
+	r->in_end = r->in + keep + n;
+	return keep + n >= want;
+}
+
+/*
+ * Copy a match of len bytes from off bytes back.  They may overlap: the
+ * match then repeats the last off bytes, and each copy doubles what can be
+ * copied in one go (the distance from the source grows, the source stays).
+ */
+static inline void
+copy_match(uint8 *dst, Size off, Size len)
+{
+	const uint8 *src = dst - off;
+
+	while (len > 0)
+	{
+		Size		k = Min(len, (Size) (dst - src));
+
+		memcpy(dst, src, k);
+		dst += k;
+		len -= k;
+	}
+}
+
+/*
+ * Decompress pglz groups into out from r->out_pos up to "limit".  The format
+ * (common/pg_lzcompress.c): a control byte, then 8 items, each a literal
+ * byte (bit clear, low bit first) or a match (bit set): 2 bytes, length - 3
+ * in the low nibble of the first, a 12-bit offset in its high nibble and the
+ * second, and when the length field is 15 a third byte adds to the length.
+ * The value's stream ends with its input: then exactly rawsize bytes must
+ * have been produced.
+ */
+static void
+pglz_piece(ToastReader *r, Size limit)
+{
+	uint8	   *out = r->out;
+	Size		pos = r->out_pos;
+	uint64		base = r->produced - pos;	/* produced = base + pos */
+
+	while (limit - pos >= PGLZ_GROUP_OUT)
+	{
+		const uint8 *in;
+		const uint8 *end;
+		uint8		ctrl;
+
+		if (!toast_input(r, PGLZ_GROUP_IN) && r->in == r->in_end)
+			break;				/* all input decoded */
+		in = r->in;
+		end = r->in_end;
+		ctrl = *in++;
+		for (int bit = 0; bit < 8 && in < end; bit++, ctrl >>= 1)
+		{
+			if (ctrl & 1)
+			{
+				Size		len;
+				Size		off;
+
+				if (end - in < 2)
+					toast_corrupt(r);
+				len = (in[0] & 0x0f) + 3;
+				off = ((Size) (in[0] & 0xf0) << 4) | in[1];
+				in += 2;
+				if (len == 18)
+				{
+					if (in == end)
+						toast_corrupt(r);
+					len += *in++;
+				}
+				if (off == 0 || off > base + pos ||
+					len > r->rawsize - (base + pos))
+					toast_corrupt(r);
+				copy_match(out + pos, off, len);
+				pos += len;
+			}
+			else
+			{
+				if (base + pos >= r->rawsize)
+					toast_corrupt(r);
+				out[pos++] = *in++;
+			}
+		}
+		r->in = in;
+	}
+	r->produced = base + pos;
+	r->out_pos = pos;
+}
+
+/*
+ * Decompress lz4 into out from r->out_pos up to "limit", resuming wherever
+ * the previous call stopped.  The format (one lz4 block): sequences of a
+ * token (literal length in the high nibble, match length - 4 in the low
+ * one, 15 meaning that bytes follow, each added, until one is not 255), the
+ * literals, a 2-byte little-endian offset and the match; the last sequence
+ * stops after its literals, at the end of the input.
+ */
+static void
+lz4_piece(ToastReader *r, Size limit)
+{
+	uint8	   *out = r->out;
+	Size		pos = r->out_pos;
+	uint64		base = r->produced - pos;
+	Size		k;
+	uint8		b;
+
+	while (pos < limit)
+	{
+		switch (r->step)
+		{
+			case LZ4_TOKEN:
+				if (!toast_input(r, 1))
+					toast_corrupt(r);
+				b = *r->in++;
+				r->len = b >> 4;
+				r->matchnib = b & 0x0f;
+				r->step = r->len == 15 ? LZ4_LITLEN : LZ4_LITERALS;
+				break;
+
+			case LZ4_LITLEN:
+			case LZ4_MATCHLEN:
+				if (!toast_input(r, 1))
+					toast_corrupt(r);
+				b = *r->in++;
+				r->len += b;
+				if (r->len > r->rawsize)
+					toast_corrupt(r);
+				if (b != 255)
+					r->step = r->step == LZ4_LITLEN ? LZ4_LITERALS : LZ4_MATCH;
+				break;
+
+			case LZ4_LITERALS:
+				if (r->len > r->rawsize - (base + pos))
+					toast_corrupt(r);
+				if (r->len > 0 && !toast_input(r, 1))
+					toast_corrupt(r);
+				k = Min(Min(r->len, (uint64) (limit - pos)),
+						(uint64) (r->in_end - r->in));
+				memcpy(out + pos, r->in, k);
+				pos += k;
+				r->in += k;
+				r->len -= k;
+				if (r->len == 0)
+				{
+					/* the last sequence: no offset follows */
+					if (!toast_input(r, 1))
+					{
+						r->step = LZ4_END;
+						goto done;
+					}
+					r->step = LZ4_OFFSET;
+				}
+				break;
+
+			case LZ4_OFFSET:
+				if (!toast_input(r, 2))
+					toast_corrupt(r);
+				r->off = r->in[0] | ((uint32) r->in[1] << 8);
+				r->in += 2;
+				if (r->off == 0 || r->off > base + pos)
+					toast_corrupt(r);
+				r->len = r->matchnib + 4;
+				r->step = r->matchnib == 15 ? LZ4_MATCHLEN : LZ4_MATCH;
+				break;
+
+			case LZ4_MATCH:
+				if (r->len > r->rawsize - (base + pos))
+					toast_corrupt(r);
+				k = Min(r->len, (uint64) (limit - pos));
+				copy_match(out + pos, r->off, k);
+				pos += k;
+				r->len -= k;
+				if (r->len == 0)
+					r->step = LZ4_TOKEN;
+				break;
+
+			case LZ4_END:
+				goto done;
+		}
+	}
+done:
+	r->produced = base + pos;
+	r->out_pos = pos;
+}
+
+/* TdcGserSource.next of an uncompressed value: its next slice. */
+static bool
+plain_next(TdcGserSource *src, const char **data, Size *len)
+{
+	ToastReader *r = (ToastReader *) src;
+
+	if (r->fetched == r->stored)
+		return false;
+	*len = fetch_slice(r);
+	*data = VARDATA(r->slice);
+	return true;
+}
+
+/* TdcGserSource.next of a compressed value: the next piece decompressed. */
+static bool
+compressed_next(TdcGserSource *src, const char **data, Size *len)
+{
+	ToastReader *r = (ToastReader *) src;
+	Size		start;
+
+	if (r->produced == r->rawsize)
+		return false;
+	CHECK_FOR_INTERRUPTS();
+	/* keep the history, drop what is older: the walker is done with it */
+	if (r->out_pos > r->history)
+	{
+		memmove(r->out, r->out + r->out_pos - r->history, r->history);
+		r->out_pos = r->history;
+	}
+	start = r->out_pos;
+	if (r->method == TOAST_PGLZ_COMPRESSION_ID)
+		pglz_piece(r, start + PIECE_BYTES);
+	else
+		lz4_piece(r, start + PIECE_BYTES);
+	if (r->out_pos == start)
+		toast_corrupt(r);		/* the input ended early */
+	*data = (const char *) r->out + start;
+	*len = r->out_pos - start;
+	return true;
+}
+
+/* CONTEXT of an ERROR (a cancel included) raised while reading a value. */
+static void
+toast_read_context(void *arg)
+{
+	const ToastReader *r = arg;
+	const char *method = r->method == TOAST_LZ4_COMPRESSION_ID ? "lz4" : "pglz";
+
+	if (r->toastrel != NULL && r->method == -1)
+		errcontext("reading a geometry value of %llu bytes stored out of line",
+				   (unsigned long long) r->rawsize);
+	else if (r->toastrel != NULL)
+		errcontext("reading a geometry value of %llu bytes stored out of line, compressed with %s",
+				   (unsigned long long) r->rawsize, method);
+	else
+		errcontext("reading a geometry value of %llu bytes compressed with %s",
+				   (unsigned long long) r->rawsize, method);
+}
+
+/*
+ * Read a value stored out of line or compressed into buf, a slice at a time
+ * (see the top of this file); returns false, having read nothing, for any
+ * other value, which the caller detoasts as usual.
+ */
+static bool
+read_toasted_value(TdcPointBuf *buf, struct varlena *attr, const char *fname)
+{
+	ToastReader r;
+	ErrorContextCallback errcb;
+
+	memset(&r, 0, sizeof(r));
+	r.fname = fname;
+	if (VARATT_IS_EXTERNAL_ONDISK(attr))
+	{
+		struct varatt_external ptr;
+
+		VARATT_EXTERNAL_GET_POINTER(ptr, attr);
+		r.stored = VARATT_EXTERNAL_GET_EXTSIZE(ptr);
+		r.rawsize = ptr.va_rawsize - VARHDRSZ;
+		r.method = VARATT_EXTERNAL_IS_COMPRESSED(ptr) ?
+			(int) VARATT_EXTERNAL_GET_COMPRESS_METHOD(ptr) : -1;
+		r.valueid = ptr.va_valueid;
+		if (r.method != -1 && r.method != TOAST_PGLZ_COMPRESSION_ID &&
+			r.method != TOAST_LZ4_COMPRESSION_ID)
+			return false;
+		r.toastrel = table_open(ptr.va_toastrelid, AccessShareLock);
+		r.slice = palloc(VARHDRSZ + Min(r.stored, (int32) SLICE_BYTES));
+	}
+	else if (VARATT_IS_COMPRESSED(attr))
+	{
+		r.stored = VARSIZE(attr) - VARHDRSZ;
+		r.rawsize = VARDATA_COMPRESSED_GET_EXTSIZE(attr);
+		r.method = (int) VARDATA_COMPRESSED_GET_COMPRESS_METHOD(attr);
+		if (r.method != TOAST_PGLZ_COMPRESSION_ID &&
+			r.method != TOAST_LZ4_COMPRESSION_ID)
+			return false;
+		r.fetched = r.stored;
+		r.in = (const uint8 *) VARDATA(attr);
+		r.in_end = r.in + r.stored;
+	}
+	else
+		return false;
+
+	/* from here on an ERROR, a cancel included, says what was being read */
+	errcb.callback = toast_read_context;
+	errcb.arg = &r;
+	errcb.previous = error_context_stack;
+	error_context_stack = &errcb;
+
+	r.src.size = r.rawsize;
+	if (r.method == -1)
+		r.src.next = plain_next;
+	else
+	{
+		/*
+		 * The stored bytes start with the 4-byte header of the compressed
+		 * value: its raw size (checked against the pointer's) and method.
+		 */
+		uint32		tcinfo;
+
+		r.src.next = compressed_next;
+		if (r.toastrel != NULL)
+		{
+			r.inbuf = palloc(PGLZ_GROUP_IN + Min(r.stored, (int32) SLICE_BYTES));
+			r.in = r.in_end = (const uint8 *) r.inbuf;
+		}
+		if (!toast_input(&r, sizeof(tcinfo)))
+			toast_corrupt(&r);
+		memcpy(&tcinfo, r.in, sizeof(tcinfo));
+		r.in += sizeof(tcinfo);
+		if ((tcinfo & VARLENA_EXTSIZE_MASK) != r.rawsize)
+			toast_corrupt(&r);
+		r.history = r.method == TOAST_LZ4_COMPRESSION_ID ? LZ4_HISTORY : PGLZ_HISTORY;
+		r.out = palloc(Min(r.history + PIECE_BYTES, r.rawsize));
+		r.step = LZ4_TOKEN;
+	}
+
+	tdc_gser_append_source(buf, &r.src, fname);
+
+	/* every stored byte must have been used, and no more */
+	if (r.method != -1 &&
+		(r.produced != r.rawsize || r.in != r.in_end || r.fetched != r.stored ||
+		 (r.method == TOAST_LZ4_COMPRESSION_ID && r.step != LZ4_END)))
+	{
+		/* a lz4 block may end in an empty last sequence: decode it */
+		if (r.method == TOAST_LZ4_COMPRESSION_ID && r.produced == r.rawsize &&
+			r.step != LZ4_END)
+			lz4_piece(&r, r.out_pos + 1);
+		if (r.step != LZ4_END || r.in != r.in_end || r.fetched != r.stored)
+			toast_corrupt(&r);
+	}
+	error_context_stack = errcb.previous;
+
+	if (r.toastrel != NULL)
+		table_close(r.toastrel, AccessShareLock);
+	if (r.slice)
+		pfree(r.slice);
+	if (r.inbuf)
+		pfree(r.inbuf);
+	if (r.out)
+		pfree(r.out);
+	return true;
+}
+
+/* ----------------------------------------------------------------
  *		SQL entry points
  * ----------------------------------------------------------------
  */
@@ -468,15 +1023,22 @@ Datum
 st_tdcdelaunaytriangles(PG_FUNCTION_ARGS)
 {
 	const char *fname = "ST_TDCDelaunayTriangles";
-	struct varlena *geom = PG_DETOAST_DATUM_PACKED(PG_GETARG_DATUM(0));
+	struct varlena *arg = (struct varlena *) DatumGetPointer(PG_GETARG_DATUM(0));
 	double		tolerance = PG_NARGS() > 1 ? PG_GETARG_FLOAT8(1) : 0.0;
 	int32		flags = PG_NARGS() > 2 ? PG_GETARG_INT32(2) : 0;
 	TdcPointBuf buf;
 
+	instr_time	start;
+
 	tdc_check_params(tolerance, flags, fname);
+	if (tdc_guc_stats)
+		INSTR_TIME_SET_CURRENT(start);
 	tdc_pointbuf_init(&buf, CurrentMemoryContext);
-	tdc_gser_append(&buf, geom, fname);
-	PG_RETURN_DATUM(tdc_triangulate_to_datum(&buf, tolerance, flags, fname));
+	if (!read_toasted_value(&buf, arg, fname))
+		tdc_gser_append(&buf, PG_DETOAST_DATUM_PACKED(PointerGetDatum(arg)),
+						fname);
+	PG_RETURN_DATUM(triangulate_to_datum(&buf, tolerance, flags, fname,
+										 tdc_guc_stats ? ms_since(start) : -1));
 }
 
 PG_FUNCTION_INFO_V1(st_tdcdelaunaydump);
@@ -523,6 +1085,13 @@ st_tdcdelaunaydump(PG_FUNCTION_ARGS)
 		return (Datum) 0;
 
 	run = tdc_run(&buf, tolerance, 0, fname);
+	if (tdc_guc_stats)
+	{
+		RunStats	st;
+
+		stats_take(run->job, &st);
+		stats_report(&st, fname, "");
+	}
 
 	tri = palloc(tdc_gser_triangle_size(buf.hasz));
 	it.pos = 0;

@@ -86,6 +86,19 @@ typedef struct TdcPointBuf
 	int32		srid;
 } TdcPointBuf;
 
+/*
+ * A geometry value that arrives in pieces, front to back: next() sets *data
+ * and *len to the next piece, valid until the following call, or returns
+ * false after the last.  The pieces add up to "size" bytes, the value
+ * without its varlena header.  tdc_funcs.c reads big TOASTed values this
+ * way, a slice at a time.
+ */
+typedef struct TdcGserSource
+{
+	bool		(*next) (struct TdcGserSource *src, const char **data, Size *len);
+	uint64		size;
+} TdcGserSource;
+
 /* gserialized.c */
 extern void tdc_pointbuf_init(TdcPointBuf *buf, MemoryContext cxt);
 extern void tdc_pointbuf_reserve(TdcPointBuf *buf, uint64 extra,
@@ -97,6 +110,8 @@ extern void tdc_pointbuf_append_buf(TdcPointBuf *dst, const TdcPointBuf *src,
 									const char *fname);
 extern void tdc_gser_append(TdcPointBuf *buf, const struct varlena *geom,
 							const char *fname);
+extern void tdc_gser_append_source(TdcPointBuf *buf, TdcGserSource *src,
+								   const char *fname);
 extern uint64 tdc_gser_result_size(const tdc_job *job, int flags, bool hasz);
 extern uint64 tdc_gser_result_bound(uint64 n, int flags, bool hasz);
 extern struct varlena *tdc_gser_result(const tdc_job *job, int flags,

@@ -76,6 +76,13 @@
 #             frees; worker threads get their arenas).
 #   postmaster  pg_postmaster_start_time() unchanged: no backend crashed
 #
+# VALUE=1: the same for one big value instead of rows: tdc_hard.val5m holds
+# the points of tdc_hard.pts5m as one MULTIPOINT (ST_Collect, ~120 MB, which
+# PostgreSQL stores out of line, compressed with pglz), and the statement is
+#   SELECT pg_column_size(ST_TDCDelaunayTriangles(g)) FROM tdc_hard.val5m
+# whose "reading" phase is reading that value a slice at a time (fetching,
+# decompressing, parsing); the other phases are as above.
+#
 # QUICK=1: 1M points, fewer signal points, 6 runs for the RSS comparison,
 # which then allows 10% + 48 MB between the peaks of the first and second
 # half of the runs (allocator swings at this size; a leak is ~100 MB a run).
@@ -99,14 +106,25 @@ MAX_LATENCY_MS=${MAX_LATENCY_MS:-200}
 STRICT_MS=${STRICT_MS:-200}
 GONE_MS=${GONE_MS:-$((MAX_LATENCY_MS * 2 > 1000 ? MAX_LATENCY_MS * 2 : 1000))}
 MAX_CPU_MS=${MAX_CPU_MS:-$((POINTS > 1000000 ? 300 * POINTS / 1000000 : 300))}
+VALUE=${VALUE:-0}
 TABLE=tdc_hard.pts$((POINTS / 1000000))m
 ((POINTS % 1000000 == 0)) || TABLE=tdc_hard.pts$POINTS
 work_dir cancel
 
-echo "== cancel.sh: $POINTS points ($TABLE), latency limit ${MAX_LATENCY_MS} ms (terminated backend gone: ${GONE_MS} ms, CPU after a cancel: ${MAX_CPU_MS} ms)"
-echo "   load: $(uptime | sed 's/.*load average/load average/')"
 server_begin
 make_points "${TABLE#tdc_hard.}" "$POINTS"
+if ((VALUE)); then
+	VTABLE=${TABLE/pts/val}
+	if [ -z "$(hpsql -c "SELECT to_regclass('$VTABLE')")" ] ||
+		[ "$(hpsql -c "SELECT ST_NPoints(g) FROM $VTABLE")" != "$POINTS" ]; then
+		hpsql -c "DROP TABLE IF EXISTS $VTABLE;
+			CREATE UNLOGGED TABLE $VTABLE AS SELECT ST_Collect(geom ORDER BY id) AS g FROM $TABLE" >/dev/null
+	fi
+	echo "== cancel.sh: one value of $POINTS points ($VTABLE: $(hpsql -c "SELECT pg_column_size(g) || ' bytes stored, ' || coalesce(pg_column_compression(g), 'uncompressed') FROM $VTABLE")), latency limit ${MAX_LATENCY_MS} ms"
+else
+	echo "== cancel.sh: $POINTS points ($TABLE), latency limit ${MAX_LATENCY_MS} ms (terminated backend gone: ${GONE_MS} ms, CPU after a cancel: ${MAX_CPU_MS} ms)"
+fi
+echo "   load: $(uptime | sed 's/.*load average/load average/')"
 
 # tdc_hard.hit(tag, base, offset_ms, kind): find the active statement whose
 # text holds 'tag' <>, wait until offset_ms after base (start: statement
@@ -302,8 +320,13 @@ END $$;
 EOF
 
 # bigq TAG: the statement under test, tagged; it prints "result TAG <size>"
+# (VALUE=1: one big single value instead of the aggregate)
 bigq() {
-	echo "SELECT 'result $1 ' || pg_column_size(ST_TDCDelaunay(geom)) FROM $TABLE WHERE '$1' <> ''"
+	if ((VALUE)); then
+		echo "SELECT 'result $1 ' || pg_column_size(ST_TDCDelaunayTriangles(g)) FROM $VTABLE WHERE '$1' <> ''"
+	else
+		echo "SELECT 'result $1 ' || pg_column_size(ST_TDCDelaunay(geom)) FROM $TABLE WHERE '$1' <> ''"
+	fi
 }
 PROBE="SELECT ST_NumGeometries(ST_TDCDelaunayTriangles('MULTIPOINT(0 0, 1 0, 0 1, 1 1)'))"
 # After a cancel the core hands the stopped job's memory to a detached thread
