@@ -914,6 +914,9 @@ read_toasted_value(TdcPointBuf *buf, struct varlena *attr, const char *fname)
 	ToastReader r;
 	ErrorContextCallback errcb;
 
+	/* the common case, a small value in line: nothing to do here */
+	if (!VARATT_IS_EXTERNAL_ONDISK(attr) && !VARATT_IS_COMPRESSED(attr))
+		return false;
 	memset(&r, 0, sizeof(r));
 	r.fname = fname;
 	if (VARATT_IS_EXTERNAL_ONDISK(attr))
