@@ -37,6 +37,13 @@
 
 #include "job.h"
 
+/*
+ * Points between two looks at the cancel flag in the counting passes: their
+ * first writes to fresh memory fault pages in, so 65536 points could take
+ * hundreds of milliseconds on a loaded machine.
+ */
+#define CANCEL_POLL_POINTS	4096
+
 static inline uint32_t
 grid_index(double v, double origin, double scale, int s)
 {
@@ -176,7 +183,7 @@ cell_task(void *arg, size_t t, int worker)
 	{
 		uint32_t	c = cell_of(job, ga->src + 2 * i);
 
-		if ((i & 0xffff) == 0 && atomic_load_explicit(&job->cancel, memory_order_relaxed))
+		if ((i & (CANCEL_POLL_POINTS - 1)) == 0 && atomic_load_explicit(&job->cancel, memory_order_relaxed))
 			return;
 
 		ga->cell[i] = c;
@@ -197,7 +204,7 @@ scatter_task(void *arg, size_t t, int worker)
 	{
 		uint32_t	p = pos[ga->cell[i]]++;
 
-		if ((i & 0xffff) == 0 && atomic_load_explicit(&job->cancel, memory_order_relaxed))
+		if ((i & (CANCEL_POLL_POINTS - 1)) == 0 && atomic_load_explicit(&job->cancel, memory_order_relaxed))
 			return;
 
 		job->xy[2 * (size_t) p] = ga->src[2 * i];
