@@ -47,6 +47,18 @@ RESET ROLE;
 REVOKE USAGE ON SCHEMA public FROM tdc_dump_user;
 DROP ROLE tdc_dump_user;
 
+-- The query only reads: statements that write are refused before they run
+-- (issue 16: DELETE ... RETURNING used to delete the rows), and the table
+-- is untouched.  A NULL query gives no rows (STRICT).
+SELECT count(*) AS before FROM tdc_dump_pts;
+SELECT count(*) FROM ST_TDCDelaunayDump('DELETE FROM tdc_dump_pts WHERE id > 45 RETURNING geom');
+SELECT count(*) FROM ST_TDCDelaunayDump('WITH d AS (DELETE FROM tdc_dump_pts WHERE id > 45 RETURNING geom) SELECT geom FROM d');
+SELECT count(*) FROM ST_TDCDelaunayDump($$INSERT INTO tdc_dump_pts VALUES (100000, 'POINT(0 0)') RETURNING geom$$);
+SELECT count(*) FROM ST_TDCDelaunayDump($$UPDATE tdc_dump_pts SET geom = 'POINT(0 0)' WHERE id > 45 RETURNING geom$$);
+SELECT count(*) FROM ST_TDCDelaunayDump('SELECT geom FROM tdc_dump_pts FOR UPDATE');
+SELECT count(*) AS after, count(*) FILTER (WHERE ST_X(geom) = 0 AND ST_Y(geom) = 0) AS changed FROM tdc_dump_pts;
+SELECT count(*) AS null_query FROM ST_TDCDelaunayDump(NULL);
+
 -- Volatile and parallel unsafe: a parallel plan never runs it in a worker.
 SELECT provolatile, proparallel, prosecdef FROM pg_proc WHERE proname = 'st_tdcdelaunaydump';
 

@@ -83,6 +83,7 @@
 #include "utils/builtins.h"
 #include "utils/lsyscache.h"
 #include "utils/memutils.h"
+#include "utils/plancache.h"
 #include "utils/tuplestore.h"
 
 #include "tdc_pg.h"
@@ -479,6 +480,43 @@ dump_error_context(void *arg)
 	errcontext("query of ST_TDCDelaunayDump: %s", (const char *) arg);
 }
 
+/*
+ * The query is documented as a SELECT that reads: refuse, before it runs,
+ * every statement that would write (INSERT, UPDATE, DELETE or MERGE with
+ * RETURNING, a data-modifying WITH, SELECT ... FOR UPDATE/SHARE), so that
+ * a function meant to triangulate never changes data.  Functions the query
+ * calls run as they would anywhere else.
+ */
+static void
+dump_check_read_only(SPIPlanPtr plan, const char *fname)
+{
+	ListCell   *ls;
+
+	foreach(ls, SPI_plan_get_plan_sources(plan))
+	{
+		CachedPlanSource *ps = (CachedPlanSource *) lfirst(ls);
+		ListCell   *lq;
+
+		foreach(lq, ps->query_list)
+		{
+			Query	   *q = lfirst_node(Query, lq);
+			const char *what = NULL;
+
+			if (q->commandType != CMD_SELECT)
+				what = "it is not a SELECT";
+			else if (q->hasModifyingCTE)
+				what = "it has a data-modifying WITH";
+			else if (q->rowMarks != NIL)
+				what = "it locks rows (FOR UPDATE or FOR SHARE)";
+			if (what)
+				ereport(ERROR,
+						(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
+						 errmsg("%s: the query must be a plain SELECT that only reads: %s",
+								fname, what)));
+		}
+	}
+}
+
 /* Run the query and collect the vertices of its geometry column. */
 static void
 dump_collect(TdcPointBuf *buf, const char *query, Oid geomoid,
@@ -507,7 +545,9 @@ dump_collect(TdcPointBuf *buf, const char *query, Oid geomoid,
 				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
 				 errmsg("%s: the query must be a single SELECT returning one geometry column",
 						fname)));
-	portal = SPI_cursor_open(NULL, plan, NULL, NULL, false);
+	dump_check_read_only(plan, fname);
+	/* read-only: SPI refuses anything that would write, as a second guard */
+	portal = SPI_cursor_open(NULL, plan, NULL, NULL, true);
 
 	desc = portal->tupDesc;
 	if (desc == NULL || desc->natts != 1)
@@ -1067,10 +1107,7 @@ st_tdcdelaunaydump(PG_FUNCTION_ARGS)
 	Datum		values[2];
 	bool		nulls[2] = {false, false};
 
-	if (PG_ARGISNULL(0) || PG_ARGISNULL(1))
-		ereport(ERROR,
-				(errcode(ERRCODE_NULL_VALUE_NOT_ALLOWED),
-				 errmsg("%s: query and tolerance must not be NULL", fname)));
+	/* STRICT: a NULL query or tolerance gives no rows, as in PostGIS */
 	query = text_to_cstring(PG_GETARG_TEXT_PP(0));
 	tolerance = PG_GETARG_FLOAT8(1);
 	tdc_check_params(tolerance, TDC_OUT_POLYGONS, fname);
