@@ -123,7 +123,7 @@ if ((VALUE)); then
 		hpsql -c "DROP TABLE IF EXISTS $VTABLE;
 			CREATE UNLOGGED TABLE $VTABLE AS SELECT ST_Collect(geom ORDER BY id) AS g FROM $TABLE" >/dev/null
 	fi
-	echo "== cancel.sh: one value of $POINTS points ($VTABLE: $(hpsql -c "SELECT pg_column_size(g) || ' bytes stored, ' || coalesce(pg_column_compression(g), 'uncompressed') FROM $VTABLE")), latency limit ${MAX_LATENCY_MS} ms"
+	echo "== cancel.sh: one value of $POINTS points ($VTABLE: $(hpsql -c "SELECT pg_column_size(g) || ' bytes stored, ' || coalesce(pg_column_compression(g), 'uncompressed') FROM $VTABLE")), latency limit ${MAX_LATENCY_MS} ms (terminated backend gone: ${GONE_MS} ms, CPU after a cancel: ${MAX_CPU_MS} ms)"
 else
 	echo "== cancel.sh: $POINTS points ($TABLE), latency limit ${MAX_LATENCY_MS} ms (terminated backend gone: ${GONE_MS} ms, CPU after a cancel: ${MAX_CPU_MS} ms)"
 fi
