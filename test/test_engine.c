@@ -717,7 +717,8 @@ check_inline_vs_threaded(const char *name, const double *xy, size_t m,
 static void
 test_inline_boundary(void)
 {
-	size_t		sizes[] = {1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 100, 1000,
+	/* 255..257: the largest jobs whose arrays come from job.c's arena, and the first that do not */
+	size_t		sizes[] = {1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 100, 255, 256, 257, 1000,
 	TDC_INLINE_MAX - 2, TDC_INLINE_MAX - 1, TDC_INLINE_MAX, TDC_INLINE_MAX + 1};
 	double	   *xy = gen_uniform(TDC_INLINE_MAX + 2, 1000, 0, 0);
 	double		line[2 * 64];
@@ -730,6 +731,18 @@ test_inline_boundary(void)
 	}
 	check_inline_vs_threaded("inline/threaded, 0 points", xy, 0, 0);
 	check_inline_vs_threaded("inline/threaded, tolerance", xy, 5000, 3.0);
+	check_inline_vs_threaded("inline/threaded, tolerance, arena", xy, 200, 30.0);
+	{
+		/* a user's grid and levels outgrow the arena: those arrays fall back */
+		tdc_options o;
+		canon		c;
+
+		tdc_options_init(&o);
+		o.grid_size = 65536;
+		o.levels = 24;
+		if (run_checked("arena overflow: grid 65536, levels 24, 256 points", xy, 256, &o, &c))
+			free(c.t);
+	}
 	for (int i = 0; i < 64; i++)
 	{
 		line[2 * i] = 0.125 * ((i * 37) % 64);
