@@ -201,9 +201,5 @@ _PG_init(void)
 							PGC_SUSET, GUC_NOT_IN_SAMPLE,
 							NULL, NULL, NULL);
 
-#if PG_VERSION_NUM >= 150000
 	MarkGUCPrefixReserved("tdc_delaunay");
-#else
-	EmitWarningsOnPlaceholders("tdc_delaunay");
-#endif
 }
