@@ -31,13 +31,14 @@ ensure_debs() {
 		die "apt-get install ${missing[*]} failed"
 }
 
-# build_tool NAME SRC COMPILER FLAGS...: (re)build $BENCH_BIN/NAME when SRC is newer
+# build_tool NAME SRC COMPILER FLAGS...: (re)build $BENCH_BIN/NAME when SRC (or
+# test/splitmix.h, which the C tools include) is newer
 build_tool() {
 	local name=$1 src=$2 compiler=$3
 	shift 3
 	local out=$BENCH_BIN/$name
 	mkdir -p "$BENCH_BIN"
-	if [ ! -x "$out" ] || [ "$src" -nt "$out" ]; then
+	if [ ! -x "$out" ] || [ "$src" -nt "$out" ] || [ "$ROOT/test/splitmix.h" -nt "$out" ]; then
 		log "building $out"
 		"$compiler" "$@" -o "$out" "$src" ${LIBS:-} || die "cannot build $out"
 	fi

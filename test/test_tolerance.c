@@ -28,6 +28,7 @@
 #include <gmp.h>
 
 #include "harness.h"
+#include "splitmix.h"
 #include "predicates.h"
 #include "tdc.h"
 
@@ -36,11 +37,7 @@ static uint64_t rng_state;
 static uint64_t
 rng(void)
 {
-	uint64_t	z = (rng_state += 0x9E3779B97F4A7C15ull);
-
-	z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-	z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-	return z ^ (z >> 31);
+	return tdc_splitmix64(&rng_state);
 }
 
 /* uniform in [0, 1) */
