@@ -359,15 +359,16 @@ tdc_run(const TdcPointBuf *buf, double tolerance, uint64 result_bytes,
 	opt.times = tdc_guc_stats;
 	if (limit > 0)
 	{
-		uint64		engine = tdc_estimate_memory((size_t) buf->n, &opt);
-		uint64		have = tdc_pointbuf_bytes(buf) + result_bytes;
+		/* the same figure for every caller; the result value apart */
+		uint64		run_bytes = tdc_pointbuf_bytes(buf) +
+			tdc_estimate_memory((size_t) buf->n, &opt);
 
-		if (have + engine > limit)
+		if (run_bytes + result_bytes > limit)
 			tdc_report_memory_limit(fname,
 									psprintf("triangulating %llu vertices",
 											 (unsigned long long) buf->n),
-									have + engine);
-		opt.max_memory = (size_t) (limit - have);
+									run_bytes, result_bytes);
+		opt.max_memory = (size_t) (limit - tdc_pointbuf_bytes(buf) - result_bytes);
 	}
 
 	/* both live as long as the context they are registered with */
