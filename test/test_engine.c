@@ -651,15 +651,6 @@ test_errors(void)
 	CHECK(tdc_job_start(bad, 3, &opt, &job, err, sizeof(err)) == TDC_EINVAL, "negative tolerance");
 }
 
-static double
-now(void)
-{
-	struct timespec ts;
-
-	clock_gettime(CLOCK_MONOTONIC, &ts);
-	return ts.tv_sec + ts.tv_nsec * 1e-9;
-}
-
 /*
  * Jobs below TDC_INLINE_MAX points run on the caller's thread, the others on
  * the pool.  Padding a point set with exact duplicates of its own points
@@ -773,10 +764,10 @@ test_cancel_and_concurrency(void)
 			if (job == NULL)
 				continue;
 			tdc_job_wait(job, delay);
-			t = now();
+			t = tdc_test_now();
 			tdc_job_cancel(job);
 			rc = tdc_job_wait(job, -1);
-			t = now() - t;
+			t = tdc_test_now() - t;
 			best = t < best ? t : best;
 			CHECK(rc == TDC_ECANCELED || rc == TDC_OK, "cancel after %d ms: status %d", delay, rc);
 			tdc_job_free(job);
@@ -923,10 +914,10 @@ test_emit(void)
 		sink.tri = malloc((3 * sink.ntri + 1) * sizeof(uint32_t));
 		CHECK(tdc_job_emit_start(job, emit_collect, &sink, err, sizeof(err)) == TDC_OK, "emit: start: %s", err);
 		tdc_job_wait(job, 2);
-		t = now();
+		t = tdc_test_now();
 		tdc_job_cancel(job);
 		rc = tdc_job_wait(job, -1);
-		t = now() - t;
+		t = tdc_test_now() - t;
 		CHECK(rc == TDC_ECANCELED || rc == TDC_OK, "emit: cancelled: status %d", rc);
 		/* quiet machine: about 1 ms; the limit is the load-proof one above */
 		CHECK(t < CANCEL_LIMIT_MS * 1e-3, "emit: cancel answered in %.1f ms (limit %d)", t * 1e3,
@@ -991,17 +982,17 @@ test_free_background(void)
 		/* every other run is dropped while it works, the rest once done */
 		done = r % 2;
 		tdc_job_wait(job, done ? -1 : 10 * (r % 7));
-		t = now();
+		t = tdc_test_now();
 		if (done && r % 4 == 1)
 		{
 			tdc_job_free(job);
-			t = now() - t;
+			t = tdc_test_now() - t;
 			sync_total += t;
 			sync_min = t < sync_min ? t : sync_min;
 			continue;
 		}
 		tdc_job_free_background(job);
-		t = now() - t;
+		t = tdc_test_now() - t;
 		if (done)
 		{
 			bg_total += t;

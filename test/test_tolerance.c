@@ -47,15 +47,6 @@ urand(void)
 	return (rng() >> 11) * 0x1p-53;
 }
 
-static double
-now(void)
-{
-	struct timespec ts;
-
-	clock_gettime(CLOCK_MONOTONIC, &ts);
-	return ts.tv_sec + ts.tv_nsec * 1e-9;
-}
-
 /* ------------------------------------------------------------------------
  * Exact arithmetic
  * ------------------------------------------------------------------------
@@ -822,10 +813,10 @@ test_tiny_tolerance_cancel(void)
 			continue;
 		}
 		usleep(delays_ms[d] * 1000);
-		t0 = now();
+		t0 = tdc_test_now();
 		tdc_job_cancel(job);
 		rc = tdc_job_wait(job, 30000);
-		stop = now() - t0;
+		stop = tdc_test_now() - t0;
 		CHECK((rc == TDC_ECANCELED || rc == TDC_OK) && stop < 1.0,
 			  "cancel %d ms into a tiny-tolerance job of %zu points: status %d after %.3f s",
 			  delays_ms[d], n, rc, stop);
