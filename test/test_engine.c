@@ -23,6 +23,7 @@
 #include <time.h>
 
 #include "harness.h"
+#include "splitmix.h"
 #include "tdc.h"
 #include "xy_oracle.h"
 
@@ -37,11 +38,7 @@ static uint64_t rng_state;
 static uint64_t
 rng(void)
 {
-	uint64_t	z = (rng_state += 0x9E3779B97F4A7C15ull);
-
-	z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-	z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-	return z ^ (z >> 31);
+	return tdc_splitmix64(&rng_state);
 }
 
 static double
@@ -654,15 +651,6 @@ test_errors(void)
 	CHECK(tdc_job_start(bad, 3, &opt, &job, err, sizeof(err)) == TDC_EINVAL, "negative tolerance");
 }
 
-static double
-now(void)
-{
-	struct timespec ts;
-
-	clock_gettime(CLOCK_MONOTONIC, &ts);
-	return ts.tv_sec + ts.tv_nsec * 1e-9;
-}
-
 /*
  * Jobs below TDC_INLINE_MAX points run on the caller's thread, the others on
  * the pool.  Padding a point set with exact duplicates of its own points
@@ -789,10 +777,10 @@ test_cancel_and_concurrency(void)
 			if (job == NULL)
 				continue;
 			tdc_job_wait(job, delay);
-			t = now();
+			t = tdc_test_now();
 			tdc_job_cancel(job);
 			rc = tdc_job_wait(job, -1);
-			t = now() - t;
+			t = tdc_test_now() - t;
 			best = t < best ? t : best;
 			CHECK(rc == TDC_ECANCELED || rc == TDC_OK, "cancel after %d ms: status %d", delay, rc);
 			tdc_job_free(job);
@@ -939,10 +927,10 @@ test_emit(void)
 		sink.tri = malloc((3 * sink.ntri + 1) * sizeof(uint32_t));
 		CHECK(tdc_job_emit_start(job, emit_collect, &sink, err, sizeof(err)) == TDC_OK, "emit: start: %s", err);
 		tdc_job_wait(job, 2);
-		t = now();
+		t = tdc_test_now();
 		tdc_job_cancel(job);
 		rc = tdc_job_wait(job, -1);
-		t = now() - t;
+		t = tdc_test_now() - t;
 		CHECK(rc == TDC_ECANCELED || rc == TDC_OK, "emit: cancelled: status %d", rc);
 		/* quiet machine: about 1 ms; the limit is the load-proof one above */
 		CHECK(t < CANCEL_LIMIT_MS * 1e-3, "emit: cancel answered in %.1f ms (limit %d)", t * 1e3,
@@ -1007,17 +995,17 @@ test_free_background(void)
 		/* every other run is dropped while it works, the rest once done */
 		done = r % 2;
 		tdc_job_wait(job, done ? -1 : 10 * (r % 7));
-		t = now();
+		t = tdc_test_now();
 		if (done && r % 4 == 1)
 		{
 			tdc_job_free(job);
-			t = now() - t;
+			t = tdc_test_now() - t;
 			sync_total += t;
 			sync_min = t < sync_min ? t : sync_min;
 			continue;
 		}
 		tdc_job_free_background(job);
-		t = now() - t;
+		t = tdc_test_now() - t;
 		if (done)
 		{
 			bg_total += t;

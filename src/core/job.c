@@ -390,9 +390,9 @@ tdc_job_free(tdc_job *job)
 
 
 /*
- * Returning a big job's pages to the kernel takes a while (about 10 ms per
- * million points, several times that on a loaded machine), and a host that
- * frees while unwinding from a cancel makes its user wait for it.  The
+ * Returning a big job's pages to the kernel takes time in proportion to its
+ * size, more on a loaded machine, and a host that frees while unwinding from
+ * a cancel makes its user wait for it.  The
  * workers are stopped and joined here, so the detached thread only unmaps
  * memory no one else can reach; if it cannot start, the caller frees.
  */

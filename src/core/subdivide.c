@@ -252,7 +252,7 @@ number_cells(const tdc_job *job, const tdc_rect *r, int axis, uint32_t next,
 	if (count == 0)
 		return next;
 	/* a single subset numbers the whole grid here: stay cancellable */
-	if (count >= 4096 && atomic_load_explicit(&job->cancel, memory_order_relaxed))
+	if (count >= CANCEL_POLL_POINTS && atomic_load_explicit(&job->cancel, memory_order_relaxed))
 		return next + count;
 	if (tdc_rect_split_inner(job, r, axis, &a, &b) < 0)
 	{
