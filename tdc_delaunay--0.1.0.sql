@@ -133,3 +133,28 @@ LANGUAGE C IMMUTABLE STRICT PARALLEL SAFE;
 COMMENT ON FUNCTION _st_tdcdelaunay_state_check(bytea) IS
 'Diagnostic: validates a serialized ST_TDCDelaunay aggregate state as the parallel deserialization function does '
 '(raising an error when it is corrupt) and returns its vertex count.';
+
+-- Voronoi diagrams, from the same exact triangulation
+
+CREATE FUNCTION ST_TDCVoronoiPolygons(g1 geometry, tolerance float8 DEFAULT 0.0,
+									  extend_to geometry DEFAULT NULL)
+RETURNS geometry
+AS 'MODULE_PATHNAME', 'st_tdcvoronoipolygons'
+LANGUAGE C IMMUTABLE PARALLEL SAFE
+COST 10000;
+
+COMMENT ON FUNCTION ST_TDCVoronoiPolygons(geometry, float8, geometry) IS
+'Voronoi cells of the vertices of g1 as a GEOMETRYCOLLECTION of 2D POLYGONs, one per distinct vertex in input order, '
+'clipped to the vertices'' bounding box grown by its larger side (and grown to extend_to''s box); '
+'drop-in for ST_VoronoiPolygons, built from the exact triangulation.';
+
+CREATE FUNCTION ST_TDCVoronoiLines(g1 geometry, tolerance float8 DEFAULT 0.0,
+								   extend_to geometry DEFAULT NULL)
+RETURNS geometry
+AS 'MODULE_PATHNAME', 'st_tdcvoronoilines'
+LANGUAGE C IMMUTABLE PARALLEL SAFE
+COST 10000;
+
+COMMENT ON FUNCTION ST_TDCVoronoiLines(geometry, float8, geometry) IS
+'Edges of the Voronoi diagram of the vertices of g1 inside the clip envelope of ST_TDCVoronoiPolygons, '
+'as a MULTILINESTRING (a LINESTRING for one edge); drop-in for ST_VoronoiLines.';

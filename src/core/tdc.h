@@ -247,6 +247,9 @@ extern size_t tdc_voronoi_memory(size_t n, int threads);
 /* The cell of a site: its vertex count, *xy the 2 * count coordinates; 0 for a non-site. */
 extern size_t tdc_voronoi_cell(const tdc_voronoi *v, uint32_t site, const double **xy);
 
+/* The clip envelope the diagram was built with. */
+extern void tdc_voronoi_env(const tdc_voronoi *v, double env[4]);
+
 /* Vertices of all cells together. */
 extern size_t tdc_voronoi_num_vertices(const tdc_voronoi *v);
 

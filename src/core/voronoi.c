@@ -1264,9 +1264,9 @@ tdc_voronoi_num_vertices(const tdc_voronoi *v)
 }
 
 void
-tdc_voronoi_box(const tdc_voronoi *v, double box[4])
+tdc_voronoi_env(const tdc_voronoi *v, double env[4])
 {
-	memcpy(box, v->box, sizeof(v->box));
+	memcpy(env, v->env, sizeof(v->env));
 }
 
 void
