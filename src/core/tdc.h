@@ -254,8 +254,9 @@ extern void tdc_voronoi_env(const tdc_voronoi *v, double env[4]);
 extern size_t tdc_voronoi_num_vertices(const tdc_voronoi *v);
 
 /*
- * GEOS's (and so PostGIS's) default clip envelope: the sites' bounding box
- * grown on every side by the larger of its width and height.
+ * GEOS's (and so PostGIS's) default clip envelope: the bounding box of the
+ * input points (all of them, also those a tolerance dropped) grown on every
+ * side by the larger of its width and height.
  */
 extern void tdc_voronoi_default_env(const tdc_job *job, double env[4]);
 

@@ -1272,19 +1272,21 @@ tdc_voronoi_env(const tdc_voronoi *v, double env[4])
 void
 tdc_voronoi_default_env(const tdc_job *job, double env[4])
 {
-	double		lo[2],
-				hi[2],
-				w;
+	double		w;
 
 	if (job->nsites == 0)
 	{
 		env[0] = env[1] = env[2] = env[3] = 0;
 		return;
 	}
-	tdc_site_extent(job, lo, hi);
-	w = fmax(hi[0] - lo[0], hi[1] - lo[1]);
-	env[0] = lo[0] - w;
-	env[1] = lo[1] - w;
-	env[2] = hi[0] + w;
-	env[3] = hi[1] + w;
+
+	/*
+	 * The box of every input point, not only of the sites a tolerance kept:
+	 * GEOS merges only exact duplicates before taking the envelope.
+	 */
+	w = fmax(job->bmax[0] - job->bmin[0], job->bmax[1] - job->bmin[1]);
+	env[0] = job->bmin[0] - w;
+	env[1] = job->bmin[1] - w;
+	env[2] = job->bmax[0] + w;
+	env[3] = job->bmax[1] + w;
 }
