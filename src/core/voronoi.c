@@ -839,7 +839,8 @@ cell_task(void *arg, size_t rg, int worker)
 	if (vor_cancelled(v))
 		return;
 	off = malloc((hi - lo) * sizeof(size_t));
-	if (off == NULL)
+	/* about 6 vertices per cell: growing from there rarely copies */
+	if (off == NULL || !ring_reserve(&out, 7 * (hi - lo)))
 		goto oom;
 	for (size_t s = lo; s < hi; s++)
 	{
