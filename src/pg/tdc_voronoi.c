@@ -124,8 +124,8 @@ vor_wait(VorRun *run, const char *fname)
  * The bounding box of extend_to's vertices into ext[4]; an EMPTY geometry
  * is an error, as in PostGIS.
  */
-static void
-extend_to_box(struct varlena *g, double ext[4], const char *fname)
+void
+tdc_voronoi_extend_to_box(struct varlena *g, double ext[4], const char *fname)
 {
 	TdcPointBuf b;
 	MemoryContext cxt = AllocSetContextCreate(CurrentMemoryContext, "tdc extend_to",
@@ -404,6 +404,27 @@ tdc_voronoi_write(const tdc_job *job, const tdc_voronoi *v, bool lines,
 	return (struct varlena *) out;
 }
 
+/* One cell as a POLYGON value (closed ring), or NULL for a non-site. */
+struct varlena *
+tdc_voronoi_cell_value(const tdc_voronoi *v, uint32 site, int32 srid)
+{
+	const double *c;
+	size_t		m = tdc_voronoi_cell(v, site, &c);
+	char	   *out,
+			   *p;
+
+	if (m == 0)
+		return NULL;
+	out = write_header(VARHDRSZ + G_HEADER + 16 + 16 * (m + 1), srid, &p);
+	p = put_u32(p, G_POLYGON);
+	p = put_u32(p, 1);
+	p = put_u32(p, (uint32) (m + 1));
+	p = put_u32(p, 0);
+	memcpy(p, c, m * 2 * sizeof(double));
+	memcpy(p + m * 2 * sizeof(double), c, 2 * sizeof(double));
+	return (struct varlena *) out;
+}
+
 /* ----------------------------------------------------------------
  *		SQL functions
  * ----------------------------------------------------------------
@@ -416,9 +437,6 @@ voronoi_function(FunctionCallInfo fcinfo, bool lines, const char *fname)
 				ext[4];
 	bool		have_ext = false;
 	TdcPointBuf buf;
-	TdcRun	   *run;
-	VorRun	   *vrun;
-	struct varlena *result;
 
 	if (PG_ARGISNULL(0))
 		PG_RETURN_NULL();
@@ -428,27 +446,42 @@ voronoi_function(FunctionCallInfo fcinfo, bool lines, const char *fname)
 	tolerance = PG_NARGS() > 1 ? PG_GETARG_FLOAT8(1) : 0.0;
 	if (PG_NARGS() > 2 && !PG_ARGISNULL(2))
 	{
-		extend_to_box((struct varlena *) PG_DETOAST_DATUM(PG_GETARG_DATUM(2)), ext, fname);
+		tdc_voronoi_extend_to_box((struct varlena *) PG_DETOAST_DATUM(PG_GETARG_DATUM(2)), ext, fname);
 		have_ext = true;
 	}
 	g = (struct varlena *) PG_DETOAST_DATUM(PG_GETARG_DATUM(0));
 	tdc_pointbuf_init(&buf, CurrentMemoryContext);
 	tdc_gser_append(&buf, g, fname);
+	PG_RETURN_POINTER(tdc_voronoi_to_value(&buf, tolerance, have_ext ? ext : NULL,
+										   lines, fname));
+}
 
-	vrun = tdc_voronoi_run(&buf, tolerance, have_ext ? ext : NULL, &run, fname);
+/*
+ * The diagram of buf's vertices as one value (GEOMETRYCOLLECTION EMPTY for
+ * fewer than 2 sites), with buf's SRID.
+ */
+struct varlena *
+tdc_voronoi_to_value(const TdcPointBuf *buf, double tolerance, const double *ext,
+					 bool lines, const char *fname)
+{
+	TdcRun	   *run;
+	VorRun	   *vrun;
+	struct varlena *result;
+
+	vrun = tdc_voronoi_run(buf, tolerance, ext, &run, fname);
 	if (vrun == NULL)
 	{
 		if (run)
 			tdc_run_free(run);
-		PG_RETURN_POINTER(tdc_gser_empty(TDC_OUT_POLYGONS, buf.srid));
+		return tdc_gser_empty(TDC_OUT_POLYGONS, buf->srid);
 	}
-	result = tdc_voronoi_write(run->job, vrun->v, lines, buf.srid,
-							   tdc_pointbuf_bytes(&buf) +
-							   tdc_estimate_memory((size_t) buf.n, NULL) +
-							   tdc_voronoi_memory((size_t) buf.n, 0), fname);
+	result = tdc_voronoi_write(run->job, vrun->v, lines, buf->srid,
+							   tdc_pointbuf_bytes(buf) +
+							   tdc_estimate_memory((size_t) buf->n, NULL) +
+							   tdc_voronoi_memory((size_t) buf->n, 0), fname);
 	CHECK_FOR_INTERRUPTS();
 	tdc_voronoi_result_free(vrun, run);
-	PG_RETURN_POINTER(result);
+	return result;
 }
 
 PG_FUNCTION_INFO_V1(st_tdcvoronoipolygons);
