@@ -106,7 +106,7 @@ endif
 # headers with the shims in fuzz/pg_shim.c (no server needed).
 FUZZ_SECONDS ?= 60
 FUZZ_CC ?= clang
-FUZZ_TARGETS = fuzz_core fuzz_gserialized fuzz_state
+FUZZ_TARGETS = fuzz_core fuzz_gserialized fuzz_state fuzz_voronoi
 FUZZ_CFLAGS = -g -O1 -fno-omit-frame-pointer -D_GNU_SOURCE -ffp-contract=off \
 	-pthread -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined \
 	-Wall -Wno-unused-parameter -Wno-missing-field-initializers
@@ -126,6 +126,10 @@ build/fuzz/fuzz_core: fuzz/fuzz_core.c test/xy_oracle.h $(FUZZ_CORE_DEPS)
 FUZZ_GSER_SRCS = src/pg/gserialized.c src/pg/gser_write.c src/pg/pointbuf.c
 FUZZ_STATE_SRCS = src/pg/tdc_agg_state.c src/pg/pointbuf.c
 FUZZ_PG_DEPS = fuzz/pg_shim.c fuzz/pg_shim.h src/pg/tdc_pg.h src/pg/gser_format.h
+
+build/fuzz/fuzz_voronoi: fuzz/fuzz_voronoi.c $(FUZZ_CORE_DEPS)
+	@mkdir -p build/fuzz
+	$(FUZZ_CC) $(FUZZ_CFLAGS) -std=c11 -Isrc/core -o $@ fuzz/fuzz_voronoi.c $(CORE_SRCS) -lm
 
 build/fuzz/fuzz_gserialized: fuzz/fuzz_gserialized.c $(FUZZ_GSER_SRCS) $(FUZZ_PG_DEPS) \
 		$(FUZZ_CORE_DEPS)

@@ -182,16 +182,57 @@ test_circumcenters(void)
 
 /* ---------------- cells ---------------- */
 
+/*
+ * Near-degenerate input (lattices nudged by ulps, sites an ulp apart): a
+ * cell narrower than the spacing of doubles cannot be represented; once its
+ * vertices are rounded it may turn right by an ulp, collapse to a sliver of
+ * zero area (a ring of 2 vertices, or one that winds 0 times), or miss its
+ * site by an ulp.  In this mode those are counted (and printed), not
+ * failed; containment still must hold within 1e-12 of the envelope's size,
+ * and edge sharing and the area sum hold as everywhere.
+ */
+static bool vor_near_degenerate;
+
+/*
+ * Is q inside the ring (crossing count), or within tol of its boundary?
+ * For near-degenerate cells, whose rounded rings may zigzag by an ulp, where
+ * the per-edge orientation test of a convex ring does not apply.
+ */
+static bool
+near_ring(const double *c, size_t m, const double *q, double tol)
+{
+	bool		in = false;
+	double		best = INFINITY;
+
+	for (size_t i = 0, j = m - 1; i < m; j = i++)
+	{
+		const double *a = c + 2 * i,
+				   *b = c + 2 * j;
+		double		dx = b[0] - a[0],
+					dy = b[1] - a[1],
+					len2 = dx * dx + dy * dy,
+					t = len2 > 0 ? ((q[0] - a[0]) * dx + (q[1] - a[1]) * dy) / len2 : 0;
+
+		if ((a[1] > q[1]) != (b[1] > q[1]) &&
+			q[0] < a[0] + (q[1] - a[1]) * dx / dy)
+			in = !in;
+		t = fmin(fmax(t, 0), 1);
+		best = fmin(best, hypot(q[0] - (a[0] + t * dx), q[1] - (a[1] + t * dy)));
+	}
+	return in || best <= tol;
+}
+
 typedef struct dedge
 {
 	double		p[2],
 				q[2];
+	bool		sliver;			/* from a cell collapsed by rounding */
 } dedge;
 
 static int
 cmp_dedge(const void *x, const void *y)
 {
-	return memcmp(x, y, sizeof(dedge));
+	return memcmp(x, y, 4 * sizeof(double));
 }
 
 static bool
@@ -220,7 +261,8 @@ check_diagram(const char *name, const double *xy, size_t n, const double *env_in
 				ncells = 0,
 				nedges = 0,
 				cap = 0;
-	long		bad_ring = 0,
+	long		collapsed = 0,
+				bad_ring = 0,
 				bad_convex = 0,
 				bad_contain = 0,
 				bad_env = 0,
@@ -258,7 +300,8 @@ check_diagram(const char *name, const double *xy, size_t n, const double *env_in
 	{
 		const double *c,
 				   *site;
-		size_t		m = tdc_voronoi_cell(v, s, &c);
+		size_t		m = tdc_voronoi_cell(v, s, &c),
+					first_edge = nedges;
 		double		a = 0,
 					turn = 0;
 
@@ -274,11 +317,12 @@ check_diagram(const char *name, const double *xy, size_t n, const double *env_in
 			continue;
 		ncells++;
 		site = tdc_site_xy(job, s);
-		if (m < 3)
+		if (m < 3 && !vor_near_degenerate)
 		{
 			bad_ring++;
 			continue;
 		}
+
 		for (size_t i = 0; i < m; i++)
 		{
 			const double *p = c + 2 * i,
@@ -291,9 +335,9 @@ check_diagram(const char *name, const double *xy, size_t n, const double *env_in
 
 			if (p[0] == q[0] && p[1] == q[1])
 				bad_ring++;
-			if (tdc_orient2d(p, q, r) < 0)
+			if (tdc_orient2d(p, q, r) < 0 && !vor_near_degenerate)
 				bad_convex++;
-			if (tdc_orient2d(p, q, site) < 0)
+			if (tdc_orient2d(p, q, site) < 0 && !vor_near_degenerate)
 				bad_contain++;
 			if (p[0] < env[0] || p[0] > env[2] || p[1] < env[1] || p[1] > env[3])
 				bad_env++;
@@ -309,11 +353,31 @@ check_diagram(const char *name, const double *xy, size_t n, const double *env_in
 				}
 				memcpy(edges[nedges].p, p, sizeof(double) * 2);
 				memcpy(edges[nedges].q, q, sizeof(double) * 2);
+				edges[nedges].sliver = false;
 				nedges++;
 			}
 		}
-		if (fabs(turn - 2 * M_PI) > 1e-6)
-			bad_convex++;
+		if (vor_near_degenerate && !near_ring(c, m, site, 1e-12 * (env[2] - env[0])))
+		{
+			if (getenv("VOR_VERBOSE"))
+			{
+				fprintf(stderr, "%s: site %u (%.17g %.17g) outside, ring:\n", name, s, site[0], site[1]);
+				for (size_t k = 0; k < m; k++)
+					fprintf(stderr, "   %.17g %.17g\n", c[2 * k], c[2 * k + 1]);
+			}
+			bad_contain++;
+		}
+		if (fabs(turn - 2 * M_PI) > 1e-6 || m < 3)
+		{
+			if (vor_near_degenerate)
+			{
+				collapsed++;
+				for (size_t k = first_edge; k < nedges; k++)
+					edges[k].sliver = true;
+			}
+			else
+				bad_convex++;
+		}
 		area += a / 2;
 	}
 	nsites = tdc_num_sites(job);
@@ -324,11 +388,20 @@ check_diagram(const char *name, const double *xy, size_t n, const double *env_in
 
 		memcpy(r.p, edges[i].q, sizeof(r.p));
 		memcpy(r.q, edges[i].p, sizeof(r.q));
-		/* exactly one reversed copy, and the edge itself only once */
+		/*
+		 * Exactly one reversed copy, and the edge itself only once; a
+		 * sliver's edges (near-degenerate mode) may pair up inside it.
+		 */
+		if (edges[i].sliver)
+			continue;
 		if (!bsearch(&r, edges, nedges, sizeof(dedge), cmp_dedge) ||
-			(i + 1 < nedges && cmp_dedge(&edges[i], &edges[i + 1]) == 0))
+			(i + 1 < nedges && cmp_dedge(&edges[i], &edges[i + 1]) == 0 &&
+			 !edges[i + 1].sliver) ||
+			(i > 0 && cmp_dedge(&edges[i], &edges[i - 1]) == 0 && !edges[i - 1].sliver))
 			bad_share++;
 	}
+	if (collapsed)
+		printf("voronoi: %s: %ld cells collapsed to slivers by rounding\n", name, collapsed);
 	CHECK(ncells == nsites, "%s: %zu cells for %zu sites", name, ncells, nsites);
 	CHECK(bad_ring == 0, "%s: %ld rings too short or with repeated vertices", name, bad_ring);
 	CHECK(bad_convex == 0, "%s: %ld non-convex turns or windings", name, bad_convex);
@@ -484,6 +557,41 @@ test_voronoi(void)
 		u[0] = 0, u[1] = 0;		/* a corner of the sites' box */
 		check_diagram("big extend_to envelope", u, 3000, env, 1, 1e-9);
 		free(u);
+	}
+	{
+		/*
+		 * Lattices nudged by a few ulps (found by fuzz_voronoi): near
+		 * duplicates on the hull make hair-thin cells, nearly collinear hull
+		 * sites put Voronoi vertices 1e17 away and with them the box the
+		 * rays are cut to.  A crossing interpolated from that far end lost
+		 * 0.09 in y and left a site outside its cell.
+		 */
+		double	   *nudged = malloc(2 * 400 * sizeof(double));
+
+		vor_near_degenerate = true;
+		for (int seed = 0; seed < 40; seed++)
+		{
+			char		name[64];
+
+			vrng_state = 1000 + seed;
+			for (int i = 0; i < 400; i++)
+			{
+				uint64_t	r = vrng();
+				double		x = 1 + (r & 15),
+							y = 1 + ((r >> 4) & 15);
+
+				for (int k = 0; k < (int) ((r >> 8) & 3); k++)
+					x = nextafter(x, (r >> 10) & 1 ? INFINITY : -INFINITY);
+				for (int k = 0; k < (int) ((r >> 11) & 3); k++)
+					y = nextafter(y, (r >> 13) & 1 ? INFINITY : -INFINITY);
+				nudged[2 * i] = x;
+				nudged[2 * i + 1] = y;
+			}
+			snprintf(name, sizeof(name), "nudged lattice %d", seed);
+			check_diagram(name, nudged, 400, NULL, 1, 1e-9);
+		}
+		vor_near_degenerate = false;
+		free(nudged);
 	}
 	{
 		/* bad envelopes are refused */

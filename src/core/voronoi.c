@@ -70,7 +70,8 @@
  * ray's exit point is the same double pair in both cells beside it.  Then
  * every cell is clipped to E by Sutherland-Hodgman against E's four sides;
  * inside tests are exact comparisons, a crossing point is computed from the
- * crossing segment's end points in lexicographic order and gets the side's
+ * crossing segment's end point nearer to the side (ties: the lexicographic
+ * order), which does not depend on the cell, and gets the side's
  * coordinate exactly, so it lies on E's boundary and is shared by the two
  * cells of that edge.  A cell lying inside E is not touched.
  *
@@ -617,8 +618,8 @@ push_arc(ring *r, const double *box, const double *from, int sf,
 /*
  * Clip ring "in" to the half-plane coord[axis] >= c (keep_ge) or <= c into
  * "out" (Sutherland-Hodgman).  A crossing point is computed from the
- * crossing segment's end points in lexicographic order, so it does not
- * depend on which of the two cells beside the segment asks.
+ * crossing segment's end points in an order fixed by their coordinates, so
+ * it does not depend on which of the two cells beside the segment asks.
  */
 static void
 clip_side(const ring *in, ring *out, int axis, double c, bool keep_ge)
@@ -635,8 +636,17 @@ clip_side(const ring *in, ring *out, int axis, double c, bool keep_ge)
 			ring_push(out, p[0], p[1]);
 		if (pin != qin)
 		{
-			const double *a = lex_less(p, q) ? p : q,
-					   *b = lex_less(p, q) ? q : p;
+			/*
+			 * From the end point nearer to the line: the other may be a ray's
+			 * exit from B, far away (B grows with the farthest Voronoi
+			 * vertex), and interpolating from there would lose the digits
+			 * of the crossing.  Ties go to the lexicographically smaller.
+			 */
+			double		dp = fabs(p[axis] - c),
+						dq = fabs(q[axis] - c);
+			bool		p_first = dp < dq || (dp == dq && lex_less(p, q));
+			const double *a = p_first ? p : q,
+					   *b = p_first ? q : p;
 			int			o = 1 - axis;
 			double		t = (c - a[axis]) / (b[axis] - a[axis]);
 			double		w = a[o] + t * (b[o] - a[o]);
