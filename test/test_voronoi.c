@@ -594,6 +594,23 @@ test_voronoi(void)
 		free(nudged);
 	}
 	{
+		/*
+		 * Four sites almost on the diagonal (found by fuzz_voronoi): the two
+		 * flat triangles have circumcenters about 1e16 away, rounded at that
+		 * scale, and the cell edges between them cross the envelope near
+		 * the sites.  Interpolated from those end points, the cell of
+		 * (1, 1) was cut along x + y = -6 instead of its bisector x + y = 3
+		 * with (2, 2), missing its site; a crossing now comes from the
+		 * bisector of the two sites.
+		 */
+		double		flat[8] = {0x1.e000000000003p+3, 0x1.e000000000003p+3,
+							   0x1.fffffffffffffp+0, 0x1.ffffffffffffep+0,
+							   0x1.0000000000003p+0, 0x1.0000000000003p+0,
+							   0x1.0000000000003p+4, 0x1.0000000000003p+4};
+
+		check_diagram("nearly collinear hull", flat, 4, NULL, 1, 1e-12);
+	}
+	{
 		/* bad envelopes are refused */
 		double		pts[6] = {0, 0, 2, 0, 0, 1};
 		double		env[4] = {0.5, 0, 3, 3};

@@ -497,11 +497,20 @@ vertex_task(void *arg, size_t r, int worker)
  *		cells
  * ----------------------------------------------------------------
  */
+/*
+ * A ring being built.  A tagged ring also records, for each vertex, the
+ * site across the edge that starts there (the neighbour whose bisector the
+ * edge lies on), or TDC_NIL for an edge along B or E: clipping computes a
+ * crossing from that bisector, not from the edge's end points, which may be
+ * far away and rounded at their own, much larger, scale.
+ */
 typedef struct ring
 {
 	double	   *p;				/* 2 per vertex */
+	uint32_t   *tag;			/* tagged rings: 1 per vertex */
 	size_t		n;
 	size_t		cap;
+	bool		tagged;
 } ring;
 
 static bool
@@ -515,19 +524,37 @@ ring_reserve(ring *r, size_t extra)
 		if (p == NULL)
 			return false;
 		r->p = p;
+		if (r->tagged)
+		{
+			uint32_t   *t = realloc(r->tag, cap * sizeof(uint32_t));
+
+			if (t == NULL)
+				return false;
+			r->tag = t;
+		}
 		r->cap = cap;
 	}
 	return true;
 }
 
-/* Append, dropping a repeat of the previous vertex; room was reserved. */
+/*
+ * Append a vertex whose outgoing edge has the given tag, dropping a repeat
+ * of the previous vertex (which then takes the tag: the edge that starts
+ * there is now this one); room was reserved.
+ */
 static inline void
-ring_push(ring *r, double x, double y)
+ring_push(ring *r, double x, double y, uint32_t tag)
 {
 	if (r->n > 0 && r->p[2 * r->n - 2] == x && r->p[2 * r->n - 1] == y)
+	{
+		if (r->tagged)
+			r->tag[r->n - 1] = tag;
 		return;
+	}
 	r->p[2 * r->n] = x;
 	r->p[2 * r->n + 1] = y;
+	if (r->tagged)
+		r->tag[r->n] = tag;
 	r->n++;
 }
 
@@ -608,7 +635,7 @@ push_arc(ring *r, const double *box, const double *from, int sf,
 		return;
 	for (int i = 0; i < 4; i++)
 	{
-		ring_push(r, box[cx[s]], box[cy[s]]);
+		ring_push(r, box[cx[s]], box[cy[s]], TDC_NIL);
 		s = (s + 1) & 3;
 		if (s == st)
 			return;
@@ -622,7 +649,8 @@ push_arc(ring *r, const double *box, const double *from, int sf,
  * it does not depend on which of the two cells beside the segment asks.
  */
 static void
-clip_side(const ring *in, ring *out, int axis, double c, bool keep_ge)
+clip_side(const tdc_voronoi *v, uint32_t site, const ring *in, ring *out,
+		  int axis, double c, bool keep_ge)
 {
 	out->n = 0;
 	for (size_t i = 0; i < in->n; i++)
@@ -632,8 +660,10 @@ clip_side(const ring *in, ring *out, int axis, double c, bool keep_ge)
 		bool		pin = keep_ge ? p[axis] >= c : p[axis] <= c,
 					qin = keep_ge ? q[axis] >= c : q[axis] <= c;
 
+		uint32_t	g = in->tag[i];
+
 		if (pin)
-			ring_push(out, p[0], p[1]);
+			ring_push(out, p[0], p[1], g);
 		if (pin != qin)
 		{
 			/*
@@ -652,10 +682,30 @@ clip_side(const ring *in, ring *out, int axis, double c, bool keep_ge)
 			double		w = a[o] + t * (b[o] - a[o]);
 			double		pt[2];
 
+			if (g != TDC_NIL)
+			{
+				/*
+				 * On the bisector of the site and its neighbour g, taken in
+				 * lexicographic order so that both cells agree: exact
+				 * differences of sites near E, where the end points may be
+				 * Voronoi vertices 1e16 away, rounded at that scale.
+				 */
+				const double *s0 = site_pt(v, site),
+						   *s1 = site_pt(v, g),
+						   *sa = lex_less(s0, s1) ? s0 : s1,
+						   *sb = lex_less(s0, s1) ? s1 : s0;
+				double		m[2] = {sa[0] * 0.5 + sb[0] * 0.5, sa[1] * 0.5 + sb[1] * 0.5};
+				double		da = sb[axis] - sa[axis],
+							dn = sb[o] - sa[o];
+
+				if (dn != 0)
+					w = m[o] + (m[axis] - c) * (da / dn);
+			}
 			w = fmin(fmax(w, fmin(a[o], b[o])), fmax(a[o], b[o]));
 			pt[axis] = c;
 			pt[o] = w;
-			ring_push(out, pt[0], pt[1]);
+			/* leaving: the next edge runs along the side; entering: along g's */
+			ring_push(out, pt[0], pt[1], pin ? TDC_NIL : g);
 		}
 	}
 	ring_close(out);
@@ -663,7 +713,7 @@ clip_side(const ring *in, ring *out, int axis, double c, bool keep_ge)
 
 /* Clip cell "a" to E in place ("b" is scratch); false when out of memory. */
 static bool
-clip_to_env(const tdc_voronoi *v, ring *a, ring *b)
+clip_to_env(const tdc_voronoi *v, uint32_t site, ring *a, ring *b)
 {
 	const double *e = v->env;
 	bool		inside = true;
@@ -680,7 +730,7 @@ clip_to_env(const tdc_voronoi *v, ring *a, ring *b)
 		/* one half-plane adds at most one vertex */
 		if (!ring_reserve(b, a->n + 2))
 			return false;
-		clip_side(a, b, k & 1, e[k], k < 2);
+		clip_side(v, site, a, b, k & 1, e[k], k < 2);
 		t = *a;
 		*a = *b;
 		*b = t;
@@ -735,16 +785,21 @@ cell_of_mesh(const tdc_voronoi *v, uint32_t s, ring *r)
 	h = ho == TDC_NIL ? h0 : job->he[ho].next;
 	for (size_t i = 0; i < deg; i++, h = job->he[h].next)
 	{
-		uint32_t	t;
+		uint32_t	t,
+					g;
 
 		if (h == ho)
 			continue;
+		/* the edge to the next vertex is dual to onext(h) */
+		g = job->he[SYM(job->he[h].next)].org;
 		t = atomic_load_explicit(&v->parent[v->tri_id[h]], memory_order_relaxed);
 		if (t != prev_t)
 		{
-			ring_push(r, v->cc[2 * (size_t) t], v->cc[2 * (size_t) t + 1]);
+			ring_push(r, v->cc[2 * (size_t) t], v->cc[2 * (size_t) t + 1], g);
 			prev_t = t;
 		}
+		else
+			r->tag[r->n - 1] = g;	/* a zero-length edge collapsed */
 	}
 	if (ho != TDC_NIL)
 	{
@@ -764,9 +819,9 @@ cell_of_mesh(const tdc_voronoi *v, uint32_t s, ring *r)
 
 		hull_ray(v, last, s, job->he[SYM(ho)].org, pout, &sout);
 		hull_ray(v, first, job->he[SYM(hin)].org, s, pin, &sin);
-		ring_push(r, pout[0], pout[1]);
+		ring_push(r, pout[0], pout[1], TDC_NIL);
 		push_arc(r, v->box, pout, sout, pin, sin);
-		ring_push(r, pin[0], pin[1]);
+		ring_push(r, pin[0], pin[1], job->he[SYM(hin)].org);
 	}
 	ring_close(r);
 	return true;
@@ -812,11 +867,11 @@ cell_of_line(const tdc_voronoi *v, uint32_t s, ring *r)
 		line_bisector(v, i, a0, &sa0, a1, &sa1);
 		line_bisector(v, i - 1, b1, &sb1, b0, &sb0);
 		/* right bisector a0 -> a1, arc, left bisector reversed b0 -> b1, arc */
-		ring_push(r, a0[0], a0[1]);
-		ring_push(r, a1[0], a1[1]);
+		ring_push(r, a0[0], a0[1], v->line[i + 1]);
+		ring_push(r, a1[0], a1[1], TDC_NIL);
 		push_arc(r, v->box, a1, sa1, b0, sb0);
-		ring_push(r, b0[0], b0[1]);
-		ring_push(r, b1[0], b1[1]);
+		ring_push(r, b0[0], b0[1], v->line[i - 1]);
+		ring_push(r, b1[0], b1[1], TDC_NIL);
 		push_arc(r, v->box, b1, sb1, a0, sa0);
 	}
 	else
@@ -825,8 +880,8 @@ cell_of_line(const tdc_voronoi *v, uint32_t s, ring *r)
 			line_bisector(v, i, a0, &sa0, a1, &sa1);
 		else
 			line_bisector(v, i - 1, a1, &sa1, a0, &sa0);
-		ring_push(r, a0[0], a0[1]);
-		ring_push(r, a1[0], a1[1]);
+		ring_push(r, a0[0], a0[1], v->line[i + 1 < v->nline ? i + 1 : i - 1]);
+		ring_push(r, a1[0], a1[1], TDC_NIL);
 		push_arc(r, v->box, a1, sa1, a0, sa0);
 	}
 	ring_close(r);
@@ -841,8 +896,8 @@ cell_task(void *arg, size_t rg, int worker)
 	const tdc_job *job = v->job;
 	size_t		lo = rg * SITES_PER_TASK,
 				hi = lo + SITES_PER_TASK < v->nsites ? lo + SITES_PER_TASK : v->nsites;
-	ring		a = {0},
-				b = {0},
+	ring		a = {.tagged = true},
+				b = {.tagged = true},
 				out = {0};
 	size_t	   *off = NULL;
 
@@ -870,14 +925,14 @@ cell_task(void *arg, size_t rg, int worker)
 			if (ok)
 			{
 				a.n = 0;
-				ring_push(&a, v->env[0], v->env[1]);
-				ring_push(&a, v->env[2], v->env[1]);
-				ring_push(&a, v->env[2], v->env[3]);
-				ring_push(&a, v->env[0], v->env[3]);
+				ring_push(&a, v->env[0], v->env[1], TDC_NIL);
+				ring_push(&a, v->env[2], v->env[1], TDC_NIL);
+				ring_push(&a, v->env[2], v->env[3], TDC_NIL);
+				ring_push(&a, v->env[0], v->env[3], TDC_NIL);
 				ring_close(&a);
 			}
 		}
-		if (!ok || !clip_to_env(v, &a, &b) || !ring_reserve(&out, a.n))
+		if (!ok || !clip_to_env(v, (uint32_t) s, &a, &b) || !ring_reserve(&out, a.n))
 			goto oom;
 		memcpy(out.p + 2 * out.n, a.p, a.n * 2 * sizeof(double));
 		out.n += a.n;
@@ -887,13 +942,17 @@ cell_task(void *arg, size_t rg, int worker)
 		v->cell_xy[s] = v->cell_n[s] ? out.p + 2 * off[s - lo] : NULL;
 	v->range_buf[rg] = out.p;
 	free(a.p);
+	free(a.tag);
 	free(b.p);
+	free(b.tag);
 	free(off);
 	return;
 
 oom:
 	free(a.p);
+	free(a.tag);
 	free(b.p);
+	free(b.tag);
 	free(out.p);
 	free(off);
 	vor_fail(v, TDC_ENOMEM, "out of memory building the Voronoi cells");
