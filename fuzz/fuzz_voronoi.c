@@ -18,7 +18,8 @@
  *
  * Every cell must have no repeated consecutive vertex, lie inside the
  * envelope and contain its site, or pass within 1e-12 of the envelope's
- * size of it, unless another site is closer than 1e-9 of that size.  Near-duplicate sites (an ulp apart, mode 3) have cells
+ * size of it, unless it or a Delaunay neighbour has another site closer
+ * than 1e-9 of that size (documented: merge such sites with a tolerance).  Near-duplicate sites (an ulp apart, mode 3) have cells
  * narrower than the spacing of doubles: rounded, such a cell may turn right
  * by an ulp or collapse to a zero-area sliver (a ring of 2, or winding 0);
  * slivers are allowed, and their edges are left out of the sharing check
@@ -120,6 +121,19 @@ check(const tdc_job *job, const tdc_voronoi *v, const tdc_voronoi *v1, const dou
 
 		if (hypot(a[0] - b[0], a[1] - b[1]) < near_d)
 			near[ev[0]] = near[ev[1]] = 1;
+	}
+	/*
+	 * ... and their Delaunay neighbours: a triangle with two sites that
+	 * close has a circumcenter that bound allows to be anywhere, and it is
+	 * a vertex of the third site's cell too.
+	 */
+	it.pos = 0;
+	while (tdc_next_edge(job, &it, ev))
+	{
+		if (near[ev[0]] == 1 && !near[ev[1]])
+			near[ev[1]] = 2;
+		if (near[ev[1]] == 1 && !near[ev[0]])
+			near[ev[0]] = 2;
 	}
 
 	size_t		cap = 64,
