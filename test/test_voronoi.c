@@ -381,7 +381,8 @@ check_diagram(const char *name, const double *xy, size_t n, const double *env_in
 		area += a / 2;
 	}
 	nsites = tdc_num_sites(job);
-	qsort(edges, nedges, sizeof(dedge), cmp_dedge);
+	if (nedges > 0)
+		qsort(edges, nedges, sizeof(dedge), cmp_dedge);
 	for (size_t i = 0; i < nedges; i++)
 	{
 		dedge		r;
@@ -609,6 +610,40 @@ test_voronoi(void)
 							   0x1.0000000000003p+4, 0x1.0000000000003p+4};
 
 		check_diagram("nearly collinear hull", flat, 4, NULL, 1, 1e-12);
+	}
+	{
+		/*
+		 * A hull edge between two sites 3.6e-37 apart, under a site at
+		 * 1.7e40: its ray's direction is so small against the box that the
+		 * exit time overflows, and box_exit took side -1, read before a
+		 * table (found by fuzz_voronoi under UBSan; check-core-asan fails
+		 * here without the fix).
+		 */
+		double		tiny_edge[6] = {-0x1.fd09c81cdb4a1p+68, 0x1.809d0f96c6b79p+133,
+									0, 0, 0, -0x1.3169a28p-121};
+		tdc_job    *job;
+		tdc_voronoi *v = NULL;
+		double		env[4];
+		char		err[256];
+		int			rc,
+					outside = 0;
+
+		tdc_triangulate(tiny_edge, 3, NULL, &job, err, sizeof(err));
+		tdc_voronoi_default_env(job, env);
+		rc = tdc_voronoi_build(job, env, 1, &v, err, sizeof(err));
+		for (uint32_t s = 0; rc == TDC_OK && s < tdc_site_id_limit(job); s++)
+		{
+			const double *c;
+			size_t		m = tdc_voronoi_cell(v, s, &c);
+
+			for (size_t i = 0; i < m; i++)
+				if (!(c[2 * i] >= env[0] && c[2 * i] <= env[2] &&
+					  c[2 * i + 1] >= env[1] && c[2 * i + 1] <= env[3]))
+					outside++;
+		}
+		CHECK(rc == TDC_OK && outside == 0, "tiny hull edge: rc %d, %d vertices outside", rc, outside);
+		tdc_voronoi_free(v);
+		tdc_job_free(job);
 	}
 	{
 		/* bad envelopes are refused */

@@ -588,7 +588,19 @@ box_exit(const double *box, const double *p, double dx, double dy,
 		ty = (box[3] - p[1]) / dy, sy = 2;
 	else if (dy < 0)
 		ty = (box[1] - p[1]) / dy, sy = 0;
-	if (tx <= ty)
+	/*
+	 * A direction component can be so small against the box that its time
+	 * overflows to infinity like that of a zero component: only a side the
+	 * ray moves towards may be taken (found by fuzz_voronoi: side -1).
+	 */
+	if (sx == -1 && sy == -1)
+	{
+		/* no direction at all: cannot happen for distinct sites; stay put */
+		out[0] = fmin(fmax(p[0], box[0]), box[2]);
+		out[1] = box[1];
+		*side = 0;
+	}
+	else if (sy == -1 || (sx != -1 && tx <= ty))
 	{
 		out[0] = sx == 1 ? box[2] : box[0];
 		out[1] = fmin(fmax(p[1] + tx * dy, box[1]), box[3]);
