@@ -85,5 +85,15 @@ check "collinear: exit 0, no triangles" "[ $? -eq 0 ] && [ ! -s $tmp/col.out ]"
 : > "$tmp/empty.txt"; $TDC -o "$tmp/empty.out" "$tmp/empty.txt"
 check "empty input: exit 0, no triangles" "[ $? -eq 0 ] && [ ! -s $tmp/empty.out ]"
 
+# --voronoi: one cell per distinct point, input order, areas add up to the
+# default envelope (the input box [0,2]x[0,1] grown by 2: 6 x 5)
+printf '0 0\n2 0\n0 1\n2 0\n' > "$tmp/v.txt"
+$TDC --voronoi -o "$tmp/v.out" --stats "$tmp/v.txt" 2> "$tmp/v.err"
+check "voronoi: exit 0" "[ $? -eq 0 ]"
+check "voronoi: 3 cells" "[ \$(wc -l < $tmp/v.out) -eq 3 ]"
+check "voronoi: stats line" "grep -qE '^voronoi=[0-9.]+ cell_vertices=13$' $tmp/v.err"
+check "voronoi: first cell is (0 0)'s" "awk 'NR == 1 { exit !(\$0 == \"1 0.5 -2 0.5 -2 -2 1 -2\") }' $tmp/v.out"
+check "voronoi: areas sum to 30" "awk '{ for (i = 1; i <= NF; i += 2) { j = (i + 2 > NF) ? 1 : i + 2; a += \$i * \$(j + 1) - \$j * \$(i + 1) } } END { exit !(a / 2 == 30) }' $tmp/v.out"
+
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ]

@@ -5,7 +5,12 @@
  *	./tdc [-t THREADS] [-g GRID] [-l LEVELS] [--tolerance T] [-o OUT] [--stats] INPUT
  *
  * and, beyond the fixed interface, --validate: check the result with the
- * exact validator (slow, and about 60 more bytes per point).
+ * exact validator (slow, and about 60 more bytes per point), and --voronoi:
+ * build the Voronoi cells too, clipped to GEOS's default envelope (the
+ * input's box grown by its larger side); -o then writes one cell per line,
+ * for each distinct point in input order of its first occurrence, its ring
+ * counter-clockwise and not closed, "x y" per vertex, %.17g; --stats adds a
+ * line with the Voronoi time.
  *
  * INPUT is a .bin file of little-endian float64 x,y pairs, or any other file
  * (or - for stdin) of text lines "x y" or "x y z".  -o writes one triangle
@@ -18,11 +23,12 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/resource.h>
+#include <time.h>
 
 #include "tdc.h"
 
 static const char usage[] =
-"usage: ./tdc [-t THREADS] [-g GRID] [-l LEVELS] [--tolerance T] [-o OUT] [--stats] [--validate] INPUT\n"
+"usage: ./tdc [-t THREADS] [-g GRID] [-l LEVELS] [--tolerance T] [-o OUT] [--stats] [--validate] [--voronoi] INPUT\n"
 "  INPUT  .bin file of little-endian float64 x,y pairs, or a text file of\n"
 "         'x y' or 'x y z' lines ('-' reads stdin)\n"
 "  -t     worker threads (0 = all online CPUs, the default)\n"
@@ -31,7 +37,8 @@ static const char usage[] =
 "  --tolerance T  drop sites closer than T to an already kept site\n"
 "  -o     write triangles, one per line, counter-clockwise, %.17g\n"
 "  --stats  print counts and phase times (seconds) to stderr\n"
-"  --validate  check the result with the exact validator; exit 1 if invalid\n";
+"  --validate  check the result with the exact validator; exit 1 if invalid\n"
+"  --voronoi  also build the Voronoi cells; -o writes cells, one ring per line\n";
 
 static void
 die(int code, const char *fmt, const char *arg)
@@ -174,7 +181,10 @@ main(int argc, char **argv)
 			   *outpath = NULL;
 	int			stats = 0,
 				validate = 0,
+				voronoi = 0,
 				rc;
+	tdc_voronoi *vor = NULL;
+	double		vor_seconds = 0;
 	size_t		n;
 	double	   *xy,
 			   *z = NULL;
@@ -196,6 +206,8 @@ main(int argc, char **argv)
 			stats = 1;
 		else if (strcmp(a, "--validate") == 0)
 			validate = 1;
+		else if (strcmp(a, "--voronoi") == 0)
+			voronoi = 1;
 		else if (strcmp(a, "-t") == 0 || strcmp(a, "-g") == 0 || strcmp(a, "-l") == 0 ||
 				 strcmp(a, "-o") == 0 || strcmp(a, "--tolerance") == 0)
 		{
@@ -237,7 +249,53 @@ main(int argc, char **argv)
 		die(1, "%s", err);
 	}
 
-	if (outpath)
+	if (voronoi)
+	{
+		double		env[4];
+		struct timespec t0,
+					t1;
+
+		clock_gettime(CLOCK_MONOTONIC, &t0);
+		tdc_voronoi_default_env(job, env);
+		rc = tdc_voronoi_build(job, env, opt.threads, &vor, err, sizeof(err));
+		clock_gettime(CLOCK_MONOTONIC, &t1);
+		if (rc != TDC_OK)
+		{
+			tdc_voronoi_free(vor);
+			tdc_job_free(job);
+			die(1, "%s", err);
+		}
+		vor_seconds = (t1.tv_sec - t0.tv_sec) + (t1.tv_nsec - t0.tv_nsec) * 1e-9;
+	}
+
+	if (outpath && vor)
+	{
+		FILE	   *f = strcmp(outpath, "-") == 0 ? stdout : fopen(outpath, "w");
+		unsigned char *seen = calloc(tdc_site_id_limit(job) + 1, 1);
+
+		if (f == NULL || seen == NULL)
+			die(1, "cannot write %s", outpath);
+		for (size_t i = 0; i < tdc_num_input(job); i++)
+		{
+			uint32_t	s = tdc_input_site(job, i);
+			const double *c;
+			size_t		m;
+
+			if (s == UINT32_MAX)
+				die(1, "out of memory%s", "");
+			if (seen[s])
+				continue;
+			seen[s] = 1;
+			m = tdc_voronoi_cell(vor, s, &c);
+			for (size_t k = 0; k < m; k++)
+				fprintf(f, k ? " %.17g %.17g" : "%.17g %.17g", c[2 * k], c[2 * k + 1]);
+			fputc('\n', f);
+		}
+		free(seen);
+		if (f != stdout && fclose(f) != 0)
+			die(1, "error writing %s", outpath);
+	}
+	else if (outpath)
 	{
 		FILE	   *f = strcmp(outpath, "-") == 0 ? stdout : fopen(outpath, "w");
 		tdc_iter	it = {0};
@@ -275,6 +333,9 @@ main(int argc, char **argv)
 				tdc_num_input(job), tdc_num_sites(job), tdc_num_triangles(job),
 				tdc_threads_used(job), t.sort, t.subdivide, t.leaves, t.merge, t.total,
 				ru.ru_maxrss / 1024.0);
+		if (vor)
+			fprintf(stderr, "voronoi=%.6f cell_vertices=%zu\n", vor_seconds,
+					tdc_voronoi_num_vertices(vor));
 	}
 	if (validate)
 	{
@@ -286,6 +347,7 @@ main(int argc, char **argv)
 		fprintf(stderr, "valid: %zu sites, %zu triangles, checked exactly\n",
 				tdc_num_sites(job), tdc_num_triangles(job));
 	}
+	tdc_voronoi_free(vor);
 	tdc_job_free(job);
 	free(xy);
 	free(z);

@@ -221,4 +221,53 @@ extern int	tdc_validate(const double *sites, size_t m, const uint32_t *tri,
  */
 extern int	tdc_validate_job(const tdc_job *job, char *err, size_t errlen);
 
+/* --- Voronoi diagram of a finished job (voronoi.c) --- */
+
+/*
+ * The Voronoi cells of a finished job's sites, clipped to the rectangle
+ * env = {xmin, ymin, xmax, ymax}, which must contain every site.  Built on
+ * "threads" worker threads (0: the job's count) by a thread of its own, like
+ * a job: wait, cancel and free it the same way; tdc_voronoi_build is start
+ * plus wait forever.  The job must stay alive and unchanged until the
+ * diagram is freed.  A cell is a counter-clockwise ring, not closed (the
+ * first vertex is not repeated), with no two consecutive vertices equal;
+ * neighbouring cells share their vertices bit for bit.
+ */
+typedef struct tdc_voronoi tdc_voronoi;
+
+extern int	tdc_voronoi_start(const tdc_job *job, const double env[4], int threads,
+							  tdc_voronoi **v, char *err, size_t errlen);
+extern int	tdc_voronoi_wait(tdc_voronoi *v, int timeout_ms);
+extern void tdc_voronoi_cancel(tdc_voronoi *v);
+extern const char *tdc_voronoi_error(const tdc_voronoi *v);
+extern void tdc_voronoi_free(tdc_voronoi *v);
+extern int	tdc_voronoi_build(const tdc_job *job, const double env[4], int threads,
+							  tdc_voronoi **v, char *err, size_t errlen);
+
+/* Bytes a diagram of a job of n input points allocates at most. */
+extern size_t tdc_voronoi_memory(size_t n, int threads);
+
+/* The cell of a site: its vertex count, *xy the 2 * count coordinates; 0 for a non-site. */
+extern size_t tdc_voronoi_cell(const tdc_voronoi *v, uint32_t site, const double **xy);
+
+/* The clip envelope the diagram was built with. */
+extern void tdc_voronoi_env(const tdc_voronoi *v, double env[4]);
+
+/* Vertices of all cells together. */
+extern size_t tdc_voronoi_num_vertices(const tdc_voronoi *v);
+
+/*
+ * GEOS's (and so PostGIS's) default clip envelope: the bounding box of the
+ * input points (all of them, also those a tolerance dropped) grown on every
+ * side by the larger of its width and height.
+ */
+extern void tdc_voronoi_default_env(const tdc_job *job, double env[4]);
+
+/*
+ * Circumcenter of the counter-clockwise triangle a, b, c, computed in
+ * double-double and rounded once (error bound in voronoi.c).
+ */
+extern void tdc_circumcenter(const double *a, const double *b, const double *c,
+							 double out[2]);
+
 #endif							/* TDC_H */

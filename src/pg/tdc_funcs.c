@@ -501,8 +501,8 @@ dump_error_context(void *arg)
  * a function meant to triangulate never changes data.  Functions the query
  * calls run as they would anywhere else.
  */
-static void
-dump_check_read_only(SPIPlanPtr plan, const char *fname)
+void
+tdc_dump_check_read_only(SPIPlanPtr plan, const char *fname)
 {
 	ListCell   *ls;
 
@@ -559,7 +559,7 @@ dump_collect(TdcPointBuf *buf, const char *query, Oid geomoid,
 				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
 				 errmsg("%s: the query must be a single SELECT returning one geometry column",
 						fname)));
-	dump_check_read_only(plan, fname);
+	tdc_dump_check_read_only(plan, fname);
 	/* read-only: SPI refuses anything that would write, as a second guard */
 	portal = SPI_cursor_open(NULL, plan, NULL, NULL, true);
 

@@ -182,6 +182,9 @@ typedef struct TdcRun
 } TdcRun;
 
 extern void tdc_check_params(double tolerance, int flags, const char *fname);
+/* Refuse a Dump query that is not a plain, read-only SELECT (an SPIPlanPtr). */
+struct _SPI_plan;
+extern void tdc_dump_check_read_only(struct _SPI_plan *plan, const char *fname);
 extern TdcRun *tdc_run(const TdcPointBuf *buf, double tolerance,
 					   uint64 result_bytes, const char *fname);
 extern bool tdc_run_emit(TdcRun *run, tdc_emit_fn emit, void *arg,

@@ -1,0 +1,1374 @@
+/*
+ * voronoi.c
+ *		The Voronoi diagram of a finished triangulation, clipped to a
+ *		rectangle: one convex cell per site.
+ *
+ * Duality.  The Voronoi diagram of a point set is the planar dual of its
+ * Delaunay triangulation (Delaunay 1934; see de Berg, Cheong, van Kreveld and
+ * Overmars, "Computational Geometry", 3rd ed., section 9.2, theorem 9.6, or
+ * Okabe, Boots, Sugihara and Chiu, "Spatial Tessellations", 2nd ed.,
+ * section 2.4): every Delaunay triangle is a Voronoi vertex, its
+ * circumcenter; every Delaunay edge st is the Voronoi edge between the cells
+ * of s and t, joining the circumcenters of the two triangles beside it, or a
+ * ray perpendicular to st when st is on the convex hull; every site is a
+ * cell, whose vertices are the circumcenters of the triangles around the
+ * site, in the same counter-clockwise order.  So the cells are read off the
+ * mesh by walking the ring of half-edges around each site, and their
+ * adjacency is exactly the Delaunay adjacency that the exact predicates
+ * decided: only the vertex coordinates are rounded.
+ *
+ * Cocircular sites.  When four or more sites lie on one empty circle the
+ * triangulation splits that circle's polygon into triangles whose
+ * circumcenters are the same point: the Voronoi edges dual to the inner
+ * diagonals have length zero.  Such an edge is recognised exactly (the
+ * incircle determinant of its two triangles is exactly zero), and the
+ * triangles are merged into one class by a lock-free union-find whose root
+ * is the smallest triangle number, so the class has one vertex, computed
+ * once, and a cell never repeats it.
+ *
+ * One vertex, one value.  A Voronoi vertex is computed once per class, from
+ * its root triangle with the vertices rotated to start at the
+ * lexicographically smallest: every cell that uses it reads the same double
+ * pair, so neighbouring cells share their vertices bit for bit and the cells
+ * form a coverage with no gap and no overlap beyond that rounding.  Points
+ * made by clipping are computed from the segment's end points taken in
+ * lexicographic order, so both cells of a clipped edge get the same point
+ * too.
+ *
+ * Error bound.  The circumcenter is computed in double-double arithmetic
+ * (Dekker's error-free product and Knuth's two-sum, no FMA needed) relative
+ * to the triangle's first vertex a, with b - a and c - a exact, and rounded
+ * once at the end.  With L the longest of |b - a| and |c - a|,
+ * D = (b - a) x (c - a), K = (|bx cy| + |by cx|) / |D| (the condition of
+ * the orientation; 1 for a right angle at a, large for a flat triangle) and
+ * u the exact offset of the circumcenter from a, each coordinate of the
+ * result is within
+ *
+ *		1/2 ulp(result) + 2^-98 * (L^3 / |D| + K * |u|)
+ *
+ * of the exact rational circumcenter.  Every double-double operation has a
+ * relative error below 2^-104 * small constant; the only cancellations are
+ * in D and in the two numerators, whose absolute errors are bounded by
+ * 2^-103 times the sums of the magnitudes of their terms (at most L^3 / 2
+ * and K |D|), which gives the second term.  For any triangle whose angles
+ * are not within about 1e-14 radian of flat, the second term is far below
+ * the first: the result is within one ulp.  test/test_voronoi.c checks the
+ * bound against exact rational arithmetic (GMP) on random, skinny and
+ * near-collinear triangles over the whole coordinate range.  Coordinates
+ * within [TDC_COORD_MIN, TDC_COORD_MAX] keep every intermediate (cubes of
+ * coordinate differences) inside the normal double range.
+ *
+ * Unbounded cells and clipping.  The diagram is clipped to the caller's
+ * rectangle E, which must contain every site.  A hull site's cell is
+ * unbounded: its ring of triangles is open at the outer face, and the two
+ * hull edges there give two rays, perpendicular to them, pointing out.
+ * The cell is first cut to a box B that strictly contains E, the sites
+ * and every Voronoi vertex: each ray is followed to where it leaves B (the
+ * hitting coordinate is set to B's side exactly), and the cell's boundary
+ * is closed along B's boundary counter-clockwise through B's corners.  That
+ * is exactly cell ∩ B, a convex polygon, and B is common to all cells, so a
+ * ray's exit point is the same double pair in both cells beside it.  Then
+ * every cell is clipped to E by Sutherland-Hodgman against E's four sides;
+ * inside tests are exact comparisons, a crossing point is computed from the
+ * crossing segment's end point nearer to the side (ties: the lexicographic
+ * order), which does not depend on the cell, and gets the side's
+ * coordinate exactly, so it lies on E's boundary and is shared by the two
+ * cells of that edge.  A cell lying inside E is not touched.
+ *
+ * Collinear sites.  With no triangle (every site on one line, or two sites),
+ * the cells are slabs between the perpendicular bisectors of consecutive
+ * sites, as GEOS (and so PostGIS) gives them; each bisector is cut to B the
+ * same way and the slabs are closed along B's boundary, then clipped.  One
+ * site: its cell is E.
+ *
+ * Parallelism and cancel.  Numbering the triangles, joining cocircular
+ * ones, computing the vertices and building the cells are parallel loops on
+ * a pool of the job's thread count, run by a driver thread with all signals
+ * blocked, like a triangulation, so the host's thread stays free to cancel.
+ * Every loop polls the cancel flag at least once per 4096 items.
+ */
+#include <errno.h>
+#include <math.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "job.h"
+
+#define SITES_PER_TASK	4096	/* cells built per task, and per cancel poll */
+#define ITEMS_PER_TASK	65536	/* half-edges or triangles per task */
+
+struct tdc_voronoi
+{
+	const tdc_job *job;
+	double		env[4];			/* E: xmin, ymin, xmax, ymax */
+	double		box[4];			/* B, strictly around E, sites and vertices */
+	int			threads;
+
+	/* triangle structure */
+	size_t		nhe;
+	size_t		ntri;
+	uint32_t   *tri_id;			/* half-edge -> triangle left of it, or NIL */
+	uint32_t   *tri_he;			/* triangle -> its smallest half-edge */
+	_Atomic(uint32_t) *parent;	/* union-find over triangles; root = class min */
+	double	   *cc;				/* circumcenter of each class root, 2 per tri */
+	_Atomic(uint32_t) *site_he; /* site -> smallest outgoing half-edge */
+	size_t	   *range_first;	/* triangles: first id of each range */
+	double	   *range_box;		/* 4 per range: bounding box of its vertices */
+
+	/* collinear input */
+	uint32_t   *line;			/* the sites sorted by (x, y) */
+	uint32_t   *line_pos;		/* site -> its place in line[] */
+	size_t		nline;
+
+	/* cells */
+	size_t		nsites;			/* site id limit */
+	double	  **cell_xy;		/* site -> its ring, or NULL */
+	uint32_t   *cell_n;			/* site -> vertices in its ring */
+	size_t		nranges;
+	double	  **range_buf;		/* ring storage of each site range */
+	size_t		total_vertices;
+
+	tdc_pool   *pool;
+	atomic_int	cancel;
+	atomic_int	failed;
+	char		task_err[256];
+
+	pthread_t	driver;
+	bool		driver_started;
+	pthread_mutex_t lock;
+	pthread_cond_t done;
+	bool		finished;
+	int			status;
+	char		err[256];
+};
+
+/* ----------------------------------------------------------------
+ *		double-double arithmetic (error-free transformations)
+ * ----------------------------------------------------------------
+ */
+typedef struct dd
+{
+	double		hi,
+				lo;
+} dd;
+
+static inline dd
+two_sum(double a, double b)
+{
+	double		s = a + b;
+	double		bb = s - a;
+	double		e = (a - (s - bb)) + (b - bb);
+
+	return (dd) {s, e};
+}
+
+static inline dd
+fast_two_sum(double a, double b)
+{
+	double		s = a + b;
+
+	return (dd) {s, b - (s - a)};
+}
+
+/* Veltkamp split: exact unless |a| > 2^996, far beyond TDC_COORD_MAX^3. */
+static inline void
+split(double a, double *hi, double *lo)
+{
+	double		c = 134217729.0 * a;	/* 2^27 + 1 */
+	double		abig = c - a;
+
+	*hi = c - abig;
+	*lo = a - *hi;
+}
+
+static inline dd
+two_prod(double a, double b)
+{
+	double		p = a * b,
+				ah,
+				al,
+				bh,
+				bl;
+
+	split(a, &ah, &al);
+	split(b, &bh, &bl);
+	return (dd) {p, ((ah * bh - p) + ah * bl + al * bh) + al * bl};
+}
+
+static inline dd
+dd_add(dd a, dd b)
+{
+	dd			s = two_sum(a.hi, b.hi);
+	dd			t = two_sum(a.lo, b.lo);
+
+	s.lo += t.hi;
+	s = fast_two_sum(s.hi, s.lo);
+	s.lo += t.lo;
+	return fast_two_sum(s.hi, s.lo);
+}
+
+static inline dd
+dd_neg(dd a)
+{
+	return (dd) {-a.hi, -a.lo};
+}
+
+static inline dd
+dd_mul(dd a, dd b)
+{
+	dd			p = two_prod(a.hi, b.hi);
+
+	p.lo += a.hi * b.lo + a.lo * b.hi;
+	return fast_two_sum(p.hi, p.lo);
+}
+
+static inline dd
+dd_div(dd a, dd b)
+{
+	double		q1 = a.hi / b.hi;
+	dd			r = dd_add(a, dd_neg(dd_mul((dd) {q1, 0}, b)));
+	double		q2 = r.hi / b.hi;
+
+	r = dd_add(r, dd_neg(dd_mul((dd) {q2, 0}, b)));
+	return dd_add(fast_two_sum(q1, q2), (dd) {r.hi / b.hi, 0});
+}
+
+/*
+ * Circumcenter of the counter-clockwise, non-degenerate triangle a, b, c,
+ * rounded once per coordinate (the bound is in the header comment).  The
+ * result depends on the order of the arguments: callers pass a canonical
+ * rotation.
+ */
+void
+tdc_circumcenter(const double *a, const double *b, const double *c,
+				 double out[2])
+{
+	dd			bx = two_sum(b[0], -a[0]),
+				by = two_sum(b[1], -a[1]),
+				cx = two_sum(c[0], -a[0]),
+				cy = two_sum(c[1], -a[1]);
+	dd			bb = dd_add(dd_mul(bx, bx), dd_mul(by, by));
+	dd			cc = dd_add(dd_mul(cx, cx), dd_mul(cy, cy));
+	dd			d = dd_add(dd_mul(bx, cy), dd_neg(dd_mul(by, cx)));
+	dd			d2 = {2 * d.hi, 2 * d.lo};
+	dd			nx = dd_add(dd_mul(cy, bb), dd_neg(dd_mul(by, cc)));
+	dd			ny = dd_add(dd_mul(bx, cc), dd_neg(dd_mul(cx, bb)));
+	dd			ux = dd_div(nx, d2),
+				uy = dd_div(ny, d2);
+
+	out[0] = dd_add((dd) {a[0], 0}, ux).hi;
+	out[1] = dd_add((dd) {a[1], 0}, uy).hi;
+}
+
+/* ----------------------------------------------------------------
+ *		helpers
+ * ----------------------------------------------------------------
+ */
+static bool
+vor_cancelled(const tdc_voronoi *v)
+{
+	return atomic_load_explicit(&v->cancel, memory_order_relaxed) != 0;
+}
+
+static void
+vor_fail(tdc_voronoi *v, int code, const char *msg)
+{
+	int			expected = 0;
+
+	if (atomic_compare_exchange_strong(&v->failed, &expected, code))
+		snprintf(v->task_err, sizeof(v->task_err), "%s", msg);
+	atomic_store(&v->cancel, 1);
+}
+
+static inline bool
+lex_less(const double *p, const double *q)
+{
+	return p[0] < q[0] || (p[0] == q[0] && p[1] < q[1]);
+}
+
+static inline const double *
+site_pt(const tdc_voronoi *v, uint32_t s)
+{
+	return v->job->xy + 2 * (size_t) s;
+}
+
+static inline bool
+is_outer(const tdc_job *job, size_t h)
+{
+	return (job->outer[h >> 6] >> (h & 63)) & 1;
+}
+
+static size_t
+nranges_for(size_t n, size_t per)
+{
+	return n == 0 ? 0 : (n + per - 1) / per;
+}
+
+/* ----------------------------------------------------------------
+ *		triangles: numbering, cocircular classes, circumcenters
+ * ----------------------------------------------------------------
+ */
+
+/* Count the triangles starting in half-edge range r; note each site's smallest half-edge. */
+static void
+count_task(void *arg, size_t r, int worker)
+{
+	tdc_voronoi *v = arg;
+	const tdc_job *job = v->job;
+	size_t		lo = r * ITEMS_PER_TASK,
+				hi = lo + ITEMS_PER_TASK < v->nhe ? lo + ITEMS_PER_TASK : v->nhe,
+				n = 0;
+	uint32_t	t[3];
+
+	if (vor_cancelled(v))
+		return;
+	for (size_t h = lo; h < hi; h++)
+	{
+		uint32_t	o = job->he[h].org;
+
+		if (o == TDC_NIL)
+			continue;
+		/* smallest half-edge out of o: a CAS loop, contention is rare */
+		{
+			uint32_t	cur = atomic_load_explicit(&v->site_he[o], memory_order_relaxed);
+
+			while ((uint32_t) h < cur &&
+				   !atomic_compare_exchange_weak_explicit(&v->site_he[o], &cur, (uint32_t) h,
+														  memory_order_relaxed,
+														  memory_order_relaxed))
+				;
+		}
+		if (v->ntri > 0 && tdc_tri_at(job, h, t))
+			n++;
+	}
+	v->range_first[r + 1] = n;
+}
+
+/* Number the triangles of range r (in half-edge order) and record their half-edges. */
+static void
+number_task(void *arg, size_t r, int worker)
+{
+	tdc_voronoi *v = arg;
+	const tdc_job *job = v->job;
+	size_t		lo = r * ITEMS_PER_TASK,
+				hi = lo + ITEMS_PER_TASK < v->nhe ? lo + ITEMS_PER_TASK : v->nhe;
+	uint32_t	id = (uint32_t) v->range_first[r],
+				t[3];
+
+	if (vor_cancelled(v))
+		return;
+	for (size_t h = lo; h < hi; h++)
+	{
+		uint32_t	h1,
+					h2;
+
+		if (!tdc_tri_at(job, h, t))
+			continue;
+		h1 = job->he[SYM(h)].prev;
+		h2 = job->he[SYM(h1)].prev;
+		v->tri_id[h] = v->tri_id[h1] = v->tri_id[h2] = id;
+		v->tri_he[id] = (uint32_t) h;
+		atomic_init(&v->parent[id], id);
+		id++;
+	}
+}
+
+static uint32_t
+uf_find(tdc_voronoi *v, uint32_t x)
+{
+	for (;;)
+	{
+		uint32_t	p = atomic_load_explicit(&v->parent[x], memory_order_relaxed);
+
+		if (p == x)
+			return x;
+		x = p;
+	}
+}
+
+/*
+ * Lock-free union: the larger root is linked below the smaller with a CAS,
+ * so parents only ever decrease and every class ends with its smallest
+ * triangle as root, whatever the order of the unions.
+ */
+static void
+uf_union(tdc_voronoi *v, uint32_t a, uint32_t b)
+{
+	for (;;)
+	{
+		uint32_t	big,
+					small;
+
+		a = uf_find(v, a);
+		b = uf_find(v, b);
+		if (a == b)
+			return;
+		big = a > b ? a : b;
+		small = a > b ? b : a;
+		if (atomic_compare_exchange_strong_explicit(&v->parent[big], &big, small,
+													memory_order_relaxed,
+													memory_order_relaxed))
+			return;
+	}
+}
+
+/* Join the two triangles of every edge of range r whose four sites are cocircular. */
+static void
+cocircular_task(void *arg, size_t r, int worker)
+{
+	tdc_voronoi *v = arg;
+	const tdc_job *job = v->job;
+	size_t		lo = r * ITEMS_PER_TASK,
+				hi = lo + ITEMS_PER_TASK < v->nhe ? lo + ITEMS_PER_TASK : v->nhe;
+
+	if (vor_cancelled(v))
+		return;
+	for (size_t h = lo & ~(size_t) 1; h < hi; h += 2)
+	{
+		uint32_t	ta = v->tri_id[h],
+					tb = v->tri_id[h + 1];
+		uint32_t	a,
+					b,
+					c,
+					d;
+
+		if (ta == TDC_NIL || tb == TDC_NIL)
+			continue;
+		a = job->he[h].org;
+		b = job->he[h + 1].org;
+		c = job->he[job->he[h + 1].prev ^ 1].org;	/* apex left of h */
+		d = job->he[job->he[h].prev ^ 1].org;	/* apex left of h + 1 */
+		if (tdc_incircle(site_pt(v, a), site_pt(v, b), site_pt(v, c), site_pt(v, d)) == 0)
+			uf_union(v, ta, tb);
+	}
+}
+
+/* Flatten the classes of triangle range r; circumcenters of its roots. */
+static void
+vertex_task(void *arg, size_t r, int worker)
+{
+	tdc_voronoi *v = arg;
+	const tdc_job *job = v->job;
+	size_t		lo = r * ITEMS_PER_TASK,
+				hi = lo + ITEMS_PER_TASK < v->ntri ? lo + ITEMS_PER_TASK : v->ntri;
+	double		bx0 = INFINITY,
+				by0 = INFINITY,
+				bx1 = -INFINITY,
+				by1 = -INFINITY;
+
+	if (vor_cancelled(v))
+		return;
+	for (size_t t = lo; t < hi; t++)
+	{
+		uint32_t	root = uf_find(v, (uint32_t) t);
+		uint32_t	h,
+					s[3];
+		const double *p[3];
+		int			k = 0;
+
+		/* safe: other tasks only read parents while flattening */
+		atomic_store_explicit(&v->parent[t], root, memory_order_relaxed);
+		if (root != t)
+			continue;
+		h = v->tri_he[t];
+		tdc_tri_at(job, h, s);
+		for (int i = 0; i < 3; i++)
+			p[i] = site_pt(v, s[i]);
+		if (lex_less(p[1], p[k]))
+			k = 1;
+		if (lex_less(p[2], p[k]))
+			k = 2;
+		tdc_circumcenter(p[k], p[(k + 1) % 3], p[(k + 2) % 3], v->cc + 2 * t);
+		bx0 = fmin(bx0, v->cc[2 * t]);
+		bx1 = fmax(bx1, v->cc[2 * t]);
+		by0 = fmin(by0, v->cc[2 * t + 1]);
+		by1 = fmax(by1, v->cc[2 * t + 1]);
+	}
+	v->range_box[4 * r] = bx0;
+	v->range_box[4 * r + 1] = by0;
+	v->range_box[4 * r + 2] = bx1;
+	v->range_box[4 * r + 3] = by1;
+}
+
+/* ----------------------------------------------------------------
+ *		cells
+ * ----------------------------------------------------------------
+ */
+/*
+ * A ring being built.  A tagged ring also records, for each vertex, the
+ * site across the edge that starts there (the neighbour whose bisector the
+ * edge lies on), or TDC_NIL for an edge along B or E: clipping computes a
+ * crossing from that bisector, not from the edge's end points, which may be
+ * far away and rounded at their own, much larger, scale.
+ */
+typedef struct ring
+{
+	double	   *p;				/* 2 per vertex */
+	uint32_t   *tag;			/* tagged rings: 1 per vertex */
+	size_t		n;
+	size_t		cap;
+	bool		tagged;
+} ring;
+
+static bool
+ring_reserve(ring *r, size_t extra)
+{
+	if (r->n + extra > r->cap)
+	{
+		size_t		cap = (r->n + extra) + (r->n + extra) / 2 + 16;
+		double	   *p = realloc(r->p, cap * 2 * sizeof(double));
+
+		if (p == NULL)
+			return false;
+		r->p = p;
+		if (r->tagged)
+		{
+			uint32_t   *t = realloc(r->tag, cap * sizeof(uint32_t));
+
+			if (t == NULL)
+				return false;
+			r->tag = t;
+		}
+		r->cap = cap;
+	}
+	return true;
+}
+
+/*
+ * Append a vertex whose outgoing edge has the given tag, dropping a repeat
+ * of the previous vertex (which then takes the tag: the edge that starts
+ * there is now this one); room was reserved.
+ */
+static inline void
+ring_push(ring *r, double x, double y, uint32_t tag)
+{
+	if (r->n > 0 && r->p[2 * r->n - 2] == x && r->p[2 * r->n - 1] == y)
+	{
+		if (r->tagged)
+			r->tag[r->n - 1] = tag;
+		return;
+	}
+	r->p[2 * r->n] = x;
+	r->p[2 * r->n + 1] = y;
+	if (r->tagged)
+		r->tag[r->n] = tag;
+	r->n++;
+}
+
+/* Drop a closing repeat of the first vertex. */
+static inline void
+ring_close(ring *r)
+{
+	while (r->n > 1 && r->p[0] == r->p[2 * r->n - 2] && r->p[1] == r->p[2 * r->n - 1])
+		r->n--;
+}
+
+/*
+ * Where the ray from p (strictly inside B) along d leaves B, with the
+ * coordinate of the side it hits set to that side exactly.  *side: 0 bottom,
+ * 1 right, 2 top, 3 left, the counter-clockwise order of B's boundary.
+ */
+static void
+box_exit(const double *box, const double *p, double dx, double dy,
+		 double out[2], int *side)
+{
+	double		tx = INFINITY,
+				ty = INFINITY;
+	int			sx = -1,
+				sy = -1;
+
+	if (dx > 0)
+		tx = (box[2] - p[0]) / dx, sx = 1;
+	else if (dx < 0)
+		tx = (box[0] - p[0]) / dx, sx = 3;
+	if (dy > 0)
+		ty = (box[3] - p[1]) / dy, sy = 2;
+	else if (dy < 0)
+		ty = (box[1] - p[1]) / dy, sy = 0;
+	/*
+	 * A direction component can be so small against the box that its time
+	 * overflows to infinity like that of a zero component: only a side the
+	 * ray moves towards may be taken (found by fuzz_voronoi: side -1).
+	 */
+	if (sx == -1 && sy == -1)
+	{
+		/* no direction at all: cannot happen for distinct sites; stay put */
+		out[0] = fmin(fmax(p[0], box[0]), box[2]);
+		out[1] = box[1];
+		*side = 0;
+	}
+	else if (sy == -1 || (sx != -1 && tx <= ty))
+	{
+		out[0] = sx == 1 ? box[2] : box[0];
+		out[1] = fmin(fmax(p[1] + tx * dy, box[1]), box[3]);
+		*side = sx;
+	}
+	else
+	{
+		out[1] = sy == 2 ? box[3] : box[1];
+		out[0] = fmin(fmax(p[0] + ty * dx, box[0]), box[2]);
+		*side = sy;
+	}
+}
+
+/* Is q at or after p going counter-clockwise along the same side? */
+static bool
+side_ahead(int side, const double *p, const double *q)
+{
+	switch (side)
+	{
+		case 0:
+			return q[0] >= p[0];
+		case 1:
+			return q[1] >= p[1];
+		case 2:
+			return q[0] <= p[0];
+		default:
+			return q[1] <= p[1];
+	}
+}
+
+/*
+ * Append B's corners met going counter-clockwise along B's boundary from
+ * "from" (on side sf) to "to" (on side st), both excluded.
+ */
+static void
+push_arc(ring *r, const double *box, const double *from, int sf,
+		 const double *to, int st)
+{
+	static const int cx[4] = {2, 2, 0, 0},
+				cy[4] = {1, 3, 3, 1};
+	int			s = sf;
+
+	if (sf == st && side_ahead(sf, from, to))
+		return;
+	for (int i = 0; i < 4; i++)
+	{
+		ring_push(r, box[cx[s]], box[cy[s]], TDC_NIL);
+		s = (s + 1) & 3;
+		if (s == st)
+			return;
+	}
+}
+
+/*
+ * Clip ring "in" to the half-plane coord[axis] >= c (keep_ge) or <= c into
+ * "out" (Sutherland-Hodgman).  A crossing point is computed from the
+ * crossing segment's end points in an order fixed by their coordinates, so
+ * it does not depend on which of the two cells beside the segment asks.
+ */
+static void
+clip_side(const tdc_voronoi *v, uint32_t site, const ring *in, ring *out,
+		  int axis, double c, bool keep_ge)
+{
+	out->n = 0;
+	for (size_t i = 0; i < in->n; i++)
+	{
+		const double *p = in->p + 2 * i,
+				   *q = in->p + 2 * ((i + 1) % in->n);
+		bool		pin = keep_ge ? p[axis] >= c : p[axis] <= c,
+					qin = keep_ge ? q[axis] >= c : q[axis] <= c;
+
+		uint32_t	g = in->tag[i];
+
+		if (pin)
+			ring_push(out, p[0], p[1], g);
+		if (pin != qin)
+		{
+			/*
+			 * From the end point nearer to the line: the other may be a ray's
+			 * exit from B, far away (B grows with the farthest Voronoi
+			 * vertex), and interpolating from there would lose the digits
+			 * of the crossing.  Ties go to the lexicographically smaller.
+			 */
+			double		dp = fabs(p[axis] - c),
+						dq = fabs(q[axis] - c);
+			bool		p_first = dp < dq || (dp == dq && lex_less(p, q));
+			const double *a = p_first ? p : q,
+					   *b = p_first ? q : p;
+			int			o = 1 - axis;
+			double		t = (c - a[axis]) / (b[axis] - a[axis]);
+			double		w = a[o] + t * (b[o] - a[o]);
+			double		pt[2];
+
+			if (g != TDC_NIL)
+			{
+				/*
+				 * On the bisector of the site and its neighbour g, taken in
+				 * lexicographic order so that both cells agree: exact
+				 * differences of sites near E, where the end points may be
+				 * Voronoi vertices 1e16 away, rounded at that scale.
+				 */
+				const double *s0 = site_pt(v, site),
+						   *s1 = site_pt(v, g),
+						   *sa = lex_less(s0, s1) ? s0 : s1,
+						   *sb = lex_less(s0, s1) ? s1 : s0;
+				double		m[2] = {sa[0] * 0.5 + sb[0] * 0.5, sa[1] * 0.5 + sb[1] * 0.5};
+				double		da = sb[axis] - sa[axis],
+							dn = sb[o] - sa[o];
+
+				if (dn != 0)
+					w = m[o] + (m[axis] - c) * (da / dn);
+			}
+			w = fmin(fmax(w, fmin(a[o], b[o])), fmax(a[o], b[o]));
+			pt[axis] = c;
+			pt[o] = w;
+			/* leaving: the next edge runs along the side; entering: along g's */
+			ring_push(out, pt[0], pt[1], pin ? TDC_NIL : g);
+		}
+	}
+	ring_close(out);
+}
+
+/* Clip cell "a" to E in place ("b" is scratch); false when out of memory. */
+static bool
+clip_to_env(const tdc_voronoi *v, uint32_t site, ring *a, ring *b)
+{
+	const double *e = v->env;
+	bool		inside = true;
+
+	for (size_t i = 0; i < a->n && inside; i++)
+		inside = a->p[2 * i] >= e[0] && a->p[2 * i] <= e[2] &&
+			a->p[2 * i + 1] >= e[1] && a->p[2 * i + 1] <= e[3];
+	if (inside)
+		return true;
+	for (int k = 0; k < 4; k++)
+	{
+		ring		t;
+
+		/* one half-plane adds at most one vertex */
+		if (!ring_reserve(b, a->n + 2))
+			return false;
+		clip_side(v, site, a, b, k & 1, e[k], k < 2);
+		t = *a;
+		*a = *b;
+		*b = t;
+	}
+	return true;
+}
+
+/* Exit points of the bisector ray of hull edge a -> b (outer face on its left), from p. */
+static void
+hull_ray(const tdc_voronoi *v, const double *p, uint32_t a, uint32_t b,
+		 double out[2], int *side)
+{
+	const double *pa = site_pt(v, a),
+			   *pb = site_pt(v, b);
+
+	box_exit(v->box, p, -(pb[1] - pa[1]), pb[0] - pa[0], out, side);
+}
+
+static inline const double *
+vertex_of(const tdc_voronoi *v, uint32_t h)
+{
+	uint32_t	t = atomic_load_explicit(&v->parent[v->tri_id[h]], memory_order_relaxed);
+
+	return v->cc + 2 * (size_t) t;
+}
+
+/* Cell of site s of a mesh with triangles, uncut, into r (cell ∩ B). */
+static bool
+cell_of_mesh(const tdc_voronoi *v, uint32_t s, ring *r)
+{
+	const tdc_job *job = v->job;
+	uint32_t	h0 = atomic_load_explicit(&v->site_he[s], memory_order_relaxed),
+				h,
+				ho = TDC_NIL,
+				prev_t = TDC_NIL;
+	size_t		deg = 0;
+
+	r->n = 0;
+	if (h0 == TDC_NIL)
+		return false;
+	h = h0;
+	do
+	{
+		if (is_outer(job, h))
+			ho = h;
+		deg++;
+		h = job->he[h].next;
+	} while (h != h0);
+	if (!ring_reserve(r, deg + 8))
+		return false;
+	/* start right after the outer face, if any, so the chain is open there */
+	h = ho == TDC_NIL ? h0 : job->he[ho].next;
+	for (size_t i = 0; i < deg; i++, h = job->he[h].next)
+	{
+		uint32_t	t,
+					g;
+
+		if (h == ho)
+			continue;
+		/* the edge to the next vertex is dual to onext(h) */
+		g = job->he[SYM(job->he[h].next)].org;
+		t = atomic_load_explicit(&v->parent[v->tri_id[h]], memory_order_relaxed);
+		if (t != prev_t)
+		{
+			ring_push(r, v->cc[2 * (size_t) t], v->cc[2 * (size_t) t + 1], g);
+			prev_t = t;
+		}
+		else
+			r->tag[r->n - 1] = g;	/* a zero-length edge collapsed */
+	}
+	if (ho != TDC_NIL)
+	{
+		/*
+		 * The chain runs from the triangle after ho to the one before it.
+		 * Out along hull edge ho = s -> u (outer face on its left), in along
+		 * the hull edge after it, whose reverse w -> s has the outer face on
+		 * its left.
+		 */
+		uint32_t	hin = job->he[ho].next;
+		const double *first = vertex_of(v, hin),
+				   *last = vertex_of(v, job->he[ho].prev);
+		double		pout[2],
+					pin[2];
+		int			sout,
+					sin;
+
+		hull_ray(v, last, s, job->he[SYM(ho)].org, pout, &sout);
+		hull_ray(v, first, job->he[SYM(hin)].org, s, pin, &sin);
+		ring_push(r, pout[0], pout[1], TDC_NIL);
+		push_arc(r, v->box, pout, sout, pin, sin);
+		ring_push(r, pin[0], pin[1], job->he[SYM(hin)].org);
+	}
+	ring_close(r);
+	return true;
+}
+
+/*
+ * The bisector of line[i] and line[i + 1], cut to B: lo then hi, with
+ * line[i] on the left of lo -> hi.
+ */
+static void
+line_bisector(const tdc_voronoi *v, size_t i, double lo[2], int *slo,
+			  double hi[2], int *shi)
+{
+	const double *a = site_pt(v, v->line[i]),
+			   *b = site_pt(v, v->line[i + 1]);
+	double		m[2] = {a[0] * 0.5 + b[0] * 0.5, a[1] * 0.5 + b[1] * 0.5};
+	double		dx = -(b[1] - a[1]),
+				dy = b[0] - a[0];
+
+	box_exit(v->box, m, -dx, -dy, lo, slo);
+	box_exit(v->box, m, dx, dy, hi, shi);
+}
+
+/* Cell of site s of collinear input (a slab), uncut, into r (cell ∩ B). */
+static bool
+cell_of_line(const tdc_voronoi *v, uint32_t s, ring *r)
+{
+	size_t		i = v->line_pos[s];
+	double		a0[2],
+				a1[2],
+				b0[2],
+				b1[2];
+	int			sa0,
+				sa1,
+				sb0,
+				sb1;
+
+	r->n = 0;
+	if (!ring_reserve(r, 16))
+		return false;
+	if (i + 1 < v->nline && i > 0)
+	{
+		line_bisector(v, i, a0, &sa0, a1, &sa1);
+		line_bisector(v, i - 1, b1, &sb1, b0, &sb0);
+		/* right bisector a0 -> a1, arc, left bisector reversed b0 -> b1, arc */
+		ring_push(r, a0[0], a0[1], v->line[i + 1]);
+		ring_push(r, a1[0], a1[1], TDC_NIL);
+		push_arc(r, v->box, a1, sa1, b0, sb0);
+		ring_push(r, b0[0], b0[1], v->line[i - 1]);
+		ring_push(r, b1[0], b1[1], TDC_NIL);
+		push_arc(r, v->box, b1, sb1, a0, sa0);
+	}
+	else
+	{
+		if (i + 1 < v->nline)
+			line_bisector(v, i, a0, &sa0, a1, &sa1);
+		else
+			line_bisector(v, i - 1, a1, &sa1, a0, &sa0);
+		ring_push(r, a0[0], a0[1], v->line[i + 1 < v->nline ? i + 1 : i - 1]);
+		ring_push(r, a1[0], a1[1], TDC_NIL);
+		push_arc(r, v->box, a1, sa1, a0, sa0);
+	}
+	ring_close(r);
+	return true;
+}
+
+/* Build the cells of the sites [r * SITES_PER_TASK, ...) into one buffer. */
+static void
+cell_task(void *arg, size_t rg, int worker)
+{
+	tdc_voronoi *v = arg;
+	const tdc_job *job = v->job;
+	size_t		lo = rg * SITES_PER_TASK,
+				hi = lo + SITES_PER_TASK < v->nsites ? lo + SITES_PER_TASK : v->nsites;
+	ring		a = {.tagged = true},
+				b = {.tagged = true},
+				out = {0};
+	size_t	   *off = NULL;
+
+	if (vor_cancelled(v))
+		return;
+	off = malloc((hi - lo) * sizeof(size_t));
+	/* about 6 vertices per cell: growing from there rarely copies */
+	if (off == NULL || !ring_reserve(&out, 7 * (hi - lo)))
+		goto oom;
+	for (size_t s = lo; s < hi; s++)
+	{
+		bool		ok;
+
+		off[s - lo] = out.n;
+		v->cell_n[s] = 0;
+		if (job->site_of[s] != s)
+			continue;
+		if (v->ntri > 0)
+			ok = cell_of_mesh(v, (uint32_t) s, &a);
+		else if (v->nline > 1)
+			ok = cell_of_line(v, (uint32_t) s, &a);
+		else
+		{
+			ok = ring_reserve(&a, 4);
+			if (ok)
+			{
+				a.n = 0;
+				ring_push(&a, v->env[0], v->env[1], TDC_NIL);
+				ring_push(&a, v->env[2], v->env[1], TDC_NIL);
+				ring_push(&a, v->env[2], v->env[3], TDC_NIL);
+				ring_push(&a, v->env[0], v->env[3], TDC_NIL);
+				ring_close(&a);
+			}
+		}
+		if (!ok || !clip_to_env(v, (uint32_t) s, &a, &b) || !ring_reserve(&out, a.n))
+			goto oom;
+		memcpy(out.p + 2 * out.n, a.p, a.n * 2 * sizeof(double));
+		out.n += a.n;
+		v->cell_n[s] = (uint32_t) a.n;
+	}
+	for (size_t s = lo; s < hi; s++)
+		v->cell_xy[s] = v->cell_n[s] ? out.p + 2 * off[s - lo] : NULL;
+	v->range_buf[rg] = out.p;
+	free(a.p);
+	free(a.tag);
+	free(b.p);
+	free(b.tag);
+	free(off);
+	return;
+
+oom:
+	free(a.p);
+	free(a.tag);
+	free(b.p);
+	free(b.tag);
+	free(out.p);
+	free(off);
+	vor_fail(v, TDC_ENOMEM, "out of memory building the Voronoi cells");
+}
+
+static int
+cmp_site(const void *x, const void *y, void *arg)
+{
+	const tdc_voronoi *v = arg;
+	const double *p = site_pt(v, *(const uint32_t *) x),
+			   *q = site_pt(v, *(const uint32_t *) y);
+
+	return lex_less(p, q) ? -1 : lex_less(q, p) ? 1 : 0;
+}
+
+static void
+grow_box(double *box, const double *p)
+{
+	box[0] = fmin(box[0], p[0]);
+	box[1] = fmin(box[1], p[1]);
+	box[2] = fmax(box[2], p[0]);
+	box[3] = fmax(box[3], p[1]);
+}
+
+#define FAIL_OOM(msg) do { vor_fail(v, TDC_ENOMEM, msg); return TDC_ENOMEM; } while (0)
+
+/* Everything, on the driver thread (or the caller's for small jobs). */
+static int
+vor_run(tdc_voronoi *v)
+{
+	const tdc_job *job = v->job;
+	size_t		nr = 0;
+	double		box[4] = {v->env[0], v->env[1], v->env[2], v->env[3]},
+				lo[2],
+				hi[2],
+				w;
+	int			rc;
+
+	rc = tdc_pool_create(&v->pool, v->threads);
+	if (rc != 0)
+	{
+		vor_fail(v, rc, rc == TDC_ETHREAD ? "could not create worker threads" : "out of memory");
+		return rc;
+	}
+	v->nsites = job->nin;
+	v->nhe = job->nin * 6;
+	v->ntri = job->ntri;
+
+	/* B: around E, the sites and (below) every vertex, then widened */
+	if (job->nsites > 0)
+	{
+		tdc_site_extent(job, lo, hi);
+		grow_box(box, lo);
+		grow_box(box, hi);
+	}
+
+	if (job->nsites >= 2)
+	{
+		nr = nranges_for(v->nhe, ITEMS_PER_TASK);
+		v->site_he = tdc_big_alloc(job->nin * sizeof(uint32_t));
+		v->range_first = calloc(nr + 1, sizeof(size_t));
+		if (v->site_he == NULL || v->range_first == NULL)
+			FAIL_OOM("out of memory numbering the triangles");
+		for (size_t s = 0; s < job->nin; s++)
+			atomic_init(&v->site_he[s], TDC_NIL);
+		tdc_pool_for(v->pool, nr, count_task, v);
+		if (vor_cancelled(v))
+			return TDC_ECANCELED;
+	}
+	if (v->ntri > 0)
+	{
+		size_t		ntr = nranges_for(v->ntri, ITEMS_PER_TASK);
+
+		for (size_t r = 0; r < nr; r++)
+			v->range_first[r + 1] += v->range_first[r];
+		if (v->range_first[nr] != v->ntri)
+		{
+			vor_fail(v, TDC_EINVAL, "the mesh does not hold the triangles counted");
+			return TDC_EINVAL;
+		}
+		v->tri_id = tdc_big_alloc(v->nhe * sizeof(uint32_t));
+		v->tri_he = tdc_big_alloc(v->ntri * sizeof(uint32_t));
+		v->parent = tdc_big_alloc(v->ntri * sizeof(uint32_t));
+		v->cc = tdc_big_alloc(v->ntri * 2 * sizeof(double));
+		v->range_box = malloc(ntr * 4 * sizeof(double));
+		if (!v->tri_id || !v->tri_he || !v->parent || !v->cc || !v->range_box)
+			FAIL_OOM("out of memory for the Voronoi vertices");
+		memset(v->tri_id, 0xff, v->nhe * sizeof(uint32_t));
+		tdc_pool_for(v->pool, nr, number_task, v);
+		if (vor_cancelled(v))
+			return TDC_ECANCELED;
+		tdc_pool_for(v->pool, nr, cocircular_task, v);
+		if (vor_cancelled(v))
+			return TDC_ECANCELED;
+		tdc_pool_for(v->pool, ntr, vertex_task, v);
+		if (vor_cancelled(v))
+			return TDC_ECANCELED;
+		for (size_t r = 0; r < ntr; r++)
+		{
+			if (v->range_box[4 * r] <= v->range_box[4 * r + 2])
+			{
+				grow_box(box, v->range_box + 4 * r);
+				grow_box(box, v->range_box + 4 * r + 2);
+			}
+		}
+		tdc_big_free(v->tri_he);
+		v->tri_he = NULL;
+	}
+	else if (job->nsites >= 2)
+	{
+		size_t		k = 0;
+
+		v->line = malloc(job->nsites * sizeof(uint32_t));
+		v->line_pos = malloc(job->nin * sizeof(uint32_t));
+		if (v->line == NULL || v->line_pos == NULL)
+			FAIL_OOM("out of memory sorting collinear sites");
+		for (size_t s = 0; s < job->nin; s++)
+			if (job->site_of[s] == s)
+				v->line[k++] = (uint32_t) s;
+		v->nline = k;
+		qsort_r(v->line, k, sizeof(uint32_t), cmp_site, v);
+		for (size_t i = 0; i < k; i++)
+			v->line_pos[v->line[i]] = (uint32_t) i;
+	}
+	w = fmax(box[2] - box[0], box[3] - box[1]);
+	if (!(w > 0))
+		w = fmax(fabs(box[2]), fabs(box[3])) + 1;
+	v->box[0] = box[0] - w;
+	v->box[1] = box[1] - w;
+	v->box[2] = box[2] + w;
+	v->box[3] = box[3] + w;
+
+	nr = nranges_for(v->nsites, SITES_PER_TASK);
+	v->nranges = nr;
+	v->cell_xy = tdc_big_alloc(v->nsites * sizeof(double *) + 1);
+	v->cell_n = tdc_big_alloc(v->nsites * sizeof(uint32_t) + 1);
+	v->range_buf = calloc(nr + 1, sizeof(double *));
+	if (v->cell_xy == NULL || v->cell_n == NULL || v->range_buf == NULL)
+		FAIL_OOM("out of memory for the Voronoi cells");
+	tdc_pool_for(v->pool, nr, cell_task, v);
+	if (vor_cancelled(v))
+		return TDC_ECANCELED;
+	for (size_t s = 0; s < v->nsites; s++)
+		v->total_vertices += v->cell_n[s];
+
+	/* what only the build needed */
+	tdc_big_free(v->tri_id);
+	v->tri_id = NULL;
+	return TDC_OK;
+}
+
+/* ----------------------------------------------------------------
+ *		lifecycle (the same as a job's)
+ * ----------------------------------------------------------------
+ */
+static void
+vor_finish(tdc_voronoi *v, int rc)
+{
+	tdc_pool_destroy(v->pool);
+	v->pool = NULL;
+	pthread_mutex_lock(&v->lock);
+	if (atomic_load(&v->failed))
+	{
+		v->status = atomic_load(&v->failed);
+		snprintf(v->err, sizeof(v->err), "%s", v->task_err);
+	}
+	else if (rc == TDC_ECANCELED || (rc == TDC_OK && atomic_load(&v->cancel)))
+	{
+		v->status = TDC_ECANCELED;
+		snprintf(v->err, sizeof(v->err), "Voronoi diagram cancelled");
+	}
+	else
+		v->status = rc;
+	v->finished = true;
+	pthread_cond_broadcast(&v->done);
+	pthread_mutex_unlock(&v->lock);
+}
+
+static void *
+vor_main(void *arg)
+{
+	tdc_voronoi *v = arg;
+
+	vor_finish(v, vor_run(v));
+	return NULL;
+}
+
+size_t
+tdc_voronoi_memory(size_t n, int threads)
+{
+	/*
+	 * Per input point: 6 half-edges' triangle numbers (24), at most 2
+	 * triangles' numbers, parents and circumcenters (8 + 8 + 32), the
+	 * smallest half-edge, ring pointer and count of its site (4 + 8 + 4);
+	 * ring storage: every triangle is in at most 3 rings (6 vertices per
+	 * point), clipping adds at most 4 per cell, a hull cell 2 exit points
+	 * and 4 corners of B: 16 vertices of 16 bytes per point, and a range's
+	 * buffer grows by half its size at a time (x 1.5).  Plus the collinear
+	 * sort (8) and per thread scratch rings.
+	 */
+	return n * (24 + 48 + 16 + 8 + 8 + 16 * 16 * 3 / 2) + (size_t) (threads + 1) * 65536 + 4096;
+}
+
+int
+tdc_voronoi_start(const tdc_job *job, const double env[4], int threads,
+				  tdc_voronoi **out, char *err, size_t errlen)
+{
+	tdc_voronoi *v;
+	pthread_condattr_t ca;
+	sigset_t	all,
+				old;
+	int			rc;
+
+	*out = NULL;
+	if (err && errlen)
+		err[0] = '\0';
+#define FAIL(code, ...) do { if (err && errlen) snprintf(err, errlen, __VA_ARGS__); return (code); } while (0)
+	if (tdc_job_wait((tdc_job *) job, 0) != TDC_OK)
+		FAIL(TDC_EINVAL, "the triangulation has not finished successfully");
+	if (!(env[0] <= env[2] && env[1] <= env[3]) || !isfinite(env[0]) ||
+		!isfinite(env[1]) || !isfinite(env[2]) || !isfinite(env[3]))
+		FAIL(TDC_EINVAL, "the clip envelope must be a finite rectangle");
+	if (job->nsites > 0)
+	{
+		double		lo[2],
+					hi[2];
+
+		tdc_site_extent(job, lo, hi);
+		if (lo[0] < env[0] || lo[1] < env[1] || hi[0] > env[2] || hi[1] > env[3])
+			FAIL(TDC_EINVAL, "the clip envelope must contain every site");
+	}
+	if (threads < 0 || threads > 1024)
+		FAIL(TDC_EINVAL, "threads must be between 0 and 1024, not %d", threads);
+	v = calloc(1, sizeof(tdc_voronoi));
+	if (v == NULL)
+		FAIL(TDC_ENOMEM, "out of memory");
+	v->job = job;
+	memcpy(v->env, env, sizeof(v->env));
+	v->threads = threads > 0 ? threads : tdc_threads_used(job);
+	if (v->threads < 1)
+		v->threads = 1;
+	atomic_init(&v->cancel, 0);
+	atomic_init(&v->failed, 0);
+	pthread_mutex_init(&v->lock, NULL);
+	pthread_condattr_init(&ca);
+	pthread_condattr_setclock(&ca, CLOCK_MONOTONIC);
+	pthread_cond_init(&v->done, &ca);
+	pthread_condattr_destroy(&ca);
+
+	if (job->nin <= TDC_INLINE_MAX)
+	{
+		v->threads = 1;
+		vor_finish(v, vor_run(v));
+		*out = v;
+		return TDC_OK;
+	}
+	sigfillset(&all);
+	pthread_sigmask(SIG_SETMASK, &all, &old);
+	rc = pthread_create(&v->driver, NULL, vor_main, v);
+	pthread_sigmask(SIG_SETMASK, &old, NULL);
+	if (rc != 0)
+	{
+		pthread_mutex_destroy(&v->lock);
+		pthread_cond_destroy(&v->done);
+		free(v);
+		FAIL(TDC_ETHREAD, "could not create a thread: %s", strerror(rc));
+	}
+	v->driver_started = true;
+	*out = v;
+	return TDC_OK;
+#undef FAIL
+}
+
+int
+tdc_voronoi_wait(tdc_voronoi *v, int timeout_ms)
+{
+	int			status;
+
+	pthread_mutex_lock(&v->lock);
+	if (!v->finished && timeout_ms < 0)
+	{
+		while (!v->finished)
+			pthread_cond_wait(&v->done, &v->lock);
+	}
+	else if (!v->finished)
+	{
+		struct timespec ts;
+
+		clock_gettime(CLOCK_MONOTONIC, &ts);
+		ts.tv_sec += timeout_ms / 1000;
+		ts.tv_nsec += (long) (timeout_ms % 1000) * 1000000L;
+		if (ts.tv_nsec >= 1000000000L)
+		{
+			ts.tv_sec++;
+			ts.tv_nsec -= 1000000000L;
+		}
+		while (!v->finished)
+			if (pthread_cond_timedwait(&v->done, &v->lock, &ts) == ETIMEDOUT)
+				break;
+	}
+	status = v->finished ? v->status : TDC_RUNNING;
+	pthread_mutex_unlock(&v->lock);
+	return status;
+}
+
+void
+tdc_voronoi_cancel(tdc_voronoi *v)
+{
+	if (v)
+		atomic_store(&v->cancel, 1);
+}
+
+const char *
+tdc_voronoi_error(const tdc_voronoi *v)
+{
+	return v->err;
+}
+
+void
+tdc_voronoi_free(tdc_voronoi *v)
+{
+	if (v == NULL)
+		return;
+	if (v->driver_started)
+	{
+		tdc_voronoi_cancel(v);
+		pthread_join(v->driver, NULL);
+	}
+	pthread_mutex_destroy(&v->lock);
+	pthread_cond_destroy(&v->done);
+	tdc_big_free(v->tri_id);
+	tdc_big_free(v->tri_he);
+	tdc_big_free(v->parent);
+	tdc_big_free(v->cc);
+	tdc_big_free(v->site_he);
+	free(v->range_first);
+	free(v->range_box);
+	free(v->line);
+	free(v->line_pos);
+	if (v->range_buf)
+		for (size_t r = 0; r < v->nranges; r++)
+			free(v->range_buf[r]);
+	free(v->range_buf);
+	tdc_big_free(v->cell_xy);
+	tdc_big_free(v->cell_n);
+	free(v);
+}
+
+int
+tdc_voronoi_build(const tdc_job *job, const double env[4], int threads,
+				  tdc_voronoi **out, char *err, size_t errlen)
+{
+	int			rc = tdc_voronoi_start(job, env, threads, out, err, errlen);
+
+	if (rc != TDC_OK)
+		return rc;
+	rc = tdc_voronoi_wait(*out, -1);
+	if (rc != TDC_OK && err && errlen)
+		snprintf(err, errlen, "%s", (*out)->err);
+	return rc;
+}
+
+size_t
+tdc_voronoi_cell(const tdc_voronoi *v, uint32_t site, const double **xy)
+{
+	if (site >= v->nsites || v->cell_n[site] == 0)
+	{
+		*xy = NULL;
+		return 0;
+	}
+	*xy = v->cell_xy[site];
+	return v->cell_n[site];
+}
+
+size_t
+tdc_voronoi_num_vertices(const tdc_voronoi *v)
+{
+	return v->total_vertices;
+}
+
+void
+tdc_voronoi_env(const tdc_voronoi *v, double env[4])
+{
+	memcpy(env, v->env, sizeof(v->env));
+}
+
+void
+tdc_voronoi_default_env(const tdc_job *job, double env[4])
+{
+	double		w;
+
+	if (job->nsites == 0)
+	{
+		env[0] = env[1] = env[2] = env[3] = 0;
+		return;
+	}
+
+	/*
+	 * The box of every input point, not only of the sites a tolerance kept:
+	 * GEOS merges only exact duplicates before taking the envelope.
+	 */
+	w = fmax(job->bmax[0] - job->bmin[0], job->bmax[1] - job->bmin[1]);
+	env[0] = job->bmin[0] - w;
+	env[1] = job->bmin[1] - w;
+	env[2] = job->bmax[0] + w;
+	env[3] = job->bmax[1] + w;
+}

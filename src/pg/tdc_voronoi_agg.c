@@ -1,0 +1,240 @@
+/*
+ * tdc_voronoi_agg.c
+ *		The ST_TDCVoronoi aggregates: the Voronoi cells of the vertices of
+ *		all rows, the same as ST_TDCVoronoiPolygons(ST_Collect(geom),
+ *		tolerance, extend_to) without the collection.
+ *
+ * The state is the Delaunay aggregate's (the collected vertices and the
+ * tolerance, tdc_agg_state.c) plus extend_to's bounding box, which must be
+ * the same in every row, as the tolerance must.  Rows whose geometry or
+ * tolerance is NULL are skipped; a NULL extend_to means none.  Under a
+ * parallel plan a worker's state travels as
+ *
+ *		varlena header, uint32 magic, uint32 has_extend_to, 4 doubles
+ *		(xmin, ymin, xmax, ymax), uint32 padding, then the Delaunay state's
+ *		own serialized bytea (with its 4-byte header),
+ *
+ * so the inner state starts 8-byte aligned and is read in place by the
+ * Delaunay aggregate's checked deserializer.
+ */
+#include "postgres.h"
+
+#include <math.h>
+
+#include "fmgr.h"
+#include "utils/memutils.h"
+
+#include "tdc_voronoi.h"
+
+#define VOR_AGG_NAME		"ST_TDCVoronoi"
+#define VOR_STATE_MAGIC		0x56524e31	/* "VRN1" */
+#define VOR_STATE_HEAD		48		/* bytes before the inner state, header included */
+
+typedef struct VorAggState
+{
+	TdcAggState *base;
+	bool		ext_set;		/* a row has been accumulated: has_ext is known */
+	bool		has_ext;
+	double		ext[4];
+} VorAggState;
+
+static MemoryContext
+agg_context(FunctionCallInfo fcinfo, const char *fn)
+{
+	MemoryContext aggcxt;
+
+	if (!AggCheckCallContext(fcinfo, &aggcxt))
+		elog(ERROR, "%s called in non-aggregate context", fn);
+	return aggcxt;
+}
+
+static VorAggState *
+vor_state_new(MemoryContext cxt)
+{
+	VorAggState *st = MemoryContextAllocZero(cxt, sizeof(VorAggState));
+
+	st->base = tdc_agg_state_new(cxt);
+	return st;
+}
+
+/* Every row must give the same tolerance and extend_to. */
+static void
+vor_state_params(VorAggState *st, double tolerance, bool has_ext, const double *ext)
+{
+	if (st->base->params_set && st->base->tolerance != tolerance)
+		ereport(ERROR,
+				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
+				 errmsg("%s: tolerance must be the same for all rows (%g versus %g)",
+						VOR_AGG_NAME, st->base->tolerance, tolerance)));
+	tdc_agg_state_set_params(st->base, tolerance, TDC_OUT_POLYGONS);
+	if (!st->ext_set)
+	{
+		st->ext_set = true;
+		st->has_ext = has_ext;
+		if (has_ext)
+			memcpy(st->ext, ext, sizeof(st->ext));
+		return;
+	}
+	if (st->has_ext != has_ext ||
+		(has_ext && (st->ext[0] != ext[0] || st->ext[1] != ext[1] ||
+					 st->ext[2] != ext[2] || st->ext[3] != ext[3])))
+		ereport(ERROR,
+				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
+				 errmsg("%s: extend_to must have the same bounding box in all rows",
+						VOR_AGG_NAME)));
+}
+
+PG_FUNCTION_INFO_V1(st_tdcvoronoi_transfn);
+
+Datum
+st_tdcvoronoi_transfn(PG_FUNCTION_ARGS)
+{
+	MemoryContext aggcxt = agg_context(fcinfo, "st_tdcvoronoi_transfn");
+	VorAggState *st = PG_ARGISNULL(0) ? NULL : (VorAggState *) PG_GETARG_POINTER(0);
+	double		tolerance = 0.0,
+				ext[4];
+	bool		has_ext = false;
+	struct varlena *geom;
+
+	if (PG_ARGISNULL(1) || (PG_NARGS() > 2 && PG_ARGISNULL(2)))
+	{
+		if (st == NULL)
+			PG_RETURN_NULL();
+		PG_RETURN_POINTER(st);
+	}
+	if (PG_NARGS() > 2)
+	{
+		tolerance = PG_GETARG_FLOAT8(2);
+		tdc_voronoi_check_tolerance(false, tolerance, VOR_AGG_NAME);
+		if (!PG_ARGISNULL(3))
+		{
+			tdc_voronoi_extend_to_box((struct varlena *) PG_DETOAST_DATUM(PG_GETARG_DATUM(3)),
+									  ext, VOR_AGG_NAME);
+			has_ext = true;
+		}
+	}
+	if (st == NULL)
+		st = vor_state_new(aggcxt);
+	vor_state_params(st, tolerance, has_ext, ext);
+
+	geom = PG_DETOAST_DATUM_PACKED(PG_GETARG_DATUM(1));
+	tdc_gser_append(&st->base->pts, geom, VOR_AGG_NAME);
+	PG_FREE_IF_COPY(geom, 1);
+	PG_RETURN_POINTER(st);
+}
+
+PG_FUNCTION_INFO_V1(st_tdcvoronoi_combinefn);
+
+Datum
+st_tdcvoronoi_combinefn(PG_FUNCTION_ARGS)
+{
+	MemoryContext aggcxt = agg_context(fcinfo, "st_tdcvoronoi_combinefn");
+	VorAggState *st1 = PG_ARGISNULL(0) ? NULL : (VorAggState *) PG_GETARG_POINTER(0);
+	VorAggState *st2 = PG_ARGISNULL(1) ? NULL : (VorAggState *) PG_GETARG_POINTER(1);
+
+	if (st2 == NULL || !st2->ext_set)
+	{
+		if (st1 == NULL)
+			PG_RETURN_NULL();
+		PG_RETURN_POINTER(st1);
+	}
+	if (st1 == NULL)
+		st1 = vor_state_new(aggcxt);
+	vor_state_params(st1, st2->base->tolerance, st2->has_ext, st2->ext);
+	tdc_agg_state_merge(st1->base, st2->base);
+	PG_RETURN_POINTER(st1);
+}
+
+PG_FUNCTION_INFO_V1(st_tdcvoronoi_serialfn);
+
+Datum
+st_tdcvoronoi_serialfn(PG_FUNCTION_ARGS)
+{
+	VorAggState *st;
+	bytea	   *inner,
+			   *out;
+	char	   *p;
+	uint32		u;
+	Size		size;
+
+	(void) agg_context(fcinfo, "st_tdcvoronoi_serialfn");
+	st = (VorAggState *) PG_GETARG_POINTER(0);
+	inner = tdc_agg_state_serialize(st->base);
+	size = VOR_STATE_HEAD + VARSIZE(inner);
+	if (size > MaxAllocSize)
+		ereport(ERROR,
+				(errcode(ERRCODE_PROGRAM_LIMIT_EXCEEDED),
+				 errmsg("%s: partial aggregate state of %llu vertices is too large to pass between parallel workers",
+						VOR_AGG_NAME, (unsigned long long) st->base->pts.n)));
+	out = palloc0(size);
+	SET_VARSIZE(out, size);
+	p = VARDATA(out);
+	u = VOR_STATE_MAGIC;
+	memcpy(p, &u, 4);
+	u = st->has_ext ? 1 : 0;
+	memcpy(p + 4, &u, 4);
+	memcpy(p + 8, st->ext, sizeof(st->ext));
+	memcpy((char *) out + VOR_STATE_HEAD, inner, VARSIZE(inner));
+	pfree(inner);
+	PG_RETURN_BYTEA_P(out);
+}
+
+static void
+vor_corrupt(const char *what)
+{
+	ereport(ERROR,
+			(errcode(ERRCODE_DATA_CORRUPTED),
+			 errmsg("%s: corrupt serialized aggregate state: %s", VOR_AGG_NAME, what)));
+}
+
+PG_FUNCTION_INFO_V1(st_tdcvoronoi_deserialfn);
+
+Datum
+st_tdcvoronoi_deserialfn(PG_FUNCTION_ARGS)
+{
+	bytea	   *in;
+	VorAggState *st;
+	const char *p;
+	uint32		u;
+	Size		size;
+
+	(void) agg_context(fcinfo, "st_tdcvoronoi_deserialfn");
+	in = PG_GETARG_BYTEA_P(0);
+	size = VARSIZE(in);
+	if (size < VOR_STATE_HEAD + VARHDRSZ)
+		vor_corrupt("too short");
+	p = VARDATA(in);
+	memcpy(&u, p, 4);
+	if (u != VOR_STATE_MAGIC)
+		vor_corrupt("bad magic number");
+	if (VARSIZE((const char *) in + VOR_STATE_HEAD) != size - VOR_STATE_HEAD)
+		vor_corrupt("inner state size does not match");
+	st = palloc0(sizeof(VorAggState));
+	memcpy(&u, p + 4, 4);
+	if (u > 1)
+		vor_corrupt("bad extend_to flag");
+	st->has_ext = u == 1;
+	memcpy(st->ext, p + 8, sizeof(st->ext));
+	if (st->has_ext && !(st->ext[0] <= st->ext[2] && st->ext[1] <= st->ext[3]))
+		vor_corrupt("bad extend_to box");
+	st->ext_set = true;
+	st->base = tdc_agg_state_deserialize((const bytea *) ((const char *) in + VOR_STATE_HEAD),
+										 CurrentMemoryContext);
+	PG_RETURN_POINTER(st);
+}
+
+PG_FUNCTION_INFO_V1(st_tdcvoronoi_finalfn);
+
+Datum
+st_tdcvoronoi_finalfn(PG_FUNCTION_ARGS)
+{
+	VorAggState *st;
+
+	(void) agg_context(fcinfo, "st_tdcvoronoi_finalfn");
+	if (PG_ARGISNULL(0))
+		PG_RETURN_NULL();
+	st = (VorAggState *) PG_GETARG_POINTER(0);
+	PG_RETURN_POINTER(tdc_voronoi_to_value(&st->base->pts, st->base->tolerance,
+										   st->has_ext ? st->ext : NULL, false,
+										   VOR_AGG_NAME));
+}
