@@ -390,7 +390,7 @@ tdc_voronoi_write(const tdc_job *job, const tdc_voronoi *v, bool lines,
 		size = VARHDRSZ + G_HEADER + 8 + w.size;
 	tdc_gser_check_result_size(size, fname);
 	if (limit > 0 && have_bytes + size > limit)
-		tdc_report_memory_limit(fname, "writing the Voronoi diagram", have_bytes + size);
+		tdc_report_memory_limit(fname, "writing the Voronoi diagram", have_bytes + size, 0);
 	out = write_header((Size) size, srid, &p);
 	if (!(lines && w.count == 1))
 	{
