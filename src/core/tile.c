@@ -1,0 +1,637 @@
+/*
+ * tile.c
+ *		Exact tiled triangulation: the triangles of one tile of the global
+ *		Delaunay triangulation, from the points of a box around the tile.
+ *
+ * Why.  One triangulation holds all its points and its mesh, about 100 bytes
+ * per point.  To triangulate more points than fit, the plane is cut into
+ * tiles; each tile is triangulated with a halo of neighbouring points and
+ * keeps only the triangles it can prove are global ones.  The result must be
+ * the one-shot triangle set, triangle for triangle, cocircular sites
+ * included.  This is the finalization rule of streaming Delaunay (Isenburg,
+ * Liu, Shewchuk, Snoeyink, "Streaming computation of Delaunay
+ * triangulations", SIGGRAPH 2006: a triangle is final once its circumcircle
+ * lies inside the region whose points are all known) applied to the
+ * tile-and-star decomposition of distributed Delaunay (Caraffa, Memari,
+ * Yirci, Brédif, "Tile & merge: distributed Delaunay triangulations for
+ * cloud computing", 2019, and its 2021 follow-up): a tile is done when the
+ * stars of all its own points are final.
+ *
+ * Notation.  P is the global point set, its sites are its distinct
+ * coordinates.  T(S) is the triangulation this engine builds for a set S:
+ * the Delaunay triangulation of S under the lifted-paraboloid perturbation
+ * of merge.c (a site's lift is raised by an infinitesimal that is larger for
+ * lexicographically smaller sites).  The perturbed lift is in general
+ * position, so T(S) is unique, and a triangle abc of S is in T(S) iff every
+ * other site of S is strictly outside its circle or, exactly on it, loses
+ * the perturbed in-circle test.  That test (incircle_tie) looks only at the
+ * coordinates of the four sites involved, never at S: it is the same in
+ * every subset of P.
+ *
+ * The caller gives, for one tile:
+ *	- K, a closed box, and Q = every point of P inside K (halo included),
+ *	  each with the label of the tile that owns it, and this tile's label;
+ *	- C, a convex polygon with P inside it (the convex hull of P, or just the
+ *	  four corners of P's bounding box; the hull finishes border tiles sooner).
+ *
+ * Ownership.  A site belongs to the smallest label among its copies, so an
+ * exact duplicate split across tiles still has one owner; every copy has the
+ * site's coordinates, so if one copy is in K all are, and the tile sees them
+ * all.  A global triangle is emitted by the owner of its lexicographically
+ * smallest vertex only, so no two tiles emit it, and (below) that owner does
+ * emit it: every triangle exactly once, for any assignment of points to
+ * tiles.
+ *
+ * Known region.  No point of P lies outside C, and every point of P inside K
+ * is in Q.  So a region R is "known" (R n P = R n Q) when R n C lies in K.
+ * We test it conservatively with the bounding box B of C: R is known when
+ * its bounding box lies strictly inside K', the box K with each side pushed
+ * to infinity where K already reaches B on that side.
+ *
+ * Lemma 1 (final triangle).  If abc is in T(Q) and its closed circumdisk D
+ * is known, abc is in T(P).  Proof: a site of P \ Q is outside K, hence
+ * (known region) outside D, hence strictly outside the circle: it cannot
+ * invalidate abc.  Sites of Q on or inside the circle are judged the same way
+ * in T(P) as in T(Q), because the tie-break depends on the four sites only.
+ *
+ * Lemma 2 (final hull edge).  If ab is an edge of the outer face of T(Q),
+ * with the open half-plane H to its outer side, and H n C lies in K, then ab
+ * is a convex hull edge of P (and an edge of T(P)): a point of P in H would
+ * be in C, hence in K, hence in Q, but no point of Q is in H.
+ *
+ * Star.  The star of an own site v is final when every triangle of T(Q) at v
+ * passes Lemma 1 and every outer edge of T(Q) at v passes Lemma 2.  Then the
+ * star of v in T(P) is exactly its star in T(Q): the triangles around v are
+ * global triangles covering a neighbourhood of v (v inside the hull of Q),
+ * or the wedge between two global hull edges (v on the hull of P), and the
+ * global triangles at v tile exactly that neighbourhood or wedge, so there
+ * is no room for another.  A collinear Q has only outer edges: they pass
+ * Lemma 2 only if P is collinear too (no triangle anywhere).  A site without
+ * edges (Q has one site) is final only if K covers B, i.e. Q = P.
+ * When every own star is final, the tile emits the triangles of T(Q) whose
+ * smallest vertex it owns: each is global (Lemma 1), and every global
+ * triangle at an own site is among them.  Otherwise the tile reports a
+ * larger box: K united with the bounding boxes of the failing disks and of
+ * the vertices of C beyond the failing hull edges, clipped to B.  Those
+ * disks are then known and those vertices in K; the caller reruns.  The box
+ * grows at every round (if the requests add nothing, the answer is K united
+ * with B), and once K covers B, Q = P and every star is final: the loop
+ * ends.
+ *
+ * Rounding.  Lemma 2 is decided with exact orientations of input
+ * coordinates: C's vertices against the edge, or the corners of the strips
+ * of B outside K (their coordinates are K's and B's, themselves inputs).
+ * Lemma 1 needs the circumdisk's bounding box, computed in double with a
+ * forward error bound (disk_box) doubled for slack; when the orientation
+ * determinant is too small for the bound to mean anything, the disk is
+ * "unknown" and the tile asks for B.  A triangle with a global hull edge ab
+ * whose opposite angle is obtuse (decided with an error bound too) has
+ * D n C inside the segment of D cut off by ab on C's side, which lies in the
+ * disk with diameter ab (Thales): that small disk is tested instead, so the
+ * slivers along the global hull, whose circles are huge, do not force border
+ * tiles to read half the data.
+ *
+ * The halo is a thin ring in practice: for uniform points, circumdisks are a
+ * few point spacings wide, so a margin of some ten spacings around a tile
+ * almost always suffices on the first round.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "job.h"
+
+#define EPS		0x1p-53
+
+/* Exact "p on the closed left of a -> b". */
+static inline bool
+left_or_on(const double *a, const double *b, const double *p)
+{
+	return tdc_orient2d(a, b, p) >= 0;
+}
+
+/*
+ * Conservative bounding box of the closed circumdisk of counter-clockwise
+ * a, b, c: the true disk lies inside box.  Returns false when the computed
+ * orientation is too uncertain to bound the centre.
+ *
+ * Error bound: with t = b - a and s = c - a rounded (relative error eps each),
+ * d = tx sy - ty sx is off by at most 4 eps P (P = |tx sy| + |ty sx|); we
+ * take eta = 8 eps P / d as its relative error and require eta <= 1/4.  The
+ * numerators nx = sy |t|^2 - ty |s|^2 (and ny) are off by at most 9 eps N
+ * (N the same sum of absolute values); taken as 12 eps N.  The centre offset
+ * u = n / 2d is then off by at most (12 eps N / 2d + eta |u|) / (1 - eta)
+ * + eps |u|, taken as twice the bracket plus 4 eps |u|; the radius by the
+ * sum of both offsets' errors plus 4 eps r; translating back and the final
+ * additions by 4 eps of the magnitudes involved.  The result is doubled.
+ */
+static bool
+disk_box(const double *a, const double *b, const double *c, double box[4])
+{
+	double		tx = b[0] - a[0],
+				ty = b[1] - a[1],
+				sx = c[0] - a[0],
+				sy = c[1] - a[1];
+	double		p1 = tx * sy,
+				p2 = ty * sx;
+	double		d = p1 - p2,
+				eta;
+	double		t2,
+				s2,
+				nx,
+				ny,
+				Nx,
+				Ny,
+				ux,
+				uy,
+				ex,
+				ey,
+				r,
+				er,
+				cx,
+				cy,
+				mx,
+				my;
+
+	if (!(d > 0))
+		return false;
+	eta = 8 * EPS * (fabs(p1) + fabs(p2)) / d;
+	if (!(eta <= 0.25))
+		return false;
+	t2 = tx * tx + ty * ty;
+	s2 = sx * sx + sy * sy;
+	nx = sy * t2 - ty * s2;
+	ny = tx * s2 - sx * t2;
+	Nx = fabs(sy) * t2 + fabs(ty) * s2;
+	Ny = fabs(tx) * s2 + fabs(sx) * t2;
+	ux = nx / (2 * d);
+	uy = ny / (2 * d);
+	ex = 2 * (12 * EPS * Nx / (2 * d) + eta * fabs(ux)) + 4 * EPS * fabs(ux);
+	ey = 2 * (12 * EPS * Ny / (2 * d) + eta * fabs(uy)) + 4 * EPS * fabs(uy);
+	r = sqrt(ux * ux + uy * uy);
+	er = ex + ey + 4 * EPS * r;
+	cx = a[0] + ux;
+	cy = a[1] + uy;
+	mx = 2 * (ex + er + 4 * EPS * (fabs(a[0]) + fabs(ux) + r)) + 0x1p-1000;
+	my = 2 * (ey + er + 4 * EPS * (fabs(a[1]) + fabs(uy) + r)) + 0x1p-1000;
+	box[0] = cx - r - mx;
+	box[1] = cy - r - my;
+	box[2] = cx + r + mx;
+	box[3] = cy + r + my;
+	return isfinite(box[0]) && isfinite(box[1]) && isfinite(box[2]) && isfinite(box[3]);
+}
+
+/* Conservative bounding box of the closed disk with diameter ab. */
+static void
+diameter_box(const double *a, const double *b, double box[4])
+{
+	double		mx = 0.5 * (a[0] + b[0]),
+				my = 0.5 * (a[1] + b[1]),
+				dx = b[0] - a[0],
+				dy = b[1] - a[1],
+				r = 0.5 * sqrt(dx * dx + dy * dy),
+				m = 8 * EPS * (fabs(a[0]) + fabs(b[0]) + fabs(a[1]) + fabs(b[1]) + r) + 0x1p-1000;
+
+	box[0] = mx - r - m;
+	box[1] = my - r - m;
+	box[2] = mx + r + m;
+	box[3] = my + r + m;
+}
+
+/* Is the angle at c of triangle abc certainly obtuse ((a - c).(b - c) < 0)? */
+static bool
+obtuse_at(const double *a, const double *b, const double *c)
+{
+	double		t1 = (a[0] - c[0]) * (b[0] - c[0]),
+				t2 = (a[1] - c[1]) * (b[1] - c[1]);
+
+	return t1 + t2 < -4 * EPS * (fabs(t1) + fabs(t2)) - 0x1p-1000;
+}
+
+typedef struct tile_ctx
+{
+	const tdc_tile_spec *spec;
+	double		keff[4];		/* K with sides at infinity where K reaches B */
+	double		B[4];			/* bounding box of C */
+	double		need[4];		/* K united with the requests so far */
+	bool		want_all;		/* a request we could not bound: ask for B */
+} tile_ctx;
+
+static void
+box_union(double *u, const double *b)
+{
+	u[0] = fmin(u[0], b[0]);
+	u[1] = fmin(u[1], b[1]);
+	u[2] = fmax(u[2], b[2]);
+	u[3] = fmax(u[3], b[3]);
+}
+
+static bool
+box_inside_keff(const tile_ctx *cx, const double *box)
+{
+	return box[0] > cx->keff[0] && box[1] > cx->keff[1] &&
+		box[2] < cx->keff[2] && box[3] < cx->keff[3];
+}
+
+/* Add a request, clipped to B (there are no points beyond it). */
+static void
+request(tile_ctx *cx, const double *box)
+{
+	double		c[4] = {fmax(box[0], cx->B[0]), fmax(box[1], cx->B[1]),
+	fmin(box[2], cx->B[2]), fmin(box[3], cx->B[3])};
+
+	if (c[0] > c[2] || c[1] > c[3])
+		return;
+	box_union(cx->need, c);
+}
+
+/*
+ * Lemma 2 for the hull edge a -> b of T(Q) (interior on its left): is the
+ * open half-plane right of it, intersected with C, inside K?  Either every
+ * vertex of C is on the closed left (the edge is on the global hull), or
+ * every strip of B outside K has its four corners on the closed left.
+ * When it fails, requests the vertices of C strictly right of the edge.
+ */
+static bool
+hull_edge_final(tile_ctx *cx, const double *a, const double *b)
+{
+	const tdc_tile_spec *sp = cx->spec;
+	const double *K = sp->known;
+	const double *B = cx->B;
+	bool		all_left = true;
+	double		strips[4][4];
+	int			ns = 0;
+	double		rq[4] = {INFINITY, INFINITY, -INFINITY, -INFINITY};
+
+	for (size_t i = 0; i < sp->nhull; i++)
+		if (!left_or_on(a, b, sp->hull + 2 * i))
+		{
+			all_left = false;
+			box_union(rq, (double[4]) {sp->hull[2 * i], sp->hull[2 * i + 1],
+									   sp->hull[2 * i], sp->hull[2 * i + 1]});
+		}
+	if (all_left)
+		return true;
+
+	/* the closures of B \ K: left, right, bottom, top strips */
+	if (K[0] > B[0])
+		memcpy(strips[ns++], (double[4]) {B[0], B[1], K[0], B[3]}, sizeof(double[4]));
+	if (K[2] < B[2])
+		memcpy(strips[ns++], (double[4]) {K[2], B[1], B[2], B[3]}, sizeof(double[4]));
+	if (K[1] > B[1])
+		memcpy(strips[ns++], (double[4]) {B[0], B[1], B[2], K[1]}, sizeof(double[4]));
+	if (K[3] < B[3])
+		memcpy(strips[ns++], (double[4]) {B[0], K[3], B[2], B[3]}, sizeof(double[4]));
+	for (int s = 0; s < ns; s++)
+		for (int k = 0; k < 4; k++)
+		{
+			double		p[2] = {strips[s][(k & 1) ? 2 : 0], strips[s][(k & 2) ? 3 : 1]};
+
+			if (!left_or_on(a, b, p))
+			{
+				request(cx, rq);
+				return false;
+			}
+		}
+	return true;
+}
+
+/*
+ * Lemma 1 for triangle v[0..2] (counter-clockwise) of T(Q); glob[k] says
+ * whether edge v[k] -> v[k+1] is a hull edge of T(Q) certified global.
+ */
+static bool
+triangle_final(tile_ctx *cx, const double *p[3], const bool glob[3])
+{
+	double		box[4];
+
+	if (cx->spec->test_weaken == TDC_TILE_WEAKEN_DISKS)
+		return true;
+	for (int k = 0; k < 3; k++)
+		if (glob[k] && obtuse_at(p[k], p[(k + 1) % 3], p[(k + 2) % 3]))
+		{
+			diameter_box(p[k], p[(k + 1) % 3], box);
+			goto test;
+		}
+	if (!disk_box(p[0], p[1], p[2], box))
+	{
+		cx->want_all = true;
+		return false;
+	}
+test:
+	if (box_inside_keff(cx, box))
+		return true;
+	request(cx, box);
+	return false;
+}
+
+static int
+cmp_i64(int64_t a, int64_t b)
+{
+	return a < b ? -1 : a > b;
+}
+
+int
+tdc_tile_finish(const tdc_job *job, const tdc_tile_spec *spec, tdc_tile_result *res,
+				char *err, size_t errlen)
+{
+	tile_ctx	cx;
+	const double *K = spec->known;
+	size_t		nin = job->nin,
+				nhe = nin * 6;
+	int64_t    *lab = NULL;
+	uint8_t    *bad = NULL;		/* per site: 1 owned, 2 owned and not final */
+	const tdc_he *he = job->he;
+	bool		covers;
+	size_t		cap,
+				nsites_own = 0;
+
+	memset(res, 0, sizeof(*res));
+	if (err && errlen)
+		err[0] = '\0';
+#define FAIL(code, ...) do { if (err && errlen) snprintf(err, errlen, __VA_ARGS__); \
+		free(lab); free(bad); tdc_tile_result_free(res); return (code); } while (0)
+
+	if (job->opt.tolerance > 0)
+		FAIL(TDC_EINVAL, "a tiled triangulation cannot use a tolerance: which points it merges depends on all of them");
+	if (!(K[0] <= K[2] && K[1] <= K[3]))
+		FAIL(TDC_EINVAL, "the known box is empty or not a number");
+	if (job->n > 0 && (spec->hull == NULL || spec->nhull == 0))
+		FAIL(TDC_EINVAL, "no extent polygon given");
+	if (job->n > 0 && spec->tile == NULL)
+		FAIL(TDC_EINVAL, "no tile labels given");
+
+	cx.spec = spec;
+	cx.want_all = false;
+	cx.B[0] = cx.B[1] = INFINITY;
+	cx.B[2] = cx.B[3] = -INFINITY;
+	for (size_t i = 0; i < spec->nhull; i++)
+		box_union(cx.B, (double[4]) {spec->hull[2 * i], spec->hull[2 * i + 1],
+									 spec->hull[2 * i], spec->hull[2 * i + 1]});
+	cx.keff[0] = K[0] <= cx.B[0] ? -INFINITY : K[0];
+	cx.keff[1] = K[1] <= cx.B[1] ? -INFINITY : K[1];
+	cx.keff[2] = K[2] >= cx.B[2] ? INFINITY : K[2];
+	cx.keff[3] = K[3] >= cx.B[3] ? INFINITY : K[3];
+	memcpy(cx.need, K, sizeof(cx.need));
+	covers = K[0] <= cx.B[0] && K[1] <= cx.B[1] && K[2] >= cx.B[2] && K[3] >= cx.B[3];
+
+	/* ownership: the smallest label among a site's copies */
+	lab = malloc(sizeof(int64_t) * (nin + 1));
+	bad = calloc(nin + 1, 1);
+	if (lab == NULL || bad == NULL)
+		FAIL(TDC_ENOMEM, "out of memory");
+	for (size_t s = 0; s < nin; s++)
+		lab[s] = INT64_MAX;
+	for (size_t i = 0; i < job->n; i++)
+	{
+		const double *p = job->input + 2 * i;
+		uint32_t	s;
+
+		if (!(p[0] >= K[0] && p[0] <= K[2] && p[1] >= K[1] && p[1] <= K[3]))
+			FAIL(TDC_EINVAL, "point %zu (%.17g %.17g) lies outside the known box", i, p[0], p[1]);
+		if (!(p[0] >= cx.B[0] && p[0] <= cx.B[2] && p[1] >= cx.B[1] && p[1] <= cx.B[3]))
+			FAIL(TDC_EINVAL, "point %zu (%.17g %.17g) lies outside the extent polygon", i, p[0], p[1]);
+		s = tdc_input_site(job, i);
+		if (s == UINT32_MAX)
+			FAIL(TDC_ENOMEM, "out of memory");
+		if (cmp_i64(spec->tile[i], lab[s]) < 0)
+			lab[s] = spec->tile[i];
+	}
+	for (size_t s = 0; s < nin; s++)
+		if (lab[s] == spec->self)
+		{
+			bad[s] = 1;
+			nsites_own++;
+		}
+	free(lab);
+	lab = NULL;
+	res->own_sites = nsites_own;
+	res->sites = job->nsites;
+
+	if (covers)
+		;						/* Q = P: every star is final */
+	else if (job->nsites < 2)
+	{
+		/* a lone site is final only when it is alone in P */
+		if (nsites_own > 0)
+		{
+			cx.want_all = true;
+			for (size_t s = 0; s < nin; s++)
+				if (bad[s])
+					bad[s] = 2;
+		}
+	}
+	else
+	{
+		/* hull edges: the outer face is on the left of these half-edges */
+		for (size_t h = 0; h < nhe; h++)
+		{
+			uint32_t	a,
+						b;
+
+			if (he[h].org == TDC_NIL)
+				continue;
+			if (job->outer && !((job->outer[h >> 6] >> (h & 63)) & 1))
+				continue;
+			b = he[h].org;
+			a = he[SYM(h)].org;
+			if (!bad[a] && !bad[b])
+				continue;
+			if (!hull_edge_final(&cx, job->xy + 2 * (size_t) a, job->xy + 2 * (size_t) b))
+			{
+				if (bad[a])
+					bad[a] = 2;
+				if (bad[b])
+					bad[b] = 2;
+			}
+		}
+		for (size_t h = 0; h < nhe && job->ntri > 0; h++)
+		{
+			uint32_t	v[3],
+						hh[3];
+			const double *p[3];
+			bool		glob[3];
+
+			if (!tdc_tri_at(job, h, v))
+				continue;
+			if (!bad[v[0]] && !bad[v[1]] && !bad[v[2]])
+				continue;
+			hh[0] = (uint32_t) h;
+			hh[1] = he[SYM(hh[0])].prev;
+			hh[2] = he[SYM(hh[1])].prev;
+			for (int k = 0; k < 3; k++)
+			{
+				uint32_t	o = SYM(hh[k]);
+
+				p[k] = job->xy + 2 * (size_t) v[k];
+				glob[k] = false;
+				if ((job->outer[o >> 6] >> (o & 63)) & 1)
+				{
+					const double *q = job->xy + 2 * (size_t) v[(k + 1) % 3];
+
+					glob[k] = true;
+					for (size_t i = 0; i < spec->nhull && glob[k]; i++)
+						glob[k] = left_or_on(p[k], q, spec->hull + 2 * i);
+				}
+			}
+			if (!triangle_final(&cx, p, glob))
+				for (int k = 0; k < 3; k++)
+					if (bad[v[k]])
+						bad[v[k]] = 2;
+		}
+	}
+
+	for (size_t s = 0; s < nin; s++)
+		if (bad[s] == 2)
+			res->unfinal_sites++;
+	if (res->unfinal_sites > 0)
+	{
+		if (cx.want_all || (cx.need[0] >= K[0] && cx.need[1] >= K[1] &&
+							cx.need[2] <= K[2] && cx.need[3] <= K[3]))
+			box_union(cx.need, cx.B);
+		memcpy(res->need, cx.need, sizeof(res->need));
+		res->final = 0;
+		free(bad);
+		return TDC_OK;
+	}
+
+	/* every own star is final: emit the triangles whose smallest vertex we own */
+	res->final = 1;
+	cap = 2 * nsites_own + 16;
+	res->tri = malloc(sizeof(size_t) * 3 * cap);
+	if (res->tri == NULL)
+		FAIL(TDC_ENOMEM, "out of memory");
+	for (size_t h = 0; h < nhe && job->ntri > 0 && nsites_own > 0; h++)
+	{
+		uint32_t	v[3];
+		int			lo = 0;
+
+		if (!tdc_tri_at(job, h, v))
+			continue;
+		for (int k = 1; k < 3; k++)
+			if (tdc_key_less(job->xy + 2 * (size_t) v[k], job->xy + 2 * (size_t) v[lo], 0))
+				lo = k;
+		if (!bad[v[lo]])
+			continue;
+		if (res->ntri == cap)
+		{
+			size_t	   *t = realloc(res->tri, sizeof(size_t) * 3 * cap * 2);
+
+			if (t == NULL)
+				FAIL(TDC_ENOMEM, "out of memory");
+			res->tri = t;
+			cap *= 2;
+		}
+		for (int k = 0; k < 3; k++)
+			res->tri[3 * res->ntri + k] = job->idx[v[k]];
+		res->ntri++;
+	}
+	free(bad);
+	return TDC_OK;
+#undef FAIL
+}
+
+int
+tdc_tile_triangulate(const double *xy, size_t n, const tdc_tile_spec *spec,
+					 const tdc_options *opt, tdc_tile_result *res,
+					 char *err, size_t errlen)
+{
+	tdc_job    *job;
+	int			rc;
+
+	memset(res, 0, sizeof(*res));
+	rc = tdc_triangulate(xy, n, opt, &job, err, errlen);
+	if (rc == TDC_OK)
+		rc = tdc_tile_finish(job, spec, res, err, errlen);
+	else if (job && err && errlen)
+		snprintf(err, errlen, "%s", tdc_job_error(job));
+	tdc_job_free(job);
+	return rc;
+}
+
+void
+tdc_tile_result_free(tdc_tile_result *res)
+{
+	if (res == NULL)
+		return;
+	free(res->tri);
+	res->tri = NULL;
+	res->ntri = 0;
+}
+
+/* Lexicographic order of points, for the monotone chain. */
+static int
+cmp_pt(const void *a, const void *b)
+{
+	const double *p = a,
+			   *q = b;
+
+	if (p[0] != q[0])
+		return p[0] < q[0] ? -1 : 1;
+	if (p[1] != q[1])
+		return p[1] < q[1] ? -1 : 1;
+	return 0;
+}
+
+int
+tdc_convex_hull(const double *xy, size_t n, double **hull, size_t *nhull)
+{
+	double	   *p,
+			   *h;
+	size_t		k = 0,
+				m = 0;
+
+	*hull = NULL;
+	*nhull = 0;
+	if (n == 0)
+		return TDC_OK;
+	p = malloc(16 * n);
+	h = malloc(16 * (2 * n + 1));
+	if (p == NULL || h == NULL)
+	{
+		free(p);
+		free(h);
+		return TDC_ENOMEM;
+	}
+	memcpy(p, xy, 16 * n);
+	qsort(p, n, 16, cmp_pt);
+	/* drop exact duplicates */
+	for (size_t i = 0; i < n; i++)
+		if (m == 0 || cmp_pt(p + 2 * (m - 1), p + 2 * i) != 0)
+		{
+			p[2 * m] = p[2 * i];
+			p[2 * m + 1] = p[2 * i + 1];
+			m++;
+		}
+	if (m < 3)
+	{
+		memcpy(h, p, 16 * m);
+		k = m;
+	}
+	else
+	{
+		/* Andrew's monotone chain, exact turns, collinear vertices dropped */
+		for (size_t i = 0; i < m; i++)
+		{
+			while (k >= 2 && tdc_orient2d(h + 2 * (k - 2), h + 2 * (k - 1), p + 2 * i) <= 0)
+				k--;
+			h[2 * k] = p[2 * i];
+			h[2 * k + 1] = p[2 * i + 1];
+			k++;
+		}
+		for (size_t i = m - 1, t = k + 1; i-- > 0;)
+		{
+			while (k >= t && tdc_orient2d(h + 2 * (k - 2), h + 2 * (k - 1), p + 2 * i) <= 0)
+				k--;
+			h[2 * k] = p[2 * i];
+			h[2 * k + 1] = p[2 * i + 1];
+			k++;
+		}
+		k--;					/* the first point closes the chain */
+	}
+	free(p);
+	*hull = h;
+	*nhull = k;
+	return TDC_OK;
+}
