@@ -33,6 +33,8 @@ main(int argc, char **argv)
 	test_concurrency();
 	printf("concurrency: %ld passed, %ld failed so far\n", tdc_test_passed, tdc_test_failed);
 	test_tolerance();
+	printf("tolerance: %ld passed, %ld failed so far\n", tdc_test_passed, tdc_test_failed);
+	test_tile();
 	printf("%ld passed, %ld failed\n", tdc_test_passed, tdc_test_failed);
 	return tdc_test_failed ? 1 : 0;
 }

@@ -71,9 +71,12 @@
  * When every own star is final, the tile emits the triangles of T(Q) whose
  * smallest vertex it owns: each is global (Lemma 1), and every global
  * triangle at an own site is among them.  Otherwise the tile reports a
- * larger box: K united with the bounding boxes of the failing disks and of
- * the vertices of C beyond the failing hull edges, clipped to B.  Those
- * disks are then known and those vertices in K; the caller reruns.  The box
+ * larger box: K united with the bounding boxes of the failing disks and,
+ * for each failing hull edge, the vertex of C beyond it nearest to it,
+ * clipped to B.  Those disks are then known and those vertices in K (a
+ * vertex of C beyond an edge of Q's hull is outside K when C's vertices are
+ * points of P; otherwise the box may fail to grow, see below); the caller
+ * reruns.  The box
  * grows at every round (if the requests add nothing, the answer is K united
  * with B), and once K covers B, Q = P and every star is final: the loop
  * ends.
@@ -84,12 +87,12 @@
  * Lemma 1 needs the circumdisk's bounding box, computed in double with a
  * forward error bound (disk_box) doubled for slack; when the orientation
  * determinant is too small for the bound to mean anything, the disk is
- * "unknown" and the tile asks for B.  A triangle with a global hull edge ab
- * whose opposite angle is obtuse (decided with an error bound too) has
- * D n C inside the segment of D cut off by ab on C's side, which lies in the
- * disk with diameter ab (Thales): that small disk is tested instead, so the
- * slivers along the global hull, whose circles are huge, do not force border
- * tiles to read half the data.
+ * "unknown" and the tile asks for B.  A flat triangle near the global hull
+ * has a huge circle that bulges out of C, while only D n C must be known:
+ * when D's box fails, it is shrunk to the box of the circular segment of D
+ * on C's side of each edge of C (and of each certified hull edge of the
+ * triangle), with the chord computed from a conservative centre and radius
+ * (clip_box).  So border tiles do not read half the data for such slivers.
  *
  * The halo is a thin ring in practice: for uniform points, circumdisks are a
  * few point spacings wide, so a margin of some ten spacings around a tile
@@ -127,7 +130,7 @@ left_or_on(const double *a, const double *b, const double *p)
  * additions by 4 eps of the magnitudes involved.  The result is doubled.
  */
 static bool
-disk_box(const double *a, const double *b, const double *c, double box[4])
+disk_box(const double *a, const double *b, const double *c, double box[4], double disk[3])
 {
 	double		tx = b[0] - a[0],
 				ty = b[1] - a[1],
@@ -179,34 +182,82 @@ disk_box(const double *a, const double *b, const double *c, double box[4])
 	box[1] = cy - r - my;
 	box[2] = cx + r + mx;
 	box[3] = cy + r + my;
-	return isfinite(box[0]) && isfinite(box[1]) && isfinite(box[2]) && isfinite(box[3]);
+	/* the disk of radius r + max(mx, my) about the computed centre holds the true one */
+	disk[0] = cx;
+	disk[1] = cy;
+	disk[2] = r + fmax(mx, my);
+	return isfinite(disk[2]) && isfinite(box[0]) && isfinite(box[1]) && isfinite(box[2]) && isfinite(box[3]);
 }
 
-/* Conservative bounding box of the closed disk with diameter ab. */
+/*
+ * Shrink box, a bounding box of the disk (centre disk[0..1], radius
+ * disk[2]), to a bounding box of the part of the disk on the closed left of
+ * the line a -> b: the circular segment beyond the chord.  A flat triangle
+ * along the global hull has a huge circle that bulges out of C; only its
+ * thin segment inside C must be known.
+ *
+ * Rounding: s, the centre's signed distance to the line (positive on the
+ * left), is off by less than es (the unit vectors and the difference carry a
+ * few eps of the magnitudes involved; es takes 16), so s + es bounds it from
+ * above, which only widens the segment.  The half-chord w = sqrt(R^2 - s^2)
+ * gets 8 eps R^2 under the root, more than the rounding of the difference.
+ * The extreme points of the disk are kept whenever they may lie on the left.
+ * The resulting box is padded by 16 eps of the magnitudes involved.
+ */
 static void
-diameter_box(const double *a, const double *b, double box[4])
+clip_box(const double *disk, const double *a, const double *b, double box[4])
 {
-	double		mx = 0.5 * (a[0] + b[0]),
-				my = 0.5 * (a[1] + b[1]),
-				dx = b[0] - a[0],
-				dy = b[1] - a[1],
-				r = 0.5 * sqrt(dx * dx + dy * dy),
-				m = 8 * EPS * (fabs(a[0]) + fabs(b[0]) + fabs(a[1]) + fabs(b[1]) + r) + 0x1p-1000;
+	double		tx = b[0] - a[0],
+				ty = b[1] - a[1],
+				L = sqrt(tx * tx + ty * ty),
+				ux,
+				uy,
+				nx,
+				ny,
+				R = disk[2],
+				s,
+				es,
+				w,
+				mx,
+				my,
+				pad,
+				c[4];
+	static const double dirs[4][2] = {{-1, 0}, {0, -1}, {1, 0}, {0, 1}};
 
-	box[0] = mx - r - m;
-	box[1] = my - r - m;
-	box[2] = mx + r + m;
-	box[3] = my + r + m;
-}
+	if (!(L > 0) || !isfinite(L))
+		return;
+	ux = tx / L;
+	uy = ty / L;
+	nx = -uy;
+	ny = ux;
+	s = nx * (disk[0] - a[0]) + ny * (disk[1] - a[1]);
+	es = 16 * EPS * (fabs(disk[0]) + fabs(disk[1]) + fabs(a[0]) + fabs(a[1])) + 0x1p-1000;
+	s += es;
+	if (!(s < R) || !(s > -R))
+		return;					/* all of the disk may be on the left: no gain */
+	w = sqrt(fmax(0, R * R - s * s) + 8 * EPS * R * R) * (1 + 4 * EPS);
+	mx = disk[0] - s * nx;
+	my = disk[1] - s * ny;
+	c[0] = fmin(mx - w * ux, mx + w * ux);
+	c[2] = fmax(mx - w * ux, mx + w * ux);
+	c[1] = fmin(my - w * uy, my + w * uy);
+	c[3] = fmax(my - w * uy, my + w * uy);
+	for (int k = 0; k < 4; k++)
+		if ((nx * dirs[k][0] + ny * dirs[k][1]) * R + s >= -8 * EPS * R)
+		{
+			double		px = disk[0] + dirs[k][0] * R,
+						py = disk[1] + dirs[k][1] * R;
 
-/* Is the angle at c of triangle abc certainly obtuse ((a - c).(b - c) < 0)? */
-static bool
-obtuse_at(const double *a, const double *b, const double *c)
-{
-	double		t1 = (a[0] - c[0]) * (b[0] - c[0]),
-				t2 = (a[1] - c[1]) * (b[1] - c[1]);
-
-	return t1 + t2 < -4 * EPS * (fabs(t1) + fabs(t2)) - 0x1p-1000;
+			c[0] = fmin(c[0], px);
+			c[1] = fmin(c[1], py);
+			c[2] = fmax(c[2], px);
+			c[3] = fmax(c[3], py);
+		}
+	pad = 16 * EPS * (fabs(disk[0]) + fabs(disk[1]) + R + w + fabs(s)) + 0x1p-1000;
+	box[0] = fmax(box[0], c[0] - pad);
+	box[1] = fmax(box[1], c[1] - pad);
+	box[2] = fmin(box[2], c[2] + pad);
+	box[3] = fmin(box[3], c[3] + pad);
 }
 
 typedef struct tile_ctx
@@ -234,12 +285,19 @@ box_inside_keff(const tile_ctx *cx, const double *box)
 		box[2] < cx->keff[2] && box[3] < cx->keff[3];
 }
 
-/* Add a request, clipped to B (there are no points beyond it). */
+/*
+ * Add a request, grown by 1 % of K's size (a vertex of the failing disk may
+ * lie on its box, and the test is strict) and clipped to B (there are no
+ * points beyond it).
+ */
 static void
 request(tile_ctx *cx, const double *box)
 {
-	double		c[4] = {fmax(box[0], cx->B[0]), fmax(box[1], cx->B[1]),
-	fmin(box[2], cx->B[2]), fmin(box[3], cx->B[3])};
+	const double *K = cx->spec->known;
+	double		px = 0.01 * (K[2] - K[0]) + 1e-9 * (fabs(box[0]) + fabs(box[2])) + 0x1p-1000,
+				py = 0.01 * (K[3] - K[1]) + 1e-9 * (fabs(box[1]) + fabs(box[3])) + 0x1p-1000;
+	double		c[4] = {fmax(box[0] - px, cx->B[0]), fmax(box[1] - py, cx->B[1]),
+	fmin(box[2] + px, cx->B[2]), fmin(box[3] + py, cx->B[3])};
 
 	if (c[0] > c[2] || c[1] > c[3])
 		return;
@@ -264,12 +322,24 @@ hull_edge_final(tile_ctx *cx, const double *a, const double *b)
 	int			ns = 0;
 	double		rq[4] = {INFINITY, INFINITY, -INFINITY, -INFINITY};
 
+	double		best = INFINITY;
+
+	/* the vertex of C beyond the edge nearest to it: the least K must take in */
 	for (size_t i = 0; i < sp->nhull; i++)
 		if (!left_or_on(a, b, sp->hull + 2 * i))
 		{
+			const double *v = sp->hull + 2 * i;
+			double		dx = v[0] - 0.5 * (a[0] + b[0]),
+						dy = v[1] - 0.5 * (a[1] + b[1]),
+						d2 = dx * dx + dy * dy;
+
 			all_left = false;
-			box_union(rq, (double[4]) {sp->hull[2 * i], sp->hull[2 * i + 1],
-									   sp->hull[2 * i], sp->hull[2 * i + 1]});
+			if (d2 < best || rq[0] > rq[2])
+			{
+				best = d2;
+				rq[0] = rq[2] = v[0];
+				rq[1] = rq[3] = v[1];
+			}
 		}
 	if (all_left)
 		return true;
@@ -300,26 +370,31 @@ hull_edge_final(tile_ctx *cx, const double *a, const double *b)
 /*
  * Lemma 1 for triangle v[0..2] (counter-clockwise) of T(Q); glob[k] says
  * whether edge v[k] -> v[k+1] is a hull edge of T(Q) certified global.
+ * The disk's box is tried first; if it is not known, the box of the disk's
+ * part inside C (clipped by C's edges and the certified hull edges, whose
+ * lines support C) is tried.
  */
 static bool
 triangle_final(tile_ctx *cx, const double *p[3], const bool glob[3])
 {
-	double		box[4];
+	const tdc_tile_spec *sp = cx->spec;
+	double		box[4],
+				disk[3];
 
-	if (cx->spec->test_weaken == TDC_TILE_WEAKEN_DISKS)
+	if (sp->test_weaken == TDC_TILE_WEAKEN_DISKS)
 		return true;
-	for (int k = 0; k < 3; k++)
-		if (glob[k] && obtuse_at(p[k], p[(k + 1) % 3], p[(k + 2) % 3]))
-		{
-			diameter_box(p[k], p[(k + 1) % 3], box);
-			goto test;
-		}
-	if (!disk_box(p[0], p[1], p[2], box))
+	if (!disk_box(p[0], p[1], p[2], box, disk))
 	{
 		cx->want_all = true;
 		return false;
 	}
-test:
+	if (box_inside_keff(cx, box))
+		return true;
+	for (int k = 0; k < 3; k++)
+		if (glob[k])
+			clip_box(disk, p[k], p[(k + 1) % 3], box);
+	for (size_t i = 0; sp->nhull >= 2 && i < sp->nhull; i++)
+		clip_box(disk, sp->hull + 2 * i, sp->hull + 2 * ((i + 1) % sp->nhull), box);
 	if (box_inside_keff(cx, box))
 		return true;
 	request(cx, box);
