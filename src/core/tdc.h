@@ -243,6 +243,8 @@ typedef struct tdc_tile_spec
 	const int64_t *tile;		/* n labels: the tile owning each point */
 	int64_t		self;			/* this tile's label */
 	double		known[4];		/* K: xmin, ymin, xmax, ymax; the caller passes every point of P in it */
+	const double *extra;		/* nextra more boxes (4 doubles each) whose points are all passed */
+	size_t		nextra;			/* too: thin bands along long edges of C, say (may be 0) */
 	const double *hull;			/* convex polygon C containing P: nhull x,y vertices */
 	size_t		nhull;			/* (the convex hull of P, or the 4 corners of P's bounding box) */
 	int			test_weaken;	/* tests only: 0, or TDC_TILE_WEAKEN_DISKS */

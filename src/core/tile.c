@@ -29,8 +29,11 @@
  * every subset of P.
  *
  * The caller gives, for one tile:
- *	- K, a closed box, and Q = every point of P inside K (halo included),
- *	  each with the label of the tile that owns it, and this tile's label;
+ *	- K, a closed box, optionally more closed "extra" boxes E1..Ek, and Q:
+ *	  every point of P inside K or an extra box (own points and halo), each
+ *	  with the label of the tile that owns it, and this tile's label.  The
+ *	  own points lie in K.  (Extra boxes let a caller add thin bands along
+ *	  long edges of the global hull without widening K; see the CLI.)
  *	- C, a convex polygon with P inside it (the convex hull of P, or just the
  *	  four corners of P's bounding box; the hull finishes border tiles sooner).
  *
@@ -43,13 +46,14 @@
  * tiles.
  *
  * Known region.  No point of P lies outside C, and every point of P inside K
- * is in Q.  So a region R is "known" (R n P = R n Q) when R n C lies in K.
- * We test it conservatively with the bounding box B of C: R is known when
- * its bounding box lies strictly inside K', the box K with each side pushed
- * to infinity where K already reaches B on that side.
+ * or an extra box is in Q.  So a region R is "known" (R n P = R n Q) when
+ * R n C lies in the union U of K and the extra boxes.  We test it
+ * conservatively with the bounding box B of C: R is known when its bounding
+ * box, clipped to B, is covered by U (box_known).  Everything below holds for
+ * any Q between P n U and P.
  *
  * Lemma 1 (final triangle).  If abc is in T(Q) and its closed circumdisk D
- * is known, abc is in T(P).  Proof: a site of P \ Q is outside K, hence
+ * is known, abc is in T(P).  Proof: a site of P \ Q is outside U, hence
  * (known region) outside D, hence strictly outside the circle: it cannot
  * invalidate abc.  Sites of Q on or inside the circle are judged the same way
  * in T(P) as in T(Q), because the tie-break depends on the four sites only.
@@ -267,6 +271,7 @@ typedef struct tile_ctx
 	double		B[4];			/* bounding box of C */
 	double		need[4];		/* K united with the requests so far */
 	bool		want_all;		/* a request we could not bound: ask for B */
+	const double **known_list;	/* K, then the extra boxes */
 } tile_ctx;
 
 static void
@@ -278,11 +283,62 @@ box_union(double *u, const double *b)
 	u[3] = fmax(u[3], b[3]);
 }
 
+/*
+ * Is the part of box r inside the closed box b covered by the union of the
+ * closed boxes k[0..nk)?  Subtracts one box at a time; the up to four
+ * pieces left around it are taken closed, which only asks for more.
+ */
 static bool
-box_inside_keff(const tile_ctx *cx, const double *box)
+box_covered(const double *r0, const double *const *k, size_t nk, int depth)
 {
-	return box[0] > cx->keff[0] && box[1] > cx->keff[1] &&
-		box[2] < cx->keff[2] && box[3] < cx->keff[3];
+	double		r[4];
+
+	memcpy(r, r0, sizeof(r));
+	if (r[0] > r[2] || r[1] > r[3])
+		return true;
+	for (size_t i = 0; i < nk; i++)
+	{
+		const double *x = k[i];
+		double		pieces[4][4];
+		int			np = 0;
+
+		if (x[0] > r[2] || x[2] < r[0] || x[1] > r[3] || x[3] < r[1])
+			continue;
+		if (depth > 6)
+			return false;
+		if (r[0] < x[0])
+			memcpy(pieces[np++], (double[4]) {r[0], r[1], x[0], r[3]}, sizeof(double[4]));
+		if (r[2] > x[2])
+			memcpy(pieces[np++], (double[4]) {x[2], r[1], r[2], r[3]}, sizeof(double[4]));
+		if (r[1] < x[1])
+			memcpy(pieces[np++], (double[4]) {fmax(r[0], x[0]), r[1], fmin(r[2], x[2]), x[1]}, sizeof(double[4]));
+		if (r[3] > x[3])
+			memcpy(pieces[np++], (double[4]) {fmax(r[0], x[0]), x[3], fmin(r[2], x[2]), r[3]}, sizeof(double[4]));
+		for (int j = 0; j < np; j++)
+			if (!box_covered(pieces[j], k + i + 1, nk - i - 1, depth + 1))
+				return false;
+		return true;
+	}
+	return false;
+}
+
+/*
+ * Is region box (holding the region that matters) known: its part inside B
+ * covered by K and the extra boxes?  No point lies outside B.
+ */
+static bool
+box_known(const tile_ctx *cx, const double *box)
+{
+	double		r[4] = {fmax(box[0], cx->B[0]), fmax(box[1], cx->B[1]),
+	fmin(box[2], cx->B[2]), fmin(box[3], cx->B[3])};
+
+	/* the common case, without allocation */
+	if (box[0] > cx->keff[0] && box[1] > cx->keff[1] &&
+		box[2] < cx->keff[2] && box[3] < cx->keff[3])
+		return true;
+	if (cx->spec->nextra == 0)
+		return false;
+	return box_covered(r, cx->known_list, cx->spec->nextra + 1, 0);
 }
 
 /*
@@ -388,14 +444,14 @@ triangle_final(tile_ctx *cx, const double *p[3], const bool glob[3])
 		cx->want_all = true;
 		return false;
 	}
-	if (box_inside_keff(cx, box))
+	if (box_known(cx, box))
 		return true;
 	for (int k = 0; k < 3; k++)
 		if (glob[k])
 			clip_box(disk, p[k], p[(k + 1) % 3], box);
 	for (size_t i = 0; sp->nhull >= 2 && i < sp->nhull; i++)
 		clip_box(disk, sp->hull + 2 * i, sp->hull + 2 * ((i + 1) % sp->nhull), box);
-	if (box_inside_keff(cx, box))
+	if (box_known(cx, box))
 		return true;
 	request(cx, box);
 	return false;
@@ -417,6 +473,7 @@ tdc_tile_finish(const tdc_job *job, const tdc_tile_spec *spec, tdc_tile_result *
 				nhe = nin * 6;
 	int64_t    *lab = NULL;
 	uint8_t    *bad = NULL;		/* per site: 1 owned, 2 owned and not final */
+	const double **known_list = NULL;
 	const tdc_he *he = job->he;
 	bool		covers;
 	size_t		cap,
@@ -426,7 +483,7 @@ tdc_tile_finish(const tdc_job *job, const tdc_tile_spec *spec, tdc_tile_result *
 	if (err && errlen)
 		err[0] = '\0';
 #define FAIL(code, ...) do { if (err && errlen) snprintf(err, errlen, __VA_ARGS__); \
-		free(lab); free(bad); tdc_tile_result_free(res); return (code); } while (0)
+		free(lab); free(bad); free(known_list); tdc_tile_result_free(res); return (code); } while (0)
 
 	if (job->opt.tolerance > 0)
 		FAIL(TDC_EINVAL, "a tiled triangulation cannot use a tolerance: which points it merges depends on all of them");
@@ -449,6 +506,12 @@ tdc_tile_finish(const tdc_job *job, const tdc_tile_spec *spec, tdc_tile_result *
 	cx.keff[2] = K[2] >= cx.B[2] ? INFINITY : K[2];
 	cx.keff[3] = K[3] >= cx.B[3] ? INFINITY : K[3];
 	memcpy(cx.need, K, sizeof(cx.need));
+	cx.known_list = known_list = malloc(sizeof(double *) * (spec->nextra + 1));
+	if (cx.known_list == NULL)
+		FAIL(TDC_ENOMEM, "out of memory");
+	cx.known_list[0] = K;
+	for (size_t i = 0; i < spec->nextra; i++)
+		cx.known_list[i + 1] = spec->extra + 4 * i;
 	covers = K[0] <= cx.B[0] && K[1] <= cx.B[1] && K[2] >= cx.B[2] && K[3] >= cx.B[3];
 
 	/* ownership: the smallest label among a site's copies */
@@ -464,7 +527,19 @@ tdc_tile_finish(const tdc_job *job, const tdc_tile_spec *spec, tdc_tile_result *
 		uint32_t	s;
 
 		if (!(p[0] >= K[0] && p[0] <= K[2] && p[1] >= K[1] && p[1] <= K[3]))
-			FAIL(TDC_EINVAL, "point %zu (%.17g %.17g) lies outside the known box", i, p[0], p[1]);
+		{
+			bool		in_extra = false;
+
+			for (size_t e = 0; e < spec->nextra && !in_extra && spec->tile[i] != spec->self; e++)
+			{
+				const double *x = spec->extra + 4 * e;
+
+				in_extra = p[0] >= x[0] && p[0] <= x[2] && p[1] >= x[1] && p[1] <= x[3];
+			}
+			if (!in_extra)
+				FAIL(TDC_EINVAL, "point %zu (%.17g %.17g) lies outside the known box%s", i, p[0], p[1],
+					 spec->tile[i] == spec->self ? " (an own point must lie in K)" : " and the extra boxes");
+		}
 		if (!(p[0] >= cx.B[0] && p[0] <= cx.B[2] && p[1] >= cx.B[1] && p[1] <= cx.B[3]))
 			FAIL(TDC_EINVAL, "point %zu (%.17g %.17g) lies outside the extent polygon", i, p[0], p[1]);
 		s = tdc_input_site(job, i);
@@ -568,6 +643,7 @@ tdc_tile_finish(const tdc_job *job, const tdc_tile_spec *spec, tdc_tile_result *
 		memcpy(res->need, cx.need, sizeof(res->need));
 		res->final = 0;
 		free(bad);
+		free(known_list);
 		return TDC_OK;
 	}
 
@@ -603,6 +679,7 @@ tdc_tile_finish(const tdc_job *job, const tdc_tile_spec *spec, tdc_tile_result *
 		res->ntri++;
 	}
 	free(bad);
+	free(known_list);
 	return TDC_OK;
 #undef FAIL
 }
