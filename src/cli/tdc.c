@@ -199,10 +199,9 @@ read_text(const char *path, size_t *n, double **zout)
  *		median splits along the longer side (kd-tree of cells), so that
  *		clustered data gets small tiles where it is dense;
  *	3	each point appended to its tile's file.
- * Then for every tile: K = its box plus a halo of 8 mean point spacings,
- * widened to both ends of every hull edge it touches (their triangles need
- * them); gather every point inside K from the tile files whose boxes meet
- * it; triangulate; tdc_tile_finish either hands over the tile's triangles
+ * Then for every tile: K = its box plus a halo of 8 mean point spacings, and
+ * as extra known boxes the bands along the hull edges near it; gather every
+ * point inside them from the tile files whose boxes meet them; triangulate; tdc_tile_finish either hands over the tile's triangles
  * or asks for a larger K, and the tile runs again.
  *
  * Memory: the largest tile with its halo is bounded by tile_max times a
@@ -216,7 +215,7 @@ read_text(const char *path, size_t *n, double **zout)
 #include <unistd.h>
 
 #define FINE_GRID	512			/* cells per side of the counting grid */
-#define CHUNK		(1 << 20)	/* points per read in the scans */
+#define CHUNK		(1 << 16)	/* points per read in the scans */
 #define MAX_TILES	900			/* open files while binning */
 
 typedef struct tile_info
@@ -499,6 +498,9 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 	tile_info  *tiles;
 	int			nt = 0,
 				has_z = zpath != NULL;
+	double	   *extra,
+				band;
+	const double **xs;
 	FILE	  **tf;
 	char		err[512];
 
@@ -611,11 +613,17 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 	st->tiles = nt;
 
 	/* 4: the tiles */
+	extra = malloc(32 * (nhull + 1));
+	xs = malloc(sizeof(double *) * (nhull + 1));
+	band = 16 * sqrt((bb[2] - bb[0]) * (bb[3] - bb[1]) / (double) (n ? n : 1));
+	if (extra == NULL || xs == NULL)
+		die(1, "out of memory%s", "");
 	for (int t = 0; t < nt; t++)
 	{
 		tile_info  *ti = &tiles[t];
 		double		K[4],
 					h;
+		size_t		nextra;
 		tdc_tile_spec spec = {0};
 
 		if (ti->count == 0)
@@ -630,23 +638,30 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 		K[1] -= h;
 		K[2] += h;
 		K[3] += h;
-		/* both ends of every hull edge that touches K */
+		/*
+		 * Extra known boxes: the boxes of the hull edges near K, grown by a
+		 * band of 16 mean spacings.  A long hull edge has one triangle whose
+		 * circle bulges far out of C: only its thin part inside C, along the
+		 * edge, must be known, and the band holds it, without widening K
+		 * along the whole edge.  The bands also bring in the hull's
+		 * vertices, so every own hull edge is certified at once.
+		 */
+		nextra = 0;
 		for (size_t i = 0; nhull > 1 && i < nhull; i++)
 		{
 			const double *a = hull + 2 * i,
 					   *b = hull + 2 * ((i + 1) % nhull);
-			double		eb[4] = {fmin(a[0], b[0]), fmin(a[1], b[1]), fmax(a[0], b[0]), fmax(a[1], b[1])};
+			double	   *eb = extra + 4 * nextra;
 
+			eb[0] = fmin(a[0], b[0]) - band;
+			eb[1] = fmin(a[1], b[1]) - band;
+			eb[2] = fmax(a[0], b[0]) + band;
+			eb[3] = fmax(a[1], b[1]) + band;
 			if (box_meets(eb, K))
-			{
-				double		K2[4];
-
-				memcpy(K2, K, sizeof(K2));
-				box_add(K2, a[0], a[1]);
-				box_add(K2, b[0], b[1]);
-				memcpy(K, K2, sizeof(K2));
-			}
+				nextra++;
 		}
+		spec.extra = extra;
+		spec.nextra = nextra;
 		spec.self = t;
 		spec.hull = hull;
 		spec.nhull = nhull;
@@ -661,6 +676,7 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 			tdc_tile_result res;
 			tdc_times	tt;
 			double		rec[3 * 4096];
+			size_t		nx;
 
 			memcpy(spec.known, K, sizeof(K));
 			/* count, then fill: the buffers are allocated once, at their size */
@@ -674,8 +690,17 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 					size_t		got;
 					int			w = has_z ? 3 : 2;
 
-					if ((u >= 0 && u == t) || tiles[s].count == 0 || !box_meets(tiles[s].bb, K))
+					bool		meets = box_meets(tiles[s].bb, K);
+
+					for (size_t e = 0; e < nextra && !meets; e++)
+						meets = box_meets(tiles[s].bb, extra + 4 * e);
+					if ((u >= 0 && u == t) || tiles[s].count == 0 || !meets)
 						continue;
+					/* only the bands that meet this file's box need testing */
+					nx = 0;
+					for (size_t e = 0; e < nextra; e++)
+						if (box_meets(tiles[s].bb, extra + 4 * e))
+							xs[nx++] = extra + 4 * e;
 					snprintf(name, sizeof(name), "tile%d", s);
 					f = tmp_open(name, "rb");
 					while ((got = fread(rec, 8 * w, 4096, f)) > 0)
@@ -683,7 +708,16 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 						{
 							double	   *p = rec + w * i;
 
-							if (!(p[0] >= K[0] && p[0] <= K[2] && p[1] >= K[1] && p[1] <= K[3]))
+							bool		in = p[0] >= K[0] && p[0] <= K[2] &&
+								p[1] >= K[1] && p[1] <= K[3];
+
+							for (size_t e = 0; e < nx && !in; e++)
+							{
+								const double *x = xs[e];
+
+								in = p[0] >= x[0] && p[0] <= x[2] && p[1] >= x[1] && p[1] <= x[3];
+							}
+							if (!in)
 								continue;
 							if (pass == 1)
 							{
@@ -760,6 +794,8 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 				break;			/* final: K was not changed */
 		}
 	}
+	free(extra);
+	free(xs);
 	free(tiles);
 	free(hull);
 }

@@ -746,7 +746,53 @@ tdc_convex_hull(const double *xy, size_t n, double **hull, size_t *nhull)
 		free(h);
 		return TDC_ENOMEM;
 	}
-	memcpy(p, xy, 16 * n);
+	/*
+	 * Akl-Toussaint: a point strictly inside the polygon of the extreme
+	 * points in eight directions is no hull vertex; only the rest is sorted.
+	 */
+	{
+		size_t		ext[8] = {0};
+		double		oct[16];
+
+		for (size_t i = 1; i < n; i++)
+		{
+			const double *q = xy + 2 * i;
+			double		key[8] = {q[0], q[0] + q[1], q[1], q[1] - q[0],
+			-q[0], -q[0] - q[1], -q[1], q[0] - q[1]};
+
+			for (int k = 0; k < 8; k++)
+			{
+				const double *e = xy + 2 * ext[k];
+				double		ek[8] = {e[0], e[0] + e[1], e[1], e[1] - e[0],
+				-e[0], -e[0] - e[1], -e[1], e[0] - e[1]};
+
+				if (key[k] < ek[k])
+					ext[k] = i;
+			}
+		}
+		/* left, lower left, bottom, lower right, ...: counter-clockwise */
+		for (int k = 0; k < 8; k++)
+		{
+			oct[2 * k] = xy[2 * ext[k]];
+			oct[2 * k + 1] = xy[2 * ext[k] + 1];
+		}
+		for (size_t i = 0; i < n; i++)
+		{
+			const double *q = xy + 2 * i;
+			bool		inside = true;
+
+			for (int k = 0; k < 8 && inside; k++)
+				inside = tdc_orient2d(oct + 2 * k, oct + 2 * ((k + 1) % 8), q) > 0;
+			if (!inside)
+			{
+				p[2 * m] = q[0];
+				p[2 * m + 1] = q[1];
+				m++;
+			}
+		}
+		n = m;
+		m = 0;
+	}
 	qsort(p, n, 16, cmp_pt);
 	/* drop exact duplicates */
 	for (size_t i = 0; i < n; i++)
