@@ -622,6 +622,7 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 	{
 		tile_info  *ti = &tiles[t];
 		double		K[4],
+					Kmin[4],	/* the least K this round may shrink back to */
 					h;
 		size_t		nextra;
 		tdc_tile_spec spec = {0};
@@ -633,6 +634,7 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 		K[1] = fmin(bb[1] + ti->r0 * ch, ti->bb[1]);
 		K[2] = fmax(bb[0] + ti->c1 * cw, ti->bb[2]);
 		K[3] = fmax(bb[1] + ti->r1 * ch, ti->bb[3]);
+		memcpy(Kmin, K, sizeof(K));
 		h = 8 * sqrt((K[2] - K[0]) * (K[3] - K[1]) / (double) ti->count);
 		K[0] -= h;
 		K[1] -= h;
@@ -678,7 +680,8 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 			double		rec[3 * 4096];
 			size_t		nx;
 
-			memcpy(spec.known, K, sizeof(K));
+			int			shrinks = 0;
+
 			/* count, then fill: the buffers are allocated once, at their size */
 			for (int pass = 0; pass < 2; pass++)
 			{
@@ -738,6 +741,22 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 							ti->count, K[0], K[1], K[2], K[3], m);
 				if (pass == 0)
 				{
+					if (tile_bytes(m, opt, has_z) > budget && shrinks < 4 &&
+						memcmp(K, Kmin, sizeof(K)) != 0)
+					{
+						/*
+						 * The halo (or the slack of a grown box) reaches
+						 * into denser data than the tile's: shrink it
+						 * towards the least box, the finality test will
+						 * ask for what is really needed.
+						 */
+						for (int c = 0; c < 4; c++)
+							K[c] = shrinks == 3 ? Kmin[c] : Kmin[c] + (K[c] - Kmin[c]) / 4;
+						shrinks++;
+						m = 0;
+						pass = -1;
+						continue;
+					}
 					if (tile_bytes(m, opt, has_z) > budget)
 					{
 						char		msg[160];
@@ -753,6 +772,7 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 						die(1, "out of memory%s", "");
 				}
 			}
+			memcpy(spec.known, K, sizeof(K));
 			spec.tile = ql;
 			st->runs++;
 			if (tdc_triangulate(q, m, opt, &job, err, sizeof(err)) != TDC_OK)
@@ -777,9 +797,17 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 			else
 			{
 				/* grow a little more than asked: each run costs a whole tile */
-				double		gx = 0.02 * (res.need[2] - res.need[0]),
-							gy = 0.02 * (res.need[3] - res.need[1]);
+				double		gx = 0.5 * h,
+							gy = 0.5 * h;
 
+				/*
+				 * If need is too big for the budget, K may fall back to a
+				 * step of an eighth of the way from the old K: the needs of
+				 * a thin halo overstate what the final stars need, and any
+				 * growth is progress.
+				 */
+				for (int c = 0; c < 4; c++)
+					Kmin[c] = K[c] + (res.need[c] - K[c]) / 8;
 				K[0] = res.need[0] - gx;
 				K[1] = res.need[1] - gy;
 				K[2] = res.need[2] + gx;

@@ -76,11 +76,9 @@
  * smallest vertex it owns: each is global (Lemma 1), and every global
  * triangle at an own site is among them.  Otherwise the tile reports a
  * larger box: K united with the bounding boxes of the failing disks and,
- * for each failing hull edge, the vertex of C beyond it nearest to it,
- * clipped to B.  Those disks are then known and those vertices in K (a
- * vertex of C beyond an edge of Q's hull is outside K when C's vertices are
- * points of P; otherwise the box may fail to grow, see below); the caller
- * reruns.  The box
+ * for each failing hull edge, a box around the edge that leaves K (and the
+ * vertex of C beyond the edge nearest to it, when near), clipped to B; the
+ * caller reruns.  The box
  * grows at every round (if the requests add nothing, the answer is K united
  * with B), and once K covers B, Q = P and every star is final: the loop
  * ends.
@@ -342,22 +340,58 @@ box_known(const tile_ctx *cx, const double *box)
 }
 
 /*
- * Add a request, grown by 1 % of K's size (a vertex of the failing disk may
- * lie on its box, and the test is strict) and clipped to B (there are no
- * points beyond it).
+ * Add a request, grown by a tenth of its size and a millionth of K's (a
+ * vertex of the failing disk may lie on K's side, and the box must then
+ * pass it), and clipped to B (there are no points beyond it).
  */
 static void
 request(tile_ctx *cx, const double *box)
 {
 	const double *K = cx->spec->known;
-	double		px = 0.01 * (K[2] - K[0]) + 1e-9 * (fabs(box[0]) + fabs(box[2])) + 0x1p-1000,
-				py = 0.01 * (K[3] - K[1]) + 1e-9 * (fabs(box[1]) + fabs(box[3])) + 0x1p-1000;
+	double		px = 0.1 * (box[2] - box[0]) + 1e-6 * (K[2] - K[0]) +
+		1e-9 * (fabs(box[0]) + fabs(box[2])) + 0x1p-1000,
+				py = 0.1 * (box[3] - box[1]) + 1e-6 * (K[3] - K[1]) +
+		1e-9 * (fabs(box[1]) + fabs(box[3])) + 0x1p-1000;
 	double		c[4] = {fmax(box[0] - px, cx->B[0]), fmax(box[1] - py, cx->B[1]),
 	fmin(box[2] + px, cx->B[2]), fmin(box[3] + py, cx->B[3])};
 
 	if (c[0] > c[2] || c[1] > c[3])
 		return;
 	box_union(cx->need, c);
+}
+
+/*
+ * What to ask for when hull edge a -> b of T(Q) is not final: points of P
+ * may lie beyond it, outside K.  Ask for the edge's box grown by its length
+ * (Q's hull edges at own sites usually mean a halo thinner than the local
+ * spacing), doubling the growth until the box leaves K so that K must grow;
+ * and for the nearest vertex of C beyond the edge too when it is within a
+ * few edge lengths (a global hull vertex, which the star needs).
+ */
+static void
+hull_edge_request(tile_ctx *cx, const double *a, const double *b, const double *cvert,
+				  double cdist2)
+{
+	const double *K = cx->spec->known;
+	double		dx = b[0] - a[0],
+				dy = b[1] - a[1],
+				g = sqrt(dx * dx + dy * dy),
+				box[4];
+
+	if (!(g > 0))
+		g = fmax(K[2] - K[0], K[3] - K[1]) * 1e-3 + 0x1p-1000;
+	for (int i = 0; i < 64; i++, g *= 2)
+	{
+		box[0] = fmin(a[0], b[0]) - g;
+		box[1] = fmin(a[1], b[1]) - g;
+		box[2] = fmax(a[0], b[0]) + g;
+		box[3] = fmax(a[1], b[1]) + g;
+		if (box[0] < K[0] || box[1] < K[1] || box[2] > K[2] || box[3] > K[3])
+			break;
+	}
+	request(cx, box);
+	if (cdist2 <= 16 * g * g)
+		request(cx, cvert);
 }
 
 /*
@@ -380,7 +414,7 @@ hull_edge_final(tile_ctx *cx, const double *a, const double *b)
 
 	double		best = INFINITY;
 
-	/* the vertex of C beyond the edge nearest to it: the least K must take in */
+	/* the vertex of C beyond the edge nearest to it */
 	for (size_t i = 0; i < sp->nhull; i++)
 		if (!left_or_on(a, b, sp->hull + 2 * i))
 		{
@@ -416,7 +450,7 @@ hull_edge_final(tile_ctx *cx, const double *a, const double *b)
 
 			if (!left_or_on(a, b, p))
 			{
-				request(cx, rq);
+				hull_edge_request(cx, a, b, rq, best);
 				return false;
 			}
 		}
