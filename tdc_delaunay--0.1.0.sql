@@ -232,8 +232,10 @@ CREATE PROCEDURE tdc_delaunay_tiled(source regclass, target text, geom_column na
 									tile_column name DEFAULT NULL, tile_size float8 DEFAULT NULL)
 LANGUAGE plpgsql
 -- a tile's statement is estimated at millions of rows, and compiling it
--- cost a second per tile
+-- cost a second per tile; boxes and the hull pass through the statements'
+-- text, so floats must print exactly
 SET jit = off
+SET extra_float_digits = 3
 AS $proc$
 DECLARE
 	fn constant text := 'tdc_delaunay_tiled';
@@ -251,11 +253,11 @@ DECLARE
 	pts text; tiles text; halo text; pfx text;
 	ntiles bigint; done bigint; pending bigint; reported int; i bigint; rerun bigint;
 	round int := 0;
+	has_null boolean;
 	halo_pts bigint := 0;
 	ntri bigint;
 	r record;
 	tile_sql text;
-	t0 timestamptz := clock_timestamp();
 BEGIN
 	-- the geometry column
 	SELECT t.typname INTO gtyp
@@ -348,8 +350,8 @@ BEGIN
 	EXECUTE format('SELECT count(*), min(ST_X(g)), min(ST_Y(g)), max(ST_X(g)), max(ST_Y(g)) FROM %s', pts)
 	   INTO npts, gx0, gy0, gx1, gy1;
 	IF tile_column IS NOT NULL THEN
-		EXECUTE format('SELECT EXISTS (SELECT 1 FROM %s WHERE tile IS NULL)', pts) INTO r;
-		IF r.exists THEN
+		EXECUTE format('SELECT EXISTS (SELECT 1 FROM %s WHERE tile IS NULL)', pts) INTO has_null;
+		IF has_null THEN
 			RAISE EXCEPTION '%: tile column "%" of % is NULL for some rows with a geometry', fn, tile_column, source
 				USING ERRCODE = 'null_value_not_allowed';
 		END IF;
@@ -440,7 +442,7 @@ BEGIN
 				 WHERE k.pending %s
 				 GROUP BY h.tile, k.label) s,
 			   LATERAL _tdc_tile_triangles(s.r) t',
-		qtarget, hull, halo, tiles, CASE WHEN citus THEN '' ELSE 'AND h.tile = $1' END);
+		qtarget, hull, halo, tiles, CASE WHEN citus THEN '' ELSE format('AND h.tile = $1::%s', ttype) END);
 
 	done := 0;
 	LOOP
@@ -475,7 +477,7 @@ BEGIN
 		ELSE
 			reported := 0;
 			i := 0;
-			FOR r IN EXECUTE format('SELECT tile FROM %s WHERE pending ORDER BY label', tiles) LOOP
+			FOR r IN EXECUTE format('SELECT tile::text AS tile FROM %s WHERE pending ORDER BY label', tiles) LOOP
 				EXECUTE tile_sql USING r.tile;
 				i := i + 1;
 				IF (i * 10 / pending)::int > reported THEN
@@ -486,7 +488,7 @@ BEGIN
 		END IF;
 		-- tiles that were not final: K := the box they need, grown by a tenth
 		EXECUTE format('UPDATE %s SET pending = false WHERE pending', tiles);
-		FOR r IN EXECUTE format('SELECT tile, ST_X(ST_PointN(ST_ExteriorRing(geom), 1)) AS x0,
+		FOR r IN EXECUTE format('SELECT tile::text AS tile, ST_X(ST_PointN(ST_ExteriorRing(geom), 1)) AS x0,
 									   ST_Y(ST_PointN(ST_ExteriorRing(geom), 1)) AS y0,
 									   ST_X(ST_PointN(ST_ExteriorRing(geom), 3)) AS x1,
 									   ST_Y(ST_PointN(ST_ExteriorRing(geom), 3)) AS y1
@@ -494,8 +496,8 @@ BEGIN
 			EXECUTE format('UPDATE %s SET pending = true,
 								known = ARRAY[%2$L::float8 - %6$L::float8, %3$L::float8 - %7$L::float8,
 											  %4$L::float8 + %6$L::float8, %5$L::float8 + %7$L::float8]
-							 WHERE tile = $1',
-						   tiles, r.x0, r.y0, r.x1, r.y1, (r.x1 - r.x0) / 10, (r.y1 - r.y0) / 10)
+							 WHERE tile = $1::%8$s',
+						   tiles, r.x0, r.y0, r.x1, r.y1, (r.x1 - r.x0) / 10, (r.y1 - r.y0) / 10, ttype)
 			USING r.tile;
 			rerun := rerun + 1;
 		END LOOP;
@@ -506,8 +508,8 @@ BEGIN
 
 	EXECUTE format('SELECT count(*) FROM %s', qtarget) INTO ntri;
 	EXECUTE format('DROP TABLE %s, %s, %s', halo, tiles, pts);
-	RAISE NOTICE '%: % triangles from % points in % tiles, % rounds, % halo points, % s', fn, ntri, npts, ntiles,
-		round, halo_pts, round(extract(epoch FROM clock_timestamp() - t0)::numeric, 1);
+	RAISE NOTICE '%: % triangles from % points in % tiles, % rounds, % halo points', fn, ntri, npts, ntiles,
+		round, halo_pts;
 END
 $proc$;
 
