@@ -250,7 +250,7 @@ DECLARE
 	hull float8[];
 	tparts text[];
 	tschema text; tname text; qtarget text;
-	pts text; tiles text; halo text; pfx text;
+	pts text; tiles text; rt text; halo text;
 	ntiles bigint; done bigint; pending bigint; reported int; i bigint; rerun bigint;
 	round int := 0;
 	has_null boolean;
@@ -311,6 +311,19 @@ BEGIN
 					AND column_to_column_name(logicalrelid, partkey) = $2)'
 		   INTO citus USING source, tile_column;
 	END IF;
+	IF citus THEN
+		-- The staging tables are written and then read by other statements of
+		-- this one transaction (the halo is repartitioned from pts); Citus
+		-- allows that only over one connection per worker, chosen before the
+		-- transaction's first distributed query.
+		PERFORM set_config('citus.multi_shard_modify_mode', 'sequential', true);
+		-- the tiles run on the workers: they must see this session's
+		-- tdc_delaunay.max_memory (Citus passes on SET LOCAL only)
+		PERFORM set_config('citus.propagate_set_commands', 'local', true);
+		IF current_setting('tdc_delaunay.max_memory', true) IS NOT NULL THEN
+			EXECUTE format('SET LOCAL tdc_delaunay.max_memory = %L', current_setting('tdc_delaunay.max_memory'));
+		END IF;
+	END IF;
 
 	-- SRID and dimensions, as ST_TDCDelaunayDump checks them
 	EXECUTE format('SELECT min(ST_SRID(%1$I)), max(ST_SRID(%1$I)), min(ST_Zmflag(%1$I)), max(ST_Zmflag(%1$I))
@@ -327,15 +340,16 @@ BEGIN
 
 	-- staging tables: temporary on plain PostgreSQL, distributed on Citus
 	IF citus THEN
-		pfx := format('%I.%I', tschema, 'tdc_tiled_' || pg_backend_pid() || '_');
 		pts := format('%I.%I', tschema, 'tdc_tiled_' || pg_backend_pid() || '_pts');
-		tiles := format('%I.%I', tschema, 'tdc_tiled_' || pg_backend_pid() || '_tiles');
+		tiles := 'pg_temp.tdc_tiled_tiles';
+		rt := format('%I.%I', tschema, 'tdc_tiled_' || pg_backend_pid() || '_tiles');
 		halo := format('%I.%I', tschema, 'tdc_tiled_' || pg_backend_pid() || '_halo');
 		EXECUTE format('CREATE TABLE %s (tile %s, seq bigint, vi bigint, g geometry)', pts, ttype);
 		EXECUTE format('SELECT create_distributed_table(%L, %L, colocate_with => %L)', pts, 'tile', source::text);
 	ELSE
 		pts := 'pg_temp.tdc_tiled_pts';
 		tiles := 'pg_temp.tdc_tiled_tiles';
+		rt := tiles;
 		halo := 'pg_temp.tdc_tiled_halo';
 		EXECUTE format('CREATE TEMP TABLE %s (tile %s, seq bigint, vi bigint, g geometry)', 'tdc_tiled_pts', ttype);
 	END IF;
@@ -380,16 +394,13 @@ BEGIN
 	END IF;
 
 	-- the tiles, labelled 1.. in the order of their tile values
-	EXECUTE format('CREATE %s TABLE %s AS
+	EXECUTE format('CREATE TEMP TABLE %s AS
 					SELECT tile, row_number() OVER (ORDER BY tile) AS label, n, x0, y0, x1, y1,
 						   NULL::float8[] AS known, NULL::float8[] AS extra, true AS pending
 					  FROM (SELECT tile, count(*) AS n, min(ST_X(g)) AS x0, min(ST_Y(g)) AS y0,
 								   max(ST_X(g)) AS x1, max(ST_Y(g)) AS y1
 							  FROM %s GROUP BY tile) t',
-				   CASE WHEN citus THEN '' ELSE 'TEMP' END, tiles, pts);
-	IF citus THEN
-		EXECUTE format('SELECT create_reference_table(%L)', tiles);
-	END IF;
+				   'tdc_tiled_tiles', pts);
 	-- a first K: the tile's extent plus some eight point spacings
 	margin := 8 * spacing;
 	EXECUTE format('UPDATE %s SET known = ARRAY[x0 - %2$L::float8, y0 - %2$L::float8, x1 + %2$L::float8, y1 + %2$L::float8]',
@@ -423,6 +434,10 @@ BEGIN
 		EXECUTE format('CREATE TABLE %s (tile %s, label bigint, seq bigint, vi bigint, g geometry)', halo, ttype);
 		EXECUTE format('SELECT create_distributed_table(%L, %L, colocate_with => %L)', halo, 'tile', source::text);
 		EXECUTE format('SELECT create_distributed_table(%L, %L, colocate_with => %L)', qtarget, 'tile', source::text);
+		-- the tiles, for the workers: a copy of the coordinator's table
+		EXECUTE format('CREATE TABLE %s (tile %s, label bigint, known float8[], extra float8[], pending boolean)',
+					   rt, ttype);
+		EXECUTE format('SELECT create_reference_table(%L)', rt);
 	ELSE
 		EXECUTE format('CREATE TEMP TABLE %s (tile %s, label bigint, seq bigint, vi bigint, g geometry)',
 					   'tdc_tiled_halo', ttype);
@@ -442,7 +457,7 @@ BEGIN
 				 WHERE k.pending %s
 				 GROUP BY h.tile, k.label) s,
 			   LATERAL _tdc_tile_triangles(s.r) t',
-		qtarget, hull, halo, tiles, CASE WHEN citus THEN '' ELSE format('AND h.tile = $1::%s', ttype) END);
+		qtarget, hull, halo, rt, CASE WHEN citus THEN '' ELSE format('AND h.tile = $1::%s', ttype) END);
 
 	done := 0;
 	LOOP
@@ -454,6 +469,10 @@ BEGIN
 				USING ERRCODE = 'internal_error';
 		END IF;
 		rerun := 0;
+		IF citus THEN
+			EXECUTE format('DELETE FROM %s', rt);
+			EXECUTE format('INSERT INTO %s SELECT tile, label, known, extra, pending FROM %s', rt, tiles);
+		END IF;
 		-- the halo of every pending tile: every point in its closed K, with its owner
 		EXECUTE format('DELETE FROM %s', halo);
 		-- (K and the extra boxes: a point is taken from the first box that holds it)
@@ -469,7 +488,7 @@ BEGIN
 						 WHERE NOT EXISTS (SELECT 1 FROM generate_series(0, b.i - 1) j
 											WHERE ST_X(p.g) BETWEEN b.bx[4*j+1] AND b.bx[4*j+3]
 											  AND ST_Y(p.g) BETWEEN b.bx[4*j+2] AND b.bx[4*j+4])',
-					   halo, pts, tiles, coalesce(srid_lo, 0));
+					   halo, pts, rt, coalesce(srid_lo, 0));
 		GET DIAGNOSTICS ntri = ROW_COUNT;
 		halo_pts := halo_pts + ntri;
 		IF citus THEN
@@ -508,6 +527,9 @@ BEGIN
 
 	EXECUTE format('SELECT count(*) FROM %s', qtarget) INTO ntri;
 	EXECUTE format('DROP TABLE %s, %s, %s', halo, tiles, pts);
+	IF citus THEN
+		EXECUTE format('DROP TABLE %s', rt);
+	END IF;
 	RAISE NOTICE '%: % triangles from % points in % tiles, % rounds, % halo points', fn, ntri, npts, ntiles,
 		round, halo_pts;
 END
