@@ -365,7 +365,8 @@ request(tile_ctx *cx, const double *box)
  * What to ask for when hull edge a -> b of T(Q) is not final: points of P
  * may lie beyond it, outside K.  Ask for the edge's box grown by its length
  * (Q's hull edges at own sites usually mean a halo thinner than the local
- * spacing), doubling the growth until the box leaves K so that K must grow;
+ * spacing), at most a twentieth of K's size to start with, doubling the
+ * growth until the box leaves K so that K must grow;
  * and for the nearest vertex of C beyond the edge too when it is within a
  * few edge lengths (a global hull vertex, which the star needs).
  */
@@ -379,6 +380,11 @@ hull_edge_request(tile_ctx *cx, const double *a, const double *b, const double *
 				g = sqrt(dx * dx + dy * dy),
 				box[4];
 
+	/*
+	 * A long edge of Q's hull (say between a halo strip and K's corner)
+	 * must not blow K up by its length: start from a twentieth of K.
+	 */
+	g = fmin(g, fmax(K[2] - K[0], K[3] - K[1]) * 0.05);
 	if (!(g > 0))
 		g = fmax(K[2] - K[0], K[3] - K[1]) * 1e-3 + 0x1p-1000;
 	for (int i = 0; i < 64; i++, g *= 2)
