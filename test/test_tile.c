@@ -258,8 +258,8 @@ tiled(const double *xy, size_t n, const int64_t *lab, int64_t ntiles, double hal
 				goto out;
 			}
 			if (getenv("TDC_TILE_VERBOSE") && getenv("TDC_TILE_VERBOSE")[0] == '2')
-				printf("    tile %lld: %zu of %zu own sites not final; K %g %g %g %g -> %g %g %g %g\n",
-					   (long long) t, res.unfinal_sites, res.own_sites, K[0], K[1], K[2], K[3],
+				printf("    tile %lld: %zu items not final (%zu own sites); K %g %g %g %g -> %g %g %g %g\n",
+					   (long long) t, res.unfinal, res.own_sites, K[0], K[1], K[2], K[3],
 					   res.need[0], res.need[1], res.need[2], res.need[3]);
 			memcpy(sp.known, res.need, sizeof(sp.known));
 			st->retries++;

@@ -567,9 +567,9 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 
 	/*
 	 * The largest tile: its points with the halo and a growth allowance of
-	 * 1.6 must fit in the budget.
+	 * 2.2 must fit in the budget (a corner tile may grow along long hull edges).
 	 */
-	for (tile_max = n; tile_max > 1000 && tile_bytes(tile_max * 8 / 5, opt, has_z) > budget;)
+	for (tile_max = n; tile_max > 1000 && tile_bytes(tile_max * 11 / 5, opt, has_z) > budget;)
 		tile_max = tile_max * 9 / 10;
 	plan_tiles(ps, 0, FINE_GRID, 0, FINE_GRID, cw, ch, tile_max, tiles, &nt);
 	free(ps);

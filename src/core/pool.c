@@ -184,7 +184,8 @@ worker_main(void *p)
 }
 
 /*
- * Create a pool of nthreads threads in all, the caller included.  Returns 0
+ * Create a pool of nthreads threads in all, the caller included (none, a
+ * NULL pool, for one thread: the caller runs every loop).  Returns 0
  * or TDC_ENOMEM / TDC_ETHREAD with nothing left behind; after TDC_ETHREAD,
  * errno holds pthread_create's error, which pthread_create returns instead
  * of setting errno (errno then holds whatever its internals left, such as
@@ -193,9 +194,13 @@ worker_main(void *p)
 int
 tdc_pool_create(tdc_pool **out, int nthreads)
 {
-	tdc_pool   *pool = calloc(1, sizeof(tdc_pool));
+	tdc_pool   *pool;
 
+	/* one thread: no pool at all, tdc_pool_for runs the loop itself */
 	*out = NULL;
+	if (nthreads <= 1)
+		return 0;
+	pool = calloc(1, sizeof(tdc_pool));
 	if (pool == NULL)
 		return TDC_ENOMEM;
 	pool->nthreads = nthreads > 1 ? nthreads - 1 : 0;
@@ -237,7 +242,7 @@ tdc_pool_for(tdc_pool *pool, size_t ntasks, tdc_task_fn fn, void *arg)
 {
 	if (ntasks == 0)
 		return;
-	if (pool->started == 0 || ntasks == 1)
+	if (pool == NULL || pool->started == 0 || ntasks == 1)
 	{
 		for (size_t i = 0; i < ntasks; i++)
 			fn(arg, i, 0);

@@ -262,7 +262,7 @@ typedef struct tdc_tile_result
 								 * first point with the vertex's coordinates) */
 	size_t		sites;			/* distinct sites in K */
 	size_t		own_sites;		/* of them owned by this tile */
-	size_t		unfinal_sites;	/* own sites whose star is not final yet */
+	size_t		unfinal;		/* triangles and hull edges at own sites found not final */
 } tdc_tile_result;
 
 /*

@@ -270,6 +270,7 @@ typedef struct tile_ctx
 	double		need[4];		/* K united with the requests so far */
 	bool		want_all;		/* a request we could not bound: ask for B */
 	const double **known_list;	/* K, then the extra boxes */
+	bool		skip_checks;	/* K covers B: only collect the triangles */
 } tile_ctx;
 
 static void
@@ -364,7 +365,8 @@ request(tile_ctx *cx, const double *box)
  * What to ask for when hull edge a -> b of T(Q) is not final: points of P
  * may lie beyond it, outside K.  Ask for the edge's box grown by its length
  * (Q's hull edges at own sites usually mean a halo thinner than the local
- * spacing), doubling the growth until the box leaves K so that K must grow;
+ * spacing), at most a twentieth of K's size to start with, doubling the
+ * growth until the box leaves K so that K must grow;
  * and for the nearest vertex of C beyond the edge too when it is within a
  * few edge lengths (a global hull vertex, which the star needs).
  */
@@ -378,6 +380,11 @@ hull_edge_request(tile_ctx *cx, const double *a, const double *b, const double *
 				g = sqrt(dx * dx + dy * dy),
 				box[4];
 
+	/*
+	 * A long edge of Q's hull (say between a halo strip and K's corner)
+	 * must not blow K up by its length: start from a twentieth of K.
+	 */
+	g = fmin(g, fmax(K[2] - K[0], K[3] - K[1]) * 0.05);
 	if (!(g > 0))
 		g = fmax(K[2] - K[0], K[3] - K[1]) * 1e-3 + 0x1p-1000;
 	for (int i = 0; i < 64; i++, g *= 2)
@@ -497,6 +504,160 @@ cmp_i64(int64_t a, int64_t b)
 	return a < b ? -1 : a > b;
 }
 
+/*
+ * The checks run on the job's thread count, each thread over a range of
+ * half-edges, with its own copy of the context (its requests are merged
+ * afterwards); on the way each keeps the triangles whose smallest vertex is
+ * owned, handed over if the tile turns out final.  bad[] (1 for an owned
+ * site) is only read.
+ */
+typedef struct tile_work
+{
+	const tdc_job *job;
+	tile_ctx	cx;
+	const uint8_t *bad;
+	size_t		lo,
+				hi;
+	size_t		unfinal;		/* failing triangles and hull edges at own sites */
+	size_t		ntri,
+				cap;
+	size_t	   *tri;
+	bool		failed;
+	void		(*fn) (struct tile_work *w);
+} tile_work;
+
+static void
+check_range(tile_work *w)
+{
+	const tdc_job *job = w->job;
+	const tdc_he *he = job->he;
+	const uint8_t *bad = w->bad;
+	const tdc_tile_spec *spec = w->cx.spec;
+
+	for (size_t h = w->lo; h < w->hi; h++)
+	{
+		uint32_t	a,
+					b,
+					v[3],
+					hh[3];
+		const double *p[3];
+		bool		glob[3];
+
+		if (he[h].org == TDC_NIL)
+			continue;
+		/* a hull edge: the outer face is on the left of h */
+		if (job->outer == NULL || ((job->outer[h >> 6] >> (h & 63)) & 1))
+		{
+			if (w->cx.skip_checks)
+				continue;
+			b = he[h].org;
+			a = he[SYM(h)].org;
+			if ((bad[a] || bad[b]) &&
+				!hull_edge_final(&w->cx, job->xy + 2 * (size_t) a, job->xy + 2 * (size_t) b))
+				w->unfinal++;
+			continue;
+		}
+		if (job->ntri == 0 || !tdc_tri_at(job, h, v))
+			continue;
+		if (!bad[v[0]] && !bad[v[1]] && !bad[v[2]])
+			continue;
+		/* keep it if its smallest vertex is ours: used when the tile is final */
+		if (w->unfinal == 0 && !w->failed)
+		{
+			int			lo = 0;
+
+			for (int k = 1; k < 3; k++)
+				if (tdc_key_less(job->xy + 2 * (size_t) v[k], job->xy + 2 * (size_t) v[lo], 0))
+					lo = k;
+			if (bad[v[lo]])
+			{
+				if (w->ntri == w->cap)
+				{
+					size_t		nc = w->cap ? 2 * w->cap : (w->hi - w->lo) / 6 + 64;
+					size_t	   *t = realloc(w->tri, sizeof(size_t) * 3 * nc);
+
+					if (t == NULL)
+						w->failed = true;
+					else
+					{
+						w->tri = t;
+						w->cap = nc;
+					}
+				}
+				if (!w->failed)
+				{
+					for (int k = 0; k < 3; k++)
+						w->tri[3 * w->ntri + k] = job->idx[v[k]];
+					w->ntri++;
+				}
+			}
+		}
+		if (w->cx.skip_checks)
+			continue;
+		hh[0] = (uint32_t) h;
+		hh[1] = he[SYM(hh[0])].prev;
+		hh[2] = he[SYM(hh[1])].prev;
+		for (int k = 0; k < 3; k++)
+		{
+			uint32_t	o = SYM(hh[k]);
+
+			p[k] = job->xy + 2 * (size_t) v[k];
+			glob[k] = false;
+			if ((job->outer[o >> 6] >> (o & 63)) & 1)
+			{
+				const double *q = job->xy + 2 * (size_t) v[(k + 1) % 3];
+
+				glob[k] = true;
+				for (size_t i = 0; i < spec->nhull && glob[k]; i++)
+					glob[k] = left_or_on(p[k], q, spec->hull + 2 * i);
+			}
+		}
+		if (!triangle_final(&w->cx, p, glob))
+			w->unfinal++;
+	}
+}
+
+static void *
+work_main(void *arg)
+{
+	tile_work  *w = arg;
+
+	w->fn(w);
+	return NULL;
+}
+
+/* Run fn over the half-edges in nthreads ranges; threads that cannot start run inline. */
+static void
+run_parallel(const tdc_job *job, const tile_ctx *cx, const uint8_t *bad,
+			 void (*fn) (tile_work *w), tile_work *tw, int nthreads)
+{
+	size_t		nhe = job->nin * 6;
+	pthread_t  *th = malloc(sizeof(pthread_t) * nthreads);
+	bool	   *started = calloc(nthreads, sizeof(bool));
+
+	for (int i = 0; i < nthreads; i++)
+	{
+		tw[i].job = job;
+		tw[i].cx = *cx;
+		tw[i].bad = bad;
+		tw[i].lo = nhe / nthreads * i;
+		tw[i].hi = i == nthreads - 1 ? nhe : nhe / nthreads * (i + 1);
+		tw[i].fn = fn;
+	}
+	for (int i = 1; i < nthreads && th && started; i++)
+		started[i] = pthread_create(&th[i], NULL, work_main, &tw[i]) == 0;
+	fn(&tw[0]);
+	for (int i = 1; i < nthreads; i++)
+	{
+		if (th && started && started[i])
+			pthread_join(th[i], NULL);
+		else
+			fn(&tw[i]);
+	}
+	free(th);
+	free(started);
+}
+
 int
 tdc_tile_finish(const tdc_job *job, const tdc_tile_spec *spec, tdc_tile_result *res,
 				char *err, size_t errlen)
@@ -506,18 +667,18 @@ tdc_tile_finish(const tdc_job *job, const tdc_tile_spec *spec, tdc_tile_result *
 	size_t		nin = job->nin,
 				nhe = nin * 6;
 	int64_t    *lab = NULL;
-	uint8_t    *bad = NULL;		/* per site: 1 owned, 2 owned and not final */
+	uint8_t    *bad = NULL;		/* per site: 1 if owned */
 	const double **known_list = NULL;
-	const tdc_he *he = job->he;
+	tile_work  *tw = NULL;
+	int			nthreads;
 	bool		covers;
-	size_t		cap,
-				nsites_own = 0;
+	size_t		nsites_own = 0;
 
 	memset(res, 0, sizeof(*res));
 	if (err && errlen)
 		err[0] = '\0';
 #define FAIL(code, ...) do { if (err && errlen) snprintf(err, errlen, __VA_ARGS__); \
-		free(lab); free(bad); free(known_list); tdc_tile_result_free(res); return (code); } while (0)
+		free(lab); free(bad); free(known_list); free(tw); tdc_tile_result_free(res); return (code); } while (0)
 
 	if (job->opt.tolerance > 0)
 		FAIL(TDC_EINVAL, "a tiled triangulation cannot use a tolerance: which points it merges depends on all of them");
@@ -592,128 +753,77 @@ tdc_tile_finish(const tdc_job *job, const tdc_tile_spec *spec, tdc_tile_result *
 	lab = NULL;
 	res->own_sites = nsites_own;
 	res->sites = job->nsites;
+	nthreads = job->threads > 0 ? job->threads : 1;
+	if (nhe < 65536)
+		nthreads = 1;
+	tw = calloc(nthreads, sizeof(tile_work));
+	if (tw == NULL)
+		FAIL(TDC_ENOMEM, "out of memory");
 
+	cx.skip_checks = covers;	/* Q = P: every star is final */
 	if (covers)
-		;						/* Q = P: every star is final */
+		run_parallel(job, &cx, bad, check_range, tw, nthreads);
 	else if (job->nsites < 2)
 	{
 		/* a lone site is final only when it is alone in P */
 		if (nsites_own > 0)
 		{
 			cx.want_all = true;
-			for (size_t s = 0; s < nin; s++)
-				if (bad[s])
-					bad[s] = 2;
+			res->unfinal = nsites_own;
 		}
 	}
 	else
+		run_parallel(job, &cx, bad, check_range, tw, nthreads);
+
+	for (int w = 0; w < nthreads; w++)
 	{
-		/* hull edges: the outer face is on the left of these half-edges */
-		for (size_t h = 0; h < nhe; h++)
-		{
-			uint32_t	a,
-						b;
-
-			if (he[h].org == TDC_NIL)
-				continue;
-			if (job->outer && !((job->outer[h >> 6] >> (h & 63)) & 1))
-				continue;
-			b = he[h].org;
-			a = he[SYM(h)].org;
-			if (!bad[a] && !bad[b])
-				continue;
-			if (!hull_edge_final(&cx, job->xy + 2 * (size_t) a, job->xy + 2 * (size_t) b))
-			{
-				if (bad[a])
-					bad[a] = 2;
-				if (bad[b])
-					bad[b] = 2;
-			}
-		}
-		for (size_t h = 0; h < nhe && job->ntri > 0; h++)
-		{
-			uint32_t	v[3],
-						hh[3];
-			const double *p[3];
-			bool		glob[3];
-
-			if (!tdc_tri_at(job, h, v))
-				continue;
-			if (!bad[v[0]] && !bad[v[1]] && !bad[v[2]])
-				continue;
-			hh[0] = (uint32_t) h;
-			hh[1] = he[SYM(hh[0])].prev;
-			hh[2] = he[SYM(hh[1])].prev;
-			for (int k = 0; k < 3; k++)
-			{
-				uint32_t	o = SYM(hh[k]);
-
-				p[k] = job->xy + 2 * (size_t) v[k];
-				glob[k] = false;
-				if ((job->outer[o >> 6] >> (o & 63)) & 1)
-				{
-					const double *q = job->xy + 2 * (size_t) v[(k + 1) % 3];
-
-					glob[k] = true;
-					for (size_t i = 0; i < spec->nhull && glob[k]; i++)
-						glob[k] = left_or_on(p[k], q, spec->hull + 2 * i);
-				}
-			}
-			if (!triangle_final(&cx, p, glob))
-				for (int k = 0; k < 3; k++)
-					if (bad[v[k]])
-						bad[v[k]] = 2;
-		}
+		res->unfinal += tw[w].unfinal;
+		box_union(cx.need, tw[w].cx.need);
+		cx.want_all |= tw[w].cx.want_all;
 	}
-
-	for (size_t s = 0; s < nin; s++)
-		if (bad[s] == 2)
-			res->unfinal_sites++;
-	if (res->unfinal_sites > 0)
+	if (res->unfinal > 0)
 	{
 		if (cx.want_all || (cx.need[0] >= K[0] && cx.need[1] >= K[1] &&
 							cx.need[2] <= K[2] && cx.need[3] <= K[3]))
 			box_union(cx.need, cx.B);
 		memcpy(res->need, cx.need, sizeof(res->need));
 		res->final = 0;
+		for (int w = 0; w < nthreads; w++)
+			free(tw[w].tri);
 		free(bad);
 		free(known_list);
+		free(tw);
 		return TDC_OK;
 	}
 
-	/* every own star is final: emit the triangles whose smallest vertex we own */
+	/* every own star is final: the triangles whose smallest vertex we own */
 	res->final = 1;
-	cap = 2 * nsites_own + 16;
-	res->tri = malloc(sizeof(size_t) * 3 * cap);
-	if (res->tri == NULL)
-		FAIL(TDC_ENOMEM, "out of memory");
-	for (size_t h = 0; h < nhe && job->ntri > 0 && nsites_own > 0; h++)
+	for (int w = 0; w < nthreads; w++)
 	{
-		uint32_t	v[3];
-		int			lo = 0;
-
-		if (!tdc_tri_at(job, h, v))
-			continue;
-		for (int k = 1; k < 3; k++)
-			if (tdc_key_less(job->xy + 2 * (size_t) v[k], job->xy + 2 * (size_t) v[lo], 0))
-				lo = k;
-		if (!bad[v[lo]])
-			continue;
-		if (res->ntri == cap)
+		if (tw[w].failed)
 		{
-			size_t	   *t = realloc(res->tri, sizeof(size_t) * 3 * cap * 2);
-
-			if (t == NULL)
-				FAIL(TDC_ENOMEM, "out of memory");
-			res->tri = t;
-			cap *= 2;
+			for (int u = 0; u < nthreads; u++)
+				free(tw[u].tri);
+			FAIL(TDC_ENOMEM, "out of memory");
 		}
-		for (int k = 0; k < 3; k++)
-			res->tri[3 * res->ntri + k] = job->idx[v[k]];
-		res->ntri++;
+		res->ntri += tw[w].ntri;
+	}
+	res->tri = malloc(sizeof(size_t) * 3 * res->ntri + 1);
+	if (res->tri == NULL)
+	{
+		for (int u = 0; u < nthreads; u++)
+			free(tw[u].tri);
+		FAIL(TDC_ENOMEM, "out of memory");
+	}
+	for (size_t w = 0, at = 0; w < (size_t) nthreads; w++)
+	{
+		memcpy(res->tri + 3 * at, tw[w].tri, sizeof(size_t) * 3 * tw[w].ntri);
+		at += tw[w].ntri;
+		free(tw[w].tri);
 	}
 	free(bad);
 	free(known_list);
+	free(tw);
 	return TDC_OK;
 #undef FAIL
 }
