@@ -108,6 +108,29 @@ else
 	finish
 fi
 
+# TDC_CITUS_BENCH=N: instead of the checks, time N uniform points in tiles
+# of about N/16 (bench/tiled_sql.sh calls this)
+if [ -n "${TDC_CITUS_BENCH:-}" ]; then
+	N=$TDC_CITUS_BENCH
+	q coord -c "SELECT setseed(0.5);
+		CREATE TABLE bpts AS SELECT (floor(x / 25) * 4 + floor(y / 25))::int AS tile, ST_MakePoint(x, y) AS geom
+		  FROM (SELECT random() * 100 AS x, random() * 100 AS y FROM generate_series(1, $N) i) s;
+		SELECT create_distributed_table('bpts', 'tile');
+		SELECT truncate_local_data_after_distributing_table('bpts');" >/dev/null 2>&1 || { bad "bench set-up"; finish; }
+	t1=$(date +%s.%N)
+	out=$(q coord -c "CALL tdc_delaunay_tiled('bpts', 'btri', tile_column => 'tile');" \
+		-c "SELECT regexp_replace(pg_read_file('/proc/self/status'), '.*VmHWM:\s*([0-9]+ kB).*', '\1')" 2>&1)
+	t2=$(date +%s.%N)
+	echo "citus bench: $N points, 2 workers, 32 shards: tdc_delaunay_tiled $(echo "$t2 - $t1" | bc) s;" \
+		"coordinator backend peak RSS (VmHWM) $(echo "$out" | tail -1)"
+	echo "$out" | grep -o '[0-9]* triangles from .*' | sed 's/^/citus bench: /'
+	for n in w1 w2; do
+		echo "citus bench: $n shards of btri: $(q "$n" -c "SELECT count(*) FROM pg_class WHERE relname LIKE 'btri_%' AND relkind = 'r'")"
+	done
+	ok "bench"
+	finish
+fi
+
 # uniform points, tiles of a 4 x 4 grid, distributed by tile
 q coord -c "SELECT setseed(0.5);
 	CREATE TABLE pts AS SELECT i AS id, (floor(x / 25) * 4 + floor(y / 25))::int AS tile, ST_MakePoint(x, y) AS geom
