@@ -124,9 +124,9 @@ if [ -n "${TDC_CITUS_BENCH:-}" ]; then
 	echo "citus bench: $N points, 2 workers, 32 shards: tdc_delaunay_tiled $(echo "$t2 - $t1" | bc) s;" \
 		"coordinator backend peak RSS (VmHWM) $(echo "$out" | tail -1)"
 	echo "$out" | grep -o '[0-9]* triangles from .*' | sed 's/^/citus bench: /'
-	for n in w1 w2; do
-		echo "citus bench: $n shards of btri: $(q "$n" -c "SELECT count(*) FROM pg_class WHERE relname LIKE 'btri_%' AND relkind = 'r'")"
-	done
+	q coord -c "SELECT 'citus bench: triangles on port ' || nodeport || ': ' || count(*) || ' shards, '
+					  || pg_size_pretty(sum(shard_size)) FROM citus_shards WHERE table_name = 'btri'::regclass
+				GROUP BY nodeport ORDER BY nodeport"
 	ok "bench"
 	finish
 fi
@@ -179,6 +179,19 @@ else
 	head -40 "$BASE/tile-plan.txt"
 fi
 cp "$BASE/tile-plan.txt" "$ROOT/build/citus-tile-plan.txt" 2>/dev/null || true
+# no statement of the run moved points or triangles through the coordinator
+# (the halo is built by a repartitioned INSERT ... SELECT, worker to worker);
+# only the small tiles table (one row per tile) is copied from the
+# coordinator into its reference table
+awk '/duration: .* plan:/ { if (blk ~ /pull to coordinator/) print first; blk = ""; first = ""; next }
+	 /Query Text:/ && first == "" { first = $0 } { blk = blk "\n" $0 }
+	 END { if (blk ~ /pull to coordinator/) print first }' "$RUN/coord.log" >"$BASE/pulls.txt"
+methods=$(grep -o 'INSERT/SELECT method: [a-z ]*' "$RUN/coord.log" | sort | uniq -c | tr -s ' ' | paste -sd, -)
+if ! grep -v -q 'INSERT INTO [a-z_.]*tdc_tiled_[0-9]*_tiles SELECT' "$BASE/pulls.txt"; then
+	ok "only the tiles table went through the coordinator ($(grep -c . "$BASE/pulls.txt") pulled statement(s); methods:${methods:- pushed down only})"
+else
+	bad "an INSERT ... SELECT pulled rows to the coordinator: $(head -3 "$BASE/pulls.txt")"
+fi
 
 # an error in a tile: no target, no staging table, on any node
 q coord -c "SET tdc_delaunay.max_memory = 1; CALL tdc_delaunay_tiled('pts', 'tri_err', tile_column => 'tile');" \
