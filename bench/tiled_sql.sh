@@ -19,7 +19,7 @@ psql -c "CREATE EXTENSION IF NOT EXISTS postgis; CREATE EXTENSION IF NOT EXISTS 
 	DROP TABLE IF EXISTS tb_pts, tb_tiled, tb_dump;
 	SELECT setseed(0.5);
 	CREATE TABLE tb_pts AS SELECT ST_MakePoint(random() * 1000, random() * 1000) AS geom FROM generate_series(1, $N);
-	VACUUM ANALYZE tb_pts;" >/dev/null 2>&1
+	ANALYZE tb_pts;" >/dev/null
 
 t1=$(now)
 out=$(psql -c "SET client_min_messages = notice; CALL tdc_delaunay_tiled('tb_pts', 'tb_tiled')" -c "$hwm" 2>&1)
