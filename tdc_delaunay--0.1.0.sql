@@ -251,3 +251,409 @@ COMMENT ON FUNCTION ST_TDCVoronoiDump(text, geometry) IS
 'Runs a query returning (id bigint, geom geometry) with the caller''s rights and returns one row per vertex '
 'with its row''s id and its Voronoi cell (duplicates share the cell), clipped as by ST_TDCVoronoiPolygons; '
 'not bound by the 1 GB limit of a single value.';
+-- tdc_delaunay_tiled: the triangulation of a whole table, tile by tile, into a new table
+-- (src/pg/tdc_tiled.c and src/core/tile.c explain the per-tile step)
+
+CREATE FUNCTION _tdc_tile_transfn(internal, geometry, int8, int8, float8[], float8[], float8[])
+RETURNS internal
+AS 'MODULE_PATHNAME', '_tdc_tile_transfn'
+LANGUAGE C IMMUTABLE PARALLEL SAFE;
+
+COMMENT ON FUNCTION _tdc_tile_transfn(internal, geometry, int8, int8, float8[], float8[], float8[]) IS
+'Transition function of _tdc_tile: collects the vertices of a tile and its halo with the label of their owning tile.';
+
+CREATE FUNCTION _tdc_tile_finalfn(internal)
+RETURNS bytea
+AS 'MODULE_PATHNAME', '_tdc_tile_finalfn'
+LANGUAGE C IMMUTABLE PARALLEL SAFE;
+
+COMMENT ON FUNCTION _tdc_tile_finalfn(internal) IS
+'Final function of _tdc_tile: triangulates the tile with its halo and keeps its final triangles, '
+'or the box it needs when they are not final yet.';
+
+CREATE AGGREGATE _tdc_tile(geometry, int8, int8, float8[], float8[], float8[]) (
+	SFUNC = _tdc_tile_transfn,
+	STYPE = internal,
+	FINALFUNC = _tdc_tile_finalfn
+);
+
+COMMENT ON AGGREGATE _tdc_tile(geometry, int8, int8, float8[], float8[], float8[]) IS
+'Internal, for tdc_delaunay_tiled: _tdc_tile(point, owner label, this tile''s label, known box {xmin,ymin,xmax,ymax}, '
+'hull {x,y,...}, extra known boxes {xmin,ymin,xmax,ymax,...} ORDER BY source order) over the points of a tile''s known box; expand with _tdc_tile_triangles.';
+
+CREATE FUNCTION _tdc_tile_triangles(bytea)
+RETURNS TABLE(k bigint, geom geometry)
+AS 'MODULE_PATHNAME', '_tdc_tile_triangles'
+LANGUAGE C IMMUTABLE STRICT PARALLEL SAFE
+ROWS 1000;
+
+COMMENT ON FUNCTION _tdc_tile_triangles(bytea) IS
+'Internal, for tdc_delaunay_tiled: the rows of a _tdc_tile result, triangles numbered k = 1.., '
+'or one row k = 0 with the box a tile that is not final yet needs.';
+
+CREATE FUNCTION _tdc_hull_transfn(internal, geometry)
+RETURNS internal
+AS 'MODULE_PATHNAME', '_tdc_hull_transfn'
+LANGUAGE C IMMUTABLE PARALLEL SAFE;
+
+COMMENT ON FUNCTION _tdc_hull_transfn(internal, geometry) IS
+'Transition function of _tdc_hull(geometry): adds the vertices, keeping only the hull when its buffer fills.';
+
+CREATE FUNCTION _tdc_hull_transfn(internal, float8[])
+RETURNS internal
+AS 'MODULE_PATHNAME', '_tdc_hull_transfn'
+LANGUAGE C IMMUTABLE PARALLEL SAFE;
+
+COMMENT ON FUNCTION _tdc_hull_transfn(internal, float8[]) IS
+'Transition function of _tdc_hull(float8[]): adds the x,y pairs of a partial hull.';
+
+CREATE FUNCTION _tdc_hull_finalfn(internal)
+RETURNS float8[]
+AS 'MODULE_PATHNAME', '_tdc_hull_finalfn'
+LANGUAGE C IMMUTABLE PARALLEL SAFE;
+
+COMMENT ON FUNCTION _tdc_hull_finalfn(internal) IS
+'Final function of _tdc_hull: the exact convex hull as {x,y,...}, counter-clockwise.';
+
+CREATE AGGREGATE _tdc_hull(geometry) (
+	SFUNC = _tdc_hull_transfn,
+	STYPE = internal,
+	FINALFUNC = _tdc_hull_finalfn
+);
+
+COMMENT ON AGGREGATE _tdc_hull(geometry) IS
+'Internal, for tdc_delaunay_tiled: the exact convex hull of the vertices as {x,y,...} (bounded memory).';
+
+CREATE AGGREGATE _tdc_hull(float8[]) (
+	SFUNC = _tdc_hull_transfn,
+	STYPE = internal,
+	FINALFUNC = _tdc_hull_finalfn
+);
+
+COMMENT ON AGGREGATE _tdc_hull(float8[]) IS
+'Internal, for tdc_delaunay_tiled: the convex hull of partial hulls given as {x,y,...}.';
+
+-- The procedure.  Its tables: pts (every vertex, with the tile owning it and
+-- its position in the source), tiles (one row per tile: label, extent, known
+-- box K), halo (for every pending tile, the points inside its K) and the
+-- target.  A round runs every pending tile; a tile whose stars are not all
+-- final writes one marker row (id -1, its needed box) instead of triangles,
+-- and the next round reruns it with a larger K.  On Citus, when source is
+-- distributed by tile_column, pts, halo and the target are distributed on it
+-- and co-located with source, tiles is a reference table, and a round is one
+-- INSERT ... SELECT ... GROUP BY tile that runs on the workers.  On plain
+-- PostgreSQL the same statement runs once per tile, so that a backend holds
+-- one tile and its halo at a time.  Everything happens in the caller's
+-- transaction: an error or a cancel leaves no target behind.
+CREATE PROCEDURE tdc_delaunay_tiled(source regclass, target text, geom_column name DEFAULT 'geom',
+									tile_column name DEFAULT NULL, tile_size float8 DEFAULT NULL)
+LANGUAGE plpgsql
+-- a tile's statement is estimated at millions of rows, and compiling it
+-- cost a second per tile; boxes and the hull pass through the statements'
+-- text, so floats must print exactly
+SET jit = off
+SET extra_float_digits = 3
+AS $proc$
+DECLARE
+	fn constant text := 'tdc_delaunay_tiled';
+	gtyp name;
+	ttype text := 'bigint';
+	tv text;					-- SQL of a vertex's tile value
+	citus boolean := false;
+	npts bigint;
+	srid_lo int; srid_hi int; zm_lo int; zm_hi int;
+	gx0 float8; gy0 float8; gx1 float8; gy1 float8;
+	w float8; h float8; spacing float8; margin float8; size float8;
+	hull float8[];
+	tparts text[];
+	tschema text; tname text; qtarget text;
+	pts text; tiles text; rt text; halo text;
+	ntiles bigint; done bigint; pending bigint; reported int; i bigint; rerun bigint;
+	round int := 0;
+	has_null boolean;
+	halo_pts bigint := 0;
+	ntri bigint;
+	r record;
+	tile_sql text;
+BEGIN
+	-- the geometry column
+	SELECT t.typname INTO gtyp
+	  FROM pg_attribute a JOIN pg_type t ON t.oid = a.atttypid
+	 WHERE a.attrelid = source AND a.attname = geom_column AND a.attnum > 0 AND NOT a.attisdropped;
+	IF NOT FOUND THEN
+		RAISE EXCEPTION '%: column "%" of relation % does not exist', fn, geom_column, source
+			USING ERRCODE = 'undefined_column';
+	END IF;
+	IF gtyp <> 'geometry' THEN
+		RAISE EXCEPTION '%: column "%" of relation % is of type %, not geometry', fn, geom_column, source, gtyp
+			USING ERRCODE = 'datatype_mismatch';
+	END IF;
+	-- the tiles
+	IF tile_column IS NOT NULL THEN
+		SELECT format_type(a.atttypid, a.atttypmod) INTO ttype
+		  FROM pg_attribute a
+		 WHERE a.attrelid = source AND a.attname = tile_column AND a.attnum > 0 AND NOT a.attisdropped;
+		IF NOT FOUND THEN
+			RAISE EXCEPTION '%: tile column "%" of relation % does not exist', fn, tile_column, source
+				USING ERRCODE = 'undefined_column';
+		END IF;
+		IF tile_size IS NOT NULL THEN
+			RAISE EXCEPTION '%: give tile_column or tile_size, not both', fn
+				USING ERRCODE = 'invalid_parameter_value';
+		END IF;
+	ELSIF tile_size IS NOT NULL AND NOT (tile_size > 0 AND tile_size < 'infinity'::float8) THEN
+		RAISE EXCEPTION '%: tile_size must be positive and finite, not %', fn, tile_size
+			USING ERRCODE = 'invalid_parameter_value';
+	END IF;
+	-- the target: never overwritten
+	tparts := parse_ident(target);
+	IF cardinality(tparts) = 1 THEN
+		tschema := current_schema();
+		tname := tparts[1];
+	ELSIF cardinality(tparts) = 2 THEN
+		tschema := tparts[1];
+		tname := tparts[2];
+	ELSE
+		RAISE EXCEPTION '%: target "%" is not a table name', fn, target
+			USING ERRCODE = 'invalid_name';
+	END IF;
+	qtarget := format('%I.%I', tschema, tname);
+	IF to_regclass(qtarget) IS NOT NULL THEN
+		RAISE EXCEPTION '%: target % already exists', fn, qtarget
+			USING ERRCODE = 'duplicate_table', HINT = 'Drop it or choose another name; it is never overwritten.';
+	END IF;
+	-- Citus: source distributed by hash of tile_column
+	IF tile_column IS NOT NULL AND to_regclass('pg_catalog.pg_dist_partition') IS NOT NULL THEN
+		EXECUTE 'SELECT EXISTS (SELECT 1 FROM pg_dist_partition WHERE logicalrelid = $1 AND partmethod = ''h''
+					AND column_to_column_name(logicalrelid, partkey) = $2)'
+		   INTO citus USING source, tile_column;
+	END IF;
+	IF citus THEN
+		-- The staging tables are written and then read by other statements of
+		-- this one transaction (the halo is repartitioned from pts); Citus
+		-- allows that only over one connection per worker, chosen before the
+		-- transaction's first distributed query.
+		PERFORM set_config('citus.multi_shard_modify_mode', 'sequential', true);
+		-- the tiles run on the workers: they must see this session's
+		-- tdc_delaunay.max_memory (Citus passes on SET LOCAL only)
+		PERFORM set_config('citus.propagate_set_commands', 'local', true);
+		IF current_setting('tdc_delaunay.max_memory', true) IS NOT NULL THEN
+			EXECUTE format('SET LOCAL tdc_delaunay.max_memory = %L', current_setting('tdc_delaunay.max_memory'));
+		END IF;
+	END IF;
+
+	-- SRID and dimensions, as ST_TDCDelaunayDump checks them
+	EXECUTE format('SELECT min(ST_SRID(%1$I)), max(ST_SRID(%1$I)), min(ST_Zmflag(%1$I)), max(ST_Zmflag(%1$I))
+					  FROM %2$s WHERE %1$I IS NOT NULL', geom_column, source)
+	   INTO srid_lo, srid_hi, zm_lo, zm_hi;
+	IF srid_lo <> srid_hi THEN
+		RAISE EXCEPTION '%: mixed SRIDs in %.% (% and %)', fn, source, geom_column, srid_lo, srid_hi
+			USING ERRCODE = 'invalid_parameter_value';
+	END IF;
+	IF zm_lo <> zm_hi THEN
+		RAISE EXCEPTION '%: mixed dimensions in %.% (with and without Z or M)', fn, source, geom_column
+			USING ERRCODE = 'invalid_parameter_value';
+	END IF;
+
+	-- staging tables: temporary on plain PostgreSQL, distributed on Citus
+	IF citus THEN
+		pts := format('%I.%I', tschema, 'tdc_tiled_' || pg_backend_pid() || '_pts');
+		tiles := 'pg_temp.tdc_tiled_tiles';
+		rt := format('%I.%I', tschema, 'tdc_tiled_' || pg_backend_pid() || '_tiles');
+		halo := format('%I.%I', tschema, 'tdc_tiled_' || pg_backend_pid() || '_halo');
+		EXECUTE format('CREATE TABLE %s (tile %s, seq bigint, vi bigint, g geometry)', pts, ttype);
+		EXECUTE format('SELECT create_distributed_table(%L, %L, colocate_with => %L)', pts, 'tile', source::text);
+	ELSE
+		pts := 'pg_temp.tdc_tiled_pts';
+		tiles := 'pg_temp.tdc_tiled_tiles';
+		rt := tiles;
+		halo := 'pg_temp.tdc_tiled_halo';
+		EXECUTE format('CREATE TEMP TABLE %s (tile %s, seq bigint, vi bigint, g geometry)', 'tdc_tiled_pts', ttype);
+	END IF;
+
+	-- every vertex, in the source's order (block, offset, vertex)
+	tv := CASE WHEN tile_column IS NOT NULL THEN format('s.%I', tile_column) ELSE 'NULL::bigint' END;
+	EXECUTE format('INSERT INTO %s (tile, seq, vi, g)
+					SELECT %s, ((s.ctid::text::point)[0])::bigint * 65536 + ((s.ctid::text::point)[1])::bigint,
+						   d.vi, d.geom
+					  FROM %s s, LATERAL ST_DumpPoints(s.%I) WITH ORDINALITY AS d(path, geom, vi)
+					 WHERE s.%I IS NOT NULL', pts, tv, source, geom_column, geom_column);
+	EXECUTE format('SELECT count(*), min(ST_X(g)), min(ST_Y(g)), max(ST_X(g)), max(ST_Y(g)) FROM %s', pts)
+	   INTO npts, gx0, gy0, gx1, gy1;
+	IF tile_column IS NOT NULL THEN
+		EXECUTE format('SELECT EXISTS (SELECT 1 FROM %s WHERE tile IS NULL)', pts) INTO has_null;
+		IF has_null THEN
+			RAISE EXCEPTION '%: tile column "%" of % is NULL for some rows with a geometry', fn, tile_column, source
+				USING ERRCODE = 'null_value_not_allowed';
+		END IF;
+	END IF;
+
+	-- the squares: tile = floor(x / size) * 2^32 + floor(y / size), a label later
+	w := coalesce(gx1 - gx0, 0);
+	h := coalesce(gy1 - gy0, 0);
+	spacing := CASE WHEN npts > 0 AND w * h > 0 THEN sqrt(w * h / npts)
+					WHEN npts > 0 AND w + h > 0 THEN (w + h) / npts
+					ELSE 1 END;
+	IF tile_column IS NULL THEN
+		size := tile_size;
+		IF size IS NULL THEN
+			-- about a million points per tile
+			size := CASE WHEN npts <= 1000000 THEN 'infinity'::float8
+						 WHEN w * h > 0 THEN sqrt(w * h / (npts / 1000000.0))
+						 ELSE greatest(w, h) / (npts / 1000000.0) END;
+		END IF;
+		IF size < 'infinity'::float8 THEN
+			EXECUTE format('UPDATE %s SET tile = floor(ST_X(g) / %L::float8)::bigint * 4294967296
+										 + floor(ST_Y(g) / %L::float8)::bigint', pts, size, size);
+		ELSE
+			EXECUTE format('UPDATE %s SET tile = 0', pts);
+		END IF;
+	END IF;
+
+	-- the tiles, labelled 1.. in the order of their tile values
+	EXECUTE format('CREATE TEMP TABLE %s AS
+					SELECT tile, row_number() OVER (ORDER BY tile) AS label, n, x0, y0, x1, y1,
+						   NULL::float8[] AS known, NULL::float8[] AS extra, true AS pending
+					  FROM (SELECT tile, count(*) AS n, min(ST_X(g)) AS x0, min(ST_Y(g)) AS y0,
+								   max(ST_X(g)) AS x1, max(ST_Y(g)) AS y1
+							  FROM %s GROUP BY tile) t',
+				   'tdc_tiled_tiles', pts);
+	-- a first K: the tile's extent plus some eight point spacings
+	margin := 8 * spacing;
+	EXECUTE format('UPDATE %s SET known = ARRAY[x0 - %2$L::float8, y0 - %2$L::float8, x1 + %2$L::float8, y1 + %2$L::float8]',
+				   tiles, margin);
+	EXECUTE format('SELECT count(*) FROM %s', tiles) INTO ntiles;
+	-- C, a convex polygon containing every point: their exact convex hull,
+	-- from the hulls of the tiles (on the workers on Citus)
+	EXECUTE format('SELECT _tdc_hull(h) FROM (SELECT _tdc_hull(g) AS h FROM %s GROUP BY tile) s', pts) INTO hull;
+
+	-- Extra known boxes: the boxes of the hull edges that meet K, grown by
+	-- 16 point spacings.  A long hull edge has a triangle whose circle bulges
+	-- far out of C; only its thin part inside C must be known, and the band
+	-- holds it without widening K along the whole edge (as the CLI does).
+	EXECUTE format('UPDATE %s k SET extra = coalesce((
+			SELECT array_agg(v ORDER BY e.i, u.j)
+			  FROM (SELECT i, least(h[2*i+1], h[2*((i+1) %% n)+1]) - %3$L::float8 AS x0,
+							  least(h[2*i+2], h[2*((i+1) %% n)+2]) - %3$L::float8 AS y0,
+							  greatest(h[2*i+1], h[2*((i+1) %% n)+1]) + %3$L::float8 AS x1,
+							  greatest(h[2*i+2], h[2*((i+1) %% n)+2]) + %3$L::float8 AS y1
+					  FROM (SELECT %2$L::float8[] AS h, cardinality(%2$L::float8[]) / 2 AS n) c,
+						   generate_series(0, CASE WHEN n > 1 THEN n - 1 ELSE -1 END) i) e,
+				   unnest(ARRAY[e.x0, e.y0, e.x1, e.y1]) WITH ORDINALITY AS u(v, j)
+			 WHERE e.x0 <= k.known[3] AND k.known[1] <= e.x1 AND e.y0 <= k.known[4] AND k.known[2] <= e.y1),
+			''{}'')', tiles, hull, 16 * spacing);
+
+	-- the target
+	EXECUTE format('CREATE TABLE %s (id bigint, tile %s, geom geometry(%s, %s))', qtarget, ttype,
+				   CASE WHEN zm_lo = 2 THEN 'PolygonZ' WHEN zm_lo = 1 THEN 'PolygonM'
+						WHEN zm_lo = 3 THEN 'PolygonZM' ELSE 'Polygon' END, coalesce(srid_lo, 0));
+	IF citus THEN
+		EXECUTE format('CREATE TABLE %s (tile %s, label bigint, seq bigint, vi bigint, g geometry)', halo, ttype);
+		EXECUTE format('SELECT create_distributed_table(%L, %L, colocate_with => %L)', halo, 'tile', source::text);
+		EXECUTE format('SELECT create_distributed_table(%L, %L, colocate_with => %L)', qtarget, 'tile', source::text);
+		-- the tiles, for the workers: a copy of the coordinator's table
+		EXECUTE format('CREATE TABLE %s (tile %s, label bigint, known float8[], extra float8[], pending boolean)',
+					   rt, ttype);
+		EXECUTE format('SELECT create_reference_table(%L)', rt);
+	ELSE
+		EXECUTE format('CREATE TEMP TABLE %s (tile %s, label bigint, seq bigint, vi bigint, g geometry)',
+					   'tdc_tiled_halo', ttype);
+		EXECUTE format('CREATE INDEX ON %s (tile)', halo);
+	END IF;
+	IF npts > 0 THEN
+		EXECUTE format('CREATE INDEX ON %s USING gist (g)', pts);
+		EXECUTE format('ANALYZE %s', pts);
+	END IF;
+
+	-- the per-tile statement: $1 restricts it to one tile on plain PostgreSQL
+	tile_sql := format('INSERT INTO %s (id, tile, geom)
+		SELECT CASE WHEN t.k = 0 THEN -1 ELSE s.label * 4294967296 + t.k END, s.tile, t.geom
+		  FROM (SELECT h.tile, k.label,
+					   _tdc_tile(h.g, h.label, k.label, k.known, %L::float8[], k.extra ORDER BY h.seq, h.vi) AS r
+				  FROM %s h JOIN %s k ON k.tile = h.tile
+				 WHERE k.pending %s
+				 GROUP BY h.tile, k.label) s,
+			   LATERAL _tdc_tile_triangles(s.r) t',
+		qtarget, hull, halo, rt, CASE WHEN citus THEN '' ELSE format('AND h.tile = $1::%s', ttype) END);
+
+	done := 0;
+	LOOP
+		EXECUTE format('SELECT count(*) FROM %s WHERE pending', tiles) INTO pending;
+		EXIT WHEN pending = 0;
+		round := round + 1;
+		IF round > 64 THEN
+			RAISE EXCEPTION '%: % tiles still not final after 64 rounds', fn, pending
+				USING ERRCODE = 'internal_error';
+		END IF;
+		rerun := 0;
+		IF citus THEN
+			EXECUTE format('DELETE FROM %s', rt);
+			EXECUTE format('INSERT INTO %s SELECT tile, label, known, extra, pending FROM %s', rt, tiles);
+		END IF;
+		-- the halo of every pending tile: every point in its closed K, with its owner
+		EXECUTE format('DELETE FROM %s', halo);
+		-- (K and the extra boxes: a point is taken from the first box that holds it)
+		EXECUTE format('INSERT INTO %1$s (tile, label, seq, vi, g)
+						SELECT b.tile, o.label, p.seq, p.vi, p.g
+						  FROM (SELECT k.tile, k.bx, i, k.bx[4*i+1] AS x0, k.bx[4*i+2] AS y0,
+									   k.bx[4*i+3] AS x1, k.bx[4*i+4] AS y1
+								  FROM (SELECT tile, known || extra AS bx FROM %3$s WHERE pending) k,
+									   generate_series(0, cardinality(k.bx) / 4 - 1) i) b
+						  JOIN %2$s p ON p.g && ST_MakeEnvelope(b.x0, b.y0, b.x1, b.y1, %4$s)
+									AND ST_X(p.g) BETWEEN b.x0 AND b.x1 AND ST_Y(p.g) BETWEEN b.y0 AND b.y1
+						  JOIN %3$s o ON o.tile = p.tile
+						 WHERE NOT EXISTS (SELECT 1 FROM generate_series(0, b.i - 1) j
+											WHERE ST_X(p.g) BETWEEN b.bx[4*j+1] AND b.bx[4*j+3]
+											  AND ST_Y(p.g) BETWEEN b.bx[4*j+2] AND b.bx[4*j+4])',
+					   halo, pts, rt, coalesce(srid_lo, 0));
+		GET DIAGNOSTICS ntri = ROW_COUNT;
+		halo_pts := halo_pts + ntri;
+		IF citus THEN
+			EXECUTE tile_sql;
+		ELSE
+			reported := 0;
+			i := 0;
+			FOR r IN EXECUTE format('SELECT tile::text AS tile FROM %s WHERE pending ORDER BY label', tiles) LOOP
+				EXECUTE tile_sql USING r.tile;
+				i := i + 1;
+				IF (i * 10 / pending)::int > reported THEN
+					reported := (i * 10 / pending)::int;
+					RAISE NOTICE '%: round %: % of % tiles run', fn, round, i, pending;
+				END IF;
+			END LOOP;
+		END IF;
+		-- tiles that were not final: K := the box they need, grown by a tenth
+		EXECUTE format('UPDATE %s SET pending = false WHERE pending', tiles);
+		FOR r IN EXECUTE format('SELECT tile::text AS tile, ST_X(ST_PointN(ST_ExteriorRing(geom), 1)) AS x0,
+									   ST_Y(ST_PointN(ST_ExteriorRing(geom), 1)) AS y0,
+									   ST_X(ST_PointN(ST_ExteriorRing(geom), 3)) AS x1,
+									   ST_Y(ST_PointN(ST_ExteriorRing(geom), 3)) AS y1
+								  FROM %s WHERE id = -1', qtarget) LOOP
+			EXECUTE format('UPDATE %s SET pending = true,
+								known = ARRAY[%2$L::float8 - %6$L::float8, %3$L::float8 - %7$L::float8,
+											  %4$L::float8 + %6$L::float8, %5$L::float8 + %7$L::float8]
+							 WHERE tile = $1::%8$s',
+						   tiles, r.x0, r.y0, r.x1, r.y1, (r.x1 - r.x0) / 10, (r.y1 - r.y0) / 10, ttype)
+			USING r.tile;
+			rerun := rerun + 1;
+		END LOOP;
+		EXECUTE format('DELETE FROM %s WHERE id = -1', qtarget);
+		done := done + pending - rerun;
+		RAISE NOTICE '%: round %: % of % tiles final', fn, round, done, ntiles;
+	END LOOP;
+
+	EXECUTE format('SELECT count(*) FROM %s', qtarget) INTO ntri;
+	EXECUTE format('DROP TABLE %s, %s, %s', halo, tiles, pts);
+	IF citus THEN
+		EXECUTE format('DROP TABLE %s', rt);
+	END IF;
+	RAISE NOTICE '%: % triangles from % points in % tiles, % rounds, % halo points', fn, ntri, npts, ntiles,
+		round, halo_pts;
+END
+$proc$;
+
+COMMENT ON PROCEDURE tdc_delaunay_tiled(regclass, text, name, name, float8) IS
+'Triangulates the vertices of source.geom_column (duplicates merged, Z of the first copy, one SRID) tile by tile '
+'into a new table target(id bigint, tile, geom geometry(Polygon)): the same triangles as ST_TDCDelaunayDump, each once. '
+'Tiles: the groups of tile_column, else squares of tile_size, else squares of about a million points. '
+'On Citus, with source distributed by tile_column, the tiles run on the workers.';

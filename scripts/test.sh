@@ -12,6 +12,8 @@
 #   6. the CI-sized hardening scripts in test/hardening/ (settings,
 #      bad_input, memcap, concurrency and cancel with QUICK=1), on the
 #      throw-away cluster
+#   7. test/citus/run.sh: tdc_delaunay_tiled on a throw-away 3-node Citus
+#      cluster (Citus built from ../shared/citus, cached between runs)
 #
 # Each part prints "N passed, N failed" (pg_regress: "All N tests passed." or
 # "N of M tests failed."); they are added up into the last line of output,
@@ -261,6 +263,14 @@ if ((hardening && built && server)); then
 			*) run_part "hardening-$h" plain bash "test/hardening/$h.sh" ;;
 		esac
 	done
+fi
+
+# Citus (test/citus/run.sh): builds Citus 13.2.2 from ../shared/citus once
+# (cached in ~/.cache/tdc-citus, about 4-12 minutes on 2 cores), then runs
+# tdc_delaunay_tiled on its own throw-away coordinator and two workers
+# (about 40 s).  TDC_CITUS=0 skips it.
+if ((${TDC_CITUS:-1} && built)); then
+	run_part citus plain bash test/citus/run.sh
 fi
 
 tdc_server_down

@@ -95,5 +95,43 @@ check "voronoi: stats line" "grep -qE '^voronoi=[0-9.]+ cell_vertices=13$' $tmp/
 check "voronoi: first cell is (0 0)'s" "awk 'NR == 1 { exit !(\$0 == \"1 0.5 -2 0.5 -2 -2 1 -2\") }' $tmp/v.out"
 check "voronoi: areas sum to 30" "awk '{ for (i = 1; i <= NF; i += 2) { j = (i + 2 > NF) ? 1 : i + 2; a += \$i * \$(j + 1) - \$j * \$(i + 1) } } END { exit !(a / 2 == 30) }' $tmp/v.out"
 
+# --max-memory: an input whose one-shot run needs several times the limit is
+# triangulated in tiles on disk, with the same triangle set and a peak RSS
+# under the limit (getrusage, reported by --stats)
+canon_d() { awk -v d="$2" '{ best = 0; for (k = 1; k < 3; k++) if ($(d*k+1) < $(d*best+1) || ($(d*k+1) == $(d*best+1) && $(d*k+2) < $(d*best+2))) best = k;
+  s = ""; for (k = 0; k < 3; k++) { j = (best + k) % 3; for (c = 1; c <= d; c++) s = s $(d*j+c) " " } print s }' "$1" | LC_ALL=C sort; }
+# (uniform, 40 Gaussian clusters, and an integer lattice with duplicates)
+perl -e 'srand(11); for (1..600000) { print pack("d<d<", rand(1000), rand(1000)) }
+  for $c (1..40) { $cx = 50 + rand(900); $cy = 50 + rand(900); for (1..10000) { $a = rand(6.2832); $r = 15 * sqrt(-2 * log(1 - rand())); print pack("d<d<", $cx + $r * cos($a), $cy + $r * sin($a)) } }
+  for (1..2000) { print pack("d<d<", 100 + int(rand(50)), 100 + int(rand(50))) }' > "$tmp/big.bin"
+$TDC -o "$tmp/big1.out" --stats "$tmp/big.bin" 2> "$tmp/big1.err"
+mkdir -p "$tmp/tiles"
+$TDC --max-memory 24 --tmpdir "$tmp/tiles" -o "$tmp/big2.out" --stats "$tmp/big.bin" 2> "$tmp/big2.err"
+check "--max-memory: exit 0" "[ $? -eq 0 ]"
+one_rss=$(sed -n 's/.*peak_rss_mb=\([0-9.]*\).*/\1/p' "$tmp/big1.err")
+til_rss=$(sed -n 's/.*peak_rss_mb=\([0-9.]*\).*/\1/p' "$tmp/big2.err")
+check "--max-memory: one-shot needs > 3x the limit ($one_rss MB)" "awk 'BEGIN { exit !($one_rss > 72) }'"
+check "--max-memory: peak RSS $til_rss MB under 24" "awk 'BEGIN { exit !($til_rss < 24) }'"
+check "--max-memory: stats has tiles= (>1) and halo_points=" "grep -qE ' tiles=([2-9]|[1-9][0-9]+) halo_points=[1-9][0-9]* ' $tmp/big2.err"
+check "--max-memory: same triangle set as one-shot" "cmp -s <(canon_d $tmp/big1.out 2) <(canon_d $tmp/big2.out 2)"
+check "--max-memory: same triangle count" "[ \$(wc -l < $tmp/big1.out) -eq \$(wc -l < $tmp/big2.out) ]"
+check "--max-memory: temporary files removed" "[ -z \"\$(ls -A $tmp/tiles)\" ]"
+
+# text with z through the tiles: z of the first point with those x,y, as one-shot
+perl -e 'srand(5); for (1..150000) { printf "%.17g %.17g %.17g\n", rand(100), rand(100), rand(9) }
+  for (1..3000) { printf "%d %d %d\n", int(rand(100)), int(rand(100)), 50 + int(rand(9)) }' > "$tmp/z3.txt"
+$TDC -o "$tmp/z31.out" "$tmp/z3.txt"
+$TDC --max-memory 10 --tmpdir "$tmp/tiles" -o "$tmp/z32.out" --stats "$tmp/z3.txt" 2> "$tmp/z32.err"
+check "--max-memory, text with z: tiled" "grep -qE ' tiles=([2-9]|[1-9][0-9]+) ' $tmp/z32.err"
+check "--max-memory, text with z: same triangles and z" "cmp -s <(canon_d $tmp/z31.out 3) <(canon_d $tmp/z32.out 3)"
+
+# when it fits, it runs as without the option
+$TDC --max-memory 500 -o "$tmp/r4.out" --stats "$tmp/r.txt" 2> "$tmp/r4.err"
+check "--max-memory, input fits: one tile, same output" "grep -q ' tiles=1 halo_points=0' $tmp/r4.err && cmp -s <(canon $tmp/r1.out) <(canon $tmp/r4.out)"
+expect_error "bad --max-memory" $TDC --max-memory abc "$tmp/sq.txt"
+expect_error "--max-memory with --tolerance" $TDC --max-memory 10 --tolerance 0.1 "$tmp/big.bin"
+expect_error "--max-memory with --validate" $TDC --max-memory 10 --validate "$tmp/big.bin"
+expect_error "--max-memory with --voronoi" $TDC --max-memory 10 --voronoi "$tmp/big.bin"
+
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ]

@@ -43,6 +43,7 @@ extern void test_memory(void);
 extern void test_concurrency(void);
 extern void test_tolerance(void);
 extern void test_voronoi(void);
+extern void test_tile(void);
 
 /* Set by --quick (sanitizer runs): smaller sizes. */
 extern int	tdc_test_quick;

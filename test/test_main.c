@@ -35,6 +35,9 @@ main(int argc, char **argv)
 	test_tolerance();
 	printf("tolerance: %ld passed, %ld failed so far\n", tdc_test_passed, tdc_test_failed);
 	test_voronoi();
+	printf("voronoi: %ld passed, %ld failed so far\n", tdc_test_passed, tdc_test_failed);
+	test_tile();
+	printf("tile: %ld passed, %ld failed so far\n", tdc_test_passed, tdc_test_failed);
 	printf("%ld passed, %ld failed\n", tdc_test_passed, tdc_test_failed);
 	return tdc_test_failed ? 1 : 0;
 }

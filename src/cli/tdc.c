@@ -22,13 +22,16 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <stdbool.h>
 #include <sys/resource.h>
+#include <sys/stat.h>
 #include <time.h>
 
 #include "tdc.h"
 
 static const char usage[] =
-"usage: ./tdc [-t THREADS] [-g GRID] [-l LEVELS] [--tolerance T] [-o OUT] [--stats] [--validate] [--voronoi] INPUT\n"
+"usage: ./tdc [-t THREADS] [-g GRID] [-l LEVELS] [--tolerance T] [-o OUT] [--stats] [--validate]\n"
+"             [--voronoi] [--max-memory MB [--tmpdir DIR]] INPUT\n"
 "  INPUT  .bin file of little-endian float64 x,y pairs, or a text file of\n"
 "         'x y' or 'x y z' lines ('-' reads stdin)\n"
 "  -t     worker threads (0 = all online CPUs, the default)\n"
@@ -38,7 +41,10 @@ static const char usage[] =
 "  -o     write triangles, one per line, counter-clockwise, %.17g\n"
 "  --stats  print counts and phase times (seconds) to stderr\n"
 "  --validate  check the result with the exact validator; exit 1 if invalid\n"
-"  --voronoi  also build the Voronoi cells; -o writes cells, one ring per line\n";
+"  --voronoi  also build the Voronoi cells; -o writes cells, one ring per line\n"
+"  --max-memory MB  keep the peak memory under MB: when the one-shot run does\n"
+"         not fit, triangulate in tiles on disk (same triangles, another order)\n"
+"  --tmpdir DIR  where the tiles go (default $TMPDIR or /tmp)\n";
 
 static void
 die(int code, const char *fmt, const char *arg)
@@ -94,6 +100,52 @@ read_bin(const char *path, size_t *n)
 	return xy;
 }
 
+/*
+ * Parse one text line into v: returns the number of values (0 for a blank
+ * or comment line), dies on garbage.  *dims is the line width seen so far.
+ */
+static int
+parse_line(char *line, size_t lineno, double v[3], int *dims)
+{
+	int			k = 0;
+	char	   *p = line,
+			   *end;
+
+	while (k < 4)
+	{
+		while (*p == ' ' || *p == '\t' || *p == ',' || *p == '\r' || *p == '\n')
+			p++;
+		if (*p == '\0' || *p == '#')
+			break;
+		if (k == 3)
+		{
+			k = 4;
+			break;
+		}
+		v[k] = strtod(p, &end);
+		if (end == p)
+		{
+			char		msg[64];
+
+			snprintf(msg, sizeof(msg), "%zu", lineno);
+			die(1, "line %s: expected numbers 'x y' or 'x y z'", msg);
+		}
+		p = end;
+		k++;
+	}
+	if (k == 0)
+		return 0;
+	if (k == 1 || k == 4 || (*dims && k != *dims))
+	{
+		char		msg[64];
+
+		snprintf(msg, sizeof(msg), "%zu", lineno);
+		die(1, "line %s: every line must hold 'x y' or every line 'x y z'", msg);
+	}
+	*dims = k;
+	return k;
+}
+
 static double *
 read_text(const char *path, size_t *n, double **zout)
 {
@@ -112,43 +164,9 @@ read_text(const char *path, size_t *n, double **zout)
 	while (getline(&line, &cap, f) >= 0)
 	{
 		double		v[3];
-		int			k = 0;
-		char	   *p = line,
-				   *end;
 
-		lineno++;
-		while (k < 4)
-		{
-			while (*p == ' ' || *p == '\t' || *p == ',' || *p == '\r' || *p == '\n')
-				p++;
-			if (*p == '\0' || *p == '#')
-				break;
-			if (k == 3)
-			{
-				k = 4;
-				break;
-			}
-			v[k] = strtod(p, &end);
-			if (end == p)
-			{
-				char		msg[64];
-
-				snprintf(msg, sizeof(msg), "%zu", lineno);
-				die(1, "line %s: expected numbers 'x y' or 'x y z'", msg);
-			}
-			p = end;
-			k++;
-		}
-		if (k == 0)
+		if (parse_line(line, ++lineno, v, &dims) == 0)
 			continue;
-		if (k == 1 || k == 4 || (dims && k != dims))
-		{
-			char		msg[64];
-
-			snprintf(msg, sizeof(msg), "%zu", lineno);
-			die(1, "line %s: every line must hold 'x y' or every line 'x y z'", msg);
-		}
-		dims = k;
 		if (*n == alloc)
 		{
 			alloc *= 2;
@@ -173,6 +191,649 @@ read_text(const char *path, size_t *n, double **zout)
 	return xy;
 }
 
+/*
+ * --- Bounded memory: --max-memory MB [--tmpdir DIR] ---
+ *
+ * When the one-shot run (the input, the engine, the result) would not fit
+ * in MB, the input is cut into tiles on disk and triangulated tile by tile
+ * with the core's exact tiling (src/core/tile.c), and the triangles are
+ * written as each tile finishes.  The steps, each a sequential read of the
+ * input (text input is first converted to a temporary .bin):
+ *	1	count, bounding box, convex hull (in chunks: the hull of a union is
+ *		the hull of the parts' hulls);
+ *	2	counts on a fine grid, cut into tiles of at most tile_max points by
+ *		median splits along the longer side (kd-tree of cells), so that
+ *		clustered data gets small tiles where it is dense;
+ *	3	each point appended to its tile's file.
+ * Then for every tile: K = its box plus a halo of 8 mean point spacings, and
+ * as extra known boxes the bands along the hull edges near it; gather every
+ * point inside them from the tile files whose boxes meet them; triangulate; tdc_tile_finish either hands over the tile's triangles
+ * or asks for a larger K, and the tile runs again.
+ *
+ * Memory: the largest tile with its halo is bounded by tile_max times a
+ * growth allowance; a tile whose K would exceed the budget is an error,
+ * never a silent overrun.  Duplicates share their cell, hence their tile,
+ * and a tile's file keeps input order, so the Z of a vertex is that of its
+ * first input point, as in the one-shot run.
+ */
+#include <dirent.h>
+#include <math.h>
+#include <unistd.h>
+
+#define FINE_GRID	512			/* cells per side of the counting grid */
+#define CHUNK		(1 << 16)	/* points per read in the scans */
+#define MAX_TILES	900			/* open files while binning */
+
+typedef struct tile_info
+{
+	int			c0,
+				c1,
+				r0,
+				r1;				/* cells [c0, c1) x [r0, r1) */
+	size_t		count;
+	double		bb[4];			/* exact box of its points */
+} tile_info;
+
+static char tmp_dir[4096];
+
+static void
+tmp_cleanup(void)
+{
+	DIR		   *d;
+	struct dirent *e;
+
+	if (tmp_dir[0] == '\0')
+		return;
+	if ((d = opendir(tmp_dir)) != NULL)
+	{
+		while ((e = readdir(d)) != NULL)
+		{
+			char		p[4400];
+
+			if (e->d_name[0] == '.')
+				continue;
+			snprintf(p, sizeof(p), "%s/%s", tmp_dir, e->d_name);
+			unlink(p);
+		}
+		closedir(d);
+	}
+	rmdir(tmp_dir);
+	tmp_dir[0] = '\0';
+}
+
+static FILE *
+tmp_open(const char *name, const char *mode)
+{
+	char		p[4400];
+	FILE	   *f;
+
+	snprintf(p, sizeof(p), "%s/%s", tmp_dir, name);
+	f = fopen(p, mode);
+	if (f == NULL)
+		die(1, "cannot open temporary file %s", p);
+	return f;
+}
+
+/* Text input to tmp_dir/input.xy (+ input.z): returns n, sets *has_z. */
+static size_t
+text_to_bin(const char *path, int *has_z)
+{
+	FILE	   *f = strcmp(path, "-") == 0 ? stdin : fopen(path, "r"),
+			   *fxy,
+			   *fz = NULL;
+	char	   *line = NULL;
+	size_t		cap = 0,
+				lineno = 0,
+				n = 0;
+	int			dims = 0;
+
+	if (f == NULL)
+		die(1, "cannot open %s", path);
+	fxy = tmp_open("input.xy", "wb");
+	while (getline(&line, &cap, f) >= 0)
+	{
+		double		v[3];
+
+		if (parse_line(line, ++lineno, v, &dims) == 0)
+			continue;
+		if (dims == 3 && fz == NULL)
+		{
+			if (n > 0)
+				die(1, "line %s: every line must hold 'x y' or every line 'x y z'", "1");
+			fz = tmp_open("input.z", "wb");
+		}
+		if (fwrite(v, 8, 2, fxy) != 2 || (fz && fwrite(v + 2, 8, 1, fz) != 1))
+			die(1, "cannot write temporary files in %s", tmp_dir);
+		n++;
+	}
+	free(line);
+	if (f != stdin)
+		fclose(f);
+	if (fclose(fxy) != 0 || (fz && fclose(fz) != 0))
+		die(1, "cannot write temporary files in %s", tmp_dir);
+	*has_z = fz != NULL;
+	return n;
+}
+
+/* Reads the .bin source (and z) in chunks: the caller's loop. */
+typedef struct source
+{
+	FILE	   *fxy,
+			   *fz;
+	double	   *xy,
+			   *z;
+} source;
+
+static void
+source_open(source *s, const char *xypath, const char *zpath)
+{
+	s->fxy = fopen(xypath, "rb");
+	s->fz = zpath ? fopen(zpath, "rb") : NULL;
+	if (s->fxy == NULL || (zpath && s->fz == NULL))
+		die(1, "cannot open %s", xypath);
+	s->xy = malloc(16 * (size_t) CHUNK);
+	s->z = zpath ? malloc(8 * (size_t) CHUNK) : NULL;
+	if (s->xy == NULL || (zpath && s->z == NULL))
+		die(1, "out of memory%s", "");
+}
+
+static size_t
+source_read(source *s)
+{
+	size_t		k = fread(s->xy, 16, CHUNK, s->fxy);
+
+	if (s->fz && fread(s->z, 8, k, s->fz) != k)
+		die(1, "short read on the temporary z file%s", "");
+	return k;
+}
+
+static void
+source_close(source *s)
+{
+	fclose(s->fxy);
+	if (s->fz)
+		fclose(s->fz);
+	free(s->xy);
+	free(s->z);
+}
+
+static int
+fine_cell(double v, double lo, double scale)
+{
+	int			c = (int) ((v - lo) * scale);
+
+	return c < 0 ? 0 : c >= FINE_GRID ? FINE_GRID - 1 : c;
+}
+
+/* Points in cells [c0, c1) x [r0, r1) from the prefix sums. */
+static size_t
+cells_count(const size_t *ps, int c0, int c1, int r0, int r1)
+{
+	const int	w = FINE_GRID + 1;
+
+	return ps[r1 * w + c1] - ps[r0 * w + c1] - ps[r1 * w + c0] + ps[r0 * w + c0];
+}
+
+/* kd-split of the cell rectangle until every tile holds at most tile_max points. */
+static void
+plan_tiles(const size_t *ps, int c0, int c1, int r0, int r1, double cw, double ch,
+		   size_t tile_max, tile_info *tiles, int *nt)
+{
+	size_t		cnt = cells_count(ps, c0, c1, r0, r1);
+	bool		by_x;
+	int			lo,
+				hi;
+
+	if (cnt == 0)
+		return;
+	if (cnt <= tile_max || (c1 - c0 == 1 && r1 - r0 == 1))
+	{
+		if (cnt > tile_max)
+			die(1, "the points are too clustered for --max-memory: one cell of the tiling grid holds %s points", "more than a tile's share of");
+		if (*nt >= MAX_TILES)
+			die(1, "--max-memory is too small for this input: more than %s tiles would be needed", "900");
+		tiles[*nt].c0 = c0;
+		tiles[*nt].c1 = c1;
+		tiles[*nt].r0 = r0;
+		tiles[*nt].r1 = r1;
+		tiles[*nt].count = cnt;
+		(*nt)++;
+		return;
+	}
+	by_x = (c1 - c0 > 1) && ((c1 - c0) * cw >= (r1 - r0) * ch || r1 - r0 == 1);
+	/* the median cell line: the smallest cut with at least half the points below */
+	lo = by_x ? c0 + 1 : r0 + 1;
+	hi = by_x ? c1 - 1 : r1 - 1;
+	while (lo < hi)
+	{
+		int			mid = (lo + hi) / 2;
+		size_t		below = by_x ? cells_count(ps, c0, mid, r0, r1) : cells_count(ps, c0, c1, r0, mid);
+
+		if (2 * below >= cnt)
+			hi = mid;
+		else
+			lo = mid + 1;
+	}
+	if (by_x)
+	{
+		plan_tiles(ps, c0, lo, r0, r1, cw, ch, tile_max, tiles, nt);
+		plan_tiles(ps, lo, c1, r0, r1, cw, ch, tile_max, tiles, nt);
+	}
+	else
+	{
+		plan_tiles(ps, c0, c1, r0, lo, cw, ch, tile_max, tiles, nt);
+		plan_tiles(ps, c0, c1, lo, r1, cw, ch, tile_max, tiles, nt);
+	}
+}
+
+static bool
+box_meets(const double *a, const double *b)
+{
+	return a[0] <= b[2] && b[0] <= a[2] && a[1] <= b[3] && b[1] <= a[3];
+}
+
+static void
+box_add(double *b, double x, double y)
+{
+	b[0] = fmin(b[0], x);
+	b[1] = fmin(b[1], y);
+	b[2] = fmax(b[2], x);
+	b[3] = fmax(b[3], y);
+}
+
+/*
+ * Bytes one tile run of m points (with z or not) may hold at once: the
+ * gathered points and labels, the engine (with its input map), tile.c's
+ * per-site arrays, and the triangle indices (at most 2m triangles of 3
+ * size_t).
+ */
+static size_t
+tile_bytes(size_t m, const tdc_options *opt, int has_z)
+{
+	return tdc_estimate_memory(m, opt) + m * (16 + 8 + (has_z ? 8 : 0) + 4 + 8 + 1 + 48) + (1 << 20);
+}
+
+typedef struct tiled_stats
+{
+	size_t		n,
+				unique,
+				ntri,
+				halo,
+				runs;
+	int			tiles,
+				threads;
+	tdc_times	t;
+} tiled_stats;
+
+static void
+write_tri(FILE *f, const double *q, const double *qz, const size_t *v)
+{
+	for (int k = 0; k < 3; k++)
+	{
+		const double *p = q + 2 * v[k];
+
+		if (qz)
+			fprintf(f, k ? " %.17g %.17g %.17g" : "%.17g %.17g %.17g", p[0], p[1], qz[v[k]]);
+		else
+			fprintf(f, k ? " %.17g %.17g" : "%.17g %.17g", p[0], p[1]);
+	}
+	fputc('\n', f);
+}
+
+/*
+ * The tiled run.  xypath/zpath: the .bin source (z beside it for text input
+ * with z).  budget: bytes.  Returns nothing; dies on errors.
+ */
+static void
+run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *opt,
+		  size_t budget, FILE *out, tiled_stats *st)
+{
+	source		src;
+	size_t		k,
+				nhull = 0,
+				tile_max,
+				*ps;
+	double		bb[4] = {INFINITY, INFINITY, -INFINITY, -INFINITY},
+			   *hull = NULL,
+				sx,
+				sy,
+				cw,
+				ch;
+	uint32_t   *counts;
+	int16_t    *cell_tile;
+	tile_info  *tiles;
+	int			nt = 0,
+				has_z = zpath != NULL;
+	double	   *extra,
+				band;
+	const double **xs;
+	FILE	  **tf;
+	char		err[512];
+
+	memset(st, 0, sizeof(*st));
+	st->n = n;
+
+	/* 1: box and hull */
+	source_open(&src, xypath, zpath);
+	while ((k = source_read(&src)) > 0)
+	{
+		double	   *buf,
+				   *h2;
+		size_t		n2;
+
+		for (size_t i = 0; i < k; i++)
+		{
+			double		x = src.xy[2 * i],
+						y = src.xy[2 * i + 1];
+
+			if (!isfinite(x) || !isfinite(y) ||
+				(x != 0 && (fabs(x) < TDC_COORD_MIN || fabs(x) > TDC_COORD_MAX)) ||
+				(y != 0 && (fabs(y) < TDC_COORD_MIN || fabs(y) > TDC_COORD_MAX)))
+				die(1, "a point has a non-finite coordinate or one outside the supported magnitude range%s", "");
+			box_add(bb, x, y);
+		}
+		buf = malloc(16 * (k + nhull));
+		if (buf == NULL)
+			die(1, "out of memory%s", "");
+		memcpy(buf, src.xy, 16 * k);
+		if (nhull)
+			memcpy(buf + 2 * k, hull, 16 * nhull);
+		if (tdc_convex_hull(buf, k + nhull, &h2, &n2) != TDC_OK)
+			die(1, "out of memory%s", "");
+		free(buf);
+		free(hull);
+		hull = h2;
+		nhull = n2;
+	}
+	source_close(&src);
+
+	/* 2: fine counts and the tiles */
+	sx = bb[2] > bb[0] ? FINE_GRID / (bb[2] - bb[0]) : 0;
+	sy = bb[3] > bb[1] ? FINE_GRID / (bb[3] - bb[1]) : 0;
+	cw = (bb[2] - bb[0]) / FINE_GRID;
+	ch = (bb[3] - bb[1]) / FINE_GRID;
+	counts = calloc((size_t) FINE_GRID * FINE_GRID, sizeof(uint32_t));
+	ps = calloc((size_t) (FINE_GRID + 1) * (FINE_GRID + 1), sizeof(size_t));
+	tiles = calloc(MAX_TILES, sizeof(tile_info));
+	cell_tile = malloc((size_t) FINE_GRID * FINE_GRID * sizeof(int16_t));
+	if (!counts || !ps || !tiles || !cell_tile)
+		die(1, "out of memory%s", "");
+	source_open(&src, xypath, NULL);
+	while ((k = source_read(&src)) > 0)
+		for (size_t i = 0; i < k; i++)
+			counts[fine_cell(src.xy[2 * i + 1], bb[1], sy) * FINE_GRID +
+				   fine_cell(src.xy[2 * i], bb[0], sx)]++;
+	source_close(&src);
+	for (int r = 0; r < FINE_GRID; r++)
+		for (int c = 0; c < FINE_GRID; c++)
+			ps[(r + 1) * (FINE_GRID + 1) + c + 1] = counts[r * FINE_GRID + c] +
+				ps[r * (FINE_GRID + 1) + c + 1] + ps[(r + 1) * (FINE_GRID + 1) + c] -
+				ps[r * (FINE_GRID + 1) + c];
+	free(counts);
+
+	/*
+	 * The largest tile: its points with the halo and a growth allowance of
+	 * 2.2 must fit in the budget (a corner tile may grow along long hull edges).
+	 */
+	for (tile_max = n; tile_max > 1000 && tile_bytes(tile_max * 11 / 5, opt, has_z) > budget;)
+		tile_max = tile_max * 9 / 10;
+	plan_tiles(ps, 0, FINE_GRID, 0, FINE_GRID, cw, ch, tile_max, tiles, &nt);
+	free(ps);
+	for (int t = 0; t < nt; t++)
+	{
+		tiles[t].bb[0] = tiles[t].bb[1] = INFINITY;
+		tiles[t].bb[2] = tiles[t].bb[3] = -INFINITY;
+		for (int r = tiles[t].r0; r < tiles[t].r1; r++)
+			for (int c = tiles[t].c0; c < tiles[t].c1; c++)
+				cell_tile[r * FINE_GRID + c] = (int16_t) t;
+	}
+
+	/* 3: bin */
+	tf = calloc((size_t) (nt > 0 ? nt : 1), sizeof(FILE *));
+	for (int t = 0; t < nt; t++)
+	{
+		char		name[32];
+
+		snprintf(name, sizeof(name), "tile%d", t);
+		tf[t] = tmp_open(name, "wb");
+		setvbuf(tf[t], NULL, _IOFBF, 1 << 16);
+	}
+	source_open(&src, xypath, zpath);
+	while ((k = source_read(&src)) > 0)
+		for (size_t i = 0; i < k; i++)
+		{
+			double		rec[3] = {src.xy[2 * i], src.xy[2 * i + 1], has_z ? src.z[i] : 0};
+			int			t = cell_tile[fine_cell(rec[1], bb[1], sy) * FINE_GRID +
+									  fine_cell(rec[0], bb[0], sx)];
+
+			box_add(tiles[t].bb, rec[0], rec[1]);
+			if (fwrite(rec, 8, has_z ? 3 : 2, tf[t]) != (size_t) (has_z ? 3 : 2))
+				die(1, "cannot write temporary files in %s", tmp_dir);
+		}
+	source_close(&src);
+	for (int t = 0; t < nt; t++)
+		if (fclose(tf[t]) != 0)
+			die(1, "cannot write temporary files in %s (disk full?)", tmp_dir);
+	free(tf);
+	free(cell_tile);
+	st->tiles = nt;
+
+	/* 4: the tiles */
+	extra = malloc(32 * (nhull + 1));
+	xs = malloc(sizeof(double *) * (nhull + 1));
+	band = 16 * sqrt((bb[2] - bb[0]) * (bb[3] - bb[1]) / (double) (n ? n : 1));
+	if (extra == NULL || xs == NULL)
+		die(1, "out of memory%s", "");
+	for (int t = 0; t < nt; t++)
+	{
+		tile_info  *ti = &tiles[t];
+		double		K[4],
+					Kmin[4],	/* the least K this round may shrink back to */
+					h;
+		size_t		nextra;
+		tdc_tile_spec spec = {0};
+
+		if (ti->count == 0)
+			continue;			/* owns nothing */
+		/* its cells' box, and the exact box of its points (rounding of the cells) */
+		K[0] = fmin(bb[0] + ti->c0 * cw, ti->bb[0]);
+		K[1] = fmin(bb[1] + ti->r0 * ch, ti->bb[1]);
+		K[2] = fmax(bb[0] + ti->c1 * cw, ti->bb[2]);
+		K[3] = fmax(bb[1] + ti->r1 * ch, ti->bb[3]);
+		memcpy(Kmin, K, sizeof(K));
+		h = 8 * sqrt((K[2] - K[0]) * (K[3] - K[1]) / (double) ti->count);
+		K[0] -= h;
+		K[1] -= h;
+		K[2] += h;
+		K[3] += h;
+		/*
+		 * Extra known boxes: the boxes of the hull edges near K, grown by a
+		 * band of 16 mean spacings.  A long hull edge has one triangle whose
+		 * circle bulges far out of C: only its thin part inside C, along the
+		 * edge, must be known, and the band holds it, without widening K
+		 * along the whole edge.  The bands also bring in the hull's
+		 * vertices, so every own hull edge is certified at once.
+		 */
+		nextra = 0;
+		for (size_t i = 0; nhull > 1 && i < nhull; i++)
+		{
+			const double *a = hull + 2 * i,
+					   *b = hull + 2 * ((i + 1) % nhull);
+			double	   *eb = extra + 4 * nextra;
+
+			eb[0] = fmin(a[0], b[0]) - band;
+			eb[1] = fmin(a[1], b[1]) - band;
+			eb[2] = fmax(a[0], b[0]) + band;
+			eb[3] = fmax(a[1], b[1]) + band;
+			if (box_meets(eb, K))
+				nextra++;
+		}
+		spec.extra = extra;
+		spec.nextra = nextra;
+		spec.self = t;
+		spec.hull = hull;
+		spec.nhull = nhull;
+		for (;;)
+		{
+			size_t		m = 0,
+						at = 0;
+			double	   *q = NULL,
+					   *qz = NULL;
+			int64_t    *ql = NULL;
+			tdc_job    *job;
+			tdc_tile_result res;
+			tdc_times	tt;
+			double		rec[3 * 4096];
+			size_t		nx;
+
+			int			shrinks = 0;
+
+			/* count, then fill: the buffers are allocated once, at their size */
+			for (int pass = 0; pass < 2; pass++)
+			{
+				for (int u = -1; u < nt; u++)
+				{
+					int			s = u < 0 ? t : u;
+					FILE	   *f;
+					char		name[32];
+					size_t		got;
+					int			w = has_z ? 3 : 2;
+
+					bool		meets = box_meets(tiles[s].bb, K);
+
+					for (size_t e = 0; e < nextra && !meets; e++)
+						meets = box_meets(tiles[s].bb, extra + 4 * e);
+					if ((u >= 0 && u == t) || tiles[s].count == 0 || !meets)
+						continue;
+					/* only the bands that meet this file's box need testing */
+					nx = 0;
+					for (size_t e = 0; e < nextra; e++)
+						if (box_meets(tiles[s].bb, extra + 4 * e))
+							xs[nx++] = extra + 4 * e;
+					snprintf(name, sizeof(name), "tile%d", s);
+					f = tmp_open(name, "rb");
+					while ((got = fread(rec, 8 * w, 4096, f)) > 0)
+						for (size_t i = 0; i < got; i++)
+						{
+							double	   *p = rec + w * i;
+
+							bool		in = p[0] >= K[0] && p[0] <= K[2] &&
+								p[1] >= K[1] && p[1] <= K[3];
+
+							for (size_t e = 0; e < nx && !in; e++)
+							{
+								const double *x = xs[e];
+
+								in = p[0] >= x[0] && p[0] <= x[2] && p[1] >= x[1] && p[1] <= x[3];
+							}
+							if (!in)
+								continue;
+							if (pass == 1)
+							{
+								q[2 * at] = p[0];
+								q[2 * at + 1] = p[1];
+								if (qz)
+									qz[at] = p[2];
+								ql[at] = s;
+								at++;
+							}
+							else
+								m++;
+						}
+					fclose(f);
+				}
+				if (pass == 0 && getenv("TDC_TILE_DEBUG"))
+					fprintf(stderr, "tile %d/%d: own %zu, K %g %g %g %g: %zu points\n", t, nt,
+							ti->count, K[0], K[1], K[2], K[3], m);
+				if (pass == 0)
+				{
+					if (tile_bytes(m, opt, has_z) > budget && shrinks < 4 &&
+						memcmp(K, Kmin, sizeof(K)) != 0)
+					{
+						/*
+						 * The halo (or the slack of a grown box) reaches
+						 * into denser data than the tile's: shrink it
+						 * towards the least box, the finality test will
+						 * ask for what is really needed.
+						 */
+						for (int c = 0; c < 4; c++)
+							K[c] = shrinks == 3 ? Kmin[c] : Kmin[c] + (K[c] - Kmin[c]) / 4;
+						shrinks++;
+						m = 0;
+						pass = -1;
+						continue;
+					}
+					if (tile_bytes(m, opt, has_z) > budget)
+					{
+						char		msg[160];
+
+						snprintf(msg, sizeof(msg), "tile %d needs %zu points with its halo, about %zu MB",
+								 t, m, tile_bytes(m, opt, has_z) >> 20);
+						die(1, "%s: more than --max-memory allows (the data is too clustered or the limit too small)", msg);
+					}
+					q = malloc(16 * m + 16);
+					ql = malloc(8 * m + 8);
+					qz = has_z ? malloc(8 * m + 8) : NULL;
+					if (!q || !ql || (has_z && !qz))
+						die(1, "out of memory%s", "");
+				}
+			}
+			memcpy(spec.known, K, sizeof(K));
+			spec.tile = ql;
+			st->runs++;
+			if (tdc_triangulate(q, m, opt, &job, err, sizeof(err)) != TDC_OK)
+				die(1, "%s", err);
+			if (tdc_tile_finish(job, &spec, &res, err, sizeof(err)) != TDC_OK)
+				die(1, "%s", err);
+			tdc_job_times(job, &tt);
+			st->t.sort += tt.sort;
+			st->t.subdivide += tt.subdivide;
+			st->t.leaves += tt.leaves;
+			st->t.merge += tt.merge;
+			st->threads = tdc_threads_used(job);
+			tdc_job_free(job);
+			if (res.final)
+			{
+				for (size_t j = 0; out && j < res.ntri; j++)
+					write_tri(out, q, qz, res.tri + 3 * j);
+				st->ntri += res.ntri;
+				st->unique += res.own_sites;
+				st->halo += m - ti->count;
+			}
+			else
+			{
+				/* grow a little more than asked: each run costs a whole tile */
+				double		gx = 0.5 * h,
+							gy = 0.5 * h;
+
+				/*
+				 * If need is too big for the budget, K may fall back to a
+				 * step of an eighth of the way from the old K: the needs of
+				 * a thin halo overstate what the final stars need, and any
+				 * growth is progress.
+				 */
+				for (int c = 0; c < 4; c++)
+					Kmin[c] = K[c] + (res.need[c] - K[c]) / 8;
+				K[0] = res.need[0] - gx;
+				K[1] = res.need[1] - gy;
+				K[2] = res.need[2] + gx;
+				K[3] = res.need[3] + gy;
+			}
+			tdc_tile_result_free(&res);
+			free(q);
+			free(ql);
+			free(qz);
+			if (spec.known[0] == K[0] && spec.known[1] == K[1] &&
+				spec.known[2] == K[2] && spec.known[3] == K[3])
+				break;			/* final: K was not changed */
+		}
+	}
+	free(extra);
+	free(xs);
+	free(tiles);
+	free(hull);
+}
+
 int
 main(int argc, char **argv)
 {
@@ -190,6 +851,8 @@ main(int argc, char **argv)
 			   *z = NULL;
 	tdc_job    *job;
 	char		err[512];
+	long		max_mb = 0;
+	const char *tmpdir = NULL;
 
 	tdc_options_init(&opt);
 	opt.times = 1;
@@ -208,6 +871,19 @@ main(int argc, char **argv)
 			validate = 1;
 		else if (strcmp(a, "--voronoi") == 0)
 			voronoi = 1;
+		else if (strcmp(a, "--max-memory") == 0 || strcmp(a, "--tmpdir") == 0)
+		{
+			if (i + 1 >= argc)
+				die(2, "option %s needs a value", a);
+			if (a[2] == 'm')
+			{
+				max_mb = parse_int(argv[++i], "--max-memory");
+				if (max_mb <= 0)
+					die(2, "invalid value for %s", "--max-memory");
+			}
+			else
+				tmpdir = argv[++i];
+		}
 		else if (strcmp(a, "-t") == 0 || strcmp(a, "-g") == 0 || strcmp(a, "-l") == 0 ||
 				 strcmp(a, "-o") == 0 || strcmp(a, "--tolerance") == 0)
 		{
@@ -240,7 +916,96 @@ main(int argc, char **argv)
 	if (input == NULL)
 		die(2, "no INPUT given (see ./tdc --help)%s", "");
 
-	xy = ends_with(input, ".bin") ? read_bin(input, &n) : read_text(input, &n, &z);
+	if (max_mb > 0)
+	{
+		/*
+		 * Bounded memory: size the one-shot run first (text input goes to a
+		 * temporary .bin on the way, so it is never held as text).
+		 */
+		size_t		budget = (size_t) max_mb << 20,
+					need;
+		const char *base = tmpdir ? tmpdir : getenv("TMPDIR") ? getenv("TMPDIR") : "/tmp";
+		char		xypath[4400],
+					zpath[4400];
+		int			has_z = 0;
+		struct stat sb;
+
+		snprintf(tmp_dir, sizeof(tmp_dir), "%s/tdc.XXXXXX", base);
+		if (mkdtemp(tmp_dir) == NULL)
+		{
+			tmp_dir[0] = '\0';
+			die(1, "cannot create a temporary directory in %s", base);
+		}
+		atexit(tmp_cleanup);
+		if (ends_with(input, ".bin"))
+		{
+			if (stat(input, &sb) != 0)
+				die(1, "cannot open %s", input);
+			if (sb.st_size % 16 != 0)
+				die(1, "%s: size is not a multiple of 16 bytes (x,y float64 pairs)", input);
+			n = (size_t) sb.st_size / 16;
+			snprintf(xypath, sizeof(xypath), "%s", input);
+		}
+		else
+		{
+			n = text_to_bin(input, &has_z);
+			snprintf(xypath, sizeof(xypath), "%s/input.xy", tmp_dir);
+			snprintf(zpath, sizeof(zpath), "%s/input.z", tmp_dir);
+		}
+		need = tdc_estimate_memory(n, &opt) + n * (16 + (has_z ? 12 : 0)) + ((size_t) 8 << 20);
+		if (need > budget)
+		{
+			tiled_stats ts;
+			FILE	   *f = NULL;
+			struct timespec t0,
+						t1;
+
+			if (opt.tolerance > 0)
+				die(1, "--tolerance cannot be used when the input must be tiled (%s)", "which points are merged depends on all of them");
+			if (validate)
+				die(1, "--validate needs the whole triangulation in memory; %s", "raise --max-memory");
+			if (voronoi)
+				die(1, "--voronoi needs the whole triangulation in memory; %s", "raise --max-memory");
+			if (outpath)
+			{
+				f = strcmp(outpath, "-") == 0 ? stdout : fopen(outpath, "w");
+				if (f == NULL)
+					die(1, "cannot write %s", outpath);
+			}
+			clock_gettime(CLOCK_MONOTONIC, &t0);
+			run_tiled(xypath, has_z ? zpath : NULL, n, &opt, budget, f, &ts);
+			clock_gettime(CLOCK_MONOTONIC, &t1);
+			if (f && f != stdout && fclose(f) != 0)
+				die(1, "error writing %s", outpath);
+			if (stats)
+			{
+				struct rusage ru;
+
+				getrusage(RUSAGE_SELF, &ru);
+				fprintf(stderr,
+						"n=%zu unique=%zu triangles=%zu threads=%d sort=%.6f subdivide=%.6f leaves=%.6f merge=%.6f total=%.6f peak_rss_mb=%.1f tiles=%d halo_points=%zu tile_runs=%zu\n",
+						ts.n, ts.unique, ts.ntri, ts.threads, ts.t.sort, ts.t.subdivide,
+						ts.t.leaves, ts.t.merge,
+						(t1.tv_sec - t0.tv_sec) + (t1.tv_nsec - t0.tv_nsec) * 1e-9,
+						ru.ru_maxrss / 1024.0, ts.tiles, ts.halo, ts.runs);
+			}
+			return 0;
+		}
+		/* it fits: run as without the option */
+		xy = read_bin(xypath, &n);
+		if (has_z)
+		{
+			FILE	   *fz = fopen(zpath, "rb");
+
+			z = malloc(8 * n + 8);
+			if (fz == NULL || z == NULL || fread(z, 8, n, fz) != n)
+				die(1, "cannot read the temporary z file in %s", tmp_dir);
+			fclose(fz);
+		}
+		tmp_cleanup();
+	}
+	else
+		xy = ends_with(input, ".bin") ? read_bin(input, &n) : read_text(input, &n, &z);
 
 	rc = tdc_triangulate(xy, n, &opt, &job, err, sizeof(err));
 	if (rc != TDC_OK)
@@ -329,10 +1094,10 @@ main(int argc, char **argv)
 		tdc_job_times(job, &t);
 		getrusage(RUSAGE_SELF, &ru);
 		fprintf(stderr,
-				"n=%zu unique=%zu triangles=%zu threads=%d sort=%.6f subdivide=%.6f leaves=%.6f merge=%.6f total=%.6f peak_rss_mb=%.1f\n",
+				"n=%zu unique=%zu triangles=%zu threads=%d sort=%.6f subdivide=%.6f leaves=%.6f merge=%.6f total=%.6f peak_rss_mb=%.1f%s\n",
 				tdc_num_input(job), tdc_num_sites(job), tdc_num_triangles(job),
 				tdc_threads_used(job), t.sort, t.subdivide, t.leaves, t.merge, t.total,
-				ru.ru_maxrss / 1024.0);
+				ru.ru_maxrss / 1024.0, max_mb > 0 ? " tiles=1 halo_points=0 tile_runs=1" : "");
 		if (vor)
 			fprintf(stderr, "voronoi=%.6f cell_vertices=%zu\n", vor_seconds,
 					tdc_voronoi_num_vertices(vor));

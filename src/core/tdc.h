@@ -269,5 +269,78 @@ extern void tdc_voronoi_default_env(const tdc_job *job, double env[4]);
  */
 extern void tdc_circumcenter(const double *a, const double *b, const double *c,
 							 double out[2]);
+/* --- Tiled triangulation (tile.c) ---
+ *
+ * The triangles of one tile of the global triangulation of a point set P,
+ * computed from the points of a box K around the tile (its own points and a
+ * halo), exactly as the one-shot run would give them.  See tile.c for the
+ * proof.  The caller's loop, per tile:
+ *
+ *	K = the tile's box, plus a margin
+ *	repeat
+ *		xy, tile[] = every point of P inside closed K, with its tile's label
+ *		tdc_tile_triangulate(xy, n, spec, ...)
+ *		if res.final: write res.tri; break
+ *		K = res.need (the caller may grow it more)
+ *
+ * Every global triangle is emitted by exactly one tile: the one that owns
+ * its lexicographically smallest vertex, where a site (distinct x,y) belongs
+ * to the smallest label among its copies.  The labels are the caller's (a
+ * tile number, a rank of a tile column value); the own points of a tile
+ * must lie inside its K.  No tolerance (options.tolerance must be 0).
+ */
+typedef struct tdc_tile_spec
+{
+	const int64_t *tile;		/* n labels: the tile owning each point */
+	int64_t		self;			/* this tile's label */
+	double		known[4];		/* K: xmin, ymin, xmax, ymax; the caller passes every point of P in it */
+	const double *extra;		/* nextra more boxes (4 doubles each) whose points are all passed */
+	size_t		nextra;			/* too: thin bands along long edges of C, say (may be 0) */
+	const double *hull;			/* convex polygon C containing P: nhull x,y vertices */
+	size_t		nhull;			/* (the convex hull of P, or the 4 corners of P's bounding box) */
+	int			test_weaken;	/* tests only: 0, or TDC_TILE_WEAKEN_DISKS */
+} tdc_tile_spec;
+
+/* tests only: take every triangle as final (shows that the disk test matters) */
+#define TDC_TILE_WEAKEN_DISKS	1
+
+typedef struct tdc_tile_result
+{
+	int			final;			/* 1: tri holds the tile's triangles; 0: rerun with K = need */
+	double		need[4];		/* when not final: a box containing K that the tile needs */
+	size_t		ntri;
+	size_t	   *tri;			/* 3 per triangle, counter-clockwise: indices into xy (the
+								 * first point with the vertex's coordinates) */
+	size_t		sites;			/* distinct sites in K */
+	size_t		own_sites;		/* of them owned by this tile */
+	size_t		unfinal;		/* triangles and hull edges at own sites found not final */
+} tdc_tile_result;
+
+/*
+ * Triangulate xy (n points, all inside spec->known) and return the tile's
+ * final triangles, or the box it needs.  Returns TDC_OK (look at
+ * res->final) or an error code with err; free res with
+ * tdc_tile_result_free in both cases.
+ */
+extern int	tdc_tile_triangulate(const double *xy, size_t n, const tdc_tile_spec *spec,
+								 const tdc_options *opt, tdc_tile_result *res,
+								 char *err, size_t errlen);
+
+/*
+ * The same decision for a job the caller ran (tdc_job_start + tdc_job_wait
+ * returned TDC_OK), for hosts that must stay interruptible while it runs.
+ */
+extern int	tdc_tile_finish(const tdc_job *job, const tdc_tile_spec *spec,
+							tdc_tile_result *res, char *err, size_t errlen);
+
+extern void tdc_tile_result_free(tdc_tile_result *res);
+
+/*
+ * Convex hull of n points, counter-clockwise, exact, collinear vertices
+ * dropped (1 or 2 vertices for degenerate input): a malloc'd array of
+ * *nhull x,y pairs (free() it), NULL when n = 0.  The hull of a union is
+ * the hull of the parts' hulls, so it can be computed in chunks.
+ */
+extern int	tdc_convex_hull(const double *xy, size_t n, double **hull, size_t *nhull);
 
 #endif							/* TDC_H */

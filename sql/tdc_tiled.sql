@@ -1,0 +1,142 @@
+-- tdc_delaunay_tiled: the tiled triangulation of a table is the triangle set
+-- of ST_TDCDelaunayDump on the same vertices, each triangle once.
+SET client_min_messages = warning;
+CREATE EXTENSION IF NOT EXISTS postgis;
+CREATE EXTENSION IF NOT EXISTS tdc_delaunay;
+SET extra_float_digits = 0;
+
+-- the triangles of a tiled target and of the one-shot dump, as canonical
+-- WKB (ring start and orientation normalized, Z included); a and b count
+-- the triangles missing from each side (with multiplicity)
+CREATE FUNCTION tiled_vs_dump(target regclass, query text,
+	OUT tiled bigint, OUT dump bigint, OUT only_tiled bigint, OUT only_dump bigint, OUT ids_unique boolean)
+LANGUAGE plpgsql AS $$
+BEGIN
+	EXECUTE format('CREATE TEMP TABLE tv_a AS SELECT ST_AsEWKB(ST_Normalize(geom)) AS g FROM %s', target);
+	EXECUTE format('CREATE TEMP TABLE tv_b AS SELECT ST_AsEWKB(ST_Normalize(geom)) AS g FROM ST_TDCDelaunayDump(%L)', query);
+	SELECT count(*) INTO tiled FROM tv_a;
+	SELECT count(*) INTO dump FROM tv_b;
+	SELECT count(*) INTO only_tiled FROM (SELECT g FROM tv_a EXCEPT ALL SELECT g FROM tv_b) x;
+	SELECT count(*) INTO only_dump FROM (SELECT g FROM tv_b EXCEPT ALL SELECT g FROM tv_a) x;
+	EXECUTE format('SELECT count(DISTINCT id) = count(*) AND count(*) = count(id) FROM %s', target) INTO ids_unique;
+	DROP TABLE tv_a, tv_b;
+END $$;
+
+-- uniform points, tiles from an integer column (a 4 x 4 grid)
+SELECT setseed(0.25);
+CREATE TABLE tt_uni AS
+	SELECT i AS id, ST_MakePoint(x, y) AS geom, (floor(x / 25) * 4 + floor(y / 25))::int AS t
+	  FROM (SELECT i, random() * 100 AS x, random() * 100 AS y FROM generate_series(1, 4000) i) s;
+CALL tdc_delaunay_tiled('tt_uni', 'tt_uni_tri', tile_column => 't');
+SELECT * FROM tiled_vs_dump('tt_uni_tri', 'SELECT geom FROM tt_uni');
+-- the target's shape: tile of the column's type, Polygon with the SRID
+SELECT attname, format_type(atttypid, atttypmod) FROM pg_attribute
+ WHERE attrelid = 'tt_uni_tri'::regclass AND attnum > 0 ORDER BY attnum;
+SELECT count(DISTINCT tile) AS tiles FROM tt_uni_tri;
+-- the staging tables are gone
+SELECT count(*) AS staging FROM pg_class WHERE relname LIKE 'tdc_tiled%';
+
+-- the same points as squares of tile_size, and with the automatic size
+CALL tdc_delaunay_tiled('tt_uni', 'tt_uni_sq', tile_size => 15);
+SELECT * FROM tiled_vs_dump('tt_uni_sq', 'SELECT geom FROM tt_uni');
+SELECT count(DISTINCT tile) AS tiles FROM tt_uni_sq;
+CALL tdc_delaunay_tiled('tt_uni', 'public.tt_uni_auto');
+SELECT * FROM tiled_vs_dump('tt_uni_auto', 'SELECT geom FROM tt_uni');
+
+-- progress and the summary are NOTICEs
+SET client_min_messages = notice;
+CALL tdc_delaunay_tiled('tt_uni', 'tt_uni_notice', tile_size => 50);
+SET client_min_messages = warning;
+
+-- exact duplicates split across tiles, with different Z: one vertex, the Z
+-- of its first copy in the source, as ST_TDCDelaunayDump keeps it
+CREATE TABLE tt_dup (id int, geom geometry, t text);
+INSERT INTO tt_dup
+	SELECT i, ST_MakePoint(x, y, i), CASE WHEN x < 5 THEN 'west' ELSE 'east' END
+	  FROM (SELECT i, (i * 7919 % 1000) / 100.0 AS x, (i * 104729 % 1000) / 100.0 AS y
+			  FROM generate_series(1, 600) i) s;
+-- copies of 100 points in the other tile, later in the source, other Z
+INSERT INTO tt_dup
+	SELECT 1000 + id, ST_MakePoint(ST_X(geom), ST_Y(geom), -id), CASE WHEN t = 'west' THEN 'east' ELSE 'west' END
+	  FROM tt_dup WHERE id <= 100;
+CALL tdc_delaunay_tiled('tt_dup', 'tt_dup_tri', tile_column => 't');
+SELECT * FROM tiled_vs_dump('tt_dup_tri', 'SELECT geom FROM tt_dup');
+SELECT attname, format_type(atttypid, atttypmod) FROM pg_attribute
+ WHERE attrelid = 'tt_dup_tri'::regclass AND attnum > 0 ORDER BY attnum;
+SELECT tile, count(*) FROM tt_dup_tri GROUP BY tile ORDER BY tile;
+-- no vertex has a negative Z (every copy with one came second)
+SELECT count(*) AS negative_z FROM tt_dup_tri, ST_DumpPoints(geom) d WHERE ST_Z(d.geom) < 0;
+
+-- a lattice: collinear rows and cocircular squares lying exactly on the tile
+-- borders (tile_size 4 divides the spacing's multiples), as multipoints
+CREATE TABLE tt_lat AS
+	SELECT y AS id, ST_Collect(ST_MakePoint(x, y)) AS geom
+	  FROM generate_series(0, 24) x, generate_series(0, 24) y GROUP BY y;
+CALL tdc_delaunay_tiled('tt_lat', 'tt_lat_tri', tile_size => 4);
+SELECT * FROM tiled_vs_dump('tt_lat_tri', 'SELECT geom FROM tt_lat');
+-- a tile whose points are all collinear, and tiles of one point
+CREATE TABLE tt_col (geom geometry, t int);
+INSERT INTO tt_col SELECT ST_MakePoint(i, 0), 1 FROM generate_series(0, 20) i;
+INSERT INTO tt_col VALUES ('POINT(3 5)', 2), ('POINT(15 -4)', 3), ('POINT(30 30)', 4);
+CALL tdc_delaunay_tiled('tt_col', 'tt_col_tri', tile_column => 't');
+SELECT * FROM tiled_vs_dump('tt_col_tri', 'SELECT geom FROM tt_col');
+-- all collinear: no triangle, no error
+CREATE TABLE tt_line AS SELECT ST_MakePoint(i, 2 * i) AS geom, i % 3 AS t FROM generate_series(1, 30) i;
+CALL tdc_delaunay_tiled('tt_line', 'tt_line_tri', tile_column => 't');
+SELECT count(*) FROM tt_line_tri;
+-- an empty source: an empty target
+CREATE TABLE tt_empty (geom geometry(Point, 4326), t int);
+CALL tdc_delaunay_tiled('tt_empty', 'tt_empty_tri', tile_column => 't');
+SELECT count(*), (SELECT format_type(atttypid, atttypmod) FROM pg_attribute
+				   WHERE attrelid = 'tt_empty_tri'::regclass AND attname = 'geom') FROM tt_empty_tri;
+
+-- the retry path: a dense cluster inside a ring, tiles by quadrant.  The
+-- triangles across the empty annulus have circles far wider than a
+-- quadrant's first halo, so some tiles are not final in round 1 and run
+-- again with the box they asked for.
+CREATE TABLE tt_ring (geom geometry, q int);
+INSERT INTO tt_ring
+	SELECT ST_MakePoint(x, y), (x >= 0)::int * 2 + (y >= 0)::int
+	  FROM (SELECT 100 * cos(2 * pi() * i / 90) AS x, 100 * sin(2 * pi() * i / 90) AS y
+			  FROM generate_series(0, 89) i
+			UNION ALL
+			SELECT (i % 40) / 20.0 - 1, (i / 40) / 20.0 - 1 FROM generate_series(0, 1599) i) s;
+SET client_min_messages = notice;
+CALL tdc_delaunay_tiled('tt_ring', 'tt_ring_tri', tile_column => 'q');
+SET client_min_messages = warning;
+SELECT * FROM tiled_vs_dump('tt_ring_tri', 'SELECT geom FROM tt_ring');
+
+-- errors: each leaves no target behind
+\set VERBOSITY terse
+CALL tdc_delaunay_tiled('tt_uni', 'tt_err', geom_column => 'nosuch');
+CALL tdc_delaunay_tiled('tt_uni', 'tt_err', geom_column => 'id');
+CALL tdc_delaunay_tiled('tt_uni', 'tt_err', tile_column => 'nosuch');
+CALL tdc_delaunay_tiled('tt_uni', 'tt_err', tile_column => 't', tile_size => 10);
+CALL tdc_delaunay_tiled('tt_uni', 'tt_err', tile_size => -1);
+CALL tdc_delaunay_tiled('tt_uni', 'tt_uni_tri');
+CALL tdc_delaunay_tiled('nosuch_table', 'tt_err');
+CREATE TABLE tt_srid (geom geometry);
+INSERT INTO tt_srid VALUES ('SRID=4326;POINT(0 0)'), ('SRID=3857;POINT(1 1)'), ('SRID=4326;POINT(1 0)');
+CALL tdc_delaunay_tiled('tt_srid', 'tt_err');
+CREATE TABLE tt_nulltile AS SELECT geom, CASE WHEN id > 10 THEN t END AS t FROM tt_uni;
+CALL tdc_delaunay_tiled('tt_nulltile', 'tt_err', tile_column => 't');
+-- a tile whose halo would exceed tdc_delaunay.max_memory
+SET tdc_delaunay.max_memory = 1;
+CALL tdc_delaunay_tiled('tt_uni', 'tt_err', tile_size => 1000);
+RESET tdc_delaunay.max_memory;
+SELECT to_regclass('tt_err') AS no_target, count(*) AS staging FROM pg_class WHERE relname LIKE 'tdc_tiled%';
+-- the existing target was not touched
+SELECT count(*) FROM tt_uni_tri;
+
+-- cancel (statement_timeout) while it runs: no half target, server alive
+CREATE TABLE tt_big AS SELECT ST_MakePoint(random(), random()) AS geom FROM generate_series(1, 200000);
+SET statement_timeout = '300ms';
+CALL tdc_delaunay_tiled('tt_big', 'tt_big_tri', tile_size => 0.25);
+RESET statement_timeout;
+SELECT to_regclass('tt_big_tri') AS no_target, count(*) AS staging FROM pg_class WHERE relname LIKE 'tdc_tiled%';
+SELECT 1 AS alive;
+\set VERBOSITY default
+
+DROP TABLE tt_uni, tt_uni_tri, tt_uni_sq, tt_uni_auto, tt_uni_notice, tt_dup, tt_dup_tri, tt_lat, tt_lat_tri,
+	tt_col, tt_col_tri, tt_line, tt_line_tri, tt_empty, tt_empty_tri, tt_ring, tt_ring_tri, tt_srid, tt_nulltile, tt_big;
+DROP FUNCTION tiled_vs_dump(regclass, text);

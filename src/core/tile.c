@@ -1,0 +1,979 @@
+/*
+ * tile.c
+ *		Exact tiled triangulation: the triangles of one tile of the global
+ *		Delaunay triangulation, from the points of a box around the tile.
+ *
+ * Why.  One triangulation holds all its points and its mesh, about 100 bytes
+ * per point.  To triangulate more points than fit, the plane is cut into
+ * tiles; each tile is triangulated with a halo of neighbouring points and
+ * keeps only the triangles it can prove are global ones.  The result must be
+ * the one-shot triangle set, triangle for triangle, cocircular sites
+ * included.  This is the finalization rule of streaming Delaunay (Isenburg,
+ * Liu, Shewchuk, Snoeyink, "Streaming computation of Delaunay
+ * triangulations", SIGGRAPH 2006: a triangle is final once its circumcircle
+ * lies inside the region whose points are all known) applied to the
+ * tile-and-star decomposition of distributed Delaunay (Caraffa, Memari,
+ * Yirci, Brédif, "Tile & merge: distributed Delaunay triangulations for
+ * cloud computing", 2019, and its 2021 follow-up): a tile is done when the
+ * stars of all its own points are final.
+ *
+ * Notation.  P is the global point set, its sites are its distinct
+ * coordinates.  T(S) is the triangulation this engine builds for a set S:
+ * the Delaunay triangulation of S under the lifted-paraboloid perturbation
+ * of merge.c (a site's lift is raised by an infinitesimal that is larger for
+ * lexicographically smaller sites).  The perturbed lift is in general
+ * position, so T(S) is unique, and a triangle abc of S is in T(S) iff every
+ * other site of S is strictly outside its circle or, exactly on it, loses
+ * the perturbed in-circle test.  That test (incircle_tie) looks only at the
+ * coordinates of the four sites involved, never at S: it is the same in
+ * every subset of P.
+ *
+ * The caller gives, for one tile:
+ *	- K, a closed box, optionally more closed "extra" boxes E1..Ek, and Q:
+ *	  every point of P inside K or an extra box (own points and halo), each
+ *	  with the label of the tile that owns it, and this tile's label.  The
+ *	  own points lie in K.  (Extra boxes let a caller add thin bands along
+ *	  long edges of the global hull without widening K; see the CLI.)
+ *	- C, a convex polygon with P inside it (the convex hull of P, or just the
+ *	  four corners of P's bounding box; the hull finishes border tiles sooner).
+ *
+ * Ownership.  A site belongs to the smallest label among its copies, so an
+ * exact duplicate split across tiles still has one owner; every copy has the
+ * site's coordinates, so if one copy is in K all are, and the tile sees them
+ * all.  A global triangle is emitted by the owner of its lexicographically
+ * smallest vertex only, so no two tiles emit it, and (below) that owner does
+ * emit it: every triangle exactly once, for any assignment of points to
+ * tiles.
+ *
+ * Known region.  No point of P lies outside C, and every point of P inside K
+ * or an extra box is in Q.  So a region R is "known" (R n P = R n Q) when
+ * R n C lies in the union U of K and the extra boxes.  We test it
+ * conservatively with the bounding box B of C: R is known when its bounding
+ * box, clipped to B, is covered by U (box_known).  Everything below holds for
+ * any Q between P n U and P.
+ *
+ * Lemma 1 (final triangle).  If abc is in T(Q) and its closed circumdisk D
+ * is known, abc is in T(P).  Proof: a site of P \ Q is outside U, hence
+ * (known region) outside D, hence strictly outside the circle: it cannot
+ * invalidate abc.  Sites of Q on or inside the circle are judged the same way
+ * in T(P) as in T(Q), because the tie-break depends on the four sites only.
+ *
+ * Lemma 2 (final hull edge).  If ab is an edge of the outer face of T(Q),
+ * with the open half-plane H to its outer side, and H n C lies in K, then ab
+ * is a convex hull edge of P (and an edge of T(P)): a point of P in H would
+ * be in C, hence in K, hence in Q, but no point of Q is in H.
+ *
+ * Star.  The star of an own site v is final when every triangle of T(Q) at v
+ * passes Lemma 1 and every outer edge of T(Q) at v passes Lemma 2.  Then the
+ * star of v in T(P) is exactly its star in T(Q): the triangles around v are
+ * global triangles covering a neighbourhood of v (v inside the hull of Q),
+ * or the wedge between two global hull edges (v on the hull of P), and the
+ * global triangles at v tile exactly that neighbourhood or wedge, so there
+ * is no room for another.  A collinear Q has only outer edges: they pass
+ * Lemma 2 only if P is collinear too (no triangle anywhere).  A site without
+ * edges (Q has one site) is final only if K covers B, i.e. Q = P.
+ * When every own star is final, the tile emits the triangles of T(Q) whose
+ * smallest vertex it owns: each is global (Lemma 1), and every global
+ * triangle at an own site is among them.  Otherwise the tile reports a
+ * larger box: K united with the bounding boxes of the failing disks and,
+ * for each failing hull edge, a box around the edge that leaves K (and the
+ * vertex of C beyond the edge nearest to it, when near), clipped to B; the
+ * caller reruns.  The box
+ * grows at every round (if the requests add nothing, the answer is K united
+ * with B), and once K covers B, Q = P and every star is final: the loop
+ * ends.
+ *
+ * Rounding.  Lemma 2 is decided with exact orientations of input
+ * coordinates: C's vertices against the edge, or the corners of the strips
+ * of B outside K (their coordinates are K's and B's, themselves inputs).
+ * Lemma 1 needs the circumdisk's bounding box, computed in double with a
+ * forward error bound (disk_box) doubled for slack; when the orientation
+ * determinant is too small for the bound to mean anything, the disk is
+ * "unknown" and the tile asks for B.  A flat triangle near the global hull
+ * has a huge circle that bulges out of C, while only D n C must be known:
+ * when D's box fails, it is shrunk to the box of the circular segment of D
+ * on C's side of each edge of C (and of each certified hull edge of the
+ * triangle), with the chord computed from a conservative centre and radius
+ * (clip_box).  So border tiles do not read half the data for such slivers.
+ *
+ * The halo is a thin ring in practice: for uniform points, circumdisks are a
+ * few point spacings wide, so a margin of some ten spacings around a tile
+ * almost always suffices on the first round.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "job.h"
+
+#define EPS		0x1p-53
+
+/* Exact "p on the closed left of a -> b". */
+static inline bool
+left_or_on(const double *a, const double *b, const double *p)
+{
+	return tdc_orient2d(a, b, p) >= 0;
+}
+
+/*
+ * Conservative bounding box of the closed circumdisk of counter-clockwise
+ * a, b, c: the true disk lies inside box.  Returns false when the computed
+ * orientation is too uncertain to bound the centre.
+ *
+ * Error bound: with t = b - a and s = c - a rounded (relative error eps each),
+ * d = tx sy - ty sx is off by at most 4 eps P (P = |tx sy| + |ty sx|); we
+ * take eta = 8 eps P / d as its relative error and require eta <= 1/4.  The
+ * numerators nx = sy |t|^2 - ty |s|^2 (and ny) are off by at most 9 eps N
+ * (N the same sum of absolute values); taken as 12 eps N.  The centre offset
+ * u = n / 2d is then off by at most (12 eps N / 2d + eta |u|) / (1 - eta)
+ * + eps |u|, taken as twice the bracket plus 4 eps |u|; the radius by the
+ * sum of both offsets' errors plus 4 eps r; translating back and the final
+ * additions by 4 eps of the magnitudes involved.  The result is doubled.
+ */
+static bool
+disk_box(const double *a, const double *b, const double *c, double box[4], double disk[3])
+{
+	double		tx = b[0] - a[0],
+				ty = b[1] - a[1],
+				sx = c[0] - a[0],
+				sy = c[1] - a[1];
+	double		p1 = tx * sy,
+				p2 = ty * sx;
+	double		d = p1 - p2,
+				eta;
+	double		t2,
+				s2,
+				nx,
+				ny,
+				Nx,
+				Ny,
+				ux,
+				uy,
+				ex,
+				ey,
+				r,
+				er,
+				cx,
+				cy,
+				mx,
+				my;
+
+	if (!(d > 0))
+		return false;
+	eta = 8 * EPS * (fabs(p1) + fabs(p2)) / d;
+	if (!(eta <= 0.25))
+		return false;
+	t2 = tx * tx + ty * ty;
+	s2 = sx * sx + sy * sy;
+	nx = sy * t2 - ty * s2;
+	ny = tx * s2 - sx * t2;
+	Nx = fabs(sy) * t2 + fabs(ty) * s2;
+	Ny = fabs(tx) * s2 + fabs(sx) * t2;
+	ux = nx / (2 * d);
+	uy = ny / (2 * d);
+	ex = 2 * (12 * EPS * Nx / (2 * d) + eta * fabs(ux)) + 4 * EPS * fabs(ux);
+	ey = 2 * (12 * EPS * Ny / (2 * d) + eta * fabs(uy)) + 4 * EPS * fabs(uy);
+	r = sqrt(ux * ux + uy * uy);
+	er = ex + ey + 4 * EPS * r;
+	cx = a[0] + ux;
+	cy = a[1] + uy;
+	mx = 2 * (ex + er + 4 * EPS * (fabs(a[0]) + fabs(ux) + r)) + 0x1p-1000;
+	my = 2 * (ey + er + 4 * EPS * (fabs(a[1]) + fabs(uy) + r)) + 0x1p-1000;
+	box[0] = cx - r - mx;
+	box[1] = cy - r - my;
+	box[2] = cx + r + mx;
+	box[3] = cy + r + my;
+	/* the disk of radius r + max(mx, my) about the computed centre holds the true one */
+	disk[0] = cx;
+	disk[1] = cy;
+	disk[2] = r + fmax(mx, my);
+	return isfinite(disk[2]) && isfinite(box[0]) && isfinite(box[1]) && isfinite(box[2]) && isfinite(box[3]);
+}
+
+/*
+ * Shrink box, a bounding box of the disk (centre disk[0..1], radius
+ * disk[2]), to a bounding box of the part of the disk on the closed left of
+ * the line a -> b: the circular segment beyond the chord.  A flat triangle
+ * along the global hull has a huge circle that bulges out of C; only its
+ * thin segment inside C must be known.
+ *
+ * Rounding: s, the centre's signed distance to the line (positive on the
+ * left), is off by less than es (the unit vectors and the difference carry a
+ * few eps of the magnitudes involved; es takes 16), so s + es bounds it from
+ * above, which only widens the segment.  The half-chord w = sqrt(R^2 - s^2)
+ * gets 8 eps R^2 under the root, more than the rounding of the difference.
+ * The extreme points of the disk are kept whenever they may lie on the left.
+ * The resulting box is padded by 16 eps of the magnitudes involved.
+ */
+static void
+clip_box(const double *disk, const double *a, const double *b, double box[4])
+{
+	double		tx = b[0] - a[0],
+				ty = b[1] - a[1],
+				L = sqrt(tx * tx + ty * ty),
+				ux,
+				uy,
+				nx,
+				ny,
+				R = disk[2],
+				s,
+				es,
+				w,
+				mx,
+				my,
+				pad,
+				c[4];
+	static const double dirs[4][2] = {{-1, 0}, {0, -1}, {1, 0}, {0, 1}};
+
+	if (!(L > 0) || !isfinite(L))
+		return;
+	ux = tx / L;
+	uy = ty / L;
+	nx = -uy;
+	ny = ux;
+	s = nx * (disk[0] - a[0]) + ny * (disk[1] - a[1]);
+	es = 16 * EPS * (fabs(disk[0]) + fabs(disk[1]) + fabs(a[0]) + fabs(a[1])) + 0x1p-1000;
+	s += es;
+	if (!(s < R) || !(s > -R))
+		return;					/* all of the disk may be on the left: no gain */
+	w = sqrt(fmax(0, R * R - s * s) + 8 * EPS * R * R) * (1 + 4 * EPS);
+	mx = disk[0] - s * nx;
+	my = disk[1] - s * ny;
+	c[0] = fmin(mx - w * ux, mx + w * ux);
+	c[2] = fmax(mx - w * ux, mx + w * ux);
+	c[1] = fmin(my - w * uy, my + w * uy);
+	c[3] = fmax(my - w * uy, my + w * uy);
+	for (int k = 0; k < 4; k++)
+		if ((nx * dirs[k][0] + ny * dirs[k][1]) * R + s >= -8 * EPS * R)
+		{
+			double		px = disk[0] + dirs[k][0] * R,
+						py = disk[1] + dirs[k][1] * R;
+
+			c[0] = fmin(c[0], px);
+			c[1] = fmin(c[1], py);
+			c[2] = fmax(c[2], px);
+			c[3] = fmax(c[3], py);
+		}
+	pad = 16 * EPS * (fabs(disk[0]) + fabs(disk[1]) + R + w + fabs(s)) + 0x1p-1000;
+	box[0] = fmax(box[0], c[0] - pad);
+	box[1] = fmax(box[1], c[1] - pad);
+	box[2] = fmin(box[2], c[2] + pad);
+	box[3] = fmin(box[3], c[3] + pad);
+}
+
+typedef struct tile_ctx
+{
+	const tdc_tile_spec *spec;
+	double		keff[4];		/* K with sides at infinity where K reaches B */
+	double		B[4];			/* bounding box of C */
+	double		need[4];		/* K united with the requests so far */
+	bool		want_all;		/* a request we could not bound: ask for B */
+	const double **known_list;	/* K, then the extra boxes */
+	bool		skip_checks;	/* K covers B: only collect the triangles */
+} tile_ctx;
+
+static void
+box_union(double *u, const double *b)
+{
+	u[0] = fmin(u[0], b[0]);
+	u[1] = fmin(u[1], b[1]);
+	u[2] = fmax(u[2], b[2]);
+	u[3] = fmax(u[3], b[3]);
+}
+
+/*
+ * Is the part of box r inside the closed box b covered by the union of the
+ * closed boxes k[0..nk)?  Subtracts one box at a time; the up to four
+ * pieces left around it are taken closed, which only asks for more.
+ */
+static bool
+box_covered(const double *r0, const double *const *k, size_t nk, int depth)
+{
+	double		r[4];
+
+	memcpy(r, r0, sizeof(r));
+	if (r[0] > r[2] || r[1] > r[3])
+		return true;
+	for (size_t i = 0; i < nk; i++)
+	{
+		const double *x = k[i];
+		double		pieces[4][4];
+		int			np = 0;
+
+		if (x[0] > r[2] || x[2] < r[0] || x[1] > r[3] || x[3] < r[1])
+			continue;
+		if (depth > 6)
+			return false;
+		if (r[0] < x[0])
+			memcpy(pieces[np++], (double[4]) {r[0], r[1], x[0], r[3]}, sizeof(double[4]));
+		if (r[2] > x[2])
+			memcpy(pieces[np++], (double[4]) {x[2], r[1], r[2], r[3]}, sizeof(double[4]));
+		if (r[1] < x[1])
+			memcpy(pieces[np++], (double[4]) {fmax(r[0], x[0]), r[1], fmin(r[2], x[2]), x[1]}, sizeof(double[4]));
+		if (r[3] > x[3])
+			memcpy(pieces[np++], (double[4]) {fmax(r[0], x[0]), x[3], fmin(r[2], x[2]), r[3]}, sizeof(double[4]));
+		for (int j = 0; j < np; j++)
+			if (!box_covered(pieces[j], k + i + 1, nk - i - 1, depth + 1))
+				return false;
+		return true;
+	}
+	return false;
+}
+
+/*
+ * Is region box (holding the region that matters) known: its part inside B
+ * covered by K and the extra boxes?  No point lies outside B.
+ */
+static bool
+box_known(const tile_ctx *cx, const double *box)
+{
+	double		r[4] = {fmax(box[0], cx->B[0]), fmax(box[1], cx->B[1]),
+	fmin(box[2], cx->B[2]), fmin(box[3], cx->B[3])};
+
+	/* the common case, without allocation */
+	if (box[0] > cx->keff[0] && box[1] > cx->keff[1] &&
+		box[2] < cx->keff[2] && box[3] < cx->keff[3])
+		return true;
+	if (cx->spec->nextra == 0)
+		return false;
+	return box_covered(r, cx->known_list, cx->spec->nextra + 1, 0);
+}
+
+/*
+ * Add a request, grown by a tenth of its size and a millionth of K's (a
+ * vertex of the failing disk may lie on K's side, and the box must then
+ * pass it), and clipped to B (there are no points beyond it).
+ */
+static void
+request(tile_ctx *cx, const double *box)
+{
+	const double *K = cx->spec->known;
+	double		px = 0.1 * (box[2] - box[0]) + 1e-6 * (K[2] - K[0]) +
+		1e-9 * (fabs(box[0]) + fabs(box[2])) + 0x1p-1000,
+				py = 0.1 * (box[3] - box[1]) + 1e-6 * (K[3] - K[1]) +
+		1e-9 * (fabs(box[1]) + fabs(box[3])) + 0x1p-1000;
+	double		c[4] = {fmax(box[0] - px, cx->B[0]), fmax(box[1] - py, cx->B[1]),
+	fmin(box[2] + px, cx->B[2]), fmin(box[3] + py, cx->B[3])};
+
+	if (c[0] > c[2] || c[1] > c[3])
+		return;
+	box_union(cx->need, c);
+}
+
+/*
+ * What to ask for when hull edge a -> b of T(Q) is not final: points of P
+ * may lie beyond it, outside K.  Ask for the edge's box grown by its length
+ * (Q's hull edges at own sites usually mean a halo thinner than the local
+ * spacing), at most a twentieth of K's size to start with, doubling the
+ * growth until the box leaves K so that K must grow;
+ * and for the nearest vertex of C beyond the edge too when it is within a
+ * few edge lengths (a global hull vertex, which the star needs).
+ */
+static void
+hull_edge_request(tile_ctx *cx, const double *a, const double *b, const double *cvert,
+				  double cdist2)
+{
+	const double *K = cx->spec->known;
+	double		dx = b[0] - a[0],
+				dy = b[1] - a[1],
+				g = sqrt(dx * dx + dy * dy),
+				box[4];
+
+	/*
+	 * A long edge of Q's hull (say between a halo strip and K's corner)
+	 * must not blow K up by its length: start from a twentieth of K.
+	 */
+	g = fmin(g, fmax(K[2] - K[0], K[3] - K[1]) * 0.05);
+	if (!(g > 0))
+		g = fmax(K[2] - K[0], K[3] - K[1]) * 1e-3 + 0x1p-1000;
+	for (int i = 0; i < 64; i++, g *= 2)
+	{
+		box[0] = fmin(a[0], b[0]) - g;
+		box[1] = fmin(a[1], b[1]) - g;
+		box[2] = fmax(a[0], b[0]) + g;
+		box[3] = fmax(a[1], b[1]) + g;
+		if (box[0] < K[0] || box[1] < K[1] || box[2] > K[2] || box[3] > K[3])
+			break;
+	}
+	request(cx, box);
+	if (cdist2 <= 16 * g * g)
+		request(cx, cvert);
+}
+
+/*
+ * Lemma 2 for the hull edge a -> b of T(Q) (interior on its left): is the
+ * open half-plane right of it, intersected with C, inside K?  Either every
+ * vertex of C is on the closed left (the edge is on the global hull), or
+ * every strip of B outside K has its four corners on the closed left.
+ * When it fails, requests the vertices of C strictly right of the edge.
+ */
+static bool
+hull_edge_final(tile_ctx *cx, const double *a, const double *b)
+{
+	const tdc_tile_spec *sp = cx->spec;
+	const double *K = sp->known;
+	const double *B = cx->B;
+	bool		all_left = true;
+	double		strips[4][4];
+	int			ns = 0;
+	double		rq[4] = {INFINITY, INFINITY, -INFINITY, -INFINITY};
+
+	double		best = INFINITY;
+
+	/* the vertex of C beyond the edge nearest to it */
+	for (size_t i = 0; i < sp->nhull; i++)
+		if (!left_or_on(a, b, sp->hull + 2 * i))
+		{
+			const double *v = sp->hull + 2 * i;
+			double		dx = v[0] - 0.5 * (a[0] + b[0]),
+						dy = v[1] - 0.5 * (a[1] + b[1]),
+						d2 = dx * dx + dy * dy;
+
+			all_left = false;
+			if (d2 < best || rq[0] > rq[2])
+			{
+				best = d2;
+				rq[0] = rq[2] = v[0];
+				rq[1] = rq[3] = v[1];
+			}
+		}
+	if (all_left)
+		return true;
+
+	/* the closures of B \ K: left, right, bottom, top strips */
+	if (K[0] > B[0])
+		memcpy(strips[ns++], (double[4]) {B[0], B[1], K[0], B[3]}, sizeof(double[4]));
+	if (K[2] < B[2])
+		memcpy(strips[ns++], (double[4]) {K[2], B[1], B[2], B[3]}, sizeof(double[4]));
+	if (K[1] > B[1])
+		memcpy(strips[ns++], (double[4]) {B[0], B[1], B[2], K[1]}, sizeof(double[4]));
+	if (K[3] < B[3])
+		memcpy(strips[ns++], (double[4]) {B[0], K[3], B[2], B[3]}, sizeof(double[4]));
+	for (int s = 0; s < ns; s++)
+		for (int k = 0; k < 4; k++)
+		{
+			double		p[2] = {strips[s][(k & 1) ? 2 : 0], strips[s][(k & 2) ? 3 : 1]};
+
+			if (!left_or_on(a, b, p))
+			{
+				hull_edge_request(cx, a, b, rq, best);
+				return false;
+			}
+		}
+	return true;
+}
+
+/*
+ * Lemma 1 for triangle v[0..2] (counter-clockwise) of T(Q); glob[k] says
+ * whether edge v[k] -> v[k+1] is a hull edge of T(Q) certified global.
+ * The disk's box is tried first; if it is not known, the box of the disk's
+ * part inside C (clipped by C's edges and the certified hull edges, whose
+ * lines support C) is tried.
+ */
+static bool
+triangle_final(tile_ctx *cx, const double *p[3], const bool glob[3])
+{
+	const tdc_tile_spec *sp = cx->spec;
+	double		box[4],
+				disk[3];
+
+	if (sp->test_weaken == TDC_TILE_WEAKEN_DISKS)
+		return true;
+	if (!disk_box(p[0], p[1], p[2], box, disk))
+	{
+		cx->want_all = true;
+		return false;
+	}
+	if (box_known(cx, box))
+		return true;
+	for (int k = 0; k < 3; k++)
+		if (glob[k])
+			clip_box(disk, p[k], p[(k + 1) % 3], box);
+	for (size_t i = 0; sp->nhull >= 2 && i < sp->nhull; i++)
+		clip_box(disk, sp->hull + 2 * i, sp->hull + 2 * ((i + 1) % sp->nhull), box);
+	if (box_known(cx, box))
+		return true;
+	request(cx, box);
+	return false;
+}
+
+static int
+cmp_i64(int64_t a, int64_t b)
+{
+	return a < b ? -1 : a > b;
+}
+
+/*
+ * The checks run on the job's thread count, each thread over a range of
+ * half-edges, with its own copy of the context (its requests are merged
+ * afterwards); on the way each keeps the triangles whose smallest vertex is
+ * owned, handed over if the tile turns out final.  bad[] (1 for an owned
+ * site) is only read.
+ */
+typedef struct tile_work
+{
+	const tdc_job *job;
+	tile_ctx	cx;
+	const uint8_t *bad;
+	size_t		lo,
+				hi;
+	size_t		unfinal;		/* failing triangles and hull edges at own sites */
+	size_t		ntri,
+				cap;
+	size_t	   *tri;
+	bool		failed;
+	void		(*fn) (struct tile_work *w);
+} tile_work;
+
+static void
+check_range(tile_work *w)
+{
+	const tdc_job *job = w->job;
+	const tdc_he *he = job->he;
+	const uint8_t *bad = w->bad;
+	const tdc_tile_spec *spec = w->cx.spec;
+
+	for (size_t h = w->lo; h < w->hi; h++)
+	{
+		uint32_t	a,
+					b,
+					v[3],
+					hh[3];
+		const double *p[3];
+		bool		glob[3];
+
+		if (he[h].org == TDC_NIL)
+			continue;
+		/* a hull edge: the outer face is on the left of h */
+		if (job->outer == NULL || ((job->outer[h >> 6] >> (h & 63)) & 1))
+		{
+			if (w->cx.skip_checks)
+				continue;
+			b = he[h].org;
+			a = he[SYM(h)].org;
+			if ((bad[a] || bad[b]) &&
+				!hull_edge_final(&w->cx, job->xy + 2 * (size_t) a, job->xy + 2 * (size_t) b))
+				w->unfinal++;
+			continue;
+		}
+		if (job->ntri == 0 || !tdc_tri_at(job, h, v))
+			continue;
+		if (!bad[v[0]] && !bad[v[1]] && !bad[v[2]])
+			continue;
+		/* keep it if its smallest vertex is ours: used when the tile is final */
+		if (w->unfinal == 0 && !w->failed)
+		{
+			int			lo = 0;
+
+			for (int k = 1; k < 3; k++)
+				if (tdc_key_less(job->xy + 2 * (size_t) v[k], job->xy + 2 * (size_t) v[lo], 0))
+					lo = k;
+			if (bad[v[lo]])
+			{
+				if (w->ntri == w->cap)
+				{
+					size_t		nc = w->cap ? 2 * w->cap : (w->hi - w->lo) / 6 + 64;
+					size_t	   *t = realloc(w->tri, sizeof(size_t) * 3 * nc);
+
+					if (t == NULL)
+						w->failed = true;
+					else
+					{
+						w->tri = t;
+						w->cap = nc;
+					}
+				}
+				if (!w->failed)
+				{
+					for (int k = 0; k < 3; k++)
+						w->tri[3 * w->ntri + k] = job->idx[v[k]];
+					w->ntri++;
+				}
+			}
+		}
+		if (w->cx.skip_checks)
+			continue;
+		hh[0] = (uint32_t) h;
+		hh[1] = he[SYM(hh[0])].prev;
+		hh[2] = he[SYM(hh[1])].prev;
+		for (int k = 0; k < 3; k++)
+		{
+			uint32_t	o = SYM(hh[k]);
+
+			p[k] = job->xy + 2 * (size_t) v[k];
+			glob[k] = false;
+			if ((job->outer[o >> 6] >> (o & 63)) & 1)
+			{
+				const double *q = job->xy + 2 * (size_t) v[(k + 1) % 3];
+
+				glob[k] = true;
+				for (size_t i = 0; i < spec->nhull && glob[k]; i++)
+					glob[k] = left_or_on(p[k], q, spec->hull + 2 * i);
+			}
+		}
+		if (!triangle_final(&w->cx, p, glob))
+			w->unfinal++;
+	}
+}
+
+static void *
+work_main(void *arg)
+{
+	tile_work  *w = arg;
+
+	w->fn(w);
+	return NULL;
+}
+
+/* Run fn over the half-edges in nthreads ranges; threads that cannot start run inline. */
+static void
+run_parallel(const tdc_job *job, const tile_ctx *cx, const uint8_t *bad,
+			 void (*fn) (tile_work *w), tile_work *tw, int nthreads)
+{
+	size_t		nhe = job->nin * 6;
+	pthread_t  *th = malloc(sizeof(pthread_t) * nthreads);
+	bool	   *started = calloc(nthreads, sizeof(bool));
+
+	for (int i = 0; i < nthreads; i++)
+	{
+		tw[i].job = job;
+		tw[i].cx = *cx;
+		tw[i].bad = bad;
+		tw[i].lo = nhe / nthreads * i;
+		tw[i].hi = i == nthreads - 1 ? nhe : nhe / nthreads * (i + 1);
+		tw[i].fn = fn;
+	}
+	for (int i = 1; i < nthreads && th && started; i++)
+		started[i] = pthread_create(&th[i], NULL, work_main, &tw[i]) == 0;
+	fn(&tw[0]);
+	for (int i = 1; i < nthreads; i++)
+	{
+		if (th && started && started[i])
+			pthread_join(th[i], NULL);
+		else
+			fn(&tw[i]);
+	}
+	free(th);
+	free(started);
+}
+
+int
+tdc_tile_finish(const tdc_job *job, const tdc_tile_spec *spec, tdc_tile_result *res,
+				char *err, size_t errlen)
+{
+	tile_ctx	cx;
+	const double *K = spec->known;
+	size_t		nin = job->nin,
+				nhe = nin * 6;
+	int64_t    *lab = NULL;
+	uint8_t    *bad = NULL;		/* per site: 1 if owned */
+	const double **known_list = NULL;
+	tile_work  *tw = NULL;
+	int			nthreads;
+	bool		covers;
+	size_t		nsites_own = 0;
+
+	memset(res, 0, sizeof(*res));
+	if (err && errlen)
+		err[0] = '\0';
+#define FAIL(code, ...) do { if (err && errlen) snprintf(err, errlen, __VA_ARGS__); \
+		free(lab); free(bad); free(known_list); free(tw); tdc_tile_result_free(res); return (code); } while (0)
+
+	if (job->opt.tolerance > 0)
+		FAIL(TDC_EINVAL, "a tiled triangulation cannot use a tolerance: which points it merges depends on all of them");
+	if (!(K[0] <= K[2] && K[1] <= K[3]))
+		FAIL(TDC_EINVAL, "the known box is empty or not a number");
+	if (job->n > 0 && (spec->hull == NULL || spec->nhull == 0))
+		FAIL(TDC_EINVAL, "no extent polygon given");
+	if (job->n > 0 && spec->tile == NULL)
+		FAIL(TDC_EINVAL, "no tile labels given");
+
+	cx.spec = spec;
+	cx.want_all = false;
+	cx.B[0] = cx.B[1] = INFINITY;
+	cx.B[2] = cx.B[3] = -INFINITY;
+	for (size_t i = 0; i < spec->nhull; i++)
+		box_union(cx.B, (double[4]) {spec->hull[2 * i], spec->hull[2 * i + 1],
+									 spec->hull[2 * i], spec->hull[2 * i + 1]});
+	cx.keff[0] = K[0] <= cx.B[0] ? -INFINITY : K[0];
+	cx.keff[1] = K[1] <= cx.B[1] ? -INFINITY : K[1];
+	cx.keff[2] = K[2] >= cx.B[2] ? INFINITY : K[2];
+	cx.keff[3] = K[3] >= cx.B[3] ? INFINITY : K[3];
+	memcpy(cx.need, K, sizeof(cx.need));
+	cx.known_list = known_list = malloc(sizeof(double *) * (spec->nextra + 1));
+	if (cx.known_list == NULL)
+		FAIL(TDC_ENOMEM, "out of memory");
+	cx.known_list[0] = K;
+	for (size_t i = 0; i < spec->nextra; i++)
+		cx.known_list[i + 1] = spec->extra + 4 * i;
+	covers = K[0] <= cx.B[0] && K[1] <= cx.B[1] && K[2] >= cx.B[2] && K[3] >= cx.B[3];
+
+	/* ownership: the smallest label among a site's copies */
+	lab = malloc(sizeof(int64_t) * (nin + 1));
+	bad = calloc(nin + 1, 1);
+	if (lab == NULL || bad == NULL)
+		FAIL(TDC_ENOMEM, "out of memory");
+	for (size_t s = 0; s < nin; s++)
+		lab[s] = INT64_MAX;
+	for (size_t i = 0; i < job->n; i++)
+	{
+		const double *p = job->input + 2 * i;
+		uint32_t	s;
+
+		if (!(p[0] >= K[0] && p[0] <= K[2] && p[1] >= K[1] && p[1] <= K[3]))
+		{
+			bool		in_extra = false;
+
+			for (size_t e = 0; e < spec->nextra && !in_extra && spec->tile[i] != spec->self; e++)
+			{
+				const double *x = spec->extra + 4 * e;
+
+				in_extra = p[0] >= x[0] && p[0] <= x[2] && p[1] >= x[1] && p[1] <= x[3];
+			}
+			if (!in_extra)
+				FAIL(TDC_EINVAL, "point %zu (%.17g %.17g) lies outside the known box%s", i, p[0], p[1],
+					 spec->tile[i] == spec->self ? " (an own point must lie in K)" : " and the extra boxes");
+		}
+		if (!(p[0] >= cx.B[0] && p[0] <= cx.B[2] && p[1] >= cx.B[1] && p[1] <= cx.B[3]))
+			FAIL(TDC_EINVAL, "point %zu (%.17g %.17g) lies outside the extent polygon", i, p[0], p[1]);
+		s = tdc_input_site(job, i);
+		if (s == UINT32_MAX)
+			FAIL(TDC_ENOMEM, "out of memory");
+		if (cmp_i64(spec->tile[i], lab[s]) < 0)
+			lab[s] = spec->tile[i];
+	}
+	for (size_t s = 0; s < nin; s++)
+		if (lab[s] == spec->self)
+		{
+			bad[s] = 1;
+			nsites_own++;
+		}
+	free(lab);
+	lab = NULL;
+	res->own_sites = nsites_own;
+	res->sites = job->nsites;
+	nthreads = job->threads > 0 ? job->threads : 1;
+	if (nhe < 65536)
+		nthreads = 1;
+	tw = calloc(nthreads, sizeof(tile_work));
+	if (tw == NULL)
+		FAIL(TDC_ENOMEM, "out of memory");
+
+	cx.skip_checks = covers;	/* Q = P: every star is final */
+	if (covers)
+		run_parallel(job, &cx, bad, check_range, tw, nthreads);
+	else if (job->nsites < 2)
+	{
+		/* a lone site is final only when it is alone in P */
+		if (nsites_own > 0)
+		{
+			cx.want_all = true;
+			res->unfinal = nsites_own;
+		}
+	}
+	else
+		run_parallel(job, &cx, bad, check_range, tw, nthreads);
+
+	for (int w = 0; w < nthreads; w++)
+	{
+		res->unfinal += tw[w].unfinal;
+		box_union(cx.need, tw[w].cx.need);
+		cx.want_all |= tw[w].cx.want_all;
+	}
+	if (res->unfinal > 0)
+	{
+		if (cx.want_all || (cx.need[0] >= K[0] && cx.need[1] >= K[1] &&
+							cx.need[2] <= K[2] && cx.need[3] <= K[3]))
+			box_union(cx.need, cx.B);
+		memcpy(res->need, cx.need, sizeof(res->need));
+		res->final = 0;
+		for (int w = 0; w < nthreads; w++)
+			free(tw[w].tri);
+		free(bad);
+		free(known_list);
+		free(tw);
+		return TDC_OK;
+	}
+
+	/* every own star is final: the triangles whose smallest vertex we own */
+	res->final = 1;
+	for (int w = 0; w < nthreads; w++)
+	{
+		if (tw[w].failed)
+		{
+			for (int u = 0; u < nthreads; u++)
+				free(tw[u].tri);
+			FAIL(TDC_ENOMEM, "out of memory");
+		}
+		res->ntri += tw[w].ntri;
+	}
+	res->tri = malloc(sizeof(size_t) * 3 * res->ntri + 1);
+	if (res->tri == NULL)
+	{
+		for (int u = 0; u < nthreads; u++)
+			free(tw[u].tri);
+		FAIL(TDC_ENOMEM, "out of memory");
+	}
+	for (size_t w = 0, at = 0; w < (size_t) nthreads; w++)
+	{
+		memcpy(res->tri + 3 * at, tw[w].tri, sizeof(size_t) * 3 * tw[w].ntri);
+		at += tw[w].ntri;
+		free(tw[w].tri);
+	}
+	free(bad);
+	free(known_list);
+	free(tw);
+	return TDC_OK;
+#undef FAIL
+}
+
+int
+tdc_tile_triangulate(const double *xy, size_t n, const tdc_tile_spec *spec,
+					 const tdc_options *opt, tdc_tile_result *res,
+					 char *err, size_t errlen)
+{
+	tdc_job    *job;
+	int			rc;
+
+	memset(res, 0, sizeof(*res));
+	rc = tdc_triangulate(xy, n, opt, &job, err, errlen);
+	if (rc == TDC_OK)
+		rc = tdc_tile_finish(job, spec, res, err, errlen);
+	else if (job && err && errlen)
+		snprintf(err, errlen, "%s", tdc_job_error(job));
+	tdc_job_free(job);
+	return rc;
+}
+
+void
+tdc_tile_result_free(tdc_tile_result *res)
+{
+	if (res == NULL)
+		return;
+	free(res->tri);
+	res->tri = NULL;
+	res->ntri = 0;
+}
+
+/* Lexicographic order of points, for the monotone chain. */
+static int
+cmp_pt(const void *a, const void *b)
+{
+	const double *p = a,
+			   *q = b;
+
+	if (p[0] != q[0])
+		return p[0] < q[0] ? -1 : 1;
+	if (p[1] != q[1])
+		return p[1] < q[1] ? -1 : 1;
+	return 0;
+}
+
+int
+tdc_convex_hull(const double *xy, size_t n, double **hull, size_t *nhull)
+{
+	double	   *p,
+			   *h;
+	size_t		k = 0,
+				m = 0;
+
+	*hull = NULL;
+	*nhull = 0;
+	if (n == 0)
+		return TDC_OK;
+	p = malloc(16 * n);
+	h = malloc(16 * (2 * n + 1));
+	if (p == NULL || h == NULL)
+	{
+		free(p);
+		free(h);
+		return TDC_ENOMEM;
+	}
+	/*
+	 * Akl-Toussaint: a point strictly inside the polygon of the extreme
+	 * points in eight directions is no hull vertex; only the rest is sorted.
+	 */
+	{
+		size_t		ext[8] = {0};
+		double		oct[16];
+
+		for (size_t i = 1; i < n; i++)
+		{
+			const double *q = xy + 2 * i;
+			double		key[8] = {q[0], q[0] + q[1], q[1], q[1] - q[0],
+			-q[0], -q[0] - q[1], -q[1], q[0] - q[1]};
+
+			for (int k = 0; k < 8; k++)
+			{
+				const double *e = xy + 2 * ext[k];
+				double		ek[8] = {e[0], e[0] + e[1], e[1], e[1] - e[0],
+				-e[0], -e[0] - e[1], -e[1], e[0] - e[1]};
+
+				if (key[k] < ek[k])
+					ext[k] = i;
+			}
+		}
+		/* left, lower left, bottom, lower right, ...: counter-clockwise */
+		for (int k = 0; k < 8; k++)
+		{
+			oct[2 * k] = xy[2 * ext[k]];
+			oct[2 * k + 1] = xy[2 * ext[k] + 1];
+		}
+		for (size_t i = 0; i < n; i++)
+		{
+			const double *q = xy + 2 * i;
+			bool		inside = true;
+
+			for (int k = 0; k < 8 && inside; k++)
+				inside = tdc_orient2d(oct + 2 * k, oct + 2 * ((k + 1) % 8), q) > 0;
+			if (!inside)
+			{
+				p[2 * m] = q[0];
+				p[2 * m + 1] = q[1];
+				m++;
+			}
+		}
+		n = m;
+		m = 0;
+	}
+	qsort(p, n, 16, cmp_pt);
+	/* drop exact duplicates */
+	for (size_t i = 0; i < n; i++)
+		if (m == 0 || cmp_pt(p + 2 * (m - 1), p + 2 * i) != 0)
+		{
+			p[2 * m] = p[2 * i];
+			p[2 * m + 1] = p[2 * i + 1];
+			m++;
+		}
+	if (m < 3)
+	{
+		memcpy(h, p, 16 * m);
+		k = m;
+	}
+	else
+	{
+		/* Andrew's monotone chain, exact turns, collinear vertices dropped */
+		for (size_t i = 0; i < m; i++)
+		{
+			while (k >= 2 && tdc_orient2d(h + 2 * (k - 2), h + 2 * (k - 1), p + 2 * i) <= 0)
+				k--;
+			h[2 * k] = p[2 * i];
+			h[2 * k + 1] = p[2 * i + 1];
+			k++;
+		}
+		for (size_t i = m - 1, t = k + 1; i-- > 0;)
+		{
+			while (k >= t && tdc_orient2d(h + 2 * (k - 2), h + 2 * (k - 1), p + 2 * i) <= 0)
+				k--;
+			h[2 * k] = p[2 * i];
+			h[2 * k + 1] = p[2 * i + 1];
+			k++;
+		}
+		k--;					/* the first point closes the chain */
+	}
+	free(p);
+	*hull = h;
+	*nhull = k;
+	return TDC_OK;
+}

@@ -1,0 +1,479 @@
+/*
+ * tdc_tiled.c
+ *		The per-tile step of tdc_delaunay_tiled (tdc_delaunay--0.1.0.sql):
+ *		an aggregate that triangulates one tile with its halo and keeps the
+ *		tile's final triangles (src/core/tile.c), and a set-returning
+ *		function that unnests its result into POLYGON rows.
+ *
+ * Why an aggregate.  The procedure's per-tile work must be one statement
+ * that Citus can push down to the workers when the tables are distributed
+ * by the tile column:
+ *
+ *	INSERT INTO target
+ *	SELECT ... FROM (SELECT tile, _tdc_tile(g, label, self, known, hull
+ *								  ORDER BY seq) AS r
+ *					 FROM halo JOIN tiles USING (tile) GROUP BY tile) s,
+ *		 LATERAL _tdc_tile_triangles(s.r) t
+ *
+ * A GROUP BY on the distribution column runs whole on the shard that holds
+ * the group, so the points and the triangles stay on the worker.  On plain
+ * PostgreSQL the procedure runs the same statement one tile at a time, so
+ * a backend holds one tile and its halo.
+ *
+ * The aggregate's result is a bytea in the format below, not a geometry
+ * collection, because a tile that is not final yet must report the box it
+ * needs instead of triangles: _tdc_tile_triangles then returns one row with
+ * k = 0 and that box as a POLYGON, which the procedure reads back (the
+ * coordinates are the core's doubles, written and read without rounding),
+ * deletes, and reruns the tile with a grown halo.
+ *
+ *	TileOut header, then for a final tile ntri triangles of 3 vertices of
+ *	2 (XY) or 3 (XYZ) doubles, counter-clockwise.
+ *
+ * Ownership, Z and duplicates.  Every halo row carries the label of the
+ * tile that owns the point; the core keeps a triangle in the tile owning
+ * its smallest vertex.  The rows arrive in the source's order (ORDER BY
+ * seq), and the core names each vertex by the first point with its
+ * coordinates, so a vertex's Z is that of its first copy in the source, as
+ * in ST_TDCDelaunayDump.
+ */
+#include "postgres.h"
+
+#include "fmgr.h"
+#include "funcapi.h"
+#include "miscadmin.h"
+#include "utils/array.h"
+#include "utils/builtins.h"
+#include "utils/memutils.h"
+#include "catalog/pg_type.h"
+
+#include <math.h>
+
+#include "tdc_pg.h"
+#include "gser_format.h"
+
+#define TILE_FNAME		"tdc_delaunay_tiled"
+
+/* The aggregate's transition state: the tile's points with their owners. */
+typedef struct TileState
+{
+	TdcPointBuf pts;
+	int64	   *label;			/* pts.cap entries: owner of each vertex */
+	uint64		label_cap;
+	int64		self;
+	double		known[4];
+	double	   *hull;			/* nhull x,y */
+	int			nhull;
+	double	   *extra;			/* nextra boxes */
+	int			nextra;
+} TileState;
+
+/* Header of the aggregate's bytea result. */
+typedef struct TileOut
+{
+	int32		vl_len_;
+	int32		final;			/* 1: triangles follow; 0: need is the box to rerun with */
+	int32		srid;
+	int32		hasz;
+	double		need[4];
+	uint64		ntri;
+} TileOut;
+
+static void
+read_box_array(ArrayType *a, double **out, int *n, int want_min, const char *what)
+{
+	Datum	   *elems;
+	bool	   *nulls;
+	int			count;
+
+	if (ARR_NDIM(a) > 1 || ARR_ELEMTYPE(a) != FLOAT8OID)
+		ereport(ERROR,
+				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
+				 errmsg("%s: %s must be a one-dimensional float8 array", TILE_FNAME, what)));
+	deconstruct_array(a, FLOAT8OID, 8, FLOAT8PASSBYVAL, TYPALIGN_DOUBLE,
+					  &elems, &nulls, &count);
+	if (count < want_min || count % 2 != 0)
+		ereport(ERROR,
+				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
+				 errmsg("%s: %s has %d values, want an even number of at least %d",
+						TILE_FNAME, what, count, want_min)));
+	*out = palloc(sizeof(double) * count);
+	for (int i = 0; i < count; i++)
+	{
+		if (nulls[i])
+			ereport(ERROR,
+					(errcode(ERRCODE_NULL_VALUE_NOT_ALLOWED),
+					 errmsg("%s: %s contains NULL", TILE_FNAME, what)));
+		(*out)[i] = DatumGetFloat8(elems[i]);
+	}
+	*n = count;
+}
+
+PG_FUNCTION_INFO_V1(_tdc_tile_transfn);
+
+/*
+ * _tdc_tile_transfn(state, g geometry, label int8, self int8,
+ *					  known float8[4], hull float8[], extra float8[])
+ * Appends the vertices of g, each owned by tile "label".  self, known,
+ * hull and the extra known boxes (4 values each, every point inside them is
+ * passed too) are the tile's and are taken from the first row.
+ */
+Datum
+_tdc_tile_transfn(PG_FUNCTION_ARGS)
+{
+	MemoryContext aggcxt;
+	TileState  *st = PG_ARGISNULL(0) ? NULL : (TileState *) PG_GETARG_POINTER(0);
+	struct varlena *geom;
+	int64		label;
+	uint64		before;
+
+	if (!AggCheckCallContext(fcinfo, &aggcxt))
+		elog(ERROR, "_tdc_tile_transfn called in non-aggregate context");
+	if (PG_ARGISNULL(1))
+		PG_RETURN_POINTER(st);
+	if (PG_ARGISNULL(2) || PG_ARGISNULL(3) || PG_ARGISNULL(4) || PG_ARGISNULL(5) ||
+		PG_ARGISNULL(6))
+		ereport(ERROR,
+				(errcode(ERRCODE_NULL_VALUE_NOT_ALLOWED),
+				 errmsg("%s: label, tile, known box and hull must not be NULL", TILE_FNAME)));
+	label = PG_GETARG_INT64(2);
+
+	if (st == NULL)
+	{
+		MemoryContext old = MemoryContextSwitchTo(aggcxt);
+		double	   *known;
+		int			nk;
+
+		st = palloc0(sizeof(TileState));
+		tdc_pointbuf_init(&st->pts, aggcxt);
+		st->self = PG_GETARG_INT64(3);
+		read_box_array(PG_GETARG_ARRAYTYPE_P(4), &known, &nk, 4, "the known box");
+		if (nk != 4 || !(known[0] <= known[2] && known[1] <= known[3]))
+			ereport(ERROR,
+					(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
+					 errmsg("%s: the known box must be {xmin, ymin, xmax, ymax}", TILE_FNAME)));
+		memcpy(st->known, known, sizeof(st->known));
+		read_box_array(PG_GETARG_ARRAYTYPE_P(5), &st->hull, &st->nhull, 2, "the hull");
+		st->nhull /= 2;
+		read_box_array(PG_GETARG_ARRAYTYPE_P(6), &st->extra, &st->nextra, 0, "the extra boxes");
+		if (st->nextra % 4 != 0)
+			ereport(ERROR,
+					(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
+					 errmsg("%s: the extra boxes must be 4 values each", TILE_FNAME)));
+		st->nextra /= 4;
+		MemoryContextSwitchTo(old);
+	}
+
+	before = st->pts.n;
+	geom = PG_DETOAST_DATUM_PACKED(PG_GETARG_DATUM(1));
+	tdc_gser_append(&st->pts, geom, TILE_FNAME);
+	PG_FREE_IF_COPY(geom, 1);
+
+	if (st->pts.n > st->label_cap)
+	{
+		uint64		cap = Max(st->pts.cap, Max(st->label_cap * 2, 1024));
+
+		if (st->label == NULL)
+			st->label = MemoryContextAllocHuge(aggcxt, cap * sizeof(int64));
+		else
+			st->label = repalloc_huge(st->label, cap * sizeof(int64));
+		st->label_cap = cap;
+	}
+	for (uint64 i = before; i < st->pts.n; i++)
+		st->label[i] = label;
+	PG_RETURN_POINTER(st);
+}
+
+PG_FUNCTION_INFO_V1(_tdc_tile_finalfn);
+
+/*
+ * The tile's final triangles, or the box it needs, as a TileOut bytea.
+ * The triangulation runs interruptibly (tdc_run), within
+ * tdc_delaunay.max_memory: a tile whose halo is too big is an ERROR.
+ */
+Datum
+_tdc_tile_finalfn(PG_FUNCTION_ARGS)
+{
+	TileState  *st = PG_ARGISNULL(0) ? NULL : (TileState *) PG_GETARG_POINTER(0);
+	tdc_tile_spec spec;
+	tdc_tile_result res;
+	TdcRun	   *run;
+	TileOut    *out;
+	char		err[256];
+	int			rc;
+	int			dim;
+	uint64		size;
+
+	if (!AggCheckCallContext(fcinfo, NULL))
+		elog(ERROR, "_tdc_tile_finalfn called in non-aggregate context");
+	if (st == NULL || st->pts.n == 0)
+		PG_RETURN_NULL();
+
+	dim = st->pts.hasz ? 3 : 2;
+	memset(&spec, 0, sizeof(spec));
+	spec.tile = st->label;
+	spec.self = st->self;
+	memcpy(spec.known, st->known, sizeof(spec.known));
+	spec.hull = st->hull;
+	spec.nhull = st->nhull;
+	spec.extra = st->extra;
+	spec.nextra = st->nextra;
+
+	/* the result is at most 2n triangles: count it against the limit */
+	run = tdc_run(&st->pts, 0.0, (uint64) st->pts.n * 2 * 3 * dim * sizeof(double),
+				  TILE_FNAME);
+	memset(&res, 0, sizeof(res));
+	err[0] = '\0';
+	rc = tdc_tile_finish(run->job, &spec, &res, err, sizeof(err));
+	if (rc != TDC_OK)
+	{
+		tdc_tile_result_free(&res);
+		tdc_run_free(run);
+		ereport(ERROR,
+				(errcode(ERRCODE_INTERNAL_ERROR),
+				 errmsg("%s: tile " INT64_FORMAT ": %s", TILE_FNAME, st->self, err)));
+	}
+
+	size = sizeof(TileOut) + (res.final ? (uint64) res.ntri * 3 * dim * sizeof(double) : 0);
+	if (size > MaxAllocSize)
+	{
+		uint64		ntri = res.ntri;
+
+		tdc_tile_result_free(&res);
+		tdc_run_free(run);
+		ereport(ERROR,
+				(errcode(ERRCODE_PROGRAM_LIMIT_EXCEEDED),
+				 errmsg("%s: tile " INT64_FORMAT " has %llu triangles, more than one value can hold",
+						TILE_FNAME, st->self, (unsigned long long) ntri),
+				 errhint("Use smaller tiles (tile_size, or a finer tile column).")));
+	}
+	out = palloc(size);
+	SET_VARSIZE(out, size);
+	out->final = res.final;
+	out->srid = st->pts.srid;
+	out->hasz = st->pts.hasz;
+	memcpy(out->need, res.final ? st->known : res.need, sizeof(out->need));
+	out->ntri = res.final ? res.ntri : 0;
+	if (res.final)
+	{
+		double	   *p = (double *) (out + 1);
+
+		for (uint64 t = 0; t < res.ntri; t++)
+			for (int j = 0; j < 3; j++)
+			{
+				size_t		i = res.tri[3 * t + j];
+
+				*p++ = st->pts.xy[2 * i];
+				*p++ = st->pts.xy[2 * i + 1];
+				if (dim == 3)
+					*p++ = st->pts.z[i];
+			}
+	}
+	tdc_tile_result_free(&res);
+	tdc_run_free(run);
+	PG_RETURN_BYTEA_P(out);
+}
+
+/* A POLYGON value with one ring of npts vertices (dim doubles each). */
+static Datum
+make_polygon(const double *ring, int npts, int dim, int32 srid)
+{
+	Size		size = VARHDRSZ + G_HEADER + 16 + (Size) npts * dim * sizeof(double);
+	char	   *out = palloc(size);
+	unsigned char *h = (unsigned char *) VARDATA(out);
+	uint32		s = (uint32) srid & 0x1fffff;
+	uint32		u[4] = {G_POLYGON, 1, (uint32) npts, 0};
+
+	SET_VARSIZE(out, size);
+	h[0] = (unsigned char) (s >> 16);
+	h[1] = (unsigned char) (s >> 8);
+	h[2] = (unsigned char) s;
+	h[3] = GF_VERSION | (dim == 3 ? GF_Z : 0);
+	memcpy(VARDATA(out) + G_HEADER, u, sizeof(u));
+	memcpy(VARDATA(out) + G_HEADER + 16, ring, (Size) npts * dim * sizeof(double));
+	return PointerGetDatum(out);
+}
+
+PG_FUNCTION_INFO_V1(_tdc_tile_triangles);
+
+/*
+ * _tdc_tile_triangles(r bytea) RETURNS TABLE(k bigint, geom geometry)
+ * A final tile's triangles numbered k = 1.., or for a tile that is not
+ * final one row k = 0 holding the box it needs as a POLYGON
+ * (xmin ymin, xmax ymin, xmax ymax, xmin ymax, xmin ymin).
+ */
+Datum
+_tdc_tile_triangles(PG_FUNCTION_ARGS)
+{
+	ReturnSetInfo *rsinfo = (ReturnSetInfo *) fcinfo->resultinfo;
+	bytea	   *in = PG_GETARG_BYTEA_P(0);
+	TileOut		h;
+	Datum		values[2];
+	bool		nulls[2] = {false, false};
+	int			dim;
+
+	InitMaterializedSRF(fcinfo, 0);
+	if (VARSIZE(in) < sizeof(TileOut))
+		ereport(ERROR,
+				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
+				 errmsg("%s: not a tile result", TILE_FNAME)));
+	memcpy(&h, in, sizeof(h));
+	dim = h.hasz ? 3 : 2;
+	if ((h.final != 0 && h.final != 1) ||
+		VARSIZE(in) != sizeof(TileOut) + h.ntri * 3 * dim * sizeof(double))
+		ereport(ERROR,
+				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
+				 errmsg("%s: corrupt tile result", TILE_FNAME)));
+
+	if (!h.final)
+	{
+		double		ring[15];
+		double		c[5][2] = {{h.need[0], h.need[1]}, {h.need[2], h.need[1]},
+		{h.need[2], h.need[3]}, {h.need[0], h.need[3]}, {h.need[0], h.need[1]}};
+
+		for (int i = 0; i < 5; i++)
+		{
+			ring[dim * i] = c[i][0];
+			ring[dim * i + 1] = c[i][1];
+			if (dim == 3)
+				ring[dim * i + 2] = 0;
+		}
+		values[0] = Int64GetDatum(0);
+		values[1] = make_polygon(ring, 5, dim, h.srid);
+		tuplestore_putvalues(rsinfo->setResult, rsinfo->setDesc, values, nulls);
+	}
+	else
+	{
+		const double *tri = (const double *) ((const char *) in + sizeof(TileOut));
+		double		ring[12];
+
+		for (uint64 t = 0; t < h.ntri; t++)
+		{
+			CHECK_FOR_INTERRUPTS();
+			memcpy(ring, tri + t * 3 * dim, 3 * dim * sizeof(double));
+			memcpy(ring + 3 * dim, tri + t * 3 * dim, dim * sizeof(double));
+			values[0] = Int64GetDatum((int64) t + 1);
+			values[1] = make_polygon(ring, 4, dim, h.srid);
+			tuplestore_putvalues(rsinfo->setResult, rsinfo->setDesc, values, nulls);
+			pfree(DatumGetPointer(values[1]));
+		}
+	}
+	return (Datum) 0;
+}
+
+/*
+ * _tdc_hull(geometry) and _tdc_hull(float8[] of x,y pairs): the exact convex
+ * hull of all vertices as {x,y,...} counter-clockwise, the polygon C of the
+ * tiles (tdc_tile_spec.hull).  The hull of a union is the hull of the parts'
+ * hulls, so the state is a buffer that is replaced by its hull whenever it
+ * fills: bounded memory for any table, and per-tile hulls (computed on the
+ * workers on Citus) can be combined by the float8[] form.
+ */
+#define HULL_BUFFER		65536
+
+typedef struct HullState
+{
+	double	   *xy;				/* HULL_BUFFER + slack pairs */
+	uint64		n;
+	uint64		cap;
+} HullState;
+
+static void
+hull_reduce(HullState *st)
+{
+	double	   *hull = NULL;
+	size_t		nh = 0;
+
+	if (tdc_convex_hull(st->xy, (size_t) st->n, &hull, &nh) != TDC_OK)
+		ereport(ERROR,
+				(errcode(ERRCODE_OUT_OF_MEMORY),
+				 errmsg("%s: out of memory computing the convex hull", TILE_FNAME)));
+	if (nh > 0)
+		memcpy(st->xy, hull, nh * 2 * sizeof(double));
+	st->n = nh;
+	free(hull);
+}
+
+static void
+hull_add(HullState *st, const double *xy, uint64 n, MemoryContext cxt)
+{
+	for (uint64 i = 0; i < n; i++)
+	{
+		if (!isfinite(xy[2 * i]) || !isfinite(xy[2 * i + 1]))
+			ereport(ERROR,
+					(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
+					 errmsg("%s: non-finite coordinate", TILE_FNAME)));
+		if (st->n == st->cap)
+		{
+			hull_reduce(st);
+			if (st->n * 2 > st->cap)
+			{
+				st->cap *= 2;
+				st->xy = repalloc_huge(st->xy, st->cap * 2 * sizeof(double));
+			}
+		}
+		st->xy[2 * st->n] = xy[2 * i];
+		st->xy[2 * st->n + 1] = xy[2 * i + 1];
+		st->n++;
+	}
+}
+
+PG_FUNCTION_INFO_V1(_tdc_hull_transfn);
+
+Datum
+_tdc_hull_transfn(PG_FUNCTION_ARGS)
+{
+	MemoryContext aggcxt;
+	HullState  *st = PG_ARGISNULL(0) ? NULL : (HullState *) PG_GETARG_POINTER(0);
+	Oid			argtype = get_fn_expr_argtype(fcinfo->flinfo, 1);
+
+	if (!AggCheckCallContext(fcinfo, &aggcxt))
+		elog(ERROR, "_tdc_hull_transfn called in non-aggregate context");
+	if (PG_ARGISNULL(1))
+		PG_RETURN_POINTER(st);
+	if (st == NULL)
+	{
+		st = MemoryContextAllocZero(aggcxt, sizeof(HullState));
+		st->cap = HULL_BUFFER;
+		st->xy = MemoryContextAllocHuge(aggcxt, st->cap * 2 * sizeof(double));
+	}
+	if (argtype == FLOAT8ARRAYOID)
+	{
+		double	   *xy;
+		int			n;
+
+		read_box_array(PG_GETARG_ARRAYTYPE_P(1), &xy, &n, 0, "a hull");
+		hull_add(st, xy, n / 2, aggcxt);
+		pfree(xy);
+	}
+	else
+	{
+		TdcPointBuf buf;
+		struct varlena *geom = PG_DETOAST_DATUM_PACKED(PG_GETARG_DATUM(1));
+
+		tdc_pointbuf_init(&buf, CurrentMemoryContext);
+		tdc_gser_append(&buf, geom, TILE_FNAME);
+		if (buf.n > 0)
+			hull_add(st, buf.xy, buf.n, aggcxt);
+		PG_FREE_IF_COPY(geom, 1);
+	}
+	PG_RETURN_POINTER(st);
+}
+
+PG_FUNCTION_INFO_V1(_tdc_hull_finalfn);
+
+Datum
+_tdc_hull_finalfn(PG_FUNCTION_ARGS)
+{
+	HullState  *st = PG_ARGISNULL(0) ? NULL : (HullState *) PG_GETARG_POINTER(0);
+	Datum	   *d;
+
+	if (st == NULL || st->n == 0)
+		PG_RETURN_NULL();
+	hull_reduce(st);
+	d = palloc(sizeof(Datum) * st->n * 2);
+	for (uint64 i = 0; i < st->n * 2; i++)
+		d[i] = Float8GetDatum(st->xy[i]);
+	PG_RETURN_ARRAYTYPE_P(construct_array(d, (int) st->n * 2, FLOAT8OID, 8,
+										  FLOAT8PASSBYVAL, TYPALIGN_DOUBLE));
+}
