@@ -46,7 +46,15 @@ build/test_core: $(TEST_SRCS) $(wildcard test/*.h) $(CORE_SRCS) $(wildcard src/c
 	@mkdir -p build
 	$(CC_CORE) $(CORE_CFLAGS) $(TEST_CFLAGS) -o $@ $(TEST_SRCS) $(CORE_SRCS) -lgmp -lm
 
-check-core: build/test_core
+# The constrained tests compare with CGAL when its headers are installed
+# (Debian: libcgal-dev); the reference is a test tool, never linked in.
+CGAL_CDT = $(if $(wildcard /usr/include/CGAL/Constrained_Delaunay_triangulation_2.h),build/cgal_cdt)
+
+build/cgal_cdt: test/cgal_cdt.cpp
+	@mkdir -p build
+	$(CXX) -O2 -DNDEBUG -DCGAL_NDEBUG -o $@ $< -lgmp -lmpfr
+
+check-core: build/test_core $(CGAL_CDT)
 	build/test_core
 
 build/test_core_asan: $(TEST_SRCS) $(wildcard test/*.h) $(CORE_SRCS) $(wildcard src/core/*.h)

@@ -31,6 +31,7 @@ extern void test_conformance(void);
 extern void test_memory(void);
 extern void test_concurrency(void);
 extern void test_tolerance(void);
+extern void test_cdt(void);
 
 /* Set by --quick (sanitizer runs): smaller sizes. */
 extern int	tdc_test_quick;
