@@ -133,3 +133,18 @@ LANGUAGE C IMMUTABLE STRICT PARALLEL SAFE;
 COMMENT ON FUNCTION _st_tdcdelaunay_state_check(bytea) IS
 'Diagnostic: validates a serialized ST_TDCDelaunay aggregate state as the parallel deserialization function does '
 '(raising an error when it is corrupt) and returns its vertex count.';
+
+-- ST_TDCConstrainedDelaunayTriangles: constrained Delaunay triangulation,
+-- comparable to SFCGAL's ST_ConstrainedDelaunayTriangles
+
+CREATE FUNCTION ST_TDCConstrainedDelaunayTriangles(g1 geometry,
+												   flags int4 DEFAULT 0)
+RETURNS geometry
+AS 'MODULE_PATHNAME', 'st_tdcconstraineddelaunaytriangles'
+LANGUAGE C IMMUTABLE STRICT PARALLEL SAFE
+COST 1000;
+
+COMMENT ON FUNCTION ST_TDCConstrainedDelaunayTriangles(geometry, int4) IS
+'Exact constrained Delaunay triangulation of the vertices of a geometry, every segment of its '
+'linestrings and polygon rings an edge (split at vertices on it). Crossing segments are an error. '
+'flags 0: GEOMETRYCOLLECTION of POLYGON triangles, 1: MULTILINESTRING of the edges, 2: TIN.';
