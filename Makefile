@@ -98,7 +98,7 @@ build/regress:
 src/core/%.o: src/core/%.c $(wildcard src/core/*.h)
 	$(CC) $(CFLAGS) -std=c11 -D_GNU_SOURCE -ffp-contract=off -pthread -Isrc/core -c -o $@ $<
 # PGXS does not track headers: a changed struct must rebuild every user.
-$(PG_SRCS:.c=.o): src/pg/tdc_pg.h src/core/tdc.h
+$(PG_SRCS:.c=.o): src/pg/tdc_pg.h src/pg/gser_format.h src/core/tdc.h
 else
 all: tdc
 endif
@@ -130,17 +130,21 @@ build/fuzz/fuzz_core: fuzz/fuzz_core.c test/xy_oracle.h $(FUZZ_CORE_DEPS)
 	@mkdir -p build/fuzz
 	$(FUZZ_CC) $(FUZZ_CFLAGS) -std=c11 -Isrc/core -o $@ fuzz/fuzz_core.c $(CORE_SRCS) -lm
 
-build/fuzz/fuzz_gserialized: fuzz/fuzz_gserialized.c fuzz/pg_shim.c fuzz/pg_shim.h \
-		src/pg/gserialized.c src/pg/tdc_pg.h $(FUZZ_CORE_DEPS)
+# The reader and writers, and the aggregate state, each with the point buffer.
+FUZZ_GSER_SRCS = src/pg/gserialized.c src/pg/gser_write.c src/pg/pointbuf.c
+FUZZ_STATE_SRCS = src/pg/tdc_agg_state.c src/pg/pointbuf.c
+FUZZ_PG_DEPS = fuzz/pg_shim.c fuzz/pg_shim.h src/pg/tdc_pg.h src/pg/gser_format.h
+
+build/fuzz/fuzz_gserialized: fuzz/fuzz_gserialized.c $(FUZZ_GSER_SRCS) $(FUZZ_PG_DEPS) \
+		$(FUZZ_CORE_DEPS)
 	@mkdir -p build/fuzz
 	$(FUZZ_CC) $(FUZZ_CFLAGS) $(FUZZ_PG_CFLAGS) -Isrc/core -o $@ fuzz/fuzz_gserialized.c \
-		fuzz/pg_shim.c src/pg/gserialized.c $(CORE_SRCS) -lm
+		fuzz/pg_shim.c $(FUZZ_GSER_SRCS) $(CORE_SRCS) -lm
 
-build/fuzz/fuzz_state: fuzz/fuzz_state.c fuzz/pg_shim.c fuzz/pg_shim.h src/pg/tdc_agg.c \
-		src/pg/gserialized.c src/pg/tdc_pg.h $(FUZZ_CORE_DEPS)
+build/fuzz/fuzz_state: fuzz/fuzz_state.c $(FUZZ_STATE_SRCS) $(FUZZ_PG_DEPS) $(FUZZ_CORE_DEPS)
 	@mkdir -p build/fuzz
 	$(FUZZ_CC) $(FUZZ_CFLAGS) $(FUZZ_PG_CFLAGS) -Isrc/core -o $@ fuzz/fuzz_state.c \
-		fuzz/pg_shim.c src/pg/gserialized.c $(CORE_SRCS) -lm
+		fuzz/pg_shim.c $(FUZZ_STATE_SRCS) $(CORE_SRCS) -lm
 
 fuzz-run: fuzz
 	FUZZ_SECONDS=$(FUZZ_SECONDS) bash fuzz/run.sh $(FUZZ_TARGETS)

@@ -1,11 +1,11 @@
 /*
  * fuzz_state.c
  *		libFuzzer target for the serialized ST_TDCDelaunay aggregate state
- *		(src/pg/tdc_agg.c: state_deserialize, state_serialize, state_merge),
- *		the bytes that travel between parallel workers.
+ *		(src/pg/tdc_agg_state.c: tdc_agg_state_deserialize, _serialize,
+ *		_merge), the bytes that travel between parallel workers.
  *
- * tdc_agg.c is compiled into this file (its state functions are static),
- * against the real server headers and the shims of pg_shim.c.
+ * Linked with tdc_agg_state.c and pointbuf.c, compiled against the real
+ * server headers, and with the shims of pg_shim.c.
  *
  * Input: uint16 little-endian length L, then L bytes of a first serialized
  * state (without the varlena header), then the rest as a second state.
@@ -20,25 +20,16 @@
  *	  (mixed SRID, dimensions or parameters) or concatenates the vertices,
  *	  and the merged state survives another serialize/deserialize round.
  */
-#include "../src/pg/tdc_agg.c"
+#include "postgres.h"
 
+#include <math.h>
 #include <stdlib.h>
 
+#include "miscadmin.h"
+#include "utils/memutils.h"
+
+#include "tdc_pg.h"
 #include "pg_shim.h"
-
-/* tdc_funcs.c is not linked: the final function is not fuzzed here. */
-void
-tdc_check_params(double tolerance, int flags, const char *fname)
-{
-	abort();
-}
-
-Datum
-tdc_triangulate_to_datum(const TdcPointBuf *buf, double tolerance, int flags,
-						 const char *fname)
-{
-	abort();
-}
 
 static void
 fail(const char *what, const char *detail)
@@ -100,7 +91,7 @@ ref_valid(const uint8 *d, size_t len)
 	return true;
 }
 
-/* What state_serialize must give back for an accepted input. */
+/* What tdc_agg_state_serialize must give back for an accepted input. */
 static void
 normalize(uint8 *d)
 {
@@ -127,7 +118,7 @@ try_deserialize(const uint8 *data, size_t size, bool *ok)
 	if (sigsetjmp(jb, 0) == 0)
 	{
 		fuzz_pg_jmp = &jb;
-		st = state_deserialize(v, CurrentMemoryContext);
+		st = tdc_agg_state_deserialize(v, CurrentMemoryContext);
 		*ok = true;
 	}
 	fuzz_pg_jmp = NULL;
@@ -137,7 +128,7 @@ try_deserialize(const uint8 *data, size_t size, bool *ok)
 			 "rejected a state the format check accepts", fuzz_pg_message);
 	if (*ok)
 	{
-		bytea	   *out = state_serialize(st);
+		bytea	   *out = tdc_agg_state_serialize(st);
 		uint8	   *norm = malloc(size);
 
 		memcpy(norm, data, size);
@@ -190,7 +181,7 @@ LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 		if (sigsetjmp(jb, 0) == 0)
 		{
 			fuzz_pg_jmp = &jb;
-			state_merge(sa, sb);
+			tdc_agg_state_merge(sa, sb);
 			merged = true;
 		}
 		fuzz_pg_jmp = NULL;
@@ -210,7 +201,7 @@ LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 			if (nb > 0 && sa->pts.hasz &&
 				memcmp(sa->pts.z + na, sb->pts.z, 8 * nb) != 0)
 				fail("combine did not append the second state's Z values", NULL);
-			ser = state_serialize(sa);
+			ser = tdc_agg_state_serialize(sa);
 			(void) try_deserialize((const uint8 *) VARDATA(ser),
 								   VARSIZE(ser) - VARHDRSZ, &ok2);
 			if (!ok2)

@@ -1,8 +1,9 @@
 /*
  * pg_shim.h
  *		Stand-ins for the few PostgreSQL backend services that the
- *		tdc_delaunay reader (src/pg/gserialized.c) and the aggregate state
- *		code (src/pg/tdc_agg.c) use, so that they run inside a libFuzzer
+ *		tdc_delaunay reader and writers (src/pg/gserialized.c, gser_write.c,
+ *		pointbuf.c) and the aggregate state (src/pg/tdc_agg_state.c) use, so
+ *		that they run inside a libFuzzer
  *		process without a server.
  *
  * Memory: palloc and friends allocate with malloc and remember every chunk;

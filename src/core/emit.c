@@ -26,6 +26,9 @@
  * as a serial writer's, whatever the thread count.  Both passes poll the
  * cancel flag at least once per chunk, so a cancel is answered as fast as
  * during the triangulation.
+ *
+ * A small job (TDC_INLINE_MAX) has no pool: tdc_emit_inline hands its
+ * triangles over on the caller's thread, in the same order.
  */
 #include <errno.h>
 #include <stdlib.h>
@@ -37,6 +40,7 @@
 #define PREFETCH		16		/* half-edges ahead: see collect_task */
 #define RANGE_MIN		65536	/* half-edges per range, at least */
 #define RANGES_PER_THREAD 16	/* for balance: faces are not spread evenly */
+#define EMIT_INLINE_BATCH	256	/* triangles per callback of a small job */
 
 typedef struct emit_plan
 {
@@ -236,4 +240,30 @@ tdc_emit_phase(tdc_job *job)
 	tdc_pool_for(job->pool, p.nranges, write_task, &p);
 	plan_free(&p);
 	return emit_cancelled(job) ? TDC_ECANCELED : TDC_OK;
+}
+
+/*
+ * A small job's triangles, handed over on the caller's thread in batches in
+ * the order of tdc_next_triangle, with none of emit.c's planning.
+ */
+int
+tdc_emit_inline(tdc_job *job)
+{
+	uint32_t	v[3 * EMIT_INLINE_BATCH];
+	tdc_iter	it = {0};
+	size_t		first = 0,
+				k = 0;
+
+	while (tdc_next_triangle(job, &it, v + 3 * k))
+	{
+		if (++k == EMIT_INLINE_BATCH)
+		{
+			job->emit(job->emit_arg, first, k, v);
+			first += k;
+			k = 0;
+		}
+	}
+	if (k > 0)
+		job->emit(job->emit_arg, first, k, v);
+	return first + k == job->ntri ? TDC_OK : TDC_EINVAL;
 }

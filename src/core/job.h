@@ -1,7 +1,8 @@
 /*
  * job.h
- *		The state of one triangulation, shared by driver.c, subdivide.c and
- *		sites.c.  Not installed.
+ *		The state of one triangulation, shared by the core's sources (the
+ *		plan and first phase in driver.c, the lifecycle in job.c, the
+ *		results in result.c).  Not installed.
  */
 #ifndef TDC_JOB_H
 #define TDC_JOB_H
@@ -79,7 +80,7 @@ struct tdc_job
 	char		err[256];
 };
 
-/* driver.c: does half-edge h start a triangle (its smallest half-edge)? */
+/* result.c, emit.c: does half-edge h start a triangle (its smallest half-edge)? */
 static inline bool
 tdc_tri_at(const tdc_job *job, size_t h, uint32_t v[3])
 {
@@ -104,7 +105,17 @@ tdc_tri_at(const tdc_job *job, size_t h, uint32_t v[3])
 /* emit.c: the driver phase of tdc_job_emit_start. */
 extern int	tdc_emit_phase(tdc_job *job);
 
-/* Record the first error of a task and stop the others. */
+/* emit.c: the same for a small job, on the caller's thread. */
+extern int	tdc_emit_inline(tdc_job *job);
+
+/* driver.c: the plan of a job of n points (see tdc_estimate_memory). */
+extern bool tdc_plan_inline(size_t n);
+extern int	tdc_plan_threads(size_t n, const tdc_options *o);
+
+/* driver.c: the first phase, the triangulation itself. */
+extern int	tdc_run_phase(tdc_job *job);
+
+/* job.c: record the first error of a task and stop the others. */
 extern void tdc_job_fail(tdc_job *job, int code, const char *fmt,...)
 			__attribute__((format(printf, 3, 4)));
 

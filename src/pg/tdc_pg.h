@@ -2,11 +2,14 @@
  * tdc_pg.h
  *		Declarations shared by the PostgreSQL side of tdc_delaunay.
  *
- * The PostgreSQL layer has four parts:
+ * The PostgreSQL layer has these parts:
  *
+ *	pointbuf.c		the point buffer the vertices of the input collect in
  *	gserialized.c	reads PostGIS geometry values straight into a point
- *					buffer and writes triangulations back as geometry values
- *	tdc_agg.c		the ST_TDCDelaunay aggregates (state, parallel support)
+ *					buffer (the format is in gser_format.h)
+ *	gser_write.c	writes triangulations back as geometry values
+ *	tdc_agg.c		the ST_TDCDelaunay aggregates' SQL entry points
+ *	tdc_agg_state.c	their state, its merging and its serialized form
  *	tdc_funcs.c		ST_TDCDelaunayTriangles, ST_TDCDelaunayDump and the
  *					helper that runs the core while watching for interrupts
  *	tdc_guc.c		_PG_init and the tdc_delaunay.* settings
@@ -71,7 +74,7 @@ typedef struct TdcPointMap
 /*
  * Vertices collected from geometry values: interleaved x,y (what the core
  * takes) plus, for XYZ input, one Z per vertex.  The arrays are mappings
- * that belong to "cxt" (see gserialized.c), so a buffer may exceed 1 GB.
+ * that belong to "cxt" (see pointbuf.c), so a buffer may exceed 1 GB.
  */
 typedef struct TdcPointBuf
 {
@@ -99,7 +102,7 @@ typedef struct TdcGserSource
 	uint64		size;
 } TdcGserSource;
 
-/* gserialized.c */
+/* pointbuf.c */
 extern void tdc_pointbuf_init(TdcPointBuf *buf, MemoryContext cxt);
 extern void tdc_pointbuf_reserve(TdcPointBuf *buf, uint64 extra,
 								 const char *fname);
@@ -108,10 +111,14 @@ extern void tdc_pointbuf_check_meta(TdcPointBuf *buf, int32 srid, bool hasz,
 									const char *fname);
 extern void tdc_pointbuf_append_buf(TdcPointBuf *dst, const TdcPointBuf *src,
 									const char *fname);
+
+/* gserialized.c */
 extern void tdc_gser_append(TdcPointBuf *buf, const struct varlena *geom,
 							const char *fname);
 extern void tdc_gser_append_source(TdcPointBuf *buf, TdcGserSource *src,
 								   const char *fname);
+
+/* gser_write.c */
 extern uint64 tdc_gser_result_size(const tdc_job *job, int flags, bool hasz);
 extern uint64 tdc_gser_result_bound(uint64 n, int flags, bool hasz);
 extern struct varlena *tdc_gser_result(const tdc_job *job, int flags,
@@ -143,6 +150,25 @@ extern Size tdc_gser_triangle_size(bool hasz);
 extern void tdc_gser_write_triangle(struct varlena *out, const tdc_job *job,
 									const uint32 v[3], const TdcPointBuf *buf);
 extern void tdc_gser_check_result_size(uint64 size, const char *fname);
+
+/* tdc_agg_state.c: the state of the ST_TDCDelaunay aggregates */
+#define TDC_AGG_NAME		"ST_TDCDelaunay"
+
+typedef struct TdcAggState
+{
+	TdcPointBuf pts;
+	bool		params_set;
+	double		tolerance;
+	int32		flags;
+} TdcAggState;
+
+extern TdcAggState *tdc_agg_state_new(MemoryContext cxt);
+extern void tdc_agg_state_set_params(TdcAggState *st, double tolerance,
+									 int32 flags);
+extern void tdc_agg_state_merge(TdcAggState *dst, const TdcAggState *src);
+extern bytea *tdc_agg_state_serialize(const TdcAggState *st);
+extern TdcAggState *tdc_agg_state_deserialize(const bytea *in,
+											  MemoryContext cxt);
 
 /* tdc_funcs.c */
 typedef struct TdcRun

@@ -1,0 +1,375 @@
+/*
+ * job.c
+ *		The lifecycle of a job: start, wait, cancel, free.
+ *
+ * tdc_job_start() checks the options and the memory bound, then either runs
+ * a small job on the caller's thread (TDC_INLINE_MAX) or starts a driver
+ * thread with every signal blocked, and returns.  The driver runs one phase
+ * (job->phase: the triangulation, then on request the handing-over of
+ * emit.c) and publishes its status under the job's lock.  The caller's
+ * thread only waits (tdc_job_wait) and may cancel; a cancel is a flag that
+ * every task polls.
+ *
+ * Invariant: job->finished and job->status change only under job->lock,
+ * and the pool is gone before finished turns true, so a waiter that sees a
+ * finished job sees no thread of it but the (idle) driver.  Freeing joins
+ * the driver first; then nothing but memory is left, which may be returned
+ * on a detached thread (tdc_job_free_background).
+ */
+#include <errno.h>
+#include <math.h>
+#include <signal.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "job.h"
+
+/* Publish the status of the phase that just ended; the pool goes first. */
+static void
+finish_phase(tdc_job *job, int rc)
+{
+	tdc_pool_destroy(job->pool);
+	job->pool = NULL;
+
+	pthread_mutex_lock(&job->lock);
+	if (atomic_load(&job->failed))
+	{
+		job->status = atomic_load(&job->failed);
+		snprintf(job->err, sizeof(job->err), "%s", job->task_err);
+	}
+	else if (rc == TDC_ECANCELED || (rc == TDC_OK && atomic_load(&job->cancel)))
+	{
+		job->status = TDC_ECANCELED;
+		snprintf(job->err, sizeof(job->err), "triangulation cancelled");
+	}
+	else
+		job->status = rc;
+	job->finished = true;
+	pthread_cond_broadcast(&job->done);
+	pthread_mutex_unlock(&job->lock);
+}
+
+static void *
+driver_main(void *arg)
+{
+	tdc_job    *job = arg;
+
+	finish_phase(job, job->phase(job));
+	return NULL;
+}
+
+static void
+free_arrays(tdc_job *job)
+{
+	tdc_big_free(job->xy);
+	tdc_big_free(job->idx);
+	tdc_big_free(job->site_of);
+	tdc_big_free(job->map);
+	tdc_big_free(job->outer);
+	tdc_big_free(job->tol_to);
+	tdc_big_free(job->he);
+	tdc_big_free(job->prefix);
+	free(job->node_rect);
+	free(job->node_axis);
+	free(job->node_lo);
+	free(job->node_hi);
+	free(job->subs);
+}
+
+/*
+ * Our threads must never take the host's signals: block them all around
+ * creation, so the new thread inherits the full mask (and the pool threads
+ * the driver starts inherit it in turn).
+ */
+static int
+create_masked_thread(pthread_t *thread, const pthread_attr_t *attr,
+					 void *(*fn) (void *), void *arg)
+{
+	sigset_t	all,
+				old;
+	int			rc;
+
+	sigfillset(&all);
+	pthread_sigmask(SIG_SETMASK, &all, &old);
+	rc = pthread_create(thread, attr, fn, arg);
+	pthread_sigmask(SIG_SETMASK, &old, NULL);
+	return rc;
+}
+
+static int
+start_driver(tdc_job *job)
+{
+	int			rc = create_masked_thread(&job->driver, NULL, driver_main, job);
+
+	job->driver_started = rc == 0;
+	return rc;
+}
+
+/* Stop and join the driver, if any; then nothing but memory is left. */
+static void
+stop_driver(tdc_job *job)
+{
+	if (job->driver_started)
+	{
+		tdc_job_cancel(job);
+		pthread_join(job->driver, NULL);
+		job->driver_started = false;
+	}
+	pthread_mutex_destroy(&job->lock);
+	pthread_cond_destroy(&job->done);
+}
+
+static void *
+reaper_main(void *arg)
+{
+	tdc_job    *job = arg;
+
+	free_arrays(job);
+	free(job);
+	return NULL;
+}
+
+void
+tdc_job_fail(tdc_job *job, int code, const char *fmt,...)
+{
+	int			expected = 0;
+
+	if (atomic_compare_exchange_strong(&job->failed, &expected, code))
+	{
+		va_list		ap;
+
+		va_start(ap, fmt);
+		vsnprintf(job->task_err, sizeof(job->task_err), fmt, ap);
+		va_end(ap);
+	}
+	atomic_store(&job->cancel, 1);
+}
+
+int
+tdc_job_start(const double *xy, size_t n, const tdc_options *opt, tdc_job **out,
+			  char *err, size_t errlen)
+{
+	tdc_job    *job;
+	tdc_options o;
+	pthread_condattr_t ca;
+	int			rc;
+
+	*out = NULL;
+	if (opt)
+		o = *opt;
+	else
+		tdc_options_init(&o);
+	if (err && errlen)
+		err[0] = '\0';
+
+#define FAIL(code, ...) do { if (err && errlen) snprintf(err, errlen, __VA_ARGS__); return (code); } while (0)
+	if (n > TDC_MAX_POINTS)
+		FAIL(TDC_ETOOBIG, "%zu points exceed the limit of %zu points per triangulation (32-bit mesh indices)",
+			 n, TDC_MAX_POINTS);
+	if (o.threads < 0 || o.threads > 1024)
+		FAIL(TDC_EINVAL, "threads must be between 0 and 1024, not %d", o.threads);
+	if (o.grid_size < 0 || o.grid_size > 65536)
+		FAIL(TDC_EINVAL, "grid size must be between 0 and 65536, not %d", o.grid_size);
+	if (o.levels < -1 || o.levels > TDC_MAX_LEVELS)
+		FAIL(TDC_EINVAL, "levels must be between -1 and %d, not %d", TDC_MAX_LEVELS, o.levels);
+	if (!(o.tolerance >= 0) || isinf(o.tolerance))
+		FAIL(TDC_EINVAL, "tolerance must be a finite number >= 0, not %g", o.tolerance);
+	if (n > 0 && xy == NULL)
+		FAIL(TDC_EINVAL, "no coordinates given for %zu points", n);
+	if (o.max_memory > 0 && tdc_estimate_memory(n, &o) > o.max_memory)
+		FAIL(TDC_EMEMLIMIT, "triangulating %zu points needs about %zu MB, more than the limit of %zu MB",
+			 n, tdc_estimate_memory(n, &o) >> 20, o.max_memory >> 20);
+
+	job = calloc(1, sizeof(tdc_job));
+	if (job == NULL)
+		FAIL(TDC_ENOMEM, "out of memory");
+	job->opt = o;
+	job->n = n;
+	job->input = xy;
+	job->inline_run = tdc_plan_inline(n);
+	job->threads = tdc_plan_threads(n, &o);
+	atomic_init(&job->cancel, 0);
+	atomic_init(&job->failed, 0);
+	pthread_mutex_init(&job->lock, NULL);
+	pthread_condattr_init(&ca);
+	pthread_condattr_setclock(&ca, CLOCK_MONOTONIC);
+	pthread_cond_init(&job->done, &ca);
+	pthread_condattr_destroy(&ca);
+
+	job->phase = tdc_run_phase;
+	if (job->inline_run)
+	{
+		finish_phase(job, tdc_run_phase(job));
+		*out = job;
+		return TDC_OK;
+	}
+	rc = start_driver(job);
+	if (rc != 0)
+	{
+		pthread_mutex_destroy(&job->lock);
+		pthread_cond_destroy(&job->done);
+		free(job);
+		FAIL(TDC_ETHREAD, "could not create a thread: %s", strerror(rc));
+	}
+	*out = job;
+	return TDC_OK;
+#undef FAIL
+}
+
+
+/*
+ * The second phase a finished job can run: its triangles handed to the
+ * host's callback on the pool (emit.c).  Same lifecycle as the first: the
+ * host waits with tdc_job_wait and may cancel.
+ */
+int
+tdc_job_emit_start(tdc_job *job, tdc_emit_fn emit, void *arg, char *err,
+				   size_t errlen)
+{
+	int			rc;
+
+	if (err && errlen)
+		err[0] = '\0';
+	pthread_mutex_lock(&job->lock);
+	rc = job->finished ? job->status : TDC_RUNNING;
+	pthread_mutex_unlock(&job->lock);
+	if (rc != TDC_OK)
+	{
+		if (err && errlen)
+			snprintf(err, errlen, "the job has not finished successfully");
+		return TDC_EINVAL;
+	}
+	/* the driver that ran the triangulation is done: reap it */
+	if (job->driver_started)
+	{
+		pthread_join(job->driver, NULL);
+		job->driver_started = false;
+	}
+	job->emit = emit;
+	job->emit_arg = arg;
+	job->phase = tdc_emit_phase;
+	job->finished = false;
+	job->status = TDC_RUNNING;
+	if (job->inline_run)
+	{
+		finish_phase(job, tdc_emit_inline(job));
+		return TDC_OK;
+	}
+	rc = start_driver(job);
+	if (rc != 0)
+	{
+		/* the triangulation stays valid; only the handing-over failed */
+		job->finished = true;
+		job->status = TDC_OK;
+		if (err && errlen)
+			snprintf(err, errlen, "could not create a thread: %s", strerror(rc));
+		return TDC_ETHREAD;
+	}
+	return TDC_OK;
+}
+
+int
+tdc_job_wait(tdc_job *job, int timeout_ms)
+{
+	int			status;
+
+	pthread_mutex_lock(&job->lock);
+	if (job->finished)
+		;						/* an inline job: no clock to read */
+	else if (timeout_ms < 0)
+	{
+		while (!job->finished)
+			pthread_cond_wait(&job->done, &job->lock);
+	}
+	else if (!job->finished)
+	{
+		struct timespec ts;
+
+		clock_gettime(CLOCK_MONOTONIC, &ts);
+		ts.tv_sec += timeout_ms / 1000;
+		ts.tv_nsec += (long) (timeout_ms % 1000) * 1000000L;
+		if (ts.tv_nsec >= 1000000000L)
+		{
+			ts.tv_sec++;
+			ts.tv_nsec -= 1000000000L;
+		}
+		while (!job->finished)
+			if (pthread_cond_timedwait(&job->done, &job->lock, &ts) == ETIMEDOUT)
+				break;
+	}
+	status = job->finished ? job->status : TDC_RUNNING;
+	pthread_mutex_unlock(&job->lock);
+	return status;
+}
+
+void
+tdc_job_cancel(tdc_job *job)
+{
+	if (job)
+		atomic_store(&job->cancel, 1);
+}
+
+const char *
+tdc_job_error(const tdc_job *job)
+{
+	return job->err;
+}
+
+void
+tdc_job_free(tdc_job *job)
+{
+	if (job == NULL)
+		return;
+	stop_driver(job);
+	free_arrays(job);
+	free(job);
+}
+
+
+/*
+ * Returning a big job's pages to the kernel takes a while (about 10 ms per
+ * million points, several times that on a loaded machine), and a host that
+ * frees while unwinding from a cancel makes its user wait for it.  The
+ * workers are stopped and joined here, so the detached thread only unmaps
+ * memory no one else can reach; if it cannot start, the caller frees.
+ */
+void
+tdc_job_free_background(tdc_job *job)
+{
+	pthread_attr_t attr;
+	pthread_t	reaper;
+	int			rc;
+
+	if (job == NULL)
+		return;
+	stop_driver(job);
+
+	if (pthread_attr_init(&attr) != 0)
+		rc = -1;
+	else
+	{
+		pthread_attr_setdetachstate(&attr, PTHREAD_CREATE_DETACHED);
+		pthread_attr_setstacksize(&attr, 64 * 1024);
+		rc = create_masked_thread(&reaper, &attr, reaper_main, job);
+		pthread_attr_destroy(&attr);
+	}
+	if (rc != 0)
+		(void) reaper_main(job);
+}
+
+int
+tdc_triangulate(const double *xy, size_t n, const tdc_options *opt, tdc_job **job,
+				char *err, size_t errlen)
+{
+	int			rc = tdc_job_start(xy, n, opt, job, err, errlen);
+
+	if (rc != TDC_OK)
+		return rc;
+	rc = tdc_job_wait(*job, -1);
+	if (rc != TDC_OK && err && errlen)
+		snprintf(err, errlen, "%s", tdc_job_error(*job));
+	return rc;
+}

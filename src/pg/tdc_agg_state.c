@@ -1,0 +1,207 @@
+/*
+ * tdc_agg_state.c
+ *		The state of the ST_TDCDelaunay aggregates, and its serialized form
+ *		for parallel aggregation.
+ *
+ * An "internal" TdcAggState holds the point buffer (x,y interleaved, Z when
+ * the inputs have it, SRID, dimensions) and the tolerance and flags, which
+ * must be the same on every row.  Its arrays belong to the aggregate memory
+ * context (pointbuf.c), so a state may pass 1 GB; tdc_delaunay.max_memory
+ * bounds the growth.
+ *
+ * Merging (the combine function) appends one state's vertices to the
+ * other's, copying into the aggregate context: the second state may live in
+ * short-lived memory.  States travel between processes as bytea:
+ *
+ *	uint32 magic 'TDCA', uint32 version, uint32 bits (have_first, hasz,
+ *	params_set), int32 srid, int32 flags, uint32 zero, float8 tolerance,
+ *	uint64 n, then n*2 float8 x,y, then n float8 z when hasz
+ *
+ * The deserializer checks the magic, the version, the bits and that n
+ * matches the length exactly, raising an ERROR on anything else: the bytes
+ * cross a process boundary, and fuzz/fuzz_state.c feeds them arbitrary
+ * input.  A serialized state is one bytea, so parallel plans are limited to
+ * partial states below 1 GB (about 67 million 2D points per worker); the
+ * error says so and how to avoid it.
+ *
+ * This file is linked, without the SQL entry points of tdc_agg.c, into the
+ * fuzz target.
+ */
+#include "postgres.h"
+
+#include <math.h>
+
+#include "utils/memutils.h"
+
+#include "tdc_pg.h"
+
+#define STATE_MAGIC			0x41434454	/* "TDCA" little-endian */
+#define STATE_VERSION		1
+#define STATE_HEADER		40
+
+#define SB_HAVE_FIRST		0x01
+#define SB_HASZ				0x02
+#define SB_PARAMS			0x04
+
+static void
+bad_state(const char *what)
+{
+	ereport(ERROR,
+			(errcode(ERRCODE_DATA_CORRUPTED),
+			 errmsg("%s: corrupt serialized aggregate state: %s",
+					TDC_AGG_NAME, what)));
+}
+
+TdcAggState *
+tdc_agg_state_new(MemoryContext cxt)
+{
+	TdcAggState *st = MemoryContextAllocZero(cxt, sizeof(TdcAggState));
+
+	tdc_pointbuf_init(&st->pts, cxt);
+	return st;
+}
+
+void
+tdc_agg_state_set_params(TdcAggState *st, double tolerance, int32 flags)
+{
+	if (!st->params_set)
+	{
+		st->params_set = true;
+		st->tolerance = tolerance;
+		st->flags = flags;
+		return;
+	}
+	/* bitwise comparison would split 0 and -0; tolerance is >= 0 anyway */
+	if (st->tolerance != tolerance || st->flags != flags)
+		ereport(ERROR,
+				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
+				 errmsg("%s: tolerance and flags must be the same for all rows (%g, %d versus %g, %d)",
+						TDC_AGG_NAME, st->tolerance, st->flags, tolerance, flags)));
+}
+
+/* Everything of src into dst (dst in the aggregate context). */
+void
+tdc_agg_state_merge(TdcAggState *dst, const TdcAggState *src)
+{
+	if (src->params_set)
+		tdc_agg_state_set_params(dst, src->tolerance, src->flags);
+	tdc_pointbuf_append_buf(&dst->pts, &src->pts, TDC_AGG_NAME);
+}
+
+bytea *
+tdc_agg_state_serialize(const TdcAggState *st)
+{
+	const TdcPointBuf *p = &st->pts;
+	uint64		per = (p->hasz ? 3 : 2) * sizeof(double);
+	uint64		size = VARHDRSZ + STATE_HEADER + p->n * per;
+	bytea	   *out;
+	char	   *w;
+	uint32		u;
+	int32		i;
+	uint64		n = p->n;
+
+	if (size > MaxAllocSize)
+		ereport(ERROR,
+				(errcode(ERRCODE_PROGRAM_LIMIT_EXCEEDED),
+				 errmsg("%s: partial aggregate state of %llu vertices is too large to pass between parallel workers",
+						TDC_AGG_NAME, (unsigned long long) n),
+				 errhint("Disable parallel aggregation for this query (SET max_parallel_workers_per_gather = 0) or use ST_TDCDelaunayDump.")));
+
+	out = palloc((Size) size);
+	SET_VARSIZE(out, size);
+	w = VARDATA(out);
+	u = STATE_MAGIC;
+	memcpy(w, &u, 4);
+	u = STATE_VERSION;
+	memcpy(w + 4, &u, 4);
+	u = (p->have_first ? SB_HAVE_FIRST : 0) | (p->hasz ? SB_HASZ : 0) |
+		(st->params_set ? SB_PARAMS : 0);
+	memcpy(w + 8, &u, 4);
+	i = p->srid;
+	memcpy(w + 12, &i, 4);
+	i = st->flags;
+	memcpy(w + 16, &i, 4);
+	u = 0;
+	memcpy(w + 20, &u, 4);
+	memcpy(w + 24, &st->tolerance, 8);
+	memcpy(w + 32, &n, 8);
+	w += STATE_HEADER;
+	if (n > 0)
+	{
+		memcpy(w, p->xy, (Size) n * 2 * sizeof(double));
+		if (p->hasz)
+			memcpy(w + n * 2 * sizeof(double), p->z, (Size) n * sizeof(double));
+	}
+	return out;
+}
+
+TdcAggState *
+tdc_agg_state_deserialize(const bytea *in, MemoryContext cxt)
+{
+	const char *r = VARDATA(in);
+	uint64		len;
+	uint32		magic,
+				version,
+				bits,
+				pad;
+	int32		srid,
+				flags;
+	double		tolerance;
+	uint64		n;
+	uint64		per;
+	TdcAggState *st;
+
+	if (VARSIZE(in) < VARHDRSZ + STATE_HEADER)
+		bad_state("shorter than its header");
+	len = VARSIZE(in) - VARHDRSZ - STATE_HEADER;
+	memcpy(&magic, r, 4);
+	memcpy(&version, r + 4, 4);
+	memcpy(&bits, r + 8, 4);
+	memcpy(&srid, r + 12, 4);
+	memcpy(&flags, r + 16, 4);
+	memcpy(&pad, r + 20, 4);
+	memcpy(&tolerance, r + 24, 8);
+	memcpy(&n, r + 32, 8);
+	if (magic != STATE_MAGIC)
+		bad_state("bad magic number");
+	if (version != STATE_VERSION)
+		bad_state(psprintf("unknown version %u", version));
+	if ((bits & ~(SB_HAVE_FIRST | SB_HASZ | SB_PARAMS)) != 0 || pad != 0)
+		bad_state("unknown flag bits");
+	if (!(bits & SB_HAVE_FIRST) && ((bits & SB_HASZ) || n != 0))
+		bad_state("vertices without dimensions");
+	if ((bits & SB_PARAMS) &&
+		(flags < TDC_OUT_POLYGONS || flags > TDC_OUT_TIN ||
+		 !(tolerance >= 0) || isinf(tolerance)))
+		bad_state("bad tolerance or flags");
+	per = ((bits & SB_HASZ) ? 3 : 2) * sizeof(double);
+	if (n > TDC_MAX_POINTS || n * per != len)
+		bad_state(psprintf("%llu vertices do not match a length of %llu bytes",
+						   (unsigned long long) n, (unsigned long long) len));
+
+	st = tdc_agg_state_new(cxt);
+	st->params_set = (bits & SB_PARAMS) != 0;
+	st->tolerance = st->params_set ? tolerance : 0;
+	st->flags = st->params_set ? flags : 0;
+	if (bits & SB_HAVE_FIRST)
+		tdc_pointbuf_check_meta(&st->pts, srid, (bits & SB_HASZ) != 0,
+								TDC_AGG_NAME);
+	if (n > 0)
+	{
+		const char *data = r + STATE_HEADER;
+		uint64		i;
+
+		tdc_pointbuf_reserve(&st->pts, n, TDC_AGG_NAME);
+		memcpy(st->pts.xy, data, (Size) n * 2 * sizeof(double));
+		if (st->pts.hasz)
+			memcpy(st->pts.z, data + n * 2 * sizeof(double),
+				   (Size) n * sizeof(double));
+		/* the core would reject them too, but say where they came from */
+		for (i = 0; i < 2 * n; i++)
+			if (!isfinite(st->pts.xy[i]))
+				bad_state("non-finite coordinate");
+		st->pts.n = n;
+	}
+	return st;
+}
+
