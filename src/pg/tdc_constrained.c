@@ -26,25 +26,8 @@
 #include "miscadmin.h"
 #include "utils/memutils.h"
 
+#include "gser_format.h"
 #include "tdc_pg.h"
-
-/* Geometry type numbers and flags of the serialized format (gserialized.c). */
-#define G_POINT				1
-#define G_LINE				2
-#define G_POLYGON			3
-#define G_MULTIPOINT		4
-#define G_MULTILINE			5
-#define G_MULTIPOLYGON		6
-#define G_COLLECTION		7
-#define G_POLYHEDRAL		13
-#define G_TRIANGLE			14
-#define G_TIN				15
-#define GF_Z				0x01
-#define GF_M				0x02
-#define GF_BBOX				0x04
-#define GF_GEODETIC			0x08
-#define GF_EXTENDED			0x10
-#define GF_VERSION			0x40
 
 typedef struct SegWalk
 {
