@@ -53,6 +53,50 @@ SELECT tdc_cdt_vs_sfcgal(ST_Collect(ARRAY[
 								 ST_Buffer('POINT(0.3 5)'::geometry, 1.7, 3)])),
 	ST_GeomFromText('MULTIPOINT(1.1 -3.3, -2.2 -6.1, 6.3 -2.9, -0.7 1.4)')])) AS polygon_with_holes;
 
+-- The aggregate over one row per contour segment (with free points) equals
+-- the function on their collection: serially, then under a parallel plan
+-- whose partial states carry the segments between processes.
+CREATE FUNCTION tdc_cdt_same(a geometry, b geometry) RETURNS text LANGUAGE sql AS $$
+	SELECT format('%s triangles, %s, only first %s, only second %s',
+				  (SELECT count(*) FROM tdc_cdt_tris(a)), (SELECT count(*) FROM tdc_cdt_tris(b)),
+				  (SELECT count(*) FROM (SELECT tdc_cdt_tris(a) EXCEPT SELECT tdc_cdt_tris(b)) x),
+				  (SELECT count(*) FROM (SELECT tdc_cdt_tris(b) EXCEPT SELECT tdc_cdt_tris(a)) x)) $$;
+CREATE TABLE tdc_contour_segs AS
+SELECT ST_MakeLine(ST_PointN(g, i), ST_PointN(g, i + 1)) AS g
+FROM tdc_contours, LATERAL generate_series(1, ST_NPoints(g) - 1) i
+UNION ALL
+SELECT ST_MakePoint(hashint4(i) / 2147483648.0 * 15, hashint4(-i) / 2147483648.0 * 15)
+FROM generate_series(1, 300) i;
+SELECT tdc_cdt_same((SELECT ST_TDCConstrainedDelaunay(g) FROM tdc_contour_segs),
+					(SELECT ST_TDCConstrainedDelaunayTriangles(ST_Collect(g)) FROM tdc_contour_segs))
+	AS aggregate_serial;
+-- (serialization costs lowered for this small table, as in tdc_parallel)
+ALTER FUNCTION st_tdcconstraineddelaunay_serialfn(internal) COST 1;
+ALTER FUNCTION st_tdcconstraineddelaunay_deserialfn(bytea, internal) COST 1;
+ANALYZE tdc_contour_segs;
+SET parallel_setup_cost = 0;
+SET parallel_tuple_cost = 0;
+SET min_parallel_table_scan_size = 0;
+SET max_parallel_workers_per_gather = 2;
+SET parallel_leader_participation = off;
+EXPLAIN (COSTS OFF) SELECT ST_TDCConstrainedDelaunay(g, 2) FROM tdc_contour_segs;
+CREATE TABLE tdc_cdt_par AS SELECT ST_TDCConstrainedDelaunay(g, 2) AS g FROM tdc_contour_segs;
+RESET parallel_setup_cost;
+RESET parallel_tuple_cost;
+RESET min_parallel_table_scan_size;
+RESET max_parallel_workers_per_gather;
+RESET parallel_leader_participation;
+ALTER FUNCTION st_tdcconstraineddelaunay_serialfn(internal) COST 10000000;
+ALTER FUNCTION st_tdcconstraineddelaunay_deserialfn(bytea, internal) COST 10000000;
+SELECT GeometryType(g) AS parallel_type,
+	   tdc_cdt_same(g, (SELECT ST_TDCConstrainedDelaunayTriangles(ST_Collect(g)) FROM tdc_contour_segs))
+	AS aggregate_parallel
+FROM tdc_cdt_par;
+-- flags must agree on all rows; a crossing across rows is the same error
+SELECT ST_TDCConstrainedDelaunay(g, i % 2) FROM (VALUES ('POINT(0 0)'::geometry, 1), ('POINT(1 0)', 2)) v(g, i);
+SELECT ST_TDCConstrainedDelaunay(g) FROM (VALUES ('LINESTRING(0 0,2 2)'::geometry), ('LINESTRING(0 2,2 0)')) v(g);
+SELECT ST_TDCConstrainedDelaunay(g) AS no_rows FROM tdc_contour_segs WHERE false;
+
 -- The thin rhombus: the Delaunay triangulation lacks the segment.
 SELECT ST_AsText(ST_Normalize(ST_TDCConstrainedDelaunayTriangles(
 	'GEOMETRYCOLLECTION(MULTIPOINT(5 1,5 -1,5 5,5 -5),LINESTRING(0 0,10 0))'::geometry))) AS rhombus;
