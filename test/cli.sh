@@ -85,5 +85,25 @@ check "collinear: exit 0, no triangles" "[ $? -eq 0 ] && [ ! -s $tmp/col.out ]"
 : > "$tmp/empty.txt"; $TDC -o "$tmp/empty.out" "$tmp/empty.txt"
 check "empty input: exit 0, no triangles" "[ $? -eq 0 ] && [ ! -s $tmp/empty.out ]"
 
+# --segments: constrained Delaunay; the thin rhombus gets edge (0 0)-(10 0),
+# which its Delaunay triangulation lacks; crossing segments exit 1
+printf '0 0\n10 0\n5 1\n5 -1\n5 5\n5 -5\n' > "$tmp/rh.txt"
+printf '0 1\n' > "$tmp/rh.seg"
+$TDC -o "$tmp/rh.dt" "$tmp/rh.txt"
+$TDC -o "$tmp/rh.out" --segments "$tmp/rh.seg" --validate --stats "$tmp/rh.txt" 2> "$tmp/rh.err"
+check "segments: exit 0" "[ $? -eq 0 ]"
+check "segments: 6 triangles" "[ \$(wc -l < $tmp/rh.out) -eq 6 ]"
+check "segments: the constraint is an edge" "grep -qE '(^| )0 0 10 0( |$)|(^| )10 0 0 0( |$)|^10 0 .* 0 0$|^0 0 .* 10 0$' $tmp/rh.out"
+check "segments: the plain DT lacks it" "! grep -qE '(^| )0 0 10 0( |$)|(^| )10 0 0 0( |$)|^10 0 .* 0 0$|^0 0 .* 10 0$' $tmp/rh.dt"
+check "segments: stats line" "grep -qE '^segments=1 constraint_edges=1 constrain=[0-9.]+$' $tmp/rh.err"
+check "segments: validated" "grep -q 'constrained Delaunay' $tmp/rh.err"
+printf '0 1\n2 3\n' > "$tmp/x.seg"
+$TDC --segments "$tmp/x.seg" "$tmp/rh.txt" 2> "$tmp/x.err"
+check "crossing segments: exit 1" "[ $? -eq 1 ]"
+check "crossing segments: both named" "grep -q 'segment 0 from (0 0) to (10 0) and segment 1 from (5 1) to (5 -1)' $tmp/x.err"
+printf '0 9\n' > "$tmp/bad.seg"
+$TDC --segments "$tmp/bad.seg" "$tmp/rh.txt" 2> /dev/null
+check "segment index out of range: exit 1" "[ $? -eq 1 ]"
+
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ]

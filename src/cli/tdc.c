@@ -5,7 +5,11 @@
  *	./tdc [-t THREADS] [-g GRID] [-l LEVELS] [--tolerance T] [-o OUT] [--stats] INPUT
  *
  * and, beyond the fixed interface, --validate: check the result with the
- * exact validator (slow, and about 60 more bytes per point).
+ * exact validator (slow, and about 60 more bytes per point), and
+ * --segments FILE: constraint segments, one per line "i j", two 0-based
+ * line numbers (point indices) of INPUT; the result is then the constrained
+ * Delaunay triangulation (cdt.c).  With --stats a second line
+ * "segments= constraint_edges= constrain=" follows.
  *
  * INPUT is a .bin file of little-endian float64 x,y pairs, or any other file
  * (or - for stdin) of text lines "x y" or "x y z".  -o writes one triangle
@@ -18,11 +22,12 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/resource.h>
+#include <time.h>
 
 #include "tdc.h"
 
 static const char usage[] =
-"usage: ./tdc [-t THREADS] [-g GRID] [-l LEVELS] [--tolerance T] [-o OUT] [--stats] [--validate] INPUT\n"
+"usage: ./tdc [-t THREADS] [-g GRID] [-l LEVELS] [--tolerance T] [-o OUT] [--stats] [--validate] [--segments FILE] INPUT\n"
 "  INPUT  .bin file of little-endian float64 x,y pairs, or a text file of\n"
 "         'x y' or 'x y z' lines ('-' reads stdin)\n"
 "  -t     worker threads (0 = all online CPUs, the default)\n"
@@ -31,7 +36,10 @@ static const char usage[] =
 "  --tolerance T  drop sites closer than T to an already kept site\n"
 "  -o     write triangles, one per line, counter-clockwise, %.17g\n"
 "  --stats  print counts and phase times (seconds) to stderr\n"
-"  --validate  check the result with the exact validator; exit 1 if invalid\n";
+"  --validate  check the result with the exact validator; exit 1 if invalid\n"
+"  --segments FILE  constraint segments, lines 'i j' of 0-based INPUT point\n"
+"         indices: the constrained Delaunay triangulation; crossing segments\n"
+"         are an error (exit 1)\n";
 
 static void
 die(int code, const char *fmt, const char *arg)
@@ -166,6 +174,43 @@ read_text(const char *path, size_t *n, double **zout)
 	return xy;
 }
 
+/* Segment file: lines "i j"; every index must be below n. */
+static uint32_t *
+read_segments(const char *path, size_t n, size_t *k)
+{
+	FILE	   *f = strcmp(path, "-") == 0 ? stdin : fopen(path, "r");
+	size_t		cap = 1024;
+	uint32_t   *seg = malloc(cap * 2 * sizeof(uint32_t));
+	unsigned long long a,
+				b;
+	int			got;
+
+	if (f == NULL)
+		die(1, "cannot read %s", path);
+	if (seg == NULL)
+		die(1, "out of memory for %s", path);
+	*k = 0;
+	while ((got = fscanf(f, "%llu %llu", &a, &b)) == 2)
+	{
+		if (a >= n || b >= n)
+			die(1, "segment index beyond the input's points in %s", path);
+		if (*k == cap)
+		{
+			seg = realloc(seg, (cap *= 2) * 2 * sizeof(uint32_t));
+			if (seg == NULL)
+				die(1, "out of memory for %s", path);
+		}
+		seg[2 * *k] = (uint32_t) a;
+		seg[2 * *k + 1] = (uint32_t) b;
+		(*k)++;
+	}
+	if (got != EOF)
+		die(1, "%s: lines must be two point indices 'i j'", path);
+	if (f != stdin)
+		fclose(f);
+	return seg;
+}
+
 int
 main(int argc, char **argv)
 {
@@ -179,6 +224,11 @@ main(int argc, char **argv)
 	double	   *xy,
 			   *z = NULL;
 	tdc_job    *job;
+	tdc_cdt    *cdt = NULL;
+	const char *segpath = NULL;
+	uint32_t   *seg = NULL;
+	size_t		nseg = 0;
+	double		constrain_s = 0;
 	char		err[512];
 
 	tdc_options_init(&opt);
@@ -196,6 +246,12 @@ main(int argc, char **argv)
 			stats = 1;
 		else if (strcmp(a, "--validate") == 0)
 			validate = 1;
+		else if (strcmp(a, "--segments") == 0)
+		{
+			if (i + 1 >= argc)
+				die(2, "option %s needs a value", a);
+			segpath = argv[++i];
+		}
 		else if (strcmp(a, "-t") == 0 || strcmp(a, "-g") == 0 || strcmp(a, "-l") == 0 ||
 				 strcmp(a, "-o") == 0 || strcmp(a, "--tolerance") == 0)
 		{
@@ -236,6 +292,23 @@ main(int argc, char **argv)
 		tdc_job_free(job);
 		die(1, "%s", err);
 	}
+	if (segpath)
+	{
+		struct timespec t0,
+					t1;
+
+		seg = read_segments(segpath, n, &nseg);
+		clock_gettime(CLOCK_MONOTONIC, &t0);
+		rc = tdc_cdt_run(job, seg, nseg, &cdt, err, sizeof(err));
+		clock_gettime(CLOCK_MONOTONIC, &t1);
+		constrain_s = (t1.tv_sec - t0.tv_sec) + (t1.tv_nsec - t0.tv_nsec) * 1e-9;
+		if (rc != TDC_OK)
+		{
+			tdc_cdt_free(cdt);
+			tdc_job_free(job);
+			die(1, "%s", err);
+		}
+	}
 
 	if (outpath)
 	{
@@ -275,18 +348,25 @@ main(int argc, char **argv)
 				tdc_num_input(job), tdc_num_sites(job), tdc_num_triangles(job),
 				tdc_threads_used(job), t.sort, t.subdivide, t.leaves, t.merge, t.total,
 				ru.ru_maxrss / 1024.0);
+		if (cdt)
+			fprintf(stderr, "segments=%zu constraint_edges=%zu constrain=%.6f\n",
+					nseg, tdc_cdt_num_constraint_edges(cdt), constrain_s);
 	}
 	if (validate)
 	{
-		if (tdc_validate_job(job, err, sizeof(err)) != 0)
+		if ((cdt ? tdc_cdt_validate(cdt, err, sizeof(err)) :
+			 tdc_validate_job(job, err, sizeof(err))) != 0)
 		{
 			tdc_job_free(job);
 			die(1, "INVALID triangulation: %s", err);
 		}
-		fprintf(stderr, "valid: %zu sites, %zu triangles, checked exactly\n",
-				tdc_num_sites(job), tdc_num_triangles(job));
+		fprintf(stderr, "valid: %zu sites, %zu triangles%s, checked exactly\n",
+				tdc_num_sites(job), tdc_num_triangles(job),
+				cdt ? ", constrained Delaunay" : "");
 	}
+	tdc_cdt_free(cdt);
 	tdc_job_free(job);
+	free(seg);
 	free(xy);
 	free(z);
 	return 0;
