@@ -114,7 +114,7 @@ endif
 # headers with the shims in fuzz/pg_shim.c (no server needed).
 FUZZ_SECONDS ?= 60
 FUZZ_CC ?= clang
-FUZZ_TARGETS = fuzz_core fuzz_gserialized fuzz_state
+FUZZ_TARGETS = fuzz_core fuzz_gserialized fuzz_state fuzz_cdt
 FUZZ_CFLAGS = -g -O1 -fno-omit-frame-pointer -D_GNU_SOURCE -ffp-contract=off \
 	-pthread -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined \
 	-Wall -Wno-unused-parameter -Wno-missing-field-initializers
@@ -129,6 +129,10 @@ fuzz: $(addprefix build/fuzz/,$(FUZZ_TARGETS))
 build/fuzz/fuzz_core: fuzz/fuzz_core.c test/xy_oracle.h $(FUZZ_CORE_DEPS)
 	@mkdir -p build/fuzz
 	$(FUZZ_CC) $(FUZZ_CFLAGS) -std=c11 -Isrc/core -o $@ fuzz/fuzz_core.c $(CORE_SRCS) -lm
+
+build/fuzz/fuzz_cdt: fuzz/fuzz_cdt.c $(FUZZ_CORE_DEPS)
+	@mkdir -p build/fuzz
+	$(FUZZ_CC) $(FUZZ_CFLAGS) -std=c11 -Isrc/core -o $@ fuzz/fuzz_cdt.c $(CORE_SRCS) -lm
 
 # The reader and writers, and the aggregate state, each with the point buffer.
 FUZZ_GSER_SRCS = src/pg/gserialized.c src/pg/gser_write.c src/pg/pointbuf.c
