@@ -50,7 +50,7 @@
  * Invariants between segments: the mesh is a triangulation of the convex
  * hull of the sites (hull edges are never crossed, so never flipped, so the
  * job's outer-face bitmap and triangle count stay right); every constraint
- * edge carries the number of the first segment that made it, every other
+ * edge carries the number (+ 1) of the first segment that made it, every other
  * edge NO_SEG; vedge[s] is a half-edge leaving site s.  The number of edges
  * never changes (a flip keeps its edge slot), so the mesh needs no memory.
  *
@@ -68,9 +68,10 @@
 
 #include "job.h"
 
-#define NO_SEG		UINT32_MAX			/* edge is no constraint */
-#define CAV			(UINT32_MAX - 1)	/* new edge of the current cavity */
-#define CAVQ		(UINT32_MAX - 2)	/* ... and on the Lawson stack */
+/* cons[] holds segment number + 1, so that the zeroed array means "none" */
+#define NO_SEG		0					/* edge is no constraint */
+#define CAV			UINT32_MAX			/* new edge of the current cavity */
+#define CAVQ		(UINT32_MAX - 1)	/* ... and on the Lawson stack */
 #define MAX_SEG		((size_t) UINT32_MAX - 3)
 #define POLL_STEPS	4096
 
@@ -80,7 +81,7 @@ struct tdc_cdt
 	const uint32_t *seg;		/* caller's pairs of input indices */
 	size_t		nseg;
 	tdc_mesh	m;
-	uint32_t   *cons;			/* per edge slot: segment number or NO_SEG/CAV/CAVQ */
+	uint32_t   *cons;			/* per edge slot: segment number + 1, or NO_SEG/CAV/CAVQ */
 	uint32_t   *vedge;			/* per site: a half-edge leaving it */
 	uint32_t   *list;			/* crossed edges, used as a circular queue */
 	uint32_t   *fresh;			/* new edges, then the Lawson stack */
@@ -362,7 +363,7 @@ mark(tdc_cdt *c, uint32_t h, size_t s)
 {
 	if (c->cons[h >> 1] == NO_SEG)
 	{
-		c->cons[h >> 1] = (uint32_t) s;
+		c->cons[h >> 1] = (uint32_t) s + 1;
 		c->nconstraint++;
 	}
 }
@@ -382,6 +383,18 @@ insert_segment(tdc_cdt *c, size_t s, uint32_t a, uint32_t b)
 		size_t		n = 0,
 					nfresh;
 		int			rc;
+
+		/*
+		 * Most segments of contour-like input are Delaunay edges already:
+		 * look for a-b without a predicate first.
+		 */
+		g = find_edge(c, a, b);
+		if (g != TDC_NIL)
+		{
+			mark(c, g, s);
+			break;
+		}
+		g = start;
 
 		/* the edge out of a along a-b, or the triangle a-b leaves a into */
 		do
@@ -427,7 +440,7 @@ insert_segment(tdc_cdt *c, size_t s, uint32_t a, uint32_t b)
 			double		o;
 
 			if (c->cons[t >> 1] != NO_SEG)
-				return crossing_error(c, s, c->cons[t >> 1]);
+				return crossing_error(c, s, c->cons[t >> 1] - 1);
 			if (n == c->cap)
 				return internal_error(c, s, "more crossed edges than edges");
 			c->list[n++] = t >> 1;
@@ -489,7 +502,7 @@ cdt_run(tdc_cdt *c)
 	c->fresh = tdc_big_alloc(nslots * sizeof(uint32_t) + 4);
 	if (!c->cons || !c->vedge || !c->list || !c->fresh)
 		return cdt_fail(c, TDC_ENOMEM, "out of memory for the constraints of %zu points", job->nin);
-	memset(c->cons, 0xff, nslots * sizeof(uint32_t));
+	/* tdc_big_alloc's memory is zeroed: every cons[] is NO_SEG */
 	for (size_t h = 0; h < 2 * nslots; h++)
 		if (job->he[h].org != TDC_NIL)
 			c->vedge[job->he[h].org] = (uint32_t) h;
@@ -727,7 +740,7 @@ tdc_next_constraint_edge(const tdc_cdt *c, tdc_iter *it, uint32_t v[2])
 		uint32_t	a,
 					b;
 
-		if (c->cons[e] >= CAVQ)
+		if (c->cons[e] == NO_SEG || c->cons[e] >= CAVQ)
 			continue;
 		a = job->he[2 * e].org;
 		b = job->he[2 * e + 1].org;
