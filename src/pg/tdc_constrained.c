@@ -24,6 +24,7 @@
 #include <math.h>
 
 #include "miscadmin.h"
+#include "portability/instr_time.h"
 #include "utils/memutils.h"
 
 #include "gser_format.h"
@@ -247,7 +248,10 @@ constrain(TdcRun *run, const TdcPointBuf *buf, const SegList *w,
 	MemoryContextCallback *cb;
 	char		err[512];
 	int			rc;
+	instr_time	start,
+				stop;
 
+	INSTR_TIME_SET_CURRENT(start);
 	hold = MemoryContextAllocZero(buf->cxt, sizeof(CdtHold));
 	cb = MemoryContextAllocZero(buf->cxt, sizeof(MemoryContextCallback));
 	cb->func = cdt_reset_callback;
@@ -287,6 +291,16 @@ constrain(TdcRun *run, const TdcPointBuf *buf, const SegList *w,
 						 rc == TDC_ENOMEM ? ERRCODE_OUT_OF_MEMORY :
 						 ERRCODE_INTERNAL_ERROR),
 				 errmsg("%s: %s", fname, tdc_cdt_error(hold->cdt))));
+	if (tdc_guc_stats)
+	{
+		INSTR_TIME_SET_CURRENT(stop);
+		INSTR_TIME_SUBTRACT(stop, start);
+		ereport(NOTICE,
+				(errmsg("%s: %llu segments, %zu constraint edges, insertion %.3f ms",
+						fname, (unsigned long long) w->nseg,
+						tdc_cdt_num_constraint_edges(hold->cdt),
+						INSTR_TIME_GET_MILLISEC(stop))));
+	}
 	/* the mesh is final; the constraint numbers are not needed for output */
 	tdc_cdt_free(hold->cdt);
 	hold->cdt = NULL;
