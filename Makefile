@@ -126,7 +126,7 @@ FUZZ_CORE_DEPS = $(CORE_SRCS) $(wildcard src/core/*.h)
 
 fuzz: $(addprefix build/fuzz/,$(FUZZ_TARGETS))
 
-build/fuzz/fuzz_core: fuzz/fuzz_core.c test/xy_oracle.h $(FUZZ_CORE_DEPS)
+build/fuzz/fuzz_core: fuzz/fuzz_core.c test/xy_oracle.h test/splitmix.h $(FUZZ_CORE_DEPS)
 	@mkdir -p build/fuzz
 	$(FUZZ_CC) $(FUZZ_CFLAGS) -std=c11 -Isrc/core -o $@ fuzz/fuzz_core.c $(CORE_SRCS) -lm
 

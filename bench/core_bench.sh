@@ -21,7 +21,7 @@
 #   BENCH_REPS_SMALL=5 (n < 5e6)  BENCH_REPS_BIG=3
 #   BENCH_PHASE_SET=uniform_1e7   BENCH_PHASE_REPS=3
 #   BENCH_TIMEOUT=900 (seconds per single run)
-#   BENCH_NO_TDC=1   only CGAL (e.g. before the core exists)
+#   BENCH_NO_TDC=1   only CGAL
 #   BENCH_DOCS=DIR   where core.png goes (default docs/)
 #   BENCH_PLOT_ONLY=1  only redraw docs/core.png from build/bench/core.csv
 set -euo pipefail

@@ -28,36 +28,22 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "../test/splitmix.h"
+
 static uint64_t rng_state;
-
-static uint64_t
-rng_next(void)
-{
-	uint64_t	z = (rng_state += UINT64_C(0x9E3779B97F4A7C15));
-
-	z = (z ^ (z >> 30)) * UINT64_C(0xBF58476D1CE4E5B9);
-	z = (z ^ (z >> 27)) * UINT64_C(0x94D049BB133111EB);
-	return z ^ (z >> 31);
-}
 
 /* uniform double in [0,1) with 53 random bits */
 static double
 rng_unit(void)
 {
-	return (double) (rng_next() >> 11) * (1.0 / 9007199254740992.0);
+	return tdc_splitmix_unit(&rng_state);
 }
 
 /* uniform integer in [0, bound) (bound > 0), rejection to avoid bias */
 static uint64_t
 rng_below(uint64_t bound)
 {
-	uint64_t	limit = UINT64_MAX - UINT64_MAX % bound;
-	uint64_t	r;
-
-	do
-		r = rng_next();
-	while (r >= limit);
-	return r % bound;
+	return tdc_splitmix_below(&rng_state, bound);
 }
 
 /* standard normal pair by Box-Muller */

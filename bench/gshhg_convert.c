@@ -27,28 +27,14 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "../test/splitmix.h"
+
 static uint64_t rng_state;
-
-static uint64_t
-rng_next(void)
-{
-	uint64_t	z = (rng_state += UINT64_C(0x9E3779B97F4A7C15));
-
-	z = (z ^ (z >> 30)) * UINT64_C(0xBF58476D1CE4E5B9);
-	z = (z ^ (z >> 27)) * UINT64_C(0x94D049BB133111EB);
-	return z ^ (z >> 31);
-}
 
 static uint64_t
 rng_below(uint64_t bound)
 {
-	uint64_t	limit = UINT64_MAX - UINT64_MAX % bound;
-	uint64_t	r;
-
-	do
-		r = rng_next();
-	while (r >= limit);
-	return r % bound;
+	return tdc_splitmix_below(&rng_state, bound);
 }
 
 /* shortest %.*g representation that round-trips */

@@ -31,13 +31,14 @@ ensure_debs() {
 		die "apt-get install ${missing[*]} failed"
 }
 
-# build_tool NAME SRC COMPILER FLAGS...: (re)build $BENCH_BIN/NAME when SRC is newer
+# build_tool NAME SRC COMPILER FLAGS...: (re)build $BENCH_BIN/NAME when SRC (or
+# test/splitmix.h, which the C tools include) is newer
 build_tool() {
 	local name=$1 src=$2 compiler=$3
 	shift 3
 	local out=$BENCH_BIN/$name
 	mkdir -p "$BENCH_BIN"
-	if [ ! -x "$out" ] || [ "$src" -nt "$out" ]; then
+	if [ ! -x "$out" ] || [ "$src" -nt "$out" ] || [ "$ROOT/test/splitmix.h" -nt "$out" ]; then
 		log "building $out"
 		"$compiler" "$@" -o "$out" "$src" ${LIBS:-} || die "cannot build $out"
 	fi
@@ -112,10 +113,6 @@ median() {
 
 # ensure the ./tdc CLI is built; returns 1 if it cannot be
 ensure_tdc() {
-	if [ ! -f "$ROOT/src/cli/tdc.c" ]; then
-		log "src/cli/tdc.c does not exist yet: no ./tdc"
-		return 1
-	fi
 	if ! make -C "$ROOT" -s tdc >&2; then
 		if [ -x "$ROOT/tdc" ]; then
 			log "WARNING: make tdc failed; using the existing ./tdc built $(date -u -r "$ROOT/tdc" '+%H:%M UTC')"

@@ -50,6 +50,7 @@
 #include <string.h>
 
 #include "tdc.h"
+#include "../test/splitmix.h"
 #include "../test/xy_oracle.h"
 
 #define MAX_RAW_POINTS		4096
@@ -122,11 +123,7 @@ init_circle(void)
 static uint64_t
 mix(uint64_t *s)
 {
-	uint64_t	z = (*s += 0x9E3779B97F4A7C15ull);
-
-	z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-	z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-	return z ^ (z >> 31);
+	return tdc_splitmix64(s);
 }
 
 /* Build the point array for a mode; returns the number of points. */

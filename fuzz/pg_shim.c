@@ -422,12 +422,13 @@ tdc_max_memory_bytes(void)
 
 /* Same error as tdc_guc.c, with the limit the fuzzer picked. */
 void
-tdc_report_memory_limit(const char *fname, const char *what, uint64 need)
+tdc_report_memory_limit(const char *fname, const char *what, uint64 need,
+						uint64 result)
 {
 	ereport(ERROR,
 			(errcode(ERRCODE_PROGRAM_LIMIT_EXCEEDED),
 			 errmsg("%s: %s needs about %llu MB, more than tdc_delaunay.max_memory (%d MB)",
-					fname, what, (unsigned long long) ((need + (1 << 20) - 1) >> 20),
+					fname, what, (unsigned long long) ((need + result + (1 << 20) - 1) >> 20),
 					fuzz_pg_max_memory_mb)));
 	pg_unreachable();
 }

@@ -3,8 +3,7 @@
  *		Stand-ins for the few PostgreSQL backend services that the
  *		tdc_delaunay reader and writers (src/pg/gserialized.c, gser_write.c,
  *		pointbuf.c) and the aggregate state (src/pg/tdc_agg_state.c) use, so
- *		that they run inside a libFuzzer
- *		process without a server.
+ *		that they run inside a libFuzzer process without a server.
  *
  * Memory: palloc and friends allocate with malloc and remember every chunk;
  * fuzz_pg_reset() frees them all, like resetting a memory context at the end

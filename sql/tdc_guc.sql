@@ -73,6 +73,22 @@ SELECT ST_NumGeometries(ST_TDCDelaunay(geom)) FROM tdc_guc_pts WHERE id <= 100;
 SELECT ST_NumGeometries(ST_TDCDelaunay(geom)) FROM tdc_guc_pts;
 SELECT ST_NumGeometries(ST_TDCDelaunay(g)) FROM (SELECT ST_MakePoint(i, i % 7) g FROM generate_series(1, 100000) i) s;
 SELECT count(*) FROM ST_TDCDelaunayDump('SELECT ST_MakePoint(i, i % 7) FROM generate_series(1, 100000) i');
+-- The same vertices get the same estimate from every function; the result
+-- value of the aggregate and of ST_TDCDelaunayTriangles is named apart.
+CREATE FUNCTION pg_temp.tdc_mem_estimate(q text) RETURNS text LANGUAGE plpgsql AS $$
+DECLARE
+	m text;
+BEGIN
+	EXECUTE q;
+	RETURN 'no error';
+EXCEPTION WHEN program_limit_exceeded THEN
+	GET STACKED DIAGNOSTICS m = MESSAGE_TEXT;
+	RETURN substring(m FROM 'triangulating [0-9]+ vertices needs about [0-9]+ MB');
+END $$;
+SELECT agg = dump AND agg = triangles AS same_estimate FROM (SELECT
+	pg_temp.tdc_mem_estimate('SELECT ST_TDCDelaunay(geom) FROM tdc_guc_pts') AS agg,
+	pg_temp.tdc_mem_estimate('SELECT count(*) FROM ST_TDCDelaunayDump(''SELECT geom FROM tdc_guc_pts'')') AS dump,
+	pg_temp.tdc_mem_estimate('SELECT ST_TDCDelaunayTriangles(ST_Collect(geom)) FROM tdc_guc_pts') AS triangles) s;
 SET tdc_delaunay.max_memory = '64MB';
 SELECT ST_NumGeometries(ST_TDCDelaunay(geom)) = tdc_expected_triangles(ST_Collect(geom)) AS fits FROM tdc_guc_pts;
 RESET tdc_delaunay.max_memory;

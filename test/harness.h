@@ -7,6 +7,7 @@
 #define TDC_HARNESS_H
 
 #include <stdio.h>
+#include <time.h>
 
 extern long tdc_test_passed;
 extern long tdc_test_failed;
@@ -23,6 +24,16 @@ extern long tdc_test_failed;
 			fputc('\n', stderr); \
 		} \
 	} while (0)
+
+/* Seconds on the monotonic clock, for the checks that time something. */
+static inline double
+tdc_test_now(void)
+{
+	struct timespec ts;
+
+	clock_gettime(CLOCK_MONOTONIC, &ts);
+	return ts.tv_sec + ts.tv_nsec * 1e-9;
+}
 
 /* Each test file exports one entry point, called from test_main.c. */
 extern void test_predicates(void);

@@ -21,6 +21,7 @@
 #include <unistd.h>
 
 #include "harness.h"
+#include "splitmix.h"
 #include "tdc.h"
 
 #define NTHREADS	4
@@ -31,13 +32,7 @@ random_points(size_t n, uint64_t seed)
 	double	   *xy = malloc(2 * n * sizeof(double));
 
 	for (size_t i = 0; i < 2 * n; i++)
-	{
-		uint64_t	z = (seed += 0x9E3779B97F4A7C15ull);
-
-		z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-		z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-		xy[i] = ((z ^ (z >> 31)) >> 11) * 0x1p-53 * 1000;
-	}
+		xy[i] = tdc_splitmix_unit(&seed) * 1000;
 	return xy;
 }
 

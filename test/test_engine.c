@@ -23,6 +23,7 @@
 #include <time.h>
 
 #include "harness.h"
+#include "splitmix.h"
 #include "tdc.h"
 #include "xy_oracle.h"
 
@@ -37,11 +38,7 @@ static uint64_t rng_state;
 static uint64_t
 rng(void)
 {
-	uint64_t	z = (rng_state += 0x9E3779B97F4A7C15ull);
-
-	z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-	z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-	return z ^ (z >> 31);
+	return tdc_splitmix64(&rng_state);
 }
 
 static double
@@ -654,15 +651,6 @@ test_errors(void)
 	CHECK(tdc_job_start(bad, 3, &opt, &job, err, sizeof(err)) == TDC_EINVAL, "negative tolerance");
 }
 
-static double
-now(void)
-{
-	struct timespec ts;
-
-	clock_gettime(CLOCK_MONOTONIC, &ts);
-	return ts.tv_sec + ts.tv_nsec * 1e-9;
-}
-
 /*
  * Jobs below TDC_INLINE_MAX points run on the caller's thread, the others on
  * the pool.  Padding a point set with exact duplicates of its own points
@@ -717,7 +705,8 @@ check_inline_vs_threaded(const char *name, const double *xy, size_t m,
 static void
 test_inline_boundary(void)
 {
-	size_t		sizes[] = {1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 100, 1000,
+	/* 255..257: the largest jobs whose arrays come from job.c's arena, and the first that do not */
+	size_t		sizes[] = {1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 100, 255, 256, 257, 1000,
 	TDC_INLINE_MAX - 2, TDC_INLINE_MAX - 1, TDC_INLINE_MAX, TDC_INLINE_MAX + 1};
 	double	   *xy = gen_uniform(TDC_INLINE_MAX + 2, 1000, 0, 0);
 	double		line[2 * 64];
@@ -730,6 +719,18 @@ test_inline_boundary(void)
 	}
 	check_inline_vs_threaded("inline/threaded, 0 points", xy, 0, 0);
 	check_inline_vs_threaded("inline/threaded, tolerance", xy, 5000, 3.0);
+	check_inline_vs_threaded("inline/threaded, tolerance, arena", xy, 200, 30.0);
+	{
+		/* a user's grid and levels outgrow the arena: those arrays fall back */
+		tdc_options o;
+		canon		c;
+
+		tdc_options_init(&o);
+		o.grid_size = 65536;
+		o.levels = 24;
+		if (run_checked("arena overflow: grid 65536, levels 24, 256 points", xy, 256, &o, &c))
+			free(c.t);
+	}
 	for (int i = 0; i < 64; i++)
 	{
 		line[2 * i] = 0.125 * ((i * 37) % 64);
@@ -776,10 +777,10 @@ test_cancel_and_concurrency(void)
 			if (job == NULL)
 				continue;
 			tdc_job_wait(job, delay);
-			t = now();
+			t = tdc_test_now();
 			tdc_job_cancel(job);
 			rc = tdc_job_wait(job, -1);
-			t = now() - t;
+			t = tdc_test_now() - t;
 			best = t < best ? t : best;
 			CHECK(rc == TDC_ECANCELED || rc == TDC_OK, "cancel after %d ms: status %d", delay, rc);
 			tdc_job_free(job);
@@ -926,10 +927,10 @@ test_emit(void)
 		sink.tri = malloc((3 * sink.ntri + 1) * sizeof(uint32_t));
 		CHECK(tdc_job_emit_start(job, emit_collect, &sink, err, sizeof(err)) == TDC_OK, "emit: start: %s", err);
 		tdc_job_wait(job, 2);
-		t = now();
+		t = tdc_test_now();
 		tdc_job_cancel(job);
 		rc = tdc_job_wait(job, -1);
-		t = now() - t;
+		t = tdc_test_now() - t;
 		CHECK(rc == TDC_ECANCELED || rc == TDC_OK, "emit: cancelled: status %d", rc);
 		/* quiet machine: about 1 ms; the limit is the load-proof one above */
 		CHECK(t < CANCEL_LIMIT_MS * 1e-3, "emit: cancel answered in %.1f ms (limit %d)", t * 1e3,
@@ -994,17 +995,17 @@ test_free_background(void)
 		/* every other run is dropped while it works, the rest once done */
 		done = r % 2;
 		tdc_job_wait(job, done ? -1 : 10 * (r % 7));
-		t = now();
+		t = tdc_test_now();
 		if (done && r % 4 == 1)
 		{
 			tdc_job_free(job);
-			t = now() - t;
+			t = tdc_test_now() - t;
 			sync_total += t;
 			sync_min = t < sync_min ? t : sync_min;
 			continue;
 		}
 		tdc_job_free_background(job);
-		t = now() - t;
+		t = tdc_test_now() - t;
 		if (done)
 		{
 			bg_total += t;

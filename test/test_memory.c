@@ -21,6 +21,7 @@
 #include <unistd.h>
 
 #include "harness.h"
+#include "splitmix.h"
 #include "tdc.h"
 
 /* Sanitizers reserve terabytes of shadow memory: measure only without them. */
@@ -40,11 +41,7 @@ static uint64_t mem_rng = 0x5eed0001;
 static double
 mem_urand(void)
 {
-	uint64_t	z = (mem_rng += 0x9E3779B97F4A7C15ull);
-
-	z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-	z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-	return ((z ^ (z >> 31)) >> 11) * 0x1p-53;
+	return tdc_splitmix_unit(&mem_rng);
 }
 
 /* A field of /proc/self/status in kB, or -1. */

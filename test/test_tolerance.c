@@ -28,6 +28,7 @@
 #include <gmp.h>
 
 #include "harness.h"
+#include "splitmix.h"
 #include "predicates.h"
 #include "tdc.h"
 
@@ -36,11 +37,7 @@ static uint64_t rng_state;
 static uint64_t
 rng(void)
 {
-	uint64_t	z = (rng_state += 0x9E3779B97F4A7C15ull);
-
-	z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-	z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-	return z ^ (z >> 31);
+	return tdc_splitmix64(&rng_state);
 }
 
 /* uniform in [0, 1) */
@@ -48,15 +45,6 @@ static double
 urand(void)
 {
 	return (rng() >> 11) * 0x1p-53;
-}
-
-static double
-now(void)
-{
-	struct timespec ts;
-
-	clock_gettime(CLOCK_MONOTONIC, &ts);
-	return ts.tv_sec + ts.tv_nsec * 1e-9;
 }
 
 /* ------------------------------------------------------------------------
@@ -825,10 +813,10 @@ test_tiny_tolerance_cancel(void)
 			continue;
 		}
 		usleep(delays_ms[d] * 1000);
-		t0 = now();
+		t0 = tdc_test_now();
 		tdc_job_cancel(job);
 		rc = tdc_job_wait(job, 30000);
-		stop = now() - t0;
+		stop = tdc_test_now() - t0;
 		CHECK((rc == TDC_ECANCELED || rc == TDC_OK) && stop < 1.0,
 			  "cancel %d ms into a tiny-tolerance job of %zu points: status %d after %.3f s",
 			  delays_ms[d], n, rc, stop);

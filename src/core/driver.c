@@ -188,12 +188,12 @@ check_input(tdc_job *job)
 	copy_arg	ca;
 
 	ca.job = job;
-	ca.bounds = malloc(nchunks * 4 * sizeof(double) + 1);
-	ca.bad = malloc(nchunks * sizeof(size_t) + 1);
+	ca.bounds = tdc_job_alloc(job, nchunks * 4 * sizeof(double));
+	ca.bad = tdc_job_alloc(job, nchunks * sizeof(size_t));
 	if (!ca.bounds || !ca.bad)
 	{
-		free(ca.bounds);
-		free(ca.bad);
+		tdc_job_release(job, ca.bounds);
+		tdc_job_release(job, ca.bad);
 		tdc_job_fail(job, TDC_ENOMEM, "out of memory");
 		return TDC_ENOMEM;
 	}
@@ -223,8 +223,8 @@ check_input(tdc_job *job)
 		job->bmax[0] = fmax(job->bmax[0], ca.bounds[4 * c + 2]);
 		job->bmax[1] = fmax(job->bmax[1], ca.bounds[4 * c + 3]);
 	}
-	free(ca.bounds);
-	free(ca.bad);
+	tdc_job_release(job, ca.bounds);
+	tdc_job_release(job, ca.bad);
 	return atomic_load(&job->failed);
 }
 
@@ -300,7 +300,7 @@ count_result(tdc_job *job)
 	}
 	job->ntri = 2 * u - 2 - h;
 	job->nedges = 3 * u - 3 - h;
-	job->outer = tdc_big_alloc(((job->nin * 6 + 63) / 64 + 1) * sizeof(uint64_t));
+	job->outer = tdc_job_alloc(job, ((job->nin * 6 + 63) / 64 + 1) * sizeof(uint64_t));
 	if (job->outer == NULL)
 	{
 		tdc_job_fail(job, TDC_ENOMEM, "out of memory marking the convex hull");
@@ -421,9 +421,9 @@ tdc_run_phase(tdc_job *job)
 
 	/* validate; tolerance */
 	t = job_clock(job);
-	job->xy = tdc_big_alloc(job->n * 2 * sizeof(double) + 16);
-	job->idx = tdc_big_alloc(job->n * sizeof(uint32_t) + 4);
-	job->site_of = tdc_big_alloc(job->n * sizeof(uint32_t) + 4);
+	job->xy = tdc_job_alloc(job, job->n * 2 * sizeof(double) + 16);
+	job->idx = tdc_job_alloc(job, job->n * sizeof(uint32_t) + 4);
+	job->site_of = tdc_job_alloc(job, job->n * sizeof(uint32_t) + 4);
 	if (!job->xy || !job->idx || !job->site_of)
 	{
 		tdc_job_fail(job, TDC_ENOMEM, "out of memory for %zu points", job->n);
@@ -434,7 +434,7 @@ tdc_run_phase(tdc_job *job)
 		return atomic_load(&job->failed);
 	if (job->opt.tolerance > 0 && job->n > 0)
 	{
-		job->tol_to = tdc_big_alloc(job->n * sizeof(uint32_t));
+		job->tol_to = tdc_job_alloc(job, job->n * sizeof(uint32_t));
 		if (job->tol_to == NULL)
 		{
 			tdc_job_fail(job, TDC_ENOMEM, "out of memory for the tolerance pass");
@@ -466,11 +466,11 @@ tdc_run_phase(tdc_job *job)
 			job->gscale[a] = 0;	/* extent below the smallest normal: one cell */
 	}
 	nnodes = (size_t) 2 << job->d;
-	job->node_rect = malloc(nnodes * sizeof(tdc_rect));
-	job->node_axis = calloc(nnodes, 1);
-	job->node_lo = malloc(nnodes * sizeof(uint32_t));
-	job->node_hi = malloc(nnodes * sizeof(uint32_t));
-	job->subs = malloc(nnodes * sizeof(tdc_sub));
+	job->node_rect = tdc_job_alloc(job, nnodes * sizeof(tdc_rect));
+	job->node_axis = tdc_job_alloc(job, nnodes);
+	job->node_lo = tdc_job_alloc(job, nnodes * sizeof(uint32_t));
+	job->node_hi = tdc_job_alloc(job, nnodes * sizeof(uint32_t));
+	job->subs = tdc_job_alloc(job, nnodes * sizeof(tdc_sub));
 	if (!job->node_rect || !job->node_axis || !job->node_lo || !job->node_hi || !job->subs)
 	{
 		tdc_job_fail(job, TDC_ENOMEM, "out of memory for the subdivision tree");
@@ -481,7 +481,7 @@ tdc_run_phase(tdc_job *job)
 	if (atomic_load(&job->cancel))
 		return TDC_ECANCELED;
 
-	job->he = tdc_big_alloc(job->nin * 6 * sizeof(tdc_he) + sizeof(tdc_he));
+	job->he = tdc_job_alloc(job, job->nin * 6 * sizeof(tdc_he) + sizeof(tdc_he));
 	if (job->he == NULL)
 	{
 		tdc_job_fail(job, TDC_ENOMEM, "out of memory for the mesh of %zu points (%zu bytes)",

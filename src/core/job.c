@@ -61,22 +61,74 @@ driver_main(void *arg)
 	return NULL;
 }
 
+/*
+ * The arena.  A call on a handful of points used to spend a third of its
+ * time in malloc and free: some twenty arrays, each a few dozen bytes, and
+ * glibc consolidating its free lists whenever a chunk next to the top of
+ * the heap came back.  So a job on at most ARENA_MAX_POINTS points gets its
+ * arrays from one zeroed block allocated together with the job, a bump
+ * allocator with nothing to free.  An array that does not fit (the sizing
+ * below is generous, not exact) falls back to tdc_big_alloc, so the arena
+ * is a speed-up only, never a limit.  The block stays within a few tens of
+ * kB, below glibc's mapping threshold, and it is counted by
+ * tdc_estimate_memory's per-point and fixed terms like the arrays it
+ * replaces.  Only the thread that runs the phases allocates from it; the
+ * input map, built on demand by any reader, never does.
+ */
+#define ARENA_MAX_POINTS	256
+#define ARENA_ALIGN			16		/* one thread: no false sharing to avoid */
+#define ARENA_FIXED			1024	/* tree nodes, grid counts, rounding */
+#define ARENA_PER_POINT		(6 * sizeof(tdc_he) + 48)	/* mesh, xy, idx, site_of, cell */
+
+static size_t
+arena_bytes(size_t n)
+{
+	return n <= ARENA_MAX_POINTS ? ARENA_FIXED + n * ARENA_PER_POINT : 0;
+}
+
+/* Zeroed, 16-aligned memory for one of the job's arrays; NULL if out of memory. */
+void *
+tdc_job_alloc(tdc_job *job, size_t size)
+{
+	size_t		rounded = (size + ARENA_ALIGN - 1) & ~(size_t) (ARENA_ALIGN - 1);
+
+	if (job->arena != NULL && rounded >= size &&
+		rounded <= job->arena_size - job->arena_used)
+	{
+		void	   *p = job->arena + job->arena_used;
+
+		job->arena_used += rounded;
+		return p;
+	}
+	return tdc_big_alloc(size);
+}
+
+void
+tdc_job_release(tdc_job *job, void *ptr)
+{
+	char	   *p = ptr;
+
+	if (p != NULL && job->arena != NULL && p >= job->arena && p < job->arena + job->arena_size)
+		return;
+	tdc_big_free(ptr);
+}
+
 static void
 free_arrays(tdc_job *job)
 {
-	tdc_big_free(job->xy);
-	tdc_big_free(job->idx);
-	tdc_big_free(job->site_of);
-	tdc_big_free(job->map);
-	tdc_big_free(job->outer);
-	tdc_big_free(job->tol_to);
-	tdc_big_free(job->he);
-	tdc_big_free(job->prefix);
-	free(job->node_rect);
-	free(job->node_axis);
-	free(job->node_lo);
-	free(job->node_hi);
-	free(job->subs);
+	tdc_job_release(job, job->xy);
+	tdc_job_release(job, job->idx);
+	tdc_job_release(job, job->site_of);
+	tdc_job_release(job, job->map);
+	tdc_job_release(job, job->outer);
+	tdc_job_release(job, job->tol_to);
+	tdc_job_release(job, job->he);
+	tdc_job_release(job, job->prefix);
+	tdc_job_release(job, job->node_rect);
+	tdc_job_release(job, job->node_axis);
+	tdc_job_release(job, job->node_lo);
+	tdc_job_release(job, job->node_hi);
+	tdc_job_release(job, job->subs);
 }
 
 /*
@@ -155,6 +207,7 @@ tdc_job_start(const double *xy, size_t n, const tdc_options *opt, tdc_job **out,
 	tdc_job    *job;
 	tdc_options o;
 	pthread_condattr_t ca;
+	size_t		arena;
 	int			rc;
 
 	*out = NULL;
@@ -183,9 +236,16 @@ tdc_job_start(const double *xy, size_t n, const tdc_options *opt, tdc_job **out,
 		FAIL(TDC_EMEMLIMIT, "triangulating %zu points needs about %zu MB, more than the limit of %zu MB",
 			 n, tdc_estimate_memory(n, &o) >> 20, o.max_memory >> 20);
 
-	job = calloc(1, sizeof(tdc_job));
+	arena = tdc_plan_inline(n) ? arena_bytes(n) : 0;
+	job = calloc(1, sizeof(tdc_job) + (arena > 0 ? arena + ARENA_ALIGN : 0));
 	if (job == NULL)
 		FAIL(TDC_ENOMEM, "out of memory");
+	if (arena > 0)
+	{
+		job->arena = (char *) (((uintptr_t) (job + 1) + ARENA_ALIGN - 1) &
+							   ~(uintptr_t) (ARENA_ALIGN - 1));
+		job->arena_size = arena;
+	}
 	job->opt = o;
 	job->n = n;
 	job->input = xy;
@@ -330,9 +390,9 @@ tdc_job_free(tdc_job *job)
 
 
 /*
- * Returning a big job's pages to the kernel takes a while (about 10 ms per
- * million points, several times that on a loaded machine), and a host that
- * frees while unwinding from a cancel makes its user wait for it.  The
+ * Returning a big job's pages to the kernel takes time in proportion to its
+ * size, more on a loaded machine, and a host that frees while unwinding from
+ * a cancel makes its user wait for it.  The
  * workers are stopped and joined here, so the detached thread only unmaps
  * memory no one else can reach; if it cannot start, the caller frees.
  */

@@ -53,6 +53,16 @@ struct tdc_job
 	tdc_sub    *subs;
 
 	tdc_pool   *pool;
+
+	/*
+	 * A small job's arrays: carved from a block allocated with the job
+	 * (tdc_job_alloc), so that a call on a few points costs one calloc and
+	 * one free.  Empty for big jobs.
+	 */
+	char	   *arena;
+	size_t		arena_size;
+	size_t		arena_used;
+
 	atomic_int	cancel;
 	atomic_int	failed;			/* first task error wins */
 	char		task_err[256];
@@ -146,5 +156,9 @@ extern size_t tdc_emit_memory(size_t n, int threads);
  * removes duplicates and fills site_of[] for its points.
  */
 extern void tdc_triangulate_leaf(tdc_job *job, size_t k, tdc_sub *out);
+
+/* job.c: a job's arrays, from its arena when they fit (driver thread only) */
+extern void *tdc_job_alloc(tdc_job *job, size_t size);
+extern void tdc_job_release(tdc_job *job, void *ptr);
 
 #endif							/* TDC_JOB_H */

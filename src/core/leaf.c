@@ -38,6 +38,14 @@
 
 #define SPLIT_MIN		12		/* below, quickselect's exact median is cheap */
 
+/*
+ * Ranges of fewer points than this do not look at the cancel flag: they are
+ * triangulated in well under a millisecond, and the range that holds them
+ * has looked already.  Polling every small range would put a shared load on
+ * the hottest path of the recursion.
+ */
+#define LEAF_POLL_MIN	1024
+
 typedef struct leaf_ctx
 {
 	tdc_job    *job;
@@ -307,7 +315,7 @@ gs_recurse(leaf_ctx *c, tdc_freelist *fl, uint32_t lo, uint32_t n, int axis,
 		return;
 	}
 	/* A cancelled job's mesh is garbage: stop before touching it again. */
-	if (n >= 1024 && tdc_cancelled(&c->m))
+	if (n >= LEAF_POLL_MIN && tdc_cancelled(&c->m))
 	{
 		empty_sub(out);
 		return;
@@ -345,7 +353,7 @@ gs_recurse(leaf_ctx *c, tdc_freelist *fl, uint32_t lo, uint32_t n, int axis,
 split:
 	gs_recurse(c, fl, lo, mid - lo, axis ^ 1, &L);
 	gs_recurse(c, fl, mid, hi - mid, axis ^ 1, &R);
-	if (n >= 1024 && tdc_cancelled(&c->m))
+	if (n >= LEAF_POLL_MIN && tdc_cancelled(&c->m))
 	{
 		empty_sub(out);
 		return;
@@ -370,7 +378,7 @@ rect_recurse(leaf_ctx *c, tdc_freelist *fl, const tdc_rect *r, int axis,
 		empty_sub(out);
 		return;
 	}
-	if (n >= 1024 && tdc_cancelled(&c->m))
+	if (n >= LEAF_POLL_MIN && tdc_cancelled(&c->m))
 	{
 		empty_sub(out);
 		return;
@@ -383,7 +391,7 @@ rect_recurse(leaf_ctx *c, tdc_freelist *fl, const tdc_rect *r, int axis,
 	}
 	rect_recurse(c, fl, &a, axis ^ 1, lo, &L);
 	rect_recurse(c, fl, &b, axis ^ 1, lo + tdc_rect_count(c->job, &a), &R);
-	if (n >= 1024 && tdc_cancelled(&c->m))
+	if (n >= LEAF_POLL_MIN && tdc_cancelled(&c->m))
 	{
 		empty_sub(out);
 		return;

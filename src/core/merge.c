@@ -34,6 +34,14 @@
 
 #include "internal.h"
 
+/*
+ * Zip steps between two looks at the cancel flag.  A step is a few
+ * predicate calls; the top merges of a big job take millions of them, and
+ * a poll per 65536 keeps the flag's cache line out of the loop while still
+ * looking many times per millisecond.  A power of two.
+ */
+#define MERGE_POLL_STEPS	65536
+
 /* Is p strictly left of (counter-clockwise from) the directed line of h? */
 static inline bool
 left_of(const tdc_mesh *m, uint32_t p, uint32_t h)
@@ -243,7 +251,7 @@ tdc_merge(tdc_mesh *mesh, tdc_freelist *fl, const tdc_sub *L, const tdc_sub *R,
 		bool		lvalid,
 					rvalid;
 
-		if ((++steps & 0xffff) == 0 && tdc_cancelled(m))
+		if ((++steps & (MERGE_POLL_STEPS - 1)) == 0 && tdc_cancelled(m))
 			return;
 
 		lvalid = above(m, tdc_dest(m, lcand), pbo, pbd);

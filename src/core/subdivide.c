@@ -252,7 +252,7 @@ number_cells(const tdc_job *job, const tdc_rect *r, int axis, uint32_t next,
 	if (count == 0)
 		return next;
 	/* a single subset numbers the whole grid here: stay cancellable */
-	if (count >= 4096 && atomic_load_explicit(&job->cancel, memory_order_relaxed))
+	if (count >= CANCEL_POLL_POINTS && atomic_load_explicit(&job->cancel, memory_order_relaxed))
 		return next + count;
 	if (tdc_rect_split_inner(job, r, axis, &a, &b) < 0)
 	{
@@ -295,22 +295,46 @@ tdc_subdivide(tdc_job *job)
 	ga.src = job->input;
 	w = job->s + 1;
 
+	/*
+	 * One cell and no tree, the auto grid of small inputs: the counting sort
+	 * would put every point into that cell in its order, so place them so
+	 * directly (a tolerance pass left its survivors in place already).
+	 */
+	if (job->s == 1 && job->d == 0)
+	{
+		job->prefix = tdc_job_alloc(job, 4 * sizeof(uint32_t));
+		if (job->prefix == NULL)
+			goto oom;
+		job->prefix[3] = (uint32_t) ga.n;
+		if (!job->tol_to && ga.n > 0)
+		{
+			memcpy(job->xy, job->input, ga.n * 2 * sizeof(double));
+			for (size_t i = 0; i < ga.n; i++)
+				job->idx[i] = (uint32_t) i;
+		}
+		job->node_rect[1].r0 = job->node_rect[1].c0 = 0;
+		job->node_rect[1].r1 = job->node_rect[1].c1 = 1;
+		job->node_lo[1] = 0;
+		job->node_hi[1] = (uint32_t) ga.n;
+		return;
+	}
+
 	if (job->tol_to)
 	{
 		copy = job->xy;
 		copyidx = job->idx;
 		ga.src = copy;
 		ga.src_idx = copyidx;
-		job->xy = tdc_big_alloc(job->nin * 2 * sizeof(double) + 16);
-		job->idx = tdc_big_alloc(job->nin * sizeof(uint32_t) + 4);
+		job->xy = tdc_job_alloc(job, job->nin * 2 * sizeof(double) + 16);
+		job->idx = tdc_job_alloc(job, job->nin * sizeof(uint32_t) + 4);
 		if (!job->xy || !job->idx)
 			goto oom;
 	}
 
-	ga.cell = tdc_big_alloc(ga.n * sizeof(uint32_t) + 4);
-	ga.hist = tdc_big_alloc((size_t) ga.nslices * ga.ncells * sizeof(uint32_t));
-	ga.cell_start = tdc_big_alloc(ga.ncells * sizeof(uint32_t));
-	job->prefix = tdc_big_alloc(w * w * sizeof(uint32_t));
+	ga.cell = tdc_job_alloc(job, ga.n * sizeof(uint32_t) + 4);
+	ga.hist = tdc_job_alloc(job, (size_t) ga.nslices * ga.ncells * sizeof(uint32_t));
+	ga.cell_start = tdc_job_alloc(job, ga.ncells * sizeof(uint32_t));
+	job->prefix = tdc_job_alloc(job, w * w * sizeof(uint32_t));
 	if (!ga.cell || !ga.hist || !ga.cell_start || !job->prefix)
 		goto oom;
 
@@ -371,9 +395,9 @@ oom:
 	tdc_job_fail(job, TDC_ENOMEM, "out of memory for the subdivision grid (%d x %d cells)",
 				 job->s, job->s);
 done:
-	tdc_big_free(copy);
-	tdc_big_free(copyidx);
-	tdc_big_free(ga.cell);
-	tdc_big_free(ga.hist);
-	tdc_big_free(ga.cell_start);
+	tdc_job_release(job, copy);
+	tdc_job_release(job, copyidx);
+	tdc_job_release(job, ga.cell);
+	tdc_job_release(job, ga.hist);
+	tdc_job_release(job, ga.cell_start);
 }

@@ -156,6 +156,9 @@ extern int	tdc_job_emit_start(tdc_job *job, tdc_emit_fn emit, void *arg,
  */
 extern void tdc_prefault(void *p, size_t len);
 
+/* Ask for transparent huge pages over the 2 MB pages inside [p, p + len). */
+extern void tdc_advise_huge(void *p, size_t len);
+
 /* Convenience: start + wait forever. */
 extern int	tdc_triangulate(const double *xy, size_t n, const tdc_options *opt,
 							tdc_job **job, char *err, size_t errlen);

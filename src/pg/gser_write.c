@@ -27,6 +27,20 @@
 #include "tdc_pg.h"
 #include "gser_format.h"
 
+/*
+ * Members written between two interrupt checks when this thread writes a
+ * result (tdc_gser_fill): a member is a few dozen bytes, so 65536 of them
+ * are a few MB and a few ms of work.  A power of two.
+ */
+#define FILL_POLL_MEMBERS	65536
+
+/*
+ * Input vertices looked at between two interrupt checks while the Z range
+ * of the bounding box is taken: a vertex costs one lookup in the input map,
+ * so checks 2^20 vertices apart are still a few ms apart.  A power of two.
+ */
+#define ZBOX_POLL_VERTICES	((uint64) 1 << 20)
+
 /* Bytes of one member of a result (without the value's header). */
 static uint64
 member_size(int flags, bool hasz)
@@ -130,7 +144,7 @@ put_box(char *p, const tdc_job *job, const TdcPointBuf *buf, bool hasz,
 				zlo = Min(zlo, buf->z[i]);
 				zhi = Max(zhi, buf->z[i]);
 			}
-			if ((i & 0xfffff) == 0)
+			if ((i & (ZBOX_POLL_VERTICES - 1)) == 0)
 				CHECK_FOR_INTERRUPTS();
 		}
 		box[4] = float_down(zlo);
@@ -243,6 +257,7 @@ tdc_gser_result_alloc(const tdc_job *job, int flags, const TdcPointBuf *buf,
 	tdc_gser_check_result_size(size, fname);
 
 	out = palloc((Size) size);
+	tdc_advise_huge(out, (Size) size);
 	write_header(out, (Size) size, buf->srid, hasz, m > 0);
 	p = VARDATA(out) + G_HEADER;
 	if (m > 0)
@@ -299,7 +314,7 @@ tdc_gser_fill(const TdcGserWriter *w)
 		{
 			if (written++ >= w->count)
 				elog(ERROR, "%s: core returned more edges than it counted", w->fname);
-			if ((written & 0xffff) == 0)
+			if ((written & (FILL_POLL_MEMBERS - 1)) == 0)
 				CHECK_FOR_INTERRUPTS();
 			p = put_u32(p, G_LINE);
 			p = put_u32(p, 2);
@@ -315,7 +330,7 @@ tdc_gser_fill(const TdcGserWriter *w)
 		{
 			if (written++ >= w->count)
 				elog(ERROR, "%s: core returned more triangles than it counted", w->fname);
-			if ((written & 0xffff) == 0)
+			if ((written & (FILL_POLL_MEMBERS - 1)) == 0)
 				CHECK_FOR_INTERRUPTS();
 			p = put_triangle(p, w->job, w->buf, w->flags, w->hasz, v);
 		}

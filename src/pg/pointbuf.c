@@ -125,7 +125,7 @@ tdc_pointbuf_reserve(TdcPointBuf *buf, uint64 extra, const char *fname)
 		tdc_report_memory_limit(fname,
 								psprintf("the input of %llu vertices",
 										 (unsigned long long) need),
-								pointbuf_bytes_for(need, buf->hasz));
+								pointbuf_bytes_for(need, buf->hasz), 0);
 
 	if (buf->map == NULL)
 	{

@@ -5,11 +5,11 @@
  *
  * Running the core.  The core triangulates on its own worker threads and
  * never calls PostgreSQL; the backend's main thread waits for it in slices of
- * 10 ms (tdc_job_wait with a timeout) and between slices looks at
+ * WAIT_SLICE_MS (tdc_job_wait with a timeout) and between slices looks at
  * InterruptPending.  A query cancel, statement_timeout or terminate request
  * cancels the job, waits for the workers to stop (they poll their cancel
  * flag every few ms) and only then lets CHECK_FOR_INTERRUPTS raise the
- * error, so the error arrives within about 10 ms plus the workers' reaction
+ * error, so the error arrives within a slice plus the workers' reaction
  * time, and no thread outlives the statement.  Other interrupts are
  * processed while the job keeps running.  A result value is written the
  * same way: the job's threads put the triangles at their offsets
@@ -23,9 +23,8 @@
  * context is reset during error recovery and the callback cancels and joins
  * the job and hands its memory to a detached core thread to unmap.  The
  * client sees the error only once the transaction is aborted (psql waits for
- * ReadyForQuery), and unmapping a 5-million-point job takes about 50 ms on a
- * quiet machine and several times that on a loaded one, so the cancel does
- * not wait for it.  While the job runs, a PG_TRY around the wait loop stops
+ * ReadyForQuery), and unmapping a big job takes time in proportion to its
+ * size, so the cancel does not wait for it.  While the job runs, a PG_TRY around the wait loop stops
  * the workers at once, before the stack unwinds.  On success tdc_run_free
  * frees the job in place (no thread outlives a successful statement) and
  * clears the pointer, so the callback has nothing left to do.  Pending
@@ -43,8 +42,8 @@
  * 120 MB, about 90 MB with pglz).  Detoasting it (PG_DETOAST_DATUM) would
  * fetch all its chunks into one buffer, decompress it into a second, and
  * only then let the walker copy the vertices into a third, all without an
- * interrupt check: a cancel arriving then waited for the whole read, about a
- * second for that value.  Instead the stored bytes are fetched a slice at a
+ * interrupt check: a cancel arriving then would wait for the whole read.
+ * Instead the stored bytes are fetched a slice at a
  * time (table_relation_fetch_toast_slice, 128 chunks, about 250 kB), and
  * handed to the walker (gserialized.c) as they come; compressed bytes,
  * stored out of line or in line, are decompressed a piece at a time into a
@@ -90,6 +89,20 @@
 
 /* Rows fetched from the Dump query at a time. */
 #define DUMP_BATCH			10000
+
+/*
+ * How long the backend waits for a job before it looks at InterruptPending
+ * again: the most a cancel waits to be noticed, against one wake-up per
+ * slice while the job runs.  10 ms is below what a user notices.
+ */
+#define WAIT_SLICE_MS		10
+
+/*
+ * Dump rows put into the tuplestore between two interrupt checks: a row is
+ * a small POLYGON value, and once the tuplestore spills to disk each costs
+ * a write, so 65536 rows are some ms of work.  A power of two.
+ */
+#define DUMP_POLL_ROWS		65536
 
 static const char *
 status_name(int rc)
@@ -267,7 +280,7 @@ wait_for_job(TdcRun *run, const char *fname)
 	 */
 	PG_TRY();
 	{
-		while ((rc = tdc_job_wait(run->job, 10)) == TDC_RUNNING)
+		while ((rc = tdc_job_wait(run->job, WAIT_SLICE_MS)) == TDC_RUNNING)
 		{
 			if (!InterruptPending)
 				continue;
@@ -346,15 +359,16 @@ tdc_run(const TdcPointBuf *buf, double tolerance, uint64 result_bytes,
 	opt.times = tdc_guc_stats;
 	if (limit > 0)
 	{
-		uint64		engine = tdc_estimate_memory((size_t) buf->n, &opt);
-		uint64		have = tdc_pointbuf_bytes(buf) + result_bytes;
+		/* the same figure for every caller; the result value apart */
+		uint64		run_bytes = tdc_pointbuf_bytes(buf) +
+			tdc_estimate_memory((size_t) buf->n, &opt);
 
-		if (have + engine > limit)
+		if (run_bytes + result_bytes > limit)
 			tdc_report_memory_limit(fname,
 									psprintf("triangulating %llu vertices",
 											 (unsigned long long) buf->n),
-									have + engine);
-		opt.max_memory = (size_t) (limit - have);
+									run_bytes, result_bytes);
+		opt.max_memory = (size_t) (limit - tdc_pointbuf_bytes(buf) - result_bytes);
 	}
 
 	/* both live as long as the context they are registered with */
@@ -1141,7 +1155,7 @@ st_tdcdelaunaydump(PG_FUNCTION_ARGS)
 		values[0] = Int64GetDatum(++id);
 		values[1] = PointerGetDatum(tri);
 		tuplestore_putvalues(rsinfo->setResult, rsinfo->setDesc, values, nulls);
-		if ((id & 0xffff) == 0)
+		if ((id & (DUMP_POLL_ROWS - 1)) == 0)
 			CHECK_FOR_INTERRUPTS();
 	}
 	CHECK_FOR_INTERRUPTS();

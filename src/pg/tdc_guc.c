@@ -115,19 +115,34 @@ tdc_memory_limit_hint(void)
 	return "Raise tdc_delaunay.max_memory or triangulate fewer points.";
 }
 
+/* Bytes in MB, rounded up: an estimate over the limit never reads as under. */
+static unsigned long long
+mb_up(uint64 bytes)
+{
+	return (unsigned long long) ((bytes + (1 << 20) - 1) >> 20);
+}
+
 void
-tdc_report_memory_limit(const char *fname, const char *what, uint64 need)
+tdc_report_memory_limit(const char *fname, const char *what, uint64 need,
+						uint64 result)
 {
 	const char *setting;
 	uint64		limit = tdc_memory_limit_mb(&setting);
 
+	if (result == 0)
+		ereport(ERROR,
+				(errcode(ERRCODE_PROGRAM_LIMIT_EXCEEDED),
+				 errmsg("%s: %s needs about %llu MB, more than %s (%llu MB)",
+						fname, what, mb_up(need),
+						setting, (unsigned long long) limit),
+				 errhint("%s", tdc_memory_limit_hint())));
 	ereport(ERROR,
 			(errcode(ERRCODE_PROGRAM_LIMIT_EXCEEDED),
-			 errmsg("%s: %s needs about %llu MB, more than %s (%llu MB)",
-					fname, what,
-					(unsigned long long) ((need + (1 << 20) - 1) >> 20),
+			 errmsg("%s: %s needs about %llu MB and its result value %llu MB more, together more than %s (%llu MB)",
+					fname, what, mb_up(need), mb_up(result),
 					setting, (unsigned long long) limit),
 			 errhint("%s", tdc_memory_limit_hint())));
+	pg_unreachable();
 }
 
 void		_PG_init(void);
@@ -201,9 +216,5 @@ _PG_init(void)
 							PGC_SUSET, GUC_NOT_IN_SAMPLE,
 							NULL, NULL, NULL);
 
-#if PG_VERSION_NUM >= 150000
 	MarkGUCPrefixReserved("tdc_delaunay");
-#else
-	EmitWarningsOnPlaceholders("tdc_delaunay");
-#endif
 }

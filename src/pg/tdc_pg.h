@@ -52,14 +52,19 @@ extern uint64 tdc_memory_limit_mb(const char **setting);
 extern uint64 tdc_max_memory_bytes(void);
 /* The HINT for an input over the limit: what the user can do about it. */
 extern const char *tdc_memory_limit_hint(void);
-/* ERROR: "what" needs "need" bytes, more than the limit. */
+/*
+ * ERROR: "what" needs "need" bytes and a result value of "result" bytes more
+ * (0: the caller allocates none), together more than the limit.  The two are
+ * reported apart so that the same triangulation gets the same figure from
+ * every function, whether or not it builds one result value.
+ */
 #if PG_VERSION_NUM >= 180000
 /* 18 replaced the trailing pg_attribute_noreturn() by a leading pg_noreturn */
 extern pg_noreturn void tdc_report_memory_limit(const char *fname, const char *what,
-												uint64 need);
+												uint64 need, uint64 result);
 #else
 extern void tdc_report_memory_limit(const char *fname, const char *what,
-									uint64 need) pg_attribute_noreturn();
+									uint64 need, uint64 result) pg_attribute_noreturn();
 #endif
 
 /* The mappings behind a point buffer, released with its context. */
