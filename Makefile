@@ -46,7 +46,15 @@ build/test_core: $(TEST_SRCS) $(wildcard test/*.h) $(CORE_SRCS) $(wildcard src/c
 	@mkdir -p build
 	$(CC_CORE) $(CORE_CFLAGS) $(TEST_CFLAGS) -o $@ $(TEST_SRCS) $(CORE_SRCS) -lgmp -lm
 
-check-core: build/test_core
+# The constrained tests compare with CGAL when its headers are installed
+# (Debian: libcgal-dev); the reference is a test tool, never linked in.
+CGAL_CDT = $(if $(wildcard /usr/include/CGAL/Constrained_Delaunay_triangulation_2.h),build/cgal_cdt)
+
+build/cgal_cdt: test/cgal_cdt.cpp
+	@mkdir -p build
+	$(CXX) -O2 -DNDEBUG -DCGAL_NDEBUG -o $@ $< -lgmp -lmpfr
+
+check-core: build/test_core $(CGAL_CDT)
 	build/test_core
 
 build/test_core_asan: $(TEST_SRCS) $(wildcard test/*.h) $(CORE_SRCS) $(wildcard src/core/*.h)
@@ -106,13 +114,13 @@ endif
 # headers with the shims in fuzz/pg_shim.c (no server needed).
 FUZZ_SECONDS ?= 60
 FUZZ_CC ?= clang
-FUZZ_TARGETS = fuzz_core fuzz_gserialized fuzz_state fuzz_voronoi
+FUZZ_TARGETS = fuzz_core fuzz_gserialized fuzz_state fuzz_voronoi fuzz_cdt
 # fuzz_voronoi is built but not yet run by fuzz-run (so by make test): it
 # has found hull cells wound twice on input collinear up to ulps, which it
 # now excuses (fuzz/known/README.md); run it by hand until it has run clean
 # for long:
 #   bash fuzz/run.sh fuzz_voronoi
-FUZZ_RUN_TARGETS = fuzz_core fuzz_gserialized fuzz_state
+FUZZ_RUN_TARGETS = fuzz_core fuzz_gserialized fuzz_state fuzz_cdt
 FUZZ_CFLAGS = -g -O1 -fno-omit-frame-pointer -D_GNU_SOURCE -ffp-contract=off \
 	-pthread -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined \
 	-Wall -Wno-unused-parameter -Wno-missing-field-initializers
@@ -127,6 +135,10 @@ fuzz: $(addprefix build/fuzz/,$(FUZZ_TARGETS))
 build/fuzz/fuzz_core: fuzz/fuzz_core.c test/xy_oracle.h test/splitmix.h $(FUZZ_CORE_DEPS)
 	@mkdir -p build/fuzz
 	$(FUZZ_CC) $(FUZZ_CFLAGS) -std=c11 -Isrc/core -o $@ fuzz/fuzz_core.c $(CORE_SRCS) -lm
+
+build/fuzz/fuzz_cdt: fuzz/fuzz_cdt.c $(FUZZ_CORE_DEPS)
+	@mkdir -p build/fuzz
+	$(FUZZ_CC) $(FUZZ_CFLAGS) -std=c11 -Isrc/core -o $@ fuzz/fuzz_cdt.c $(CORE_SRCS) -lm
 
 # The reader and writers, and the aggregate state, each with the point buffer.
 FUZZ_GSER_SRCS = src/pg/gserialized.c src/pg/gser_write.c src/pg/pointbuf.c

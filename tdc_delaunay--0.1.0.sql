@@ -657,3 +657,101 @@ COMMENT ON PROCEDURE tdc_delaunay_tiled(regclass, text, name, name, float8) IS
 'into a new table target(id bigint, tile, geom geometry(Polygon)): the same triangles as ST_TDCDelaunayDump, each once. '
 'Tiles: the groups of tile_column, else squares of tile_size, else squares of about a million points. '
 'On Citus, with source distributed by tile_column, the tiles run on the workers.';
+-- ST_TDCConstrainedDelaunayTriangles: constrained Delaunay triangulation,
+-- comparable to SFCGAL's ST_ConstrainedDelaunayTriangles
+
+CREATE FUNCTION ST_TDCConstrainedDelaunayTriangles(g1 geometry,
+												   flags int4 DEFAULT 0)
+RETURNS geometry
+AS 'MODULE_PATHNAME', 'st_tdcconstraineddelaunaytriangles'
+LANGUAGE C IMMUTABLE STRICT PARALLEL SAFE
+COST 1000;
+
+COMMENT ON FUNCTION ST_TDCConstrainedDelaunayTriangles(geometry, int4) IS
+'Exact constrained Delaunay triangulation of the vertices of a geometry, every segment of its '
+'linestrings and polygon rings an edge (split at vertices on it). Crossing segments are an error. '
+'flags 0: GEOMETRYCOLLECTION of POLYGON triangles, 1: MULTILINESTRING of the edges, 2: TIN.';
+
+-- Aggregates: ST_TDCConstrainedDelaunay(geometry [, flags])
+--   = ST_TDCConstrainedDelaunayTriangles(ST_Collect(geometry), flags),
+-- parallel-safe like ST_TDCDelaunay (the partial states carry the segments).
+
+CREATE FUNCTION st_tdcconstraineddelaunay_transfn(internal, geometry)
+RETURNS internal
+AS 'MODULE_PATHNAME', 'st_tdcconstraineddelaunay_transfn'
+LANGUAGE C IMMUTABLE PARALLEL SAFE;
+
+COMMENT ON FUNCTION st_tdcconstraineddelaunay_transfn(internal, geometry) IS
+'Transition function of ST_TDCConstrainedDelaunay(geometry): collects the vertices and segments of each input.';
+
+CREATE FUNCTION st_tdcconstraineddelaunay_transfn(internal, geometry, int4)
+RETURNS internal
+AS 'MODULE_PATHNAME', 'st_tdcconstraineddelaunay_transfn'
+LANGUAGE C IMMUTABLE PARALLEL SAFE;
+
+COMMENT ON FUNCTION st_tdcconstraineddelaunay_transfn(internal, geometry, int4) IS
+'Transition function of ST_TDCConstrainedDelaunay(geometry, int4): collects the vertices and segments of each input.';
+
+CREATE FUNCTION st_tdcconstraineddelaunay_combinefn(internal, internal)
+RETURNS internal
+AS 'MODULE_PATHNAME', 'st_tdcconstraineddelaunay_combinefn'
+LANGUAGE C IMMUTABLE PARALLEL SAFE;
+
+COMMENT ON FUNCTION st_tdcconstraineddelaunay_combinefn(internal, internal) IS
+'Combine function of ST_TDCConstrainedDelaunay: appends the vertices and segments of one partial state to another.';
+
+-- costs as for st_tdcdelaunay_serialfn: parallel plans only for big tables
+CREATE FUNCTION st_tdcconstraineddelaunay_serialfn(internal)
+RETURNS bytea
+AS 'MODULE_PATHNAME', 'st_tdcconstraineddelaunay_serialfn'
+LANGUAGE C IMMUTABLE STRICT PARALLEL SAFE
+COST 10000000;
+
+COMMENT ON FUNCTION st_tdcconstraineddelaunay_serialfn(internal) IS
+'Serialization function of ST_TDCConstrainedDelaunay for parallel aggregation.';
+
+CREATE FUNCTION st_tdcconstraineddelaunay_deserialfn(bytea, internal)
+RETURNS internal
+AS 'MODULE_PATHNAME', 'st_tdcconstraineddelaunay_deserialfn'
+LANGUAGE C IMMUTABLE STRICT PARALLEL SAFE
+COST 10000000;
+
+COMMENT ON FUNCTION st_tdcconstraineddelaunay_deserialfn(bytea, internal) IS
+'Deserialization function of ST_TDCConstrainedDelaunay for parallel aggregation; checks the header, length and segment ends.';
+
+CREATE FUNCTION st_tdcconstraineddelaunay_finalfn(internal)
+RETURNS geometry
+AS 'MODULE_PATHNAME', 'st_tdcconstraineddelaunay_finalfn'
+LANGUAGE C IMMUTABLE PARALLEL SAFE;
+
+COMMENT ON FUNCTION st_tdcconstraineddelaunay_finalfn(internal) IS
+'Final function of ST_TDCConstrainedDelaunay: the constrained triangulation of the collected vertices and segments.';
+
+CREATE AGGREGATE ST_TDCConstrainedDelaunay(geometry) (
+	SFUNC = st_tdcconstraineddelaunay_transfn,
+	STYPE = internal,
+	FINALFUNC = st_tdcconstraineddelaunay_finalfn,
+	COMBINEFUNC = st_tdcconstraineddelaunay_combinefn,
+	SERIALFUNC = st_tdcconstraineddelaunay_serialfn,
+	DESERIALFUNC = st_tdcconstraineddelaunay_deserialfn,
+	PARALLEL = SAFE
+);
+
+COMMENT ON AGGREGATE ST_TDCConstrainedDelaunay(geometry) IS
+'Exact constrained Delaunay triangulation of all input geometries (linestring and ring segments as constraints), '
+'as a GEOMETRYCOLLECTION of POLYGON triangles; same as ST_TDCConstrainedDelaunayTriangles(ST_Collect(geom)).';
+
+CREATE AGGREGATE ST_TDCConstrainedDelaunay(geometry, int4) (
+	SFUNC = st_tdcconstraineddelaunay_transfn,
+	STYPE = internal,
+	FINALFUNC = st_tdcconstraineddelaunay_finalfn,
+	COMBINEFUNC = st_tdcconstraineddelaunay_combinefn,
+	SERIALFUNC = st_tdcconstraineddelaunay_serialfn,
+	DESERIALFUNC = st_tdcconstraineddelaunay_deserialfn,
+	PARALLEL = SAFE
+);
+
+COMMENT ON AGGREGATE ST_TDCConstrainedDelaunay(geometry, int4) IS
+'Exact constrained Delaunay triangulation of all input geometries with flags '
+'(0: GEOMETRYCOLLECTION of POLYGON, 1: MULTILINESTRING of edges, 2: TIN); '
+'same as ST_TDCConstrainedDelaunayTriangles(ST_Collect(geom), flags).';

@@ -30,6 +30,7 @@ TDC_PACKAGES=(
 	postgresql-15-postgis-3		# PostGIS 3.3 (the geometry type, ST_DelaunayTriangles)
 	build-essential				# gcc, make, libc headers
 	libgmp-dev					# exact rational arithmetic in the core tests' oracle
+	libcgal-dev					# CGAL reference for the constrained tests (test/cgal_cdt.cpp)
 	clang						# the sanitizer builds (check-core-asan, check-core-tsan)
 	libclang-rt-14-dev			# clang's ASan/UBSan/TSan runtime libraries
 )

@@ -133,5 +133,27 @@ expect_error "--max-memory with --tolerance" $TDC --max-memory 10 --tolerance 0.
 expect_error "--max-memory with --validate" $TDC --max-memory 10 --validate "$tmp/big.bin"
 expect_error "--max-memory with --voronoi" $TDC --max-memory 10 --voronoi "$tmp/big.bin"
 
+# --segments: constrained Delaunay; the thin rhombus gets edge (0 0)-(10 0),
+# which its Delaunay triangulation lacks; crossing segments exit 1
+printf '0 0\n10 0\n5 1\n5 -1\n5 5\n5 -5\n' > "$tmp/rh.txt"
+printf '0 1\n' > "$tmp/rh.seg"
+$TDC -o "$tmp/rh.dt" "$tmp/rh.txt"
+$TDC -o "$tmp/rh.out" --segments "$tmp/rh.seg" --validate --stats "$tmp/rh.txt" 2> "$tmp/rh.err"
+check "segments: exit 0" "[ $? -eq 0 ]"
+check "segments: 6 triangles" "[ \$(wc -l < $tmp/rh.out) -eq 6 ]"
+check "segments: the constraint is an edge" "grep -qE '(^| )0 0 10 0( |$)|(^| )10 0 0 0( |$)|^10 0 .* 0 0$|^0 0 .* 10 0$' $tmp/rh.out"
+check "segments: the plain DT lacks it" "! grep -qE '(^| )0 0 10 0( |$)|(^| )10 0 0 0( |$)|^10 0 .* 0 0$|^0 0 .* 10 0$' $tmp/rh.dt"
+check "segments: stats line" "grep -qE '^segments=1 constraint_edges=1 constrain=[0-9.]+$' $tmp/rh.err"
+check "segments: validated" "grep -q 'constrained Delaunay' $tmp/rh.err"
+printf '0 1\n2 3\n' > "$tmp/x.seg"
+$TDC --segments "$tmp/x.seg" "$tmp/rh.txt" 2> "$tmp/x.err"
+check "crossing segments: exit 1" "[ $? -eq 1 ]"
+check "crossing segments: both named" "grep -q 'segment 0 from (0 0) to (10 0) and segment 1 from (5 1) to (5 -1)' $tmp/x.err"
+printf '0 9\n' > "$tmp/bad.seg"
+$TDC --segments "$tmp/bad.seg" "$tmp/rh.txt" 2> /dev/null
+check "segment index out of range: exit 1" "[ $? -eq 1 ]"
+expect_error "--max-memory with --segments" $TDC --max-memory 10 --segments "$tmp/rh.seg" "$tmp/big.bin"
+expect_error "--segments with --voronoi" $TDC --segments "$tmp/rh.seg" --voronoi "$tmp/rh.txt"
+
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ]

@@ -44,6 +44,7 @@ extern void test_concurrency(void);
 extern void test_tolerance(void);
 extern void test_voronoi(void);
 extern void test_tile(void);
+extern void test_cdt(void);
 
 /* Set by --quick (sanitizer runs): smaller sizes. */
 extern int	tdc_test_quick;

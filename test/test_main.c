@@ -1,7 +1,7 @@
 /*
  * test_main.c
  *		Runs the core suite: predicates, engine properties, conformance cases,
- *		concurrent use, the tolerance rule.
+ *		concurrent use, the tolerance rule, constrained triangulations.
  *		Prints "N passed, N failed"; exits non-zero on any failure.
  *		--quick shrinks the largest inputs (sanitizer builds).
  */
@@ -38,6 +38,7 @@ main(int argc, char **argv)
 	printf("voronoi: %ld passed, %ld failed so far\n", tdc_test_passed, tdc_test_failed);
 	test_tile();
 	printf("tile: %ld passed, %ld failed so far\n", tdc_test_passed, tdc_test_failed);
+	test_cdt();
 	printf("%ld passed, %ld failed\n", tdc_test_passed, tdc_test_failed);
 	return tdc_test_failed ? 1 : 0;
 }

@@ -10,7 +10,10 @@
  * input's box grown by its larger side); -o then writes one cell per line,
  * for each distinct point in input order of its first occurrence, its ring
  * counter-clockwise and not closed, "x y" per vertex, %.17g; --stats adds a
- * line with the Voronoi time.
+ * line with the Voronoi time; and --segments FILE: constraint segments, one
+ * per line "i j", two 0-based line numbers (point indices) of INPUT; the
+ * result is then the constrained Delaunay triangulation (cdt.c), and with
+ * --stats a second line "segments= constraint_edges= constrain=" follows.
  *
  * INPUT is a .bin file of little-endian float64 x,y pairs, or any other file
  * (or - for stdin) of text lines "x y" or "x y z".  -o writes one triangle
@@ -31,7 +34,7 @@
 
 static const char usage[] =
 "usage: ./tdc [-t THREADS] [-g GRID] [-l LEVELS] [--tolerance T] [-o OUT] [--stats] [--validate]\n"
-"             [--voronoi] [--max-memory MB [--tmpdir DIR]] INPUT\n"
+"             [--voronoi] [--segments FILE] [--max-memory MB [--tmpdir DIR]] INPUT\n"
 "  INPUT  .bin file of little-endian float64 x,y pairs, or a text file of\n"
 "         'x y' or 'x y z' lines ('-' reads stdin)\n"
 "  -t     worker threads (0 = all online CPUs, the default)\n"
@@ -44,7 +47,10 @@ static const char usage[] =
 "  --voronoi  also build the Voronoi cells; -o writes cells, one ring per line\n"
 "  --max-memory MB  keep the peak memory under MB: when the one-shot run does\n"
 "         not fit, triangulate in tiles on disk (same triangles, another order)\n"
-"  --tmpdir DIR  where the tiles go (default $TMPDIR or /tmp)\n";
+"  --tmpdir DIR  where the tiles go (default $TMPDIR or /tmp)\n"
+"  --segments FILE  constraint segments, lines 'i j' of 0-based INPUT point\n"
+"         indices: the constrained Delaunay triangulation; crossing segments\n"
+"         are an error (exit 1)\n";
 
 static void
 die(int code, const char *fmt, const char *arg)
@@ -834,6 +840,43 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 	free(hull);
 }
 
+/* Segment file: lines "i j"; every index must be below n. */
+static uint32_t *
+read_segments(const char *path, size_t n, size_t *k)
+{
+	FILE	   *f = strcmp(path, "-") == 0 ? stdin : fopen(path, "r");
+	size_t		cap = 1024;
+	uint32_t   *seg = malloc(cap * 2 * sizeof(uint32_t));
+	unsigned long long a,
+				b;
+	int			got;
+
+	if (f == NULL)
+		die(1, "cannot read %s", path);
+	if (seg == NULL)
+		die(1, "out of memory for %s", path);
+	*k = 0;
+	while ((got = fscanf(f, "%llu %llu", &a, &b)) == 2)
+	{
+		if (a >= n || b >= n)
+			die(1, "segment index beyond the input's points in %s", path);
+		if (*k == cap)
+		{
+			seg = realloc(seg, (cap *= 2) * 2 * sizeof(uint32_t));
+			if (seg == NULL)
+				die(1, "out of memory for %s", path);
+		}
+		seg[2 * *k] = (uint32_t) a;
+		seg[2 * *k + 1] = (uint32_t) b;
+		(*k)++;
+	}
+	if (got != EOF)
+		die(1, "%s: lines must be two point indices 'i j'", path);
+	if (f != stdin)
+		fclose(f);
+	return seg;
+}
+
 int
 main(int argc, char **argv)
 {
@@ -850,6 +893,11 @@ main(int argc, char **argv)
 	double	   *xy,
 			   *z = NULL;
 	tdc_job    *job;
+	tdc_cdt    *cdt = NULL;
+	const char *segpath = NULL;
+	uint32_t   *seg = NULL;
+	size_t		nseg = 0;
+	double		constrain_s = 0;
 	char		err[512];
 	long		max_mb = 0;
 	const char *tmpdir = NULL;
@@ -883,6 +931,12 @@ main(int argc, char **argv)
 			}
 			else
 				tmpdir = argv[++i];
+		}
+		else if (strcmp(a, "--segments") == 0)
+		{
+			if (i + 1 >= argc)
+				die(2, "option %s needs a value", a);
+			segpath = argv[++i];
 		}
 		else if (strcmp(a, "-t") == 0 || strcmp(a, "-g") == 0 || strcmp(a, "-l") == 0 ||
 				 strcmp(a, "-o") == 0 || strcmp(a, "--tolerance") == 0)
@@ -966,6 +1020,8 @@ main(int argc, char **argv)
 				die(1, "--validate needs the whole triangulation in memory; %s", "raise --max-memory");
 			if (voronoi)
 				die(1, "--voronoi needs the whole triangulation in memory; %s", "raise --max-memory");
+			if (segpath)
+				die(1, "--segments needs the whole triangulation in memory; %s", "raise --max-memory");
 			if (outpath)
 			{
 				f = strcmp(outpath, "-") == 0 ? stdout : fopen(outpath, "w");
@@ -1012,6 +1068,25 @@ main(int argc, char **argv)
 	{
 		tdc_job_free(job);
 		die(1, "%s", err);
+	}
+	if (segpath && voronoi)
+		die(2, "--voronoi of a constrained triangulation is not supported%s", "");
+	if (segpath)
+	{
+		struct timespec t0,
+					t1;
+
+		seg = read_segments(segpath, n, &nseg);
+		clock_gettime(CLOCK_MONOTONIC, &t0);
+		rc = tdc_cdt_run(job, seg, nseg, &cdt, err, sizeof(err));
+		clock_gettime(CLOCK_MONOTONIC, &t1);
+		constrain_s = (t1.tv_sec - t0.tv_sec) + (t1.tv_nsec - t0.tv_nsec) * 1e-9;
+		if (rc != TDC_OK)
+		{
+			tdc_cdt_free(cdt);
+			tdc_job_free(job);
+			die(1, "%s", err);
+		}
 	}
 
 	if (voronoi)
@@ -1101,19 +1176,26 @@ main(int argc, char **argv)
 		if (vor)
 			fprintf(stderr, "voronoi=%.6f cell_vertices=%zu\n", vor_seconds,
 					tdc_voronoi_num_vertices(vor));
+		if (cdt)
+			fprintf(stderr, "segments=%zu constraint_edges=%zu constrain=%.6f\n",
+					nseg, tdc_cdt_num_constraint_edges(cdt), constrain_s);
 	}
 	if (validate)
 	{
-		if (tdc_validate_job(job, err, sizeof(err)) != 0)
+		if ((cdt ? tdc_cdt_validate(cdt, err, sizeof(err)) :
+			 tdc_validate_job(job, err, sizeof(err))) != 0)
 		{
 			tdc_job_free(job);
 			die(1, "INVALID triangulation: %s", err);
 		}
-		fprintf(stderr, "valid: %zu sites, %zu triangles, checked exactly\n",
-				tdc_num_sites(job), tdc_num_triangles(job));
+		fprintf(stderr, "valid: %zu sites, %zu triangles%s, checked exactly\n",
+				tdc_num_sites(job), tdc_num_triangles(job),
+				cdt ? ", constrained Delaunay" : "");
 	}
 	tdc_voronoi_free(vor);
+	tdc_cdt_free(cdt);
 	tdc_job_free(job);
+	free(seg);
 	free(xy);
 	free(z);
 	return 0;

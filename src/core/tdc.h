@@ -31,6 +31,7 @@
 #define TDC_ETOOBIG			(-4)	/* more points than the 32-bit index width allows */
 #define TDC_EMEMLIMIT		(-5)	/* would exceed options.max_memory */
 #define TDC_ETHREAD			(-6)	/* pthread_create failed */
+#define TDC_ECROSS			(-7)	/* two constraint segments cross (cdt.c) */
 
 /*
  * Largest input size: the mesh numbers half-edges with uint32_t and needs
@@ -342,5 +343,56 @@ extern void tdc_tile_result_free(tdc_tile_result *res);
  * the hull of the parts' hulls, so it can be computed in chunks.
  */
 extern int	tdc_convex_hull(const double *xy, size_t n, double **hull, size_t *nhull);
+/*
+ * Exact check of a constrained Delaunay triangulation (validate.c): the
+ * checks of tdc_validate(), except that an edge lying on one of the nseg
+ * segments (pairs of indices into sites) need not be locally Delaunay, and
+ * every segment must be a chain of edges through exactly the sites on it.
+ * A triangulation whose other edges are all locally Delaunay is the
+ * constrained Delaunay triangulation (the constrained Delaunay lemma).
+ */
+extern int	tdc_validate_cdt(const double *sites, size_t m, const uint32_t *tri,
+							 size_t ntri, const uint32_t *seg, size_t nseg,
+							 char *err, size_t errlen);
+
+/*
+ * --- Constrained Delaunay triangulation (cdt.c) ---
+ *
+ * Insert constraint segments into a finished job's triangulation, in place:
+ * afterwards the job's triangles (tdc_next_triangle, tdc_job_emit_start) are
+ * the constrained Delaunay triangulation of its sites and the segments.
+ * seg holds nseg pairs of input indices (into the xy given to
+ * tdc_job_start), and must stay valid until tdc_cdt_wait returned a final
+ * status.  Segments of zero length (after merging exact duplicates) are
+ * ignored, a segment through other sites is split at them, overlaps merge;
+ * two segments that cross at a point that is no site of both give
+ * TDC_ECROSS, with a message naming both segments' end points.  The job's
+ * tdc_job_cancel does not reach the insertion: use tdc_cdt_cancel.  Runs on
+ * a thread of its own (signals blocked), on the caller's thread when job and
+ * segments are small (fewer than TDC_INLINE_MAX each).  Insertion is serial.
+ * On error the job's mesh is a valid triangulation but not the CDT: free it.
+ */
+typedef struct tdc_cdt tdc_cdt;
+
+/* Bytes tdc_cdt_start allocates at most, beyond the job, for n input points. */
+extern size_t tdc_cdt_memory(size_t n);
+
+extern int	tdc_cdt_start(tdc_job *job, const uint32_t *seg, size_t nseg,
+						  tdc_cdt **cdt, char *err, size_t errlen);
+extern int	tdc_cdt_wait(tdc_cdt *cdt, int timeout_ms);
+extern void tdc_cdt_cancel(tdc_cdt *cdt);
+extern const char *tdc_cdt_error(const tdc_cdt *cdt);
+/* Start + wait forever. */
+extern int	tdc_cdt_run(tdc_job *job, const uint32_t *seg, size_t nseg,
+						tdc_cdt **cdt, char *err, size_t errlen);
+/* After TDC_ECROSS: the numbers of the two segments; returns 1, else 0. */
+extern int	tdc_cdt_crossing(const tdc_cdt *cdt, size_t *s1, size_t *s2);
+extern size_t tdc_cdt_num_constraint_edges(const tdc_cdt *cdt);
+/* Iterate the constraint edges like tdc_next_edge. */
+extern int	tdc_next_constraint_edge(const tdc_cdt *cdt, tdc_iter *it, uint32_t v[2]);
+/* tdc_validate_cdt on the result; the job must still exist. */
+extern int	tdc_cdt_validate(const tdc_cdt *cdt, char *err, size_t errlen);
+/* Stop (if running) and free; the job stays.  NULL is allowed. */
+extern void tdc_cdt_free(tdc_cdt *cdt);
 
 #endif							/* TDC_H */

@@ -18,6 +18,16 @@
  * Orientation, manifoldness, boundary = hull and the count make the triangles
  * a triangulation of the hull; local Delaunay edges then make it Delaunay
  * (Delaunay's lemma).
+ *
+ * tdc_validate_cdt() checks a constrained Delaunay triangulation the same
+ * way, with segments: each must be a chain of edges from one end to the
+ * other, each edge running exactly along the segment towards its far end
+ * (so it passes through every site on it, and no triangle crosses it); the
+ * edges of these chains are exempt from the local Delaunay test, all others
+ * must pass it.  Then the triangulation is the constrained Delaunay one
+ * (the constrained Delaunay lemma: every unconstrained edge locally
+ * Delaunay implies that no triangle's circumcircle holds a site visible
+ * from its interior, constraint edges blocking the view).
  */
 #include <math.h>
 #include <stdarg.h>
@@ -122,10 +132,75 @@ find_edge(const uint64_t *key, size_t n, uint32_t a, uint32_t b)
 	return lo < n && key[lo] == k ? lo : SIZE_MAX;
 }
 
-int
-tdc_validate(const double *S, size_t m, const uint32_t *tri, size_t ntri,
-			 char *err, size_t errlen)
+/*
+ * p lies exactly on the line of a-b: is it strictly between them?  By
+ * coordinate comparisons along the longer-varying axis, so exact.
+ */
+static bool
+strictly_between(const double *a, const double *p, const double *b)
 {
+	int			k = a[0] != b[0] ? 0 : 1;
+
+	return (a[k] < p[k] && p[k] < b[k]) || (b[k] < p[k] && p[k] < a[k]);
+}
+
+/*
+ * Follow segment a-b along directed edges (keys sorted) from a, marking the
+ * edges it uses (both directions) in "on".  Returns false when some step
+ * finds no edge out of the current site along the segment.
+ */
+static bool
+walk_segment(const double *S, const uint64_t *key, size_t ne, unsigned char *on,
+			 uint32_t a, uint32_t b)
+{
+	uint32_t	cur = a;
+
+	while (cur != b)
+	{
+		uint64_t	k0 = (uint64_t) cur << 32;
+		size_t		lo = 0,
+					hi = ne;
+		uint32_t	next = UINT32_MAX;
+
+		while (lo < hi)
+		{
+			size_t		mid = lo + (hi - lo) / 2;
+
+			if (key[mid] < k0)
+				lo = mid + 1;
+			else
+				hi = mid;
+		}
+		for (size_t i = lo; i < ne && (key[i] >> 32) == cur; i++)
+		{
+			uint32_t	c = (uint32_t) key[i];
+
+			if (c == b ||
+				(tdc_orient2d(S + 2 * (size_t) a, S + 2 * (size_t) b, S + 2 * (size_t) c) == 0 &&
+				 strictly_between(S + 2 * (size_t) cur, S + 2 * (size_t) c, S + 2 * (size_t) b)))
+			{
+				size_t		j = find_edge(key, ne, c, cur);
+
+				next = c;
+				on[i] = 1;
+				if (j != SIZE_MAX)
+					on[j] = 1;
+				break;
+			}
+		}
+		if (next == UINT32_MAX)
+			return false;
+		cur = next;
+	}
+	return true;
+}
+
+static int
+validate(const double *S, size_t m, const uint32_t *tri, size_t ntri,
+		 const uint32_t *seg, size_t nseg, char *err, size_t errlen)
+{
+	unsigned char *on = NULL;	/* per directed edge: on a segment */
+
 	uint32_t   *order = NULL,
 			   *hull = NULL,
 			   *val = NULL;
@@ -234,6 +309,26 @@ tdc_validate(const double *S, size_t m, const uint32_t *tri, size_t ntri,
 		if (key[i] == key[i - 1])
 			BAIL("directed edge %u->%u occurs twice: not a manifold triangulation",
 				 (uint32_t) (key[i] >> 32), (uint32_t) key[i]);
+	if (nseg > 0)
+	{
+		on = calloc(ne + 1, 1);
+		if (!on)
+			BAIL("out of memory");
+	}
+	for (size_t s = 0; s < nseg; s++)
+	{
+		uint32_t	a = seg[2 * s],
+					b = seg[2 * s + 1];
+
+		if (a >= m || b >= m)
+			BAIL("segment %zu has a site index out of range", s);
+		if (a == b)
+			continue;
+		/* a segment along the hull has its edges in one direction only */
+		if (!walk_segment(S, key, ne, on, a, b) && !walk_segment(S, key, ne, on, b, a))
+			BAIL("segment %zu (%.17g %.17g -> %.17g %.17g) is not a chain of edges",
+				 s, P(a)[0], P(a)[1], P(b)[0], P(b)[1]);
+	}
 	for (size_t i = 0; i < m; i++)
 		if (!used[i])
 			BAIL("site %zu (%.17g %.17g) is in no triangle", i, P(i)[0], P(i)[1]);
@@ -249,7 +344,7 @@ tdc_validate(const double *S, size_t m, const uint32_t *tri, size_t ntri,
 			nb++;
 			continue;
 		}
-		if (a < b)
+		if (a < b && !(on && on[i]))
 		{
 			uint32_t	c = tri[val[i]],
 						d = tri[val[j]];
@@ -279,9 +374,24 @@ done:
 	free(key);
 	free(val);
 	free(used);
+	free(on);
 	return rc;
 #undef P
 #undef BAIL
+}
+
+int
+tdc_validate(const double *S, size_t m, const uint32_t *tri, size_t ntri,
+			 char *err, size_t errlen)
+{
+	return validate(S, m, tri, ntri, NULL, 0, err, errlen);
+}
+
+int
+tdc_validate_cdt(const double *S, size_t m, const uint32_t *tri, size_t ntri,
+				 const uint32_t *seg, size_t nseg, char *err, size_t errlen)
+{
+	return validate(S, m, tri, ntri, seg, nseg, err, errlen);
 }
 
 int

@@ -1,0 +1,840 @@
+/*
+ * cdt.c
+ *		Constrained Delaunay triangulation: constraint segments inserted into
+ *		a finished Delaunay triangulation, in place, with exact predicates.
+ *
+ * Method.  Segments are inserted one at a time, in input order, by the edge
+ * flipping scheme of Sloan (1993, "A fast algorithm for generating
+ * constrained Delaunay triangulations", Computers & Structures 47(3)):
+ *
+ *	1. walk from the segment's first end point a towards its other end b
+ *	   through the triangles the open segment crosses, listing the edges it
+ *	   crosses properly;
+ *	2. take listed edges in turn: an edge whose two triangles form a strictly
+ *	   convex quadrilateral is flipped, and if the new diagonal still crosses
+ *	   the segment it goes back to the end of the list, otherwise it is kept
+ *	   aside as a new edge; an edge whose quadrilateral is not convex goes back
+ *	   to the end of the list.  Sloan shows some listed edge always has a
+ *	   convex quadrilateral, so the list empties and a-b is an edge;
+ *	3. restore the Delaunay property by Lawson flips (incircle) among the new
+ *	   edges only; the constraint itself is never flipped.
+ *
+ * Why only the new edges: inserting a-b changes the constrained Delaunay
+ * triangulation (CDT) only inside the union of the triangles a-b crosses
+ * (Anglada 1997, "An improved incremental algorithm for constructing
+ * restricted Delaunay triangulations"), whose two halves are then
+ * triangulated Delaunay-wise relative to the constraint.  Every flip stays
+ * inside that region, and a triangulation of a polygon whose inner edges are
+ * all locally Delaunay is its CDT (the constrained Delaunay lemma), which is
+ * what Lawson's flips reach.
+ *
+ * Ties.  The in-circle test breaks exact cocircularity with the same
+ * symbolic perturbation of the lifting map as merge.c (simulation of
+ * simplicity on the lift, smaller sites lifted more), so the perturbed sites
+ * admit exactly one CDT for a given set of segments: the result depends on
+ * the site set and the constraint set only, not on the insertion order or the
+ * thread count of the unconstrained triangulation.
+ *
+ * Rules for the segments (the endpoints are input indices; the job already
+ * merged exact duplicates, so they are mapped to sites first):
+ *	- both ends on the same site: ignored (zero length);
+ *	- a site lying exactly on the open segment splits it there: the walk
+ *	  meets that site (as the far end of an edge out of the current end, or
+ *	  as the apex of a crossed triangle) and continues from it; no site is
+ *	  ever created;
+ *	- collinear overlaps: the shared stretch is already a chain of
+ *	  constraint edges, found as existing edges by the walk;
+ *	- a proper crossing with an earlier segment is found when the walk
+ *	  would cross one of its edges: TDC_ECROSS, naming both segments.
+ *
+ * Invariants between segments: the mesh is a triangulation of the convex
+ * hull of the sites (hull edges are never crossed, so never flipped, so the
+ * job's outer-face bitmap and triangle count stay right); every constraint
+ * edge carries the number (+ 1) of the first segment that made it, every other
+ * edge NO_SEG; vedge[s] is a half-edge leaving site s.  The number of edges
+ * never changes (a flip keeps its edge slot), so the mesh needs no memory.
+ *
+ * Memory: 4 bytes per edge slot for the constraint numbers (12 per point),
+ * 4 per site for vedge, the job's input map (4 per input point), and two
+ * lists of at most the number of crossed edges each (at most 3 per point).
+ * Cancel is polled before every segment and every 4096 steps inside one.
+ */
+#include <errno.h>
+#include <signal.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "job.h"
+
+/* cons[] holds segment number + 1, so that the zeroed array means "none" */
+#define NO_SEG		0					/* edge is no constraint */
+#define CAV			UINT32_MAX			/* new edge of the current cavity */
+#define CAVQ		(UINT32_MAX - 1)	/* ... and on the Lawson stack */
+#define MAX_SEG		((size_t) UINT32_MAX - 3)
+#define POLL_STEPS	4096
+
+struct tdc_cdt
+{
+	tdc_job    *job;
+	const uint32_t *seg;		/* caller's pairs of input indices */
+	size_t		nseg;
+	tdc_mesh	m;
+	uint32_t   *cons;			/* per edge slot: segment number + 1, or NO_SEG/CAV/CAVQ */
+	uint32_t   *vedge;			/* per site: a half-edge leaving it */
+	uint32_t   *list;			/* crossed edges, used as a circular queue */
+	uint32_t   *fresh;			/* new edges, then the Lawson stack */
+	size_t		cap;
+	size_t		nconstraint;	/* constraint edges */
+	size_t		cross[2];		/* the two segments of a TDC_ECROSS */
+	long		steps;
+
+	atomic_int	cancel;
+	bool		inline_run;
+	pthread_t	thread;
+	bool		thread_started;
+	pthread_mutex_t lock;
+	pthread_cond_t done;
+	bool		finished;
+	int			status;
+	char		err[512];
+};
+
+static int	cdt_fail(tdc_cdt *c, int code, const char *fmt,...)
+			__attribute__((format(printf, 3, 4)));
+
+static int
+cdt_fail(tdc_cdt *c, int code, const char *fmt,...)
+{
+	va_list		ap;
+
+	va_start(ap, fmt);
+	vsnprintf(c->err, sizeof(c->err), fmt, ap);
+	va_end(ap);
+	return code;
+}
+
+static bool
+cdt_poll(tdc_cdt *c)
+{
+	if (++c->steps % POLL_STEPS != 0)
+		return false;
+	return atomic_load_explicit(&c->cancel, memory_order_relaxed) != 0;
+}
+
+static inline bool
+is_outer(const tdc_cdt *c, uint32_t h)
+{
+	return c->job->outer != NULL && ((c->job->outer[h >> 6] >> (h & 63)) & 1);
+}
+
+static inline double
+orient(const tdc_cdt *c, uint32_t a, uint32_t b, uint32_t p)
+{
+	return tdc_orient2d(tdc_pt(&c->m, a), tdc_pt(&c->m, b), tdc_pt(&c->m, p));
+}
+
+/*
+ * In-circle with merge.c's tie rule: is d inside the circle through the
+ * counter-clockwise a, b, c, exact zeros decided by perturbing the lift of
+ * the lexicographically smallest of the four distinct sites.
+ */
+static bool
+incircle_sos(const tdc_cdt *c, uint32_t a, uint32_t b, uint32_t cc, uint32_t d)
+{
+	const double *pa = tdc_pt(&c->m, a),
+			   *pb = tdc_pt(&c->m, b),
+			   *pc = tdc_pt(&c->m, cc),
+			   *pd = tdc_pt(&c->m, d),
+			   *low;
+	double		det = tdc_incircle(pa, pb, pc, pd);
+
+	if (det != 0)
+		return det > 0;
+	low = pa;
+	if (tdc_key_less(pb, low, 0))
+		low = pb;
+	if (tdc_key_less(pc, low, 0))
+		low = pc;
+	if (tdc_key_less(pd, low, 0))
+		low = pd;
+	if (low == pa)
+		return tdc_orient2d(pb, pc, pd) > 0;
+	if (low == pb)
+		return -tdc_orient2d(pa, pc, pd) > 0;
+	if (low == pc)
+		return tdc_orient2d(pa, pb, pd) > 0;
+	return -tdc_orient2d(pa, pb, pc) > 0;
+}
+
+/*
+ * p lies exactly on the line of a-b: is it on the same side of a as b?
+ * Coordinate comparisons only, so exact.
+ */
+static bool
+same_dir(const tdc_cdt *c, uint32_t a, uint32_t p, uint32_t b)
+{
+	const double *pa = tdc_pt(&c->m, a),
+			   *pp = tdc_pt(&c->m, p),
+			   *pb = tdc_pt(&c->m, b);
+
+	if (pb[0] != pa[0])
+		return (pp[0] > pa[0]) == (pb[0] > pa[0]) && pp[0] != pa[0];
+	return (pp[1] > pa[1]) == (pb[1] > pa[1]) && pp[1] != pa[1];
+}
+
+/*
+ * Flip edge h, the diagonal of the strictly convex quadrilateral of its two
+ * triangles, to the other diagonal (Guibas & Stolfi's Swap).  The edge slot
+ * stays; vedge[] of h's old ends moves to edges that still leave them.
+ */
+static void
+flip(tdc_cdt *c, uint32_t h)
+{
+	tdc_mesh   *m = &c->m;
+	uint32_t	a = tdc_oprev(m, h),
+				b = tdc_oprev(m, SYM(h)),
+				u = tdc_org(m, h),
+				v = tdc_dest(m, h);
+
+	if (c->vedge[u] == h)
+		c->vedge[u] = a;
+	if (c->vedge[v] == SYM(h))
+		c->vedge[v] = b;
+	tdc_splice(m, h, a);
+	tdc_splice(m, SYM(h), b);
+	tdc_splice(m, h, tdc_lnext(m, a));
+	tdc_splice(m, SYM(h), tdc_lnext(m, b));
+	m->he[h].org = tdc_dest(m, a);
+	m->he[SYM(h)].org = tdc_dest(m, b);
+}
+
+static const double *
+input_xy(const tdc_cdt *c, size_t i)
+{
+	return c->job->input + 2 * i;
+}
+
+static int
+crossing_error(tdc_cdt *c, size_t s1, size_t s2)
+{
+	const double *a = input_xy(c, c->seg[2 * s2]),
+			   *b = input_xy(c, c->seg[2 * s2 + 1]),
+			   *p = input_xy(c, c->seg[2 * s1]),
+			   *q = input_xy(c, c->seg[2 * s1 + 1]);
+
+	c->cross[0] = s2;
+	c->cross[1] = s1;
+	return cdt_fail(c, TDC_ECROSS,
+					"constraint segments cross: segment %zu from (%.17g %.17g) to (%.17g %.17g) and segment %zu from (%.17g %.17g) to (%.17g %.17g)",
+					s2, a[0], a[1], b[0], b[1], s1, p[0], p[1], q[0], q[1]);
+}
+
+static int
+internal_error(tdc_cdt *c, size_t s, const char *what)
+{
+	return cdt_fail(c, TDC_EINVAL, "internal error inserting segment %zu: %s", s, what);
+}
+
+/*
+ * Sloan's step 2 on the n crossed edges in c->list (a circular queue) for
+ * the piece a-e: afterwards a-e is an edge, and c->fresh holds the *nfresh
+ * other edges made here, all inside the region the piece crossed.
+ */
+static int
+remove_crossings(tdc_cdt *c, size_t s, uint32_t a, uint32_t e, size_t n,
+				 size_t *nfresh)
+{
+	tdc_mesh   *m = &c->m;
+	size_t		head = 0,
+				count = n,
+				idle = 0;
+
+	*nfresh = 0;
+	while (count > 0)
+	{
+		uint32_t	h = 2 * c->list[head],
+					u = tdc_org(m, h),
+					v = tdc_dest(m, h),
+					p = tdc_dest(m, tdc_lnext(m, h)),
+					q = tdc_dest(m, tdc_lnext(m, SYM(h)));
+		double		ou = orient(c, p, q, u),
+					ov = orient(c, p, q, v);
+
+		head = (head + 1) % c->cap;
+		count--;
+		if (cdt_poll(c))
+			return TDC_ECANCELED;
+		if ((ou > 0 && ov < 0) || (ou < 0 && ov > 0))
+		{
+			double		op,
+						oq;
+
+			flip(c, h);
+			idle = 0;
+			op = orient(c, a, e, p);
+			oq = orient(c, a, e, q);
+			if ((op > 0 && oq < 0) || (op < 0 && oq > 0))
+			{
+				c->list[(head + count) % c->cap] = h >> 1;
+				count++;
+			}
+			else
+				c->fresh[(*nfresh)++] = h >> 1;
+		}
+		else
+		{
+			c->list[(head + count) % c->cap] = h >> 1;
+			count++;
+			/* Sloan: some quadrilateral is always convex; never loop */
+			if (++idle > count)
+				return internal_error(c, s, "no crossed edge can be flipped");
+		}
+	}
+	return TDC_OK;
+}
+
+/*
+ * Lawson's flips among the n new edges of a cavity, marked CAV in cons[];
+ * the constraint and the cavity's border are not listed, so never flipped.
+ */
+static int
+restore_delaunay(tdc_cdt *c, size_t n)
+{
+	tdc_mesh   *m = &c->m;
+	size_t		top = n;
+
+	for (size_t i = 0; i < n; i++)
+		c->cons[c->fresh[i]] = CAVQ;
+	while (top > 0)
+	{
+		uint32_t	e = c->fresh[--top],
+					h = 2 * e,
+					u = tdc_org(m, h),
+					v = tdc_dest(m, h),
+					p = tdc_dest(m, tdc_lnext(m, h)),
+					q = tdc_dest(m, tdc_lnext(m, SYM(h)));
+
+		c->cons[e] = CAV;
+		if (cdt_poll(c))
+			return TDC_ECANCELED;
+		if (incircle_sos(c, u, v, p, q))
+		{
+			uint32_t	around[4];
+
+			flip(c, h);
+			around[0] = tdc_lnext(m, h);
+			around[1] = tdc_lnext(m, around[0]);
+			around[2] = tdc_lnext(m, SYM(h));
+			around[3] = tdc_lnext(m, around[2]);
+			for (int k = 0; k < 4; k++)
+			{
+				uint32_t	f = around[k] >> 1;
+
+				if (c->cons[f] == CAV)
+				{
+					c->cons[f] = CAVQ;
+					c->fresh[top++] = f;
+				}
+			}
+		}
+	}
+	return TDC_OK;
+}
+
+/* Is there an edge a-b?  Returns a half-edge a->b or TDC_NIL. */
+static uint32_t
+find_edge(const tdc_cdt *c, uint32_t a, uint32_t b)
+{
+	uint32_t	g = c->vedge[a];
+
+	do
+	{
+		if (tdc_dest(&c->m, g) == b)
+			return g;
+		g = tdc_onext(&c->m, g);
+	} while (g != c->vedge[a]);
+	return TDC_NIL;
+}
+
+static void
+mark(tdc_cdt *c, uint32_t h, size_t s)
+{
+	if (c->cons[h >> 1] == NO_SEG)
+	{
+		c->cons[h >> 1] = (uint32_t) s + 1;
+		c->nconstraint++;
+	}
+}
+
+/* Insert segment s from site a to site b (a != b), piece by piece. */
+static int
+insert_segment(tdc_cdt *c, size_t s, uint32_t a, uint32_t b)
+{
+	tdc_mesh   *m = &c->m;
+
+	while (a != b)
+	{
+		uint32_t	g = c->vedge[a],
+					start = g,
+					t = TDC_NIL,
+					e = TDC_NIL;
+		size_t		n = 0,
+					nfresh;
+		int			rc;
+
+		/*
+		 * Most segments of contour-like input are Delaunay edges already:
+		 * look for a-b without a predicate first.
+		 */
+		g = find_edge(c, a, b);
+		if (g != TDC_NIL)
+		{
+			mark(c, g, s);
+			break;
+		}
+		g = start;
+
+		/* the edge out of a along a-b, or the triangle a-b leaves a into */
+		do
+		{
+			uint32_t	p = tdc_dest(m, g),
+						gn = tdc_onext(m, g);
+			double		o;
+
+			if (p == b)
+			{
+				e = b;
+				break;
+			}
+			o = orient(c, a, b, p);
+			if (o == 0 && same_dir(c, a, p, b))
+			{
+				e = p;			/* a site on the segment: split there */
+				break;
+			}
+			if (o < 0 && gn != g && !is_outer(c, g) &&
+				orient(c, a, b, tdc_dest(m, gn)) > 0)
+			{
+				t = tdc_lnext(m, g);
+				break;
+			}
+			g = gn;
+		} while (g != start);
+
+		if (e != TDC_NIL)
+		{
+			mark(c, g, s);
+			a = e;
+			continue;
+		}
+		if (t == TDC_NIL)
+			return internal_error(c, s, "no triangle around its start");
+
+		/* walk; t is a crossed edge from the right of a-b to its left */
+		for (;;)
+		{
+			uint32_t	sym = SYM(t),
+						r;
+			double		o;
+
+			if (c->cons[t >> 1] != NO_SEG)
+				return crossing_error(c, s, c->cons[t >> 1] - 1);
+			if (n == c->cap)
+				return internal_error(c, s, "more crossed edges than edges");
+			c->list[n++] = t >> 1;
+			if (is_outer(c, sym))
+				return internal_error(c, s, "the walk left the convex hull");
+			r = tdc_dest(m, tdc_lnext(m, sym));
+			if (r == b)
+			{
+				e = b;
+				break;
+			}
+			o = orient(c, a, b, r);
+			if (o == 0)
+			{
+				e = r;			/* a site on the segment: split there */
+				break;
+			}
+			t = o > 0 ? tdc_lnext(m, sym) : tdc_lnext(m, tdc_lnext(m, sym));
+			if (cdt_poll(c))
+				return TDC_ECANCELED;
+		}
+
+		rc = remove_crossings(c, s, a, e, n, &nfresh);
+		if (rc != TDC_OK)
+			return rc;
+		g = find_edge(c, a, e);
+		if (g == TDC_NIL)
+			return internal_error(c, s, "the constraint is no edge after the flips");
+		/* the last flip may have made a-e itself: it is no new edge to flip */
+		for (size_t i = 0; i < nfresh; i++)
+			if (c->fresh[i] == g >> 1)
+				c->fresh[i--] = c->fresh[--nfresh];
+		/* the Lawson stack overwrites fresh[]: keep the set in list[] */
+		memcpy(c->list, c->fresh, nfresh * sizeof(uint32_t));
+		rc = restore_delaunay(c, nfresh);
+		for (size_t i = 0; i < nfresh; i++)
+			c->cons[c->list[i]] = NO_SEG;
+		if (rc != TDC_OK)
+			return rc;
+		mark(c, g, s);
+		a = e;
+	}
+	return TDC_OK;
+}
+
+static int
+cdt_run(tdc_cdt *c)
+{
+	tdc_job    *job = c->job;
+	size_t		nslots = job->nin * 3;
+
+	c->m.xy = job->xy;
+	c->m.he = job->he;
+	c->m.cancel = &c->cancel;
+	c->cap = nslots;
+	c->cons = tdc_big_alloc(nslots * sizeof(uint32_t) + 4);
+	c->vedge = tdc_big_alloc(job->nin * sizeof(uint32_t) + 4);
+	c->list = tdc_big_alloc(nslots * sizeof(uint32_t) + 4);
+	c->fresh = tdc_big_alloc(nslots * sizeof(uint32_t) + 4);
+	if (!c->cons || !c->vedge || !c->list || !c->fresh)
+		return cdt_fail(c, TDC_ENOMEM, "out of memory for the constraints of %zu points", job->nin);
+	/* tdc_big_alloc's memory is zeroed: every cons[] is NO_SEG */
+	for (size_t h = 0; h < 2 * nslots; h++)
+		if (job->he[h].org != TDC_NIL)
+			c->vedge[job->he[h].org] = (uint32_t) h;
+
+	for (size_t s = 0; s < c->nseg; s++)
+	{
+		uint32_t	a,
+					b;
+		int			rc;
+
+		if (atomic_load_explicit(&c->cancel, memory_order_relaxed))
+			return TDC_ECANCELED;
+		if (c->seg[2 * s] >= job->n || c->seg[2 * s + 1] >= job->n)
+			return cdt_fail(c, TDC_EINVAL, "segment %zu has an end point index out of range (%u %u, %zu points)",
+							s, c->seg[2 * s], c->seg[2 * s + 1], job->n);
+		a = tdc_input_site(job, c->seg[2 * s]);
+		b = tdc_input_site(job, c->seg[2 * s + 1]);
+		if (a == UINT32_MAX || b == UINT32_MAX)
+			return cdt_fail(c, TDC_ENOMEM, "out of memory for the input map");
+		if (a == b)
+			continue;			/* zero length */
+		rc = insert_segment(c, s, a, b);
+		if (rc != TDC_OK)
+			return rc;
+	}
+	return TDC_OK;
+}
+
+static void
+cdt_finish(tdc_cdt *c, int rc)
+{
+	/* the lists are only needed while inserting */
+	tdc_big_free(c->list);
+	tdc_big_free(c->fresh);
+	tdc_big_free(c->vedge);
+	c->list = c->fresh = c->vedge = NULL;
+	pthread_mutex_lock(&c->lock);
+	if (rc == TDC_ECANCELED)
+		snprintf(c->err, sizeof(c->err), "constraint insertion cancelled");
+	else if (rc == TDC_OK)
+		c->err[0] = '\0';
+	c->status = rc;
+	c->finished = true;
+	pthread_cond_broadcast(&c->done);
+	pthread_mutex_unlock(&c->lock);
+}
+
+static void *
+cdt_main(void *arg)
+{
+	tdc_cdt    *c = arg;
+
+	cdt_finish(c, cdt_run(c));
+	return NULL;
+}
+
+size_t
+tdc_cdt_memory(size_t n)
+{
+	/* cons, vedge, list, fresh, and the job's input map */
+	return n * (3 * 4 + 4 + 3 * 4 + 3 * 4 + 4) + 64;
+}
+
+int
+tdc_cdt_start(tdc_job *job, const uint32_t *seg, size_t nseg, tdc_cdt **out,
+			  char *err, size_t errlen)
+{
+	tdc_cdt    *c;
+	pthread_condattr_t ca;
+	int			rc;
+
+#define FAIL(code, ...) do { if (err && errlen) snprintf(err, errlen, __VA_ARGS__); return (code); } while (0)
+	*out = NULL;
+	if (err && errlen)
+		err[0] = '\0';
+	if (tdc_job_wait(job, 0) != TDC_OK)
+		FAIL(TDC_EINVAL, "the triangulation has not finished successfully");
+	if (nseg > MAX_SEG)
+		FAIL(TDC_ETOOBIG, "%zu constraint segments exceed the limit of %zu", nseg, MAX_SEG);
+	if (nseg > 0 && seg == NULL)
+		FAIL(TDC_EINVAL, "no end points given for %zu segments", nseg);
+	if (job->opt.max_memory > 0 &&
+		tdc_estimate_memory(job->n, &job->opt) + tdc_cdt_memory(job->n) > job->opt.max_memory)
+		FAIL(TDC_EMEMLIMIT, "constraining %zu points needs about %zu MB, more than the limit of %zu MB",
+			 job->n, (tdc_estimate_memory(job->n, &job->opt) + tdc_cdt_memory(job->n)) >> 20,
+			 job->opt.max_memory >> 20);
+	c = calloc(1, sizeof(tdc_cdt));
+	if (c == NULL)
+		FAIL(TDC_ENOMEM, "out of memory");
+	c->job = job;
+	c->seg = seg;
+	c->nseg = nseg;
+	c->cross[0] = c->cross[1] = SIZE_MAX;
+	atomic_init(&c->cancel, 0);
+	pthread_mutex_init(&c->lock, NULL);
+	pthread_condattr_init(&ca);
+	pthread_condattr_setclock(&ca, CLOCK_MONOTONIC);
+	pthread_cond_init(&c->done, &ca);
+	pthread_condattr_destroy(&ca);
+
+	/* like the triangulation: small work runs on the caller's thread */
+	c->inline_run = job->n < TDC_INLINE_MAX && nseg < TDC_INLINE_MAX;
+	if (c->inline_run)
+	{
+		cdt_finish(c, cdt_run(c));
+		*out = c;
+		return TDC_OK;
+	}
+	{
+		sigset_t	all,
+					old;
+
+		sigfillset(&all);
+		pthread_sigmask(SIG_SETMASK, &all, &old);
+		rc = pthread_create(&c->thread, NULL, cdt_main, c);
+		pthread_sigmask(SIG_SETMASK, &old, NULL);
+	}
+	if (rc != 0)
+	{
+		pthread_mutex_destroy(&c->lock);
+		pthread_cond_destroy(&c->done);
+		free(c);
+		FAIL(TDC_ETHREAD, "could not create a thread: %s", strerror(rc));
+	}
+	c->thread_started = true;
+	*out = c;
+	return TDC_OK;
+#undef FAIL
+}
+
+int
+tdc_cdt_wait(tdc_cdt *c, int timeout_ms)
+{
+	int			status;
+
+	pthread_mutex_lock(&c->lock);
+	if (!c->finished && timeout_ms < 0)
+	{
+		while (!c->finished)
+			pthread_cond_wait(&c->done, &c->lock);
+	}
+	else if (!c->finished)
+	{
+		struct timespec ts;
+
+		clock_gettime(CLOCK_MONOTONIC, &ts);
+		ts.tv_sec += timeout_ms / 1000;
+		ts.tv_nsec += (long) (timeout_ms % 1000) * 1000000L;
+		if (ts.tv_nsec >= 1000000000L)
+		{
+			ts.tv_sec++;
+			ts.tv_nsec -= 1000000000L;
+		}
+		while (!c->finished)
+			if (pthread_cond_timedwait(&c->done, &c->lock, &ts) == ETIMEDOUT)
+				break;
+	}
+	status = c->finished ? c->status : TDC_RUNNING;
+	pthread_mutex_unlock(&c->lock);
+	return status;
+}
+
+void
+tdc_cdt_cancel(tdc_cdt *c)
+{
+	if (c)
+		atomic_store(&c->cancel, 1);
+}
+
+const char *
+tdc_cdt_error(const tdc_cdt *c)
+{
+	return c->err;
+}
+
+int
+tdc_cdt_crossing(const tdc_cdt *c, size_t *s1, size_t *s2)
+{
+	if (c->status != TDC_ECROSS)
+		return 0;
+	*s1 = c->cross[0];
+	*s2 = c->cross[1];
+	return 1;
+}
+
+size_t
+tdc_cdt_num_constraint_edges(const tdc_cdt *c)
+{
+	return c->nconstraint;
+}
+
+void
+tdc_cdt_free(tdc_cdt *c)
+{
+	if (c == NULL)
+		return;
+	if (c->thread_started)
+	{
+		tdc_cdt_cancel(c);
+		pthread_join(c->thread, NULL);
+	}
+	pthread_mutex_destroy(&c->lock);
+	pthread_cond_destroy(&c->done);
+	tdc_big_free(c->cons);
+	tdc_big_free(c->list);
+	tdc_big_free(c->fresh);
+	tdc_big_free(c->vedge);
+	free(c);
+}
+
+int
+tdc_cdt_run(tdc_job *job, const uint32_t *seg, size_t nseg, tdc_cdt **out,
+			char *err, size_t errlen)
+{
+	int			rc = tdc_cdt_start(job, seg, nseg, out, err, errlen);
+
+	if (rc != TDC_OK)
+		return rc;
+	rc = tdc_cdt_wait(*out, -1);
+	if (rc != TDC_OK && err && errlen)
+		snprintf(err, errlen, "%s", tdc_cdt_error(*out));
+	return rc;
+}
+
+int
+tdc_next_constraint_edge(const tdc_cdt *c, tdc_iter *it, uint32_t v[2])
+{
+	const tdc_job *job = c->job;
+	size_t		nslots = job->nin * 3;
+
+	if (c->cons == NULL || c->status != TDC_OK)
+		return 0;
+	for (size_t e = it->pos; e < nslots; e++)
+	{
+		uint32_t	a,
+					b;
+
+		if (c->cons[e] == NO_SEG || c->cons[e] >= CAVQ)
+			continue;
+		a = job->he[2 * e].org;
+		b = job->he[2 * e + 1].org;
+		if (tdc_key_less(job->xy + 2 * (size_t) b, job->xy + 2 * (size_t) a, 0))
+			v[0] = b, v[1] = a;
+		else
+			v[0] = a, v[1] = b;
+		it->pos = e + 1;
+		return 1;
+	}
+	it->pos = nslots;
+	return 0;
+}
+
+/*
+ * Validate a finished constrained job: its sites, triangles and the input
+ * segments, renumbered densely, through tdc_validate_cdt().
+ */
+int
+tdc_cdt_validate(const tdc_cdt *c, char *err, size_t errlen)
+{
+	const tdc_job *job = c->job;
+	size_t		n = tdc_num_input(job),
+				m = 0,
+				t = 0,
+				ns = 0;
+	uint32_t	lim = tdc_site_id_limit(job),
+			   *dense = malloc(sizeof(uint32_t) * ((size_t) lim + 1)),
+			   *tri = malloc(12 * (tdc_num_triangles(job) + 1)),
+			   *seg = malloc(8 * (c->nseg + 1)),
+				v[3];
+	double	   *sites = malloc(16 * (tdc_num_sites(job) + 1));
+	tdc_iter	it = {0};
+	int			rc = -1;
+
+	if (!dense || !tri || !sites || !seg)
+	{
+		snprintf(err, errlen, "out of memory for validation");
+		goto done;
+	}
+	for (uint32_t s = 0; s < lim; s++)
+		dense[s] = UINT32_MAX;
+	for (size_t i = 0; i < n; i++)
+	{
+		uint32_t	s = tdc_input_site(job, i);
+
+		if (s >= lim || (dense[s] == UINT32_MAX && m == tdc_num_sites(job)))
+		{
+			snprintf(err, errlen, "input %zu maps to a bad site %u", i, s);
+			goto done;
+		}
+		if (dense[s] == UINT32_MAX)
+		{
+			dense[s] = (uint32_t) m;
+			memcpy(sites + 2 * m++, tdc_site_xy(job, s), 16);
+		}
+	}
+	while (tdc_next_triangle(job, &it, v))
+	{
+		if (t == tdc_num_triangles(job))
+		{
+			snprintf(err, errlen, "more triangles than the %zu reported", tdc_num_triangles(job));
+			goto done;
+		}
+		for (int k = 0; k < 3; k++)
+		{
+			if (v[k] >= lim || dense[v[k]] == UINT32_MAX)
+			{
+				snprintf(err, errlen, "a triangle uses site %u, which no input reaches", v[k]);
+				goto done;
+			}
+			tri[3 * t + k] = dense[v[k]];
+		}
+		t++;
+	}
+	for (size_t s = 0; s < c->nseg; s++)
+	{
+		uint32_t	a = dense[tdc_input_site(job, c->seg[2 * s])],
+					b = dense[tdc_input_site(job, c->seg[2 * s + 1])];
+
+		if (a != b)
+		{
+			seg[2 * ns] = a;
+			seg[2 * ns++ + 1] = b;
+		}
+	}
+	if (t != tdc_num_triangles(job))
+		snprintf(err, errlen, "%zu triangles iterated, %zu reported", t, tdc_num_triangles(job));
+	else
+		rc = tdc_validate_cdt(sites, m, tri, t, seg, ns, err, errlen);
+done:
+	free(dense);
+	free(tri);
+	free(sites);
+	free(seg);
+	return rc;
+}

@@ -1,0 +1,681 @@
+/*
+ * tdc_constrained.c
+ *		ST_TDCConstrainedDelaunayTriangles: the constrained Delaunay
+ *		triangulation of a geometry's vertices, its linework as constraints.
+ *
+ * The vertices are read by the same reader as ST_TDCDelaunayTriangles
+ * (gserialized.c: NaN and infinities rejected, Z kept, M dropped, SRID
+ * carried), in the order they are stored.  The segments come from a second,
+ * structural walk over the same value here: every linestring and every
+ * polygon ring (triangles and the faces of TINs and polyhedral surfaces
+ * included) contributes the segments between its consecutive vertices, as
+ * indices into that vertex order; points contribute none.  The reader has
+ * already checked the value, so this walk only has to count the same way,
+ * and still checks every count against the bytes left.
+ *
+ * The triangulation runs as usual (tdc_run), then the segments are inserted
+ * by the core (cdt.c) on a thread of its own, while this backend waits in
+ * 10 ms slices and watches for interrupts.  A proper crossing is an ERROR
+ * that names both segments by their end points: an exact triangulation
+ * cannot invent the crossing point, so the lines must be noded first.
+ */
+#include "postgres.h"
+
+#include <math.h>
+
+#include "miscadmin.h"
+#include "portability/instr_time.h"
+#include "utils/memutils.h"
+
+#include "gser_format.h"
+#include "tdc_pg.h"
+
+/* Segments as pairs of vertex indices, in a memory context of their own choosing. */
+typedef struct SegList
+{
+	MemoryContext cxt;
+	uint32	   *seg;
+	uint64		nseg;
+	uint64		cap;
+} SegList;
+
+typedef struct SegWalk
+{
+	const char *p;
+	const char *end;
+	Size		vsize;			/* bytes per vertex */
+	uint64		nvert;			/* vertex index of the next vertex */
+	SegList    *out;
+	const char *fname;
+} SegWalk;
+
+static void
+seg_corrupt(const SegWalk *w)
+{
+	ereport(ERROR,
+			(errcode(ERRCODE_DATA_CORRUPTED),
+			 errmsg("%s: corrupt geometry value", w->fname)));
+}
+
+static uint32
+seg_u32(SegWalk *w)
+{
+	uint32		v;
+
+	if (w->end - w->p < 4)
+		seg_corrupt(w);
+	memcpy(&v, w->p, 4);
+	w->p += 4;
+	return v;
+}
+
+/* A chain of k vertices: its k - 1 segments, then skip the vertices. */
+static void
+seg_chain(SegWalk *w, uint32 k, bool segments)
+{
+	if ((uint64) k * w->vsize > (uint64) (w->end - w->p))
+		seg_corrupt(w);
+	if (segments && k > 1)
+	{
+		SegList    *l = w->out;
+
+		if (w->nvert + k > TDC_MAX_POINTS)
+			ereport(ERROR,
+					(errcode(ERRCODE_PROGRAM_LIMIT_EXCEEDED),
+					 errmsg("%s: more than %zu vertices", w->fname, TDC_MAX_POINTS)));
+		if (l->nseg + k - 1 > l->cap)
+		{
+			uint64		cap = Max(l->cap * 2, l->nseg + k - 1);
+
+			l->seg = l->seg ? repalloc_huge(l->seg, cap * 2 * sizeof(uint32))
+				: MemoryContextAllocHuge(l->cxt, cap * 2 * sizeof(uint32));
+			l->cap = cap;
+		}
+		for (uint32 i = 0; i + 1 < k; i++)
+		{
+			l->seg[2 * l->nseg] = (uint32) (w->nvert + i);
+			l->seg[2 * l->nseg + 1] = (uint32) (w->nvert + i + 1);
+			l->nseg++;
+		}
+	}
+	w->nvert += k;
+	w->p += (Size) k * w->vsize;
+}
+
+static void
+seg_geom(SegWalk *w)
+{
+	uint32		type,
+				count;
+
+	check_stack_depth();
+	CHECK_FOR_INTERRUPTS();
+	type = seg_u32(w);
+	count = seg_u32(w);
+	switch (type)
+	{
+		case G_POINT:
+			seg_chain(w, count, false);
+			return;
+		case G_LINE:
+		case G_TRIANGLE:
+			seg_chain(w, count, true);
+			return;
+		case G_POLYGON:
+			{
+				const char *sizes = w->p;
+
+				if ((uint64) count * 4 + (count % 2) * 4 > (uint64) (w->end - w->p))
+					seg_corrupt(w);
+				w->p += (Size) count * 4 + (count % 2) * 4;
+				for (uint32 i = 0; i < count; i++)
+				{
+					uint32		k;
+
+					memcpy(&k, sizes + 4 * (Size) i, 4);
+					seg_chain(w, k, true);
+				}
+				return;
+			}
+		case G_MULTIPOINT:
+		case G_MULTILINE:
+		case G_MULTIPOLYGON:
+		case G_COLLECTION:
+		case G_POLYHEDRAL:
+		case G_TIN:
+			for (uint32 i = 0; i < count; i++)
+				seg_geom(w);
+			return;
+	}
+	/* the vertex reader rejected curves and unknown types already */
+	seg_corrupt(w);
+}
+
+/*
+ * Append to out the segments of a detoasted value whose vertices were
+ * appended to a point buffer, the first of them at index "first"; returns
+ * the number of vertices walked, which must match.
+ */
+static uint64
+collect_segments(const struct varlena *geom, SegList *out, uint64 first,
+				 const char *fname)
+{
+	const unsigned char *h = (const unsigned char *) VARDATA_ANY(geom);
+	uint8		gflags;
+	int			ndims;
+	SegWalk		ww,
+			   *w = &ww;
+
+	memset(w, 0, sizeof(*w));
+	w->fname = fname;
+	w->out = out;
+	w->nvert = first;
+	w->p = (const char *) h;
+	w->end = (const char *) geom + VARSIZE_ANY(geom);
+	if (w->end - w->p < 8)
+		seg_corrupt(w);
+	gflags = h[3];
+	ndims = 2 + ((gflags & GF_Z) ? 1 : 0) + ((gflags & GF_M) ? 1 : 0);
+	w->vsize = ndims * sizeof(double);
+	w->p += 4;
+	if ((gflags & GF_VERSION) && (gflags & GF_EXTENDED))
+		w->p += 8;
+	if (gflags & GF_BBOX)
+		w->p += sizeof(float) * ((gflags & GF_GEODETIC) ? 6 : 2 * ndims);
+	if (w->p > w->end)
+		seg_corrupt(w);
+	seg_geom(w);
+	if (w->p != w->end)
+		seg_corrupt(w);
+	return w->nvert - first;
+}
+
+/* ----------------------------------------------------------------
+ *		running the insertion
+ * ----------------------------------------------------------------
+ */
+
+typedef struct CdtHold
+{
+	tdc_cdt    *cdt;
+} CdtHold;
+
+/* On error or cancel: stop and free the insertion before the job goes. */
+static void
+cdt_reset_callback(void *arg)
+{
+	CdtHold    *hold = (CdtHold *) arg;
+
+	if (hold->cdt != NULL)
+	{
+		tdc_cdt_free(hold->cdt);
+		hold->cdt = NULL;
+	}
+}
+
+static void
+report_crossing(const CdtHold *hold, const TdcPointBuf *buf, const SegList *w,
+				const char *fname)
+{
+	size_t		s1,
+				s2;
+
+	if (tdc_cdt_crossing(hold->cdt, &s1, &s2))
+	{
+		const double *a = buf->xy + 2 * (size_t) w->seg[2 * s1],
+				   *b = buf->xy + 2 * (size_t) w->seg[2 * s1 + 1],
+				   *c = buf->xy + 2 * (size_t) w->seg[2 * s2],
+				   *d = buf->xy + 2 * (size_t) w->seg[2 * s2 + 1];
+
+		ereport(ERROR,
+				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
+				 errmsg("%s: segments LINESTRING(%.17g %.17g,%.17g %.17g) and LINESTRING(%.17g %.17g,%.17g %.17g) cross",
+						fname, a[0], a[1], b[0], b[1], c[0], c[1], d[0], d[1]),
+				 errdetail("An exact constrained triangulation cannot create their crossing point."),
+				 errhint("Node the lines first, with ST_Node or ST_UnaryUnion.")));
+	}
+}
+
+/*
+ * Insert the segments into the finished job of run, waiting interruptibly.
+ * Any failure is an ERROR; the insertion is freed with buf's context.
+ */
+static void
+constrain(TdcRun *run, const TdcPointBuf *buf, const SegList *w,
+		  const char *fname)
+{
+	CdtHold    *hold;
+	MemoryContextCallback *cb;
+	char		err[512];
+	int			rc;
+	instr_time	start,
+				stop;
+
+	INSTR_TIME_SET_CURRENT(start);
+	hold = MemoryContextAllocZero(buf->cxt, sizeof(CdtHold));
+	cb = MemoryContextAllocZero(buf->cxt, sizeof(MemoryContextCallback));
+	cb->func = cdt_reset_callback;
+	cb->arg = hold;
+	/* registered after the job's: runs before it, so the job outlives it */
+	MemoryContextRegisterResetCallback(buf->cxt, cb);
+
+	err[0] = '\0';
+	rc = tdc_cdt_start(run->job, w->seg, (size_t) w->nseg, &hold->cdt, err,
+					   sizeof(err));
+	if (rc != TDC_OK)
+		ereport(ERROR,
+				(errcode(rc == TDC_EMEMLIMIT ? ERRCODE_PROGRAM_LIMIT_EXCEEDED :
+						 rc == TDC_ENOMEM ? ERRCODE_OUT_OF_MEMORY :
+						 ERRCODE_INTERNAL_ERROR),
+				 errmsg("%s: %s", fname, err)));
+	while ((rc = tdc_cdt_wait(hold->cdt, 10)) == TDC_RUNNING)
+	{
+		if (!InterruptPending)
+			continue;
+		if (QueryCancelPending || ProcDiePending)
+		{
+			tdc_cdt_cancel(hold->cdt);
+			(void) tdc_cdt_wait(hold->cdt, -1);
+			CHECK_FOR_INTERRUPTS();
+			ereport(ERROR,
+					(errcode(ERRCODE_QUERY_CANCELED),
+					 errmsg("%s: triangulation canceled", fname)));
+		}
+		CHECK_FOR_INTERRUPTS();
+	}
+	if (rc == TDC_ECROSS)
+		report_crossing(hold, buf, w, fname);
+	if (rc != TDC_OK)
+		ereport(ERROR,
+				(errcode(rc == TDC_ECANCELED ? ERRCODE_QUERY_CANCELED :
+						 rc == TDC_ENOMEM ? ERRCODE_OUT_OF_MEMORY :
+						 ERRCODE_INTERNAL_ERROR),
+				 errmsg("%s: %s", fname, tdc_cdt_error(hold->cdt))));
+	if (tdc_guc_stats)
+	{
+		INSTR_TIME_SET_CURRENT(stop);
+		INSTR_TIME_SUBTRACT(stop, start);
+		ereport(NOTICE,
+				(errmsg("%s: %llu segments, %zu constraint edges, insertion %.3f ms",
+						fname, (unsigned long long) w->nseg,
+						tdc_cdt_num_constraint_edges(hold->cdt),
+						INSTR_TIME_GET_MILLISEC(stop))));
+	}
+	/* the mesh is final; the constraint numbers are not needed for output */
+	tdc_cdt_free(hold->cdt);
+	hold->cdt = NULL;
+}
+
+/*
+ * The constrained triangulation of buf's vertices and the segments, as one
+ * geometry value of the given kind.
+ */
+static Datum
+constrained_to_datum(const TdcPointBuf *buf, const SegList *segs, int flags,
+					 const char *fname)
+{
+	TdcRun	   *run;
+	TdcGserWriter wr;
+	struct varlena *result;
+	uint64		extra;
+
+	if (buf->n == 0)
+		return PointerGetDatum(tdc_gser_empty(flags, buf->srid));
+
+	/*
+	 * The result and the segments, for max_memory; tdc_cdt_start adds the
+	 * insertion's own arrays (tdc_cdt_memory) to the engine's estimate.
+	 */
+	extra = tdc_gser_result_bound(buf->n, flags, buf->hasz) +
+		segs->nseg * 2 * sizeof(uint32);
+	run = tdc_run(buf, 0.0, extra, fname);
+	constrain(run, buf, segs, fname);
+
+	result = tdc_gser_result_alloc(run->job, flags, buf, fname, &wr);
+	if (flags == TDC_OUT_EDGES || wr.count == 0 ||
+		!tdc_run_emit(run, tdc_gser_emit, &wr, fname))
+		tdc_gser_fill(&wr);
+	CHECK_FOR_INTERRUPTS();
+	tdc_run_free(run);
+	return PointerGetDatum(result);
+}
+
+PG_FUNCTION_INFO_V1(st_tdcconstraineddelaunaytriangles);
+
+/*
+ * ST_TDCConstrainedDelaunayTriangles(geometry, flags int4)
+ *		comparable to SFCGAL's ST_ConstrainedDelaunayTriangles; STRICT.
+ */
+Datum
+st_tdcconstraineddelaunaytriangles(PG_FUNCTION_ARGS)
+{
+	const char *fname = "ST_TDCConstrainedDelaunayTriangles";
+	struct varlena *geom = PG_DETOAST_DATUM(PG_GETARG_DATUM(0));
+	int32		flags = PG_NARGS() > 1 ? PG_GETARG_INT32(1) : 0;
+	TdcPointBuf buf;
+	SegList		segs = {CurrentMemoryContext, NULL, 0, 0};
+
+	tdc_check_params(0.0, flags, fname);
+	tdc_pointbuf_init(&buf, CurrentMemoryContext);
+	tdc_gser_append(&buf, geom, fname);
+	if (collect_segments(geom, &segs, 0, fname) != buf.n)
+		ereport(ERROR,
+				(errcode(ERRCODE_DATA_CORRUPTED),
+				 errmsg("%s: corrupt geometry value", fname)));
+	PG_RETURN_DATUM(constrained_to_datum(&buf, &segs, flags, fname));
+}
+
+/* ----------------------------------------------------------------
+ *		the aggregate ST_TDCConstrainedDelaunay(geometry [, flags])
+ * ----------------------------------------------------------------
+ *
+ * Its state is the point buffer of ST_TDCDelaunay's plus the segments, as
+ * indices into that buffer, both in the aggregate context.  Combining
+ * appends the second state's vertices and its segments shifted by the first
+ * state's vertex count.  Serialized for parallel plans as
+ *
+ *	uint32 magic 'TDCC', uint32 version, uint32 bits (have_first, hasz,
+ *	flags set), int32 srid, int32 flags, uint32 zero, uint64 n, uint64 k,
+ *	then n*2 float8 x,y, n float8 z when hasz, k*2 uint32 segment ends
+ *
+ * and the deserializer checks every field, the exact length, finite
+ * coordinates and segment ends below n.
+ */
+#define CDT_AGG_NAME		"ST_TDCConstrainedDelaunay"
+#define CSTATE_MAGIC		0x43434454	/* "TDCC" little-endian */
+#define CSTATE_VERSION		1
+#define CSTATE_HEADER		40
+#define CB_HAVE_FIRST		0x01
+#define CB_HASZ				0x02
+#define CB_FLAGS			0x04
+
+typedef struct CdtAggState
+{
+	TdcPointBuf pts;
+	SegList		segs;
+	bool		flags_set;
+	int32		flags;
+} CdtAggState;
+
+static MemoryContext
+cdt_agg_context(FunctionCallInfo fcinfo, const char *fn)
+{
+	MemoryContext aggcxt;
+
+	if (!AggCheckCallContext(fcinfo, &aggcxt))
+		elog(ERROR, "%s called in non-aggregate context", fn);
+	return aggcxt;
+}
+
+static CdtAggState *
+cdt_state_new(MemoryContext cxt)
+{
+	CdtAggState *st = MemoryContextAllocZero(cxt, sizeof(CdtAggState));
+
+	tdc_pointbuf_init(&st->pts, cxt);
+	st->segs.cxt = cxt;
+	return st;
+}
+
+static void
+cdt_state_set_flags(CdtAggState *st, int32 flags)
+{
+	if (!st->flags_set)
+	{
+		st->flags_set = true;
+		st->flags = flags;
+	}
+	else if (st->flags != flags)
+		ereport(ERROR,
+				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
+				 errmsg("%s: flags must be the same for all rows (%d versus %d)",
+						CDT_AGG_NAME, st->flags, flags)));
+}
+
+static void
+seg_reserve(SegList *l, uint64 more)
+{
+	if (l->nseg + more > l->cap)
+	{
+		uint64		cap = Max(l->cap * 2, l->nseg + more);
+
+		l->seg = l->seg ? repalloc_huge(l->seg, cap * 2 * sizeof(uint32))
+			: MemoryContextAllocHuge(l->cxt, cap * 2 * sizeof(uint32));
+		l->cap = cap;
+	}
+}
+
+static void
+bad_cstate(const char *what)
+{
+	ereport(ERROR,
+			(errcode(ERRCODE_DATA_CORRUPTED),
+			 errmsg("%s: corrupt serialized aggregate state: %s",
+					CDT_AGG_NAME, what)));
+}
+
+PG_FUNCTION_INFO_V1(st_tdcconstraineddelaunay_transfn);
+
+/* st_tdcconstraineddelaunay_transfn(internal, geometry [, int4]) */
+Datum
+st_tdcconstraineddelaunay_transfn(PG_FUNCTION_ARGS)
+{
+	MemoryContext aggcxt = cdt_agg_context(fcinfo, "st_tdcconstraineddelaunay_transfn");
+	CdtAggState *st = PG_ARGISNULL(0) ? NULL : (CdtAggState *) PG_GETARG_POINTER(0);
+	int32		flags = TDC_OUT_POLYGONS;
+	struct varlena *geom;
+	uint64		first;
+
+	if (PG_ARGISNULL(1) || (PG_NARGS() > 2 && PG_ARGISNULL(2)))
+	{
+		if (st == NULL)
+			PG_RETURN_NULL();
+		PG_RETURN_POINTER(st);
+	}
+	if (PG_NARGS() > 2)
+	{
+		flags = PG_GETARG_INT32(2);
+		tdc_check_params(0.0, flags, CDT_AGG_NAME);
+	}
+	if (st == NULL)
+		st = cdt_state_new(aggcxt);
+	cdt_state_set_flags(st, flags);
+
+	geom = PG_DETOAST_DATUM(PG_GETARG_DATUM(1));
+	first = st->pts.n;
+	tdc_gser_append(&st->pts, geom, CDT_AGG_NAME);
+	if (collect_segments(geom, &st->segs, first, CDT_AGG_NAME) != st->pts.n - first)
+		bad_cstate("vertex count");
+	PG_FREE_IF_COPY(geom, 1);
+	PG_RETURN_POINTER(st);
+}
+
+PG_FUNCTION_INFO_V1(st_tdcconstraineddelaunay_combinefn);
+
+Datum
+st_tdcconstraineddelaunay_combinefn(PG_FUNCTION_ARGS)
+{
+	MemoryContext aggcxt = cdt_agg_context(fcinfo, "st_tdcconstraineddelaunay_combinefn");
+	CdtAggState *st1 = PG_ARGISNULL(0) ? NULL : (CdtAggState *) PG_GETARG_POINTER(0);
+	CdtAggState *st2 = PG_ARGISNULL(1) ? NULL : (CdtAggState *) PG_GETARG_POINTER(1);
+	uint64		base;
+
+	if (st2 == NULL)
+	{
+		if (st1 == NULL)
+			PG_RETURN_NULL();
+		PG_RETURN_POINTER(st1);
+	}
+	if (st1 == NULL)
+		st1 = cdt_state_new(aggcxt);
+	if (st2->flags_set)
+		cdt_state_set_flags(st1, st2->flags);
+	base = st1->pts.n;
+	tdc_pointbuf_append_buf(&st1->pts, &st2->pts, CDT_AGG_NAME);
+	seg_reserve(&st1->segs, st2->segs.nseg);
+	for (uint64 i = 0; i < 2 * st2->segs.nseg; i++)
+		st1->segs.seg[2 * st1->segs.nseg + i] = (uint32) (st2->segs.seg[i] + base);
+	st1->segs.nseg += st2->segs.nseg;
+	PG_RETURN_POINTER(st1);
+}
+
+PG_FUNCTION_INFO_V1(st_tdcconstraineddelaunay_serialfn);
+
+Datum
+st_tdcconstraineddelaunay_serialfn(PG_FUNCTION_ARGS)
+{
+	CdtAggState *st;
+	const TdcPointBuf *p;
+	uint64		n,
+				k,
+				size;
+	bytea	   *out;
+	char	   *w;
+	uint32		u;
+	int32		i;
+
+	(void) cdt_agg_context(fcinfo, "st_tdcconstraineddelaunay_serialfn");
+	st = (CdtAggState *) PG_GETARG_POINTER(0);
+	p = &st->pts;
+	n = p->n;
+	k = st->segs.nseg;
+	size = VARHDRSZ + CSTATE_HEADER + n * (p->hasz ? 3 : 2) * sizeof(double) +
+		k * 2 * sizeof(uint32);
+	if (size > MaxAllocSize)
+		ereport(ERROR,
+				(errcode(ERRCODE_PROGRAM_LIMIT_EXCEEDED),
+				 errmsg("%s: partial aggregate state of %llu vertices and %llu segments is too large to pass between parallel workers",
+						CDT_AGG_NAME, (unsigned long long) n, (unsigned long long) k),
+				 errhint("Disable parallel aggregation for this query (SET max_parallel_workers_per_gather = 0).")));
+	out = palloc((Size) size);
+	SET_VARSIZE(out, size);
+	w = VARDATA(out);
+	u = CSTATE_MAGIC;
+	memcpy(w, &u, 4);
+	u = CSTATE_VERSION;
+	memcpy(w + 4, &u, 4);
+	u = (p->have_first ? CB_HAVE_FIRST : 0) | (p->hasz ? CB_HASZ : 0) |
+		(st->flags_set ? CB_FLAGS : 0);
+	memcpy(w + 8, &u, 4);
+	i = p->srid;
+	memcpy(w + 12, &i, 4);
+	i = st->flags;
+	memcpy(w + 16, &i, 4);
+	u = 0;
+	memcpy(w + 20, &u, 4);
+	memcpy(w + 24, &n, 8);
+	memcpy(w + 32, &k, 8);
+	w += CSTATE_HEADER;
+	if (n > 0)
+	{
+		memcpy(w, p->xy, (Size) n * 2 * sizeof(double));
+		w += n * 2 * sizeof(double);
+		if (p->hasz)
+		{
+			memcpy(w, p->z, (Size) n * sizeof(double));
+			w += n * sizeof(double);
+		}
+	}
+	if (k > 0)
+		memcpy(w, st->segs.seg, (Size) k * 2 * sizeof(uint32));
+	PG_RETURN_BYTEA_P(out);
+}
+
+PG_FUNCTION_INFO_V1(st_tdcconstraineddelaunay_deserialfn);
+
+Datum
+st_tdcconstraineddelaunay_deserialfn(PG_FUNCTION_ARGS)
+{
+	bytea	   *in;
+	const char *r;
+	uint64		len,
+				n,
+				k,
+				per;
+	uint32		magic,
+				version,
+				bits,
+				pad;
+	int32		srid,
+				flags;
+	CdtAggState *st;
+
+	(void) cdt_agg_context(fcinfo, "st_tdcconstraineddelaunay_deserialfn");
+	in = PG_GETARG_BYTEA_P(0);
+	r = VARDATA(in);
+	if (VARSIZE(in) < VARHDRSZ + CSTATE_HEADER)
+		bad_cstate("shorter than its header");
+	len = VARSIZE(in) - VARHDRSZ - CSTATE_HEADER;
+	memcpy(&magic, r, 4);
+	memcpy(&version, r + 4, 4);
+	memcpy(&bits, r + 8, 4);
+	memcpy(&srid, r + 12, 4);
+	memcpy(&flags, r + 16, 4);
+	memcpy(&pad, r + 20, 4);
+	memcpy(&n, r + 24, 8);
+	memcpy(&k, r + 32, 8);
+	if (magic != CSTATE_MAGIC)
+		bad_cstate("bad magic number");
+	if (version != CSTATE_VERSION)
+		bad_cstate(psprintf("unknown version %u", version));
+	if ((bits & ~(CB_HAVE_FIRST | CB_HASZ | CB_FLAGS)) != 0 || pad != 0)
+		bad_cstate("unknown flag bits");
+	if (!(bits & CB_HAVE_FIRST) && ((bits & CB_HASZ) || n != 0))
+		bad_cstate("vertices without dimensions");
+	if ((bits & CB_FLAGS) && (flags < TDC_OUT_POLYGONS || flags > TDC_OUT_TIN))
+		bad_cstate("bad flags");
+	per = ((bits & CB_HASZ) ? 3 : 2) * sizeof(double);
+	if (n > TDC_MAX_POINTS || k > MaxAllocHugeSize / 8 ||
+		n * per + k * 2 * sizeof(uint32) != len)
+		bad_cstate(psprintf("%llu vertices and %llu segments do not match a length of %llu bytes",
+							(unsigned long long) n, (unsigned long long) k,
+							(unsigned long long) len));
+
+	st = cdt_state_new(CurrentMemoryContext);
+	st->flags_set = (bits & CB_FLAGS) != 0;
+	st->flags = st->flags_set ? flags : 0;
+	if (bits & CB_HAVE_FIRST)
+		tdc_pointbuf_check_meta(&st->pts, srid, (bits & CB_HASZ) != 0, CDT_AGG_NAME);
+	r += CSTATE_HEADER;
+	if (n > 0)
+	{
+		tdc_pointbuf_reserve(&st->pts, n, CDT_AGG_NAME);
+		memcpy(st->pts.xy, r, (Size) n * 2 * sizeof(double));
+		r += n * 2 * sizeof(double);
+		if (st->pts.hasz)
+		{
+			memcpy(st->pts.z, r, (Size) n * sizeof(double));
+			r += n * sizeof(double);
+		}
+		for (uint64 i = 0; i < 2 * n; i++)
+			if (!isfinite(st->pts.xy[i]))
+				bad_cstate("non-finite coordinate");
+		st->pts.n = n;
+	}
+	if (k > 0)
+	{
+		seg_reserve(&st->segs, k);
+		memcpy(st->segs.seg, r, (Size) k * 2 * sizeof(uint32));
+		for (uint64 i = 0; i < 2 * k; i++)
+			if (st->segs.seg[i] >= n)
+				bad_cstate("segment end beyond the vertices");
+		st->segs.nseg = k;
+	}
+	PG_RETURN_POINTER(st);
+}
+
+PG_FUNCTION_INFO_V1(st_tdcconstraineddelaunay_finalfn);
+
+Datum
+st_tdcconstraineddelaunay_finalfn(PG_FUNCTION_ARGS)
+{
+	CdtAggState *st;
+
+	(void) cdt_agg_context(fcinfo, "st_tdcconstraineddelaunay_finalfn");
+	if (PG_ARGISNULL(0))
+		PG_RETURN_NULL();
+	st = (CdtAggState *) PG_GETARG_POINTER(0);
+	PG_RETURN_DATUM(constrained_to_datum(&st->pts, &st->segs,
+										 st->flags_set ? st->flags : 0,
+										 CDT_AGG_NAME));
+}

@@ -1,0 +1,807 @@
+/*
+ * test_cdt.c
+ *		Constrained Delaunay triangulation (cdt.c): every result through the
+ *		exact validator (tdc_validate_cdt), degenerate inputs, the rules for
+ *		segments (split at sites, overlaps, zero length, crossings), order and
+ *		thread independence, cancel, and triangle sets against CGAL's
+ *		Constrained_Delaunay_triangulation_2 (build/cgal_cdt, when built).
+ */
+#include <math.h>
+#include <stdbool.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "harness.h"
+#include "tdc.h"
+#include "predicates.h"
+
+static uint64_t rs = 0x9e3779b97f4a7c15ULL;
+
+static double
+urand(void)
+{
+	rs ^= rs << 13;
+	rs ^= rs >> 7;
+	rs ^= rs << 17;
+	return (double) (rs >> 11) / 9007199254740992.0;
+}
+
+typedef struct input
+{
+	double	   *xy;
+	size_t		n,
+				cap;
+	uint32_t   *seg;
+	size_t		k,
+				kcap;
+} input;
+
+static uint32_t
+add_pt(input *in, double x, double y)
+{
+	if (in->n == in->cap)
+	{
+		in->cap = in->cap ? 2 * in->cap : 64;
+		in->xy = realloc(in->xy, in->cap * 16);
+	}
+	in->xy[2 * in->n] = x;
+	in->xy[2 * in->n + 1] = y;
+	return (uint32_t) in->n++;
+}
+
+static void
+add_seg(input *in, uint32_t a, uint32_t b)
+{
+	if (in->k == in->kcap)
+	{
+		in->kcap = in->kcap ? 2 * in->kcap : 64;
+		in->seg = realloc(in->seg, in->kcap * 8);
+	}
+	in->seg[2 * in->k] = a;
+	in->seg[2 * in->k + 1] = b;
+	in->k++;
+}
+
+/* A closed ring of m points around (cx, cy), radius r +- noise. */
+static void
+add_ring(input *in, double cx, double cy, double r, double noise, int m)
+{
+	uint32_t	first = 0,
+				prev = 0;
+
+	for (int i = 0; i < m; i++)
+	{
+		double		t = 2 * M_PI * i / m,
+					rr = r + noise * (urand() - 0.5);
+		uint32_t	v = add_pt(in, cx + rr * cos(t), cy + rr * sin(t));
+
+		if (i == 0)
+			first = v;
+		else
+			add_seg(in, prev, v);
+		prev = v;
+	}
+	add_seg(in, prev, first);
+}
+
+static void
+free_input(input *in)
+{
+	free(in->xy);
+	free(in->seg);
+	memset(in, 0, sizeof(*in));
+}
+
+/* Triangles as 6 coordinates, rotated to start at the smallest vertex, sorted. */
+static int
+cmp6(const void *a, const void *b)
+{
+	const double *p = a,
+			   *q = b;
+
+	for (int i = 0; i < 6; i++)
+		if (p[i] != q[i])
+			return p[i] < q[i] ? -1 : 1;
+	return 0;
+}
+
+static void
+normalize(double *t)
+{
+	int			lo = 0;
+	double		c[6];
+
+	for (int j = 1; j < 3; j++)
+		if (t[2 * j] < t[2 * lo] || (t[2 * j] == t[2 * lo] && t[2 * j + 1] < t[2 * lo + 1]))
+			lo = j;
+	for (int j = 0; j < 3; j++)
+	{
+		c[2 * j] = t[2 * ((lo + j) % 3)];
+		c[2 * j + 1] = t[2 * ((lo + j) % 3) + 1];
+	}
+	memcpy(t, c, sizeof(c));
+}
+
+static double *
+tri_set(tdc_job *job, size_t *nt)
+{
+	size_t		n = tdc_num_triangles(job),
+				i = 0;
+	double	   *t = malloc((n + 1) * 48);
+	uint32_t	v[3];
+	tdc_iter	it = {0};
+
+	while (tdc_next_triangle(job, &it, v))
+	{
+		for (int j = 0; j < 3; j++)
+			memcpy(t + 6 * i + 2 * j, tdc_site_xy(job, v[j]), 16);
+		normalize(t + 6 * i);
+		i++;
+	}
+	qsort(t, i, 48, cmp6);
+	*nt = i;
+	return t;
+}
+
+/* Triangulate, constrain, validate.  Returns the cdt status; keeps job/cdt. */
+static int
+run(const input *in, int threads, tdc_job **job, tdc_cdt **cdt, char *err)
+{
+	tdc_options o;
+	int			rc;
+
+	tdc_options_init(&o);
+	o.threads = threads;
+	*cdt = NULL;
+	rc = tdc_triangulate(in->xy, in->n, &o, job, err, 256);
+	if (rc != TDC_OK)
+		return 1000 + rc;
+	return tdc_cdt_run(*job, in->seg, in->k, cdt, err, 256);
+}
+
+/* The whole check for an input that must succeed. */
+static void
+check_ok(const char *name, const input *in, int threads)
+{
+	tdc_job    *job = NULL;
+	tdc_cdt    *cdt = NULL;
+	char		err[256] = "";
+	int			rc = run(in, threads, &job, &cdt, err);
+
+	CHECK(rc == TDC_OK, "%s: status %d: %s", name, rc, err);
+	if (rc == TDC_OK)
+	{
+		rc = tdc_cdt_validate(cdt, err, sizeof(err));
+		CHECK(rc == 0, "%s: not a valid CDT: %s", name, err);
+	}
+	tdc_cdt_free(cdt);
+	tdc_job_free(job);
+}
+
+/* Same triangle sets? */
+static bool
+same_sets(const double *a, size_t na, const double *b, size_t nb)
+{
+	return na == nb && memcmp(a, b, na * 48) == 0;
+}
+
+/* Proper or improper intersection of two segments other than a shared end. */
+static bool
+touches(const double *a, const double *b, const double *c, const double *d)
+{
+	double		o1 = tdc_orient2d(a, b, c),
+				o2 = tdc_orient2d(a, b, d),
+				o3 = tdc_orient2d(c, d, a),
+				o4 = tdc_orient2d(c, d, b);
+	bool		shared = (a[0] == c[0] && a[1] == c[1]) || (a[0] == d[0] && a[1] == d[1]) ||
+		(b[0] == c[0] && b[1] == c[1]) || (b[0] == d[0] && b[1] == d[1]);
+
+	if (o1 == 0 && o2 == 0)
+		return true;			/* collinear: reject, overlaps are tested apart */
+	if (shared)
+		return false;
+	return ((o1 >= 0 && o2 <= 0) || (o1 <= 0 && o2 >= 0)) &&
+		((o3 >= 0 && o4 <= 0) || (o3 <= 0 && o4 >= 0));
+}
+
+/* n random points, then up to k random segments that touch no earlier one. */
+static void
+random_segments(input *in, size_t n, size_t k, int maxlen_pct)
+{
+	for (size_t i = 0; i < n; i++)
+		add_pt(in, urand(), urand());
+	for (size_t tries = 0; tries < 20 * k && in->k < k; tries++)
+	{
+		uint32_t	a = (uint32_t) (urand() * n),
+					b = (uint32_t) (urand() * n);
+		const double *pa = in->xy + 2 * a,
+				   *pb = in->xy + 2 * b;
+		bool		ok = a != b && hypot(pa[0] - pb[0], pa[1] - pb[1]) < maxlen_pct / 100.0;
+
+		for (size_t s = 0; ok && s < in->k; s++)
+			if (touches(pa, pb, in->xy + 2 * in->seg[2 * s], in->xy + 2 * in->seg[2 * s + 1]))
+				ok = false;
+		if (ok)
+			add_seg(in, a, b);
+	}
+}
+
+/* --- CGAL --- */
+
+static const char *
+cgal_path(void)
+{
+	static char path[4096];
+
+	snprintf(path, sizeof(path), "%s/build/cgal_cdt", TDC_SOURCE_DIR);
+	return access(path, X_OK) == 0 ? path : NULL;
+}
+
+static double *
+cgal_tri_set(const input *in, size_t *nt)
+{
+	char		inpath[] = "/tmp/tdc_cdt_inXXXXXX",
+				cmd[8192];
+	int			fd = mkstemp(inpath);
+	FILE	   *f,
+			   *p;
+	size_t		cap = 1024,
+				i = 0;
+	double	   *t = malloc(cap * 48);
+
+	if (fd < 0)
+		return NULL;
+	f = fdopen(fd, "w");
+	fprintf(f, "%zu %zu\n", in->n, in->k);
+	for (size_t j = 0; j < in->n; j++)
+		fprintf(f, "%.17g %.17g\n", in->xy[2 * j], in->xy[2 * j + 1]);
+	for (size_t j = 0; j < in->k; j++)
+		fprintf(f, "%u %u\n", in->seg[2 * j], in->seg[2 * j + 1]);
+	fclose(f);
+	snprintf(cmd, sizeof(cmd), "%s < %s", cgal_path(), inpath);
+	p = popen(cmd, "r");
+	while (p)
+	{
+		if (i == cap)
+			t = realloc(t, (cap *= 2) * 48);
+		if (fscanf(p, "%lf %lf %lf %lf %lf %lf", t + 6 * i, t + 6 * i + 1, t + 6 * i + 2,
+				   t + 6 * i + 3, t + 6 * i + 4, t + 6 * i + 5) != 6)
+			break;
+		normalize(t + 6 * i);
+		i++;
+	}
+	if (!p || pclose(p) != 0)
+	{
+		free(t);
+		t = NULL;
+	}
+	unlink(inpath);
+	qsort(t, i, 48, cmp6);
+	*nt = i;
+	return t;
+}
+
+static void
+check_cgal(const char *name, const input *in)
+{
+	tdc_job    *job = NULL;
+	tdc_cdt    *cdt = NULL;
+	char		err[256] = "";
+	size_t		na,
+				nb;
+	double	   *a,
+			   *b;
+	int			rc;
+
+	if (!cgal_path())
+		return;
+	rc = run(in, 0, &job, &cdt, err);
+	CHECK(rc == TDC_OK, "%s: %s", name, err);
+	if (rc != TDC_OK)
+		goto out;
+	a = tri_set(job, &na);
+	b = cgal_tri_set(in, &nb);
+	CHECK(b != NULL, "%s: cgal_cdt failed", name);
+	if (b)
+		CHECK(same_sets(a, na, b, nb), "%s: %zu triangles, CGAL %zu, sets differ", name, na, nb);
+	free(a);
+	free(b);
+out:
+	tdc_cdt_free(cdt);
+	tdc_job_free(job);
+}
+
+/* --- the cases --- */
+
+static void
+test_random(void)
+{
+	for (int round = 0; round < 6; round++)
+	{
+		input		in = {0};
+		char		name[64];
+
+		random_segments(&in, 200 + 300 * round, 40 + 30 * round, round < 3 ? 30 : 8);
+		snprintf(name, sizeof(name), "random segments %d (%zu pts, %zu segs)", round, in.n, in.k);
+		check_ok(name, &in, 0);
+		check_cgal(name, &in);
+		free_input(&in);
+	}
+}
+
+/* Nested noisy rings, as contour lines, with free points between. */
+static void
+contours(input *in, int rings, int per_ring, int free_pts)
+{
+	for (int r = 1; r <= rings; r++)
+		add_ring(in, 0.1 * urand(), 0.1 * urand(), r, 0.3, per_ring + 7 * r);
+	for (int i = 0; i < free_pts; i++)
+		add_pt(in, (urand() - 0.5) * 2 * rings, (urand() - 0.5) * 2 * rings);
+}
+
+static void
+test_contours(void)
+{
+	input		in = {0};
+
+	contours(&in, 12, 60, 300);
+	check_ok("nested rings", &in, 0);
+	check_cgal("nested rings", &in);
+	free_input(&in);
+
+	/* only segments: no free points */
+	contours(&in, 8, 40, 0);
+	check_ok("rings only", &in, 0);
+	check_cgal("rings only", &in);
+	free_input(&in);
+}
+
+/* A polygon with holes: an outer noisy ring and small rings inside. */
+static void
+test_holes(void)
+{
+	input		in = {0};
+
+	add_ring(&in, 0, 0, 10, 0.5, 200);
+	for (int i = 0; i < 3; i++)
+		for (int j = 0; j < 3; j++)
+			add_ring(&in, -5 + 5 * i, -5 + 5 * j, 1.5, 0.2, 17 + i + j);
+	for (int i = 0; i < 200; i++)
+		add_pt(&in, (urand() - 0.5) * 12, (urand() - 0.5) * 12);
+	check_ok("polygon with holes", &in, 0);
+	check_cgal("polygon with holes", &in);
+	free_input(&in);
+}
+
+/*
+ * Integer-grid contours: squares and diamonds on a grid, all grid points as
+ * sites (cocircular everywhere); validator only (not general position).
+ */
+static void
+test_grid(void)
+{
+	input		in = {0};
+	int			g = 30;
+	uint32_t	id[31][31];
+
+	for (int x = 0; x <= g; x++)
+		for (int y = 0; y <= g; y++)
+			id[x][y] = add_pt(&in, x, y);
+	for (int k = 2; k < 15; k += 3)
+	{
+		/* square of half-size k around (15, 15), unit steps */
+		for (int i = -k; i < k; i++)
+		{
+			add_seg(&in, id[15 + i][15 - k], id[15 + i + 1][15 - k]);
+			add_seg(&in, id[15 + k][15 + i], id[15 + k][15 + i + 1]);
+			add_seg(&in, id[15 - i][15 + k], id[15 - i - 1][15 + k]);
+			add_seg(&in, id[15 - k][15 - i], id[15 - k][15 - i - 1]);
+		}
+	}
+	/* diamonds with long diagonal segments through grid points */
+	add_seg(&in, id[15][1], id[16][2]);
+	add_seg(&in, id[1][15], id[15][29]);	/* passes through (2,16) ... */
+	check_ok("grid contours", &in, 0);
+	check_ok("grid contours, 1 thread", &in, 1);
+	free_input(&in);
+
+	/* long segments along grid lines, through many sites at once */
+	for (int x = 0; x <= g; x++)
+		for (int y = 0; y <= g; y++)
+			id[x][y] = add_pt(&in, x, y);
+	add_seg(&in, id[0][3], id[30][3]);
+	add_seg(&in, id[3][0], id[3][30]);	/* meets the previous one at a site */
+	add_seg(&in, id[0][0], id[30][30]);	/* the diagonal, through (3,3) too */
+	add_seg(&in, id[30][0], id[0][30]);	/* crosses the diagonal at (15,15), a site */
+	check_ok("grid lines through sites", &in, 0);
+	free_input(&in);
+}
+
+static size_t
+constraint_edges(const input *in)
+{
+	tdc_job    *job = NULL;
+	tdc_cdt    *cdt = NULL;
+	char		err[256];
+	size_t		k = SIZE_MAX;
+
+	if (run(in, 0, &job, &cdt, err) == TDC_OK)
+		k = tdc_cdt_num_constraint_edges(cdt);
+	tdc_cdt_free(cdt);
+	tdc_job_free(job);
+	return k;
+}
+
+static void
+test_rules(void)
+{
+	input		in = {0};
+	size_t		k;
+
+	/* a segment through other sites is split there */
+	for (int i = 0; i < 6; i++)
+		add_pt(&in, i, 0.0);
+	add_pt(&in, 2.5, 3);
+	add_pt(&in, 2.5, -0.001);
+	add_pt(&in, 2.5, 0.001);
+	add_seg(&in, 0, 5);
+	check_ok("segment through sites", &in, 0);
+	k = constraint_edges(&in);
+	CHECK(k == 5, "segment through 4 sites: %zu constraint edges, want 5", k);
+
+	/* collinear overlaps merge */
+	add_seg(&in, 1, 3);
+	add_seg(&in, 2, 4);
+	add_seg(&in, 4, 2);
+	check_ok("collinear overlaps", &in, 0);
+	k = constraint_edges(&in);
+	CHECK(k == 5, "overlaps: %zu constraint edges, want 5", k);
+	free_input(&in);
+
+	/* zero length, duplicates merged */
+	add_pt(&in, 0, 0);
+	add_pt(&in, 1, 0);
+	add_pt(&in, 0, 1);
+	add_pt(&in, 1, 1);
+	add_pt(&in, 1, 1);			/* duplicate of 3 */
+	add_seg(&in, 3, 4);			/* zero length after merging */
+	add_seg(&in, 2, 2);
+	add_seg(&in, 0, 4);			/* the diagonal through the duplicate */
+	check_ok("zero length and duplicates", &in, 0);
+	k = constraint_edges(&in);
+	CHECK(k == 1, "duplicates: %zu constraint edges, want 1", k);
+	free_input(&in);
+
+	/* segments along the convex hull, both directions, through hull sites */
+	add_pt(&in, 0, 0);
+	add_pt(&in, 4, 0);
+	add_pt(&in, 4, 4);
+	add_pt(&in, 0, 4);
+	add_pt(&in, 1, 0);
+	add_pt(&in, 2, 0);
+	add_pt(&in, 2, 2);
+	add_pt(&in, 1, 3);
+	add_seg(&in, 0, 1);
+	add_seg(&in, 2, 1);
+	add_seg(&in, 3, 7);
+	check_ok("segments along the hull", &in, 0);
+	k = constraint_edges(&in);
+	CHECK(k == 5, "hull: %zu constraint edges, want 5", k);
+	free_input(&in);
+
+	/* a single segment; two points */
+	add_pt(&in, 0, 0);
+	add_pt(&in, 1, 2);
+	add_seg(&in, 0, 1);
+	check_ok("single segment", &in, 0);
+	CHECK(constraint_edges(&in) == 1, "single segment: one constraint edge");
+	free_input(&in);
+
+	/* all collinear, a segment over all of them */
+	for (int i = 0; i < 10; i++)
+		add_pt(&in, i, 2 * i);
+	add_seg(&in, 9, 0);
+	check_ok("collinear sites", &in, 0);
+	CHECK(constraint_edges(&in) == 9, "collinear: 9 constraint edges");
+	free_input(&in);
+}
+
+/* A segment the Delaunay triangulation lacks: the thin rhombus. */
+static void
+test_forced_edge(void)
+{
+	input		in = {0};
+	tdc_job    *job = NULL;
+	tdc_cdt    *cdt = NULL;
+	char		err[256];
+	int			rc;
+
+	add_pt(&in, 0, 0);
+	add_pt(&in, 10, 0);
+	add_pt(&in, 5, 1);
+	add_pt(&in, 5, -1);
+	add_pt(&in, 5, 5);
+	add_pt(&in, 5, -5);
+	add_seg(&in, 0, 1);			/* crosses the Delaunay edge 2-3 */
+	check_ok("forced edge", &in, 0);
+	check_cgal("forced edge", &in);
+
+	/* the validator sees that the plain DT lacks it */
+	rc = tdc_triangulate(in.xy, in.n, NULL, &job, err, sizeof(err));
+	CHECK(rc == TDC_OK, "forced edge DT: %s", err);
+	rc = tdc_cdt_run(job, in.seg, 0, &cdt, err, sizeof(err));
+	CHECK(rc == TDC_OK, "no segments: %s", err);
+	{
+		size_t		nt;
+		double	   *t = tri_set(job, &nt);
+		uint32_t   *tri = malloc(nt * 12 + 12);
+		double		sites[12];
+		uint32_t	seg[2] = {0, 1};
+
+		memcpy(sites, in.xy, sizeof(sites));
+		for (size_t i = 0; i < nt; i++)
+			for (int j = 0; j < 3; j++)
+				for (uint32_t s = 0; s < 6; s++)
+					if (sites[2 * s] == t[6 * i + 2 * j] && sites[2 * s + 1] == t[6 * i + 2 * j + 1])
+						tri[3 * i + j] = s;
+		rc = tdc_validate_cdt(sites, 6, tri, nt, seg, 1, err, sizeof(err));
+		CHECK(rc != 0 && strstr(err, "not a chain of edges"),
+			  "the DT must fail the CDT validator for segment 0-1: %d %s", rc, err);
+		rc = tdc_validate_cdt(sites, 6, tri, nt, seg, 0, err, sizeof(err));
+		CHECK(rc == 0, "the DT is a valid CDT without segments: %s", err);
+		free(t);
+		free(tri);
+	}
+	tdc_cdt_free(cdt);
+	tdc_job_free(job);
+
+	/* and that a constrained result is not Delaunay without its segment */
+	rc = run(&in, 0, &job, &cdt, err);
+	CHECK(rc == TDC_OK, "forced edge: %s", err);
+	{
+		size_t		nt;
+		double	   *t = tri_set(job, &nt);
+		uint32_t   *tri = malloc(nt * 12 + 12);
+		double		sites[12];
+
+		memcpy(sites, in.xy, sizeof(sites));
+		for (size_t i = 0; i < nt; i++)
+			for (int j = 0; j < 3; j++)
+				for (uint32_t s = 0; s < 6; s++)
+					if (sites[2 * s] == t[6 * i + 2 * j] && sites[2 * s + 1] == t[6 * i + 2 * j + 1])
+						tri[3 * i + j] = s;
+		rc = tdc_validate_cdt(sites, 6, tri, nt, in.seg, 0, err, sizeof(err));
+		CHECK(rc != 0 && strstr(err, "not locally Delaunay"),
+			  "the CDT without its segment must fail: %d %s", rc, err);
+		free(t);
+		free(tri);
+	}
+	tdc_cdt_free(cdt);
+	tdc_job_free(job);
+	free_input(&in);
+}
+
+static void
+test_crossing(void)
+{
+	input		in = {0};
+	tdc_job    *job = NULL;
+	tdc_cdt    *cdt = NULL;
+	char		err[256] = "";
+	size_t		s1 = 0,
+				s2 = 0;
+	int			rc;
+
+	add_pt(&in, 0, 0);
+	add_pt(&in, 2, 2);
+	add_pt(&in, 0, 2);
+	add_pt(&in, 2, 0);
+	add_pt(&in, 5, 5);
+	add_seg(&in, 2, 4);
+	add_seg(&in, 0, 1);
+	add_seg(&in, 2, 3);			/* crosses 0-1 at (1, 1), no site */
+	rc = run(&in, 0, &job, &cdt, err);
+	CHECK(rc == TDC_ECROSS, "crossing segments: status %d (%s)", rc, err);
+	CHECK(strstr(err, "(0 0) to (2 2)") && strstr(err, "(0 2) to (2 0)"),
+		  "the message names both segments: %s", err);
+	CHECK(cdt && tdc_cdt_crossing(cdt, &s1, &s2) && s1 == 1 && s2 == 2,
+		  "crossing pair %zu %zu, want 1 2", s1, s2);
+	tdc_cdt_free(cdt);
+	tdc_job_free(job);
+
+	/* at a site both pass through, it is no crossing */
+	add_pt(&in, 1, 1);
+	rc = run(&in, 0, &job, &cdt, err);
+	CHECK(rc == TDC_OK, "crossing at a site: %d %s", rc, err);
+	tdc_cdt_free(cdt);
+	tdc_job_free(job);
+
+	/* segment index out of range */
+	add_seg(&in, 0, 99);
+	rc = run(&in, 0, &job, &cdt, err);
+	CHECK(rc == TDC_EINVAL, "index out of range: %d %s", rc, err);
+	tdc_cdt_free(cdt);
+	tdc_job_free(job);
+	free_input(&in);
+}
+
+/* The result depends on the sites and segments, not the order nor threads. */
+static void
+test_unique(void)
+{
+	input		in = {0},
+				rev = {0};
+	tdc_job    *job = NULL;
+	tdc_cdt    *cdt = NULL;
+	char		err[256];
+	size_t		na = 0,
+				nb = 0,
+				nc = 0;
+	double	   *a = NULL,
+			   *b = NULL,
+			   *c = NULL;
+	int			n = tdc_test_quick ? 30000 : 120000;
+
+	/* cocircular everywhere: integer grid contours plus random grid points */
+	for (int r = 1; r <= n / 2000; r++)
+		add_ring(&in, 0, 0, 10.0 * r, 0, 400);
+	for (size_t i = 0; i < in.n; i++)
+	{
+		in.xy[2 * i] = round(in.xy[2 * i] * 4) / 4;
+		in.xy[2 * i + 1] = round(in.xy[2 * i + 1] * 4) / 4;
+	}
+	while ((int) in.n < n)
+		add_pt(&in, round(urand() * 2000 - 1000) / 4, round(urand() * 2000 - 1000) / 4);
+	rev = in;
+	rev.seg = malloc(in.k * 8);
+	for (size_t s = 0; s < in.k; s++)
+	{
+		rev.seg[2 * s] = in.seg[2 * (in.k - 1 - s) + 1];
+		rev.seg[2 * s + 1] = in.seg[2 * (in.k - 1 - s)];
+	}
+
+	if (run(&in, 1, &job, &cdt, err) == TDC_OK)
+	{
+		a = tri_set(job, &na);
+		CHECK(tdc_cdt_validate(cdt, err, sizeof(err)) == 0, "rounded rings: %s", err);
+	}
+	else
+		CHECK(0, "rounded rings, 1 thread: %s", err);
+	tdc_cdt_free(cdt);
+	tdc_job_free(job);
+	if (run(&rev, 2, &job, &cdt, err) == TDC_OK)
+		b = tri_set(job, &nb);
+	else
+		CHECK(0, "rounded rings, 2 threads, reversed: %s", err);
+	tdc_cdt_free(cdt);
+	tdc_job_free(job);
+	if (run(&in, 3, &job, &cdt, err) == TDC_OK)
+		c = tri_set(job, &nc);
+	else
+		CHECK(0, "rounded rings, 3 threads: %s", err);
+	tdc_cdt_free(cdt);
+	tdc_job_free(job);
+	CHECK(a && b && same_sets(a, na, b, nb), "reversed segments and 2 threads give other triangles");
+	CHECK(a && c && same_sets(a, na, c, nc), "3 threads give other triangles");
+	free(a);
+	free(b);
+	free(c);
+	free(rev.seg);
+	free_input(&in);
+}
+
+static double
+now(void)
+{
+	struct timespec ts;
+
+	clock_gettime(CLOCK_MONOTONIC, &ts);
+	return ts.tv_sec + ts.tv_nsec * 1e-9;
+}
+
+/*
+ * Cancel during a long insertion: answered within 50 ms.  Best of up to 3
+ * tries, as the engine's cancel test: a loaded machine may not run the
+ * insertion's thread for a while, which is no latency of ours.
+ */
+static void
+test_cancel(void)
+{
+	input		in = {0};
+	tdc_job    *job = NULL;
+	char		err[256];
+	int			rc;
+	double		best = 1e9;
+	int			canceled = 0;
+
+	/* long segments across many random points: much flipping */
+	for (int i = 0; i < 200000; i++)
+		add_pt(&in, urand(), urand());
+	for (int i = 0; i < 400; i++)
+	{
+		uint32_t	a = add_pt(&in, -1, i / 400.0),
+					b = add_pt(&in, 2, i / 400.0 + 0.0001);
+
+		add_seg(&in, a, b);
+	}
+	for (int try = 0; try < 3 && best >= 0.05; try++)
+	{
+		tdc_cdt    *cdt = NULL;
+		double		t;
+
+		rc = tdc_triangulate(in.xy, in.n, NULL, &job, err, sizeof(err));
+		CHECK(rc == TDC_OK, "cancel input: %s", err);
+		rc = tdc_cdt_start(job, in.seg, in.k, &cdt, err, sizeof(err));
+		CHECK(rc == TDC_OK, "cdt start: %s", err);
+		if (rc == TDC_OK)
+		{
+			usleep(20000);
+			t = now();
+			tdc_cdt_cancel(cdt);
+			rc = tdc_cdt_wait(cdt, 5000);
+			t = now() - t;
+			if (rc == TDC_ECANCELED)
+			{
+				canceled++;
+				best = t < best ? t : best;
+			}
+		}
+		tdc_cdt_free(cdt);
+		tdc_job_free(job);
+	}
+	CHECK(canceled > 0, "no insertion was cancelled");
+	CHECK(best < 0.05, "cancel answered in %.3f s at best", best);
+	printf("cdt: cancel during the insertion answered in %.2f ms\n", best * 1000);
+	free_input(&in);
+}
+
+/* options.max_memory bounds the insertion's arrays too (tdc_cdt_memory). */
+static void
+test_memory_limit(void)
+{
+	input		in = {0};
+	tdc_options o;
+	tdc_job    *job = NULL;
+	tdc_cdt    *cdt = NULL;
+	char		err[256];
+	int			rc;
+
+	contours(&in, 6, 30, 100);
+	tdc_options_init(&o);
+	o.max_memory = tdc_estimate_memory(in.n, &o) + tdc_cdt_memory(in.n) / 2;
+	rc = tdc_triangulate(in.xy, in.n, &o, &job, err, sizeof(err));
+	CHECK(rc == TDC_OK, "memory limit: the triangulation fits: %s", err);
+	rc = tdc_cdt_start(job, in.seg, in.k, &cdt, err, sizeof(err));
+	CHECK(rc == TDC_EMEMLIMIT && cdt == NULL, "memory limit: status %d, want TDC_EMEMLIMIT (%s)", rc, err);
+	tdc_job_free(job);
+
+	o.max_memory = tdc_estimate_memory(in.n, &o) + tdc_cdt_memory(in.n);
+	rc = tdc_triangulate(in.xy, in.n, &o, &job, err, sizeof(err));
+	CHECK(rc == TDC_OK, "memory limit: %s", err);
+	rc = tdc_cdt_run(job, in.seg, in.k, &cdt, err, sizeof(err));
+	CHECK(rc == TDC_OK, "memory limit with room for the insertion: %d %s", rc, err);
+	tdc_cdt_free(cdt);
+	tdc_job_free(job);
+	free_input(&in);
+}
+
+void
+test_cdt(void)
+{
+	if (!cgal_path())
+		printf("cdt: no build/cgal_cdt (libcgal-dev missing?): CGAL comparisons skipped\n");
+	test_rules();
+	test_forced_edge();
+	test_crossing();
+	test_random();
+	test_contours();
+	test_holes();
+	test_grid();
+	test_unique();
+	test_memory_limit();
+	test_cancel();
+}
