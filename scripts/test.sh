@@ -274,7 +274,8 @@ fi
 citus_src=${TDC_CITUS_SRC:-$TDC_ROOT/../shared/citus}
 if ((${TDC_CITUS:-1} && built)); then
 	if [ -f "$citus_src/citus-13.2.2.tar.gz" ]; then
-		run_part citus plain bash test/citus/run.sh
+		# its first run builds Citus: up to 12 minutes on a loaded 2-core machine
+		PART_TIMEOUT=$((PART_TIMEOUT * 2)) run_part citus plain bash test/citus/run.sh
 	else
 		tdc_warn "no Citus source ($citus_src/citus-13.2.2.tar.gz): the Citus part is skipped"
 		record citus 0 0 "skipped: no Citus source (../shared/citus or TDC_CITUS_SRC)"
