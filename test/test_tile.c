@@ -116,7 +116,8 @@ oneshot(const double *xy, size_t n, tset *s)
 	while (tdc_next_triangle(job, &it, v))
 		tset_add(s, &cap, tdc_site_xy(job, v[0]), tdc_site_xy(job, v[1]), tdc_site_xy(job, v[2]));
 	tdc_job_free(job);
-	qsort(s->t, s->ntri, 48, cmp_tri);
+	if (s->ntri > 0)
+		qsort(s->t, s->ntri, 48, cmp_tri);
 	return true;
 }
 
@@ -267,7 +268,8 @@ tiled(const double *xy, size_t n, const int64_t *lab, int64_t ntiles, double hal
 		}
 	}
 out:
-	qsort(s->t, s->ntri, 48, cmp_tri);
+	if (s->ntri > 0)
+		qsort(s->t, s->ntri, 48, cmp_tri);
 	free(extra);
 	free(hull);
 	free(q);

@@ -817,7 +817,8 @@ tdc_tile_finish(const tdc_job *job, const tdc_tile_spec *spec, tdc_tile_result *
 	}
 	for (size_t w = 0, at = 0; w < (size_t) nthreads; w++)
 	{
-		memcpy(res->tri + 3 * at, tw[w].tri, sizeof(size_t) * 3 * tw[w].ntri);
+		if (tw[w].ntri > 0)
+			memcpy(res->tri + 3 * at, tw[w].tri, sizeof(size_t) * 3 * tw[w].ntri);
 		at += tw[w].ntri;
 		free(tw[w].tri);
 	}
