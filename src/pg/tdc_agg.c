@@ -54,6 +54,7 @@ st_tdcdelaunay_transfn(PG_FUNCTION_ARGS)
 	int32		flags = TDC_OUT_POLYGONS;
 	struct varlena *geom;
 
+	tdc_signal_guard();
 	if (PG_ARGISNULL(1))
 		goto skip;
 	if (PG_NARGS() > 2)
@@ -91,6 +92,7 @@ st_tdcdelaunay_combinefn(PG_FUNCTION_ARGS)
 	TdcAggState *st2 = PG_ARGISNULL(1) ? NULL :
 		(TdcAggState *) PG_GETARG_POINTER(1);
 
+	tdc_signal_guard();
 	if (st2 == NULL)
 	{
 		if (st1 == NULL)
@@ -108,6 +110,7 @@ PG_FUNCTION_INFO_V1(st_tdcdelaunay_serialfn);
 Datum
 st_tdcdelaunay_serialfn(PG_FUNCTION_ARGS)
 {
+	tdc_signal_guard();
 	(void) agg_context(fcinfo, "st_tdcdelaunay_serialfn");
 	PG_RETURN_BYTEA_P(tdc_agg_state_serialize((TdcAggState *) PG_GETARG_POINTER(0)));
 }
@@ -119,6 +122,7 @@ st_tdcdelaunay_deserialfn(PG_FUNCTION_ARGS)
 {
 	bytea	   *in;
 
+	tdc_signal_guard();
 	(void) agg_context(fcinfo, "st_tdcdelaunay_deserialfn");
 	in = PG_GETARG_BYTEA_P(0);	/* 4-byte header, not packed */
 	PG_RETURN_POINTER(tdc_agg_state_deserialize(in, CurrentMemoryContext));
@@ -131,6 +135,7 @@ st_tdcdelaunay_finalfn(PG_FUNCTION_ARGS)
 {
 	TdcAggState *st;
 
+	tdc_signal_guard();
 	(void) agg_context(fcinfo, "st_tdcdelaunay_finalfn");
 	if (PG_ARGISNULL(0))
 		PG_RETURN_NULL();
@@ -154,6 +159,7 @@ _st_tdcdelaunay_state_check(PG_FUNCTION_ARGS)
 	TdcAggState *st = tdc_agg_state_deserialize(PG_GETARG_BYTEA_P(0),
 										CurrentMemoryContext);
 
+	tdc_signal_guard();
 	PG_RETURN_INT64((int64) st->pts.n);
 }
 

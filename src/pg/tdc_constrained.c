@@ -355,6 +355,7 @@ st_tdcconstraineddelaunaytriangles(PG_FUNCTION_ARGS)
 	TdcPointBuf buf;
 	SegList		segs = {CurrentMemoryContext, NULL, 0, 0};
 
+	tdc_signal_guard();
 	tdc_check_params(0.0, flags, fname);
 	tdc_pointbuf_init(&buf, CurrentMemoryContext);
 	tdc_gser_append(&buf, geom, fname);
@@ -466,6 +467,7 @@ st_tdcconstraineddelaunay_transfn(PG_FUNCTION_ARGS)
 	struct varlena *geom;
 	uint64		first;
 
+	tdc_signal_guard();
 	if (PG_ARGISNULL(1) || (PG_NARGS() > 2 && PG_ARGISNULL(2)))
 	{
 		if (st == NULL)
@@ -500,6 +502,7 @@ st_tdcconstraineddelaunay_combinefn(PG_FUNCTION_ARGS)
 	CdtAggState *st2 = PG_ARGISNULL(1) ? NULL : (CdtAggState *) PG_GETARG_POINTER(1);
 	uint64		base;
 
+	tdc_signal_guard();
 	if (st2 == NULL)
 	{
 		if (st1 == NULL)
@@ -534,6 +537,7 @@ st_tdcconstraineddelaunay_serialfn(PG_FUNCTION_ARGS)
 	uint32		u;
 	int32		i;
 
+	tdc_signal_guard();
 	(void) cdt_agg_context(fcinfo, "st_tdcconstraineddelaunay_serialfn");
 	st = (CdtAggState *) PG_GETARG_POINTER(0);
 	p = &st->pts;
@@ -600,6 +604,7 @@ st_tdcconstraineddelaunay_deserialfn(PG_FUNCTION_ARGS)
 				flags;
 	CdtAggState *st;
 
+	tdc_signal_guard();
 	(void) cdt_agg_context(fcinfo, "st_tdcconstraineddelaunay_deserialfn");
 	in = PG_GETARG_BYTEA_P(0);
 	r = VARDATA(in);
@@ -671,6 +676,7 @@ st_tdcconstraineddelaunay_finalfn(PG_FUNCTION_ARGS)
 {
 	CdtAggState *st;
 
+	tdc_signal_guard();
 	(void) cdt_agg_context(fcinfo, "st_tdcconstraineddelaunay_finalfn");
 	if (PG_ARGISNULL(0))
 		PG_RETURN_NULL();

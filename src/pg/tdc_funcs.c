@@ -1087,6 +1087,7 @@ st_tdcdelaunaytriangles(PG_FUNCTION_ARGS)
 
 	instr_time	start;
 
+	tdc_signal_guard();
 	tdc_check_params(tolerance, flags, fname);
 	if (tdc_guc_stats)
 		INSTR_TIME_SET_CURRENT(start);
@@ -1121,6 +1122,7 @@ st_tdcdelaunaydump(PG_FUNCTION_ARGS)
 	Datum		values[2];
 	bool		nulls[2] = {false, false};
 
+	tdc_signal_guard();
 	/* STRICT: a NULL query or tolerance gives no rows, as in PostGIS */
 	query = text_to_cstring(PG_GETARG_TEXT_PP(0));
 	tolerance = PG_GETARG_FLOAT8(1);

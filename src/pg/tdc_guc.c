@@ -39,6 +39,7 @@
 #include <limits.h>
 #include <unistd.h>
 
+#include "access/xact.h"
 #include "fmgr.h"
 #include "utils/guc.h"
 #include "utils/memutils.h"
@@ -217,4 +218,8 @@ _PG_init(void)
 							NULL, NULL, NULL);
 
 	MarkGUCPrefixReserved("tdc_delaunay");
+
+	/* PostGIS's cancel handler must never allocate: see tdc_signal.c */
+	if (IsTransactionState())
+		tdc_signal_settle();
 }

@@ -13,6 +13,8 @@
  *	tdc_funcs.c		ST_TDCDelaunayTriangles, ST_TDCDelaunayDump and the
  *					helper that runs the core while watching for interrupts
  *	tdc_guc.c		_PG_init and the tdc_delaunay.* settings
+ *	tdc_signal.c	keeps PostGIS's cancel handler from allocating inside a
+ *					signal; every SQL entry point calls tdc_signal_guard()
  *
  * Only the backend's main thread ever calls PostgreSQL.  The core's worker
  * threads see nothing but plain malloc'd arrays.
@@ -192,5 +194,17 @@ extern bool tdc_run_emit(TdcRun *run, tdc_emit_fn emit, void *arg,
 extern void tdc_run_free(TdcRun *run);
 extern Datum tdc_triangulate_to_datum(const TdcPointBuf *buf, double tolerance,
 									  int flags, const char *fname);
+
+/* tdc_signal.c */
+extern bool tdc_signal_settled;
+extern void tdc_signal_settle(void);
+
+/* First thing in every SQL entry point: see tdc_signal.c. */
+static inline void
+tdc_signal_guard(void)
+{
+	if (unlikely(!tdc_signal_settled))
+		tdc_signal_settle();
+}
 
 #endif							/* TDC_PG_H */

@@ -127,6 +127,7 @@ _tdc_tile_transfn(PG_FUNCTION_ARGS)
 	int64		label;
 	uint64		before;
 
+	tdc_signal_guard();
 	if (!AggCheckCallContext(fcinfo, &aggcxt))
 		elog(ERROR, "_tdc_tile_transfn called in non-aggregate context");
 	if (PG_ARGISNULL(1))
@@ -204,6 +205,7 @@ _tdc_tile_finalfn(PG_FUNCTION_ARGS)
 	int			dim;
 	uint64		size;
 
+	tdc_signal_guard();
 	if (!AggCheckCallContext(fcinfo, NULL))
 		elog(ERROR, "_tdc_tile_finalfn called in non-aggregate context");
 	if (st == NULL || st->pts.n == 0)
@@ -312,6 +314,7 @@ _tdc_tile_triangles(PG_FUNCTION_ARGS)
 	bool		nulls[2] = {false, false};
 	int			dim;
 
+	tdc_signal_guard();
 	InitMaterializedSRF(fcinfo, 0);
 	if (VARSIZE(in) < sizeof(TileOut))
 		ereport(ERROR,
@@ -427,6 +430,7 @@ _tdc_hull_transfn(PG_FUNCTION_ARGS)
 	HullState  *st = PG_ARGISNULL(0) ? NULL : (HullState *) PG_GETARG_POINTER(0);
 	Oid			argtype = get_fn_expr_argtype(fcinfo->flinfo, 1);
 
+	tdc_signal_guard();
 	if (!AggCheckCallContext(fcinfo, &aggcxt))
 		elog(ERROR, "_tdc_hull_transfn called in non-aggregate context");
 	if (PG_ARGISNULL(1))
@@ -468,6 +472,7 @@ _tdc_hull_finalfn(PG_FUNCTION_ARGS)
 	HullState  *st = PG_ARGISNULL(0) ? NULL : (HullState *) PG_GETARG_POINTER(0);
 	Datum	   *d;
 
+	tdc_signal_guard();
 	if (st == NULL || st->n == 0)
 		PG_RETURN_NULL();
 	hull_reduce(st);

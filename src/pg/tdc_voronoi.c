@@ -488,6 +488,7 @@ PG_FUNCTION_INFO_V1(st_tdcvoronoipolygons);
 Datum
 st_tdcvoronoipolygons(PG_FUNCTION_ARGS)
 {
+	tdc_signal_guard();
 	return voronoi_function(fcinfo, false, "ST_TDCVoronoiPolygons");
 }
 
@@ -495,5 +496,6 @@ PG_FUNCTION_INFO_V1(st_tdcvoronoilines);
 Datum
 st_tdcvoronoilines(PG_FUNCTION_ARGS)
 {
+	tdc_signal_guard();
 	return voronoi_function(fcinfo, true, "ST_TDCVoronoiLines");
 }

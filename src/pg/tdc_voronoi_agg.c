@@ -96,6 +96,7 @@ st_tdcvoronoi_transfn(PG_FUNCTION_ARGS)
 	bool		has_ext = false;
 	struct varlena *geom;
 
+	tdc_signal_guard();
 	if (PG_ARGISNULL(1) || (PG_NARGS() > 2 && PG_ARGISNULL(2)))
 	{
 		if (st == NULL)
@@ -132,6 +133,7 @@ st_tdcvoronoi_combinefn(PG_FUNCTION_ARGS)
 	VorAggState *st1 = PG_ARGISNULL(0) ? NULL : (VorAggState *) PG_GETARG_POINTER(0);
 	VorAggState *st2 = PG_ARGISNULL(1) ? NULL : (VorAggState *) PG_GETARG_POINTER(1);
 
+	tdc_signal_guard();
 	if (st2 == NULL || !st2->ext_set)
 	{
 		if (st1 == NULL)
@@ -157,6 +159,7 @@ st_tdcvoronoi_serialfn(PG_FUNCTION_ARGS)
 	uint32		u;
 	Size		size;
 
+	tdc_signal_guard();
 	(void) agg_context(fcinfo, "st_tdcvoronoi_serialfn");
 	st = (VorAggState *) PG_GETARG_POINTER(0);
 	inner = tdc_agg_state_serialize(st->base);
@@ -198,6 +201,7 @@ st_tdcvoronoi_deserialfn(PG_FUNCTION_ARGS)
 	uint32		u;
 	Size		size;
 
+	tdc_signal_guard();
 	(void) agg_context(fcinfo, "st_tdcvoronoi_deserialfn");
 	in = PG_GETARG_BYTEA_P(0);
 	size = VARSIZE(in);
@@ -230,6 +234,7 @@ st_tdcvoronoi_finalfn(PG_FUNCTION_ARGS)
 {
 	VorAggState *st;
 
+	tdc_signal_guard();
 	(void) agg_context(fcinfo, "st_tdcvoronoi_finalfn");
 	if (PG_ARGISNULL(0))
 		PG_RETURN_NULL();

@@ -163,6 +163,7 @@ st_tdcvoronoidump(PG_FUNCTION_ARGS)
 	Datum		values[2];
 	bool		nulls[2] = {false, false};
 
+	tdc_signal_guard();
 #if PG_VERSION_NUM >= 150001
 	InitMaterializedSRF(fcinfo, 0);
 #else
