@@ -679,7 +679,8 @@ COST 1000;
 COMMENT ON FUNCTION ST_TDCConstrainedDelaunayTriangles(geometry, int4) IS
 'Exact constrained Delaunay triangulation of the vertices of a geometry, every segment of its '
 'linestrings and polygon rings an edge (split at vertices on it). Crossing segments are an error. '
-'flags 0: GEOMETRYCOLLECTION of POLYGON triangles, 1: MULTILINESTRING of the edges, 2: TIN.';
+'flags 0: GEOMETRYCOLLECTION of POLYGON triangles, 1: MULTILINESTRING of the edges, 2: TIN, '
+'5: MULTILINESTRING of the constraint edges alone.';
 
 -- Aggregates: ST_TDCConstrainedDelaunay(geometry [, flags])
 --   = ST_TDCConstrainedDelaunayTriangles(ST_Collect(geometry), flags),
@@ -762,5 +763,5 @@ CREATE AGGREGATE ST_TDCConstrainedDelaunay(geometry, int4) (
 
 COMMENT ON AGGREGATE ST_TDCConstrainedDelaunay(geometry, int4) IS
 'Exact constrained Delaunay triangulation of all input geometries with flags '
-'(0: GEOMETRYCOLLECTION of POLYGON, 1: MULTILINESTRING of edges, 2: TIN); '
+'(0: GEOMETRYCOLLECTION of POLYGON, 1: MULTILINESTRING of edges, 2: TIN, 5: the constraint edges alone); '
 'same as ST_TDCConstrainedDelaunayTriangles(ST_Collect(geom), flags).';

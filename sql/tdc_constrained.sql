@@ -106,6 +106,22 @@ SELECT tdc_cdt_vs_sfcgal('GEOMETRYCOLLECTION(MULTIPOINT(5 1,5 -1,5 5,5 -5),LINES
 SELECT ST_AsText(ST_Normalize(ST_TDCConstrainedDelaunayTriangles(
 	'GEOMETRYCOLLECTION(LINESTRING(0 0,4 0),MULTIPOINT(1 0,2 0,3 0,2 0.01,2 -0.01))'::geometry, 1)))
 	AS split_edges;
+-- flags 5: the constraint edges alone, split at the vertices on them, with
+-- Z and SRID; no bounding box of the whole triangulation (the envelope is the
+-- edges'), EMPTY for no segments, and the aggregate.
+SELECT ST_AsText(ST_Normalize(ST_TDCConstrainedDelaunayTriangles(
+	'GEOMETRYCOLLECTION(LINESTRING(0 0,4 0),MULTIPOINT(1 0,2 0,3 0,2 0.01,2 -0.01))'::geometry, 5)))
+	AS constraint_edges;
+SELECT ST_AsEWKT(ST_Normalize(ST_TDCConstrainedDelaunayTriangles(
+	'SRID=3857;GEOMETRYCOLLECTION(LINESTRING Z (0 0 1,4 0 2),MULTIPOINT Z (1 0 5,2 0.01 6,3 3 8))'::geometry, 5)))
+	AS constraint_edges_z;
+SELECT ST_AsText(ST_Envelope(ST_TDCConstrainedDelaunayTriangles(
+	'GEOMETRYCOLLECTION(LINESTRING(0 0,1 0),MULTIPOINT(5 5,-3 7))'::geometry, 5))) AS constraint_envelope;
+SELECT ST_AsEWKT(ST_TDCConstrainedDelaunayTriangles('SRID=4326;MULTIPOINT(0 0,1 1,2 0)'::geometry, 5))
+	AS no_constraints;
+SELECT ST_AsText(ST_Normalize(ST_TDCConstrainedDelaunay(geom, 5))) AS constraint_edges_agg
+FROM (VALUES ('LINESTRING(0 0,1 0,1 1)'::geometry), ('POLYGON((3 3,4 3,4 4,3 3))'), ('POINT(9 9)')) v(geom);
+
 -- collinear overlaps, a zero-length segment, duplicate vertices
 SELECT ST_NumGeometries(ST_TDCConstrainedDelaunayTriangles(
 	'GEOMETRYCOLLECTION(LINESTRING(0 0,2 0),LINESTRING(1 0,3 0),LINESTRING(3 0,3 0),POINT(1 1),POINT(1 1))'::geometry))
@@ -128,6 +144,7 @@ SELECT ST_NumGeometries(ST_TDCConstrainedDelaunayTriangles(
 	ST_Node('MULTILINESTRING((0 0,2 2),(0 2,2 0))'::geometry))) AS noded;
 SELECT ST_TDCConstrainedDelaunayTriangles(ST_MakeLine(ST_MakePoint(0, 0), ST_MakePoint('NaN', 1)));
 SELECT ST_TDCConstrainedDelaunayTriangles('LINESTRING(0 0,1 1)'::geometry, 3);
+SELECT ST_TDCConstrainedDelaunayTriangles('LINESTRING(0 0,1 1)'::geometry, 4);
 \set VERBOSITY terse
 
 -- Cancel: a statement_timeout during a long constrained triangulation

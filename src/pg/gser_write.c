@@ -356,6 +356,49 @@ tdc_gser_result(const tdc_job *job, int flags, const TdcPointBuf *buf,
 	return out;
 }
 
+/*
+ * A MULTILINESTRING of "count" edges that next() hands out one at a time as
+ * pairs of the job's sites: a chosen subset of the triangulation's edges
+ * (the constraint edges of a constrained triangulation).  Written without a
+ * bounding box, since the edges may span less than the job's sites; PostGIS
+ * computes a missing box when it needs one.
+ */
+struct varlena *
+tdc_gser_edge_list(const tdc_job *job, const TdcPointBuf *buf, uint64 count,
+				   bool (*next) (void *arg, uint32 v[2]), void *arg,
+				   const char *fname)
+{
+	bool		hasz = buf->hasz && count > 0;
+	uint64		msize = member_size(TDC_OUT_EDGES, hasz);
+	uint64		size = VARHDRSZ + G_HEADER + 8 + count * msize;
+	uint64		written = 0;
+	uint32		v[2];
+	char	   *out;
+	char	   *p;
+
+	tdc_gser_check_result_size(size, fname);
+	out = palloc((Size) size);
+	write_header(out, (Size) size, buf->srid, hasz, false);
+	p = VARDATA(out) + G_HEADER;
+	p = put_u32(p, G_MULTILINE);
+	p = put_u32(p, (uint32) count);
+	while (next(arg, v))
+	{
+		if (written++ >= count)
+			elog(ERROR, "%s: core returned more edges than it counted", fname);
+		if ((written & (FILL_POLL_MEMBERS - 1)) == 0)
+			CHECK_FOR_INTERRUPTS();
+		p = put_u32(p, G_LINE);
+		p = put_u32(p, 2);
+		p = put_vertex(p, job, v[0], buf, hasz);
+		p = put_vertex(p, job, v[1], buf, hasz);
+	}
+	if (written != count || p != out + size)
+		elog(ERROR, "%s: core returned %llu of %llu counted edges", fname,
+			 (unsigned long long) written, (unsigned long long) count);
+	return (struct varlena *) out;
+}
+
 /* An empty result of the given kind (2D, like PostGIS). */
 struct varlena *
 tdc_gser_empty(int flags, int32 srid)
@@ -367,7 +410,7 @@ tdc_gser_empty(int flags, int32 srid)
 	write_header(out, size, srid, false, false);
 	p = VARDATA(out) + G_HEADER;
 	p = put_u32(p, flags == TDC_OUT_POLYGONS ? G_COLLECTION :
-				flags == TDC_OUT_EDGES ? G_MULTILINE : G_TIN);
+				flags == TDC_OUT_EDGES || flags == TDC_OUT_CONSTRAINTS ? G_MULTILINE : G_TIN);
 	(void) put_u32(p, 0);
 	return (struct varlena *) out;
 }

@@ -238,9 +238,11 @@ report_crossing(const CdtHold *hold, const TdcPointBuf *buf, const SegList *w,
 
 /*
  * Insert the segments into the finished job of run, waiting interruptibly.
- * Any failure is an ERROR; the insertion is freed with buf's context.
+ * Any failure is an ERROR.  The caller frees the insertion with cdt_release
+ * once it no longer needs the constraint edges; on error it goes with buf's
+ * context.
  */
-static void
+static CdtHold *
 constrain(TdcRun *run, const TdcPointBuf *buf, const SegList *w,
 		  const char *fname)
 {
@@ -301,9 +303,43 @@ constrain(TdcRun *run, const TdcPointBuf *buf, const SegList *w,
 						tdc_cdt_num_constraint_edges(hold->cdt),
 						INSTR_TIME_GET_MILLISEC(stop))));
 	}
-	/* the mesh is final; the constraint numbers are not needed for output */
+	return hold;
+}
+
+/* Free the insertion now (its memory is big); the job stays. */
+static void
+cdt_release(CdtHold *hold)
+{
 	tdc_cdt_free(hold->cdt);
 	hold->cdt = NULL;
+}
+
+/* tdc_gser_edge_list's next() over the constraint edges. */
+typedef struct CdtEdgeWalk
+{
+	const tdc_cdt *cdt;
+	tdc_iter	it;
+} CdtEdgeWalk;
+
+static bool
+next_constraint_edge(void *arg, uint32 v[2])
+{
+	CdtEdgeWalk *walk = arg;
+
+	return tdc_next_constraint_edge(walk->cdt, &walk->it, v) != 0;
+}
+
+/* The flags of the constrained functions: ST_TDCDelaunayTriangles's and 5. */
+static void
+cdt_check_flags(int flags, const char *fname)
+{
+	if (flags != TDC_OUT_CONSTRAINTS &&
+		(flags < TDC_OUT_POLYGONS || flags > TDC_OUT_TIN))
+		ereport(ERROR,
+				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
+				 errmsg("%s: invalid flags %d", fname, flags),
+				 errhint("Use 0 for a GEOMETRYCOLLECTION of polygons, 1 for a MULTILINESTRING of edges, "
+						 "2 for a TIN, 5 for a MULTILINESTRING of the constraint edges alone.")));
 }
 
 /*
@@ -315,6 +351,7 @@ constrained_to_datum(const TdcPointBuf *buf, const SegList *segs, int flags,
 					 const char *fname)
 {
 	TdcRun	   *run;
+	CdtHold    *hold;
 	TdcGserWriter wr;
 	struct varlena *result;
 	uint64		extra;
@@ -326,10 +363,23 @@ constrained_to_datum(const TdcPointBuf *buf, const SegList *segs, int flags,
 	 * The result and the segments, for max_memory; tdc_cdt_start adds the
 	 * insertion's own arrays (tdc_cdt_memory) to the engine's estimate.
 	 */
-	extra = tdc_gser_result_bound(buf->n, flags, buf->hasz) +
+	extra = tdc_gser_result_bound(buf->n, flags == TDC_OUT_CONSTRAINTS ?
+								  TDC_OUT_EDGES : flags, buf->hasz) +
 		segs->nseg * 2 * sizeof(uint32);
 	run = tdc_run(buf, 0.0, extra, fname);
-	constrain(run, buf, segs, fname);
+	hold = constrain(run, buf, segs, fname);
+	if (flags == TDC_OUT_CONSTRAINTS)
+	{
+		CdtEdgeWalk walk = {hold->cdt, {0}};
+
+		result = tdc_gser_edge_list(run->job, buf,
+									tdc_cdt_num_constraint_edges(hold->cdt),
+									next_constraint_edge, &walk, fname);
+		cdt_release(hold);
+		tdc_run_free(run);
+		return PointerGetDatum(result);
+	}
+	cdt_release(hold);
 
 	result = tdc_gser_result_alloc(run->job, flags, buf, fname, &wr);
 	if (flags == TDC_OUT_EDGES || wr.count == 0 ||
@@ -356,7 +406,7 @@ st_tdcconstraineddelaunaytriangles(PG_FUNCTION_ARGS)
 	SegList		segs = {CurrentMemoryContext, NULL, 0, 0};
 
 	tdc_signal_guard();
-	tdc_check_params(0.0, flags, fname);
+	cdt_check_flags(flags, fname);
 	tdc_pointbuf_init(&buf, CurrentMemoryContext);
 	tdc_gser_append(&buf, geom, fname);
 	if (collect_segments(geom, &segs, 0, fname) != buf.n)
@@ -477,7 +527,7 @@ st_tdcconstraineddelaunay_transfn(PG_FUNCTION_ARGS)
 	if (PG_NARGS() > 2)
 	{
 		flags = PG_GETARG_INT32(2);
-		tdc_check_params(0.0, flags, CDT_AGG_NAME);
+		cdt_check_flags(flags, CDT_AGG_NAME);
 	}
 	if (st == NULL)
 		st = cdt_state_new(aggcxt);
@@ -627,7 +677,8 @@ st_tdcconstraineddelaunay_deserialfn(PG_FUNCTION_ARGS)
 		bad_cstate("unknown flag bits");
 	if (!(bits & CB_HAVE_FIRST) && ((bits & CB_HASZ) || n != 0))
 		bad_cstate("vertices without dimensions");
-	if ((bits & CB_FLAGS) && (flags < TDC_OUT_POLYGONS || flags > TDC_OUT_TIN))
+	if ((bits & CB_FLAGS) && flags != TDC_OUT_CONSTRAINTS &&
+		(flags < TDC_OUT_POLYGONS || flags > TDC_OUT_TIN))
 		bad_cstate("bad flags");
 	per = ((bits & CB_HASZ) ? 3 : 2) * sizeof(double);
 	if (n > TDC_MAX_POINTS || k > MaxAllocHugeSize / 8 ||

@@ -34,6 +34,8 @@
 #define TDC_OUT_POLYGONS	0	/* GEOMETRYCOLLECTION of POLYGON */
 #define TDC_OUT_EDGES		1	/* MULTILINESTRING */
 #define TDC_OUT_TIN			2	/* TIN */
+/* Constrained functions only: 1 | 4, a MULTILINESTRING of the constraint edges alone. */
+#define TDC_OUT_CONSTRAINTS	5
 
 /* Settings (tdc_guc.c). */
 extern int	tdc_guc_threads;
@@ -153,6 +155,10 @@ extern void tdc_gser_emit(void *arg, size_t first, size_t count,
 						  const uint32 *v);
 extern void tdc_gser_fill(const TdcGserWriter *w);
 extern struct varlena *tdc_gser_empty(int flags, int32 srid);
+extern struct varlena *tdc_gser_edge_list(const tdc_job *job, const TdcPointBuf *buf,
+										  uint64 count,
+										  bool (*next) (void *arg, uint32 v[2]),
+										  void *arg, const char *fname);
 extern Size tdc_gser_triangle_size(bool hasz);
 extern void tdc_gser_write_triangle(struct varlena *out, const tdc_job *job,
 									const uint32 v[3], const TdcPointBuf *buf);
