@@ -156,10 +156,10 @@ PG_FUNCTION_INFO_V1(_st_tdcdelaunay_state_check);
 Datum
 _st_tdcdelaunay_state_check(PG_FUNCTION_ARGS)
 {
-	TdcAggState *st = tdc_agg_state_deserialize(PG_GETARG_BYTEA_P(0),
-										CurrentMemoryContext);
+	TdcAggState *st;
 
 	tdc_signal_guard();
+	st = tdc_agg_state_deserialize(PG_GETARG_BYTEA_P(0), CurrentMemoryContext);
 	PG_RETURN_INT64((int64) st->pts.n);
 }
 

@@ -178,6 +178,34 @@ extern bytea *tdc_agg_state_serialize(const TdcAggState *st);
 extern TdcAggState *tdc_agg_state_deserialize(const bytea *in,
 											  MemoryContext cxt);
 
+/*
+ * The serialized form of an aggregate whose state holds a TdcAggState plus
+ * a part of its own, which follows the vertices (see tdc_agg_state.c).
+ */
+typedef struct TdcStateFormat
+{
+	uint32		magic;
+	uint32		version;
+	const char *fname;			/* the aggregate, in errors */
+	const char *hint;			/* for a state too large to pass on */
+} TdcStateFormat;
+
+extern bytea *tdc_agg_state_serialize_with(const TdcAggState *st,
+										   const TdcStateFormat *fmt,
+										   const void *extra, Size extra_len,
+										   const char *contents);
+extern TdcAggState *tdc_agg_state_deserialize_with(const bytea *in,
+												   const TdcStateFormat *fmt,
+												   MemoryContext cxt,
+												   const char **extra,
+												   Size *extra_len);
+/* ERROR: "fname: corrupt serialized aggregate state: what" */
+#if PG_VERSION_NUM >= 180000
+extern pg_noreturn void tdc_agg_state_corrupt(const char *fname, const char *what);
+#else
+extern void tdc_agg_state_corrupt(const char *fname, const char *what) pg_attribute_noreturn();
+#endif
+
 /* tdc_funcs.c */
 typedef struct TdcRun
 {
