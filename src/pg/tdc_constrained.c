@@ -393,16 +393,6 @@ typedef struct CdtAggState
 	SegList		segs;
 } CdtAggState;
 
-static MemoryContext
-cdt_agg_context(FunctionCallInfo fcinfo, const char *fn)
-{
-	MemoryContext aggcxt;
-
-	if (!AggCheckCallContext(fcinfo, &aggcxt))
-		elog(ERROR, "%s called in non-aggregate context", fn);
-	return aggcxt;
-}
-
 /* A state in cxt around base, or around a new empty one when base is NULL. */
 static CdtAggState *
 cdt_state_new(MemoryContext cxt, TdcAggState *base)
@@ -444,7 +434,7 @@ PG_FUNCTION_INFO_V1(st_tdcconstraineddelaunay_transfn);
 Datum
 st_tdcconstraineddelaunay_transfn(PG_FUNCTION_ARGS)
 {
-	MemoryContext aggcxt = cdt_agg_context(fcinfo, "st_tdcconstraineddelaunay_transfn");
+	MemoryContext aggcxt = tdc_agg_context(fcinfo, "st_tdcconstraineddelaunay_transfn");
 	CdtAggState *st = PG_ARGISNULL(0) ? NULL : (CdtAggState *) PG_GETARG_POINTER(0);
 	int32		flags = TDC_OUT_POLYGONS;
 	struct varlena *geom;
@@ -480,7 +470,7 @@ PG_FUNCTION_INFO_V1(st_tdcconstraineddelaunay_combinefn);
 Datum
 st_tdcconstraineddelaunay_combinefn(PG_FUNCTION_ARGS)
 {
-	MemoryContext aggcxt = cdt_agg_context(fcinfo, "st_tdcconstraineddelaunay_combinefn");
+	MemoryContext aggcxt = tdc_agg_context(fcinfo, "st_tdcconstraineddelaunay_combinefn");
 	CdtAggState *st1 = PG_ARGISNULL(0) ? NULL : (CdtAggState *) PG_GETARG_POINTER(0);
 	CdtAggState *st2 = PG_ARGISNULL(1) ? NULL : (CdtAggState *) PG_GETARG_POINTER(1);
 	uint64		base;
@@ -514,7 +504,7 @@ st_tdcconstraineddelaunay_serialfn(PG_FUNCTION_ARGS)
 	uint64		k;
 
 	tdc_signal_guard();
-	(void) cdt_agg_context(fcinfo, "st_tdcconstraineddelaunay_serialfn");
+	(void) tdc_agg_context(fcinfo, "st_tdcconstraineddelaunay_serialfn");
 	st = (CdtAggState *) PG_GETARG_POINTER(0);
 	k = st->segs.nseg;
 	/* segments in a state are bounded by MaxAllocHugeSize: no overflow */
@@ -538,7 +528,7 @@ st_tdcconstraineddelaunay_deserialfn(PG_FUNCTION_ARGS)
 	uint64		k;
 
 	tdc_signal_guard();
-	(void) cdt_agg_context(fcinfo, "st_tdcconstraineddelaunay_deserialfn");
+	(void) tdc_agg_context(fcinfo, "st_tdcconstraineddelaunay_deserialfn");
 	base = tdc_agg_state_deserialize_with(PG_GETARG_BYTEA_P(0), &cdt_format,
 										  CurrentMemoryContext,
 										  &extra, &extra_len);
@@ -568,7 +558,7 @@ st_tdcconstraineddelaunay_finalfn(PG_FUNCTION_ARGS)
 	CdtAggState *st;
 
 	tdc_signal_guard();
-	(void) cdt_agg_context(fcinfo, "st_tdcconstraineddelaunay_finalfn");
+	(void) tdc_agg_context(fcinfo, "st_tdcconstraineddelaunay_finalfn");
 	if (PG_ARGISNULL(0))
 		PG_RETURN_NULL();
 	st = (CdtAggState *) PG_GETARG_POINTER(0);

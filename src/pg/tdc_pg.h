@@ -206,6 +206,9 @@ extern pg_noreturn void tdc_agg_state_corrupt(const char *fname, const char *wha
 extern void tdc_agg_state_corrupt(const char *fname, const char *what) pg_attribute_noreturn();
 #endif
 
+/* tdc_agg.c, for the support functions of every aggregate */
+extern MemoryContext tdc_agg_context(FunctionCallInfo fcinfo, const char *fn);
+
 /* tdc_funcs.c */
 typedef struct TdcRun
 {

@@ -40,16 +40,6 @@ typedef struct VorAggState
 	double		ext[4];
 } VorAggState;
 
-static MemoryContext
-agg_context(FunctionCallInfo fcinfo, const char *fn)
-{
-	MemoryContext aggcxt;
-
-	if (!AggCheckCallContext(fcinfo, &aggcxt))
-		elog(ERROR, "%s called in non-aggregate context", fn);
-	return aggcxt;
-}
-
 static VorAggState *
 vor_state_new(MemoryContext cxt)
 {
@@ -91,7 +81,7 @@ PG_FUNCTION_INFO_V1(st_tdcvoronoi_transfn);
 Datum
 st_tdcvoronoi_transfn(PG_FUNCTION_ARGS)
 {
-	MemoryContext aggcxt = agg_context(fcinfo, "st_tdcvoronoi_transfn");
+	MemoryContext aggcxt = tdc_agg_context(fcinfo, "st_tdcvoronoi_transfn");
 	VorAggState *st = PG_ARGISNULL(0) ? NULL : (VorAggState *) PG_GETARG_POINTER(0);
 	double		tolerance = 0.0,
 				ext[4];
@@ -131,7 +121,7 @@ PG_FUNCTION_INFO_V1(st_tdcvoronoi_combinefn);
 Datum
 st_tdcvoronoi_combinefn(PG_FUNCTION_ARGS)
 {
-	MemoryContext aggcxt = agg_context(fcinfo, "st_tdcvoronoi_combinefn");
+	MemoryContext aggcxt = tdc_agg_context(fcinfo, "st_tdcvoronoi_combinefn");
 	VorAggState *st1 = PG_ARGISNULL(0) ? NULL : (VorAggState *) PG_GETARG_POINTER(0);
 	VorAggState *st2 = PG_ARGISNULL(1) ? NULL : (VorAggState *) PG_GETARG_POINTER(1);
 
@@ -159,7 +149,7 @@ st_tdcvoronoi_serialfn(PG_FUNCTION_ARGS)
 	uint32		u[2];
 
 	tdc_signal_guard();
-	(void) agg_context(fcinfo, "st_tdcvoronoi_serialfn");
+	(void) tdc_agg_context(fcinfo, "st_tdcvoronoi_serialfn");
 	st = (VorAggState *) PG_GETARG_POINTER(0);
 	u[0] = st->has_ext ? 1 : 0;
 	u[1] = 0;
@@ -180,7 +170,7 @@ st_tdcvoronoi_deserialfn(PG_FUNCTION_ARGS)
 	uint32		u[2];
 
 	tdc_signal_guard();
-	(void) agg_context(fcinfo, "st_tdcvoronoi_deserialfn");
+	(void) tdc_agg_context(fcinfo, "st_tdcvoronoi_deserialfn");
 	st = palloc0(sizeof(VorAggState));
 	st->base = tdc_agg_state_deserialize_with(PG_GETARG_BYTEA_P(0), &vor_format,
 											  CurrentMemoryContext,
@@ -208,7 +198,7 @@ st_tdcvoronoi_finalfn(PG_FUNCTION_ARGS)
 	VorAggState *st;
 
 	tdc_signal_guard();
-	(void) agg_context(fcinfo, "st_tdcvoronoi_finalfn");
+	(void) tdc_agg_context(fcinfo, "st_tdcvoronoi_finalfn");
 	if (PG_ARGISNULL(0))
 		PG_RETURN_NULL();
 	st = (VorAggState *) PG_GETARG_POINTER(0);
