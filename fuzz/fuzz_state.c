@@ -18,7 +18,12 @@
  *	  flags when no parameters were set);
  *	- when both states are accepted, the combine step either raises an ERROR
  *	  (mixed SRID, dimensions or parameters) or concatenates the vertices,
- *	  and the merged state survives another serialize/deserialize round.
+ *	  and the merged state survives another serialize/deserialize round;
+ *	- an accepted state written with the second input as the extra part of
+ *	  another format (tdc_agg_state_serialize_with, as the constrained and
+ *	  Voronoi aggregates do) reads back with the same vertices and exactly
+ *	  that extra part, and is refused by ST_TDCDelaunay's deserializer and,
+ *	  when the extra part is not empty, by one that expects none.
  */
 #include "postgres.h"
 
@@ -141,6 +146,77 @@ try_deserialize(const uint8 *data, size_t size, bool *ok)
 	return st;
 }
 
+/* A format of another aggregate, as tdc_constrained.c and tdc_voronoi_agg.c have. */
+static const TdcStateFormat other_format = {
+	0x5a5a4454, 1, "fuzz_other", "a hint", -1
+};
+
+/* Raises an ERROR? */
+static bool
+refuses(const bytea *v, const TdcStateFormat *fmt)
+{
+	sigjmp_buf	jb;
+	volatile bool ok = false;
+
+	if (sigsetjmp(jb, 0) == 0)
+	{
+		fuzz_pg_jmp = &jb;
+		if (fmt)
+			(void) tdc_agg_state_deserialize_with(v, fmt, CurrentMemoryContext,
+												  NULL, NULL);
+		else
+			(void) tdc_agg_state_deserialize(v, CurrentMemoryContext);
+		ok = true;
+	}
+	fuzz_pg_jmp = NULL;
+	if (!ok && fuzz_pg_sqlstate != ERRCODE_DATA_CORRUPTED)
+		fail("refused a state with an unexpected error", fuzz_pg_message);
+	return !ok;
+}
+
+/* st with "extra" as the extra part of other_format, and back. */
+static void
+check_extra(const TdcAggState *st, const uint8 *extra, size_t extra_len)
+{
+	sigjmp_buf	jb;
+	bytea	   *volatile ser = NULL;
+	TdcAggState *volatile back = NULL;
+	const char *volatile got = NULL;
+	volatile Size got_len = 0;
+	uint64		per = st->pts.hasz ? 3 : 2;
+
+	if (sigsetjmp(jb, 0) == 0)
+	{
+		const char *g;
+		Size		gl;
+
+		fuzz_pg_jmp = &jb;
+		ser = tdc_agg_state_serialize_with(st, &other_format, extra, extra_len,
+										   NULL);
+		back = tdc_agg_state_deserialize_with(ser, &other_format,
+											  CurrentMemoryContext, &g, &gl);
+		got = g;
+		got_len = gl;
+	}
+	fuzz_pg_jmp = NULL;
+	if (back == NULL)
+		fail("a state with an extra part does not read back", fuzz_pg_message);
+	if (back->pts.n != st->pts.n || back->pts.hasz != st->pts.hasz ||
+		(st->pts.n > 0 &&
+		 (memcmp(back->pts.xy, st->pts.xy, 16 * st->pts.n) != 0 ||
+		  (st->pts.hasz && memcmp(back->pts.z, st->pts.z, 8 * st->pts.n) != 0))))
+		fail("a state with an extra part reads back other vertices", NULL);
+	if (got_len != extra_len ||
+		(extra_len > 0 && memcmp(got, extra, extra_len) != 0))
+		fail("the extra part reads back different", NULL);
+	if (got != (const char *) VARDATA(ser) + 40 + 8 * per * st->pts.n)
+		fail("the extra part is not right after the vertices", NULL);
+	if (!refuses(ser, NULL))
+		fail("ST_TDCDelaunay's deserializer accepted another format", NULL);
+	if (extra_len > 0 && !refuses(ser, &other_format))
+		fail("a deserializer that expects no extra part accepted one", NULL);
+}
+
 int			LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
 int
@@ -168,6 +244,8 @@ LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 
 	sa = try_deserialize(a, alen, &oka);
 	sb = blen > 0 ? try_deserialize(b, blen, &okb) : NULL;
+	if (sa != NULL)
+		check_extra(sa, b, blen);
 
 	if (sa != NULL && sb != NULL)
 	{

@@ -81,6 +81,8 @@ SET max_parallel_workers_per_gather = 2;
 SET parallel_leader_participation = off;
 EXPLAIN (COSTS OFF) SELECT ST_TDCConstrainedDelaunay(g, 2) FROM tdc_contour_segs;
 CREATE TABLE tdc_cdt_par AS SELECT ST_TDCConstrainedDelaunay(g, 2) AS g FROM tdc_contour_segs;
+-- flags 5 crosses the processes too: the same constraint edges as serially
+CREATE TABLE tdc_cdt_par5 AS SELECT ST_TDCConstrainedDelaunay(g, 5) AS g FROM tdc_contour_segs;
 RESET parallel_setup_cost;
 RESET parallel_tuple_cost;
 RESET min_parallel_table_scan_size;
@@ -92,6 +94,11 @@ SELECT GeometryType(g) AS parallel_type,
 	   tdc_cdt_same(g, (SELECT ST_TDCConstrainedDelaunayTriangles(ST_Collect(g)) FROM tdc_contour_segs))
 	AS aggregate_parallel
 FROM tdc_cdt_par;
+SELECT ST_NumGeometries(p.g) AS parallel_constraint_edges,
+	   ST_Equals(p.g, (SELECT ST_TDCConstrainedDelaunayTriangles(ST_Collect(g), 5) FROM tdc_contour_segs))
+	AS same_as_function
+FROM tdc_cdt_par5 p;
+DROP TABLE tdc_cdt_par5;
 -- flags must agree on all rows; a crossing across rows is the same error
 SELECT ST_TDCConstrainedDelaunay(g, i % 2) FROM (VALUES ('POINT(0 0)'::geometry, 1), ('POINT(1 0)', 2)) v(g, i);
 SELECT ST_TDCConstrainedDelaunay(g) FROM (VALUES ('LINESTRING(0 0,2 2)'::geometry), ('LINESTRING(0 2,2 0)')) v(g);

@@ -24,8 +24,9 @@
 
 #include "tdc_pg.h"
 
-static MemoryContext
-agg_context(FunctionCallInfo fcinfo, const char *fn)
+/* The aggregate context, or an ERROR when fn is not called as an aggregate. */
+MemoryContext
+tdc_agg_context(FunctionCallInfo fcinfo, const char *fn)
 {
 	MemoryContext aggcxt;
 
@@ -47,7 +48,7 @@ PG_FUNCTION_INFO_V1(st_tdcdelaunay_transfn);
 Datum
 st_tdcdelaunay_transfn(PG_FUNCTION_ARGS)
 {
-	MemoryContext aggcxt = agg_context(fcinfo, "st_tdcdelaunay_transfn");
+	MemoryContext aggcxt = tdc_agg_context(fcinfo, "st_tdcdelaunay_transfn");
 	TdcAggState *st = PG_ARGISNULL(0) ? NULL :
 		(TdcAggState *) PG_GETARG_POINTER(0);
 	double		tolerance = 0.0;
@@ -86,7 +87,7 @@ PG_FUNCTION_INFO_V1(st_tdcdelaunay_combinefn);
 Datum
 st_tdcdelaunay_combinefn(PG_FUNCTION_ARGS)
 {
-	MemoryContext aggcxt = agg_context(fcinfo, "st_tdcdelaunay_combinefn");
+	MemoryContext aggcxt = tdc_agg_context(fcinfo, "st_tdcdelaunay_combinefn");
 	TdcAggState *st1 = PG_ARGISNULL(0) ? NULL :
 		(TdcAggState *) PG_GETARG_POINTER(0);
 	TdcAggState *st2 = PG_ARGISNULL(1) ? NULL :
@@ -111,7 +112,7 @@ Datum
 st_tdcdelaunay_serialfn(PG_FUNCTION_ARGS)
 {
 	tdc_signal_guard();
-	(void) agg_context(fcinfo, "st_tdcdelaunay_serialfn");
+	(void) tdc_agg_context(fcinfo, "st_tdcdelaunay_serialfn");
 	PG_RETURN_BYTEA_P(tdc_agg_state_serialize((TdcAggState *) PG_GETARG_POINTER(0)));
 }
 
@@ -123,7 +124,7 @@ st_tdcdelaunay_deserialfn(PG_FUNCTION_ARGS)
 	bytea	   *in;
 
 	tdc_signal_guard();
-	(void) agg_context(fcinfo, "st_tdcdelaunay_deserialfn");
+	(void) tdc_agg_context(fcinfo, "st_tdcdelaunay_deserialfn");
 	in = PG_GETARG_BYTEA_P(0);	/* 4-byte header, not packed */
 	PG_RETURN_POINTER(tdc_agg_state_deserialize(in, CurrentMemoryContext));
 }
@@ -136,7 +137,7 @@ st_tdcdelaunay_finalfn(PG_FUNCTION_ARGS)
 	TdcAggState *st;
 
 	tdc_signal_guard();
-	(void) agg_context(fcinfo, "st_tdcdelaunay_finalfn");
+	(void) tdc_agg_context(fcinfo, "st_tdcdelaunay_finalfn");
 	if (PG_ARGISNULL(0))
 		PG_RETURN_NULL();
 	st = (TdcAggState *) PG_GETARG_POINTER(0);
@@ -156,10 +157,10 @@ PG_FUNCTION_INFO_V1(_st_tdcdelaunay_state_check);
 Datum
 _st_tdcdelaunay_state_check(PG_FUNCTION_ARGS)
 {
-	TdcAggState *st = tdc_agg_state_deserialize(PG_GETARG_BYTEA_P(0),
-										CurrentMemoryContext);
+	TdcAggState *st;
 
 	tdc_signal_guard();
+	st = tdc_agg_state_deserialize(PG_GETARG_BYTEA_P(0), CurrentMemoryContext);
 	PG_RETURN_INT64((int64) st->pts.n);
 }
 

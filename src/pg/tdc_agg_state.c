@@ -24,6 +24,12 @@
  * partial states below 1 GB (about 67 million 2D points per worker); the
  * error says so and how to avoid it.
  *
+ * The other aggregates whose state holds a TdcAggState (ST_TDCVoronoi,
+ * ST_TDCConstrainedDelaunay) travel in the same form under a magic number
+ * and version of their own (a TdcStateFormat), with their own part after
+ * the vertices: the _with functions write it and hand it back to be
+ * checked, so the vertex part and its checks exist once.
+ *
  * This file is linked, without the SQL entry points of tdc_agg.c, into the
  * fuzz target.
  */
@@ -43,13 +49,20 @@
 #define SB_HASZ				0x02
 #define SB_PARAMS			0x04
 
-static void
-bad_state(const char *what)
+/* The ST_TDCDelaunay aggregates' own form: the vertices and nothing after. */
+static const TdcStateFormat delaunay_format = {
+	STATE_MAGIC, STATE_VERSION, TDC_AGG_NAME,
+	"Disable parallel aggregation for this query (SET max_parallel_workers_per_gather = 0) or use ST_TDCDelaunayDump.",
+	-1
+};
+
+void
+tdc_agg_state_corrupt(const char *fname, const char *what)
 {
 	ereport(ERROR,
 			(errcode(ERRCODE_DATA_CORRUPTED),
 			 errmsg("%s: corrupt serialized aggregate state: %s",
-					TDC_AGG_NAME, what)));
+					fname, what)));
 }
 
 TdcAggState *
@@ -88,12 +101,19 @@ tdc_agg_state_merge(TdcAggState *dst, const TdcAggState *src)
 	tdc_pointbuf_append_buf(&dst->pts, &src->pts, TDC_AGG_NAME);
 }
 
+/*
+ * st in fmt's form, followed by extra_len bytes of "extra" (the aggregate's
+ * own part, which its deserializer reads back).  "contents" names what the
+ * state holds in the error for a state over 1 GB; NULL: its vertices.
+ */
 bytea *
-tdc_agg_state_serialize(const TdcAggState *st)
+tdc_agg_state_serialize_with(const TdcAggState *st, const TdcStateFormat *fmt,
+							 const void *extra, Size extra_len,
+							 const char *contents)
 {
 	const TdcPointBuf *p = &st->pts;
 	uint64		per = (p->hasz ? 3 : 2) * sizeof(double);
-	uint64		size = VARHDRSZ + STATE_HEADER + p->n * per;
+	uint64		size = VARHDRSZ + STATE_HEADER + p->n * per + extra_len;
 	bytea	   *out;
 	char	   *w;
 	uint32		u;
@@ -103,16 +123,17 @@ tdc_agg_state_serialize(const TdcAggState *st)
 	if (size > MaxAllocSize)
 		ereport(ERROR,
 				(errcode(ERRCODE_PROGRAM_LIMIT_EXCEEDED),
-				 errmsg("%s: partial aggregate state of %llu vertices is too large to pass between parallel workers",
-						TDC_AGG_NAME, (unsigned long long) n),
-				 errhint("Disable parallel aggregation for this query (SET max_parallel_workers_per_gather = 0) or use ST_TDCDelaunayDump.")));
+				 errmsg("%s: partial aggregate state of %s is too large to pass between parallel workers",
+						fmt->fname, contents ? contents :
+						psprintf("%llu vertices", (unsigned long long) n)),
+				 errhint("%s", fmt->hint)));
 
 	out = palloc((Size) size);
 	SET_VARSIZE(out, size);
 	w = VARDATA(out);
-	u = STATE_MAGIC;
+	u = fmt->magic;
 	memcpy(w, &u, 4);
-	u = STATE_VERSION;
+	u = fmt->version;
 	memcpy(w + 4, &u, 4);
 	u = (p->have_first ? SB_HAVE_FIRST : 0) | (p->hasz ? SB_HASZ : 0) |
 		(st->params_set ? SB_PARAMS : 0);
@@ -131,13 +152,30 @@ tdc_agg_state_serialize(const TdcAggState *st)
 		memcpy(w, p->xy, (Size) n * 2 * sizeof(double));
 		if (p->hasz)
 			memcpy(w + n * 2 * sizeof(double), p->z, (Size) n * sizeof(double));
+		w += n * per;
 	}
+	if (extra_len > 0)
+		memcpy(w, extra, extra_len);
 	return out;
 }
 
-TdcAggState *
-tdc_agg_state_deserialize(const bytea *in, MemoryContext cxt)
+bytea *
+tdc_agg_state_serialize(const TdcAggState *st)
 {
+	return tdc_agg_state_serialize_with(st, &delaunay_format, NULL, 0, NULL);
+}
+
+/*
+ * Read a state in fmt's form, checking every field.  With extra NULL the
+ * vertices must fill the rest exactly; otherwise *extra and *extra_len are
+ * set to the bytes after them (in "in"), which the caller checks.
+ */
+TdcAggState *
+tdc_agg_state_deserialize_with(const bytea *in, const TdcStateFormat *fmt,
+							   MemoryContext cxt, const char **extra,
+							   Size *extra_len)
+{
+	const char *fname = fmt->fname;
 	const char *r = VARDATA(in);
 	uint64		len;
 	uint32		magic,
@@ -152,7 +190,7 @@ tdc_agg_state_deserialize(const bytea *in, MemoryContext cxt)
 	TdcAggState *st;
 
 	if (VARSIZE(in) < VARHDRSZ + STATE_HEADER)
-		bad_state("shorter than its header");
+		tdc_agg_state_corrupt(fname, "shorter than its header");
 	len = VARSIZE(in) - VARHDRSZ - STATE_HEADER;
 	memcpy(&magic, r, 4);
 	memcpy(&version, r + 4, 4);
@@ -162,36 +200,38 @@ tdc_agg_state_deserialize(const bytea *in, MemoryContext cxt)
 	memcpy(&pad, r + 20, 4);
 	memcpy(&tolerance, r + 24, 8);
 	memcpy(&n, r + 32, 8);
-	if (magic != STATE_MAGIC)
-		bad_state("bad magic number");
-	if (version != STATE_VERSION)
-		bad_state(psprintf("unknown version %u", version));
+	if (magic != fmt->magic)
+		tdc_agg_state_corrupt(fname, "bad magic number");
+	if (version != fmt->version)
+		tdc_agg_state_corrupt(fname, psprintf("unknown version %u", version));
 	if ((bits & ~(SB_HAVE_FIRST | SB_HASZ | SB_PARAMS)) != 0 || pad != 0)
-		bad_state("unknown flag bits");
+		tdc_agg_state_corrupt(fname, "unknown flag bits");
 	if (!(bits & SB_HAVE_FIRST) && ((bits & SB_HASZ) || n != 0))
-		bad_state("vertices without dimensions");
+		tdc_agg_state_corrupt(fname, "vertices without dimensions");
 	if ((bits & SB_PARAMS) &&
-		(flags < TDC_OUT_POLYGONS || flags > TDC_OUT_TIN ||
+		(((fmt->more_flags < 0 || flags != fmt->more_flags) &&
+		  (flags < TDC_OUT_POLYGONS || flags > TDC_OUT_TIN)) ||
 		 !(tolerance >= 0) || isinf(tolerance)))
-		bad_state("bad tolerance or flags");
+		tdc_agg_state_corrupt(fname, "bad tolerance or flags");
 	per = ((bits & SB_HASZ) ? 3 : 2) * sizeof(double);
-	if (n > TDC_MAX_POINTS || n * per != len)
-		bad_state(psprintf("%llu vertices do not match a length of %llu bytes",
-						   (unsigned long long) n, (unsigned long long) len));
+	if (n > TDC_MAX_POINTS || (extra ? n * per > len : n * per != len))
+		tdc_agg_state_corrupt(fname,
+							  psprintf("%llu vertices do not match a length of %llu bytes",
+									   (unsigned long long) n,
+									   (unsigned long long) len));
 
 	st = tdc_agg_state_new(cxt);
 	st->params_set = (bits & SB_PARAMS) != 0;
 	st->tolerance = st->params_set ? tolerance : 0;
 	st->flags = st->params_set ? flags : 0;
 	if (bits & SB_HAVE_FIRST)
-		tdc_pointbuf_check_meta(&st->pts, srid, (bits & SB_HASZ) != 0,
-								TDC_AGG_NAME);
+		tdc_pointbuf_check_meta(&st->pts, srid, (bits & SB_HASZ) != 0, fname);
 	if (n > 0)
 	{
 		const char *data = r + STATE_HEADER;
 		uint64		i;
 
-		tdc_pointbuf_reserve(&st->pts, n, TDC_AGG_NAME);
+		tdc_pointbuf_reserve(&st->pts, n, fname);
 		memcpy(st->pts.xy, data, (Size) n * 2 * sizeof(double));
 		if (st->pts.hasz)
 			memcpy(st->pts.z, data + n * 2 * sizeof(double),
@@ -199,9 +239,19 @@ tdc_agg_state_deserialize(const bytea *in, MemoryContext cxt)
 		/* the core would reject them too, but say where they came from */
 		for (i = 0; i < 2 * n; i++)
 			if (!isfinite(st->pts.xy[i]))
-				bad_state("non-finite coordinate");
+				tdc_agg_state_corrupt(fname, "non-finite coordinate");
 		st->pts.n = n;
+	}
+	if (extra)
+	{
+		*extra = r + STATE_HEADER + n * per;
+		*extra_len = (Size) (len - n * per);
 	}
 	return st;
 }
 
+TdcAggState *
+tdc_agg_state_deserialize(const bytea *in, MemoryContext cxt)
+{
+	return tdc_agg_state_deserialize_with(in, &delaunay_format, cxt, NULL, NULL);
+}

@@ -420,50 +420,37 @@ st_tdcconstraineddelaunaytriangles(PG_FUNCTION_ARGS)
  *		the aggregate ST_TDCConstrainedDelaunay(geometry [, flags])
  * ----------------------------------------------------------------
  *
- * Its state is the point buffer of ST_TDCDelaunay's plus the segments, as
- * indices into that buffer, both in the aggregate context.  Combining
- * appends the second state's vertices and its segments shifted by the first
- * state's vertex count.  Serialized for parallel plans as
- *
- *	uint32 magic 'TDCC', uint32 version, uint32 bits (have_first, hasz,
- *	flags set), int32 srid, int32 flags, uint32 zero, uint64 n, uint64 k,
- *	then n*2 float8 x,y, n float8 z when hasz, k*2 uint32 segment ends
- *
- * and the deserializer checks every field, the exact length, finite
- * coordinates and segment ends below n.
+ * Its state is ST_TDCDelaunay's (the point buffer and the flags, tolerance
+ * 0) plus the segments, as indices into that buffer, both in the aggregate
+ * context.  Combining appends the second state's vertices and its segments
+ * shifted by the first state's vertex count.  Serialized for parallel plans
+ * in ST_TDCDelaunay's form (tdc_agg_state.c) under magic "TDC2", followed
+ * by k*2 uint32 segment ends (k from the length); the deserializer checks
+ * ST_TDCDelaunay's part as for that aggregate, then that the rest is whole
+ * segments whose ends are below n.
  */
 #define CDT_AGG_NAME		"ST_TDCConstrainedDelaunay"
-#define CSTATE_MAGIC		0x43434454	/* "TDCC" little-endian */
-#define CSTATE_VERSION		1
-#define CSTATE_HEADER		40
-#define CB_HAVE_FIRST		0x01
-#define CB_HASZ				0x02
-#define CB_FLAGS			0x04
+
+static const TdcStateFormat cdt_format = {
+	0x32434454,					/* "TDC2" little-endian */
+	1, CDT_AGG_NAME,
+	"Disable parallel aggregation for this query (SET max_parallel_workers_per_gather = 0).",
+	TDC_OUT_CONSTRAINTS
+};
 
 typedef struct CdtAggState
 {
-	TdcPointBuf pts;
+	TdcAggState *base;			/* the vertices and the flags */
 	SegList		segs;
-	bool		flags_set;
-	int32		flags;
 } CdtAggState;
 
-static MemoryContext
-cdt_agg_context(FunctionCallInfo fcinfo, const char *fn)
-{
-	MemoryContext aggcxt;
-
-	if (!AggCheckCallContext(fcinfo, &aggcxt))
-		elog(ERROR, "%s called in non-aggregate context", fn);
-	return aggcxt;
-}
-
+/* A state in cxt around base, or around a new empty one when base is NULL. */
 static CdtAggState *
-cdt_state_new(MemoryContext cxt)
+cdt_state_new(MemoryContext cxt, TdcAggState *base)
 {
 	CdtAggState *st = MemoryContextAllocZero(cxt, sizeof(CdtAggState));
 
-	tdc_pointbuf_init(&st->pts, cxt);
+	st->base = base ? base : tdc_agg_state_new(cxt);
 	st->segs.cxt = cxt;
 	return st;
 }
@@ -471,16 +458,12 @@ cdt_state_new(MemoryContext cxt)
 static void
 cdt_state_set_flags(CdtAggState *st, int32 flags)
 {
-	if (!st->flags_set)
-	{
-		st->flags_set = true;
-		st->flags = flags;
-	}
-	else if (st->flags != flags)
+	if (st->base->params_set && st->base->flags != flags)
 		ereport(ERROR,
 				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
 				 errmsg("%s: flags must be the same for all rows (%d versus %d)",
-						CDT_AGG_NAME, st->flags, flags)));
+						CDT_AGG_NAME, st->base->flags, flags)));
+	tdc_agg_state_set_params(st->base, 0.0, flags);
 }
 
 static void
@@ -496,22 +479,13 @@ seg_reserve(SegList *l, uint64 more)
 	}
 }
 
-static void
-bad_cstate(const char *what)
-{
-	ereport(ERROR,
-			(errcode(ERRCODE_DATA_CORRUPTED),
-			 errmsg("%s: corrupt serialized aggregate state: %s",
-					CDT_AGG_NAME, what)));
-}
-
 PG_FUNCTION_INFO_V1(st_tdcconstraineddelaunay_transfn);
 
 /* st_tdcconstraineddelaunay_transfn(internal, geometry [, int4]) */
 Datum
 st_tdcconstraineddelaunay_transfn(PG_FUNCTION_ARGS)
 {
-	MemoryContext aggcxt = cdt_agg_context(fcinfo, "st_tdcconstraineddelaunay_transfn");
+	MemoryContext aggcxt = tdc_agg_context(fcinfo, "st_tdcconstraineddelaunay_transfn");
 	CdtAggState *st = PG_ARGISNULL(0) ? NULL : (CdtAggState *) PG_GETARG_POINTER(0);
 	int32		flags = TDC_OUT_POLYGONS;
 	struct varlena *geom;
@@ -530,14 +504,14 @@ st_tdcconstraineddelaunay_transfn(PG_FUNCTION_ARGS)
 		cdt_check_flags(flags, CDT_AGG_NAME);
 	}
 	if (st == NULL)
-		st = cdt_state_new(aggcxt);
+		st = cdt_state_new(aggcxt, NULL);
 	cdt_state_set_flags(st, flags);
 
 	geom = PG_DETOAST_DATUM(PG_GETARG_DATUM(1));
-	first = st->pts.n;
-	tdc_gser_append(&st->pts, geom, CDT_AGG_NAME);
-	if (collect_segments(geom, &st->segs, first, CDT_AGG_NAME) != st->pts.n - first)
-		bad_cstate("vertex count");
+	first = st->base->pts.n;
+	tdc_gser_append(&st->base->pts, geom, CDT_AGG_NAME);
+	if (collect_segments(geom, &st->segs, first, CDT_AGG_NAME) != st->base->pts.n - first)
+		tdc_agg_state_corrupt(CDT_AGG_NAME, "vertex count");
 	PG_FREE_IF_COPY(geom, 1);
 	PG_RETURN_POINTER(st);
 }
@@ -547,7 +521,7 @@ PG_FUNCTION_INFO_V1(st_tdcconstraineddelaunay_combinefn);
 Datum
 st_tdcconstraineddelaunay_combinefn(PG_FUNCTION_ARGS)
 {
-	MemoryContext aggcxt = cdt_agg_context(fcinfo, "st_tdcconstraineddelaunay_combinefn");
+	MemoryContext aggcxt = tdc_agg_context(fcinfo, "st_tdcconstraineddelaunay_combinefn");
 	CdtAggState *st1 = PG_ARGISNULL(0) ? NULL : (CdtAggState *) PG_GETARG_POINTER(0);
 	CdtAggState *st2 = PG_ARGISNULL(1) ? NULL : (CdtAggState *) PG_GETARG_POINTER(1);
 	uint64		base;
@@ -560,11 +534,11 @@ st_tdcconstraineddelaunay_combinefn(PG_FUNCTION_ARGS)
 		PG_RETURN_POINTER(st1);
 	}
 	if (st1 == NULL)
-		st1 = cdt_state_new(aggcxt);
-	if (st2->flags_set)
-		cdt_state_set_flags(st1, st2->flags);
-	base = st1->pts.n;
-	tdc_pointbuf_append_buf(&st1->pts, &st2->pts, CDT_AGG_NAME);
+		st1 = cdt_state_new(aggcxt, NULL);
+	if (st2->base->params_set)
+		cdt_state_set_flags(st1, st2->base->flags);
+	base = st1->base->pts.n;
+	tdc_pointbuf_append_buf(&st1->base->pts, &st2->base->pts, CDT_AGG_NAME);
 	seg_reserve(&st1->segs, st2->segs.nseg);
 	for (uint64 i = 0; i < 2 * st2->segs.nseg; i++)
 		st1->segs.seg[2 * st1->segs.nseg + i] = (uint32) (st2->segs.seg[i] + base);
@@ -578,61 +552,19 @@ Datum
 st_tdcconstraineddelaunay_serialfn(PG_FUNCTION_ARGS)
 {
 	CdtAggState *st;
-	const TdcPointBuf *p;
-	uint64		n,
-				k,
-				size;
-	bytea	   *out;
-	char	   *w;
-	uint32		u;
-	int32		i;
+	uint64		k;
 
 	tdc_signal_guard();
-	(void) cdt_agg_context(fcinfo, "st_tdcconstraineddelaunay_serialfn");
+	(void) tdc_agg_context(fcinfo, "st_tdcconstraineddelaunay_serialfn");
 	st = (CdtAggState *) PG_GETARG_POINTER(0);
-	p = &st->pts;
-	n = p->n;
 	k = st->segs.nseg;
-	size = VARHDRSZ + CSTATE_HEADER + n * (p->hasz ? 3 : 2) * sizeof(double) +
-		k * 2 * sizeof(uint32);
-	if (size > MaxAllocSize)
-		ereport(ERROR,
-				(errcode(ERRCODE_PROGRAM_LIMIT_EXCEEDED),
-				 errmsg("%s: partial aggregate state of %llu vertices and %llu segments is too large to pass between parallel workers",
-						CDT_AGG_NAME, (unsigned long long) n, (unsigned long long) k),
-				 errhint("Disable parallel aggregation for this query (SET max_parallel_workers_per_gather = 0).")));
-	out = palloc((Size) size);
-	SET_VARSIZE(out, size);
-	w = VARDATA(out);
-	u = CSTATE_MAGIC;
-	memcpy(w, &u, 4);
-	u = CSTATE_VERSION;
-	memcpy(w + 4, &u, 4);
-	u = (p->have_first ? CB_HAVE_FIRST : 0) | (p->hasz ? CB_HASZ : 0) |
-		(st->flags_set ? CB_FLAGS : 0);
-	memcpy(w + 8, &u, 4);
-	i = p->srid;
-	memcpy(w + 12, &i, 4);
-	i = st->flags;
-	memcpy(w + 16, &i, 4);
-	u = 0;
-	memcpy(w + 20, &u, 4);
-	memcpy(w + 24, &n, 8);
-	memcpy(w + 32, &k, 8);
-	w += CSTATE_HEADER;
-	if (n > 0)
-	{
-		memcpy(w, p->xy, (Size) n * 2 * sizeof(double));
-		w += n * 2 * sizeof(double);
-		if (p->hasz)
-		{
-			memcpy(w, p->z, (Size) n * sizeof(double));
-			w += n * sizeof(double);
-		}
-	}
-	if (k > 0)
-		memcpy(w, st->segs.seg, (Size) k * 2 * sizeof(uint32));
-	PG_RETURN_BYTEA_P(out);
+	/* segments in a state are bounded by MaxAllocHugeSize: no overflow */
+	PG_RETURN_BYTEA_P(tdc_agg_state_serialize_with(st->base, &cdt_format,
+												   st->segs.seg,
+												   (Size) k * 2 * sizeof(uint32),
+												   psprintf("%llu vertices and %llu segments",
+															(unsigned long long) st->base->pts.n,
+															(unsigned long long) k)));
 }
 
 PG_FUNCTION_INFO_V1(st_tdcconstraineddelaunay_deserialfn);
@@ -640,81 +572,30 @@ PG_FUNCTION_INFO_V1(st_tdcconstraineddelaunay_deserialfn);
 Datum
 st_tdcconstraineddelaunay_deserialfn(PG_FUNCTION_ARGS)
 {
-	bytea	   *in;
-	const char *r;
-	uint64		len,
-				n,
-				k,
-				per;
-	uint32		magic,
-				version,
-				bits,
-				pad;
-	int32		srid,
-				flags;
+	TdcAggState *base;
 	CdtAggState *st;
+	const char *extra;
+	Size		extra_len;
+	uint64		k;
 
 	tdc_signal_guard();
-	(void) cdt_agg_context(fcinfo, "st_tdcconstraineddelaunay_deserialfn");
-	in = PG_GETARG_BYTEA_P(0);
-	r = VARDATA(in);
-	if (VARSIZE(in) < VARHDRSZ + CSTATE_HEADER)
-		bad_cstate("shorter than its header");
-	len = VARSIZE(in) - VARHDRSZ - CSTATE_HEADER;
-	memcpy(&magic, r, 4);
-	memcpy(&version, r + 4, 4);
-	memcpy(&bits, r + 8, 4);
-	memcpy(&srid, r + 12, 4);
-	memcpy(&flags, r + 16, 4);
-	memcpy(&pad, r + 20, 4);
-	memcpy(&n, r + 24, 8);
-	memcpy(&k, r + 32, 8);
-	if (magic != CSTATE_MAGIC)
-		bad_cstate("bad magic number");
-	if (version != CSTATE_VERSION)
-		bad_cstate(psprintf("unknown version %u", version));
-	if ((bits & ~(CB_HAVE_FIRST | CB_HASZ | CB_FLAGS)) != 0 || pad != 0)
-		bad_cstate("unknown flag bits");
-	if (!(bits & CB_HAVE_FIRST) && ((bits & CB_HASZ) || n != 0))
-		bad_cstate("vertices without dimensions");
-	if ((bits & CB_FLAGS) && flags != TDC_OUT_CONSTRAINTS &&
-		(flags < TDC_OUT_POLYGONS || flags > TDC_OUT_TIN))
-		bad_cstate("bad flags");
-	per = ((bits & CB_HASZ) ? 3 : 2) * sizeof(double);
-	if (n > TDC_MAX_POINTS || k > MaxAllocHugeSize / 8 ||
-		n * per + k * 2 * sizeof(uint32) != len)
-		bad_cstate(psprintf("%llu vertices and %llu segments do not match a length of %llu bytes",
-							(unsigned long long) n, (unsigned long long) k,
-							(unsigned long long) len));
-
-	st = cdt_state_new(CurrentMemoryContext);
-	st->flags_set = (bits & CB_FLAGS) != 0;
-	st->flags = st->flags_set ? flags : 0;
-	if (bits & CB_HAVE_FIRST)
-		tdc_pointbuf_check_meta(&st->pts, srid, (bits & CB_HASZ) != 0, CDT_AGG_NAME);
-	r += CSTATE_HEADER;
-	if (n > 0)
-	{
-		tdc_pointbuf_reserve(&st->pts, n, CDT_AGG_NAME);
-		memcpy(st->pts.xy, r, (Size) n * 2 * sizeof(double));
-		r += n * 2 * sizeof(double);
-		if (st->pts.hasz)
-		{
-			memcpy(st->pts.z, r, (Size) n * sizeof(double));
-			r += n * sizeof(double);
-		}
-		for (uint64 i = 0; i < 2 * n; i++)
-			if (!isfinite(st->pts.xy[i]))
-				bad_cstate("non-finite coordinate");
-		st->pts.n = n;
-	}
+	(void) tdc_agg_context(fcinfo, "st_tdcconstraineddelaunay_deserialfn");
+	base = tdc_agg_state_deserialize_with(PG_GETARG_BYTEA_P(0), &cdt_format,
+										  CurrentMemoryContext,
+										  &extra, &extra_len);
+	st = cdt_state_new(CurrentMemoryContext, base);
+	if (extra_len % (2 * sizeof(uint32)) != 0)
+		tdc_agg_state_corrupt(CDT_AGG_NAME,
+							  psprintf("%zu bytes after %llu vertices are not whole segments",
+									   extra_len, (unsigned long long) base->pts.n));
+	k = extra_len / (2 * sizeof(uint32));
 	if (k > 0)
 	{
 		seg_reserve(&st->segs, k);
-		memcpy(st->segs.seg, r, (Size) k * 2 * sizeof(uint32));
+		memcpy(st->segs.seg, extra, extra_len);
 		for (uint64 i = 0; i < 2 * k; i++)
-			if (st->segs.seg[i] >= n)
-				bad_cstate("segment end beyond the vertices");
+			if (st->segs.seg[i] >= base->pts.n)
+				tdc_agg_state_corrupt(CDT_AGG_NAME, "segment end beyond the vertices");
 		st->segs.nseg = k;
 	}
 	PG_RETURN_POINTER(st);
@@ -728,11 +609,11 @@ st_tdcconstraineddelaunay_finalfn(PG_FUNCTION_ARGS)
 	CdtAggState *st;
 
 	tdc_signal_guard();
-	(void) cdt_agg_context(fcinfo, "st_tdcconstraineddelaunay_finalfn");
+	(void) tdc_agg_context(fcinfo, "st_tdcconstraineddelaunay_finalfn");
 	if (PG_ARGISNULL(0))
 		PG_RETURN_NULL();
 	st = (CdtAggState *) PG_GETARG_POINTER(0);
-	PG_RETURN_DATUM(constrained_to_datum(&st->pts, &st->segs,
-										 st->flags_set ? st->flags : 0,
+	PG_RETURN_DATUM(constrained_to_datum(&st->base->pts, &st->segs,
+										 st->base->params_set ? st->base->flags : 0,
 										 CDT_AGG_NAME));
 }

@@ -59,11 +59,10 @@
  * before.  An ERROR raised while reading carries a CONTEXT line saying how
  * the value was stored.
  *
- * ST_TDCDelaunayDump runs a query through SPI (as the calling user: the
- * function is not SECURITY DEFINER), reads its single geometry column with a
- * cursor in batches, triangulates, and returns one POLYGON row per triangle
- * through a tuplestore, which spills to disk past work_mem.  So it is not
- * bound by the 1 GB limit of a single value.
+ * ST_TDCDelaunayDump collects the vertices of its query's single geometry
+ * column (tdc_dump_query.c), triangulates, and returns one POLYGON row per
+ * triangle through a tuplestore, which spills to disk past work_mem.  So it
+ * is not bound by the 1 GB limit of a single value.
  */
 #include "postgres.h"
 
@@ -75,20 +74,14 @@
 #include "access/table.h"
 #include "access/tableam.h"
 #include "access/toast_compression.h"
-#include "executor/spi.h"
 #include "funcapi.h"
 #include "miscadmin.h"
 #include "portability/instr_time.h"
 #include "utils/builtins.h"
-#include "utils/lsyscache.h"
 #include "utils/memutils.h"
-#include "utils/plancache.h"
 #include "utils/tuplestore.h"
 
 #include "tdc_pg.h"
-
-/* Rows fetched from the Dump query at a time. */
-#define DUMP_BATCH			10000
 
 /*
  * How long the backend waits for a job before it looks at InterruptPending
@@ -481,129 +474,6 @@ tdc_triangulate_to_datum(const TdcPointBuf *buf, double tolerance, int flags,
 						 const char *fname)
 {
 	return triangulate_to_datum(buf, tolerance, flags, fname, -1);
-}
-
-/* ----------------------------------------------------------------
- *		ST_TDCDelaunayDump helpers
- * ----------------------------------------------------------------
- */
-
-static void
-dump_error_context(void *arg)
-{
-	errcontext("query of ST_TDCDelaunayDump: %s", (const char *) arg);
-}
-
-/*
- * The query is documented as a SELECT that reads: refuse, before it runs,
- * every statement that would write (INSERT, UPDATE, DELETE or MERGE with
- * RETURNING, a data-modifying WITH, SELECT ... FOR UPDATE/SHARE), so that
- * a function meant to triangulate never changes data.  Functions the query
- * calls run as they would anywhere else.
- */
-void
-tdc_dump_check_read_only(SPIPlanPtr plan, const char *fname)
-{
-	ListCell   *ls;
-
-	foreach(ls, SPI_plan_get_plan_sources(plan))
-	{
-		CachedPlanSource *ps = (CachedPlanSource *) lfirst(ls);
-		ListCell   *lq;
-
-		foreach(lq, ps->query_list)
-		{
-			Query	   *q = lfirst_node(Query, lq);
-			const char *what = NULL;
-
-			if (q->commandType != CMD_SELECT)
-				what = "it is not a SELECT";
-			else if (q->hasModifyingCTE)
-				what = "it has a data-modifying WITH";
-			else if (q->rowMarks != NIL)
-				what = "it locks rows (FOR UPDATE or FOR SHARE)";
-			if (what)
-				ereport(ERROR,
-						(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
-						 errmsg("%s: the query must be a plain SELECT that only reads: %s",
-								fname, what)));
-		}
-	}
-}
-
-/* Run the query and collect the vertices of its geometry column. */
-static void
-dump_collect(TdcPointBuf *buf, const char *query, Oid geomoid,
-			 const char *fname)
-{
-	ErrorContextCallback errcb;
-	SPIPlanPtr	plan;
-	Portal		portal;
-	TupleDesc	desc;
-	Oid			coltype;
-
-	errcb.callback = dump_error_context;
-	errcb.arg = (void *) query;
-	errcb.previous = error_context_stack;
-	error_context_stack = &errcb;
-
-	if (SPI_connect() != SPI_OK_CONNECT)
-		elog(ERROR, "%s: SPI_connect failed", fname);
-
-	plan = SPI_prepare(query, 0, NULL);
-	if (plan == NULL)
-		elog(ERROR, "%s: could not prepare the query: %s", fname,
-			 SPI_result_code_string(SPI_result));
-	if (!SPI_is_cursor_plan(plan))
-		ereport(ERROR,
-				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
-				 errmsg("%s: the query must be a single SELECT returning one geometry column",
-						fname)));
-	tdc_dump_check_read_only(plan, fname);
-	/* read-only: SPI refuses anything that would write, as a second guard */
-	portal = SPI_cursor_open(NULL, plan, NULL, NULL, true);
-
-	desc = portal->tupDesc;
-	if (desc == NULL || desc->natts != 1)
-		ereport(ERROR,
-				(errcode(ERRCODE_DATATYPE_MISMATCH),
-				 errmsg("%s: the query must return exactly one column of type geometry, it returns %d columns",
-						fname, desc ? desc->natts : 0)));
-	coltype = getBaseType(TupleDescAttr(desc, 0)->atttypid);
-	if (coltype != geomoid)
-		ereport(ERROR,
-				(errcode(ERRCODE_DATATYPE_MISMATCH),
-				 errmsg("%s: the query's column must be of type geometry, not %s",
-						fname, format_type_be(TupleDescAttr(desc, 0)->atttypid))));
-
-	for (;;)
-	{
-		uint64		i;
-
-		SPI_cursor_fetch(portal, true, DUMP_BATCH);
-		if (SPI_processed == 0)
-			break;
-		for (i = 0; i < SPI_processed; i++)
-		{
-			bool		isnull;
-			Datum		d = SPI_getbinval(SPI_tuptable->vals[i],
-										  SPI_tuptable->tupdesc, 1, &isnull);
-			struct varlena *g;
-
-			if (isnull)
-				continue;
-			g = PG_DETOAST_DATUM_PACKED(d);
-			tdc_gser_append(buf, g, fname);
-			if ((Pointer) g != DatumGetPointer(d))
-				pfree(g);
-		}
-		SPI_freetuptable(SPI_tuptable);
-		CHECK_FOR_INTERRUPTS();
-	}
-	SPI_cursor_close(portal);
-	SPI_finish();
-
-	error_context_stack = errcb.previous;
 }
 
 /* ----------------------------------------------------------------
@@ -1136,7 +1006,7 @@ st_tdcdelaunaydump(PG_FUNCTION_ARGS)
 	geomoid = TupleDescAttr(rsinfo->setDesc, 1)->atttypid;
 
 	tdc_pointbuf_init(&buf, CurrentMemoryContext);
-	dump_collect(&buf, query, geomoid, fname);
+	tdc_dump_collect(&buf, NULL, query, geomoid, fname);
 	if (buf.n == 0)
 		return (Datum) 0;
 

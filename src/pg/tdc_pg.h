@@ -12,6 +12,7 @@
  *	tdc_agg_state.c	their state, its merging and its serialized form
  *	tdc_funcs.c		ST_TDCDelaunayTriangles, ST_TDCDelaunayDump and the
  *					helper that runs the core while watching for interrupts
+ *	tdc_dump_query.c	the Dump functions' query: checked, run, collected
  *	tdc_guc.c		_PG_init and the tdc_delaunay.* settings
  *	tdc_signal.c	keeps PostGIS's cancel handler from allocating inside a
  *					signal; every SQL entry point calls tdc_signal_guard()
@@ -183,6 +184,38 @@ extern bytea *tdc_agg_state_serialize(const TdcAggState *st);
 extern TdcAggState *tdc_agg_state_deserialize(const bytea *in,
 											  MemoryContext cxt);
 
+/*
+ * The serialized form of an aggregate whose state holds a TdcAggState plus
+ * a part of its own, which follows the vertices (see tdc_agg_state.c).
+ */
+typedef struct TdcStateFormat
+{
+	uint32		magic;
+	uint32		version;
+	const char *fname;			/* the aggregate, in errors */
+	const char *hint;			/* for a state too large to pass on */
+	int32		more_flags;		/* a flags value beyond 0..2 it accepts, or -1 */
+} TdcStateFormat;
+
+extern bytea *tdc_agg_state_serialize_with(const TdcAggState *st,
+										   const TdcStateFormat *fmt,
+										   const void *extra, Size extra_len,
+										   const char *contents);
+extern TdcAggState *tdc_agg_state_deserialize_with(const bytea *in,
+												   const TdcStateFormat *fmt,
+												   MemoryContext cxt,
+												   const char **extra,
+												   Size *extra_len);
+/* ERROR: "fname: corrupt serialized aggregate state: what" */
+#if PG_VERSION_NUM >= 180000
+extern pg_noreturn void tdc_agg_state_corrupt(const char *fname, const char *what);
+#else
+extern void tdc_agg_state_corrupt(const char *fname, const char *what) pg_attribute_noreturn();
+#endif
+
+/* tdc_agg.c, for the support functions of every aggregate */
+extern MemoryContext tdc_agg_context(FunctionCallInfo fcinfo, const char *fn);
+
 /* tdc_funcs.c */
 typedef struct TdcRun
 {
@@ -190,9 +223,6 @@ typedef struct TdcRun
 } TdcRun;
 
 extern void tdc_check_params(double tolerance, int flags, const char *fname);
-/* Refuse a Dump query that is not a plain, read-only SELECT (an SPIPlanPtr). */
-struct _SPI_plan;
-extern void tdc_dump_check_read_only(struct _SPI_plan *plan, const char *fname);
 extern TdcRun *tdc_run(const TdcPointBuf *buf, double tolerance,
 					   uint64 result_bytes, const char *fname);
 extern bool tdc_run_emit(TdcRun *run, tdc_emit_fn emit, void *arg,
@@ -200,6 +230,19 @@ extern bool tdc_run_emit(TdcRun *run, tdc_emit_fn emit, void *arg,
 extern void tdc_run_free(TdcRun *run);
 extern Datum tdc_triangulate_to_datum(const TdcPointBuf *buf, double tolerance,
 									  int flags, const char *fname);
+
+/* tdc_dump_query.c */
+
+/* The row id of every collected vertex: id[k] for vertex k. */
+typedef struct TdcIdBuf
+{
+	int64	   *id;
+	Size		n;
+	Size		cap;
+} TdcIdBuf;
+
+extern void tdc_dump_collect(TdcPointBuf *buf, TdcIdBuf *ids, const char *query,
+							 Oid geomoid, const char *fname);
 
 /* tdc_signal.c */
 extern bool tdc_signal_settled;

@@ -8,14 +8,11 @@
  * tolerance, tdc_agg_state.c) plus extend_to's bounding box, which must be
  * the same in every row, as the tolerance must.  Rows whose geometry or
  * tolerance is NULL are skipped; a NULL extend_to means none.  Under a
- * parallel plan a worker's state travels as
+ * parallel plan a worker's state travels in the Delaunay state's serialized
+ * form (tdc_agg_state.c) under magic "VRN2", followed by
  *
- *		varlena header, uint32 magic, uint32 has_extend_to, 4 doubles
- *		(xmin, ymin, xmax, ymax), uint32 padding, then the Delaunay state's
- *		own serialized bytea (with its 4-byte header),
- *
- * so the inner state starts 8-byte aligned and is read in place by the
- * Delaunay aggregate's checked deserializer.
+ *		uint32 has_extend_to (0 or 1), uint32 zero, 4 float8 (xmin, ymin,
+ *		xmax, ymax; a box with min <= max when has_extend_to)
  */
 #include "postgres.h"
 
@@ -27,8 +24,14 @@
 #include "tdc_voronoi.h"
 
 #define VOR_AGG_NAME		"ST_TDCVoronoi"
-#define VOR_STATE_MAGIC		0x56524e31	/* "VRN1" */
-#define VOR_STATE_HEAD		48		/* bytes before the inner state, header included */
+#define VOR_EXTRA			40		/* bytes after the vertices */
+
+static const TdcStateFormat vor_format = {
+	0x324e5256,					/* "VRN2" little-endian */
+	1, VOR_AGG_NAME,
+	"Disable parallel aggregation for this query (SET max_parallel_workers_per_gather = 0).",
+	-1
+};
 
 typedef struct VorAggState
 {
@@ -37,16 +40,6 @@ typedef struct VorAggState
 	bool		has_ext;
 	double		ext[4];
 } VorAggState;
-
-static MemoryContext
-agg_context(FunctionCallInfo fcinfo, const char *fn)
-{
-	MemoryContext aggcxt;
-
-	if (!AggCheckCallContext(fcinfo, &aggcxt))
-		elog(ERROR, "%s called in non-aggregate context", fn);
-	return aggcxt;
-}
 
 static VorAggState *
 vor_state_new(MemoryContext cxt)
@@ -89,7 +82,7 @@ PG_FUNCTION_INFO_V1(st_tdcvoronoi_transfn);
 Datum
 st_tdcvoronoi_transfn(PG_FUNCTION_ARGS)
 {
-	MemoryContext aggcxt = agg_context(fcinfo, "st_tdcvoronoi_transfn");
+	MemoryContext aggcxt = tdc_agg_context(fcinfo, "st_tdcvoronoi_transfn");
 	VorAggState *st = PG_ARGISNULL(0) ? NULL : (VorAggState *) PG_GETARG_POINTER(0);
 	double		tolerance = 0.0,
 				ext[4];
@@ -129,7 +122,7 @@ PG_FUNCTION_INFO_V1(st_tdcvoronoi_combinefn);
 Datum
 st_tdcvoronoi_combinefn(PG_FUNCTION_ARGS)
 {
-	MemoryContext aggcxt = agg_context(fcinfo, "st_tdcvoronoi_combinefn");
+	MemoryContext aggcxt = tdc_agg_context(fcinfo, "st_tdcvoronoi_combinefn");
 	VorAggState *st1 = PG_ARGISNULL(0) ? NULL : (VorAggState *) PG_GETARG_POINTER(0);
 	VorAggState *st2 = PG_ARGISNULL(1) ? NULL : (VorAggState *) PG_GETARG_POINTER(1);
 
@@ -153,41 +146,18 @@ Datum
 st_tdcvoronoi_serialfn(PG_FUNCTION_ARGS)
 {
 	VorAggState *st;
-	bytea	   *inner,
-			   *out;
-	char	   *p;
-	uint32		u;
-	Size		size;
+	char		extra[VOR_EXTRA];
+	uint32		u[2];
 
 	tdc_signal_guard();
-	(void) agg_context(fcinfo, "st_tdcvoronoi_serialfn");
+	(void) tdc_agg_context(fcinfo, "st_tdcvoronoi_serialfn");
 	st = (VorAggState *) PG_GETARG_POINTER(0);
-	inner = tdc_agg_state_serialize(st->base);
-	size = VOR_STATE_HEAD + VARSIZE(inner);
-	if (size > MaxAllocSize)
-		ereport(ERROR,
-				(errcode(ERRCODE_PROGRAM_LIMIT_EXCEEDED),
-				 errmsg("%s: partial aggregate state of %llu vertices is too large to pass between parallel workers",
-						VOR_AGG_NAME, (unsigned long long) st->base->pts.n)));
-	out = palloc0(size);
-	SET_VARSIZE(out, size);
-	p = VARDATA(out);
-	u = VOR_STATE_MAGIC;
-	memcpy(p, &u, 4);
-	u = st->has_ext ? 1 : 0;
-	memcpy(p + 4, &u, 4);
-	memcpy(p + 8, st->ext, sizeof(st->ext));
-	memcpy((char *) out + VOR_STATE_HEAD, inner, VARSIZE(inner));
-	pfree(inner);
-	PG_RETURN_BYTEA_P(out);
-}
-
-static void
-vor_corrupt(const char *what)
-{
-	ereport(ERROR,
-			(errcode(ERRCODE_DATA_CORRUPTED),
-			 errmsg("%s: corrupt serialized aggregate state: %s", VOR_AGG_NAME, what)));
+	u[0] = st->has_ext ? 1 : 0;
+	u[1] = 0;
+	memcpy(extra, u, sizeof(u));
+	memcpy(extra + sizeof(u), st->ext, sizeof(st->ext));
+	PG_RETURN_BYTEA_P(tdc_agg_state_serialize_with(st->base, &vor_format,
+												   extra, VOR_EXTRA, NULL));
 }
 
 PG_FUNCTION_INFO_V1(st_tdcvoronoi_deserialfn);
@@ -195,35 +165,29 @@ PG_FUNCTION_INFO_V1(st_tdcvoronoi_deserialfn);
 Datum
 st_tdcvoronoi_deserialfn(PG_FUNCTION_ARGS)
 {
-	bytea	   *in;
 	VorAggState *st;
-	const char *p;
-	uint32		u;
-	Size		size;
+	const char *extra;
+	Size		extra_len;
+	uint32		u[2];
 
 	tdc_signal_guard();
-	(void) agg_context(fcinfo, "st_tdcvoronoi_deserialfn");
-	in = PG_GETARG_BYTEA_P(0);
-	size = VARSIZE(in);
-	if (size < VOR_STATE_HEAD + VARHDRSZ)
-		vor_corrupt("too short");
-	p = VARDATA(in);
-	memcpy(&u, p, 4);
-	if (u != VOR_STATE_MAGIC)
-		vor_corrupt("bad magic number");
-	if (VARSIZE((const char *) in + VOR_STATE_HEAD) != size - VOR_STATE_HEAD)
-		vor_corrupt("inner state size does not match");
+	(void) tdc_agg_context(fcinfo, "st_tdcvoronoi_deserialfn");
 	st = palloc0(sizeof(VorAggState));
-	memcpy(&u, p + 4, 4);
-	if (u > 1)
-		vor_corrupt("bad extend_to flag");
-	st->has_ext = u == 1;
-	memcpy(st->ext, p + 8, sizeof(st->ext));
+	st->base = tdc_agg_state_deserialize_with(PG_GETARG_BYTEA_P(0), &vor_format,
+											  CurrentMemoryContext,
+											  &extra, &extra_len);
+	if (extra_len != VOR_EXTRA)
+		tdc_agg_state_corrupt(VOR_AGG_NAME,
+							  psprintf("%zu bytes of extend_to, not %d",
+									   extra_len, VOR_EXTRA));
+	memcpy(u, extra, sizeof(u));
+	if (u[0] > 1 || u[1] != 0)
+		tdc_agg_state_corrupt(VOR_AGG_NAME, "bad extend_to flag");
+	st->has_ext = u[0] == 1;
+	memcpy(st->ext, extra + sizeof(u), sizeof(st->ext));
 	if (st->has_ext && !(st->ext[0] <= st->ext[2] && st->ext[1] <= st->ext[3]))
-		vor_corrupt("bad extend_to box");
+		tdc_agg_state_corrupt(VOR_AGG_NAME, "bad extend_to box");
 	st->ext_set = true;
-	st->base = tdc_agg_state_deserialize((const bytea *) ((const char *) in + VOR_STATE_HEAD),
-										 CurrentMemoryContext);
 	PG_RETURN_POINTER(st);
 }
 
@@ -235,7 +199,7 @@ st_tdcvoronoi_finalfn(PG_FUNCTION_ARGS)
 	VorAggState *st;
 
 	tdc_signal_guard();
-	(void) agg_context(fcinfo, "st_tdcvoronoi_finalfn");
+	(void) tdc_agg_context(fcinfo, "st_tdcvoronoi_finalfn");
 	if (PG_ARGISNULL(0))
 		PG_RETURN_NULL();
 	st = (VorAggState *) PG_GETARG_POINTER(0);

@@ -1,0 +1,226 @@
+/*
+ * tdc_dump_query.c
+ *		The query of a Dump function (ST_TDCDelaunayDump, ST_TDCVoronoiDump):
+ *		refuse it unless it only reads, run it, and collect the vertices of
+ *		its geometry column, with the id of each vertex's row when asked.
+ *
+ * The query runs through SPI as the calling user (the Dump functions are
+ * not SECURITY DEFINER), read-only, behind a cursor fetched in batches of
+ * DUMP_BATCH rows with an interrupt check after each, so its result never
+ * has to fit in memory as rows: only the vertices (and ids) are kept.  An
+ * ERROR raised while the query runs carries a CONTEXT line naming the
+ * function and the query.
+ */
+#include "postgres.h"
+
+#include "catalog/pg_type.h"
+#include "executor/spi.h"
+#include "miscadmin.h"
+#include "utils/builtins.h"
+#include "utils/lsyscache.h"
+#include "utils/memutils.h"
+#include "utils/plancache.h"
+
+#include "tdc_pg.h"
+
+/* Rows fetched from the query at a time. */
+#define DUMP_BATCH			10000
+
+typedef struct DumpContext
+{
+	const char *fname;
+	const char *query;
+} DumpContext;
+
+static void
+dump_error_context(void *arg)
+{
+	const DumpContext *c = (const DumpContext *) arg;
+
+	errcontext("query of %s: %s", c->fname, c->query);
+}
+
+/*
+ * The query is documented as a SELECT that reads: refuse, before it runs,
+ * every statement that would write (INSERT, UPDATE, DELETE or MERGE with
+ * RETURNING, a data-modifying WITH, SELECT ... FOR UPDATE/SHARE), so that
+ * a function meant to triangulate never changes data.  Functions the query
+ * calls run as they would anywhere else.
+ */
+static void
+dump_check_read_only(SPIPlanPtr plan, const char *fname)
+{
+	ListCell   *ls;
+
+	foreach(ls, SPI_plan_get_plan_sources(plan))
+	{
+		CachedPlanSource *ps = (CachedPlanSource *) lfirst(ls);
+		ListCell   *lq;
+
+		foreach(lq, ps->query_list)
+		{
+			Query	   *q = lfirst_node(Query, lq);
+			const char *what = NULL;
+
+			if (q->commandType != CMD_SELECT)
+				what = "it is not a SELECT";
+			else if (q->hasModifyingCTE)
+				what = "it has a data-modifying WITH";
+			else if (q->rowMarks != NIL)
+				what = "it locks rows (FOR UPDATE or FOR SHARE)";
+			if (what)
+				ereport(ERROR,
+						(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
+						 errmsg("%s: the query must be a plain SELECT that only reads: %s",
+								fname, what)));
+		}
+	}
+}
+
+/* Give ids[n .. upto-1] the id "id", growing the array in "cxt". */
+static void
+idbuf_fill(TdcIdBuf *ids, Size upto, int64 id, MemoryContext cxt)
+{
+	if (upto > ids->cap)
+	{
+		Size		cap = Max(upto, ids->cap * 2);
+
+		cap = Max(cap, 1024);
+		ids->id = ids->id == NULL ?
+			MemoryContextAllocHuge(cxt, cap * sizeof(int64)) :
+			repalloc_huge(ids->id, cap * sizeof(int64));
+		ids->cap = cap;
+	}
+	while (ids->n < upto)
+		ids->id[ids->n++] = id;
+}
+
+/*
+ * Check the query's columns: (geometry) without ids, (integer id, geometry)
+ * with them.  Returns the id column's base type (InvalidOid without ids).
+ */
+static Oid
+dump_check_columns(TupleDesc desc, bool with_ids, Oid geomoid,
+				   const char *fname)
+{
+	Oid			idtype = InvalidOid;
+	int			gcol = with_ids ? 1 : 0;
+
+	if (desc == NULL || desc->natts != (with_ids ? 2 : 1))
+	{
+		if (with_ids)
+			ereport(ERROR,
+					(errcode(ERRCODE_DATATYPE_MISMATCH),
+					 errmsg("%s: the query must return two columns (id bigint, geom geometry), it returns %d",
+							fname, desc ? desc->natts : 0)));
+		ereport(ERROR,
+				(errcode(ERRCODE_DATATYPE_MISMATCH),
+				 errmsg("%s: the query must return exactly one column of type geometry, it returns %d columns",
+						fname, desc ? desc->natts : 0)));
+	}
+	if (with_ids)
+	{
+		idtype = getBaseType(TupleDescAttr(desc, 0)->atttypid);
+		if (idtype != INT8OID && idtype != INT4OID && idtype != INT2OID)
+			ereport(ERROR,
+					(errcode(ERRCODE_DATATYPE_MISMATCH),
+					 errmsg("%s: the query's first column must be an integer id, not %s",
+							fname, format_type_be(TupleDescAttr(desc, 0)->atttypid))));
+	}
+	if (getBaseType(TupleDescAttr(desc, gcol)->atttypid) != geomoid)
+		ereport(ERROR,
+				(errcode(ERRCODE_DATATYPE_MISMATCH),
+				 errmsg("%s: the query's %scolumn must be of type geometry, not %s",
+						fname, with_ids ? "second " : "",
+						format_type_be(TupleDescAttr(desc, gcol)->atttypid))));
+	return idtype;
+}
+
+/*
+ * Run "query" and append the vertices of its geometry column (of type
+ * geomoid) to buf, skipping rows whose geometry is NULL.  With ids NULL the
+ * query returns that one column; otherwise it returns (id, geometry) with an
+ * integer id that must not be NULL, and ids->id[k] becomes the id of the
+ * row vertex k came from (ids grows in the caller's memory context, so
+ * ids->n == buf->n afterwards when both started empty).  SPI is connected
+ * and finished here; buf's context is the caller's, so the vertices
+ * outlive SPI_finish.
+ */
+void
+tdc_dump_collect(TdcPointBuf *buf, TdcIdBuf *ids, const char *query,
+				 Oid geomoid, const char *fname)
+{
+	ErrorContextCallback errcb;
+	DumpContext dc;
+	SPIPlanPtr	plan;
+	Portal		portal;
+	Oid			idtype;
+	int			gcol = ids ? 2 : 1;
+	MemoryContext outer = CurrentMemoryContext;
+
+	dc.fname = fname;
+	dc.query = query;
+	errcb.callback = dump_error_context;
+	errcb.arg = (void *) &dc;
+	errcb.previous = error_context_stack;
+	error_context_stack = &errcb;
+
+	if (SPI_connect() != SPI_OK_CONNECT)
+		elog(ERROR, "%s: SPI_connect failed", fname);
+	plan = SPI_prepare(query, 0, NULL);
+	if (plan == NULL)
+		elog(ERROR, "%s: could not prepare the query: %s", fname,
+			 SPI_result_code_string(SPI_result));
+	if (!SPI_is_cursor_plan(plan))
+		ereport(ERROR,
+				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
+				 errmsg("%s: the query must be a single SELECT returning %s",
+						fname, ids ? "(id bigint, geom geometry)" : "one geometry column")));
+	dump_check_read_only(plan, fname);
+	/* read-only: SPI refuses anything that would write, as a second guard */
+	portal = SPI_cursor_open(NULL, plan, NULL, NULL, true);
+	idtype = dump_check_columns(portal->tupDesc, ids != NULL, geomoid, fname);
+
+	for (;;)
+	{
+		SPI_cursor_fetch(portal, true, DUMP_BATCH);
+		if (SPI_processed == 0)
+			break;
+		for (uint64 i = 0; i < SPI_processed; i++)
+		{
+			bool		gnull,
+						inull;
+			Datum		g = SPI_getbinval(SPI_tuptable->vals[i],
+										  SPI_tuptable->tupdesc, gcol, &gnull);
+			Datum		d;
+			int64		id = 0;
+			struct varlena *gv;
+
+			if (gnull)
+				continue;
+			if (ids)
+			{
+				d = SPI_getbinval(SPI_tuptable->vals[i],
+								  SPI_tuptable->tupdesc, 1, &inull);
+				if (inull)
+					ereport(ERROR,
+							(errcode(ERRCODE_NULL_VALUE_NOT_ALLOWED),
+							 errmsg("%s: the query returned a NULL id", fname)));
+				id = idtype == INT8OID ? DatumGetInt64(d) :
+					idtype == INT4OID ? (int64) DatumGetInt32(d) :
+					(int64) DatumGetInt16(d);
+			}
+			gv = PG_DETOAST_DATUM_PACKED(g);
+			tdc_gser_append(buf, gv, fname);
+			if ((Pointer) gv != DatumGetPointer(g))
+				pfree(gv);
+			if (ids)
+				idbuf_fill(ids, (Size) buf->n, id, outer);
+		}
+		SPI_freetuptable(SPI_tuptable);
+		CHECK_FOR_INTERRUPTS();
+	}
+	SPI_cursor_close(portal);
+	SPI_finish();
+	error_context_stack = errcb.previous;
+}
