@@ -682,6 +682,17 @@ COMMENT ON FUNCTION ST_TDCConstrainedDelaunayTriangles(geometry, int4) IS
 'flags 0: GEOMETRYCOLLECTION of POLYGON triangles, 1: MULTILINESTRING of the edges, 2: TIN, '
 '5: MULTILINESTRING of the constraint edges alone.';
 
+CREATE FUNCTION ST_TDCConstrainedDelaunayDump(query text)
+RETURNS TABLE(id bigint, geom geometry)
+AS 'MODULE_PATHNAME', 'st_tdcconstraineddelaunaydump'
+LANGUAGE C VOLATILE STRICT PARALLEL UNSAFE
+COST 10000 ROWS 100000;
+
+COMMENT ON FUNCTION ST_TDCConstrainedDelaunayDump(text) IS
+'Runs a query returning one geometry column (with the caller''s rights, read-only) and returns the constrained '
+'Delaunay triangulation of all its vertices, linestring and ring segments as constraints, one POLYGON row per '
+'triangle numbered from 1; not bound by the 1 GB limit of a single value.';
+
 -- Aggregates: ST_TDCConstrainedDelaunay(geometry [, flags])
 --   = ST_TDCConstrainedDelaunayTriangles(ST_Collect(geometry), flags),
 -- parallel-safe like ST_TDCDelaunay (the partial states carry the segments).

@@ -99,6 +99,27 @@ SELECT ST_NumGeometries(p.g) AS parallel_constraint_edges,
 	AS same_as_function
 FROM tdc_cdt_par5 p;
 DROP TABLE tdc_cdt_par5;
+
+-- ST_TDCConstrainedDelaunayDump: the same triangles as the function on the
+-- query's collection, one row each, numbered from 1; the query's rules are
+-- ST_TDCDelaunayDump's (read-only, one geometry column, NULL rows skipped).
+SELECT tdc_cdt_same((SELECT ST_Collect(geom ORDER BY id) FROM ST_TDCConstrainedDelaunayDump(
+						'SELECT g FROM tdc_contour_segs UNION ALL SELECT NULL::geometry')),
+					(SELECT ST_TDCConstrainedDelaunayTriangles(ST_Collect(g)) FROM tdc_contour_segs))
+	AS dump_same;
+SELECT min(id) AS first_id, max(id) = count(*) AS numbered
+FROM ST_TDCConstrainedDelaunayDump('SELECT g FROM tdc_contour_segs');
+SELECT id, ST_AsText(geom) AS dump_rhombus
+FROM ST_TDCConstrainedDelaunayDump('SELECT ''GEOMETRYCOLLECTION(MULTIPOINT(5 1,5 -1,5 5,5 -5),LINESTRING(0 0,10 0))''::geometry')
+ORDER BY id;
+SELECT count(*) AS dump_no_rows FROM ST_TDCConstrainedDelaunayDump('SELECT g FROM tdc_contour_segs WHERE false');
+SELECT count(*) AS dump_null_query FROM ST_TDCConstrainedDelaunayDump(NULL);
+\set VERBOSITY terse
+SELECT count(*) FROM ST_TDCConstrainedDelaunayDump('VALUES (''LINESTRING(0 0,2 2)''::geometry), (''LINESTRING(0 2,2 0)'')');
+SELECT count(*) FROM ST_TDCConstrainedDelaunayDump('DELETE FROM tdc_contour_segs RETURNING g');
+SELECT count(*) FROM ST_TDCConstrainedDelaunayDump('SELECT 1');
+\set VERBOSITY default
+SELECT count(*) AS segs_kept FROM tdc_contour_segs;
 -- flags must agree on all rows; a crossing across rows is the same error
 SELECT ST_TDCConstrainedDelaunay(g, i % 2) FROM (VALUES ('POINT(0 0)'::geometry, 1), ('POINT(1 0)', 2)) v(g, i);
 SELECT ST_TDCConstrainedDelaunay(g) FROM (VALUES ('LINESTRING(0 0,2 2)'::geometry), ('LINESTRING(0 2,2 0)')) v(g);

@@ -18,13 +18,20 @@
  * 10 ms slices and watches for interrupts.  A proper crossing is an ERROR
  * that names both segments by their end points: an exact triangulation
  * cannot invent the crossing point, so the lines must be noded first.
+ *
+ * ST_TDCConstrainedDelaunayDump(query) reads its query with the Dump
+ * functions' collector (tdc_dump_query.c), taking each row's segments as
+ * its vertices arrive, and returns one row per triangle like
+ * ST_TDCDelaunayDump, so no single value bounds the result.
  */
 #include "postgres.h"
 
 #include <math.h>
 
+#include "funcapi.h"
 #include "miscadmin.h"
 #include "portability/instr_time.h"
+#include "utils/builtins.h"
 #include "utils/memutils.h"
 
 #include "gser_format.h"
@@ -616,4 +623,66 @@ st_tdcconstraineddelaunay_finalfn(PG_FUNCTION_ARGS)
 	PG_RETURN_DATUM(constrained_to_datum(&st->base->pts, &st->segs,
 										 st->base->params_set ? st->base->flags : 0,
 										 CDT_AGG_NAME));
+}
+
+/* ----------------------------------------------------------------
+ *		ST_TDCConstrainedDelaunayDump(query text)
+ * ----------------------------------------------------------------
+ */
+
+typedef struct CdtDumpRows
+{
+	SegList    *segs;
+	const TdcPointBuf *buf;
+	const char *fname;
+} CdtDumpRows;
+
+/* TdcDumpRowFn: the segments of one row of the query. */
+static void
+cdt_dump_row(void *arg, const struct varlena *geom, uint64 first)
+{
+	CdtDumpRows *rows = (CdtDumpRows *) arg;
+
+	if (collect_segments(geom, rows->segs, first, rows->fname) != rows->buf->n - first)
+		ereport(ERROR,
+				(errcode(ERRCODE_DATA_CORRUPTED),
+				 errmsg("%s: corrupt geometry value", rows->fname)));
+}
+
+PG_FUNCTION_INFO_V1(st_tdcconstraineddelaunaydump);
+
+/*
+ * ST_TDCConstrainedDelaunayDump(query text) RETURNS TABLE(id bigint,
+ * geom geometry): one POLYGON row per triangle, numbered from 1.  STRICT.
+ */
+Datum
+st_tdcconstraineddelaunaydump(PG_FUNCTION_ARGS)
+{
+	const char *fname = "ST_TDCConstrainedDelaunayDump";
+	ReturnSetInfo *rsinfo = (ReturnSetInfo *) fcinfo->resultinfo;
+	char	   *query;
+	Oid			geomoid;
+	TdcPointBuf buf;
+	SegList		segs = {CurrentMemoryContext, NULL, 0, 0};
+	CdtDumpRows rows;
+	TdcRun	   *run;
+
+	tdc_signal_guard();
+	query = text_to_cstring(PG_GETARG_TEXT_PP(0));
+	InitMaterializedSRF(fcinfo, 0);
+	geomoid = TupleDescAttr(rsinfo->setDesc, 1)->atttypid;
+
+	tdc_pointbuf_init(&buf, CurrentMemoryContext);
+	rows.segs = &segs;
+	rows.buf = &buf;
+	rows.fname = fname;
+	tdc_dump_collect(&buf, NULL, query, geomoid, fname, cdt_dump_row, &rows);
+	if (buf.n == 0)
+		return (Datum) 0;
+
+	run = tdc_run(&buf, 0.0, segs.nseg * 2 * sizeof(uint32), fname);
+	cdt_release(constrain(run, &buf, &segs, fname));
+	tdc_dump_triangles(rsinfo, run, &buf);
+	tdc_run_free(run);
+	return (Datum) 0;
 }

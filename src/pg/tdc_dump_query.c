@@ -144,11 +144,13 @@ dump_check_columns(TupleDesc desc, bool with_ids, Oid geomoid,
  * row vertex k came from (ids grows in the caller's memory context, so
  * ids->n == buf->n afterwards when both started empty).  SPI is connected
  * and finished here; buf's context is the caller's, so the vertices
- * outlive SPI_finish.
+ * outlive SPI_finish.  row_fn, when not NULL, sees each geometry read
+ * (see TdcDumpRowFn); it allocates in its own context, not SPI's.
  */
 void
 tdc_dump_collect(TdcPointBuf *buf, TdcIdBuf *ids, const char *query,
-				 Oid geomoid, const char *fname)
+				 Oid geomoid, const char *fname, TdcDumpRowFn row_fn,
+				 void *row_arg)
 {
 	ErrorContextCallback errcb;
 	DumpContext dc;
@@ -194,6 +196,7 @@ tdc_dump_collect(TdcPointBuf *buf, TdcIdBuf *ids, const char *query,
 										  SPI_tuptable->tupdesc, gcol, &gnull);
 			Datum		d;
 			int64		id = 0;
+			uint64		first;
 			struct varlena *gv;
 
 			if (gnull)
@@ -211,7 +214,10 @@ tdc_dump_collect(TdcPointBuf *buf, TdcIdBuf *ids, const char *query,
 					(int64) DatumGetInt16(d);
 			}
 			gv = PG_DETOAST_DATUM_PACKED(g);
+			first = buf->n;
 			tdc_gser_append(buf, gv, fname);
+			if (row_fn)
+				row_fn(row_arg, gv, first);
 			if ((Pointer) gv != DatumGetPointer(g))
 				pfree(gv);
 			if (ids)

@@ -969,6 +969,34 @@ st_tdcdelaunaytriangles(PG_FUNCTION_ARGS)
 										 tdc_guc_stats ? ms_since(start) : -1));
 }
 
+/*
+ * The rows of a Dump function: one POLYGON per triangle of run's finished
+ * job, numbered from 1, into the materialized result of rsinfo.
+ */
+void
+tdc_dump_triangles(struct ReturnSetInfo *rsinfo, TdcRun *run, const TdcPointBuf *buf)
+{
+	struct varlena *tri = palloc(tdc_gser_triangle_size(buf->hasz));
+	tdc_iter	it;
+	uint32		v[3];
+	int64		id = 0;
+	Datum		values[2];
+	bool		nulls[2] = {false, false};
+
+	it.pos = 0;
+	while (tdc_next_triangle(run->job, &it, v))
+	{
+		tdc_gser_write_triangle(tri, run->job, v, buf);
+		values[0] = Int64GetDatum(++id);
+		values[1] = PointerGetDatum(tri);
+		tuplestore_putvalues(rsinfo->setResult, rsinfo->setDesc, values, nulls);
+		if ((id & (DUMP_POLL_ROWS - 1)) == 0)
+			CHECK_FOR_INTERRUPTS();
+	}
+	CHECK_FOR_INTERRUPTS();
+	pfree(tri);
+}
+
 PG_FUNCTION_INFO_V1(st_tdcdelaunaydump);
 
 /*
@@ -985,12 +1013,6 @@ st_tdcdelaunaydump(PG_FUNCTION_ARGS)
 	Oid			geomoid;
 	TdcPointBuf buf;
 	TdcRun	   *run;
-	struct varlena *tri;
-	tdc_iter	it;
-	uint32		v[3];
-	int64		id = 0;
-	Datum		values[2];
-	bool		nulls[2] = {false, false};
 
 	tdc_signal_guard();
 	/* STRICT: a NULL query or tolerance gives no rows, as in PostGIS */
@@ -1006,7 +1028,7 @@ st_tdcdelaunaydump(PG_FUNCTION_ARGS)
 	geomoid = TupleDescAttr(rsinfo->setDesc, 1)->atttypid;
 
 	tdc_pointbuf_init(&buf, CurrentMemoryContext);
-	tdc_dump_collect(&buf, NULL, query, geomoid, fname);
+	tdc_dump_collect(&buf, NULL, query, geomoid, fname, NULL, NULL);
 	if (buf.n == 0)
 		return (Datum) 0;
 
@@ -1019,18 +1041,7 @@ st_tdcdelaunaydump(PG_FUNCTION_ARGS)
 		stats_report(&st, fname, "");
 	}
 
-	tri = palloc(tdc_gser_triangle_size(buf.hasz));
-	it.pos = 0;
-	while (tdc_next_triangle(run->job, &it, v))
-	{
-		tdc_gser_write_triangle(tri, run->job, v, &buf);
-		values[0] = Int64GetDatum(++id);
-		values[1] = PointerGetDatum(tri);
-		tuplestore_putvalues(rsinfo->setResult, rsinfo->setDesc, values, nulls);
-		if ((id & (DUMP_POLL_ROWS - 1)) == 0)
-			CHECK_FOR_INTERRUPTS();
-	}
-	CHECK_FOR_INTERRUPTS();
+	tdc_dump_triangles(rsinfo, run, &buf);
 	tdc_run_free(run);
 	return (Datum) 0;
 }

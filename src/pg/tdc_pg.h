@@ -228,6 +228,9 @@ extern TdcRun *tdc_run(const TdcPointBuf *buf, double tolerance,
 extern bool tdc_run_emit(TdcRun *run, tdc_emit_fn emit, void *arg,
 						 const char *fname);
 extern void tdc_run_free(TdcRun *run);
+struct ReturnSetInfo;
+extern void tdc_dump_triangles(struct ReturnSetInfo *rsinfo, TdcRun *run,
+							   const TdcPointBuf *buf);
 extern Datum tdc_triangulate_to_datum(const TdcPointBuf *buf, double tolerance,
 									  int flags, const char *fname);
 
@@ -241,8 +244,17 @@ typedef struct TdcIdBuf
 	Size		cap;
 } TdcIdBuf;
 
+/*
+ * Called for each non-NULL geometry of the query after its vertices were
+ * appended to buf, the first of them at index "first" (the constrained
+ * Dump collects the segments this way).
+ */
+typedef void (*TdcDumpRowFn) (void *arg, const struct varlena *geom,
+							  uint64 first);
+
 extern void tdc_dump_collect(TdcPointBuf *buf, TdcIdBuf *ids, const char *query,
-							 Oid geomoid, const char *fname);
+							 Oid geomoid, const char *fname,
+							 TdcDumpRowFn row_fn, void *row_arg);
 
 /* tdc_signal.c */
 extern bool tdc_signal_settled;
