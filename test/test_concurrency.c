@@ -2,7 +2,7 @@
  * test_concurrency.c
  *		The core's promise of no global mutable state, checked with threads
  *		that use it at the same moment; and the message of a failed
- *		pthread_create.
+ *		pthread_create, in the pool and in every start.
  *
  * Races rarely change a result on two cores, so the real check of the
  * first two tests is `make check-core-tsan`: ThreadSanitizer reports any
@@ -346,10 +346,108 @@ test_thread_error_message(void)
 	free(xy);
 }
 
+static void
+count_emitted(void *arg, size_t first, size_t count, const uint32_t *v)
+{
+	atomic_fetch_add((_Atomic size_t *) arg, count);
+}
+
+/*
+ * The other starts (runner.c): when the thread of a handing-over, a
+ * constraint insertion, a Voronoi diagram or a new job cannot be created,
+ * each returns TDC_ETHREAD with pthread_create's error and no object, and
+ * the finished job stays usable.  A child process makes every new thread's
+ * stack 64 TB, which glibc cannot map (EAGAIN), after the job has finished;
+ * it writes what went wrong, if anything, to the pipe and exits 1.  Skipped
+ * under sanitizers (--quick), like the test above.
+ */
+static void
+test_start_thread_error(void)
+{
+	size_t		n = TDC_INLINE_MAX + 1;	/* every start below takes a thread */
+	double	   *xy;
+	int			fd[2];
+	pid_t		pid;
+	int			status;
+	char		msg[512] = "";
+	ssize_t		got;
+
+	if (tdc_test_quick)
+		return;
+	if (pipe(fd) != 0)
+	{
+		CHECK(false, "start thread error: pipe: %s", strerror(errno));
+		return;
+	}
+	xy = random_points(n, 7);
+	fflush(NULL);
+	pid = fork();
+	if (pid == 0)
+	{
+		pthread_attr_t attr;
+		tdc_job    *job = NULL,
+				   *job2 = NULL;
+		tdc_cdt    *cdt = NULL;
+		tdc_voronoi *vor = NULL;
+		uint32_t	seg[2] = {0, 1};
+		double		env[4];
+		_Atomic size_t emitted = 0;
+		char		err[4][256];
+		int			rc[4];
+		const char *what[4] = {"emit", "cdt", "voronoi", "job"};
+		size_t		len = 0;
+
+		close(fd[0]);
+		if (tdc_triangulate(xy, n, NULL, &job, err[0], sizeof(err[0])) != TDC_OK)
+			_exit(2);
+		tdc_voronoi_default_env(job, env);
+		pthread_attr_init(&attr);
+		pthread_attr_setstacksize(&attr, (size_t) 1 << 46);
+		if (pthread_setattr_default_np(&attr) != 0)
+			_exit(3);
+		rc[0] = tdc_job_emit_start(job, count_emitted, &emitted, err[0], sizeof(err[0]));
+		rc[1] = tdc_cdt_start(job, seg, 1, &cdt, err[1], sizeof(err[1]));
+		rc[2] = tdc_voronoi_start(job, env, 0, &vor, err[2], sizeof(err[2]));
+		rc[3] = tdc_job_start(xy, n, NULL, &job2, err[3], sizeof(err[3]));
+		for (int i = 0; i < 4; i++)
+			if (rc[i] != TDC_ETHREAD || strstr(err[i], strerror(EAGAIN)) == NULL)
+				len += snprintf(msg + len, sizeof(msg) - len, "%s: %d \"%s\"; ",
+								what[i], rc[i], err[i]);
+		if (cdt != NULL || vor != NULL || job2 != NULL)
+			len += snprintf(msg + len, sizeof(msg) - len, "an object came back; ");
+		if (tdc_job_wait(job, 0) != TDC_OK)
+			len += snprintf(msg + len, sizeof(msg) - len, "the job lost its status; ");
+		pthread_attr_setstacksize(&attr, (size_t) 1 << 20);
+		pthread_setattr_default_np(&attr);
+		if (tdc_job_emit_start(job, count_emitted, &emitted, err[0], sizeof(err[0])) != TDC_OK ||
+			tdc_job_wait(job, -1) != TDC_OK || emitted != tdc_num_triangles(job))
+			len += snprintf(msg + len, sizeof(msg) - len, "no handing-over after: %zu of %zu triangles",
+							(size_t) emitted, tdc_num_triangles(job));
+		if (len > 0 && write(fd[1], msg, strlen(msg)) < 0)
+			_exit(4);
+		_exit(len > 0);
+	}
+	close(fd[1]);
+	CHECK(pid > 0, "start thread error: fork failed");
+	if (pid > 0)
+	{
+		got = read(fd[0], msg, sizeof(msg) - 1);
+		msg[got > 0 ? got : 0] = '\0';
+		waitpid(pid, &status, 0);
+		CHECK(WIFEXITED(status) && WEXITSTATUS(status) == 0,
+			  "start thread error: the child ended with %s %d: %s",
+			  WIFEXITED(status) ? "exit" : "signal",
+			  WIFEXITED(status) ? WEXITSTATUS(status) : WTERMSIG(status), msg);
+	}
+	close(fd[0]);
+	free(xy);
+}
+
 void
 test_concurrency(void)
 {
 	test_concurrent_validate();
 	test_concurrent_input_site();
 	test_thread_error_message();
+	test_start_thread_error();
 }
