@@ -2,7 +2,7 @@
  * test_concurrency.c
  *		The core's promise of no global mutable state, checked with threads
  *		that use it at the same moment; and the message of a failed
- *		pthread_create.
+ *		pthread_create, in the pool and in every start.
  *
  * Races rarely change a result on two cores, so the real check of the
  * first two tests is `make check-core-tsan`: ThreadSanitizer reports any
@@ -270,6 +270,80 @@ vm_size(void)
 }
 
 /*
+ * Run child(xy, n, fd) on n random points in a forked process, which reports
+ * on fd and exits; msg gets what it wrote.  Checks that it exited 0; returns
+ * whether it did.  A child keeps a changed process-wide state (thread
+ * attributes, limits) away from the rest of the suite.
+ */
+static bool
+child_passes(const char *what, void (*child) (const double *xy, size_t n, int fd),
+			 size_t n, uint64_t seed, char *msg, size_t msglen)
+{
+	double	   *xy = random_points(n, seed);
+	int			fd[2];
+	pid_t		pid = -1;
+	int			status = -1;
+	ssize_t		got;
+
+	msg[0] = '\0';
+	if (pipe(fd) == 0)
+	{
+		fflush(NULL);
+		pid = fork();
+		if (pid == 0)
+		{
+			close(fd[0]);
+			child(xy, n, fd[1]);
+			_exit(127);
+		}
+		close(fd[1]);
+		if (pid > 0)
+		{
+			got = read(fd[0], msg, msglen - 1);
+			msg[got > 0 ? got : 0] = '\0';
+			waitpid(pid, &status, 0);
+		}
+		close(fd[0]);
+	}
+	free(xy);
+	CHECK(pid > 0, "%s: no child process: %s", what, strerror(errno));
+	if (pid <= 0)
+		return false;
+	CHECK(WIFEXITED(status) && WEXITSTATUS(status) == 0,
+		  "%s: the child ended with %s %d, message \"%s\"", what,
+		  WIFEXITED(status) ? "exit" : "signal",
+		  WIFEXITED(status) ? WEXITSTATUS(status) : WTERMSIG(status), msg);
+	return WIFEXITED(status) && WEXITSTATUS(status) == 0;
+}
+
+static void
+thread_error_child(const double *xy, size_t n, int fd)
+{
+	pthread_attr_t attr;
+	struct rlimit rl;
+	tdc_options opt;
+	tdc_job    *job = NULL;
+	char		err[256] = "";
+	int			rc;
+
+	pthread_attr_init(&attr);
+	pthread_attr_setstacksize(&attr, (size_t) 64 << 20);
+	if (pthread_setattr_default_np(&attr) != 0)
+		_exit(10);
+	rl.rlim_cur = rl.rlim_max = vm_size() + ((size_t) 512 << 20);
+	if (setrlimit(RLIMIT_AS, &rl) != 0)
+		_exit(11);
+	tdc_options_init(&opt);
+	opt.threads = 1024;
+	rc = tdc_triangulate(xy, n, &opt, &job, err, sizeof(err));
+	if (job != NULL)
+		snprintf(err, sizeof(err), "%s", tdc_job_error(job));
+	if (write(fd, err, strlen(err)) < 0)
+		_exit(12);
+	_exit(rc == TDC_ETHREAD ? 0 : rc == TDC_OK ? 13 : 14);
+}
+
+/*
  * When the pool cannot start its threads, the job's message must give
  * pthread_create's own error, which it returns and does not leave in errno.
  * The job is just big enough to run on a driver thread with a pool.
@@ -282,68 +356,90 @@ vm_size(void)
 static void
 test_thread_error_message(void)
 {
-	size_t		n = TDC_INLINE_MAX;	/* smaller jobs run inline, without a pool */
-	double	   *xy;
-	int			fd[2];
-	pid_t		pid;
-	int			status;
-	char		msg[256] = "";
-	ssize_t		got;
+	char		msg[256];
 
-	if (tdc_test_quick)
+	/* smaller jobs than TDC_INLINE_MAX run inline, without a pool */
+	if (tdc_test_quick ||
+		!child_passes("thread error (exit 0 = TDC_ETHREAD)", thread_error_child,
+					  TDC_INLINE_MAX, 5, msg, sizeof(msg)))
 		return;
-	if (pipe(fd) != 0)
-	{
-		CHECK(false, "thread error: pipe: %s", strerror(errno));
-		return;
-	}
-	xy = random_points(n, 5);
-	fflush(NULL);
-	pid = fork();
-	if (pid == 0)
-	{
-		pthread_attr_t attr;
-		struct rlimit rl;
-		tdc_options opt;
-		tdc_job    *job = NULL;
-		char		err[256] = "";
-		int			rc;
+	CHECK(strstr(msg, strerror(EAGAIN)) != NULL && strstr(msg, strerror(0)) == NULL,
+		  "thread error: message \"%s\" does not give pthread_create's error (%s)",
+		  msg, strerror(EAGAIN));
+	printf("thread error: \"%s\"\n", msg);
+}
 
-		close(fd[0]);
-		pthread_attr_init(&attr);
-		pthread_attr_setstacksize(&attr, (size_t) 64 << 20);
-		if (pthread_setattr_default_np(&attr) != 0)
-			_exit(10);
-		rl.rlim_cur = rl.rlim_max = vm_size() + ((size_t) 512 << 20);
-		if (setrlimit(RLIMIT_AS, &rl) != 0)
-			_exit(11);
-		tdc_options_init(&opt);
-		opt.threads = 1024;
-		rc = tdc_triangulate(xy, n, &opt, &job, err, sizeof(err));
-		if (job != NULL)
-			snprintf(err, sizeof(err), "%s", tdc_job_error(job));
-		if (write(fd[1], err, strlen(err)) < 0)
-			_exit(12);
-		_exit(rc == TDC_ETHREAD ? 0 : rc == TDC_OK ? 13 : 14);
-	}
-	close(fd[1]);
-	CHECK(pid > 0, "thread error: fork failed");
-	if (pid > 0)
-	{
-		got = read(fd[0], msg, sizeof(msg) - 1);
-		msg[got > 0 ? got : 0] = '\0';
-		waitpid(pid, &status, 0);
-		CHECK(WIFEXITED(status) && WEXITSTATUS(status) == 0,
-			  "thread error: the capped run ended with %s %d (0 = TDC_ETHREAD), message \"%s\"",
-			  WIFEXITED(status) ? "exit" : "signal",
-			  WIFEXITED(status) ? WEXITSTATUS(status) : WTERMSIG(status), msg);
-		CHECK(strstr(msg, strerror(EAGAIN)) != NULL && strstr(msg, strerror(0)) == NULL,
-			  "thread error: message \"%s\" does not give pthread_create's error (%s)",
-			  msg, strerror(EAGAIN));
-		printf("thread error: \"%s\"\n", msg);
-	}
-	close(fd[0]);
-	free(xy);
+static void
+count_emitted(void *arg, size_t first, size_t count, const uint32_t *v)
+{
+	atomic_fetch_add((_Atomic size_t *) arg, count);
+}
+
+static void
+start_error_child(const double *xy, size_t n, int fd)
+{
+	pthread_attr_t attr;
+	tdc_job    *job = NULL,
+			   *job2 = NULL;
+	tdc_cdt    *cdt = NULL;
+	tdc_voronoi *vor = NULL;
+	uint32_t	seg[2] = {0, 1};
+	double		env[4];
+	_Atomic size_t emitted = 0;
+	char		err[4][256],
+				msg[1024];
+	int			rc[4];
+	const char *what[4] = {"emit", "cdt", "voronoi", "job"};
+	size_t		len = 0;
+
+	if (tdc_triangulate(xy, n, NULL, &job, err[0], sizeof(err[0])) != TDC_OK)
+		_exit(2);
+	tdc_voronoi_default_env(job, env);
+	pthread_attr_init(&attr);
+	pthread_attr_setstacksize(&attr, (size_t) 1 << 46);
+	if (pthread_setattr_default_np(&attr) != 0)
+		_exit(3);
+	rc[0] = tdc_job_emit_start(job, count_emitted, &emitted, err[0], sizeof(err[0]));
+	rc[1] = tdc_cdt_start(job, seg, 1, &cdt, err[1], sizeof(err[1]));
+	rc[2] = tdc_voronoi_start(job, env, 0, &vor, err[2], sizeof(err[2]));
+	rc[3] = tdc_job_start(xy, n, NULL, &job2, err[3], sizeof(err[3]));
+	for (int i = 0; i < 4; i++)
+		if (rc[i] != TDC_ETHREAD || strstr(err[i], strerror(EAGAIN)) == NULL)
+			len += snprintf(msg + len, sizeof(msg) - len, "%s: %d \"%s\"; ",
+							what[i], rc[i], err[i]);
+	if (cdt != NULL || vor != NULL || job2 != NULL)
+		len += snprintf(msg + len, sizeof(msg) - len, "an object came back; ");
+	if (tdc_job_wait(job, 0) != TDC_OK)
+		len += snprintf(msg + len, sizeof(msg) - len, "the job lost its status; ");
+	pthread_attr_setstacksize(&attr, (size_t) 1 << 20);
+	pthread_setattr_default_np(&attr);
+	if (tdc_job_emit_start(job, count_emitted, &emitted, err[0], sizeof(err[0])) != TDC_OK ||
+		tdc_job_wait(job, -1) != TDC_OK || emitted != tdc_num_triangles(job))
+		len += snprintf(msg + len, sizeof(msg) - len, "no handing-over after: %zu of %zu triangles",
+						(size_t) emitted, tdc_num_triangles(job));
+	if (len > 0 && write(fd, msg, strlen(msg)) < 0)
+		_exit(4);
+	_exit(len > 0);
+}
+
+/*
+ * The other starts (runner.c): when the thread of a handing-over, a
+ * constraint insertion, a Voronoi diagram or a new job cannot be created,
+ * each returns TDC_ETHREAD with pthread_create's error and no object, and
+ * the finished job stays usable.  A child process makes every new thread's
+ * stack 64 TB, which glibc cannot map (EAGAIN), after the job has finished;
+ * it writes what went wrong, if anything, and exits 1.  Skipped under
+ * sanitizers (--quick), like the test above.
+ */
+static void
+test_start_thread_error(void)
+{
+	char		msg[1024];
+
+	/* TDC_INLINE_MAX + 1 points: every start takes a thread */
+	if (!tdc_test_quick)
+		child_passes("start thread error", start_error_child, TDC_INLINE_MAX + 1, 7,
+					 msg, sizeof(msg));
 }
 
 void
@@ -352,4 +448,5 @@ test_concurrency(void)
 	test_concurrent_validate();
 	test_concurrent_input_site();
 	test_thread_error_message();
+	test_start_thread_error();
 }

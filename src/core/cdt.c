@@ -58,9 +58,10 @@
  * 4 per site for vedge, the job's input map (4 per input point), and two
  * lists of at most the number of crossed edges each (at most 3 per point).
  * Cancel is polled before every segment and every 4096 steps inside one.
+ * The insertion runs like a triangulation, on the caller's thread when it
+ * is small, otherwise on a thread with every signal blocked that the host
+ * waits for and cancels (the runner of runner.c).
  */
-#include <errno.h>
-#include <signal.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -92,12 +93,7 @@ struct tdc_cdt
 
 	atomic_int	cancel;
 	bool		inline_run;
-	pthread_t	thread;
-	bool		thread_started;
-	pthread_mutex_t lock;
-	pthread_cond_t done;
-	bool		finished;
-	int			status;
+	tdc_runner	run;			/* the job's lifecycle (runner.c) */
 	char		err[512];
 };
 
@@ -531,32 +527,23 @@ cdt_run(tdc_cdt *c)
 	return TDC_OK;
 }
 
-static void
-cdt_finish(tdc_cdt *c, int rc)
+/* The work, on the runner's thread or the caller's; returns the status. */
+static int
+cdt_work(void *arg)
 {
+	tdc_cdt    *c = arg;
+	int			rc = cdt_run(c);
+
 	/* the lists are only needed while inserting */
 	tdc_big_free(c->list);
 	tdc_big_free(c->fresh);
 	tdc_big_free(c->vedge);
 	c->list = c->fresh = c->vedge = NULL;
-	pthread_mutex_lock(&c->lock);
 	if (rc == TDC_ECANCELED)
 		snprintf(c->err, sizeof(c->err), "constraint insertion cancelled");
 	else if (rc == TDC_OK)
 		c->err[0] = '\0';
-	c->status = rc;
-	c->finished = true;
-	pthread_cond_broadcast(&c->done);
-	pthread_mutex_unlock(&c->lock);
-}
-
-static void *
-cdt_main(void *arg)
-{
-	tdc_cdt    *c = arg;
-
-	cdt_finish(c, cdt_run(c));
-	return NULL;
+	return rc;
 }
 
 size_t
@@ -571,7 +558,6 @@ tdc_cdt_start(tdc_job *job, const uint32_t *seg, size_t nseg, tdc_cdt **out,
 			  char *err, size_t errlen)
 {
 	tdc_cdt    *c;
-	pthread_condattr_t ca;
 	int			rc;
 
 #define FAIL(code, ...) do { if (err && errlen) snprintf(err, errlen, __VA_ARGS__); return (code); } while (0)
@@ -596,38 +582,17 @@ tdc_cdt_start(tdc_job *job, const uint32_t *seg, size_t nseg, tdc_cdt **out,
 	c->seg = seg;
 	c->nseg = nseg;
 	c->cross[0] = c->cross[1] = SIZE_MAX;
-	atomic_init(&c->cancel, 0);
-	pthread_mutex_init(&c->lock, NULL);
-	pthread_condattr_init(&ca);
-	pthread_condattr_setclock(&ca, CLOCK_MONOTONIC);
-	pthread_cond_init(&c->done, &ca);
-	pthread_condattr_destroy(&ca);
+	tdc_runner_init(&c->run, &c->cancel);
 
 	/* like the triangulation: small work runs on the caller's thread */
 	c->inline_run = job->n < TDC_INLINE_MAX && nseg < TDC_INLINE_MAX;
-	if (c->inline_run)
+	rc = tdc_runner_start(&c->run, c->inline_run, cdt_work, c, err, errlen);
+	if (rc != TDC_OK)
 	{
-		cdt_finish(c, cdt_run(c));
-		*out = c;
-		return TDC_OK;
-	}
-	{
-		sigset_t	all,
-					old;
-
-		sigfillset(&all);
-		pthread_sigmask(SIG_SETMASK, &all, &old);
-		rc = pthread_create(&c->thread, NULL, cdt_main, c);
-		pthread_sigmask(SIG_SETMASK, &old, NULL);
-	}
-	if (rc != 0)
-	{
-		pthread_mutex_destroy(&c->lock);
-		pthread_cond_destroy(&c->done);
+		tdc_runner_destroy(&c->run);
 		free(c);
-		FAIL(TDC_ETHREAD, "could not create a thread: %s", strerror(rc));
+		return rc;
 	}
-	c->thread_started = true;
 	*out = c;
 	return TDC_OK;
 #undef FAIL
@@ -636,40 +601,14 @@ tdc_cdt_start(tdc_job *job, const uint32_t *seg, size_t nseg, tdc_cdt **out,
 int
 tdc_cdt_wait(tdc_cdt *c, int timeout_ms)
 {
-	int			status;
-
-	pthread_mutex_lock(&c->lock);
-	if (!c->finished && timeout_ms < 0)
-	{
-		while (!c->finished)
-			pthread_cond_wait(&c->done, &c->lock);
-	}
-	else if (!c->finished)
-	{
-		struct timespec ts;
-
-		clock_gettime(CLOCK_MONOTONIC, &ts);
-		ts.tv_sec += timeout_ms / 1000;
-		ts.tv_nsec += (long) (timeout_ms % 1000) * 1000000L;
-		if (ts.tv_nsec >= 1000000000L)
-		{
-			ts.tv_sec++;
-			ts.tv_nsec -= 1000000000L;
-		}
-		while (!c->finished)
-			if (pthread_cond_timedwait(&c->done, &c->lock, &ts) == ETIMEDOUT)
-				break;
-	}
-	status = c->finished ? c->status : TDC_RUNNING;
-	pthread_mutex_unlock(&c->lock);
-	return status;
+	return tdc_runner_wait(&c->run, timeout_ms);
 }
 
 void
 tdc_cdt_cancel(tdc_cdt *c)
 {
 	if (c)
-		atomic_store(&c->cancel, 1);
+		tdc_runner_cancel(&c->run);
 }
 
 const char *
@@ -681,7 +620,7 @@ tdc_cdt_error(const tdc_cdt *c)
 int
 tdc_cdt_crossing(const tdc_cdt *c, size_t *s1, size_t *s2)
 {
-	if (c->status != TDC_ECROSS)
+	if (c->run.status != TDC_ECROSS)
 		return 0;
 	*s1 = c->cross[0];
 	*s2 = c->cross[1];
@@ -699,13 +638,7 @@ tdc_cdt_free(tdc_cdt *c)
 {
 	if (c == NULL)
 		return;
-	if (c->thread_started)
-	{
-		tdc_cdt_cancel(c);
-		pthread_join(c->thread, NULL);
-	}
-	pthread_mutex_destroy(&c->lock);
-	pthread_cond_destroy(&c->done);
+	tdc_runner_destroy(&c->run);
 	tdc_big_free(c->cons);
 	tdc_big_free(c->list);
 	tdc_big_free(c->fresh);
@@ -733,7 +666,7 @@ tdc_next_constraint_edge(const tdc_cdt *c, tdc_iter *it, uint32_t v[2])
 	const tdc_job *job = c->job;
 	size_t		nslots = job->nin * 3;
 
-	if (c->cons == NULL || c->status != TDC_OK)
+	if (c->cons == NULL || c->run.status != TDC_OK)
 		return 0;
 	for (size_t e = it->pos; e < nslots; e++)
 	{

@@ -89,6 +89,38 @@ extern int	tdc_pool_create(tdc_pool **pool, int nthreads);
 extern void tdc_pool_for(tdc_pool *pool, size_t ntasks, tdc_task_fn fn, void *arg);
 extern void tdc_pool_destroy(tdc_pool *pool);
 
+/*
+ * The lifecycle of a job, a constraint insertion and a Voronoi diagram
+ * (runner.c): work on a thread with every signal blocked, or inline on the
+ * caller's; a status the host waits for with a timeout; a cancel flag (the
+ * owner's) the work polls; cancel and join on free.
+ */
+typedef int (*tdc_work_fn) (void *arg);
+
+typedef struct tdc_runner
+{
+	atomic_int *cancel;			/* the owner's flag, polled by its work */
+	tdc_work_fn work;			/* what the thread runs, and on what */
+	void	   *arg;
+	pthread_t	thread;
+	bool		started;		/* a thread was started and not joined yet */
+	pthread_mutex_t lock;
+	pthread_cond_t done;
+	bool		finished;		/* under lock */
+	int			status;			/* under lock */
+} tdc_runner;
+
+extern void tdc_runner_init(tdc_runner *r, atomic_int *cancel);
+extern int	tdc_runner_start(tdc_runner *r, bool inline_run, tdc_work_fn work,
+							 void *arg, char *err, size_t errlen);
+extern void tdc_runner_finish(tdc_runner *r, int status);
+extern int	tdc_runner_wait(tdc_runner *r, int timeout_ms);
+extern void tdc_runner_cancel(tdc_runner *r);
+extern void tdc_runner_rearm(tdc_runner *r);
+extern void tdc_runner_destroy(tdc_runner *r);
+extern int	tdc_thread_create_masked(pthread_t *thread, const pthread_attr_t *attr,
+									 void *(*fn) (void *), void *arg);
+
 /* merge.c: Guibas-Stolfi merge of two separated subsets along an axis. */
 extern void tdc_merge(tdc_mesh *m, tdc_freelist *fl, const tdc_sub *L,
 					  const tdc_sub *R, int axis, tdc_sub *out);

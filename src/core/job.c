@@ -8,57 +8,56 @@
  * (job->phase: the triangulation, then on request the handing-over of
  * emit.c) and publishes its status under the job's lock.  The caller's
  * thread only waits (tdc_job_wait) and may cancel; a cancel is a flag that
- * every task polls.
+ * every task polls.  The thread, the lock, the wait and the join are the
+ * runner that constraints and Voronoi diagrams share (runner.c).
  *
- * Invariant: job->finished and job->status change only under job->lock,
- * and the pool is gone before finished turns true, so a waiter that sees a
- * finished job sees no thread of it but the (idle) driver.  Freeing joins
- * the driver first; then nothing but memory is left, which may be returned
- * on a detached thread (tdc_job_free_background).
+ * Invariant: the job's finished flag and status change only under its lock
+ * (job->run.lock), and the pool is gone before finished turns true, so a
+ * waiter that sees a finished job sees no thread of it but the (idle)
+ * driver.  Freeing joins the driver first; then nothing but memory is left,
+ * which may be returned on a detached thread (tdc_job_free_background).
  */
-#include <errno.h>
 #include <math.h>
-#include <signal.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
 #include "job.h"
 
-/* Publish the status of the phase that just ended; the pool goes first. */
-static void
-finish_phase(tdc_job *job, int rc)
+/*
+ * The status of the phase that just ended, its message in job->err: a
+ * task's error wins, then a cancel.  The pool goes first.
+ */
+static int
+settle_phase(tdc_job *job, int rc)
 {
 	tdc_pool_destroy(job->pool);
 	job->pool = NULL;
 
-	pthread_mutex_lock(&job->lock);
 	if (atomic_load(&job->failed))
 	{
-		job->status = atomic_load(&job->failed);
 		snprintf(job->err, sizeof(job->err), "%s", job->task_err);
+		return atomic_load(&job->failed);
 	}
-	else if (rc == TDC_ECANCELED || (rc == TDC_OK && atomic_load(&job->cancel)))
+	if (rc == TDC_ECANCELED || (rc == TDC_OK && atomic_load(&job->cancel)))
 	{
-		job->status = TDC_ECANCELED;
 		snprintf(job->err, sizeof(job->err), "triangulation cancelled");
+		return TDC_ECANCELED;
 	}
-	else
-		job->status = rc;
-	job->finished = true;
-	pthread_cond_broadcast(&job->done);
-	pthread_mutex_unlock(&job->lock);
+	return rc;
 }
 
-static void *
-driver_main(void *arg)
+/*
+ * A phase, on the driver thread or inline on the caller's (tdc_work_fn); the
+ * runner publishes the status.
+ */
+static int
+phase_work(void *arg)
 {
 	tdc_job    *job = arg;
 
-	finish_phase(job, job->phase(job));
-	return NULL;
+	return settle_phase(job, job->phase(job));
 }
 
 /*
@@ -131,49 +130,6 @@ free_arrays(tdc_job *job)
 	tdc_job_release(job, job->subs);
 }
 
-/*
- * Our threads must never take the host's signals: block them all around
- * creation, so the new thread inherits the full mask (and the pool threads
- * the driver starts inherit it in turn).
- */
-static int
-create_masked_thread(pthread_t *thread, const pthread_attr_t *attr,
-					 void *(*fn) (void *), void *arg)
-{
-	sigset_t	all,
-				old;
-	int			rc;
-
-	sigfillset(&all);
-	pthread_sigmask(SIG_SETMASK, &all, &old);
-	rc = pthread_create(thread, attr, fn, arg);
-	pthread_sigmask(SIG_SETMASK, &old, NULL);
-	return rc;
-}
-
-static int
-start_driver(tdc_job *job)
-{
-	int			rc = create_masked_thread(&job->driver, NULL, driver_main, job);
-
-	job->driver_started = rc == 0;
-	return rc;
-}
-
-/* Stop and join the driver, if any; then nothing but memory is left. */
-static void
-stop_driver(tdc_job *job)
-{
-	if (job->driver_started)
-	{
-		tdc_job_cancel(job);
-		pthread_join(job->driver, NULL);
-		job->driver_started = false;
-	}
-	pthread_mutex_destroy(&job->lock);
-	pthread_cond_destroy(&job->done);
-}
-
 static void *
 reaper_main(void *arg)
 {
@@ -206,7 +162,6 @@ tdc_job_start(const double *xy, size_t n, const tdc_options *opt, tdc_job **out,
 {
 	tdc_job    *job;
 	tdc_options o;
-	pthread_condattr_t ca;
 	size_t		arena;
 	int			rc;
 
@@ -251,28 +206,16 @@ tdc_job_start(const double *xy, size_t n, const tdc_options *opt, tdc_job **out,
 	job->input = xy;
 	job->inline_run = tdc_plan_inline(n);
 	job->threads = tdc_plan_threads(n, &o);
-	atomic_init(&job->cancel, 0);
 	atomic_init(&job->failed, 0);
-	pthread_mutex_init(&job->lock, NULL);
-	pthread_condattr_init(&ca);
-	pthread_condattr_setclock(&ca, CLOCK_MONOTONIC);
-	pthread_cond_init(&job->done, &ca);
-	pthread_condattr_destroy(&ca);
+	tdc_runner_init(&job->run, &job->cancel);
 
 	job->phase = tdc_run_phase;
-	if (job->inline_run)
+	rc = tdc_runner_start(&job->run, job->inline_run, phase_work, job, err, errlen);
+	if (rc != TDC_OK)
 	{
-		finish_phase(job, tdc_run_phase(job));
-		*out = job;
-		return TDC_OK;
-	}
-	rc = start_driver(job);
-	if (rc != 0)
-	{
-		pthread_mutex_destroy(&job->lock);
-		pthread_cond_destroy(&job->done);
+		tdc_runner_destroy(&job->run);
 		free(job);
-		FAIL(TDC_ETHREAD, "could not create a thread: %s", strerror(rc));
+		return rc;
 	}
 	*out = job;
 	return TDC_OK;
@@ -293,40 +236,23 @@ tdc_job_emit_start(tdc_job *job, tdc_emit_fn emit, void *arg, char *err,
 
 	if (err && errlen)
 		err[0] = '\0';
-	pthread_mutex_lock(&job->lock);
-	rc = job->finished ? job->status : TDC_RUNNING;
-	pthread_mutex_unlock(&job->lock);
-	if (rc != TDC_OK)
+	if (tdc_runner_wait(&job->run, 0) != TDC_OK)
 	{
 		if (err && errlen)
 			snprintf(err, errlen, "the job has not finished successfully");
 		return TDC_EINVAL;
 	}
 	/* the driver that ran the triangulation is done: reap it */
-	if (job->driver_started)
-	{
-		pthread_join(job->driver, NULL);
-		job->driver_started = false;
-	}
+	tdc_runner_rearm(&job->run);
 	job->emit = emit;
 	job->emit_arg = arg;
-	job->phase = tdc_emit_phase;
-	job->finished = false;
-	job->status = TDC_RUNNING;
-	if (job->inline_run)
-	{
-		finish_phase(job, tdc_emit_inline(job));
-		return TDC_OK;
-	}
-	rc = start_driver(job);
-	if (rc != 0)
+	job->phase = job->inline_run ? tdc_emit_inline : tdc_emit_phase;
+	rc = tdc_runner_start(&job->run, job->inline_run, phase_work, job, err, errlen);
+	if (rc != TDC_OK)
 	{
 		/* the triangulation stays valid; only the handing-over failed */
-		job->finished = true;
-		job->status = TDC_OK;
-		if (err && errlen)
-			snprintf(err, errlen, "could not create a thread: %s", strerror(rc));
-		return TDC_ETHREAD;
+		tdc_runner_finish(&job->run, TDC_OK);
+		return rc;
 	}
 	return TDC_OK;
 }
@@ -334,42 +260,14 @@ tdc_job_emit_start(tdc_job *job, tdc_emit_fn emit, void *arg, char *err,
 int
 tdc_job_wait(tdc_job *job, int timeout_ms)
 {
-	int			status;
-
-	pthread_mutex_lock(&job->lock);
-	if (job->finished)
-		;						/* an inline job: no clock to read */
-	else if (timeout_ms < 0)
-	{
-		while (!job->finished)
-			pthread_cond_wait(&job->done, &job->lock);
-	}
-	else if (!job->finished)
-	{
-		struct timespec ts;
-
-		clock_gettime(CLOCK_MONOTONIC, &ts);
-		ts.tv_sec += timeout_ms / 1000;
-		ts.tv_nsec += (long) (timeout_ms % 1000) * 1000000L;
-		if (ts.tv_nsec >= 1000000000L)
-		{
-			ts.tv_sec++;
-			ts.tv_nsec -= 1000000000L;
-		}
-		while (!job->finished)
-			if (pthread_cond_timedwait(&job->done, &job->lock, &ts) == ETIMEDOUT)
-				break;
-	}
-	status = job->finished ? job->status : TDC_RUNNING;
-	pthread_mutex_unlock(&job->lock);
-	return status;
+	return tdc_runner_wait(&job->run, timeout_ms);
 }
 
 void
 tdc_job_cancel(tdc_job *job)
 {
 	if (job)
-		atomic_store(&job->cancel, 1);
+		tdc_runner_cancel(&job->run);
 }
 
 const char *
@@ -383,7 +281,7 @@ tdc_job_free(tdc_job *job)
 {
 	if (job == NULL)
 		return;
-	stop_driver(job);
+	tdc_runner_destroy(&job->run);
 	free_arrays(job);
 	free(job);
 }
@@ -405,7 +303,7 @@ tdc_job_free_background(tdc_job *job)
 
 	if (job == NULL)
 		return;
-	stop_driver(job);
+	tdc_runner_destroy(&job->run);
 
 	if (pthread_attr_init(&attr) != 0)
 		rc = -1;
@@ -413,7 +311,7 @@ tdc_job_free_background(tdc_job *job)
 	{
 		pthread_attr_setdetachstate(&attr, PTHREAD_CREATE_DETACHED);
 		pthread_attr_setstacksize(&attr, 64 * 1024);
-		rc = create_masked_thread(&reaper, &attr, reaper_main, job);
+		rc = tdc_thread_create_masked(&reaper, &attr, reaper_main, job);
 		pthread_attr_destroy(&attr);
 	}
 	if (rc != 0)

@@ -1,8 +1,8 @@
 /*
  * job.h
  *		The state of one triangulation, shared by the core's sources (the
- *		plan and first phase in driver.c, the lifecycle in job.c, the
- *		results in result.c).  Not installed.
+ *		plan and first phase in driver.c, the lifecycle in job.c on the
+ *		runner of runner.c, the results in result.c).  Not installed.
  */
 #ifndef TDC_JOB_H
 #define TDC_JOB_H
@@ -78,15 +78,10 @@ struct tdc_job
 	tdc_emit_fn emit;
 	void	   *emit_arg;
 
-	/* lifecycle */
+	/* lifecycle (runner.c); run.lock also guards the input map's building */
 	bool		inline_run;		/* phases run on the caller's thread (TDC_INLINE_MAX) */
-	int			(*phase) (struct tdc_job *job);	/* what the driver thread runs */
-	pthread_t	driver;
-	bool		driver_started;
-	pthread_mutex_t lock;
-	pthread_cond_t done;
-	bool		finished;
-	int			status;
+	int			(*phase) (struct tdc_job *job);	/* what the driver (or caller) runs */
+	tdc_runner	run;
 	char		err[256];
 };
 

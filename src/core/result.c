@@ -33,7 +33,7 @@ build_input_map(tdc_job *job)
 {
 	uint32_t   *map;
 
-	pthread_mutex_lock(&job->lock);
+	pthread_mutex_lock(&job->run.lock);
 	map = atomic_load_explicit(&job->map, memory_order_relaxed);
 	if (map == NULL)
 	{
@@ -49,7 +49,7 @@ build_input_map(tdc_job *job)
 			atomic_store_explicit(&job->map, map, memory_order_release);
 		}
 	}
-	pthread_mutex_unlock(&job->lock);
+	pthread_mutex_unlock(&job->run.lock);
 	return map;
 }
 

@@ -136,12 +136,7 @@ struct tdc_voronoi
 	atomic_int	failed;
 	char		task_err[256];
 
-	pthread_t	driver;
-	bool		driver_started;
-	pthread_mutex_t lock;
-	pthread_cond_t done;
-	bool		finished;
-	int			status;
+	tdc_runner	run;			/* the driver and its status (runner.c) */
 	char		err[256];
 };
 
@@ -1120,36 +1115,29 @@ vor_run(tdc_voronoi *v)
  *		lifecycle (the same as a job's)
  * ----------------------------------------------------------------
  */
-static void
-vor_finish(tdc_voronoi *v, int rc)
-{
-	tdc_pool_destroy(v->pool);
-	v->pool = NULL;
-	pthread_mutex_lock(&v->lock);
-	if (atomic_load(&v->failed))
-	{
-		v->status = atomic_load(&v->failed);
-		snprintf(v->err, sizeof(v->err), "%s", v->task_err);
-	}
-	else if (rc == TDC_ECANCELED || (rc == TDC_OK && atomic_load(&v->cancel)))
-	{
-		v->status = TDC_ECANCELED;
-		snprintf(v->err, sizeof(v->err), "Voronoi diagram cancelled");
-	}
-	else
-		v->status = rc;
-	v->finished = true;
-	pthread_cond_broadcast(&v->done);
-	pthread_mutex_unlock(&v->lock);
-}
-
-static void *
-vor_main(void *arg)
+/*
+ * The work, on the driver or the caller's thread: the status, its message in
+ * v->err (a task's error wins, then a cancel).  The pool goes first.
+ */
+static int
+vor_work(void *arg)
 {
 	tdc_voronoi *v = arg;
+	int			rc = vor_run(v);
 
-	vor_finish(v, vor_run(v));
-	return NULL;
+	tdc_pool_destroy(v->pool);
+	v->pool = NULL;
+	if (atomic_load(&v->failed))
+	{
+		snprintf(v->err, sizeof(v->err), "%s", v->task_err);
+		return atomic_load(&v->failed);
+	}
+	if (rc == TDC_ECANCELED || (rc == TDC_OK && atomic_load(&v->cancel)))
+	{
+		snprintf(v->err, sizeof(v->err), "Voronoi diagram cancelled");
+		return TDC_ECANCELED;
+	}
+	return rc;
 }
 
 size_t
@@ -1173,9 +1161,6 @@ tdc_voronoi_start(const tdc_job *job, const double env[4], int threads,
 				  tdc_voronoi **out, char *err, size_t errlen)
 {
 	tdc_voronoi *v;
-	pthread_condattr_t ca;
-	sigset_t	all,
-				old;
 	int			rc;
 
 	*out = NULL;
@@ -1206,33 +1191,18 @@ tdc_voronoi_start(const tdc_job *job, const double env[4], int threads,
 	v->threads = threads > 0 ? threads : tdc_threads_used(job);
 	if (v->threads < 1)
 		v->threads = 1;
-	atomic_init(&v->cancel, 0);
 	atomic_init(&v->failed, 0);
-	pthread_mutex_init(&v->lock, NULL);
-	pthread_condattr_init(&ca);
-	pthread_condattr_setclock(&ca, CLOCK_MONOTONIC);
-	pthread_cond_init(&v->done, &ca);
-	pthread_condattr_destroy(&ca);
+	tdc_runner_init(&v->run, &v->cancel);
 
 	if (job->nin <= TDC_INLINE_MAX)
-	{
 		v->threads = 1;
-		vor_finish(v, vor_run(v));
-		*out = v;
-		return TDC_OK;
-	}
-	sigfillset(&all);
-	pthread_sigmask(SIG_SETMASK, &all, &old);
-	rc = pthread_create(&v->driver, NULL, vor_main, v);
-	pthread_sigmask(SIG_SETMASK, &old, NULL);
-	if (rc != 0)
+	rc = tdc_runner_start(&v->run, job->nin <= TDC_INLINE_MAX, vor_work, v, err, errlen);
+	if (rc != TDC_OK)
 	{
-		pthread_mutex_destroy(&v->lock);
-		pthread_cond_destroy(&v->done);
+		tdc_runner_destroy(&v->run);
 		free(v);
-		FAIL(TDC_ETHREAD, "could not create a thread: %s", strerror(rc));
+		return rc;
 	}
-	v->driver_started = true;
 	*out = v;
 	return TDC_OK;
 #undef FAIL
@@ -1241,40 +1211,14 @@ tdc_voronoi_start(const tdc_job *job, const double env[4], int threads,
 int
 tdc_voronoi_wait(tdc_voronoi *v, int timeout_ms)
 {
-	int			status;
-
-	pthread_mutex_lock(&v->lock);
-	if (!v->finished && timeout_ms < 0)
-	{
-		while (!v->finished)
-			pthread_cond_wait(&v->done, &v->lock);
-	}
-	else if (!v->finished)
-	{
-		struct timespec ts;
-
-		clock_gettime(CLOCK_MONOTONIC, &ts);
-		ts.tv_sec += timeout_ms / 1000;
-		ts.tv_nsec += (long) (timeout_ms % 1000) * 1000000L;
-		if (ts.tv_nsec >= 1000000000L)
-		{
-			ts.tv_sec++;
-			ts.tv_nsec -= 1000000000L;
-		}
-		while (!v->finished)
-			if (pthread_cond_timedwait(&v->done, &v->lock, &ts) == ETIMEDOUT)
-				break;
-	}
-	status = v->finished ? v->status : TDC_RUNNING;
-	pthread_mutex_unlock(&v->lock);
-	return status;
+	return tdc_runner_wait(&v->run, timeout_ms);
 }
 
 void
 tdc_voronoi_cancel(tdc_voronoi *v)
 {
 	if (v)
-		atomic_store(&v->cancel, 1);
+		tdc_runner_cancel(&v->run);
 }
 
 const char *
@@ -1288,13 +1232,7 @@ tdc_voronoi_free(tdc_voronoi *v)
 {
 	if (v == NULL)
 		return;
-	if (v->driver_started)
-	{
-		tdc_voronoi_cancel(v);
-		pthread_join(v->driver, NULL);
-	}
-	pthread_mutex_destroy(&v->lock);
-	pthread_cond_destroy(&v->done);
+	tdc_runner_destroy(&v->run);
 	tdc_big_free(v->tri_id);
 	tdc_big_free(v->tri_he);
 	tdc_big_free(v->parent);
