@@ -781,6 +781,9 @@ static const int box_cx[4] = {2, 2, 0, 0},
  * right, 1 top right, 2 top left, 3 bottom left) in the cell of site s
  * rather than in that of site g?  Exact: the nearer site, ties to the
  * lexicographically smaller, so of two neighbours exactly one claims it.
+ * |c - s|^2 - |c - g|^2 = (g - s) . (2c - s - g), summed as an exact
+ * expansion: no squares of B's size (B can be 1e16 times the sites'
+ * extent and more), so nothing overflows or needs a range.
  */
 static bool
 corner_closer(const tdc_voronoi *v, int k, uint32_t s, uint32_t g)
@@ -788,17 +791,23 @@ corner_closer(const tdc_voronoi *v, int k, uint32_t s, uint32_t g)
 	const double c[2] = {v->box[box_cx[k]], v->box[box_cy[k]]};
 	const double *ps = site_pt(v, s),
 			   *pg = site_pt(v, g);
-	double		ds = (c[0] - ps[0]) * (c[0] - ps[0]) + (c[1] - ps[1]) * (c[1] - ps[1]),
-				dg = (c[0] - pg[0]) * (c[0] - pg[0]) + (c[1] - pg[1]) * (c[1] - pg[1]);
-	int			cmp;
+	double		e[24];
+	int			n = 0;
 
-	/* a few roundings of relative 2^-53 each: 2^-49 is ample */
-	if (ds < dg * (1 - 0x1p-49))
-		return true;
-	if (dg < ds * (1 - 0x1p-49))
-		return false;
-	cmp = tdc_sqdist_cmp_exact(c, ps, c, pg);
-	return cmp < 0 || (cmp == 0 && lex_less(ps, pg));
+	for (int i = 0; i < 2; i++)
+	{
+		double		d[2],
+					t1[2],
+					t2[3];
+		int			nd = dd_exp(two_sum(pg[i], -ps[i]), d),
+					n1 = dd_exp(two_sum(2 * c[i], -ps[i]), t1),
+					n2 = exp_grow(n1, t1, -pg[i], t2);
+
+		n = exp_add_product(n, e, nd, d, n2, t2, 1);
+	}
+	if (n > 0)
+		return e[n - 1] < 0;
+	return lex_less(ps, pg);
 }
 
 /*
