@@ -338,14 +338,18 @@ dd_exp(dd x, double *e)
  * result depends on the order of the arguments: callers pass a canonical
  * rotation.
  *
- * The double-double path is taken when its error bound is below 2^-56 of
- * the result's larger coordinate (about 1/16 ulp).  Otherwise D and the
- * two numerators are computed exactly as expansions (the differences
- * b - a and c - a are exact double-doubles, so D is a sum of 8 exact
- * products and each numerator of 32) and rounded to double-double before
- * the division.  Without it, a triangle 2^-250 thin (two sites 1e-37 apart
- * under a third at 1e40: fuzz/known/voronoi_box_exit_side) lost D entirely,
- * divided by zero and gave NaN, and the cells of its sites came out empty.
+ * The double-double result is kept when its error bound is below 2^-56 of
+ * each of its coordinates (about 1/16 ulp).  Otherwise D and the
+ * numerators of the coordinates themselves, 2 a D + N, are computed exactly
+ * as expansions (the differences b - a and c - a are exact double-doubles,
+ * so every product is a sum of exact two-products: at most 16 parts for D,
+ * CC_EXP_MAX for a numerator) and rounded to double-double only for the
+ * division, so a coordinate near 0 keeps its own digits.  Without it, a
+ * triangle 2^-250 thin (two sites 1e-37 apart under a third at 1e40:
+ * fuzz/known/voronoi_box_exit_side) lost D entirely, divided by zero and
+ * gave NaN, and the cells of its sites came out empty; and the y of a
+ * circumcenter at x = -2.3e59 was 2e7 off instead of 0.054
+ * (voronoi_thin_strips_far_vertex), which wound a thin cell backwards.
  */
 void
 tdc_circumcenter(const double *a, const double *b, const double *c,
