@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # fuzz/run.sh: run libFuzzer targets for a while each (`make fuzz-run`).
 #
-#   bash fuzz/run.sh [TARGET...]      default: fuzz_core fuzz_gserialized fuzz_state fuzz_cdt
+#   bash fuzz/run.sh [TARGET...]      default: fuzz_core fuzz_gserialized fuzz_state
+#                                     fuzz_voronoi fuzz_cdt
 #
 #   FUZZ_SECONDS=60     -max_total_time per target
 #   FUZZ_ARGS=...       extra libFuzzer flags (e.g. -seed=1 -jobs=2)
@@ -17,7 +18,7 @@ cd "$(dirname "${BASH_SOURCE[0]}")/.."
 SECONDS_PER=${FUZZ_SECONDS:-60}
 read -r -a EXTRA <<<"${FUZZ_ARGS:-}"
 if (($# == 0)); then
-	set -- fuzz_core fuzz_gserialized fuzz_state fuzz_cdt
+	set -- fuzz_core fuzz_gserialized fuzz_state fuzz_voronoi fuzz_cdt
 fi
 
 passed=0

@@ -110,6 +110,16 @@ check_circumcenter(const double *a, const double *b, const double *c)
 					 0x1p-98 * (L * L * L / Dd + K * u));
 		if (err / bound > ratio)
 			ratio = err / bound;
+		/*
+		 * And per coordinate: 1/2 ulp plus 2^-56 of itself (the exact path
+		 * takes over where double-double cannot promise that), so a
+		 * coordinate near 0 is not swamped by the other's size.
+		 */
+		bound = 0.5 * fmax(nextafter(fabs(exact), INFINITY) - fabs(exact),
+						   nextafter(fabs(out[k]), INFINITY) - fabs(out[k])) +
+			0x1p-55 * fabs(exact);
+		if (err / bound > ratio)
+			ratio = err / bound;
 	}
 	mpq_clears(bx, by, cx, cy, B, C, D, t, ux, uy, X, Y, NULL);
 	return ratio;
@@ -128,7 +138,7 @@ test_circumcenters(void)
 		double		p[3][2],
 					scale = ldexp(1.0, (int) (vrng() % 380) - 190);
 		double		off = (vrng() & 1) ? scale * 1e6 * (vurand() - 0.5) : 0;
-		int			kind = i % 4;
+		int			kind = i % 5;
 		double		r;
 
 		for (int k = 0; k < 3; k++)
@@ -158,6 +168,23 @@ test_circumcenters(void)
 				p[k][0] = (double) (vrng() % 64);
 				p[k][1] = (double) (vrng() % 64);
 			}
+		}
+		else if (kind == 4)
+		{
+			/*
+			 * near-duplicates under a far site: b and c up to 2^-200 of
+			 * the scale apart, a up to 2^60 times farther (a triangle
+			 * 2^-250 thin made D vanish in double-double: NaN)
+			 */
+			double		far = ldexp(scale, (int) (vrng() % 61)),
+						d = ldexp(scale, -(int) (vrng() % 201));
+
+			p[0][0] = off + far * (vurand() - 0.5);
+			p[0][1] = off + far * (vurand() + 0.5);
+			p[2][0] = p[1][0] + d * (vurand() - 0.5);
+			p[2][1] = p[1][1] + d * (vurand() - 0.5);
+			if (fabs(p[0][0]) > 1e60 || fabs(p[0][1]) > 1e60)
+				continue;
 		}
 		if (tdc_orient2d(p[0], p[1], p[2]) == 0)
 			continue;
@@ -610,6 +637,52 @@ test_voronoi(void)
 							   0x1.0000000000003p+4, 0x1.0000000000003p+4};
 
 		check_diagram("nearly collinear hull", flat, 4, NULL, 1, 1e-12);
+	}
+	{
+		/*
+		 * hull cell wound twice: five sites on the diagonal up to ulps
+		 * (fuzz/known/voronoi_flat_hull_double_wound).  The cell of
+		 * (2, 2) is a strip 10 wide between two Voronoi vertices 1e17 out;
+		 * its two rays leave B (as large) 10 apart, rounded at B's scale
+		 * their exits swapped, and closing from one to the other went round
+		 * all of B: the ring wound twice, the areas summed to twice E.  The
+		 * corners of B in a cell are now decided exactly.
+		 */
+		double		flat[10] = {0x1.e000000000003p+3, 0x1.e000000000003p+3,
+								0x1.fffffffffffffp+0, 0x1.ffffffffffffep+0,
+								0x1p+0, 0x1.fffffffffffffp-1,
+								0x1.fffffffffffffp+3, 0x1.ffffffffffffep+3,
+								0x1.0000000000003p+4, 0x1.0000000000003p+4};
+
+		check_diagram("hull cell wound twice", flat, 5, NULL, 1, 1e-12);
+	}
+	{
+		/*
+		 * circumcenter NaN: two sites 4.5e-37 apart under one at 1.6e40
+		 * (fuzz/known/voronoi_box_exit_side).  The triangle is 2^-250 thin,
+		 * double-double lost D entirely, divided by 0, and the cells of the
+		 * far site and of (0, -4.5e-37) came out empty.
+		 */
+		double		tiny_edge[6] = {-0x1.fd09c81cdb4a1p+68, 0x1.809d0f96c6b79p+133,
+									0, 0, 0, -0x1.3169a28p-121};
+
+		check_diagram("circumcenter NaN", tiny_edge, 3, NULL, 1, 1e-12);
+	}
+	{
+		/*
+		 * thin strips rounded at a far vertex's scale: four sites on x = 0
+		 * (y = -4.5e-37, 0, 0.107, 139264) under one at 1.6e40 (found by
+		 * fuzz_voronoi).  The cells are horizontal strips; their corners
+		 * are circumcenters at x = -2.3e59, whose y was right only to
+		 * 2^-98 of 2.3e59 (2e7 off, not 0.054), so the strip of 0.107 was
+		 * wound backwards over [0, 2e7] and an edge was in three cells.
+		 * Each coordinate is now right to its own ulp.
+		 */
+		double		strips[10] = {-0x1.fd09c81cdb4a1p+68, 0x1.809d0f96c6b79p+133,
+								  0, 0, 0, -0x1.3169a28p-121, 0, 0x1.1p+17,
+								  0, 0x1.b8ap-4};
+
+		check_diagram("thin strips under a far site", strips, 5, NULL, 1, 1e-12);
 	}
 	{
 		/*

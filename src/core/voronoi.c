@@ -42,7 +42,7 @@
  * D = (b - a) x (c - a), K = (|bx cy| + |by cx|) / |D| (the condition of
  * the orientation; 1 for a right angle at a, large for a flat triangle) and
  * u the exact offset of the circumcenter from a, each coordinate of the
- * result is within
+ * double-double result is within
  *
  *		1/2 ulp(result) + 2^-98 * (L^3 / |D| + K * |u|)
  *
@@ -50,13 +50,29 @@
  * relative error below 2^-104 * small constant; the only cancellations are
  * in D and in the two numerators, whose absolute errors are bounded by
  * 2^-103 times the sums of the magnitudes of their terms (at most L^3 / 2
- * and K |D|), which gives the second term.  For any triangle whose angles
- * are not within about 1e-14 radian of flat, the second term is far below
- * the first: the result is within one ulp.  test/test_voronoi.c checks the
- * bound against exact rational arithmetic (GMP) on random, skinny and
- * near-collinear triangles over the whole coordinate range.  Coordinates
- * within [TDC_COORD_MIN, TDC_COORD_MAX] keep every intermediate (cubes of
- * coordinate differences) inside the normal double range.
+ * and K |D|), which gives the second term.  That term is small against the
+ * first for any triangle not within about 1e-14 radian of flat, but
+ * not for the triangles that sites an ulp apart, or collinear up to ulps,
+ * make: there it can exceed the result itself (D can even vanish, giving
+ * NaN), and a coordinate near 0 is swamped by the size of u.  So the
+ * function bounds its own error from the computed terms and, unless that
+ * is below 2^-56 of each coordinate, recomputes exactly: D and the
+ * numerators 2 a D + N as expansions (Shewchuk 1997; b - a and c - a are
+ * exact double-doubles, so every product is a sum of exact two-products),
+ * rounded to double-double only for the final division.  Either way each
+ * coordinate is also within
+ *
+ *		1/2 ulp(result) + 2^-55 * |result|
+ *
+ * (under 5/8 ulp).  The first bound is the double-double path's; the exact
+ * path replaces it only where it is looser than this one, except for the
+ * exact path's final double-double division, good to 2^-100 of the
+ * result.  test/test_voronoi.c checks both bounds against exact rational
+ * arithmetic (GMP) on random, skinny, near-collinear and near-duplicate
+ * triangles over the whole coordinate range.  Coordinates within [TDC_COORD_MIN, TDC_COORD_MAX] keep every
+ * intermediate (cubes of coordinate differences and the exact path's
+ * two-product tails) inside the normal double range, so the expansions are
+ * exact.
  *
  * Unbounded cells and clipping.  The diagram is clipped to the caller's
  * rectangle E, which must contain every site.  A hull site's cell is
@@ -65,9 +81,15 @@
  * The cell is first cut to a box B that strictly contains E, the sites
  * and every Voronoi vertex: each ray is followed to where it leaves B (the
  * hitting coordinate is set to B's side exactly), and the cell's boundary
- * is closed along B's boundary counter-clockwise through B's corners.  That
- * is exactly cell ∩ B, a convex polygon, and B is common to all cells, so a
- * ray's exit point is the same double pair in both cells beside it.  Then
+ * is closed along B's boundary counter-clockwise through those corners of
+ * B that lie in the cell.  Which corners those are is decided exactly (the
+ * corner is nearer to the site than to each Delaunay neighbour), not from
+ * the order of the two exits: B grows with the farthest Voronoi vertex,
+ * 1e16 times the sites' extent for sites collinear up to ulps, and the
+ * exits, rounded at that scale, can swap (see push_arc).  That is
+ * cell ∩ B, a convex polygon, up to rounding at B's scale, far outside E;
+ * and B is common to all cells, so a ray's exit point is the same double
+ * pair in both cells beside it.  Then
  * every cell is clipped to E by Sutherland-Hodgman against E's four sides;
  * inside tests are exact comparisons, a crossing point is computed from the
  * crossing segment's end point nearer to the side (ties: the lexicographic
@@ -232,10 +254,97 @@ dd_div(dd a, dd b)
 }
 
 /*
+ * Exact expansions (Shewchuk, "Adaptive precision floating-point arithmetic
+ * and fast robust geometric predicates", 1997): a value as a sum of
+ * nonoverlapping doubles in increasing magnitude, zeros dropped.  Used only
+ * by the circumcenter's exact path, so kept simple: every sum grows one
+ * component at a time (quadratic, on at most 128 components).
+ */
+
+#define CC_EXP_MAX	160			/* parts of 2 a D + N, at most */
+
+/* h = e + b; h has room for elen + 1; returns the length of h. */
+static int
+exp_grow(int elen, const double *e, double b, double *h)
+{
+	int			n = 0;
+	double		q = b;
+
+	for (int i = 0; i < elen; i++)
+	{
+		dd			s = two_sum(q, e[i]);
+
+		if (s.lo != 0)
+			h[n++] = s.lo;
+		q = s.hi;
+	}
+	if (q != 0)
+		h[n++] = q;
+	return n;
+}
+
+/* e += sign * (f * g), in place; e has room for elen + 2 * flen * glen. */
+static int
+exp_add_product(int elen, double *e, int flen, const double *f, int glen,
+				const double *g, double sign)
+{
+	double		t[CC_EXP_MAX + 1];
+
+	for (int i = 0; i < flen; i++)
+		for (int j = 0; j < glen; j++)
+		{
+			dd			p = two_prod(f[i], g[j]);
+
+			elen = exp_grow(elen, e, sign * p.lo, t);
+			memcpy(e, t, elen * sizeof(double));
+			elen = exp_grow(elen, e, sign * p.hi, t);
+			memcpy(e, t, elen * sizeof(double));
+		}
+	return elen;
+}
+
+/* The expansion rounded to double-double: summed from its smallest part. */
+static dd
+exp_to_dd(int elen, const double *e)
+{
+	dd			s = {0, 0};
+
+	for (int i = 0; i < elen; i++)
+		s = dd_add(s, (dd) {e[i], 0});
+	return s;
+}
+
+/* x as an expansion of at most 2 parts, increasing */
+static int
+dd_exp(dd x, double *e)
+{
+	int			n = 0;
+
+	if (x.lo != 0)
+		e[n++] = x.lo;
+	if (x.hi != 0)
+		e[n++] = x.hi;
+	return n;
+}
+
+/*
  * Circumcenter of the counter-clockwise, non-degenerate triangle a, b, c,
  * rounded once per coordinate (the bound is in the header comment).  The
  * result depends on the order of the arguments: callers pass a canonical
  * rotation.
+ *
+ * The double-double result is kept when its error bound is below 2^-56 of
+ * each of its coordinates (about 1/16 ulp).  Otherwise D and the
+ * numerators of the coordinates themselves, 2 a D + N, are computed exactly
+ * as expansions (the differences b - a and c - a are exact double-doubles,
+ * so every product is a sum of exact two-products: at most 16 parts for D,
+ * CC_EXP_MAX for a numerator) and rounded to double-double only for the
+ * division, so a coordinate near 0 keeps its own digits.  Without it, a
+ * triangle 2^-250 thin (two sites 1e-37 apart under a third at 1e40:
+ * fuzz/known/voronoi_box_exit_side) lost D entirely, divided by zero and
+ * gave NaN, and the cells of its sites came out empty; and the y of a
+ * circumcenter at x = -2.3e59 was 2e7 off instead of 0.054
+ * (voronoi_thin_strips_far_vertex), which wound a thin cell backwards.
  */
 void
 tdc_circumcenter(const double *a, const double *b, const double *c,
@@ -248,14 +357,68 @@ tdc_circumcenter(const double *a, const double *b, const double *c,
 	dd			bb = dd_add(dd_mul(bx, bx), dd_mul(by, by));
 	dd			cc = dd_add(dd_mul(cx, cx), dd_mul(cy, cy));
 	dd			d = dd_add(dd_mul(bx, cy), dd_neg(dd_mul(by, cx)));
-	dd			d2 = {2 * d.hi, 2 * d.lo};
-	dd			nx = dd_add(dd_mul(cy, bb), dd_neg(dd_mul(by, cc)));
-	dd			ny = dd_add(dd_mul(bx, cc), dd_neg(dd_mul(cx, bb)));
-	dd			ux = dd_div(nx, d2),
-				uy = dd_div(ny, d2);
+	dd			d2,
+				nx = dd_add(dd_mul(cy, bb), dd_neg(dd_mul(by, cc))),
+				ny = dd_add(dd_mul(bx, cc), dd_neg(dd_mul(cx, bb))),
+				ux,
+				uy;
+	/*
+	 * Absolute error bounds of D and the numerators (2^-100 covers the
+	 * few double-double roundings of 2^-104 relative each, with slack)
+	 */
+	double		err_d = 0x1p-100 * (fabs(bx.hi * cy.hi) + fabs(by.hi * cx.hi)),
+				err_n = 0x1p-100 * fmax(fabs(cy.hi) * bb.hi + fabs(by.hi) * cc.hi,
+										fabs(bx.hi) * cc.hi + fabs(cx.hi) * bb.hi);
+	double		err_u;
 
+	d2 = (dd) {2 * d.hi, 2 * d.lo};
+	ux = dd_div(nx, d2);
+	uy = dd_div(ny, d2);
 	out[0] = dd_add((dd) {a[0], 0}, ux).hi;
 	out[1] = dd_add((dd) {a[1], 0}, uy).hi;
+	/* first order, valid while D is known to 2^-20 of itself */
+	err_u = (err_n + fmax(fabs(ux.hi), fabs(uy.hi)) * 2 * err_d) / fabs(d2.hi);
+	if (err_d <= 0x1p-20 * fabs(d.hi) &&
+		err_u <= 0x1p-56 * fabs(out[0]) && err_u <= 0x1p-56 * fabs(out[1]))
+		return;
+
+	{
+		double		ex[2],
+					ey[2],
+					fx[2],
+					fy[2],
+					two_a[2] = {2 * a[0], 2 * a[1]},
+					eb[16],
+					ec[16],
+					ed[16],
+					en[CC_EXP_MAX];
+		int			nex = dd_exp(bx, ex),
+					ney = dd_exp(by, ey),
+					nfx = dd_exp(cx, fx),
+					nfy = dd_exp(cy, fy),
+					nb,
+					nc,
+					nd,
+					nn;
+
+		nb = exp_add_product(0, eb, nex, ex, nex, ex, 1);
+		nb = exp_add_product(nb, eb, ney, ey, ney, ey, 1);
+		nc = exp_add_product(0, ec, nfx, fx, nfx, fx, 1);
+		nc = exp_add_product(nc, ec, nfy, fy, nfy, fy, 1);
+		nd = exp_add_product(0, ed, nex, ex, nfy, fy, 1);
+		nd = exp_add_product(nd, ed, ney, ey, nfx, fx, -1);
+		d = exp_to_dd(nd, ed);
+		d2 = (dd) {2 * d.hi, 2 * d.lo};
+		/* x = (2 ax D + Nx) / 2D: a coordinate near 0 keeps its own digits */
+		nn = exp_add_product(0, en, nfy, fy, nb, eb, 1);
+		nn = exp_add_product(nn, en, ney, ey, nc, ec, -1);
+		nn = exp_add_product(nn, en, 1, two_a, nd, ed, 1);
+		out[0] = dd_div(exp_to_dd(nn, en), d2).hi;
+		nn = exp_add_product(0, en, nex, ex, nc, ec, 1);
+		nn = exp_add_product(nn, en, nfx, fx, nb, eb, -1);
+		nn = exp_add_product(nn, en, 1, two_a + 1, nd, ed, 1);
+		out[1] = dd_div(exp_to_dd(nn, en), d2).hi;
+	}
 }
 
 /* ----------------------------------------------------------------
@@ -609,44 +772,69 @@ box_exit(const double *box, const double *p, double dx, double dy,
 	}
 }
 
-/* Is q at or after p going counter-clockwise along the same side? */
+static const int box_cx[4] = {2, 2, 0, 0},
+			box_cy[4] = {1, 3, 3, 1};
+
+/*
+ * Is B's corner k (the end of side k going counter-clockwise: 0 bottom
+ * right, 1 top right, 2 top left, 3 bottom left) in the cell of site s
+ * rather than in that of site g?  Exact: the nearer site, ties to the
+ * lexicographically smaller, so of two neighbours exactly one claims it.
+ * |c - s|^2 - |c - g|^2 = (g - s) . (2c - s - g), summed as an exact
+ * expansion: no squares of B's size (B can be 1e16 times the sites'
+ * extent and more), so nothing overflows or needs a range.
+ */
 static bool
-side_ahead(int side, const double *p, const double *q)
+corner_closer(const tdc_voronoi *v, int k, uint32_t s, uint32_t g)
 {
-	switch (side)
+	const double c[2] = {v->box[box_cx[k]], v->box[box_cy[k]]};
+	const double *ps = site_pt(v, s),
+			   *pg = site_pt(v, g);
+	double		e[24];
+	int			n = 0;
+
+	for (int i = 0; i < 2; i++)
 	{
-		case 0:
-			return q[0] >= p[0];
-		case 1:
-			return q[1] >= p[1];
-		case 2:
-			return q[0] <= p[0];
-		default:
-			return q[1] <= p[1];
+		double		d[2],
+					t1[2],
+					t2[3];
+		int			nd = dd_exp(two_sum(pg[i], -ps[i]), d),
+					n1 = dd_exp(two_sum(2 * c[i], -ps[i]), t1),
+					n2 = exp_grow(n1, t1, -pg[i], t2);
+
+		n = exp_add_product(n, e, nd, d, n2, t2, 1);
 	}
+	if (n > 0)
+		return e[n - 1] < 0;
+	return lex_less(ps, pg);
 }
 
 /*
- * Append B's corners met going counter-clockwise along B's boundary from
- * "from" (on side sf) to "to" (on side st), both excluded.
+ * Append, going counter-clockwise along B's boundary from a point on side
+ * sf to a point on side st, the corners passed that lie in the cell
+ * ("owned", bit k for corner k, decided exactly by the caller).  Never the
+ * full loop: with sf == st no corner is passed.
+ *
+ * Why the ownership and not the two points' order: the points are exits of
+ * rays from Voronoi vertices that may lie 1e16 times farther out than the
+ * sites (nearly collinear sites), so B is that large and the exits are
+ * rounded at B's scale, while the cell may be a strip only a few units
+ * wide.  Rounded, two exits can swap along a side, or one can slip round a
+ * corner; walking by their order then went round all of B and wound the
+ * cell twice (fuzz/known/voronoi_flat_hull_double_wound).  The exact cell
+ * never contains all four corners (it would contain B and the other
+ * sites), the corners it does contain are exactly those between its exits,
+ * and a rounded exit can slip past a corner only if it is within rounding
+ * of that corner: so the walk pushes every corner the cell owns, none it
+ * does not, and what rounding still misplaces stays within an ulp of B's
+ * boundary, far outside E, where clipping cuts it off.
  */
 static void
-push_arc(ring *r, const double *box, const double *from, int sf,
-		 const double *to, int st)
+push_arc(ring *r, const double *box, int sf, int st, unsigned owned)
 {
-	static const int cx[4] = {2, 2, 0, 0},
-				cy[4] = {1, 3, 3, 1};
-	int			s = sf;
-
-	if (sf == st && side_ahead(sf, from, to))
-		return;
-	for (int i = 0; i < 4; i++)
-	{
-		ring_push(r, box[cx[s]], box[cy[s]], TDC_NIL);
-		s = (s + 1) & 3;
-		if (s == st)
-			return;
-	}
+	for (int s = sf; s != st; s = (s + 1) & 3)
+		if (owned & (1u << s))
+			ring_push(r, box[box_cx[s]], box[box_cy[s]], TDC_NIL);
 }
 
 /*
@@ -823,11 +1011,23 @@ cell_of_mesh(const tdc_voronoi *v, uint32_t s, ring *r)
 					pin[2];
 		int			sout,
 					sin;
+		unsigned	owned = 15;
 
+		/* the corners of B in the cell: nearer to s than to every neighbour */
+		h = h0;
+		do
+		{
+			uint32_t	g = job->he[SYM(h)].org;
+
+			for (int k = 0; k < 4; k++)
+				if ((owned & (1u << k)) && !corner_closer(v, k, s, g))
+					owned &= ~(1u << k);
+			h = job->he[h].next;
+		} while (h != h0);
 		hull_ray(v, last, s, job->he[SYM(ho)].org, pout, &sout);
 		hull_ray(v, first, job->he[SYM(hin)].org, s, pin, &sin);
 		ring_push(r, pout[0], pout[1], TDC_NIL);
-		push_arc(r, v->box, pout, sout, pin, sin);
+		push_arc(r, v->box, sout, sin, owned);
 		ring_push(r, pin[0], pin[1], job->he[SYM(hin)].org);
 	}
 	ring_close(r);
@@ -866,9 +1066,15 @@ cell_of_line(const tdc_voronoi *v, uint32_t s, ring *r)
 				sb0,
 				sb1;
 
+	unsigned	owned = 15;
+
 	r->n = 0;
 	if (!ring_reserve(r, 16))
 		return false;
+	for (int k = 0; k < 4; k++)
+		if ((i > 0 && !corner_closer(v, k, s, v->line[i - 1])) ||
+			(i + 1 < v->nline && !corner_closer(v, k, s, v->line[i + 1])))
+			owned &= ~(1u << k);
 	if (i + 1 < v->nline && i > 0)
 	{
 		line_bisector(v, i, a0, &sa0, a1, &sa1);
@@ -876,10 +1082,10 @@ cell_of_line(const tdc_voronoi *v, uint32_t s, ring *r)
 		/* right bisector a0 -> a1, arc, left bisector reversed b0 -> b1, arc */
 		ring_push(r, a0[0], a0[1], v->line[i + 1]);
 		ring_push(r, a1[0], a1[1], TDC_NIL);
-		push_arc(r, v->box, a1, sa1, b0, sb0);
+		push_arc(r, v->box, sa1, sb0, owned);
 		ring_push(r, b0[0], b0[1], v->line[i - 1]);
 		ring_push(r, b1[0], b1[1], TDC_NIL);
-		push_arc(r, v->box, b1, sb1, a0, sa0);
+		push_arc(r, v->box, sb1, sa0, owned);
 	}
 	else
 	{
@@ -889,7 +1095,7 @@ cell_of_line(const tdc_voronoi *v, uint32_t s, ring *r)
 			line_bisector(v, i - 1, a1, &sa1, a0, &sa0);
 		ring_push(r, a0[0], a0[1], v->line[i + 1 < v->nline ? i + 1 : i - 1]);
 		ring_push(r, a1[0], a1[1], TDC_NIL);
-		push_arc(r, v->box, a1, sa1, a0, sa0);
+		push_arc(r, v->box, sa1, sa0, owned);
 	}
 	ring_close(r);
 	return true;
