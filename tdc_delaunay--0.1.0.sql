@@ -263,12 +263,12 @@ COMMENT ON FUNCTION ST_TDCVoronoiDump(text, geometry) IS
 -- tdc_delaunay_tiled: the triangulation of a whole table, tile by tile, into a new table
 -- (src/pg/tdc_tiled.c and src/core/tile.c explain the per-tile step)
 
-CREATE FUNCTION _tdc_tile_transfn(internal, geometry, int8, int8, float8[], float8[], float8[])
+CREATE FUNCTION _tdc_tile_transfn(internal, geometry, int8, int8, float8[], float8[], float8[], int8, int8)
 RETURNS internal
 AS 'MODULE_PATHNAME', '_tdc_tile_transfn'
 LANGUAGE C IMMUTABLE PARALLEL SAFE;
 
-COMMENT ON FUNCTION _tdc_tile_transfn(internal, geometry, int8, int8, float8[], float8[], float8[]) IS
+COMMENT ON FUNCTION _tdc_tile_transfn(internal, geometry, int8, int8, float8[], float8[], float8[], int8, int8) IS
 'Transition function of _tdc_tile: collects the vertices of a tile and its halo with the label of their owning tile.';
 
 CREATE FUNCTION _tdc_tile_finalfn(internal)
@@ -280,15 +280,16 @@ COMMENT ON FUNCTION _tdc_tile_finalfn(internal) IS
 'Final function of _tdc_tile: triangulates the tile with its halo and keeps its final triangles, '
 'or the box it needs when they are not final yet.';
 
-CREATE AGGREGATE _tdc_tile(geometry, int8, int8, float8[], float8[], float8[]) (
+CREATE AGGREGATE _tdc_tile(geometry, int8, int8, float8[], float8[], float8[], int8, int8) (
 	SFUNC = _tdc_tile_transfn,
 	STYPE = internal,
 	FINALFUNC = _tdc_tile_finalfn
 );
 
-COMMENT ON AGGREGATE _tdc_tile(geometry, int8, int8, float8[], float8[], float8[]) IS
+COMMENT ON AGGREGATE _tdc_tile(geometry, int8, int8, float8[], float8[], float8[], int8, int8) IS
 'Internal, for tdc_delaunay_tiled: _tdc_tile(point, owner label, this tile''s label, known box {xmin,ymin,xmax,ymax}, '
-'hull {x,y,...}, extra known boxes {xmin,ymin,xmax,ymax,...} ORDER BY source order) over the points of a tile''s known box; expand with _tdc_tile_triangles.';
+'hull {x,y,...}, extra known boxes {xmin,ymin,xmax,ymax,...}, source position (row, vertex)) over the points of a tile''s known box, '
+'in any order; expand with _tdc_tile_triangles.';
 
 CREATE FUNCTION _tdc_tile_triangles(bytea)
 RETURNS TABLE(k bigint, geom geometry)
@@ -299,6 +300,14 @@ ROWS 1000;
 COMMENT ON FUNCTION _tdc_tile_triangles(bytea) IS
 'Internal, for tdc_delaunay_tiled: the rows of a _tdc_tile result, triangles numbered k = 1.., '
 'or one row k = 0 with the box a tile that is not final yet needs.';
+
+CREATE FUNCTION _tdc_first_box(float8, float8, float8[], int4)
+RETURNS boolean
+AS 'MODULE_PATHNAME', '_tdc_first_box'
+LANGUAGE C IMMUTABLE STRICT PARALLEL SAFE;
+
+COMMENT ON FUNCTION _tdc_first_box(float8, float8, float8[], int4) IS
+'Internal, for tdc_delaunay_tiled: whether box i (from 0) of {xmin,ymin,xmax,ymax,...} is the first that holds the point x, y.';
 
 CREATE FUNCTION _tdc_hull_transfn(internal, geometry)
 RETURNS internal
@@ -362,6 +371,8 @@ LANGUAGE plpgsql
 -- text, so floats must print exactly
 SET jit = off
 SET extra_float_digits = 3
+-- the one-tile pass reads the source in its order, as the staging table does
+SET synchronize_seqscans = off
 AS $proc$
 DECLARE
 	fn constant text := 'tdc_delaunay_tiled';
@@ -384,6 +395,7 @@ DECLARE
 	ntri bigint;
 	r record;
 	tile_sql text;
+	tile_box text;
 BEGIN
 	-- the geometry column
 	SELECT t.typname INTO gtyp
@@ -451,10 +463,14 @@ BEGIN
 		END IF;
 	END IF;
 
-	-- SRID and dimensions, as ST_TDCDelaunayDump checks them
-	EXECUTE format('SELECT min(ST_SRID(%1$I)), max(ST_SRID(%1$I)), min(ST_Zmflag(%1$I)), max(ST_Zmflag(%1$I))
+	-- SRID and dimensions, as ST_TDCDelaunayDump checks them, and the number
+	-- and extent of the vertices (the extent from the values' boxes, which
+	-- may be rounded outward: it only sizes the tiles)
+	EXECUTE format('SELECT min(ST_SRID(%1$I)), max(ST_SRID(%1$I)), min(ST_Zmflag(%1$I)), max(ST_Zmflag(%1$I)),
+						   coalesce(sum(ST_NPoints(%1$I)), 0), min(ST_XMin(%1$I)), min(ST_YMin(%1$I)),
+						   max(ST_XMax(%1$I)), max(ST_YMax(%1$I))
 					  FROM %2$s WHERE %1$I IS NOT NULL', geom_column, source)
-	   INTO srid_lo, srid_hi, zm_lo, zm_hi;
+	   INTO srid_lo, srid_hi, zm_lo, zm_hi, npts, gx0, gy0, gx1, gy1;
 	IF srid_lo <> srid_hi THEN
 		RAISE EXCEPTION '%: mixed SRIDs in %.% (% and %)', fn, source, geom_column, srid_lo, srid_hi
 			USING ERRCODE = 'invalid_parameter_value';
@@ -462,6 +478,52 @@ BEGIN
 	IF zm_lo <> zm_hi THEN
 		RAISE EXCEPTION '%: mixed dimensions in %.% (with and without Z or M)', fn, source, geom_column
 			USING ERRCODE = 'invalid_parameter_value';
+	END IF;
+
+	-- the squares: tile = floor(x / size) * 2^32 + floor(y / size), a label later
+	w := coalesce(gx1 - gx0, 0);
+	h := coalesce(gy1 - gy0, 0);
+	spacing := CASE WHEN npts > 0 AND w * h > 0 THEN sqrt(w * h / npts)
+					WHEN npts > 0 AND w + h > 0 THEN (w + h) / npts
+					ELSE 1 END;
+	IF tile_column IS NULL THEN
+		size := tile_size;
+		IF size IS NULL THEN
+			-- about a million points per tile
+			size := CASE WHEN npts <= 1000000 THEN 'infinity'::float8
+						 WHEN w * h > 0 THEN sqrt(w * h / (npts / 1000000.0))
+						 ELSE greatest(w, h) / (npts / 1000000.0) END;
+		END IF;
+		IF size < 'infinity'::float8 THEN
+			tv := format('floor(ST_X(d.geom) / %1$L::float8)::bigint * 4294967296 + floor(ST_Y(d.geom) / %1$L::float8)::bigint',
+						 size);
+		ELSE
+			tv := '0::bigint';
+		END IF;
+
+		-- One tile: every point is known to it, so its halo is everything and
+		-- every triangle is its own.  That is ST_TDCDelaunayDump of the
+		-- source, read in the source's order like the staging table (the
+		-- procedure turns synchronized scans off), without the staging tables,
+		-- the halo or the index.  The box may be rounded outward, so a
+		-- square counts as the only one only when that box lies in it.
+		IF npts = 0 OR size = 'infinity'::float8
+		   OR (floor(gx0 / size) = floor(gx1 / size) AND floor(gy0 / size) = floor(gy1 / size)) THEN
+			-- (CREATE TABLE AS: it writes in bulk, an INSERT into a new table
+			-- took about twice as long)
+			EXECUTE format('CREATE TABLE %s AS
+							SELECT (4294967296 + d.id)::bigint AS id, %s::bigint AS tile,
+								   d.geom::geometry(%s, %s) AS geom
+							  FROM ST_TDCDelaunayDump(%L) d', qtarget,
+						   CASE WHEN npts = 0 OR size = 'infinity'::float8 THEN 0
+								ELSE floor(gx0 / size)::bigint * 4294967296 + floor(gy0 / size)::bigint END,
+						   CASE WHEN zm_lo = 2 THEN 'PolygonZ' WHEN zm_lo = 1 THEN 'PolygonM'
+								WHEN zm_lo = 3 THEN 'PolygonZM' ELSE 'Polygon' END, coalesce(srid_lo, 0),
+						   format('SELECT %I FROM %s', geom_column, source));
+			GET DIAGNOSTICS ntri = ROW_COUNT;
+			RAISE NOTICE '%: % triangles from % points in 1 tile, in one pass', fn, ntri, npts;
+			RETURN;
+		END IF;
 	END IF;
 
 	-- staging tables: temporary on plain PostgreSQL, distributed on Citus
@@ -480,15 +542,16 @@ BEGIN
 		EXECUTE format('CREATE TEMP TABLE %s (tile %s, seq bigint, vi bigint, g geometry)', 'tdc_tiled_pts', ttype);
 	END IF;
 
-	-- every vertex, in the source's order (block, offset, vertex)
-	tv := CASE WHEN tile_column IS NOT NULL THEN format('s.%I', tile_column) ELSE 'NULL::bigint' END;
+	-- every vertex, in the source's order (block, offset, vertex), with its
+	-- tile: the tile column's value, or its square
+	IF tile_column IS NOT NULL THEN
+		tv := format('s.%I', tile_column);
+	END IF;
 	EXECUTE format('INSERT INTO %s (tile, seq, vi, g)
 					SELECT %s, ((s.ctid::text::point)[0])::bigint * 65536 + ((s.ctid::text::point)[1])::bigint,
 						   d.vi, d.geom
 					  FROM %s s, LATERAL ST_DumpPoints(s.%I) WITH ORDINALITY AS d(path, geom, vi)
 					 WHERE s.%I IS NOT NULL', pts, tv, source, geom_column, geom_column);
-	EXECUTE format('SELECT count(*), min(ST_X(g)), min(ST_Y(g)), max(ST_X(g)), max(ST_Y(g)) FROM %s', pts)
-	   INTO npts, gx0, gy0, gx1, gy1;
 	IF tile_column IS NOT NULL THEN
 		EXECUTE format('SELECT EXISTS (SELECT 1 FROM %s WHERE tile IS NULL)', pts) INTO has_null;
 		IF has_null THEN
@@ -497,27 +560,6 @@ BEGIN
 		END IF;
 	END IF;
 
-	-- the squares: tile = floor(x / size) * 2^32 + floor(y / size), a label later
-	w := coalesce(gx1 - gx0, 0);
-	h := coalesce(gy1 - gy0, 0);
-	spacing := CASE WHEN npts > 0 AND w * h > 0 THEN sqrt(w * h / npts)
-					WHEN npts > 0 AND w + h > 0 THEN (w + h) / npts
-					ELSE 1 END;
-	IF tile_column IS NULL THEN
-		size := tile_size;
-		IF size IS NULL THEN
-			-- about a million points per tile
-			size := CASE WHEN npts <= 1000000 THEN 'infinity'::float8
-						 WHEN w * h > 0 THEN sqrt(w * h / (npts / 1000000.0))
-						 ELSE greatest(w, h) / (npts / 1000000.0) END;
-		END IF;
-		IF size < 'infinity'::float8 THEN
-			EXECUTE format('UPDATE %s SET tile = floor(ST_X(g) / %L::float8)::bigint * 4294967296
-										 + floor(ST_Y(g) / %L::float8)::bigint', pts, size, size);
-		ELSE
-			EXECUTE format('UPDATE %s SET tile = 0', pts);
-		END IF;
-	END IF;
 
 	-- the tiles, labelled 1.. in the order of their tile values
 	EXECUTE format('CREATE TEMP TABLE %s AS
@@ -578,7 +620,7 @@ BEGIN
 	tile_sql := format('INSERT INTO %s (id, tile, geom)
 		SELECT CASE WHEN t.k = 0 THEN -1 ELSE s.label * 4294967296 + t.k END, s.tile, t.geom
 		  FROM (SELECT h.tile, k.label,
-					   _tdc_tile(h.g, h.label, k.label, k.known, %L::float8[], k.extra ORDER BY h.seq, h.vi) AS r
+					   _tdc_tile(h.g, h.label, k.label, k.known, %L::float8[], k.extra, h.seq, h.vi) AS r
 				  FROM %s h JOIN %s k ON k.tile = h.tile
 				 WHERE k.pending %s
 				 GROUP BY h.tile, k.label) s,
@@ -602,19 +644,23 @@ BEGIN
 		-- the halo of every pending tile: every point in its closed K, with its owner
 		EXECUTE format('DELETE FROM %s', halo);
 		-- (K and the extra boxes: a point is taken from the first box that holds it)
-		EXECUTE format('INSERT INTO %1$s (tile, label, seq, vi, g)
+		-- (the boxes are materialized on plain PostgreSQL: inlined, known ||
+		-- extra would be evaluated again for every point; Citus pushes the
+		-- statement down only with the subquery inline)
+		tile_box := format('SELECT k.tile, k.bx, i, k.bx[4*i+1] AS x0, k.bx[4*i+2] AS y0,
+								   k.bx[4*i+3] AS x1, k.bx[4*i+4] AS y1
+							  FROM (SELECT tile, known || extra AS bx FROM %s WHERE pending) k,
+								   generate_series(0, cardinality(k.bx) / 4 - 1) i', rt);
+		EXECUTE format('%5$s
+						INSERT INTO %1$s (tile, label, seq, vi, g)
 						SELECT b.tile, o.label, p.seq, p.vi, p.g
-						  FROM (SELECT k.tile, k.bx, i, k.bx[4*i+1] AS x0, k.bx[4*i+2] AS y0,
-									   k.bx[4*i+3] AS x1, k.bx[4*i+4] AS y1
-								  FROM (SELECT tile, known || extra AS bx FROM %3$s WHERE pending) k,
-									   generate_series(0, cardinality(k.bx) / 4 - 1) i) b
+						  FROM %6$s b
 						  JOIN %2$s p ON p.g && ST_MakeEnvelope(b.x0, b.y0, b.x1, b.y1, %4$s)
-									AND ST_X(p.g) BETWEEN b.x0 AND b.x1 AND ST_Y(p.g) BETWEEN b.y0 AND b.y1
-						  JOIN %3$s o ON o.tile = p.tile
-						 WHERE NOT EXISTS (SELECT 1 FROM generate_series(0, b.i - 1) j
-											WHERE ST_X(p.g) BETWEEN b.bx[4*j+1] AND b.bx[4*j+3]
-											  AND ST_Y(p.g) BETWEEN b.bx[4*j+2] AND b.bx[4*j+4])',
-					   halo, pts, rt, coalesce(srid_lo, 0));
+									AND _tdc_first_box(ST_X(p.g), ST_Y(p.g), b.bx, b.i)
+						  JOIN %3$s o ON o.tile = p.tile',
+					   halo, pts, rt, coalesce(srid_lo, 0),
+					   CASE WHEN citus THEN '' ELSE 'WITH b AS MATERIALIZED (' || tile_box || ')' END,
+					   CASE WHEN citus THEN '(' || tile_box || ')' ELSE '' END);
 		GET DIAGNOSTICS ntri = ROW_COUNT;
 		halo_pts := halo_pts + ntri;
 		IF citus THEN

@@ -66,6 +66,28 @@ SELECT attname, format_type(atttypid, atttypmod) FROM pg_attribute
 SELECT tile, count(*) FROM tt_dup_tri GROUP BY tile ORDER BY tile;
 -- no vertex has a negative Z (every copy with one came second)
 SELECT count(*) AS negative_z FROM tt_dup_tri, ST_DumpPoints(geom) d WHERE ST_Z(d.geom) < 0;
+-- the same without a tile column: one tile, in one pass, the same Z rule
+SET client_min_messages = notice;
+CALL tdc_delaunay_tiled('tt_dup', 'tt_dup_one');
+SET client_min_messages = warning;
+SELECT * FROM tiled_vs_dump('tt_dup_one', 'SELECT geom FROM tt_dup');
+SELECT count(*) AS negative_z FROM tt_dup_one, ST_DumpPoints(geom) d WHERE ST_Z(d.geom) < 0;
+SELECT DISTINCT tile FROM tt_dup_one;
+-- squares of tile_size that hold every point are one tile too, named by its square
+CALL tdc_delaunay_tiled('tt_dup', 'tt_dup_sq', tile_size => 20);
+SELECT * FROM tiled_vs_dump('tt_dup_sq', 'SELECT geom FROM tt_dup');
+SELECT DISTINCT tile FROM tt_dup_sq;
+
+-- the tile aggregate takes its rows in any order and puts them back in
+-- source order (seq, vi): the duplicate's Z is that of the smallest position
+-- whatever order the rows come in
+SELECT t.k, ST_AsText(t.geom) AS triangle
+  FROM (SELECT _tdc_tile(g, 1, 1, '{-1,-1,3,3}', '{0,0,2,0,0,2}', '{}', seq, vi) AS r
+		  FROM (SELECT * FROM (VALUES ('POINT Z (0 0 7)'::geometry, 9, 1), ('POINT Z (2 0 5)', 3, 2),
+									  ('POINT Z (0 0 8)', 3, 1), ('POINT Z (0 2 6)', 3, 3),
+									  ('POINT Z (0 0 9)', 3, 4)) v(g, seq, vi)
+				 ORDER BY seq DESC, vi DESC) o) s,
+	   LATERAL _tdc_tile_triangles(s.r) t;
 
 -- a lattice: collinear rows and cocircular squares lying exactly on the tile
 -- borders (tile_size 4 divides the spacing's multiples), as multipoints
@@ -120,9 +142,11 @@ INSERT INTO tt_srid VALUES ('SRID=4326;POINT(0 0)'), ('SRID=3857;POINT(1 1)'), (
 CALL tdc_delaunay_tiled('tt_srid', 'tt_err');
 CREATE TABLE tt_nulltile AS SELECT geom, CASE WHEN id > 10 THEN t END AS t FROM tt_uni;
 CALL tdc_delaunay_tiled('tt_nulltile', 'tt_err', tile_column => 't');
--- a tile whose halo would exceed tdc_delaunay.max_memory
+-- one tile (one pass) that would exceed tdc_delaunay.max_memory
 SET tdc_delaunay.max_memory = 1;
 CALL tdc_delaunay_tiled('tt_uni', 'tt_err', tile_size => 1000);
+-- the same limit on a tile of several (tiles of 50: a quarter of the points and their halo)
+CALL tdc_delaunay_tiled('tt_uni', 'tt_err', tile_size => 50);
 RESET tdc_delaunay.max_memory;
 SELECT to_regclass('tt_err') AS no_target, count(*) AS staging FROM pg_class WHERE relname LIKE 'tdc_tiled%';
 -- the existing target was not touched
@@ -137,6 +161,6 @@ SELECT to_regclass('tt_big_tri') AS no_target, count(*) AS staging FROM pg_class
 SELECT 1 AS alive;
 \set VERBOSITY default
 
-DROP TABLE tt_uni, tt_uni_tri, tt_uni_sq, tt_uni_auto, tt_uni_notice, tt_dup, tt_dup_tri, tt_lat, tt_lat_tri,
+DROP TABLE tt_uni, tt_uni_tri, tt_uni_sq, tt_uni_auto, tt_uni_notice, tt_dup, tt_dup_tri, tt_dup_one, tt_dup_sq, tt_lat, tt_lat_tri,
 	tt_col, tt_col_tri, tt_line, tt_line_tri, tt_empty, tt_empty_tri, tt_ring, tt_ring_tri, tt_srid, tt_nulltile, tt_big;
 DROP FUNCTION tiled_vs_dump(regclass, text);

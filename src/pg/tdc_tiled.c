@@ -10,8 +10,8 @@
  * by the tile column:
  *
  *	INSERT INTO target
- *	SELECT ... FROM (SELECT tile, _tdc_tile(g, label, self, known, hull
- *								  ORDER BY seq) AS r
+ *	SELECT ... FROM (SELECT tile, _tdc_tile(g, label, self, known, hull,
+ *											  extra, seq, vi) AS r
  *					 FROM halo JOIN tiles USING (tile) GROUP BY tile) s,
  *		 LATERAL _tdc_tile_triangles(s.r) t
  *
@@ -32,10 +32,11 @@
  *
  * Ownership, Z and duplicates.  Every halo row carries the label of the
  * tile that owns the point; the core keeps a triangle in the tile owning
- * its smallest vertex.  The rows arrive in the source's order (ORDER BY
- * seq), and the core names each vertex by the first point with its
- * coordinates, so a vertex's Z is that of its first copy in the source, as
- * in ST_TDCDelaunayDump.
+ * its smallest vertex.  Every row also carries its source position
+ * (seq, vi); the final function sorts the rows back into that order, and
+ * the core names each vertex by the first point with its coordinates, so a
+ * vertex's Z is that of its first copy in the source, as in
+ * ST_TDCDelaunayDump.
  */
 #include "postgres.h"
 
@@ -58,8 +59,10 @@
 typedef struct TileState
 {
 	TdcPointBuf pts;
-	int64	   *label;			/* pts.cap entries: owner of each vertex */
+	int64	   *label;			/* label_cap entries: owner of each vertex */
+	int64	   *key;			/* 2 * label_cap: (seq, vi), its source order */
 	uint64		label_cap;
+	bool		unordered;		/* keys arrived out of source order */
 	int64		self;
 	double		known[4];
 	double	   *hull;			/* nhull x,y */
@@ -109,14 +112,117 @@ read_box_array(ArrayType *a, double **out, int *n, int want_min, const char *wha
 	*n = count;
 }
 
+/* Compares the source positions of vertices a and b. */
+static inline int
+key_cmp(const int64 *key, uint64 a, uint64 b)
+{
+	if (key[2 * a] != key[2 * b])
+		return key[2 * a] < key[2 * b] ? -1 : 1;
+	if (key[2 * a + 1] != key[2 * b + 1])
+		return key[2 * a + 1] < key[2 * b + 1] ? -1 : 1;
+	return 0;
+}
+
+/*
+ * Puts the tile's vertices back in source order.  The core names a vertex
+ * by the first input point with its coordinates, so this order is what
+ * makes a duplicate's Z that of its first copy in the source, as in
+ * ST_TDCDelaunayDump.  Sorting here, rather than with ORDER BY in the
+ * aggregate call, keeps the executor from sorting every row with all of the
+ * aggregate's arguments (the hull and the boxes included): that sort spilled
+ * gigabytes to disk for a tile of a million points.
+ *
+ * A stable bottom-up merge sort of vertex numbers, with an interrupt check
+ * every SORT_POLL elements: a tile can be as big as the user's tile column
+ * makes it, and qsort could not be interrupted.
+ */
+#define SORT_POLL	65536
+
+static void
+sort_by_source(TileState *st)
+{
+	uint64		n = st->pts.n;
+	uint64	   *a;
+	uint64	   *b;
+	uint64		done = 0;
+	double	   *xy;
+	double	   *z = NULL;
+	int64	   *label;
+
+	if (!st->unordered || n < 2)
+		return;
+	a = MemoryContextAllocHuge(CurrentMemoryContext, n * sizeof(uint64));
+	b = MemoryContextAllocHuge(CurrentMemoryContext, n * sizeof(uint64));
+	for (uint64 i = 0; i < n; i++)
+		a[i] = i;
+	for (uint64 w = 1; w < n; w *= 2)
+	{
+		for (uint64 lo = 0; lo < n; lo += 2 * w)
+		{
+			uint64		mid = Min(lo + w, n);
+			uint64		hi = Min(lo + 2 * w, n);
+			uint64		i = lo;
+			uint64		j = mid;
+			uint64		k = lo;
+
+			while (i < mid && j < hi)
+				b[k++] = key_cmp(st->key, a[j], a[i]) < 0 ? a[j++] : a[i++];
+			while (i < mid)
+				b[k++] = a[i++];
+			while (j < hi)
+				b[k++] = a[j++];
+			done += hi - lo;
+			if (done >= SORT_POLL)
+			{
+				done = 0;
+				CHECK_FOR_INTERRUPTS();
+			}
+		}
+		{
+			uint64	   *t = a;
+
+			a = b;
+			b = t;
+		}
+	}
+
+	/* apply the permutation a to the coordinates and labels */
+	xy = MemoryContextAllocHuge(CurrentMemoryContext, n * 2 * sizeof(double));
+	label = MemoryContextAllocHuge(CurrentMemoryContext, n * sizeof(int64));
+	if (st->pts.hasz)
+		z = MemoryContextAllocHuge(CurrentMemoryContext, n * sizeof(double));
+	for (uint64 i = 0; i < n; i++)
+	{
+		xy[2 * i] = st->pts.xy[2 * a[i]];
+		xy[2 * i + 1] = st->pts.xy[2 * a[i] + 1];
+		label[i] = st->label[a[i]];
+		if (z != NULL)
+			z[i] = st->pts.z[a[i]];
+	}
+	memcpy(st->pts.xy, xy, n * 2 * sizeof(double));
+	memcpy(st->label, label, n * sizeof(int64));
+	if (z != NULL)
+		memcpy(st->pts.z, z, n * sizeof(double));
+	pfree(xy);
+	pfree(label);
+	if (z != NULL)
+		pfree(z);
+	pfree(a);
+	pfree(b);
+	st->unordered = false;
+}
+
 PG_FUNCTION_INFO_V1(_tdc_tile_transfn);
 
 /*
  * _tdc_tile_transfn(state, g geometry, label int8, self int8,
- *					  known float8[4], hull float8[], extra float8[])
- * Appends the vertices of g, each owned by tile "label".  self, known,
- * hull and the extra known boxes (4 values each, every point inside them is
- * passed too) are the tile's and are taken from the first row.
+ *					  known float8[4], hull float8[], extra float8[],
+ *					  seq int8, vi int8)
+ * Appends the vertices of g, each owned by tile "label", at source position
+ * (seq, vi).  self, known, hull and the extra known boxes (4 values each,
+ * every point inside them is passed too) are the tile's and are taken from
+ * the first row.  The rows may come in any order: the final function puts
+ * them back in source order (sort_by_source).
  */
 Datum
 _tdc_tile_transfn(PG_FUNCTION_ARGS)
@@ -125,6 +231,8 @@ _tdc_tile_transfn(PG_FUNCTION_ARGS)
 	TileState  *st = PG_ARGISNULL(0) ? NULL : (TileState *) PG_GETARG_POINTER(0);
 	struct varlena *geom;
 	int64		label;
+	int64		seq;
+	int64		vi;
 	uint64		before;
 
 	tdc_signal_guard();
@@ -133,11 +241,14 @@ _tdc_tile_transfn(PG_FUNCTION_ARGS)
 	if (PG_ARGISNULL(1))
 		PG_RETURN_POINTER(st);
 	if (PG_ARGISNULL(2) || PG_ARGISNULL(3) || PG_ARGISNULL(4) || PG_ARGISNULL(5) ||
-		PG_ARGISNULL(6))
+		PG_ARGISNULL(6) || PG_ARGISNULL(7) || PG_ARGISNULL(8))
 		ereport(ERROR,
 				(errcode(ERRCODE_NULL_VALUE_NOT_ALLOWED),
-				 errmsg("%s: label, tile, known box and hull must not be NULL", TILE_FNAME)));
+				 errmsg("%s: label, tile, known box, hull and source position must not be NULL",
+						TILE_FNAME)));
 	label = PG_GETARG_INT64(2);
+	seq = PG_GETARG_INT64(7);
+	vi = PG_GETARG_INT64(8);
 
 	if (st == NULL)
 	{
@@ -175,13 +286,25 @@ _tdc_tile_transfn(PG_FUNCTION_ARGS)
 		uint64		cap = Max(st->pts.cap, Max(st->label_cap * 2, 1024));
 
 		if (st->label == NULL)
+		{
 			st->label = MemoryContextAllocHuge(aggcxt, cap * sizeof(int64));
+			st->key = MemoryContextAllocHuge(aggcxt, cap * 2 * sizeof(int64));
+		}
 		else
+		{
 			st->label = repalloc_huge(st->label, cap * sizeof(int64));
+			st->key = repalloc_huge(st->key, cap * 2 * sizeof(int64));
+		}
 		st->label_cap = cap;
 	}
 	for (uint64 i = before; i < st->pts.n; i++)
+	{
 		st->label[i] = label;
+		st->key[2 * i] = seq;
+		st->key[2 * i + 1] = vi;
+		if (i > 0 && key_cmp(st->key, i - 1, i) > 0)
+			st->unordered = true;
+	}
 	PG_RETURN_POINTER(st);
 }
 
@@ -210,6 +333,7 @@ _tdc_tile_finalfn(PG_FUNCTION_ARGS)
 		elog(ERROR, "_tdc_tile_finalfn called in non-aggregate context");
 	if (st == NULL || st->pts.n == 0)
 		PG_RETURN_NULL();
+	sort_by_source(st);
 
 	dim = st->pts.hasz ? 3 : 2;
 	memset(&spec, 0, sizeof(spec));
@@ -362,6 +486,45 @@ _tdc_tile_triangles(PG_FUNCTION_ARGS)
 		}
 	}
 	return (Datum) 0;
+}
+
+PG_FUNCTION_INFO_V1(_tdc_first_box);
+
+/*
+ * _tdc_first_box(x float8, y float8, boxes float8[], i int4) RETURNS bool
+ * Whether box i (from 0) of boxes {xmin,ymin,xmax,ymax,...} is the first
+ * that holds the point (closed boxes).  The procedure takes a halo point
+ * from the first of a tile's known boxes that holds it, so that a point in
+ * several of them is passed once; a NOT EXISTS over generate_series said
+ * the same at the cost of a subplan per point.
+ */
+Datum
+_tdc_first_box(PG_FUNCTION_ARGS)
+{
+	double		x = PG_GETARG_FLOAT8(0);
+	double		y = PG_GETARG_FLOAT8(1);
+	ArrayType  *a = PG_GETARG_ARRAYTYPE_P(2);
+	int32		i = PG_GETARG_INT32(3);
+	int			n;
+	const double *b;
+
+	if (ARR_NDIM(a) > 1 || ARR_ELEMTYPE(a) != FLOAT8OID || ARR_HASNULL(a))
+		ereport(ERROR,
+				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
+				 errmsg("%s: the boxes must be a one-dimensional float8 array without NULLs",
+						TILE_FNAME)));
+	n = ARR_NDIM(a) == 0 ? 0 : ARR_DIMS(a)[0];
+	if (n % 4 != 0 || i < 0 || i >= n / 4)
+		ereport(ERROR,
+				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
+				 errmsg("%s: box %d of %d boxes", TILE_FNAME, i, n / 4)));
+	b = (const double *) ARR_DATA_PTR(a);
+	if (!(b[4 * i] <= x && x <= b[4 * i + 2] && b[4 * i + 1] <= y && y <= b[4 * i + 3]))
+		PG_RETURN_BOOL(false);
+	for (int j = 0; j < i; j++)
+		if (b[4 * j] <= x && x <= b[4 * j + 2] && b[4 * j + 1] <= y && y <= b[4 * j + 3])
+			PG_RETURN_BOOL(false);
+	PG_RETURN_BOOL(true);
 }
 
 /*
