@@ -89,11 +89,14 @@ online_cpus(void)
 static int
 plan_grid(size_t n, const tdc_options *o)
 {
-	int			cap = (int) ceil(sqrt(2.0 * (double) n));
 	int			s;
 
 	if (o->grid_size > 0)
+	{
+		int			cap = (int) ceil(sqrt(2.0 * (double) n));
+
 		s = o->grid_size < cap ? o->grid_size : cap;
+	}
 	else if (n < NO_GRID_MAX)
 		s = 1;					/* a few points: sorting them beats binning */
 	else

@@ -56,12 +56,13 @@ struct tdc_job
 
 	/*
 	 * A small job's arrays: carved from a block allocated with the job
-	 * (tdc_job_alloc), so that a call on a few points costs one calloc and
+	 * (tdc_job_alloc), so that a call on a few points costs one malloc and
 	 * one free.  Empty for big jobs.
 	 */
 	char	   *arena;
 	size_t		arena_size;
 	size_t		arena_used;
+	bool		off_arena;		/* some array did not fit: free_arrays looks */
 
 	atomic_int	cancel;
 	atomic_int	failed;			/* first task error wins */
