@@ -458,7 +458,14 @@ triangulate_to_datum(const TdcPointBuf *buf, double tolerance, int flags,
 		INSTR_TIME_SET_CURRENT(start);
 	}
 	result = tdc_gser_result_alloc(run->job, flags, buf, fname, &w);
-	if (flags == TDC_OUT_EDGES || w.count == 0 ||
+
+	/*
+	 * A job that ran inline would hand its triangles over on this thread
+	 * too, in the same order (so the same bytes): writing them directly
+	 * spares the phase's set-up and its wait, which a call on a few points
+	 * feels.
+	 */
+	if (flags == TDC_OUT_EDGES || w.count == 0 || buf->n < TDC_INLINE_MAX ||
 		!tdc_run_emit(run, tdc_gser_emit, &w, fname))
 		tdc_gser_fill(&w);
 	/* freeing a big job takes a while: let a pending cancel in first */
