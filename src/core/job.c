@@ -15,8 +15,9 @@
  * (job->run.lock), or for a small job on the caller's thread before
  * tdc_job_start returns it (runner.c), and the pool is gone before finished
  * turns true, so a waiter that sees a finished job sees no thread of it but
- * the (idle) driver.  Freeing joins the driver first; then nothing but memory is left,
- * which may be returned on a detached thread (tdc_job_free_background).
+ * the (idle) driver.  Freeing joins the driver first; then nothing but
+ * memory is left, which may be returned on a detached thread
+ * (tdc_job_free_background).
  */
 #include <math.h>
 #include <stdarg.h>

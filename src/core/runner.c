@@ -16,14 +16,15 @@
  * the runner with tdc_runner_init_inline: then there is no condition
  * variable, and publishing and waiting take no lock, since the status is
  * written by the thread that then hands the owner out, before it does.  On
- * a call of a few points those pthread calls were a tenth of the core's
- * time.  The lock itself still exists, for owners that guard other state
- * with it (a job's input map, result.c).
+ * a call of a few points those pthread calls were several percent of the
+ * core's time.  The lock itself still exists, for owners that guard other
+ * state with it (a job's input map, result.c).
  *
- * Invariant: finished and status change only under lock, and finished turns
- * true after the work has let go of everything but the owner's memory (its
- * pool is gone), so a waiter that sees it finished sees no thread of it but
- * the idle one that published it.  The work writes its results and error
+ * Invariant: finished and status change only under lock (inline_only: on
+ * the one thread that runs the work), and finished turns true after the
+ * work has let go of everything but the owner's memory (its pool is gone),
+ * so a waiter that sees it finished sees no thread of it but the idle one
+ * that published it.  The work writes its results and error
  * message before the runner takes the lock to publish, so a waiter that saw
  * finished sees them too.  Freeing cancels and joins first; then nothing but
  * memory is left.  The runner holds no global state: it lives inside its
@@ -60,10 +61,6 @@ tdc_runner_init(tdc_runner *r, atomic_int *cancel)
 	pthread_condattr_destroy(&ca);
 }
 
-/*
- * Our threads must never take the host's signals: block them all around
- * creation, so the new thread inherits the full mask.
- */
 /* A runner whose work only ever runs inline (tdc_runner_start's inline_run). */
 void
 tdc_runner_init_inline(tdc_runner *r, atomic_int *cancel)
@@ -77,6 +74,10 @@ tdc_runner_init_inline(tdc_runner *r, atomic_int *cancel)
 	pthread_mutex_init(&r->lock, NULL);
 }
 
+/*
+ * Our threads must never take the host's signals: block them all around
+ * creation, so the new thread inherits the full mask.
+ */
 int
 tdc_thread_create_masked(pthread_t *thread, const pthread_attr_t *attr,
 						 void *(*fn) (void *), void *arg)

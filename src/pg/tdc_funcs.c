@@ -274,8 +274,7 @@ wait_for_job(TdcRun *run, const char *fname)
 
 	/*
 	 * A small job ran inline and is finished already: no loop, and no
-	 * PG_TRY (a sigsetjmp per phase, a few percent of a call on a handful
-	 * of points).
+	 * PG_TRY (a sigsetjmp per phase).
 	 */
 	rc = tdc_job_wait(run->job, 0);
 
