@@ -21,6 +21,7 @@
  */
 #include <math.h>
 #include <stdarg.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -206,7 +207,9 @@ tdc_job_start(const double *xy, size_t n, const tdc_options *opt, tdc_job **out,
 	job = malloc(sizeof(tdc_job) + (arena > 0 ? arena + ARENA_ALIGN : 0));
 	if (job == NULL)
 		FAIL(TDC_ENOMEM, "out of memory");
-	memset(job, 0, sizeof(tdc_job));
+	/* all but the two message buffers, which only need to be empty */
+	memset(job, 0, offsetof(tdc_job, task_err));
+	job->task_err[0] = job->err[0] = '\0';
 	if (arena > 0)
 	{
 		job->arena = (char *) (((uintptr_t) (job + 1) + ARENA_ALIGN - 1) &

@@ -66,7 +66,6 @@ struct tdc_job
 
 	atomic_int	cancel;
 	atomic_int	failed;			/* first task error wins */
-	char		task_err[256];
 
 	/* results */
 	size_t		nsites;
@@ -83,6 +82,9 @@ struct tdc_job
 	bool		inline_run;		/* phases run on the caller's thread (TDC_INLINE_MAX) */
 	int			(*phase) (struct tdc_job *job);	/* what the driver (or caller) runs */
 	tdc_runner	run;
+
+	/* messages last: a new job clears everything before them (job.c) */
+	char		task_err[256];
 	char		err[256];
 };
 
