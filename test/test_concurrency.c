@@ -189,12 +189,13 @@ map_main(void *a)
  * The first calls of tdc_input_site build the input->site map lazily: from
  * several threads at once on a fresh job, all must get the same complete
  * map (one build, safely published).  Duplicates and a tolerance make the
- * map more than a permutation.
+ * map more than a permutation.  Small jobs too: they ran inline, where the
+ * runner publishes its status without locking, but the map is still built
+ * under the job's lock.
  */
 static void
-test_concurrent_input_site(void)
+input_site_rounds(size_t n, int rounds)
 {
-	size_t		n = tdc_test_quick ? 20000 : 100000;
 	double	   *xy = random_points(n, 77);
 	uint32_t   *site[NTHREADS];
 	map_arg		ma[NTHREADS];
@@ -206,7 +207,7 @@ test_concurrent_input_site(void)
 	for (int k = 0; k < NTHREADS; k++)
 		site[k] = malloc(n * sizeof(uint32_t));
 	pthread_barrier_init(&start, NULL, NTHREADS);
-	for (int round = 0; round < 6; round++)
+	for (int round = 0; round < rounds; round++)
 	{
 		tdc_options opt;
 		tdc_job    *job;
@@ -216,7 +217,7 @@ test_concurrent_input_site(void)
 		opt.threads = 2;
 		opt.tolerance = round % 2 ? 0.01 : 0;
 		CHECK(tdc_triangulate(xy, n, &opt, &job, err, sizeof(err)) == TDC_OK,
-			  "concurrent input_site: triangulation: %s", err);
+			  "concurrent input_site: %zu points: triangulation: %s", n, err);
 		if (job == NULL)
 			continue;
 		for (int k = 0; k < NTHREADS; k++)
@@ -234,23 +235,32 @@ test_concurrent_input_site(void)
 		{
 			size_t		bad = 0;
 
-			CHECK(ma[k].rc == 0, "concurrent input_site: round %d, thread %d validates: %s",
-				  round, k, ma[k].err);
+			CHECK(ma[k].rc == 0, "concurrent input_site: %zu points, round %d, thread %d validates: %s",
+				  n, round, k, ma[k].err);
 			for (size_t i = 0; i < n; i++)
 				if (site[k][i] != site[0][i] || site[k][i] >= tdc_site_id_limit(job))
 					bad++;
-			CHECK(bad == 0, "concurrent input_site: round %d, thread %d: %zu inputs mapped differently or not at all",
-				  round, k, bad);
+			CHECK(bad == 0, "concurrent input_site: %zu points, round %d, thread %d: %zu inputs mapped differently or not at all",
+				  n, round, k, bad);
 		}
 		/* without a tolerance, duplicates follow their first occurrence */
 		CHECK(opt.tolerance > 0 || tdc_input_site(job, n - 1) == tdc_input_site(job, 0),
-			  "concurrent input_site: round %d: a duplicate maps elsewhere", round);
+			  "concurrent input_site: %zu points, round %d: a duplicate maps elsewhere", n, round);
 		tdc_job_free(job);
 	}
 	pthread_barrier_destroy(&start);
 	for (int k = 0; k < NTHREADS; k++)
 		free(site[k]);
 	free(xy);
+}
+
+static void
+test_concurrent_input_site(void)
+{
+	input_site_rounds(tdc_test_quick ? 20000 : 100000, 6);
+	/* inline, then inline within the arena of a small job */
+	input_site_rounds(TDC_INLINE_MAX - 1, 2);
+	input_site_rounds(60, 4);
 }
 
 /* Virtual memory of this process in bytes (first field of /proc/self/statm). */

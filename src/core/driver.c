@@ -89,11 +89,14 @@ online_cpus(void)
 static int
 plan_grid(size_t n, const tdc_options *o)
 {
-	int			cap = (int) ceil(sqrt(2.0 * (double) n));
 	int			s;
 
 	if (o->grid_size > 0)
+	{
+		int			cap = (int) ceil(sqrt(2.0 * (double) n));
+
 		s = o->grid_size < cap ? o->grid_size : cap;
+	}
 	else if (n < NO_GRID_MAX)
 		s = 1;					/* a few points: sorting them beats binning */
 	else
@@ -186,10 +189,20 @@ check_input(tdc_job *job)
 {
 	size_t		nchunks = (job->n + CHECK_CHUNK - 1) / CHECK_CHUNK;
 	copy_arg	ca;
+	double		bounds1[4];		/* one chunk: no allocation */
+	size_t		bad1;
 
 	ca.job = job;
-	ca.bounds = tdc_job_alloc(job, nchunks * 4 * sizeof(double));
-	ca.bad = tdc_job_alloc(job, nchunks * sizeof(size_t));
+	if (nchunks == 1)
+	{
+		ca.bounds = bounds1;
+		ca.bad = &bad1;
+	}
+	else
+	{
+		ca.bounds = tdc_job_alloc(job, nchunks * 4 * sizeof(double));
+		ca.bad = tdc_job_alloc(job, nchunks * sizeof(size_t));
+	}
 	if (!ca.bounds || !ca.bad)
 	{
 		tdc_job_release(job, ca.bounds);
@@ -223,8 +236,11 @@ check_input(tdc_job *job)
 		job->bmax[0] = fmax(job->bmax[0], ca.bounds[4 * c + 2]);
 		job->bmax[1] = fmax(job->bmax[1], ca.bounds[4 * c + 3]);
 	}
-	tdc_job_release(job, ca.bounds);
-	tdc_job_release(job, ca.bad);
+	if (nchunks > 1)
+	{
+		tdc_job_release(job, ca.bounds);
+		tdc_job_release(job, ca.bad);
+	}
 	return atomic_load(&job->failed);
 }
 

@@ -104,6 +104,7 @@ typedef struct tdc_runner
 	void	   *arg;
 	pthread_t	thread;
 	bool		started;		/* a thread was started and not joined yet */
+	bool		inline_only;	/* tdc_runner_init_inline: no thread, no condvar */
 	pthread_mutex_t lock;
 	pthread_cond_t done;
 	bool		finished;		/* under lock */
@@ -111,6 +112,7 @@ typedef struct tdc_runner
 } tdc_runner;
 
 extern void tdc_runner_init(tdc_runner *r, atomic_int *cancel);
+extern void tdc_runner_init_inline(tdc_runner *r, atomic_int *cancel);
 extern int	tdc_runner_start(tdc_runner *r, bool inline_run, tdc_work_fn work,
 							 void *arg, char *err, size_t errlen);
 extern void tdc_runner_finish(tdc_runner *r, int status);

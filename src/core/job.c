@@ -12,13 +12,16 @@
  * runner that constraints and Voronoi diagrams share (runner.c).
  *
  * Invariant: the job's finished flag and status change only under its lock
- * (job->run.lock), and the pool is gone before finished turns true, so a
- * waiter that sees a finished job sees no thread of it but the (idle)
- * driver.  Freeing joins the driver first; then nothing but memory is left,
- * which may be returned on a detached thread (tdc_job_free_background).
+ * (job->run.lock), or for a small job on the caller's thread before
+ * tdc_job_start returns it (runner.c), and the pool is gone before finished
+ * turns true, so a waiter that sees a finished job sees no thread of it but
+ * the (idle) driver.  Freeing joins the driver first; then nothing but
+ * memory is left, which may be returned on a detached thread
+ * (tdc_job_free_background).
  */
 #include <math.h>
 #include <stdarg.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -72,7 +75,9 @@ phase_work(void *arg)
  * kB, below glibc's mapping threshold, and it is counted by
  * tdc_estimate_memory's per-point and fixed terms like the arrays it
  * replaces.  Only the thread that runs the phases allocates from it; the
- * input map, built on demand by any reader, never does.
+ * input map, built on demand by any reader, never does.  The block is
+ * zeroed an array at a time as it is handed out, not as a whole: the sizing
+ * is generous, and clearing the unused rest cost more than the arrays.
  */
 #define ARENA_MAX_POINTS	256
 #define ARENA_ALIGN			16		/* one thread: no false sharing to avoid */
@@ -97,8 +102,9 @@ tdc_job_alloc(tdc_job *job, size_t size)
 		void	   *p = job->arena + job->arena_used;
 
 		job->arena_used += rounded;
-		return p;
+		return memset(p, 0, size);
 	}
+	job->off_arena = true;
 	return tdc_big_alloc(size);
 }
 
@@ -115,6 +121,12 @@ tdc_job_release(tdc_job *job, void *ptr)
 static void
 free_arrays(tdc_job *job)
 {
+	/* the input map never comes from the arena (see above) */
+	if (job->arena != NULL && !job->off_arena)
+	{
+		tdc_big_free(job->map);
+		return;
+	}
 	tdc_job_release(job, job->xy);
 	tdc_job_release(job, job->idx);
 	tdc_job_release(job, job->site_of);
@@ -192,9 +204,12 @@ tdc_job_start(const double *xy, size_t n, const tdc_options *opt, tdc_job **out,
 			 n, tdc_estimate_memory(n, &o) >> 20, o.max_memory >> 20);
 
 	arena = tdc_plan_inline(n) ? arena_bytes(n) : 0;
-	job = calloc(1, sizeof(tdc_job) + (arena > 0 ? arena + ARENA_ALIGN : 0));
+	job = malloc(sizeof(tdc_job) + (arena > 0 ? arena + ARENA_ALIGN : 0));
 	if (job == NULL)
 		FAIL(TDC_ENOMEM, "out of memory");
+	/* all but the two message buffers, which only need to be empty */
+	memset(job, 0, offsetof(tdc_job, task_err));
+	job->task_err[0] = job->err[0] = '\0';
 	if (arena > 0)
 	{
 		job->arena = (char *) (((uintptr_t) (job + 1) + ARENA_ALIGN - 1) &
@@ -207,7 +222,10 @@ tdc_job_start(const double *xy, size_t n, const tdc_options *opt, tdc_job **out,
 	job->inline_run = tdc_plan_inline(n);
 	job->threads = tdc_plan_threads(n, &o);
 	atomic_init(&job->failed, 0);
-	tdc_runner_init(&job->run, &job->cancel);
+	if (job->inline_run)
+		tdc_runner_init_inline(&job->run, &job->cancel);
+	else
+		tdc_runner_init(&job->run, &job->cancel);
 
 	job->phase = tdc_run_phase;
 	rc = tdc_runner_start(&job->run, job->inline_run, phase_work, job, err, errlen);

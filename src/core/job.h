@@ -56,16 +56,16 @@ struct tdc_job
 
 	/*
 	 * A small job's arrays: carved from a block allocated with the job
-	 * (tdc_job_alloc), so that a call on a few points costs one calloc and
+	 * (tdc_job_alloc), so that a call on a few points costs one malloc and
 	 * one free.  Empty for big jobs.
 	 */
 	char	   *arena;
 	size_t		arena_size;
 	size_t		arena_used;
+	bool		off_arena;		/* some array did not fit: free_arrays looks */
 
 	atomic_int	cancel;
 	atomic_int	failed;			/* first task error wins */
-	char		task_err[256];
 
 	/* results */
 	size_t		nsites;
@@ -82,6 +82,9 @@ struct tdc_job
 	bool		inline_run;		/* phases run on the caller's thread (TDC_INLINE_MAX) */
 	int			(*phase) (struct tdc_job *job);	/* what the driver (or caller) runs */
 	tdc_runner	run;
+
+	/* messages last: a new job clears everything before them (job.c) */
+	char		task_err[256];
 	char		err[256];
 };
 

@@ -32,7 +32,10 @@
  * Arrays below POINTMAP_MIN_BYTES are palloc'd in the buffer's context
  * instead: one call per row on a small geometry would otherwise pay a map,
  * its page faults and an unmap (with a TLB flush on every CPU the process
- * ran threads on) for a few dozen bytes of coordinates.
+ * ran threads on) for a few dozen bytes of coordinates.  The map record and
+ * its release callback are only created when an array first reaches that
+ * size: a buffer of palloc'd arrays has nothing to release, and two pallocs
+ * and a callback per row were a visible part of a call on five points.
  */
 #define POINTMAP_MIN_BYTES	((Size) 256 * 1024)
 
@@ -129,9 +132,28 @@ tdc_pointbuf_reserve(TdcPointBuf *buf, uint64 extra, const char *fname)
 
 	if (buf->map == NULL)
 	{
+		Size		xy_bytes = (Size) buf->cap * 2 * sizeof(double);
 		MemoryContextCallback *cb;
 
+		/* z is half the size of xy: if xy stays small, so does z */
+		if ((Size) newcap * 2 * sizeof(double) < POINTMAP_MIN_BYTES)
+		{
+			buf->xy = buf->xy == NULL ?
+				MemoryContextAlloc(buf->cxt, (Size) newcap * 2 * sizeof(double)) :
+				repalloc(buf->xy, (Size) newcap * 2 * sizeof(double));
+			if (buf->hasz)
+				buf->z = buf->z == NULL ?
+					MemoryContextAlloc(buf->cxt, (Size) newcap * sizeof(double)) :
+					repalloc(buf->z, (Size) newcap * sizeof(double));
+			buf->cap = newcap;
+			return;
+		}
+		/* the arrays palloc'd so far move to mappings from here on */
 		buf->map = MemoryContextAllocZero(buf->cxt, sizeof(TdcPointMap));
+		buf->map->xy = buf->xy;
+		buf->map->xy_bytes = buf->xy != NULL ? xy_bytes : 0;
+		buf->map->z = buf->z;
+		buf->map->z_bytes = buf->z != NULL ? xy_bytes / 2 : 0;
 		cb = MemoryContextAllocZero(buf->cxt, sizeof(MemoryContextCallback));
 		cb->func = pointmap_release;
 		cb->arg = buf->map;

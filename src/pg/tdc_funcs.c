@@ -168,6 +168,13 @@ stop_job(TdcRun *run)
 	(void) tdc_job_wait(run->job, -1);
 }
 
+/* A run and the callback that frees its job on an error: one allocation. */
+typedef struct RunAlloc
+{
+	TdcRun		run;
+	MemoryContextCallback cb;
+} RunAlloc;
+
 static void
 run_reset_callback(void *arg)
 {
@@ -266,37 +273,46 @@ wait_for_job(TdcRun *run, const char *fname)
 	int			rc;
 
 	/*
+	 * A small job ran inline and is finished already: no loop, and no
+	 * PG_TRY (a sigsetjmp per phase).
+	 */
+	rc = tdc_job_wait(run->job, 0);
+
+	/*
 	 * The workers read the input buffer (and may write the result) until
 	 * they finish: whatever ERROR leaves this loop, stop them before the
 	 * stack unwinds.  Freeing is left to the reset callback, which runs
 	 * after the error went to the client.
 	 */
-	PG_TRY();
+	if (rc == TDC_RUNNING)
 	{
-		while ((rc = tdc_job_wait(run->job, WAIT_SLICE_MS)) == TDC_RUNNING)
+		PG_TRY();
 		{
-			if (!InterruptPending)
-				continue;
-			if (QueryCancelPending || ProcDiePending)
+			while ((rc = tdc_job_wait(run->job, WAIT_SLICE_MS)) == TDC_RUNNING)
 			{
-				stop_job(run);
+				if (!InterruptPending)
+					continue;
+				if (QueryCancelPending || ProcDiePending)
+				{
+					stop_job(run);
+					CHECK_FOR_INTERRUPTS();
+					/* interrupts are held off: still, we have no result */
+					ereport(ERROR,
+							(errcode(ERRCODE_QUERY_CANCELED),
+							 errmsg("%s: triangulation canceled", fname)));
+				}
+				/* anything else: process it, the job keeps running */
 				CHECK_FOR_INTERRUPTS();
-				/* interrupts are held off: still, we have no result */
-				ereport(ERROR,
-						(errcode(ERRCODE_QUERY_CANCELED),
-						 errmsg("%s: triangulation canceled", fname)));
 			}
-			/* anything else: process it, the job keeps running */
-			CHECK_FOR_INTERRUPTS();
 		}
+		PG_CATCH();
+		{
+			if (run->job != NULL)
+				stop_job(run);
+			PG_RE_THROW();
+		}
+		PG_END_TRY();
 	}
-	PG_CATCH();
-	{
-		if (run->job != NULL)
-			stop_job(run);
-		PG_RE_THROW();
-	}
-	PG_END_TRY();
 
 	if (rc != TDC_OK)
 	{
@@ -339,7 +355,7 @@ tdc_run(const TdcPointBuf *buf, double tolerance, uint64 result_bytes,
 {
 	tdc_options opt;
 	TdcRun	   *run;
-	MemoryContextCallback *cb;
+	RunAlloc   *ra;
 	uint64		limit = tdc_max_memory_bytes();
 	char		err[256];
 	int			rc;
@@ -365,12 +381,12 @@ tdc_run(const TdcPointBuf *buf, double tolerance, uint64 result_bytes,
 	}
 
 	/* both live as long as the context they are registered with */
-	run = MemoryContextAllocZero(buf->cxt, sizeof(TdcRun));
-	cb = MemoryContextAllocZero(buf->cxt, sizeof(MemoryContextCallback));
-	cb->func = run_reset_callback;
-	cb->arg = run;
+	ra = MemoryContextAllocZero(buf->cxt, sizeof(RunAlloc));
+	run = &ra->run;
+	ra->cb.func = run_reset_callback;
+	ra->cb.arg = run;
 	/* on the buffer's context: it must not be freed before the job is */
-	MemoryContextRegisterResetCallback(buf->cxt, cb);
+	MemoryContextRegisterResetCallback(buf->cxt, &ra->cb);
 
 	err[0] = '\0';
 	rc = tdc_job_start(buf->xy, (size_t) buf->n, &opt, &run->job, err,
@@ -441,7 +457,14 @@ triangulate_to_datum(const TdcPointBuf *buf, double tolerance, int flags,
 		INSTR_TIME_SET_CURRENT(start);
 	}
 	result = tdc_gser_result_alloc(run->job, flags, buf, fname, &w);
-	if (flags == TDC_OUT_EDGES || w.count == 0 ||
+
+	/*
+	 * A job that ran inline would hand its triangles over on this thread
+	 * too, in the same order (so the same bytes): writing them directly
+	 * spares the phase's set-up and its wait, which a call on a few points
+	 * feels.
+	 */
+	if (flags == TDC_OUT_EDGES || w.count == 0 || buf->n < TDC_INLINE_MAX ||
 		!tdc_run_emit(run, tdc_gser_emit, &w, fname))
 		tdc_gser_fill(&w);
 	/* freeing a big job takes a while: let a pending cancel in first */

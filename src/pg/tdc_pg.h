@@ -89,7 +89,7 @@ typedef struct TdcPointMap
 typedef struct TdcPointBuf
 {
 	MemoryContext cxt;
-	TdcPointMap *map;			/* NULL until the first vertex */
+	TdcPointMap *map;			/* NULL while the arrays are small (palloc) */
 	double	   *xy;				/* 2 * cap doubles */
 	double	   *z;				/* cap doubles when hasz, else NULL */
 	uint64		n;				/* vertices stored */
