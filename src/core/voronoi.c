@@ -121,6 +121,7 @@
 
 #define SITES_PER_TASK	4096	/* cells built per task, and per cancel poll */
 #define ITEMS_PER_TASK	65536	/* half-edges or triangles per task */
+#define CELL_RANGE_MIN	262144	/* half-edges per cell task, at least */
 
 struct tdc_voronoi
 {
@@ -150,6 +151,8 @@ struct tdc_voronoi
 	double	  **cell_xy;		/* site -> its ring, or NULL */
 	uint32_t   *cell_n;			/* site -> vertices in its ring */
 	size_t		nranges;
+	size_t		cell_range;		/* half-edges per cell range (mesh input) */
+	bool		big_bufs;		/* range_buf from tdc_big_alloc, not malloc */
 	double	  **range_buf;		/* ring storage of each site range */
 	size_t		total_vertices;
 
@@ -1320,6 +1323,32 @@ oom:
 }
 
 /*
+ * Room for extra more vertices in a range's untagged buffer, which comes
+ * from tdc_big_alloc (mapped, on huge pages where the kernel gives them: a
+ * million points' cells are some 100 MB written once, and a 4 kB page
+ * fault costs microseconds on a virtual machine).  Grows by half, copying;
+ * the first size is meant to make that rare.
+ */
+static bool
+out_reserve(ring *r, size_t extra)
+{
+	if (r->n + extra > r->cap)
+	{
+		size_t		cap = (r->n + extra) + (r->n + extra) / 2 + 16;
+		double	   *p = tdc_big_alloc(cap * 2 * sizeof(double));
+
+		if (p == NULL)
+			return false;
+		if (r->n > 0)
+			memcpy(p, r->p, r->n * 2 * sizeof(double));
+		tdc_big_free(r->p);
+		r->p = p;
+		r->cap = cap;
+	}
+	return true;
+}
+
+/*
  * Build the cells of the sites whose smallest half-edge lies in half-edge
  * range rg into one buffer.  The half-edges are in the triangulation's
  * spatial order, so taking the sites in that order, rather than in input
@@ -1334,8 +1363,8 @@ mesh_cell_task(void *arg, size_t rg, int worker)
 {
 	tdc_voronoi *v = arg;
 	const tdc_job *job = v->job;
-	size_t		lo = rg * ITEMS_PER_TASK,
-				hi = lo + ITEMS_PER_TASK < v->nhe ? lo + ITEMS_PER_TASK : v->nhe;
+	size_t		lo = rg * v->cell_range,
+				hi = lo + v->cell_range < v->nhe ? lo + v->cell_range : v->nhe;
 	ring		a = {.tagged = true},
 				b = {.tagged = true},
 				out = {0};
@@ -1344,9 +1373,14 @@ mesh_cell_task(void *arg, size_t rg, int worker)
 
 	if (vor_cancelled(v))
 		return;
-	/* at most one site per two half-edges; about 6 vertices per cell */
+
+	/*
+	 * At most one site per two half-edges.  A cell has as many vertices as
+	 * its site has edges, 6 on average, give or take a few for clipping:
+	 * about one per half-edge, and a quarter more is rarely outgrown.
+	 */
 	sites = malloc(((hi - lo) / 2 + 1) * sizeof(uint32_t));
-	if (sites == NULL || !ring_reserve(&out, (hi - lo) + 64))
+	if (sites == NULL || !out_reserve(&out, (hi - lo) + (hi - lo) / 4 + 64))
 		goto oom;
 	for (size_t h = lo; h < hi; h++)
 	{
@@ -1361,7 +1395,7 @@ mesh_cell_task(void *arg, size_t rg, int worker)
 			atomic_load_explicit(&v->site_he[s], memory_order_relaxed) != (uint32_t) h)
 			continue;
 		deg = site_degree(v, s, &ho);
-		if (!ring_reserve(&out, deg + 8))
+		if (!out_reserve(&out, deg + 8))
 			goto oom;
 		if (ho == TDC_NIL)
 		{
@@ -1383,7 +1417,7 @@ mesh_cell_task(void *arg, size_t rg, int worker)
 		if (!ring_reserve(&a, deg + 8))
 			goto oom;
 		cell_of_mesh(v, s, deg, ho, &a);
-		if (!clip_to_env(v, s, &a, &b) || !ring_reserve(&out, a.n))
+		if (!clip_to_env(v, s, &a, &b) || !out_reserve(&out, a.n))
 			goto oom;
 		memcpy(out.p + 2 * out.n, a.p, a.n * 2 * sizeof(double));
 		out.n += a.n;
@@ -1406,7 +1440,7 @@ done:
 	free(a.tag);
 	free(b.p);
 	free(b.tag);
-	free(out.p);
+	tdc_big_free(out.p);
 	free(sites);
 	return;
 
@@ -1415,7 +1449,7 @@ oom:
 	free(a.tag);
 	free(b.p);
 	free(b.tag);
-	free(out.p);
+	tdc_big_free(out.p);
 	free(sites);
 	vor_fail(v, TDC_ENOMEM, "out of memory building the Voronoi cells");
 }
@@ -1547,7 +1581,16 @@ vor_run(tdc_voronoi *v)
 	v->box[2] = box[2] + w;
 	v->box[3] = box[3] + w;
 
-	nr = v->ntri > 0 ? nranges_for(v->nhe, ITEMS_PER_TASK) : nranges_for(v->nsites, SITES_PER_TASK);
+	/*
+	 * Cells of a mesh by half-edge ranges of at least 2^18 (a few MB of
+	 * cells each, so their buffers get huge pages), yet eight ranges per
+	 * thread where there is enough, for balance.
+	 */
+	v->cell_range = v->nhe / ((size_t) v->threads * 8) + 1;
+	if (v->cell_range < CELL_RANGE_MIN)
+		v->cell_range = CELL_RANGE_MIN;
+	v->big_bufs = v->ntri > 0;
+	nr = v->ntri > 0 ? nranges_for(v->nhe, v->cell_range) : nranges_for(v->nsites, SITES_PER_TASK);
 	v->nranges = nr;
 	v->cell_xy = tdc_big_alloc(v->nsites * sizeof(double *) + 1);
 	v->cell_n = tdc_big_alloc(v->nsites * sizeof(uint32_t) + 1);
@@ -1706,7 +1749,12 @@ tdc_voronoi_free(tdc_voronoi *v)
 	free(v->line_pos);
 	if (v->range_buf)
 		for (size_t r = 0; r < v->nranges; r++)
-			free(v->range_buf[r]);
+		{
+			if (v->big_bufs)
+				tdc_big_free(v->range_buf[r]);
+			else
+				free(v->range_buf[r]);
+		}
 	free(v->range_buf);
 	tdc_big_free(v->cell_xy);
 	tdc_big_free(v->cell_n);
