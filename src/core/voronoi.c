@@ -35,7 +35,12 @@
  * lexicographic order, so both cells of a clipped edge get the same point
  * too.
  *
- * Error bound.  The circumcenter is computed in double-double arithmetic
+ * Error bound.  The circumcenter is first computed in plain double
+ * arithmetic with a forward error bound (circumcenter_fast); when that
+ * bound proves the exact coordinate rounds to the computed one, as it does
+ * for some 95 percent of the triangles of uniform input, that correctly
+ * rounded value is the vertex: within 1/2 ulp.  Otherwise it is computed
+ * in double-double arithmetic
  * (Dekker's error-free product and Knuth's two-sum, no FMA needed) relative
  * to the triangle's first vertex a, with b - a and c - a exact, and rounded
  * once at the end.  With L the longest of |b - a| and |c - a|,
@@ -107,7 +112,10 @@
  * ones, computing the vertices and building the cells are parallel loops on
  * a pool of the job's thread count, run by a driver thread with all signals
  * blocked, like a triangulation, so the host's thread stays free to cancel.
- * Every loop polls the cancel flag at least once per 4096 items.
+ * Every loop polls the cancel flag at least once per 4096 items.  The cells
+ * of a mesh are built by ranges of half-edges, each site in the range of its
+ * smallest half-edge, so the walks follow the mesh's memory order; each
+ * range writes its cells into one buffer of its own.
  */
 #include <errno.h>
 #include <math.h>
