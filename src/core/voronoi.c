@@ -35,7 +35,12 @@
  * lexicographic order, so both cells of a clipped edge get the same point
  * too.
  *
- * Error bound.  The circumcenter is computed in double-double arithmetic
+ * Error bound.  The circumcenter is first computed in plain double
+ * arithmetic with a forward error bound (circumcenter_fast); when that
+ * bound proves the exact coordinate rounds to the computed one, as it does
+ * for some 95 percent of the triangles of uniform input, that correctly
+ * rounded value is the vertex: within 1/2 ulp.  Otherwise it is computed
+ * in double-double arithmetic
  * (Dekker's error-free product and Knuth's two-sum, no FMA needed) relative
  * to the triangle's first vertex a, with b - a and c - a exact, and rounded
  * once at the end.  With L the longest of |b - a| and |c - a|,
@@ -107,7 +112,10 @@
  * ones, computing the vertices and building the cells are parallel loops on
  * a pool of the job's thread count, run by a driver thread with all signals
  * blocked, like a triangulation, so the host's thread stays free to cancel.
- * Every loop polls the cancel flag at least once per 4096 items.
+ * Every loop polls the cancel flag at least once per 4096 items.  The cells
+ * of a mesh are built by ranges of half-edges, each site in the range of its
+ * smallest half-edge, so the walks follow the mesh's memory order; each
+ * range writes its cells into one buffer of its own.
  */
 #include <errno.h>
 #include <math.h>
@@ -121,6 +129,7 @@
 
 #define SITES_PER_TASK	4096	/* cells built per task, and per cancel poll */
 #define ITEMS_PER_TASK	65536	/* half-edges or triangles per task */
+#define CELL_RANGE_MIN	262144	/* half-edges per cell task, at least */
 
 struct tdc_voronoi
 {
@@ -150,6 +159,8 @@ struct tdc_voronoi
 	double	  **cell_xy;		/* site -> its ring, or NULL */
 	uint32_t   *cell_n;			/* site -> vertices in its ring */
 	size_t		nranges;
+	size_t		cell_range;		/* half-edges per cell range (mesh input) */
+	bool		big_bufs;		/* range_buf from tdc_big_alloc, not malloc */
 	double	  **range_buf;		/* ring storage of each site range */
 	size_t		total_vertices;
 
@@ -346,9 +357,139 @@ dd_exp(dd x, double *e)
  * circumcenter at x = -2.3e59 was 2e7 off instead of 0.054
  * (voronoi_thin_strips_far_vertex), which wound a thin cell backwards.
  */
+/*
+ * Half the gap from x (normal, |x| >= 2^-900) to its nearer neighbour: x's
+ * exponent with the mantissa cleared is 2^e <= |x|; the gap above is 2^(e-52),
+ * the one below the same unless |x| is a power of 2, then half of it.
+ */
+static void circumcenter_careful(const double *a, const double *b, const double *c,
+								 double out[2]);
+
+static inline double
+half_gap(double x)
+{
+	uint64_t	bits,
+				e;
+	double		p;
+
+	memcpy(&bits, &x, sizeof(bits));
+	e = bits & 0x7ff0000000000000u;
+	memcpy(&p, &e, sizeof(p));
+	return (bits & 0x000fffffffffffffu) ? p * 0x1p-53 : p * 0x1p-54;
+}
+
+/*
+ * The circumcenter in plain double arithmetic, when it can prove the
+ * result correctly rounded.  Relative to a, with eps = 2^-53, gamma_k =
+ * k eps / (1 - k eps) and every quantity the computed one (Higham,
+ * "Accuracy and Stability of Numerical Algorithms", 2nd ed., chapter 3):
+ * b - a and friends are within eps of themselves; |b - a|^2 within
+ * gamma_4 (two for the squared difference, one product, one sum, all terms
+ * positive); each of bx cy and by cx within gamma_3, so D within gamma_3
+ * P + eps P <= 4.0001 eps P_D of the exact D, where P_D = |bx cy| + |by cx|
+ * bounds both the exact terms (to gamma_4) and |D|; each term of a
+ * numerator, cy |b - a|^2 and the like, within gamma_6, so the numerator
+ * within 7.0001 eps of P_N, the sum of its terms' magnitudes.  The
+ * constants used, 0x1.01p-51 = 4.03 eps and 0x1.c1p-51 = 7.016 eps, are
+ * above these.  Then the offset ux = nx / 2D (2D exact, the quotient
+ * within eps) is within
+ *
+ *		e_u = q + r (|ux| + q) + eps |ux|,   q = e_N / 2|D|,  r = e_D / |D|
+ *
+ * of the exact offset U, to first order in r, which must be below 2^-20;
+ * the factor 1.01 covers the second order and the rounding of e_u itself.
+ * The exact coordinate is a + U = s + t + (U - ux) with s + t = a + ux
+ * exactly (two-sum); if |t| + e_u is below half the gap from s to its
+ * nearer neighbour (a power of 2: rounding is monotonic, so a computed sum
+ * below it proves the exact one is), the exact
+ * coordinate rounds to s, which is returned: within 1/2 ulp, tighter than
+ * the careful path.  The range guard keeps every product of up to three
+ * differences within [2^-900, 2^750] or exactly 0, and their differences 0
+ * or above 2^-952, so no step underflows and the relative bounds hold;
+ * results below 2^-900 are left to the careful path.  Fails for a triangle
+ * within about 2^-20 of flat, for a coordinate near 0 against the
+ * triangle's size, and otherwise with probability about 2 e_u / ulp (a
+ * coordinate within e_u of a rounding boundary): 5 to 10 percent of the
+ * triangles of a million uniform points.
+ */
+/* 0, or a magnitude in [2^-300, 2^250]: see circumcenter_fast */
+static inline bool
+in_fast_range(double x)
+{
+	double		m = fabs(x);
+
+	return x == 0 || (m >= 0x1p-300 && m <= 0x1p250);
+}
+
+static inline bool
+circumcenter_fast(const double *a, const double *b, const double *c,
+				  double out[2])
+{
+	double		bx = b[0] - a[0],
+				by = b[1] - a[1],
+				cx = c[0] - a[0],
+				cy = c[1] - a[1];
+	double		bb,
+				cc,
+				t1,
+				t2,
+				d,
+				pd,
+				ed,
+				n[2],
+				pn[2];
+
+	if (!(in_fast_range(bx) && in_fast_range(by) && in_fast_range(cx) && in_fast_range(cy)))
+		return false;
+	bb = bx * bx + by * by;
+	cc = cx * cx + cy * cy;
+	t1 = bx * cy;
+	t2 = by * cx;
+	d = t1 - t2;
+	pd = fabs(t1) + fabs(t2);
+	ed = 0x1.01p-51 * pd;
+	if (!(ed < 0x1p-20 * fabs(d)))
+		return false;
+	t1 = cy * bb;
+	t2 = by * cc;
+	n[0] = t1 - t2;
+	pn[0] = fabs(t1) + fabs(t2);
+	t1 = bx * cc;
+	t2 = cx * bb;
+	n[1] = t1 - t2;
+	pn[1] = fabs(t1) + fabs(t2);
+	for (int k = 0; k < 2; k++)
+	{
+		double		u = n[k] / (2 * d),
+					q = 0x1.c1p-51 * pn[k] / (2 * fabs(d)),
+					eu = 1.01 * (q + (ed / fabs(d)) * (fabs(u) + q) + 0x1.01p-53 * fabs(u)) + 0x1p-1000;
+		dd			s = two_sum(a[k], u);
+
+		/* NaN fails every comparison */
+		if (!(fabs(s.hi) >= 0x1p-900 && fabs(s.hi) < INFINITY &&
+			  fabs(s.lo) + eu < half_gap(s.hi)))
+			return false;
+		out[k] = s.hi;
+	}
+	return true;
+}
+
 void
 tdc_circumcenter(const double *a, const double *b, const double *c,
 				 double out[2])
+{
+	if (circumcenter_fast(a, b, c, out))
+		return;
+	circumcenter_careful(a, b, c, out);
+}
+
+/*
+ * The double-double path, with its exact fallback: the bounds of the
+ * header comment.
+ */
+static void
+circumcenter_careful(const double *a, const double *b, const double *c,
+						 double out[2])
 {
 	dd			bx = two_sum(b[0], -a[0]),
 				by = two_sum(b[1], -a[1]),
@@ -952,49 +1093,70 @@ vertex_of(const tdc_voronoi *v, uint32_t h)
 	return v->cc + 2 * (size_t) t;
 }
 
-/* Cell of site s of a mesh with triangles, uncut, into r (cell ∩ B). */
-static bool
-cell_of_mesh(const tdc_voronoi *v, uint32_t s, ring *r)
+/*
+ * The ring of half-edges out of site s: its degree, and the one with the
+ * outer face on its left (s is on the hull), or TDC_NIL.
+ */
+static size_t
+site_degree(const tdc_voronoi *v, uint32_t s, uint32_t *ho)
+{
+	const tdc_job *job = v->job;
+	uint32_t	h0 = atomic_load_explicit(&v->site_he[s], memory_order_relaxed),
+				h = h0;
+	size_t		deg = 0;
+
+	*ho = TDC_NIL;
+	if (h0 == TDC_NIL)
+		return 0;
+	do
+	{
+		if (is_outer(job, h))
+			*ho = h;
+		deg++;
+		h = job->he[h].next;
+	} while (h != h0);
+	return deg;
+}
+
+/*
+ * Cell of site s of a mesh with triangles, uncut, into r (cell ∩ B), which
+ * has room for deg + 8 vertices (deg and ho from site_degree).  An
+ * untagged r is for inner sites only: it skips the neighbours' lookups.
+ */
+static void
+cell_of_mesh(const tdc_voronoi *v, uint32_t s, size_t deg, uint32_t ho, ring *r)
 {
 	const tdc_job *job = v->job;
 	uint32_t	h0 = atomic_load_explicit(&v->site_he[s], memory_order_relaxed),
 				h,
-				ho = TDC_NIL,
 				prev_t = TDC_NIL;
-	size_t		deg = 0;
 
 	r->n = 0;
-	if (h0 == TDC_NIL)
-		return false;
-	h = h0;
-	do
-	{
-		if (is_outer(job, h))
-			ho = h;
-		deg++;
-		h = job->he[h].next;
-	} while (h != h0);
-	if (!ring_reserve(r, deg + 8))
-		return false;
 	/* start right after the outer face, if any, so the chain is open there */
 	h = ho == TDC_NIL ? h0 : job->he[ho].next;
-	for (size_t i = 0; i < deg; i++, h = job->he[h].next)
+	for (size_t i = 0; i < deg; i++)
 	{
 		uint32_t	t,
-					g;
+					g = TDC_NIL,
+					hn = job->he[h].next;
 
 		if (h == ho)
+		{
+			h = hn;
 			continue;
+		}
 		/* the edge to the next vertex is dual to onext(h) */
-		g = job->he[SYM(job->he[h].next)].org;
+		if (r->tagged)
+			g = job->he[SYM(hn)].org;
 		t = atomic_load_explicit(&v->parent[v->tri_id[h]], memory_order_relaxed);
 		if (t != prev_t)
 		{
 			ring_push(r, v->cc[2 * (size_t) t], v->cc[2 * (size_t) t + 1], g);
 			prev_t = t;
 		}
-		else
+		else if (r->tagged)
 			r->tag[r->n - 1] = g;	/* a zero-length edge collapsed */
+		h = hn;
 	}
 	if (ho != TDC_NIL)
 	{
@@ -1031,7 +1193,6 @@ cell_of_mesh(const tdc_voronoi *v, uint32_t s, ring *r)
 		ring_push(r, pin[0], pin[1], job->he[SYM(hin)].org);
 	}
 	ring_close(r);
-	return true;
 }
 
 /*
@@ -1128,9 +1289,7 @@ cell_task(void *arg, size_t rg, int worker)
 		v->cell_n[s] = 0;
 		if (job->site_of[s] != s)
 			continue;
-		if (v->ntri > 0)
-			ok = cell_of_mesh(v, (uint32_t) s, &a);
-		else if (v->nline > 1)
+		if (v->nline > 1)
 			ok = cell_of_line(v, (uint32_t) s, &a);
 		else
 		{
@@ -1168,6 +1327,138 @@ oom:
 	free(b.tag);
 	free(out.p);
 	free(off);
+	vor_fail(v, TDC_ENOMEM, "out of memory building the Voronoi cells");
+}
+
+/*
+ * Room for extra more vertices in a range's untagged buffer, which comes
+ * from tdc_big_alloc (mapped, on huge pages where the kernel gives them: a
+ * million points' cells are some 100 MB written once, and a 4 kB page
+ * fault costs microseconds on a virtual machine).  Grows by half, copying;
+ * the first size is meant to make that rare.
+ */
+static bool
+out_reserve(ring *r, size_t extra)
+{
+	if (r->n + extra > r->cap)
+	{
+		size_t		cap = (r->n + extra) + (r->n + extra) / 2 + 16;
+		double	   *p = tdc_big_alloc(cap * 2 * sizeof(double));
+
+		if (p == NULL)
+			return false;
+		if (r->n > 0)
+			memcpy(p, r->p, r->n * 2 * sizeof(double));
+		tdc_big_free(r->p);
+		r->p = p;
+		r->cap = cap;
+	}
+	return true;
+}
+
+/*
+ * Build the cells of the sites whose smallest half-edge lies in half-edge
+ * range rg into one buffer.  The half-edges are in the triangulation's
+ * spatial order, so taking the sites in that order, rather than in input
+ * order (random for unsorted input), keeps the mesh walks, the triangle
+ * numbers and the circumcenters in cache.  An inner site's cell is built
+ * untagged straight into the buffer and kept there when it lies inside E,
+ * as almost every inner cell does; hull cells, and cells crossing E, go
+ * through the tagged scratch ring and are clipped.
+ */
+static void
+mesh_cell_task(void *arg, size_t rg, int worker)
+{
+	tdc_voronoi *v = arg;
+	const tdc_job *job = v->job;
+	size_t		lo = rg * v->cell_range,
+				hi = lo + v->cell_range < v->nhe ? lo + v->cell_range : v->nhe;
+	ring		a = {.tagged = true},
+				b = {.tagged = true},
+				out = {0};
+	uint32_t   *sites = NULL;
+	size_t		nsites = 0;
+
+	if (vor_cancelled(v))
+		return;
+
+	/*
+	 * At most one site per two half-edges.  A cell has as many vertices as
+	 * its site has edges, 6 on average, give or take a few for clipping:
+	 * about one per half-edge, and a quarter more is rarely outgrown.
+	 */
+	sites = malloc(((hi - lo) / 2 + 1) * sizeof(uint32_t));
+	if (sites == NULL || !out_reserve(&out, (hi - lo) + (hi - lo) / 4 + 64))
+		goto oom;
+	for (size_t h = lo; h < hi; h++)
+	{
+		uint32_t	s = job->he[h].org,
+					ho;
+		size_t		deg,
+					start = out.n;
+
+		if (((h - lo) & 4095) == 4095 && vor_cancelled(v))
+			goto done;
+		if (s == TDC_NIL ||
+			atomic_load_explicit(&v->site_he[s], memory_order_relaxed) != (uint32_t) h)
+			continue;
+		deg = site_degree(v, s, &ho);
+		if (!out_reserve(&out, deg + 8))
+			goto oom;
+		if (ho == TDC_NIL)
+		{
+			ring		w = {.p = out.p + 2 * start, .cap = out.cap - start};
+			bool		inside = true;
+
+			cell_of_mesh(v, s, deg, ho, &w);
+			for (size_t i = 0; i < w.n && inside; i++)
+				inside = w.p[2 * i] >= v->env[0] && w.p[2 * i] <= v->env[2] &&
+					w.p[2 * i + 1] >= v->env[1] && w.p[2 * i + 1] <= v->env[3];
+			if (inside)
+			{
+				out.n += w.n;
+				v->cell_n[s] = (uint32_t) w.n;
+				sites[nsites++] = s;
+				continue;
+			}
+		}
+		if (!ring_reserve(&a, deg + 8))
+			goto oom;
+		cell_of_mesh(v, s, deg, ho, &a);
+		if (!clip_to_env(v, s, &a, &b) || !out_reserve(&out, a.n))
+			goto oom;
+		memcpy(out.p + 2 * out.n, a.p, a.n * 2 * sizeof(double));
+		out.n += a.n;
+		v->cell_n[s] = (uint32_t) a.n;
+		sites[nsites++] = s;
+	}
+	{
+		size_t		off = 0;
+
+		for (size_t i = 0; i < nsites; i++)
+		{
+			v->cell_xy[sites[i]] = out.p + 2 * off;
+			off += v->cell_n[sites[i]];
+		}
+	}
+	v->range_buf[rg] = out.p;
+	out.p = NULL;
+done:
+	free(a.p);
+	free(a.tag);
+	free(b.p);
+	free(b.tag);
+	tdc_big_free(out.p);
+	free(sites);
+	return;
+
+oom:
+	free(a.p);
+	free(a.tag);
+	free(b.p);
+	free(b.tag);
+	tdc_big_free(out.p);
+	free(sites);
 	vor_fail(v, TDC_ENOMEM, "out of memory building the Voronoi cells");
 }
 
@@ -1298,14 +1589,30 @@ vor_run(tdc_voronoi *v)
 	v->box[2] = box[2] + w;
 	v->box[3] = box[3] + w;
 
-	nr = nranges_for(v->nsites, SITES_PER_TASK);
+	/*
+	 * Cells of a mesh by half-edge ranges of at least 2^18 (a few MB of
+	 * cells each, so their buffers get huge pages), yet eight ranges per
+	 * thread where there is enough, for balance.
+	 */
+	v->cell_range = v->nhe / ((size_t) v->threads * 8) + 1;
+	if (v->cell_range < CELL_RANGE_MIN)
+		v->cell_range = CELL_RANGE_MIN;
+	v->big_bufs = v->ntri > 0;
+	nr = v->ntri > 0 ? nranges_for(v->nhe, v->cell_range) : nranges_for(v->nsites, SITES_PER_TASK);
 	v->nranges = nr;
 	v->cell_xy = tdc_big_alloc(v->nsites * sizeof(double *) + 1);
 	v->cell_n = tdc_big_alloc(v->nsites * sizeof(uint32_t) + 1);
 	v->range_buf = calloc(nr + 1, sizeof(double *));
 	if (v->cell_xy == NULL || v->cell_n == NULL || v->range_buf == NULL)
 		FAIL_OOM("out of memory for the Voronoi cells");
-	tdc_pool_for(v->pool, nr, cell_task, v);
+	/* a site without a cell (a duplicate) keeps 0 */
+	if (v->ntri > 0)
+	{
+		memset(v->cell_n, 0, v->nsites * sizeof(uint32_t));
+		tdc_pool_for(v->pool, nr, mesh_cell_task, v);
+	}
+	else
+		tdc_pool_for(v->pool, nr, cell_task, v);
 	if (vor_cancelled(v))
 		return TDC_ECANCELED;
 	for (size_t s = 0; s < v->nsites; s++)
@@ -1450,7 +1757,12 @@ tdc_voronoi_free(tdc_voronoi *v)
 	free(v->line_pos);
 	if (v->range_buf)
 		for (size_t r = 0; r < v->nranges; r++)
-			free(v->range_buf[r]);
+		{
+			if (v->big_bufs)
+				tdc_big_free(v->range_buf[r]);
+			else
+				free(v->range_buf[r]);
+		}
 	free(v->range_buf);
 	tdc_big_free(v->cell_xy);
 	tdc_big_free(v->cell_n);
