@@ -78,7 +78,7 @@
  * 4 per site for vedge, the job's input map (4 per input point), and the
  * serial lists of crossed and new edges, which start small and double up to
  * one entry per edge slot (12 bytes per point each, counted in full); the
- * parallel pass adds 2 bytes per segment and NPART fixed lists.  Cancel is
+ * parallel pass adds 2 bytes per segment, 1 per point and NPART fixed lists.  Cancel is
  * polled before every segment and every 4096 steps inside one.  The
  * insertion runs like a triangulation, on the caller's thread when it is
  * small, otherwise on a thread with every signal blocked that the host
@@ -150,6 +150,7 @@ struct tdc_cdt
 	size_t		cross[2];		/* the two segments of a TDC_ECROSS */
 
 	/* the parallel pass (only for at least PART_MIN_SEG segments) */
+	uint8_t    *spart;			/* per site: its stripe (x_part) */
 	uint8_t    *seg_part;		/* per segment: its stripe, SEG_SERIAL or SEG_NONE */
 	uint8_t    *seg_done;		/* per segment: inserted by its stripe's inserter */
 	double		part_x0;		/* stripe of x: (x - part_x0) * part_scale */
@@ -250,13 +251,20 @@ same_dir(const tdc_cdt *c, uint32_t a, uint32_t p, uint32_t b)
 static inline int
 site_part(const tdc_cdt *c, uint32_t v)
 {
-	double		t = (c->m.xy[2 * (size_t) v] - c->part_x0) * c->part_scale;
+	return c->spart[v];
+}
+
+/* The stripe of an x coordinate. */
+static inline uint8_t
+x_part(const tdc_cdt *c, double x)
+{
+	double		t = (x - c->part_x0) * c->part_scale;
 
 	if (!(t > 0))
 		return 0;
 	if (t >= NPART)
 		return NPART - 1;
-	return (int) t;
+	return (uint8_t) t;
 }
 
 /* May inserter x touch site v?  The serial one any, a stripe's its own. */
@@ -663,6 +671,18 @@ typedef struct cdt_prep
 	size_t	   *bad;
 } cdt_prep;
 
+/* Task k: the stripes of sites [k * PREP_CHUNK, (k + 1) * PREP_CHUNK). */
+static void
+spart_task(void *arg, size_t k, int worker)
+{
+	tdc_cdt    *c = arg;
+	size_t		lo = k * PREP_CHUNK,
+				hi = lo + PREP_CHUNK < c->job->nin ? lo + PREP_CHUNK : c->job->nin;
+
+	for (size_t p = lo; p < hi; p++)
+		c->spart[p] = x_part(c, c->job->xy[2 * p]);
+}
+
 static void
 prep_task(void *arg, size_t k, int worker)
 {
@@ -730,6 +750,7 @@ prepare(tdc_cdt *c, tdc_pool *pool, cdt_ctx *ser)
 	}
 	c->part_x0 = lo;
 	c->part_scale = hi > lo ? NPART / (hi - lo) : 0;
+	tdc_pool_for(pool, (job->nin + PREP_CHUNK - 1) / PREP_CHUNK, spart_task, c);
 	for (size_t k = 0; k < nchunks; k++)
 		pp.bad[k] = SIZE_MAX;
 	tdc_pool_for(pool, nchunks + 1, prep_task, &pp);
@@ -855,7 +876,7 @@ cdt_run(tdc_cdt *c)
 	c->fresh = malloc(ser->cap * sizeof(uint32_t) + 4);
 	if (c->nseg >= PART_MIN_SEG)
 	{
-		c->seg_part = tdc_big_alloc(2 * c->nseg);
+		c->seg_part = tdc_big_alloc(2 * c->nseg + job->nin);
 		c->parts = calloc(NPART, sizeof(cdt_ctx));
 		c->part_lists = malloc((size_t) 2 * NPART * PART_CAP * sizeof(uint32_t));
 	}
@@ -871,6 +892,7 @@ cdt_run(tdc_cdt *c)
 		tdc_pool   *pool = NULL;
 
 		c->seg_done = c->seg_part + c->nseg;
+		c->spart = c->seg_done + c->nseg;
 		if (threads > 1 &&
 			(rc = tdc_pool_create(&pool, threads < NPART ? threads : NPART)) != TDC_OK)
 			return take_error(c, ser, cdt_fail(ser, rc, "could not create the insertion's threads"));
@@ -922,7 +944,7 @@ cdt_work(void *arg)
 	free(c->parts);
 	free(c->part_lists);
 	c->list = c->fresh = c->vedge = c->part_lists = NULL;
-	c->seg_part = c->seg_done = NULL;
+	c->seg_part = c->seg_done = c->spart = NULL;
 	c->parts = NULL;
 	if (rc == TDC_ECANCELED)
 		snprintf(c->err, sizeof(c->err), "constraint insertion cancelled");
@@ -938,12 +960,12 @@ tdc_cdt_memory(size_t n)
 	return n * (3 * 4 + 4 + 3 * 4 + 3 * 4 + 4) + 64;
 }
 
-/* The parallel pass's own arrays, for nseg segments: two bytes each. */
+/* The parallel pass's own arrays, for nseg segments and n points. */
 static size_t
-cdt_seg_memory(size_t nseg)
+cdt_seg_memory(size_t nseg, size_t n)
 {
 	return nseg >= PART_MIN_SEG ?
-		2 * nseg + NPART * (sizeof(cdt_ctx) + 2 * PART_CAP * sizeof(uint32_t)) : 0;
+		2 * nseg + n + NPART * (sizeof(cdt_ctx) + 2 * PART_CAP * sizeof(uint32_t)) : 0;
 }
 
 int
@@ -965,10 +987,10 @@ tdc_cdt_start(tdc_job *job, const uint32_t *seg, size_t nseg, tdc_cdt **out,
 		FAIL(TDC_EINVAL, "no end points given for %zu segments", nseg);
 	if (job->opt.max_memory > 0 &&
 		tdc_estimate_memory(job->n, &job->opt) + tdc_cdt_memory(job->n) +
-		cdt_seg_memory(nseg) > job->opt.max_memory)
+		cdt_seg_memory(nseg, job->n) > job->opt.max_memory)
 		FAIL(TDC_EMEMLIMIT, "constraining %zu points needs about %zu MB, more than the limit of %zu MB",
 			 job->n, (tdc_estimate_memory(job->n, &job->opt) + tdc_cdt_memory(job->n) +
-					  cdt_seg_memory(nseg)) >> 20,
+					  cdt_seg_memory(nseg, job->n)) >> 20,
 			 job->opt.max_memory >> 20);
 	c = calloc(1, sizeof(tdc_cdt));
 	if (c == NULL)
