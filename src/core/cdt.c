@@ -696,10 +696,17 @@ prep_task(void *arg, size_t k, int worker)
 	if (k == 0)
 	{
 		for (size_t h = 0; h < 6 * job->nin; h++)
+		{
 			if (job->he[h].org != TDC_NIL)
 				c->vedge[job->he[h].org] = (uint32_t) h;
+			if ((h & ((1 << 20) - 1)) == 0 &&
+				atomic_load_explicit(&c->cancel, memory_order_relaxed))
+				return;
+		}
 		return;
 	}
+	if (atomic_load_explicit(&c->cancel, memory_order_relaxed))
+		return;
 	lo = (k - 1) * PREP_CHUNK;
 	hi = lo + PREP_CHUNK < c->nseg ? lo + PREP_CHUNK : c->nseg;
 	/* the first call builds the map, under the job's lock */
@@ -754,6 +761,11 @@ prepare(tdc_cdt *c, tdc_pool *pool, cdt_ctx *ser)
 	for (size_t k = 0; k < nchunks; k++)
 		pp.bad[k] = SIZE_MAX;
 	tdc_pool_for(pool, nchunks + 1, prep_task, &pp);
+	if (atomic_load_explicit(&c->cancel, memory_order_relaxed))
+	{
+		free(pp.bad);
+		return TDC_ECANCELED;
+	}
 	for (size_t k = 0; k < nchunks; k++)
 		if (pp.bad[k] != SIZE_MAX)
 		{
