@@ -10,7 +10,9 @@
  *				1	int16 pairs scaled by 2^-8 (general-ish position)
  *				2	one byte per point: x in 0..15 on the line y = 2x,
  *					plus x, y in 0..15 for every odd byte (collinear runs)
- *	byte 1		bits 0-1: threads - 1 of the triangulation
+ *	byte 1		bits 0-1: threads - 1 of the triangulation; bit 2: repeat
+ *				the segments (every other copy reversed) to at least
+ *				REPEAT_SEGS, so that cdt.c's parallel pass by stripes runs
  *	byte 2		number of points (1..128)
  *	then		the points, then the segments: byte pairs, indices mod n
  *
@@ -22,7 +24,8 @@
  *	- TDC_ECROSS: the two named segments do cross properly;
  *	- the same segments in reverse order, and the triangulation with
  *	  another thread count, give the same status, and on TDC_OK the same
- *	  triangle set: the result depends on the sites and segments only.
+ *	  triangle set: the result depends on the sites and segments only;
+ *	  with another thread count alone, TDC_ECROSS names the same pair.
  */
 #include <stdarg.h>
 #include <stdbool.h>
@@ -36,6 +39,7 @@
 
 #define MAX_PTS		128
 #define MAX_SEGS	256
+#define REPEAT_SEGS	8192			/* cdt.c's PART_MIN_SEG */
 
 static void die(const char *fmt,...) __attribute__((format(printf, 1, 2), noreturn));
 
@@ -168,11 +172,12 @@ int
 LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
 	double		xy[2 * MAX_PTS];
-	uint32_t	seg[2 * MAX_SEGS],
-				rev[2 * MAX_SEGS];
+	static uint32_t seg[2 * (REPEAT_SEGS + MAX_SEGS)],
+				rev[2 * (REPEAT_SEGS + MAX_SEGS)];
 	size_t		pos = 3,
 				n,
-				k = 0;
+				k = 0,
+				k0;
 	int			mode,
 				threads;
 	result		a,
@@ -220,6 +225,17 @@ LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 		seg[2 * k + 1] = data[pos++] % n;
 		k++;
 	}
+	k0 = k;
+	while ((data[1] & 4) && k0 > 0 && k < REPEAT_SEGS)
+	{
+		bool		flip = (k / k0) & 1;
+
+		for (size_t s = 0; s < k0; s++, k++)
+		{
+			seg[2 * k] = seg[2 * s + flip];
+			seg[2 * k + 1] = seg[2 * s + !flip];
+		}
+	}
 	for (size_t s = 0; s < k; s++)
 	{
 		rev[2 * s] = seg[2 * (k - 1 - s) + 1];
@@ -236,9 +252,9 @@ LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 		if (a.nt != b.nt || memcmp(a.tris, b.tris, a.nt * 48) != 0 ||
 			a.nt != c.nt || memcmp(a.tris, c.tris, a.nt * 48) != 0)
 			die("triangle sets differ with the order or the thread count");
-		/* no crossing may have gone unnoticed */
-		for (size_t s = 0; s < k; s++)
-			for (size_t t = s + 1; t < k; t++)
+		/* no crossing may have gone unnoticed (the copies add none) */
+		for (size_t s = 0; s < k0; s++)
+			for (size_t t = s + 1; t < k0; t++)
 			{
 				const double *p = xy + 2 * seg[2 * s],
 						   *q = xy + 2 * seg[2 * s + 1],
@@ -264,6 +280,8 @@ LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 
 		if (!proper_cross(p, q, u, v))
 			die("segments %zu and %zu reported as crossing do not cross properly", a.s1, a.s2);
+		if (a.s1 != c.s1 || a.s2 != c.s2)
+			die("crossing %zu %zu with %d threads, %zu %zu with one", a.s1, a.s2, threads, c.s1, c.s2);
 	}
 	free(a.tris);
 	free(b.tris);

@@ -695,6 +695,175 @@ test_unique(void)
 }
 
 /*
+ * The parallel pass (cdt.c: stripes of x, at least 8192 segments): rings on
+ * a quarter grid (cocircular sites, sites on segments), and to their right
+ * long horizontal segments along grid rows among grid points, which cross
+ * every stripe there and split at the sites they meet.  1, 2 and 3 threads
+ * must give one valid CDT, the same constraint edges, and CGAL's triangles;
+ * a crossing added to it must be reported as the same pair.
+ */
+static void
+stripes_input(input *in, int rings, int rows, bool grid)
+{
+	for (int r = 1; r <= rings; r++)
+		add_ring(in, 0, 0, 2.0 * r, grid ? 0 : 0.3, 300 + 10 * r);
+	for (size_t i = 0; grid && i < in->n; i++)
+	{
+		in->xy[2 * i] = round(in->xy[2 * i] * 4) / 4;
+		in->xy[2 * i + 1] = round(in->xy[2 * i + 1] * 4) / 4;
+	}
+	for (int i = 0; i < rows; i++)
+	{
+		double		y = -2.0 * rings + 4.0 * rings * i / rows;
+		uint32_t	a = add_pt(in, 2.5 * rings, y),
+					b = add_pt(in, 6.0 * rings, y);
+
+		add_seg(in, a, b);
+	}
+	for (int i = 0; i < 40 * rings; i++)
+	{
+		double		x = (2.5 + 3.5 * urand()) * rings,
+					y = (urand() - 0.5) * 4 * rings;
+
+		add_pt(in, grid ? round(x * 4) / 4 : x, grid ? round(y * 4) / 4 : y);
+	}
+}
+
+/* The constraint edges as sorted coordinate quadruples. */
+static double *
+constraint_set(const tdc_job *job, const tdc_cdt *cdt, size_t *n)
+{
+	size_t		k = tdc_cdt_num_constraint_edges(cdt),
+				i = 0;
+	double	   *e = malloc((k + 1) * 48);
+	uint32_t	v[2];
+	tdc_iter	it = {0};
+
+	while (i < k && tdc_next_constraint_edge(cdt, &it, v))
+	{
+		memcpy(e + 6 * i, tdc_site_xy(job, v[0]), 16);
+		memcpy(e + 6 * i + 2, tdc_site_xy(job, v[1]), 16);
+		e[6 * i + 4] = e[6 * i + 5] = 0;
+		i++;
+	}
+	qsort(e, i, 48, cmp6);
+	*n = i;
+	return e;
+}
+
+/* 1, 2 and 3 threads: valid, and the same triangles and constraint edges */
+static void
+check_threads(const char *name, const input *in)
+{
+	double	   *t[3] = {NULL},
+			   *e[3] = {NULL};
+	size_t		nt[3] = {0},
+				ne[3] = {0};
+
+	CHECK(in->k >= 8192, "%s: %zu segments, fewer than the parallel pass needs", name, in->k);
+	for (int th = 1; th <= 3; th++)
+	{
+		tdc_job    *job = NULL;
+		tdc_cdt    *cdt = NULL;
+		char		err[256] = "";
+		int			rc = run(in, th, &job, &cdt, err);
+
+		CHECK(rc == TDC_OK, "%s, %d threads: %d %s", name, th, rc, err);
+		if (rc == TDC_OK)
+		{
+			if (th == 2)
+				CHECK(tdc_cdt_validate(cdt, err, sizeof(err)) == 0, "%s: not a valid CDT: %s", name, err);
+			t[th - 1] = tri_set(job, &nt[th - 1]);
+			e[th - 1] = constraint_set(job, cdt, &ne[th - 1]);
+		}
+		tdc_cdt_free(cdt);
+		tdc_job_free(job);
+	}
+	for (int th = 2; th <= 3; th++)
+	{
+		CHECK(t[0] && t[th - 1] && same_sets(t[0], nt[0], t[th - 1], nt[th - 1]),
+			  "%s: %d threads give other triangles than 1", name, th);
+		CHECK(e[0] && e[th - 1] && ne[0] == ne[th - 1] &&
+			  memcmp(e[0], e[th - 1], ne[0] * 48) == 0,
+			  "%s: %d threads give other constraint edges than 1 (%zu, %zu)",
+			  name, th, ne[th - 1], ne[0]);
+	}
+	for (int i = 0; i < 3; i++)
+	{
+		free(t[i]);
+		free(e[i]);
+	}
+}
+
+static void
+test_stripes(void)
+{
+	input		in = {0},
+				noisy = {0};
+	size_t		pair[3][2];
+	char		msg[3][256];
+	int			rings = tdc_test_quick ? 22 : 40;
+	size_t		k0;
+
+	stripes_input(&noisy, rings, 10 * rings, false);
+	check_threads("stripes", &noisy);
+	check_cgal("stripes", &noisy);
+	free_input(&noisy);
+	stripes_input(&in, rings, 10 * rings, true);
+	check_threads("stripes on a grid", &in);
+
+	/*
+	 * Crossings: a chord from ring 3 to ring 5 across ring 4 (inside a
+	 * stripe), then a long one from the middle out across every ring (the
+	 * serial pass).  Each must be reported as the same pair by 1, 2 and 3
+	 * threads.
+	 */
+	k0 = in.k;
+	for (int round = 0; round < 2; round++)
+	{
+		in.k = k0;
+		if (round == 0)
+		{
+			uint32_t	a = add_pt(&in, 6.0 + 0.013, 0.021),
+						b = add_pt(&in, 10.0 - 0.017, 0.029);
+
+			add_seg(&in, a, b);
+		}
+		else
+		{
+			uint32_t	a = add_pt(&in, 0.0071, 0.0013),
+						b = add_pt(&in, 0.0093, 2.0 * rings + 1.0037);
+
+			add_seg(&in, b, a);
+		}
+		for (int th = 1; th <= 3; th++)
+		{
+			tdc_job    *job = NULL;
+			tdc_cdt    *cdt = NULL;
+			char		err[256] = "";
+			int			rc = run(&in, th, &job, &cdt, err);
+
+			CHECK(rc == TDC_ECROSS, "stripes crossing %d, %d threads: status %d (%s)", round, th, rc, err);
+			pair[th - 1][0] = pair[th - 1][1] = SIZE_MAX;
+			if (cdt)
+				tdc_cdt_crossing(cdt, &pair[th - 1][0], &pair[th - 1][1]);
+			snprintf(msg[th - 1], sizeof(msg[0]), "%s", err);
+			tdc_cdt_free(cdt);
+			tdc_job_free(job);
+		}
+		CHECK(pair[0][1] == in.k - 1,
+			  "stripes crossing %d: the pair %zu %zu does not name the chord %zu", round,
+			  pair[0][0], pair[0][1], in.k - 1);
+		for (int th = 2; th <= 3; th++)
+			CHECK(pair[th - 1][0] == pair[0][0] && pair[th - 1][1] == pair[0][1] &&
+				  strcmp(msg[th - 1], msg[0]) == 0,
+				  "stripes crossing %d: %d threads report %zu %zu, 1 thread %zu %zu",
+				  round, th, pair[th - 1][0], pair[th - 1][1], pair[0][0], pair[0][1]);
+	}
+	free_input(&in);
+}
+
+/*
  * Cancel during a long insertion.  Best of up to 3 tries, as the engine's
  * cancel test: a loaded machine may not run the insertion's thread for a
  * while, which is no latency of ours.  The limit is CDT_CANCEL_LIMIT_MS,
@@ -798,6 +967,7 @@ test_cdt(void)
 	test_holes();
 	test_grid();
 	test_unique();
+	test_stripes();
 	test_memory_limit();
 	test_cancel();
 }

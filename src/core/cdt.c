@@ -3,7 +3,7 @@
  *		Constrained Delaunay triangulation: constraint segments inserted into
  *		a finished Delaunay triangulation, in place, with exact predicates.
  *
- * Method.  Segments are inserted one at a time, in input order, by the edge
+ * Method.  Segments are inserted one at a time by the edge
  * flipping scheme of Sloan (1993, "A fast algorithm for generating
  * constrained Delaunay triangulations", Computers & Structures 47(3)):
  *
@@ -47,21 +47,45 @@
  *	- a proper crossing with an earlier segment is found when the walk
  *	  would cross one of its edges: TDC_ECROSS, naming both segments.
  *
+ * Parallel pass.  With at least PART_MIN_SEG segments, the sites are cut
+ * into NPART vertical stripes of equal width (a function of the sites alone,
+ * never of the thread count).  A segment with both ends in stripe k goes to
+ * stripe k's inserter, which takes its segments in input order and may only
+ * change triangles whose three corners lie in stripe k: the moment a piece
+ * would touch another triangle (a corner, a split site or a crossed triangle
+ * outside the stripe, or more crossed edges than its fixed lists hold), it
+ * leaves the segment, before changing anything of that piece, to the serial
+ * pass.  Such triangles are never flipped by anyone in this pass (a flip
+ * stays inside the union of the triangles a segment crosses), and an
+ * inserter reads only edges with an end in its stripe, so inserters of
+ * different stripes share nothing they write: the stripes run on a pool of
+ * the job's thread count, in any order, and leave the same mesh, half-edge
+ * for half-edge, as one thread running them one after the other.  Then the
+ * serial pass inserts, in input order, every segment not done (ends in two
+ * stripes, or left over), finding the pieces already in place as edges.
+ * An error is the one of the lowest stripe that failed, else the serial
+ * pass's, so it does not depend on the thread count either.
+ *
  * Invariants between segments: the mesh is a triangulation of the convex
  * hull of the sites (hull edges are never crossed, so never flipped, so the
  * job's outer-face bitmap and triangle count stay right); every constraint
- * edge carries the number (+ 1) of the first segment that made it, every other
- * edge NO_SEG; vedge[s] is a half-edge leaving site s.  The number of edges
- * never changes (a flip keeps its edge slot), so the mesh needs no memory.
+ * edge carries the smallest number (+ 1) of the segments that made it,
+ * every other edge NO_SEG; vedge[s] is a half-edge leaving site s.  The
+ * number of edges never changes (a flip keeps its edge slot), so the mesh
+ * needs no memory.
  *
  * Memory: 4 bytes per edge slot for the constraint numbers (12 per point),
- * 4 per site for vedge, the job's input map (4 per input point), and two
- * lists of at most the number of crossed edges each (at most 3 per point).
- * Cancel is polled before every segment and every 4096 steps inside one.
- * The insertion runs like a triangulation, on the caller's thread when it
- * is small, otherwise on a thread with every signal blocked that the host
- * waits for and cancels (the runner of runner.c).
+ * 4 per site for vedge, the job's input map (4 per input point), and the
+ * serial lists of crossed and new edges, which start small and double up to
+ * one entry per edge slot (12 bytes per point each, counted in full); the
+ * parallel pass adds 2 bytes per segment, 1 per point and NPART fixed lists.  Cancel is
+ * polled before every segment and every 4096 steps inside one.  The
+ * insertion runs like a triangulation, on the caller's thread when it is
+ * small, otherwise on a thread with every signal blocked that the host
+ * waits for and cancels (the runner of runner.c), whose pool threads
+ * inherit that mask.
  */
+#include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -76,6 +100,40 @@
 #define MAX_SEG		((size_t) UINT32_MAX - 3)
 #define POLL_STEPS	4096
 
+/*
+ * The parallel pass: NPART vertical stripes of equal width over the sites'
+ * x range, a number fixed so that the work, the mesh and the error reported
+ * are the same for every thread count.  Below PART_MIN_SEG segments the
+ * pass would cost more than it saves.
+ */
+#define NPART		16
+#define PART_MIN_SEG 8192
+#define PART_CAP	4096			/* crossed edges a stripe's walk may list */
+#define LIST_MIN	4096			/* the serial lists' first size */
+#define SEG_SERIAL	0xfe			/* seg_part[]: ends in two stripes */
+#define SEG_NONE	0xff			/* ... both ends on one site */
+#define TDC_DEFER	1				/* insert_segment: leave it to the serial pass */
+
+/*
+ * One inserter: the serial one (part < 0, any site), or the one of stripe
+ * "part" in the parallel pass, which may only touch triangles whose three
+ * corners lie in its stripe.  Each has its own lists, poll counter and
+ * error, so inserters of different stripes share nothing they write.
+ */
+typedef struct cdt_ctx
+{
+	struct tdc_cdt *c;
+	int			part;			/* stripe, or -1: serial */
+	uint32_t   *list;			/* crossed edges, used as a circular queue */
+	uint32_t   *fresh;			/* new edges, then the Lawson stack */
+	size_t		cap;
+	size_t		nconstraint;	/* constraint edges this inserter made */
+	size_t		cross[2];		/* the two segments of a TDC_ECROSS */
+	long		steps;
+	int			rc;
+	char		err[512];
+} cdt_ctx;
+
 struct tdc_cdt
 {
 	tdc_job    *job;
@@ -84,12 +142,21 @@ struct tdc_cdt
 	tdc_mesh	m;
 	uint32_t   *cons;			/* per edge slot: segment number + 1, or NO_SEG/CAV/CAVQ */
 	uint32_t   *vedge;			/* per site: a half-edge leaving it */
-	uint32_t   *list;			/* crossed edges, used as a circular queue */
-	uint32_t   *fresh;			/* new edges, then the Lawson stack */
-	size_t		cap;
+	uint32_t   *list;			/* the serial inserter's lists (grow_lists) */
+	uint32_t   *fresh;
+	size_t		nslots;			/* edge slots: the most any list needs */
+	uint32_t   *part_lists;		/* the stripes' lists, PART_CAP each, 2 per stripe */
 	size_t		nconstraint;	/* constraint edges */
 	size_t		cross[2];		/* the two segments of a TDC_ECROSS */
-	long		steps;
+
+	/* the parallel pass (only for at least PART_MIN_SEG segments) */
+	uint8_t    *spart;			/* per site: its stripe (x_part) */
+	uint8_t    *seg_part;		/* per segment: its stripe, SEG_SERIAL or SEG_NONE */
+	uint8_t    *seg_done;		/* per segment: inserted by its stripe's inserter */
+	double		part_x0;		/* stripe of x: (x - part_x0) * part_scale */
+	double		part_scale;
+	cdt_ctx    *parts;			/* NPART inserters */
+	cdt_ctx		serial;
 
 	atomic_int	cancel;
 	bool		inline_run;
@@ -97,26 +164,26 @@ struct tdc_cdt
 	char		err[512];
 };
 
-static int	cdt_fail(tdc_cdt *c, int code, const char *fmt,...)
+static int	cdt_fail(cdt_ctx *x, int code, const char *fmt,...)
 			__attribute__((format(printf, 3, 4)));
 
 static int
-cdt_fail(tdc_cdt *c, int code, const char *fmt,...)
+cdt_fail(cdt_ctx *x, int code, const char *fmt,...)
 {
 	va_list		ap;
 
 	va_start(ap, fmt);
-	vsnprintf(c->err, sizeof(c->err), fmt, ap);
+	vsnprintf(x->err, sizeof(x->err), fmt, ap);
 	va_end(ap);
 	return code;
 }
 
 static bool
-cdt_poll(tdc_cdt *c)
+cdt_poll(cdt_ctx *x)
 {
-	if (++c->steps % POLL_STEPS != 0)
+	if (++x->steps % POLL_STEPS != 0)
 		return false;
-	return atomic_load_explicit(&c->cancel, memory_order_relaxed) != 0;
+	return atomic_load_explicit(&x->c->cancel, memory_order_relaxed) != 0;
 }
 
 static inline bool
@@ -180,6 +247,33 @@ same_dir(const tdc_cdt *c, uint32_t a, uint32_t p, uint32_t b)
 	return (pp[1] > pa[1]) == (pb[1] > pa[1]) && pp[1] != pa[1];
 }
 
+/* The stripe of site v: a function of its x alone, never of the threads. */
+static inline int
+site_part(const tdc_cdt *c, uint32_t v)
+{
+	return c->spart[v];
+}
+
+/* The stripe of an x coordinate. */
+static inline uint8_t
+x_part(const tdc_cdt *c, double x)
+{
+	double		t = (x - c->part_x0) * c->part_scale;
+
+	if (!(t > 0))
+		return 0;
+	if (t >= NPART)
+		return NPART - 1;
+	return (uint8_t) t;
+}
+
+/* May inserter x touch site v?  The serial one any, a stripe's its own. */
+static inline bool
+owns(const cdt_ctx *x, uint32_t v)
+{
+	return x->part < 0 || site_part(x->c, v) == x->part;
+}
+
 /*
  * Flip edge h, the diagonal of the strictly convex quadrilateral of its two
  * triangles, to the other diagonal (Guibas & Stolfi's Swap).  The edge slot
@@ -213,35 +307,37 @@ input_xy(const tdc_cdt *c, size_t i)
 }
 
 static int
-crossing_error(tdc_cdt *c, size_t s1, size_t s2)
+crossing_error(cdt_ctx *x, size_t s1, size_t s2)
 {
+	const tdc_cdt *c = x->c;
 	const double *a = input_xy(c, c->seg[2 * s2]),
 			   *b = input_xy(c, c->seg[2 * s2 + 1]),
 			   *p = input_xy(c, c->seg[2 * s1]),
 			   *q = input_xy(c, c->seg[2 * s1 + 1]);
 
-	c->cross[0] = s2;
-	c->cross[1] = s1;
-	return cdt_fail(c, TDC_ECROSS,
+	x->cross[0] = s2;
+	x->cross[1] = s1;
+	return cdt_fail(x, TDC_ECROSS,
 					"constraint segments cross: segment %zu from (%.17g %.17g) to (%.17g %.17g) and segment %zu from (%.17g %.17g) to (%.17g %.17g)",
 					s2, a[0], a[1], b[0], b[1], s1, p[0], p[1], q[0], q[1]);
 }
 
 static int
-internal_error(tdc_cdt *c, size_t s, const char *what)
+internal_error(cdt_ctx *x, size_t s, const char *what)
 {
-	return cdt_fail(c, TDC_EINVAL, "internal error inserting segment %zu: %s", s, what);
+	return cdt_fail(x, TDC_EINVAL, "internal error inserting segment %zu: %s", s, what);
 }
 
 /*
- * Sloan's step 2 on the n crossed edges in c->list (a circular queue) for
- * the piece a-e: afterwards a-e is an edge, and c->fresh holds the *nfresh
+ * Sloan's step 2 on the n crossed edges in x->list (a circular queue) for
+ * the piece a-e: afterwards a-e is an edge, and x->fresh holds the *nfresh
  * other edges made here, all inside the region the piece crossed.
  */
 static int
-remove_crossings(tdc_cdt *c, size_t s, uint32_t a, uint32_t e, size_t n,
+remove_crossings(cdt_ctx *x, size_t s, uint32_t a, uint32_t e, size_t n,
 				 size_t *nfresh)
 {
+	tdc_cdt    *c = x->c;
 	tdc_mesh   *m = &c->m;
 	size_t		head = 0,
 				count = n,
@@ -250,7 +346,7 @@ remove_crossings(tdc_cdt *c, size_t s, uint32_t a, uint32_t e, size_t n,
 	*nfresh = 0;
 	while (count > 0)
 	{
-		uint32_t	h = 2 * c->list[head],
+		uint32_t	h = 2 * x->list[head],
 					u = tdc_org(m, h),
 					v = tdc_dest(m, h),
 					p = tdc_dest(m, tdc_lnext(m, h)),
@@ -258,9 +354,9 @@ remove_crossings(tdc_cdt *c, size_t s, uint32_t a, uint32_t e, size_t n,
 		double		ou = orient(c, p, q, u),
 					ov = orient(c, p, q, v);
 
-		head = (head + 1) % c->cap;
+		head = (head + 1) % x->cap;
 		count--;
-		if (cdt_poll(c))
+		if (cdt_poll(x))
 			return TDC_ECANCELED;
 		if ((ou > 0 && ov < 0) || (ou < 0 && ov > 0))
 		{
@@ -273,19 +369,19 @@ remove_crossings(tdc_cdt *c, size_t s, uint32_t a, uint32_t e, size_t n,
 			oq = orient(c, a, e, q);
 			if ((op > 0 && oq < 0) || (op < 0 && oq > 0))
 			{
-				c->list[(head + count) % c->cap] = h >> 1;
+				x->list[(head + count) % x->cap] = h >> 1;
 				count++;
 			}
 			else
-				c->fresh[(*nfresh)++] = h >> 1;
+				x->fresh[(*nfresh)++] = h >> 1;
 		}
 		else
 		{
-			c->list[(head + count) % c->cap] = h >> 1;
+			x->list[(head + count) % x->cap] = h >> 1;
 			count++;
 			/* Sloan: some quadrilateral is always convex; never loop */
 			if (++idle > count)
-				return internal_error(c, s, "no crossed edge can be flipped");
+				return internal_error(x, s, "no crossed edge can be flipped");
 		}
 	}
 	return TDC_OK;
@@ -296,16 +392,17 @@ remove_crossings(tdc_cdt *c, size_t s, uint32_t a, uint32_t e, size_t n,
  * the constraint and the cavity's border are not listed, so never flipped.
  */
 static int
-restore_delaunay(tdc_cdt *c, size_t n)
+restore_delaunay(cdt_ctx *x, size_t n)
 {
+	tdc_cdt    *c = x->c;
 	tdc_mesh   *m = &c->m;
 	size_t		top = n;
 
 	for (size_t i = 0; i < n; i++)
-		c->cons[c->fresh[i]] = CAVQ;
+		c->cons[x->fresh[i]] = CAVQ;
 	while (top > 0)
 	{
-		uint32_t	e = c->fresh[--top],
+		uint32_t	e = x->fresh[--top],
 					h = 2 * e,
 					u = tdc_org(m, h),
 					v = tdc_dest(m, h),
@@ -313,7 +410,7 @@ restore_delaunay(tdc_cdt *c, size_t n)
 					q = tdc_dest(m, tdc_lnext(m, SYM(h)));
 
 		c->cons[e] = CAV;
-		if (cdt_poll(c))
+		if (cdt_poll(x))
 			return TDC_ECANCELED;
 		if (incircle_sos(c, u, v, p, q))
 		{
@@ -331,7 +428,7 @@ restore_delaunay(tdc_cdt *c, size_t n)
 				if (c->cons[f] == CAV)
 				{
 					c->cons[f] = CAVQ;
-					c->fresh[top++] = f;
+					x->fresh[top++] = f;
 				}
 			}
 		}
@@ -354,20 +451,65 @@ find_edge(const tdc_cdt *c, uint32_t a, uint32_t b)
 	return TDC_NIL;
 }
 
+/*
+ * Edge h is (part of) segment s.  An edge covered by several segments keeps
+ * the smallest number, so the numbers do not depend on which inserter came
+ * first.
+ */
 static void
-mark(tdc_cdt *c, uint32_t h, size_t s)
+mark(cdt_ctx *x, uint32_t h, size_t s)
 {
-	if (c->cons[h >> 1] == NO_SEG)
+	uint32_t   *k = &x->c->cons[h >> 1];
+
+	if (*k == NO_SEG)
 	{
-		c->cons[h >> 1] = (uint32_t) s + 1;
-		c->nconstraint++;
+		*k = (uint32_t) s + 1;
+		x->nconstraint++;
 	}
+	else if (*k > (uint32_t) s + 1)
+		*k = (uint32_t) s + 1;
 }
 
-/* Insert segment s from site a to site b (a != b), piece by piece. */
+/*
+ * The serial inserter's lists start small (most segments cross few edges)
+ * and double when a walk fills them, up to one entry per edge, so that a
+ * million segments do not fault in 24 bytes a point they never use.  A
+ * stripe's lists are fixed: a longer walk is left to the serial pass.
+ */
 static int
-insert_segment(tdc_cdt *c, size_t s, uint32_t a, uint32_t b)
+grow_lists(cdt_ctx *x, size_t s)
 {
+	tdc_cdt    *c = x->c;
+	size_t		cap = 2 * x->cap < c->nslots ? 2 * x->cap : c->nslots;
+	uint32_t   *l,
+			   *f;
+
+	if (x->part >= 0)
+		return TDC_DEFER;
+	if (cap <= x->cap)
+		return internal_error(x, s, "more crossed edges than edges");
+	l = realloc(c->list, cap * sizeof(uint32_t));
+	if (l != NULL)
+		c->list = x->list = l;
+	f = l ? realloc(c->fresh, cap * sizeof(uint32_t)) : NULL;
+	if (f == NULL)
+		return cdt_fail(x, TDC_ENOMEM, "out of memory for the crossed edges of segment %zu", s);
+	c->fresh = x->fresh = f;
+	x->cap = cap;
+	return TDC_OK;
+}
+
+/*
+ * Insert segment s from site a to site b (a != b), piece by piece.  A
+ * stripe's inserter returns TDC_DEFER, before it changes anything of the
+ * piece at hand, when that piece would touch a triangle with a corner
+ * outside its stripe (or needs more crossed edges than its lists hold); the
+ * pieces already in place stay, and the serial pass finds them as edges.
+ */
+static int
+insert_segment(cdt_ctx *x, size_t s, uint32_t a, uint32_t b)
+{
+	tdc_cdt    *c = x->c;
 	tdc_mesh   *m = &c->m;
 
 	while (a != b)
@@ -387,7 +529,7 @@ insert_segment(tdc_cdt *c, size_t s, uint32_t a, uint32_t b)
 		g = find_edge(c, a, b);
 		if (g != TDC_NIL)
 		{
-			mark(c, g, s);
+			mark(x, g, s);
 			break;
 		}
 		g = start;
@@ -421,12 +563,16 @@ insert_segment(tdc_cdt *c, size_t s, uint32_t a, uint32_t b)
 
 		if (e != TDC_NIL)
 		{
-			mark(c, g, s);
+			if (!owns(x, e))
+				return TDC_DEFER;
+			mark(x, g, s);
 			a = e;
 			continue;
 		}
 		if (t == TDC_NIL)
-			return internal_error(c, s, "no triangle around its start");
+			return internal_error(x, s, "no triangle around its start");
+		if (!owns(x, tdc_dest(m, g)) || !owns(x, tdc_dest(m, tdc_onext(m, g))))
+			return TDC_DEFER;
 
 		/* walk; t is a crossed edge from the right of a-b to its left */
 		for (;;)
@@ -436,13 +582,15 @@ insert_segment(tdc_cdt *c, size_t s, uint32_t a, uint32_t b)
 			double		o;
 
 			if (c->cons[t >> 1] != NO_SEG)
-				return crossing_error(c, s, c->cons[t >> 1] - 1);
-			if (n == c->cap)
-				return internal_error(c, s, "more crossed edges than edges");
-			c->list[n++] = t >> 1;
+				return crossing_error(x, s, c->cons[t >> 1] - 1);
+			if (n == x->cap && (rc = grow_lists(x, s)) != TDC_OK)
+				return rc;
+			x->list[n++] = t >> 1;
 			if (is_outer(c, sym))
-				return internal_error(c, s, "the walk left the convex hull");
+				return internal_error(x, s, "the walk left the convex hull");
 			r = tdc_dest(m, tdc_lnext(m, sym));
+			if (!owns(x, r))
+				return TDC_DEFER;
 			if (r == b)
 			{
 				e = b;
@@ -455,53 +603,191 @@ insert_segment(tdc_cdt *c, size_t s, uint32_t a, uint32_t b)
 				break;
 			}
 			t = o > 0 ? tdc_lnext(m, sym) : tdc_lnext(m, tdc_lnext(m, sym));
-			if (cdt_poll(c))
+			if (cdt_poll(x))
 				return TDC_ECANCELED;
 		}
 
-		rc = remove_crossings(c, s, a, e, n, &nfresh);
+		rc = remove_crossings(x, s, a, e, n, &nfresh);
 		if (rc != TDC_OK)
 			return rc;
 		g = find_edge(c, a, e);
 		if (g == TDC_NIL)
-			return internal_error(c, s, "the constraint is no edge after the flips");
+			return internal_error(x, s, "the constraint is no edge after the flips");
 		/* the last flip may have made a-e itself: it is no new edge to flip */
 		for (size_t i = 0; i < nfresh; i++)
-			if (c->fresh[i] == g >> 1)
-				c->fresh[i--] = c->fresh[--nfresh];
+			if (x->fresh[i] == g >> 1)
+				x->fresh[i--] = x->fresh[--nfresh];
 		/* the Lawson stack overwrites fresh[]: keep the set in list[] */
-		memcpy(c->list, c->fresh, nfresh * sizeof(uint32_t));
-		rc = restore_delaunay(c, nfresh);
+		memcpy(x->list, x->fresh, nfresh * sizeof(uint32_t));
+		rc = restore_delaunay(x, nfresh);
 		for (size_t i = 0; i < nfresh; i++)
-			c->cons[c->list[i]] = NO_SEG;
+			c->cons[x->list[i]] = NO_SEG;
 		if (rc != TDC_OK)
 			return rc;
-		mark(c, g, s);
+		mark(x, g, s);
 		a = e;
 	}
 	return TDC_OK;
 }
 
+/* The end sites of segment s, checked. */
 static int
-cdt_run(tdc_cdt *c)
+seg_sites(cdt_ctx *x, size_t s, uint32_t *a, uint32_t *b)
 {
-	tdc_job    *job = c->job;
-	size_t		nslots = job->nin * 3;
+	const tdc_cdt *c = x->c;
+	const tdc_job *job = c->job;
 
-	c->m.xy = job->xy;
-	c->m.he = job->he;
-	c->m.cancel = &c->cancel;
-	c->cap = nslots;
-	c->cons = tdc_big_alloc(nslots * sizeof(uint32_t) + 4);
-	c->vedge = tdc_big_alloc(job->nin * sizeof(uint32_t) + 4);
-	c->list = tdc_big_alloc(nslots * sizeof(uint32_t) + 4);
-	c->fresh = tdc_big_alloc(nslots * sizeof(uint32_t) + 4);
-	if (!c->cons || !c->vedge || !c->list || !c->fresh)
-		return cdt_fail(c, TDC_ENOMEM, "out of memory for the constraints of %zu points", job->nin);
-	/* tdc_big_alloc's memory is zeroed: every cons[] is NO_SEG */
-	for (size_t h = 0; h < 2 * nslots; h++)
-		if (job->he[h].org != TDC_NIL)
-			c->vedge[job->he[h].org] = (uint32_t) h;
+	if (c->seg[2 * s] >= job->n || c->seg[2 * s + 1] >= job->n)
+		return cdt_fail(x, TDC_EINVAL, "segment %zu has an end point index out of range (%u %u, %zu points)",
+						s, c->seg[2 * s], c->seg[2 * s + 1], job->n);
+	*a = tdc_input_site(job, c->seg[2 * s]);
+	*b = tdc_input_site(job, c->seg[2 * s + 1]);
+	if (*a == UINT32_MAX || *b == UINT32_MAX)
+		return cdt_fail(x, TDC_ENOMEM, "out of memory for the input map");
+	return TDC_OK;
+}
+
+/* The status of inserter x, its message and crossing moved to c. */
+static int
+take_error(tdc_cdt *c, const cdt_ctx *x, int rc)
+{
+	memcpy(c->err, x->err, sizeof(c->err));
+	c->cross[0] = x->cross[0];
+	c->cross[1] = x->cross[1];
+	return rc;
+}
+
+/*
+ * The preparation of the parallel pass, as tasks: task 0 sets vedge[],
+ * task k > 0 sorts chunk k - 1 of the segments by stripe: both ends in
+ * stripe i gives i, ends in two stripes SEG_SERIAL, one site SEG_NONE.  A
+ * chunk stops at its first bad segment and notes it in bad[k - 1].
+ */
+#define PREP_CHUNK	65536
+
+typedef struct cdt_prep
+{
+	tdc_cdt    *c;
+	size_t	   *bad;
+} cdt_prep;
+
+/* Task k: the stripes of sites [k * PREP_CHUNK, (k + 1) * PREP_CHUNK). */
+static void
+spart_task(void *arg, size_t k, int worker)
+{
+	tdc_cdt    *c = arg;
+	size_t		lo = k * PREP_CHUNK,
+				hi = lo + PREP_CHUNK < c->job->nin ? lo + PREP_CHUNK : c->job->nin;
+
+	for (size_t p = lo; p < hi; p++)
+		c->spart[p] = x_part(c, c->job->xy[2 * p]);
+}
+
+static void
+prep_task(void *arg, size_t k, int worker)
+{
+	cdt_prep   *pp = arg;
+	tdc_cdt    *c = pp->c;
+	const tdc_job *job = c->job;
+	size_t		lo,
+				hi;
+	const uint32_t *map;
+
+	if (k == 0)
+	{
+		for (size_t h = 0; h < 6 * job->nin; h++)
+		{
+			if (job->he[h].org != TDC_NIL)
+				c->vedge[job->he[h].org] = (uint32_t) h;
+			if ((h & ((1 << 20) - 1)) == 0 &&
+				atomic_load_explicit(&c->cancel, memory_order_relaxed))
+				return;
+		}
+		return;
+	}
+	if (atomic_load_explicit(&c->cancel, memory_order_relaxed))
+		return;
+	lo = (k - 1) * PREP_CHUNK;
+	hi = lo + PREP_CHUNK < c->nseg ? lo + PREP_CHUNK : c->nseg;
+	/* the first call builds the map, under the job's lock */
+	if (tdc_input_site(job, 0) == UINT32_MAX)
+	{
+		pp->bad[k - 1] = lo;
+		return;
+	}
+	map = atomic_load_explicit(&((tdc_job *) job)->map, memory_order_acquire);
+	for (size_t s = lo; s < hi; s++)
+	{
+		uint32_t	i = c->seg[2 * s],
+					j = c->seg[2 * s + 1],
+					a,
+					b;
+		int			pa;
+
+		if (i >= job->n || j >= job->n)
+		{
+			pp->bad[k - 1] = s;
+			return;
+		}
+		a = map[i];
+		b = map[j];
+		pa = site_part(c, a);
+		c->seg_part[s] = a == b ? SEG_NONE : pa == site_part(c, b) ? (uint8_t) pa : SEG_SERIAL;
+	}
+}
+
+/* Set vedge[] and sort the segments by stripe (prep_task), on the pool. */
+static int
+prepare(tdc_cdt *c, tdc_pool *pool, cdt_ctx *ser)
+{
+	const tdc_job *job = c->job;
+	size_t		nchunks = (c->nseg + PREP_CHUNK - 1) / PREP_CHUNK;
+	cdt_prep	pp = {c, malloc(nchunks * sizeof(size_t))};
+	double		lo = INFINITY,
+				hi = -INFINITY;
+
+	if (pp.bad == NULL)
+		return cdt_fail(ser, TDC_ENOMEM, "out of memory for the constraints");
+	for (size_t p = 0; p < job->nin; p++)
+	{
+		double		v = job->xy[2 * p];
+
+		lo = v < lo ? v : lo;
+		hi = v > hi ? v : hi;
+	}
+	c->part_x0 = lo;
+	c->part_scale = hi > lo ? NPART / (hi - lo) : 0;
+	tdc_pool_for(pool, (job->nin + PREP_CHUNK - 1) / PREP_CHUNK, spart_task, c);
+	for (size_t k = 0; k < nchunks; k++)
+		pp.bad[k] = SIZE_MAX;
+	tdc_pool_for(pool, nchunks + 1, prep_task, &pp);
+	if (atomic_load_explicit(&c->cancel, memory_order_relaxed))
+	{
+		free(pp.bad);
+		return TDC_ECANCELED;
+	}
+	for (size_t k = 0; k < nchunks; k++)
+		if (pp.bad[k] != SIZE_MAX)
+		{
+			uint32_t	a,
+						b;
+			int			rc = seg_sites(ser, pp.bad[k], &a, &b);
+
+			free(pp.bad);
+			return rc != TDC_OK ? rc : internal_error(ser, pp.bad[k], "a segment was misread");
+		}
+	free(pp.bad);
+	return TDC_OK;
+}
+
+/* The pool's task k: stripe k's segments, in input order. */
+static void
+part_task(void *arg, size_t k, int worker)
+{
+	tdc_cdt    *c = arg;
+	cdt_ctx    *x = &c->parts[k];
+	/* prepare() checked the ends and built the input map */
+	const uint32_t *map = atomic_load_explicit(&c->job->map, memory_order_acquire);
 
 	for (size_t s = 0; s < c->nseg; s++)
 	{
@@ -509,20 +795,147 @@ cdt_run(tdc_cdt *c)
 					b;
 		int			rc;
 
+		if (c->seg_part[s] != k)
+			continue;
 		if (atomic_load_explicit(&c->cancel, memory_order_relaxed))
-			return TDC_ECANCELED;
-		if (c->seg[2 * s] >= job->n || c->seg[2 * s + 1] >= job->n)
-			return cdt_fail(c, TDC_EINVAL, "segment %zu has an end point index out of range (%u %u, %zu points)",
-							s, c->seg[2 * s], c->seg[2 * s + 1], job->n);
-		a = tdc_input_site(job, c->seg[2 * s]);
-		b = tdc_input_site(job, c->seg[2 * s + 1]);
-		if (a == UINT32_MAX || b == UINT32_MAX)
-			return cdt_fail(c, TDC_ENOMEM, "out of memory for the input map");
-		if (a == b)
-			continue;			/* zero length */
-		rc = insert_segment(c, s, a, b);
+		{
+			x->rc = TDC_ECANCELED;
+			return;
+		}
+		a = map[c->seg[2 * s]];
+		b = map[c->seg[2 * s + 1]];
+		rc = insert_segment(x, s, a, b);
+		if (rc == TDC_OK)
+			c->seg_done[s] = 1;
+		else if (rc != TDC_DEFER)
+		{
+			x->rc = rc;
+			return;
+		}
+	}
+}
+
+/*
+ * The parallel pass.  Stripe k's inserter only changes triangles whose three
+ * corners lie in stripe k, and only reads edges with an end in stripe k or
+ * triangles no inserter changes (those with corners in two stripes), so the
+ * stripes' inserters touch disjoint parts of the mesh: run in any order or
+ * at once, they leave the same mesh, and the first stripe with an error
+ * names the same error.  With one thread they run one after the other, and
+ * stop at the first error, as the threads' result is read.
+ */
+static int
+run_parts(tdc_cdt *c, tdc_pool *pool)
+{
+	for (int k = 0; k < NPART; k++)
+	{
+		cdt_ctx    *x = &c->parts[k];
+
+		x->c = c;
+		x->part = k;
+		x->list = c->part_lists + (size_t) 2 * k * PART_CAP;
+		x->fresh = x->list + PART_CAP;
+		x->cap = PART_CAP;
+		x->cross[0] = x->cross[1] = SIZE_MAX;
+	}
+	if (pool != NULL)
+		tdc_pool_for(pool, NPART, part_task, c);
+	else
+	{
+		for (int k = 0; k < NPART; k++)
+		{
+			part_task(c, (size_t) k, 0);
+			if (c->parts[k].rc != TDC_OK)
+				break;
+		}
+	}
+	if (atomic_load_explicit(&c->cancel, memory_order_relaxed))
+		return TDC_ECANCELED;
+	for (int k = 0; k < NPART; k++)
+	{
+		c->nconstraint += c->parts[k].nconstraint;
+		if (c->parts[k].rc != TDC_OK)
+			return take_error(c, &c->parts[k], c->parts[k].rc);
+	}
+	return TDC_OK;
+}
+
+/*
+ * Many segments: the parallel pass then the serial one for what it left;
+ * few: the serial one alone.  The pool is the job's thread count (none for
+ * one thread: tdc_pool_for then runs the tasks itself).
+ */
+static int
+cdt_run(tdc_cdt *c)
+{
+	tdc_job    *job = c->job;
+	size_t		nslots = job->nin * 3;
+	cdt_ctx    *ser = &c->serial;
+	int			rc,
+				threads = tdc_threads_used(job);
+
+	c->m.xy = job->xy;
+	c->m.he = job->he;
+	c->m.cancel = &c->cancel;
+	c->nslots = nslots;
+	ser->c = c;
+	ser->part = -1;
+	ser->cross[0] = ser->cross[1] = SIZE_MAX;
+	c->cons = tdc_big_alloc(nslots * sizeof(uint32_t) + 4);
+	c->vedge = tdc_big_alloc(job->nin * sizeof(uint32_t) + 4);
+	ser->cap = nslots < LIST_MIN ? nslots : LIST_MIN;
+	c->list = malloc(ser->cap * sizeof(uint32_t) + 4);
+	c->fresh = malloc(ser->cap * sizeof(uint32_t) + 4);
+	if (c->nseg >= PART_MIN_SEG)
+	{
+		c->seg_part = tdc_big_alloc(2 * c->nseg + job->nin);
+		c->parts = calloc(NPART, sizeof(cdt_ctx));
+		c->part_lists = malloc((size_t) 2 * NPART * PART_CAP * sizeof(uint32_t));
+	}
+	if (!c->cons || !c->vedge || !c->list || !c->fresh ||
+		(c->nseg >= PART_MIN_SEG && (!c->seg_part || !c->parts || !c->part_lists)))
+		return take_error(c, ser, cdt_fail(ser, TDC_ENOMEM, "out of memory for the constraints of %zu points", job->nin));
+	ser->list = c->list;
+	ser->fresh = c->fresh;
+
+	/* tdc_big_alloc's memory is zeroed: every cons[] is NO_SEG */
+	if (c->seg_part != NULL)
+	{
+		tdc_pool   *pool = NULL;
+
+		c->seg_done = c->seg_part + c->nseg;
+		c->spart = c->seg_done + c->nseg;
+		if (threads > 1 &&
+			(rc = tdc_pool_create(&pool, threads < NPART ? threads : NPART)) != TDC_OK)
+			return take_error(c, ser, cdt_fail(ser, rc, "could not create the insertion's threads"));
+		rc = prepare(c, pool, ser);
+		if (rc == TDC_OK)
+			rc = run_parts(c, pool);
+		else
+			rc = take_error(c, ser, rc);
+		tdc_pool_destroy(pool);
 		if (rc != TDC_OK)
 			return rc;
+	}
+	else
+		for (size_t h = 0; h < 2 * nslots; h++)
+			if (job->he[h].org != TDC_NIL)
+				c->vedge[job->he[h].org] = (uint32_t) h;
+
+	for (size_t s = 0; s < c->nseg; s++)
+	{
+		uint32_t	a,
+					b;
+
+		if (c->seg_done != NULL && (c->seg_done[s] || c->seg_part[s] == SEG_NONE))
+			continue;
+		if (atomic_load_explicit(&c->cancel, memory_order_relaxed))
+			return TDC_ECANCELED;
+		rc = seg_sites(ser, s, &a, &b);
+		if (rc == TDC_OK && a != b)
+			rc = insert_segment(ser, s, a, b);
+		if (rc != TDC_OK)
+			return take_error(c, ser, rc);
 	}
 	return TDC_OK;
 }
@@ -534,11 +947,17 @@ cdt_work(void *arg)
 	tdc_cdt    *c = arg;
 	int			rc = cdt_run(c);
 
+	c->nconstraint += c->serial.nconstraint;
 	/* the lists are only needed while inserting */
-	tdc_big_free(c->list);
-	tdc_big_free(c->fresh);
+	free(c->list);
+	free(c->fresh);
 	tdc_big_free(c->vedge);
-	c->list = c->fresh = c->vedge = NULL;
+	tdc_big_free(c->seg_part);
+	free(c->parts);
+	free(c->part_lists);
+	c->list = c->fresh = c->vedge = c->part_lists = NULL;
+	c->seg_part = c->seg_done = c->spart = NULL;
+	c->parts = NULL;
 	if (rc == TDC_ECANCELED)
 		snprintf(c->err, sizeof(c->err), "constraint insertion cancelled");
 	else if (rc == TDC_OK)
@@ -551,6 +970,14 @@ tdc_cdt_memory(size_t n)
 {
 	/* cons, vedge, list, fresh, and the job's input map */
 	return n * (3 * 4 + 4 + 3 * 4 + 3 * 4 + 4) + 64;
+}
+
+/* The parallel pass's own arrays, for nseg segments and n points. */
+static size_t
+cdt_seg_memory(size_t nseg, size_t n)
+{
+	return nseg >= PART_MIN_SEG ?
+		2 * nseg + n + NPART * (sizeof(cdt_ctx) + 2 * PART_CAP * sizeof(uint32_t)) : 0;
 }
 
 int
@@ -571,9 +998,11 @@ tdc_cdt_start(tdc_job *job, const uint32_t *seg, size_t nseg, tdc_cdt **out,
 	if (nseg > 0 && seg == NULL)
 		FAIL(TDC_EINVAL, "no end points given for %zu segments", nseg);
 	if (job->opt.max_memory > 0 &&
-		tdc_estimate_memory(job->n, &job->opt) + tdc_cdt_memory(job->n) > job->opt.max_memory)
+		tdc_estimate_memory(job->n, &job->opt) + tdc_cdt_memory(job->n) +
+		cdt_seg_memory(nseg, job->n) > job->opt.max_memory)
 		FAIL(TDC_EMEMLIMIT, "constraining %zu points needs about %zu MB, more than the limit of %zu MB",
-			 job->n, (tdc_estimate_memory(job->n, &job->opt) + tdc_cdt_memory(job->n)) >> 20,
+			 job->n, (tdc_estimate_memory(job->n, &job->opt) + tdc_cdt_memory(job->n) +
+					  cdt_seg_memory(nseg, job->n)) >> 20,
 			 job->opt.max_memory >> 20);
 	c = calloc(1, sizeof(tdc_cdt));
 	if (c == NULL)
@@ -640,9 +1069,12 @@ tdc_cdt_free(tdc_cdt *c)
 		return;
 	tdc_runner_destroy(&c->run);
 	tdc_big_free(c->cons);
-	tdc_big_free(c->list);
-	tdc_big_free(c->fresh);
+	free(c->list);
+	free(c->fresh);
 	tdc_big_free(c->vedge);
+	tdc_big_free(c->seg_part);
+	free(c->parts);
+	free(c->part_lists);
 	free(c);
 }
 

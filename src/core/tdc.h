@@ -369,12 +369,18 @@ extern int	tdc_validate_cdt(const double *sites, size_t m, const uint32_t *tri,
  * TDC_ECROSS, with a message naming both segments' end points.  The job's
  * tdc_job_cancel does not reach the insertion: use tdc_cdt_cancel.  Runs on
  * a thread of its own (signals blocked), on the caller's thread when job and
- * segments are small (fewer than TDC_INLINE_MAX each).  Insertion is serial.
+ * segments are small (fewer than TDC_INLINE_MAX each).  Many segments are
+ * inserted on the job's thread count, by stripes, then the rest serially;
+ * the result and the error reported do not depend on the thread count.
  * On error the job's mesh is a valid triangulation but not the CDT: free it.
  */
 typedef struct tdc_cdt tdc_cdt;
 
-/* Bytes tdc_cdt_start allocates at most, beyond the job, for n input points. */
+/*
+ * Bytes tdc_cdt_start allocates at most, beyond the job, for n input points
+ * (at least 8192 segments add 2 bytes each, 1 per point and about 0.5 MB,
+ * which tdc_cdt_start counts against options.max_memory as well).
+ */
 extern size_t tdc_cdt_memory(size_t n);
 
 extern int	tdc_cdt_start(tdc_job *job, const uint32_t *seg, size_t nseg,
