@@ -225,6 +225,9 @@ read_text(const char *path, size_t *n, double **zout)
 #include <dirent.h>
 #include <math.h>
 #include <unistd.h>
+#ifdef __GLIBC__
+#include <malloc.h>
+#endif
 
 #define FINE_GRID	512			/* cells per side of the counting grid */
 #define CHUNK		(1 << 16)	/* points per read in the scans */
@@ -385,7 +388,8 @@ static void
 plan_tiles(const size_t *ps, int c0, int c1, int r0, int r1, double cw, double ch,
 		   size_t tile_max, tile_info *tiles, int *nt)
 {
-	size_t		cnt = cells_count(ps, c0, c1, r0, r1);
+	size_t		cnt = cells_count(ps, c0, c1, r0, r1),
+				k;
 	bool		by_x;
 	int			lo,
 				hi;
@@ -407,7 +411,15 @@ plan_tiles(const size_t *ps, int c0, int c1, int r0, int r1, double cw, double c
 		return;
 	}
 	by_x = (c1 - c0 > 1) && ((c1 - c0) * cw >= (r1 - r0) * ch || r1 - r0 == 1);
-	/* the median cell line: the smallest cut with at least half the points below */
+
+	/*
+	 * The rectangle needs k = ceil(cnt / tile_max) tiles: cut it at the
+	 * fraction floor(k / 2) / k, so that each side needs a whole number of
+	 * tiles.  Halving instead would round the count up to a power of two:
+	 * 16 tiles where 9 do, each smaller, with more halo in all.  The cut is
+	 * the smallest cell line with at least that fraction below.
+	 */
+	k = (cnt + tile_max - 1) / tile_max;
 	lo = by_x ? c0 + 1 : r0 + 1;
 	hi = by_x ? c1 - 1 : r1 - 1;
 	while (lo < hi)
@@ -415,7 +427,7 @@ plan_tiles(const size_t *ps, int c0, int c1, int r0, int r1, double cw, double c
 		int			mid = (lo + hi) / 2;
 		size_t		below = by_x ? cells_count(ps, c0, mid, r0, r1) : cells_count(ps, c0, c1, r0, mid);
 
-		if (2 * below >= cnt)
+		if (below * k >= cnt * (k / 2))
 			hi = mid;
 		else
 			lo = mid + 1;
@@ -518,6 +530,17 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 
 	memset(st, 0, sizeof(*st));
 	st->n = n;
+#ifdef __GLIBC__
+
+	/*
+	 * Every tile allocates and frees the same large arrays.  Served by mmap
+	 * they go back to the kernel at each free and come back as fresh pages
+	 * to fault in and zero, a tenth of the run; kept in the heap they are
+	 * reused.  The peak stays that of the largest tile.
+	 */
+	mallopt(M_MMAP_MAX, 0);
+	mallopt(M_TRIM_THRESHOLD, INT32_MAX);
+#endif
 
 	/* 1: box and hull */
 	source_open(&src, xypath, zpath);
@@ -579,9 +602,12 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 
 	/*
 	 * The largest tile: its points with the halo and a growth allowance of
-	 * 2.2 must fit in the budget (a corner tile may grow along long hull edges).
+	 * 1.5 must fit in the budget.  (It was 2.2 while a sliver along a long
+	 * hull edge made corner tiles grow; tile.c now bounds such a triangle's
+	 * circle by its segment over the hull edge.  A tile that still outgrows
+	 * the budget is first shrunk back, see below.)
 	 */
-	for (tile_max = n; tile_max > 1000 && tile_bytes(tile_max * 11 / 5, opt, has_z) > budget;)
+	for (tile_max = n; tile_max > 1000 && tile_bytes(tile_max * 3 / 2, opt, has_z) > budget;)
 		tile_max = tile_max * 9 / 10;
 	plan_tiles(ps, 0, FINE_GRID, 0, FINE_GRID, cw, ch, tile_max, tiles, &nt);
 	free(ps);
