@@ -523,7 +523,9 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 	int			nt = 0,
 				has_z = zpath != NULL;
 	double	   *extra,
+			   *bands,			/* every hull edge's band */
 				band;
+	uint8_t    *inband;			/* is it among this tile's extra boxes */
 	const double **xs;
 	FILE	  **tf;
 	char		err[512];
@@ -652,10 +654,22 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 
 	/* 4: the tiles */
 	extra = malloc(32 * (nhull + 1));
+	bands = malloc(32 * (nhull + 1));
+	inband = malloc(nhull + 1);
 	xs = malloc(sizeof(double *) * (nhull + 1));
 	band = 16 * sqrt((bb[2] - bb[0]) * (bb[3] - bb[1]) / (double) (n ? n : 1));
-	if (extra == NULL || xs == NULL)
+	if (extra == NULL || bands == NULL || inband == NULL || xs == NULL)
 		die(1, "out of memory%s", "");
+	for (size_t i = 0; nhull > 1 && i < nhull; i++)
+	{
+		const double *a = hull + 2 * i,
+				   *b = hull + 2 * ((i + 1) % nhull);
+
+		bands[4 * i] = fmin(a[0], b[0]) - band;
+		bands[4 * i + 1] = fmin(a[1], b[1]) - band;
+		bands[4 * i + 2] = fmax(a[0], b[0]) + band;
+		bands[4 * i + 3] = fmax(a[1], b[1]) + band;
+	}
 	for (int t = 0; t < nt; t++)
 	{
 		tile_info  *ti = &tiles[t];
@@ -688,18 +702,8 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 		 */
 		nextra = 0;
 		for (size_t i = 0; nhull > 1 && i < nhull; i++)
-		{
-			const double *a = hull + 2 * i,
-					   *b = hull + 2 * ((i + 1) % nhull);
-			double	   *eb = extra + 4 * nextra;
-
-			eb[0] = fmin(a[0], b[0]) - band;
-			eb[1] = fmin(a[1], b[1]) - band;
-			eb[2] = fmax(a[0], b[0]) + band;
-			eb[3] = fmax(a[1], b[1]) + band;
-			if (box_meets(eb, K))
-				nextra++;
-		}
+			if ((inband[i] = box_meets(bands + 4 * i, K)))
+				memcpy(extra + 4 * nextra++, bands + 4 * i, 32);
 		spec.extra = extra;
 		spec.nextra = nextra;
 		spec.self = t;
@@ -837,6 +841,31 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 				/* grow a little more than asked: each run costs a whole tile */
 				double		gx = 0.5 * h,
 							gy = 0.5 * h;
+				size_t		added = 0;
+
+				/*
+				 * A request reaching along the border comes from slivers
+				 * under a long hull edge, whose circles' parts inside C are
+				 * thin lenses along the hull: first add the bands of the
+				 * hull edges the request meets and run again with the same
+				 * K, rather than widen K along the whole side.
+				 */
+				for (size_t i = 0; nhull > 1 && i < nhull; i++)
+					if (!inband[i] && box_meets(bands + 4 * i, res.need))
+					{
+						inband[i] = 1;
+						memcpy(extra + 4 * nextra++, bands + 4 * i, 32);
+						added++;
+					}
+				if (added > 0)
+				{
+					spec.nextra = nextra;
+					tdc_tile_result_free(&res);
+					free(q);
+					free(ql);
+					free(qz);
+					continue;
+				}
 
 				/*
 				 * If need is too big for the budget, K may fall back to a
@@ -861,6 +890,8 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 		}
 	}
 	free(extra);
+	free(bands);
+	free(inband);
 	free(xs);
 	free(tiles);
 	free(hull);
