@@ -593,6 +593,9 @@ check_range(tile_work *w)
 	const tdc_he *he = job->he;
 	const uint8_t *bad = w->bad;
 	const tdc_tile_spec *spec = w->cx.spec;
+#ifdef __GNUC__
+	const size_t nhe = w->job->nin * 6;
+#endif
 
 	for (size_t h = w->lo; h < w->hi; h++)
 	{
@@ -615,13 +618,14 @@ check_range(tile_work *w)
 			uint32_t	f1 = he[SYM(h + 2 * PF)].prev,
 						g1 = he[SYM(h + PF)].prev;
 
-			if (f1 != TDC_NIL)
+			/* a free edge's links may be anything: stay in the array */
+			if (f1 < nhe)
 				__builtin_prefetch(&he[SYM(f1)]);
-			if (g1 != TDC_NIL)
+			if (g1 < nhe)
 			{
 				uint32_t	g2 = he[SYM(g1)].prev;
 
-				if (g2 != TDC_NIL)
+				if (g2 < nhe)
 					__builtin_prefetch(&he[g2]);
 			}
 		}
