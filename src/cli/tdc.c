@@ -214,7 +214,8 @@ read_text(const char *path, size_t *n, double **zout)
  * Then for every tile: K = its box plus a halo of 8 mean point spacings, and
  * as extra known boxes the bands along the hull edges near it; gather every
  * point inside them from the tile files whose boxes meet them; triangulate; tdc_tile_finish either hands over the tile's triangles
- * or asks for a larger K, and the tile runs again.
+ * or asks for a larger K, and the tile runs again (first with the bands of
+ * the hull edges the request meets, then with a larger K).
  *
  * Memory: the largest tile with its halo is bounded by tile_max times a
  * growth allowance; a tile whose K would exceed the budget is an error,

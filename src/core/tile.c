@@ -95,6 +95,11 @@
  * on C's side of each edge of C (and of each certified hull edge of the
  * triangle), with the chord computed from a conservative centre and radius
  * (clip_box).  So border tiles do not read half the data for such slivers.
+ * When the sliver stands on a certified hull edge ab of its own, D n C lies
+ * in the segment over the chord ab; with an obtuse angle at the third
+ * vertex that segment is bounded without the centre, from the angle
+ * (segment_box): a computed centre 1e8 away carries more error than the
+ * segment is high.
  *
  * The halo is a thin ring in practice: for uniform points, circumdisks are a
  * few point spacings wide, so a margin of some ten spacings around a tile
