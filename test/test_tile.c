@@ -812,10 +812,108 @@ test_tile_errors(void)
 	free(h);
 }
 
+/*
+ * A sliver along a long hull edge: a point 2^-30 under the top side of the
+ * square makes a triangle over a hull edge 700 long with a circle of radius
+ * about 6e13.  A bound on its part inside C through the computed centre
+ * (clip_box) carries rounding far larger than the segment's height and
+ * does not shrink the disk's box, so the corner tile asked for the whole
+ * side (the same happened with slivers 1e-4 under a side in the CLI's 10M
+ * point runs, where two corner tiles ran eleven times each).  The segment
+ * over the edge, bounded from the angle at the third vertex, stays in the
+ * band: the corner tile, given as the CLI does the bands of the hull edges
+ * that meet its K, is final at once; and the tiled set is the one-shot set.
+ */
+static void
+test_hull_sliver(void)
+{
+	size_t		body = tdc_test_quick ? 20000 : 60000,
+				n = body + 3,
+				nhull,
+				m = 0,
+				nextra = 0;
+	double	   *xy = malloc(16 * n),
+			   *q = malloc(16 * n),
+			   *hull,
+			   *extra;
+	int64_t    *lab = malloc(8 * n),
+			   *ql = malloc(8 * n);
+	double		K[4] = {-30, 670, 330, 1030},
+				w = 10;
+	tdc_tile_spec sp = {0};
+	tdc_tile_result res;
+	char		err[256];
+
+	rs = 11;
+	for (size_t i = 0; i < body; i++)
+	{
+		xy[2 * i] = urand() * 1000;
+		xy[2 * i + 1] = urand() * 1000;
+	}
+	/* the hull's top side, and a point just under it */
+	memcpy(xy + 2 * body, (double[6]) {50, 1000, 750, 1000, 600, 1000 - 0x1p-30}, 48);
+	/* the corner tile [0, 300] x [700, 1000] against the rest */
+	for (size_t i = 0; i < n; i++)
+		lab[i] = xy[2 * i] <= 300 && xy[2 * i + 1] >= 700 ? 0 : 1;
+
+	tdc_convex_hull(xy, n, &hull, &nhull);
+	extra = malloc(32 * nhull);
+	for (size_t i = 0; i < nhull; i++)
+	{
+		const double *a = hull + 2 * i,
+				   *b = hull + 2 * ((i + 1) % nhull);
+		double	   *e = extra + 4 * nextra;
+
+		e[0] = fmin(a[0], b[0]) - w;
+		e[1] = fmin(a[1], b[1]) - w;
+		e[2] = fmax(a[0], b[0]) + w;
+		e[3] = fmax(a[1], b[1]) + w;
+		if (e[0] <= K[2] && K[0] <= e[2] && e[1] <= K[3] && K[1] <= e[3])
+			nextra++;
+	}
+	for (size_t i = 0; i < n; i++)
+	{
+		bool		in = xy[2 * i] >= K[0] && xy[2 * i] <= K[2] &&
+			xy[2 * i + 1] >= K[1] && xy[2 * i + 1] <= K[3];
+
+		for (size_t e = 0; e < nextra && !in; e++)
+			in = xy[2 * i] >= extra[4 * e] && xy[2 * i] <= extra[4 * e + 2] &&
+				xy[2 * i + 1] >= extra[4 * e + 1] && xy[2 * i + 1] <= extra[4 * e + 3];
+		if (in)
+		{
+			q[2 * m] = xy[2 * i];
+			q[2 * m + 1] = xy[2 * i + 1];
+			ql[m++] = lab[i];
+		}
+	}
+	memcpy(sp.known, K, sizeof(K));
+	sp.hull = hull;
+	sp.nhull = nhull;
+	sp.extra = extra;
+	sp.nextra = nextra;
+	sp.tile = ql;
+	sp.self = 0;
+	CHECK(tdc_tile_triangulate(q, m, &sp, NULL, &res, err, sizeof(err)) == TDC_OK && res.final,
+		  "hull sliver: the corner tile with %zu hull bands is not final at once (asks for %g %g %g %g) %s",
+		  nextra, res.need[0], res.need[1], res.need[2], res.need[3], err);
+	tdc_tile_result_free(&res);
+
+	band = 0.01;
+	check_labels("hull sliver, corner tile and the rest, hull bands", xy, n, lab, 2, 0.1, false);
+	band = 0;
+	free(xy);
+	free(q);
+	free(lab);
+	free(ql);
+	free(hull);
+	free(extra);
+}
+
 void
 test_tile(void)
 {
 	test_tile_errors();
+	test_hull_sliver();
 	test_distributions();
 	test_small_tiles_and_duplicates();
 	test_weakened_check_is_caught();

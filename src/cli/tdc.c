@@ -214,7 +214,8 @@ read_text(const char *path, size_t *n, double **zout)
  * Then for every tile: K = its box plus a halo of 8 mean point spacings, and
  * as extra known boxes the bands along the hull edges near it; gather every
  * point inside them from the tile files whose boxes meet them; triangulate; tdc_tile_finish either hands over the tile's triangles
- * or asks for a larger K, and the tile runs again.
+ * or asks for a larger K, and the tile runs again (first with the bands of
+ * the hull edges the request meets, then with a larger K).
  *
  * Memory: the largest tile with its halo is bounded by tile_max times a
  * growth allowance; a tile whose K would exceed the budget is an error,
@@ -225,6 +226,9 @@ read_text(const char *path, size_t *n, double **zout)
 #include <dirent.h>
 #include <math.h>
 #include <unistd.h>
+#ifdef __GLIBC__
+#include <malloc.h>
+#endif
 
 #define FINE_GRID	512			/* cells per side of the counting grid */
 #define CHUNK		(1 << 16)	/* points per read in the scans */
@@ -385,7 +389,8 @@ static void
 plan_tiles(const size_t *ps, int c0, int c1, int r0, int r1, double cw, double ch,
 		   size_t tile_max, tile_info *tiles, int *nt)
 {
-	size_t		cnt = cells_count(ps, c0, c1, r0, r1);
+	size_t		cnt = cells_count(ps, c0, c1, r0, r1),
+				k;
 	bool		by_x;
 	int			lo,
 				hi;
@@ -407,7 +412,15 @@ plan_tiles(const size_t *ps, int c0, int c1, int r0, int r1, double cw, double c
 		return;
 	}
 	by_x = (c1 - c0 > 1) && ((c1 - c0) * cw >= (r1 - r0) * ch || r1 - r0 == 1);
-	/* the median cell line: the smallest cut with at least half the points below */
+
+	/*
+	 * The rectangle needs k = ceil(cnt / tile_max) tiles: cut it at the
+	 * fraction floor(k / 2) / k, so that each side needs a whole number of
+	 * tiles.  Halving instead would round the count up to a power of two:
+	 * 16 tiles where 9 do, each smaller, with more halo in all.  The cut is
+	 * the smallest cell line with at least that fraction below.
+	 */
+	k = (cnt + tile_max - 1) / tile_max;
 	lo = by_x ? c0 + 1 : r0 + 1;
 	hi = by_x ? c1 - 1 : r1 - 1;
 	while (lo < hi)
@@ -415,7 +428,7 @@ plan_tiles(const size_t *ps, int c0, int c1, int r0, int r1, double cw, double c
 		int			mid = (lo + hi) / 2;
 		size_t		below = by_x ? cells_count(ps, c0, mid, r0, r1) : cells_count(ps, c0, c1, r0, mid);
 
-		if (2 * below >= cnt)
+		if (below * k >= cnt * (k / 2))
 			hi = mid;
 		else
 			lo = mid + 1;
@@ -511,13 +524,26 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 	int			nt = 0,
 				has_z = zpath != NULL;
 	double	   *extra,
+			   *bands,			/* every hull edge's band */
 				band;
+	uint8_t    *inband;			/* is it among this tile's extra boxes */
 	const double **xs;
 	FILE	  **tf;
 	char		err[512];
 
 	memset(st, 0, sizeof(*st));
 	st->n = n;
+#ifdef __GLIBC__
+
+	/*
+	 * Every tile allocates and frees the same large arrays.  Served by mmap
+	 * they go back to the kernel at each free and come back as fresh pages
+	 * to fault in and zero, a tenth of the run; kept in the heap they are
+	 * reused.  The peak stays that of the largest tile.
+	 */
+	mallopt(M_MMAP_MAX, 0);
+	mallopt(M_TRIM_THRESHOLD, INT32_MAX);
+#endif
 
 	/* 1: box and hull */
 	source_open(&src, xypath, zpath);
@@ -579,9 +605,12 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 
 	/*
 	 * The largest tile: its points with the halo and a growth allowance of
-	 * 2.2 must fit in the budget (a corner tile may grow along long hull edges).
+	 * 1.5 must fit in the budget.  (It was 2.2 while a sliver along a long
+	 * hull edge made corner tiles grow; tile.c now bounds such a triangle's
+	 * circle by its segment over the hull edge.  A tile that still outgrows
+	 * the budget is first shrunk back, see below.)
 	 */
-	for (tile_max = n; tile_max > 1000 && tile_bytes(tile_max * 11 / 5, opt, has_z) > budget;)
+	for (tile_max = n; tile_max > 1000 && tile_bytes(tile_max * 3 / 2, opt, has_z) > budget;)
 		tile_max = tile_max * 9 / 10;
 	plan_tiles(ps, 0, FINE_GRID, 0, FINE_GRID, cw, ch, tile_max, tiles, &nt);
 	free(ps);
@@ -626,14 +655,28 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 
 	/* 4: the tiles */
 	extra = malloc(32 * (nhull + 1));
+	bands = malloc(32 * (nhull + 1));
+	inband = malloc(nhull + 1);
 	xs = malloc(sizeof(double *) * (nhull + 1));
 	band = 16 * sqrt((bb[2] - bb[0]) * (bb[3] - bb[1]) / (double) (n ? n : 1));
-	if (extra == NULL || xs == NULL)
+	if (extra == NULL || bands == NULL || inband == NULL || xs == NULL)
 		die(1, "out of memory%s", "");
+	for (size_t i = 0; nhull > 1 && i < nhull; i++)
+	{
+		const double *a = hull + 2 * i,
+				   *b = hull + 2 * ((i + 1) % nhull);
+
+		bands[4 * i] = fmin(a[0], b[0]) - band;
+		bands[4 * i + 1] = fmin(a[1], b[1]) - band;
+		bands[4 * i + 2] = fmax(a[0], b[0]) + band;
+		bands[4 * i + 3] = fmax(a[1], b[1]) + band;
+	}
 	for (int t = 0; t < nt; t++)
 	{
 		tile_info  *ti = &tiles[t];
 		double		K[4],
+					near[4],	/* hull edges meeting it give bands */
+					g,
 					Kmin[4],	/* the least K this round may shrink back to */
 					h;
 		size_t		nextra;
@@ -660,20 +703,25 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 		 * along the whole edge.  The bands also bring in the hull's
 		 * vertices, so every own hull edge is certified at once.
 		 */
+		/*
+		 * The bands of the hull edges near K, not only those meeting it:
+		 * slivers under a long hull edge have their circles' parts inside
+		 * C along the neighbouring edges too (border tiles of 100M uniform
+		 * points re-ran in 7 cases of 12 without this).  Within K's size of
+		 * K, the bands along a side hold about 96 / sqrt(count) of the
+		 * tile's points (a band is 32 spacings wide), against a whole tile
+		 * for a re-run: taken when that is under 5 %, else only the bands
+		 * meeting K, and a re-run adds what is missing.
+		 */
+		g = ti->count >= 4000000 ? fmax(K[2] - K[0], K[3] - K[1]) : 0;
+		near[0] = K[0] - g;
+		near[1] = K[1] - g;
+		near[2] = K[2] + g;
+		near[3] = K[3] + g;
 		nextra = 0;
 		for (size_t i = 0; nhull > 1 && i < nhull; i++)
-		{
-			const double *a = hull + 2 * i,
-					   *b = hull + 2 * ((i + 1) % nhull);
-			double	   *eb = extra + 4 * nextra;
-
-			eb[0] = fmin(a[0], b[0]) - band;
-			eb[1] = fmin(a[1], b[1]) - band;
-			eb[2] = fmax(a[0], b[0]) + band;
-			eb[3] = fmax(a[1], b[1]) + band;
-			if (box_meets(eb, K))
-				nextra++;
-		}
+			if ((inband[i] = box_meets(bands + 4 * i, near)))
+				memcpy(extra + 4 * nextra++, bands + 4 * i, 32);
 		spec.extra = extra;
 		spec.nextra = nextra;
 		spec.self = t;
@@ -811,6 +859,31 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 				/* grow a little more than asked: each run costs a whole tile */
 				double		gx = 0.5 * h,
 							gy = 0.5 * h;
+				size_t		added = 0;
+
+				/*
+				 * A request reaching along the border comes from slivers
+				 * under a long hull edge, whose circles' parts inside C are
+				 * thin lenses along the hull: first add the bands of the
+				 * hull edges the request meets and run again with the same
+				 * K, rather than widen K along the whole side.
+				 */
+				for (size_t i = 0; nhull > 1 && i < nhull; i++)
+					if (!inband[i] && box_meets(bands + 4 * i, res.need))
+					{
+						inband[i] = 1;
+						memcpy(extra + 4 * nextra++, bands + 4 * i, 32);
+						added++;
+					}
+				if (added > 0)
+				{
+					spec.nextra = nextra;
+					tdc_tile_result_free(&res);
+					free(q);
+					free(ql);
+					free(qz);
+					continue;
+				}
 
 				/*
 				 * If need is too big for the budget, K may fall back to a
@@ -835,6 +908,8 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 		}
 	}
 	free(extra);
+	free(bands);
+	free(inband);
 	free(xs);
 	free(tiles);
 	free(hull);

@@ -95,6 +95,11 @@
  * on C's side of each edge of C (and of each certified hull edge of the
  * triangle), with the chord computed from a conservative centre and radius
  * (clip_box).  So border tiles do not read half the data for such slivers.
+ * When the sliver stands on a certified hull edge ab of its own, D n C lies
+ * in the segment over the chord ab; with an obtuse angle at the third
+ * vertex that segment is bounded without the centre, from the angle
+ * (segment_box): a computed centre 1e8 away carries more error than the
+ * segment is high.
  *
  * The halo is a thin ring in practice: for uniform points, circumdisks are a
  * few point spacings wide, so a margin of some ten spacings around a tile
@@ -465,6 +470,61 @@ hull_edge_final(tile_ctx *cx, const double *a, const double *b)
 }
 
 /*
+ * Shrink box, holding the part inside C of the circumdisk D of triangle
+ * a, b, c (counter-clockwise), when a -> b is a certified global hull edge:
+ * C lies on the closed left of ab, as c does, so D n C lies in the circular
+ * segment cut off by the chord ab on c's side.  When the angle at c is
+ * obtuse that segment is the minor one: it projects onto the chord within
+ * [a, b] and its height is the sagitta h = (L/2) tan(phi/2), phi = pi - the
+ * angle at c, and tan(phi/2) <= tan(phi) = cross / -dot of a - c, b - c.
+ * This uses no circumcentre: a sliver along a long hull edge has a circle
+ * of radius 1e8 whose computed centre carries an error far larger than the
+ * segment's height, and clip_box's chord, widened by that error, reaches
+ * past the edge's ends into regions the tile does not know.
+ *
+ * Rounding: t = a - c and s = b - c carry eps relative error each, the
+ * products and sums a few more; cross and dot are taken off by at most
+ * 8 eps of their sums of absolute products, the angle is called obtuse
+ * only when dot stays negative by twice that, and h is then bounded with
+ * the worst cross, the least |dot|, L grown by 4 eps, times 2 for slack.
+ */
+static void
+segment_box(const double *a, const double *b, const double *c, double box[4])
+{
+	double		tx = a[0] - c[0],
+				ty = a[1] - c[1],
+				sx = b[0] - c[0],
+				sy = b[1] - c[1];
+	double		cross = tx * sy - ty * sx,
+				ecross = 8 * EPS * (fabs(tx * sy) + fabs(ty * sx)),
+				dot = tx * sx + ty * sy,
+				edot = 8 * EPS * (fabs(tx * sx) + fabs(ty * sy)),
+				lx = b[0] - a[0],
+				ly = b[1] - a[1],
+				L = sqrt(lx * lx + ly * ly) * (1 + 4 * EPS),
+				h,
+				pad,
+				r[4];
+
+	if (!(dot < -2 * edot) || !isfinite(L))
+		return;
+	h = 2 * (L / 2) * (fabs(cross) + ecross) / (-dot - edot);
+	if (!isfinite(h))
+		return;
+	h = h * (1 + 16 * EPS) + 0x1p-1000;
+	pad = 16 * EPS * (fabs(a[0]) + fabs(a[1]) + fabs(b[0]) + fabs(b[1]) + h) + 0x1p-1000;
+	/* the rectangle over ab of height h on its left, any direction covered by +-h */
+	r[0] = fmin(a[0], b[0]) - h - pad;
+	r[1] = fmin(a[1], b[1]) - h - pad;
+	r[2] = fmax(a[0], b[0]) + h + pad;
+	r[3] = fmax(a[1], b[1]) + h + pad;
+	box[0] = fmax(box[0], r[0]);
+	box[1] = fmax(box[1], r[1]);
+	box[2] = fmin(box[2], r[2]);
+	box[3] = fmin(box[3], r[3]);
+}
+
+/*
  * Lemma 1 for triangle v[0..2] (counter-clockwise) of T(Q); glob[k] says
  * whether edge v[k] -> v[k+1] is a hull edge of T(Q) certified global.
  * The disk's box is tried first; if it is not known, the box of the disk's
@@ -489,7 +549,10 @@ triangle_final(tile_ctx *cx, const double *p[3], const bool glob[3])
 		return true;
 	for (int k = 0; k < 3; k++)
 		if (glob[k])
+		{
 			clip_box(disk, p[k], p[(k + 1) % 3], box);
+			segment_box(p[k], p[(k + 1) % 3], p[(k + 2) % 3], box);
+		}
 	for (size_t i = 0; sp->nhull >= 2 && i < sp->nhull; i++)
 		clip_box(disk, sp->hull + 2 * i, sp->hull + 2 * ((i + 1) % sp->nhull), box);
 	if (box_known(cx, box))
@@ -526,6 +589,8 @@ typedef struct tile_work
 	void		(*fn) (struct tile_work *w);
 } tile_work;
 
+#define PF		16				/* prefetch distance in half-edges */
+
 static void
 check_range(tile_work *w)
 {
@@ -533,6 +598,9 @@ check_range(tile_work *w)
 	const tdc_he *he = job->he;
 	const uint8_t *bad = w->bad;
 	const tdc_tile_spec *spec = w->cx.spec;
+#ifdef __GNUC__
+	const size_t nhe = w->job->nin * 6;
+#endif
 
 	for (size_t h = w->lo; h < w->hi; h++)
 	{
@@ -543,6 +611,30 @@ check_range(tile_work *w)
 		const double *p[3];
 		bool		glob[3];
 
+#ifdef __GNUC__
+
+		/*
+		 * The walk is bound by two dependent random loads per half-edge
+		 * (lnext's record, then the third corner's).  Fetch them ahead, the
+		 * first for h + 2 PF, the second for h + PF, whose first has arrived.
+		 */
+		if (h + 2 * PF < w->hi)
+		{
+			uint32_t	f1 = he[SYM(h + 2 * PF)].prev,
+						g1 = he[SYM(h + PF)].prev;
+
+			/* a free edge's links may be anything: stay in the array */
+			if (f1 < nhe)
+				__builtin_prefetch(&he[SYM(f1)]);
+			if (g1 < nhe)
+			{
+				uint32_t	g2 = he[SYM(g1)].prev;
+
+				if (g2 < nhe)
+					__builtin_prefetch(&he[g2]);
+			}
+		}
+#endif
 		if (he[h].org == TDC_NIL)
 			continue;
 		/* a hull edge: the outer face is on the left of h */
@@ -573,7 +665,8 @@ check_range(tile_work *w)
 			{
 				if (w->ntri == w->cap)
 				{
-					size_t		nc = w->cap ? 2 * w->cap : (w->hi - w->lo) / 6 + 64;
+					/* a range of k half-edges holds about k / 3 triangles: sized once, never copied */
+					size_t		nc = w->cap ? 2 * w->cap : (w->hi - w->lo) / 3 + 64;
 					size_t	   *t = realloc(w->tri, sizeof(size_t) * 3 * nc);
 
 					if (t == NULL)
@@ -808,14 +901,15 @@ tdc_tile_finish(const tdc_job *job, const tdc_tile_spec *spec, tdc_tile_result *
 		}
 		res->ntri += tw[w].ntri;
 	}
-	res->tri = malloc(sizeof(size_t) * 3 * res->ntri + 1);
+	/* the first range's array, grown, takes the others: one copy less */
+	res->tri = realloc(tw[0].tri, sizeof(size_t) * 3 * res->ntri + 1);
 	if (res->tri == NULL)
 	{
 		for (int u = 0; u < nthreads; u++)
 			free(tw[u].tri);
 		FAIL(TDC_ENOMEM, "out of memory");
 	}
-	for (size_t w = 0, at = 0; w < (size_t) nthreads; w++)
+	for (size_t w = 1, at = tw[0].ntri; w < (size_t) nthreads; w++)
 	{
 		if (tw[w].ntri > 0)
 			memcpy(res->tri + 3 * at, tw[w].tri, sizeof(size_t) * 3 * tw[w].ntri);
