@@ -122,6 +122,35 @@ oneshot(const double *xy, size_t n, tset *s)
 }
 
 /*
+ * The points a tile is run with: those in its known box K or in one of the
+ * nextra extra boxes (closed), with their owners' labels, into q and ql.
+ * Returns how many.
+ */
+static size_t
+gather_known(const double *xy, const int64_t *lab, size_t n, const double *K,
+			 const double *extra, size_t nextra, double *q, int64_t *ql)
+{
+	size_t		m = 0;
+
+	for (size_t i = 0; i < n; i++)
+	{
+		bool		in = xy[2 * i] >= K[0] && xy[2 * i] <= K[2] &&
+			xy[2 * i + 1] >= K[1] && xy[2 * i + 1] <= K[3];
+
+		for (size_t e = 0; e < nextra && !in; e++)
+			in = xy[2 * i] >= extra[4 * e] && xy[2 * i] <= extra[4 * e + 2] &&
+				xy[2 * i + 1] >= extra[4 * e + 1] && xy[2 * i + 1] <= extra[4 * e + 3];
+		if (in)
+		{
+			q[2 * m] = xy[2 * i];
+			q[2 * m + 1] = xy[2 * i + 1];
+			ql[m++] = lab[i];
+		}
+	}
+	return m;
+}
+
+/*
  * The caller's loop for every label 0 .. ntiles - 1.  halo: the first K is
  * the own points' box grown by halo times its larger side (0: no halo, the
  * grow-and-retry path does all the work).  box_extent: give the 4 corners of
@@ -213,24 +242,8 @@ tiled(const double *xy, size_t n, const int64_t *lab, int64_t ntiles, double hal
 		{
 			tdc_tile_result res;
 			char		err[256];
-			size_t		m = 0;
 			const double *K = sp.known;
-
-			for (size_t i = 0; i < n; i++)
-			{
-				bool		in = xy[2 * i] >= K[0] && xy[2 * i] <= K[2] &&
-					xy[2 * i + 1] >= K[1] && xy[2 * i + 1] <= K[3];
-
-				for (size_t e = 0; e < nextra && !in; e++)
-					in = xy[2 * i] >= extra[4 * e] && xy[2 * i] <= extra[4 * e + 2] &&
-						xy[2 * i + 1] >= extra[4 * e + 1] && xy[2 * i + 1] <= extra[4 * e + 3];
-				if (in)
-				{
-					q[2 * m] = xy[2 * i];
-					q[2 * m + 1] = xy[2 * i + 1];
-					ql[m++] = lab[i];
-				}
-			}
+			size_t		m = gather_known(xy, lab, n, K, extra, nextra, q, ql);
 			sp.tile = ql;
 			st->rounds++;
 			st->rc = tdc_tile_triangulate(q, m, &sp, NULL, &res, err, sizeof(err));
@@ -871,21 +884,7 @@ test_hull_sliver(void)
 		if (e[0] <= K[2] && K[0] <= e[2] && e[1] <= K[3] && K[1] <= e[3])
 			nextra++;
 	}
-	for (size_t i = 0; i < n; i++)
-	{
-		bool		in = xy[2 * i] >= K[0] && xy[2 * i] <= K[2] &&
-			xy[2 * i + 1] >= K[1] && xy[2 * i + 1] <= K[3];
-
-		for (size_t e = 0; e < nextra && !in; e++)
-			in = xy[2 * i] >= extra[4 * e] && xy[2 * i] <= extra[4 * e + 2] &&
-				xy[2 * i + 1] >= extra[4 * e + 1] && xy[2 * i + 1] <= extra[4 * e + 3];
-		if (in)
-		{
-			q[2 * m] = xy[2 * i];
-			q[2 * m + 1] = xy[2 * i + 1];
-			ql[m++] = lab[i];
-		}
-	}
+	m = gather_known(xy, lab, n, K, extra, nextra, q, ql);
 	memcpy(sp.known, K, sizeof(K));
 	sp.hull = hull;
 	sp.nhull = nhull;

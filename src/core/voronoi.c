@@ -1313,21 +1313,18 @@ cell_task(void *arg, size_t rg, int worker)
 	for (size_t s = lo; s < hi; s++)
 		v->cell_xy[s] = v->cell_n[s] ? out.p + 2 * off[s - lo] : NULL;
 	v->range_buf[rg] = out.p;
-	free(a.p);
-	free(a.tag);
-	free(b.p);
-	free(b.tag);
-	free(off);
-	return;
+	out.p = NULL;
+	goto done;
 
 oom:
+	vor_fail(v, TDC_ENOMEM, "out of memory building the Voronoi cells");
+done:
 	free(a.p);
 	free(a.tag);
 	free(b.p);
 	free(b.tag);
 	free(out.p);
 	free(off);
-	vor_fail(v, TDC_ENOMEM, "out of memory building the Voronoi cells");
 }
 
 /*
@@ -1443,6 +1440,10 @@ mesh_cell_task(void *arg, size_t rg, int worker)
 	}
 	v->range_buf[rg] = out.p;
 	out.p = NULL;
+	goto done;
+
+oom:
+	vor_fail(v, TDC_ENOMEM, "out of memory building the Voronoi cells");
 done:
 	free(a.p);
 	free(a.tag);
@@ -1450,16 +1451,6 @@ done:
 	free(b.tag);
 	tdc_big_free(out.p);
 	free(sites);
-	return;
-
-oom:
-	free(a.p);
-	free(a.tag);
-	free(b.p);
-	free(b.tag);
-	tdc_big_free(out.p);
-	free(sites);
-	vor_fail(v, TDC_ENOMEM, "out of memory building the Voronoi cells");
 }
 
 static int
