@@ -10,6 +10,14 @@
  * every growth checked against tdc_delaunay.max_memory before it happens,
  * so an input over the limit is refused with the limit's ERROR and never
  * half-allocated.
+ *
+ * Some owners keep arrays that grow with the vertices: a Dump's row ids, a
+ * tile's owners and source positions, the segments of a constrained
+ * triangulation.  They can outweigh the coordinates (a tile's are 24 bytes
+ * a vertex against 16), so they count as part of the buffer: the owner
+ * grows them through tdc_pointbuf_side_grow, whose check is the same as for
+ * the coordinates, and tdc_pointbuf_bytes, which every later check of the
+ * triangulation starts from, includes them.
  */
 #include "postgres.h"
 
@@ -96,7 +104,28 @@ pointbuf_bytes_for(uint64 cap, bool hasz)
 uint64
 tdc_pointbuf_bytes(const TdcPointBuf *buf)
 {
-	return pointbuf_bytes_for(buf->cap, buf->hasz);
+	return pointbuf_bytes_for(buf->cap, buf->hasz) + buf->side_bytes;
+}
+
+/*
+ * The owner's arrays beside the vertices ("what") grow from old_bytes to
+ * new_bytes: refused with the limit's ERROR before they do, if the buffer
+ * would then pass tdc_delaunay.max_memory.
+ */
+void
+tdc_pointbuf_side_grow(TdcPointBuf *buf, uint64 old_bytes, uint64 new_bytes,
+					   const char *what, const char *fname)
+{
+	uint64		limit = tdc_max_memory_bytes();
+	uint64		total = tdc_pointbuf_bytes(buf) - old_bytes + new_bytes;
+
+	Assert(old_bytes <= buf->side_bytes);
+	if (limit > 0 && total > limit)
+		tdc_report_memory_limit(fname,
+								psprintf("the input of %llu vertices with %s",
+										 (unsigned long long) buf->n, what),
+								total, 0);
+	buf->side_bytes = buf->side_bytes - old_bytes + new_bytes;
 }
 
 /* Make room for "extra" more vertices, honouring tdc_delaunay.max_memory. */
@@ -122,13 +151,14 @@ tdc_pointbuf_reserve(TdcPointBuf *buf, uint64 extra, const char *fname)
 	if (newcap > TDC_MAX_POINTS)
 		newcap = TDC_MAX_POINTS;
 	/* don't let doubling alone trip the memory limit */
-	if (limit > 0 && pointbuf_bytes_for(newcap, buf->hasz) > limit)
-		newcap = Max(need, limit / ((buf->hasz ? 3 : 2) * sizeof(double)));
-	if (limit > 0 && pointbuf_bytes_for(newcap, buf->hasz) > limit)
+	if (limit > 0 && pointbuf_bytes_for(newcap, buf->hasz) + buf->side_bytes > limit)
+		newcap = Max(need, (limit - Min(limit, buf->side_bytes)) /
+					 ((buf->hasz ? 3 : 2) * sizeof(double)));
+	if (limit > 0 && pointbuf_bytes_for(newcap, buf->hasz) + buf->side_bytes > limit)
 		tdc_report_memory_limit(fname,
 								psprintf("the input of %llu vertices",
 										 (unsigned long long) need),
-								pointbuf_bytes_for(need, buf->hasz), 0);
+								pointbuf_bytes_for(need, buf->hasz) + buf->side_bytes, 0);
 
 	if (buf->map == NULL)
 	{

@@ -77,15 +77,21 @@ dump_check_read_only(SPIPlanPtr plan, const char *fname)
 	}
 }
 
-/* Give ids[n .. upto-1] the id "id", growing the array in "cxt". */
+/*
+ * Give ids[n .. upto-1] the id "id", growing the array in "cxt"; it counts
+ * with buf's vertices against tdc_delaunay.max_memory.
+ */
 static void
-idbuf_fill(TdcIdBuf *ids, Size upto, int64 id, MemoryContext cxt)
+idbuf_fill(TdcIdBuf *ids, Size upto, int64 id, MemoryContext cxt,
+		   TdcPointBuf *buf, const char *fname)
 {
 	if (upto > ids->cap)
 	{
 		Size		cap = Max(upto, ids->cap * 2);
 
 		cap = Max(cap, 1024);
+		tdc_pointbuf_side_grow(buf, (uint64) ids->cap * sizeof(int64),
+							   (uint64) cap * sizeof(int64), "their row ids", fname);
 		ids->id = ids->id == NULL ?
 			MemoryContextAllocHuge(cxt, cap * sizeof(int64)) :
 			repalloc_huge(ids->id, cap * sizeof(int64));
@@ -221,7 +227,7 @@ tdc_dump_collect(TdcPointBuf *buf, TdcIdBuf *ids, const char *query,
 			if ((Pointer) gv != DatumGetPointer(g))
 				pfree(gv);
 			if (ids)
-				idbuf_fill(ids, (Size) buf->n, id, outer);
+				idbuf_fill(ids, (Size) buf->n, id, outer, buf, fname);
 		}
 		SPI_freetuptable(SPI_tuptable);
 		CHECK_FOR_INTERRUPTS();

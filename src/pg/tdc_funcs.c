@@ -343,6 +343,48 @@ tdc_check_params(double tolerance, int flags, const char *fname)
 				 errhint("Use 0 for a GEOMETRYCOLLECTION of polygons, 1 for a MULTILINESTRING of edges, 2 for a TIN.")));
 }
 
+/* The options of a run on buf: the session's settings and the memory limit. */
+static void
+run_options(const TdcPointBuf *buf, double tolerance, uint64 result_bytes,
+			const char *fname, tdc_options *opt)
+{
+	uint64		limit = tdc_max_memory_bytes();
+
+	tdc_options_init(opt);
+	opt->threads = effective_threads();
+	opt->grid_size = tdc_guc_grid_size;
+	opt->levels = tdc_guc_levels;
+	opt->tolerance = tolerance;
+	opt->times = tdc_guc_stats;
+	if (limit > 0)
+	{
+		/* the same figure for every caller; the result value apart */
+		uint64		run_bytes = tdc_pointbuf_bytes(buf) +
+			tdc_estimate_memory((size_t) buf->n, opt);
+
+		if (run_bytes + result_bytes > limit)
+			tdc_report_memory_limit(fname,
+									psprintf("triangulating %llu vertices",
+											 (unsigned long long) buf->n),
+									run_bytes, result_bytes);
+		opt->max_memory = (size_t) (limit - tdc_pointbuf_bytes(buf) - result_bytes);
+	}
+}
+
+/*
+ * The tdc_delaunay.max_memory check of tdc_run, for a caller that needs
+ * memory of its own before it runs (less than the run's) and must fail
+ * before taking it.
+ */
+void
+tdc_check_run_memory(const TdcPointBuf *buf, double tolerance,
+					 uint64 result_bytes, const char *fname)
+{
+	tdc_options opt;
+
+	run_options(buf, tolerance, result_bytes, fname, &opt);
+}
+
 /*
  * Triangulate the points of buf with the core, waiting interruptibly.
  * result_bytes: what the caller will allocate for the result, for the
@@ -356,29 +398,10 @@ tdc_run(const TdcPointBuf *buf, double tolerance, uint64 result_bytes,
 	tdc_options opt;
 	TdcRun	   *run;
 	RunAlloc   *ra;
-	uint64		limit = tdc_max_memory_bytes();
 	char		err[256];
 	int			rc;
 
-	tdc_options_init(&opt);
-	opt.threads = effective_threads();
-	opt.grid_size = tdc_guc_grid_size;
-	opt.levels = tdc_guc_levels;
-	opt.tolerance = tolerance;
-	opt.times = tdc_guc_stats;
-	if (limit > 0)
-	{
-		/* the same figure for every caller; the result value apart */
-		uint64		run_bytes = tdc_pointbuf_bytes(buf) +
-			tdc_estimate_memory((size_t) buf->n, &opt);
-
-		if (run_bytes + result_bytes > limit)
-			tdc_report_memory_limit(fname,
-									psprintf("triangulating %llu vertices",
-											 (unsigned long long) buf->n),
-									run_bytes, result_bytes);
-		opt.max_memory = (size_t) (limit - tdc_pointbuf_bytes(buf) - result_bytes);
-	}
+	run_options(buf, tolerance, result_bytes, fname, &opt);
 
 	/* both live as long as the context they are registered with */
 	ra = MemoryContextAllocZero(buf->cxt, sizeof(RunAlloc));

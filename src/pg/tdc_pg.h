@@ -97,6 +97,7 @@ typedef struct TdcPointBuf
 	bool		have_first;		/* srid and hasz come from a first input */
 	bool		hasz;
 	int32		srid;
+	uint64		side_bytes;		/* the owner's arrays beside the vertices */
 } TdcPointBuf;
 
 /*
@@ -117,6 +118,9 @@ extern void tdc_pointbuf_init(TdcPointBuf *buf, MemoryContext cxt);
 extern void tdc_pointbuf_reserve(TdcPointBuf *buf, uint64 extra,
 								 const char *fname);
 extern uint64 tdc_pointbuf_bytes(const TdcPointBuf *buf);
+extern void tdc_pointbuf_side_grow(TdcPointBuf *buf, uint64 old_bytes,
+								   uint64 new_bytes, const char *what,
+								   const char *fname);
 extern void tdc_pointbuf_check_meta(TdcPointBuf *buf, int32 srid, bool hasz,
 									const char *fname);
 extern void tdc_pointbuf_append_buf(TdcPointBuf *dst, const TdcPointBuf *src,
@@ -223,6 +227,8 @@ typedef struct TdcRun
 } TdcRun;
 
 extern void tdc_check_params(double tolerance, int flags, const char *fname);
+extern void tdc_check_run_memory(const TdcPointBuf *buf, double tolerance,
+								 uint64 result_bytes, const char *fname);
 extern TdcRun *tdc_run(const TdcPointBuf *buf, double tolerance,
 					   uint64 result_bytes, const char *fname);
 extern bool tdc_run_emit(TdcRun *run, tdc_emit_fn emit, void *arg,

@@ -285,6 +285,9 @@ _tdc_tile_transfn(PG_FUNCTION_ARGS)
 	{
 		uint64		cap = Max(st->pts.cap, Max(st->label_cap * 2, 1024));
 
+		tdc_pointbuf_side_grow(&st->pts, st->label_cap * 3 * sizeof(int64),
+							   cap * 3 * sizeof(int64),
+							   "their tiles and source positions", TILE_FNAME);
 		if (st->label == NULL)
 		{
 			st->label = MemoryContextAllocHuge(aggcxt, cap * sizeof(int64));
@@ -327,15 +330,25 @@ _tdc_tile_finalfn(PG_FUNCTION_ARGS)
 	int			rc;
 	int			dim;
 	uint64		size;
+	uint64		result_bytes;
 
 	tdc_signal_guard();
 	if (!AggCheckCallContext(fcinfo, NULL))
 		elog(ERROR, "_tdc_tile_finalfn called in non-aggregate context");
 	if (st == NULL || st->pts.n == 0)
 		PG_RETURN_NULL();
+	dim = st->pts.hasz ? 3 : 2;
+
+	/*
+	 * The result is at most 2n triangles: count it against the limit.  The
+	 * sort's own arrays (at most 48 bytes a vertex, freed before the run)
+	 * weigh less than the engine's, so the run's check covers them, as long
+	 * as it comes first.
+	 */
+	result_bytes = (uint64) st->pts.n * 2 * 3 * dim * sizeof(double);
+	tdc_check_run_memory(&st->pts, 0.0, result_bytes, TILE_FNAME);
 	sort_by_source(st);
 
-	dim = st->pts.hasz ? 3 : 2;
 	memset(&spec, 0, sizeof(spec));
 	spec.tile = st->label;
 	spec.self = st->self;
@@ -345,9 +358,7 @@ _tdc_tile_finalfn(PG_FUNCTION_ARGS)
 	spec.extra = st->extra;
 	spec.nextra = st->nextra;
 
-	/* the result is at most 2n triangles: count it against the limit */
-	run = tdc_run(&st->pts, 0.0, (uint64) st->pts.n * 2 * 3 * dim * sizeof(double),
-				  TILE_FNAME);
+	run = tdc_run(&st->pts, 0.0, result_bytes, TILE_FNAME);
 	memset(&res, 0, sizeof(res));
 	err[0] = '\0';
 	rc = tdc_tile_finish(run->job, &spec, &res, err, sizeof(err));
