@@ -48,6 +48,7 @@ build_helpers() {
 	command -v cc >/dev/null || die "cc not found"
 	LIBS=-lm build_tool gen_points "$ROOT/bench/gen_points.c" cc -O2 -Wall
 	build_tool gshhg_convert "$ROOT/bench/gshhg_convert.c" cc -O2 -Wall
+	build_tool first_touch "$ROOT/bench/first_touch.c" cc -O2 -Wall
 }
 
 build_cgal() {
@@ -94,6 +95,15 @@ ensure_gshhg() {
 	rm -rf "$tmp"
 	mv "$d/gshhg.meta.tmp" "$d/gshhg.meta"
 	log "GSHHG: $(cat "$d/gshhg.meta")"
+}
+
+# first_touch_note: one line on what fresh memory costs on this machine
+# (bench/first_touch.c): 256 MB touched once, then again right away
+first_touch_note() {
+	build_tool first_touch "$ROOT/bench/first_touch.c" cc -O2 -Wall
+	"$BENCH_BIN/first_touch" 256 2 | awk '
+		{ r[NR] = $9; gsub(/[()]/, "", r[NR]) }
+		END { printf "fresh memory: 256 MB touched at %s GB/s the first time, %s GB/s right after (see bench/first_touch.c)\n", r[1], r[2] }'
 }
 
 # kv FILE KEY: value of KEY=value on the last line of FILE containing "KEY="

@@ -478,12 +478,14 @@ wl_name() {
 	esac
 }
 
+FIRST_TOUCH=$(first_touch_note)
 THREADS=$(sql -c "SELECT ST_TDCDelaunayTriangles('MULTIPOINT(0 0,1 0,0 1)') IS NOT NULL" -c "SELECT current_setting('tdc_delaunay.threads', true)" | tail -1)
 setting() { sql -c "$SET_SQL" -c "SELECT current_setting('$1', true)" | tail -1; }
 {
 	echo "### Size sweep: tdc_delaunay vs PostGIS, $(date -u '+%Y-%m-%d %H:%M UTC')"
 	echo
 	echo "- machine: $(nproc) CPUs ($(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ *//')), $(free -g | awk '/Mem:/ { print $2 }') GB RAM; load average $LOAD_START at start, $LOAD_END at end"
+	echo "- $FIRST_TOUCH"
 	echo "- server: $PG_VER, PostGIS $PGIS_VER, GEOS $GEOS_VER, tdc_delaunay $TDC_VER (git $(git -C "$ROOT" rev-parse --short HEAD 2>/dev/null || echo '?'); $SO: $SO_START)"
 	if [ "$SO_START" != "$SO_END" ]; then
 		echo "- **WARNING: tdc_delaunay.so was replaced during the run ($SO_START -> $SO_END): the figures mix two builds; run again.**"
