@@ -965,6 +965,215 @@ test_stripes(void)
 }
 
 /*
+ * Stripe borders under attack: the parallel pass's stripes are 1/16 of the
+ * sites' x range wide, here [0, 16], so the borders are x = 1 .. 15.  Along
+ * each border, on both sides and a hair from it, vertical segments run up
+ * through dense random sites, so that nearly every triangle they cross has
+ * a corner on the other side; the pieces go up in input order, left and
+ * right in turn, so that the inserters of two neighbouring stripes (each
+ * takes its segments in input order) reach the same height of the same
+ * border at about the same time.  Tiny segments (already Delaunay edges)
+ * make up the 8192 segments the parallel pass needs.  Inserters that
+ * flipped such triangles instead of leaving the segment to the serial pass
+ * would flip the same triangles at once: a corrupt mesh, an internal error,
+ * or a result that is not the one thread's nor CGAL's.  (Whether threads
+ * meet there is up to the scheduler: test_ownership is the exact check.)
+ */
+static void
+border_input(input *in, int pieces, int pts)
+{
+	add_pt(in, 0, 0);
+	add_pt(in, 16, 1);
+	for (int i = 0; i < pts; i++)
+		add_pt(in, 16 * urand(), urand());
+	for (int j = 0; j < pieces; j++)
+		for (int b = 1; b < 16; b++)
+			for (int side = -1; side <= 1; side += 2)
+			{
+				double		x = b + side * (1e-6 + 1e-4 * urand());
+
+				add_seg(in, add_pt(in, x, (double) j / pieces), add_pt(in, x, (j + 0.999) / pieces));
+			}
+	while (in->k < 8400)
+	{
+		double		x = 16 * urand(),
+					y = urand();
+
+		if (x - floor(x) > 0.01 && x - floor(x) < 0.99)
+			add_seg(in, add_pt(in, x, y), add_pt(in, x + 1e-7, y + 3e-8));
+	}
+}
+
+static void
+test_borders(void)
+{
+	input		in = {0};
+	tdc_job    *job = NULL;
+	tdc_cdt    *cdt = NULL;
+	char		err[256] = "";
+	size_t		par = 0,
+				def = 0,
+				ser = 0;
+
+	border_input(&in, 10, 40000);
+	check_threads("stripe borders", &in);
+	check_cgal("stripe borders", &in);
+	if (run(&in, 2, &job, &cdt, err) == TDC_OK)
+		tdc_cdt_pass_counts(cdt, &par, &def, &ser);
+	CHECK(def >= 15 * 2 * 10 / 2,
+		  "stripe borders: the stripes inserted %zu and left %zu of %zu; want at least half of the %d along the borders left",
+		  par, def, in.k, 15 * 2 * 10);
+	tdc_cdt_free(cdt);
+	tdc_job_free(job);
+	free_input(&in);
+}
+
+/*
+ * The stripes' ownership rule, decided exactly.  Sites span x = [0, 16], so
+ * stripe k is [k, k + 1).  Far below, 8400 tiny segments (each joins a site
+ * to one 1e-7 away: already Delaunay edges) make the parallel pass run.
+ * Above them, "gadgets": at each border, a cluster of sites across it and a
+ * segment on each side ending just short of it, rows of them far apart.  A
+ * gadget's crossed triangles in the unconstrained triangulation are found
+ * here by brute force (a triangle is crossed when the open segment properly
+ * crosses one of its edges); the gadgets of one stripe must cross disjoint
+ * sets, so each meets its triangles as the unconstrained triangulation has
+ * them (nobody else flips them: a triangle with corners in two stripes is
+ * never flipped in the parallel pass).  So the rule says exactly which
+ * gadgets the stripes must leave to the serial pass: those with a crossed
+ * triangle with a corner in another stripe.  tdc_cdt_pass_counts must give
+ * that number at 1, 2 and 3 threads, and the result must be the CDT.
+ */
+#define GADGET_ROWS 4
+
+static int
+stripe_of(double x)
+{
+	return x <= 0 ? 0 : x >= 16 ? 15 : (int) x;
+}
+
+/* Does the open segment p-q properly cross the segment a-b? */
+static bool
+crosses(const double *p, const double *q, const double *a, const double *b)
+{
+	double		o1 = tdc_orient2d(p, q, a),
+				o2 = tdc_orient2d(p, q, b),
+				o3 = tdc_orient2d(a, b, p),
+				o4 = tdc_orient2d(a, b, q);
+
+	return ((o1 > 0 && o2 < 0) || (o1 < 0 && o2 > 0)) &&
+		((o3 > 0 && o4 < 0) || (o3 < 0 && o4 > 0));
+}
+
+static void
+test_ownership(void)
+{
+	input		in = {0};
+	tdc_job    *job = NULL;
+	tdc_cdt    *cdt = NULL;
+	char		err[256] = "";
+	size_t		nfill = 8400,
+				ngad,
+				g0,
+				nt = 0,
+				expect = 0;
+	double	   *t = NULL;
+	size_t	   *owner = NULL;
+	bool		disjoint = true;
+
+	add_pt(&in, 0, -1);
+	add_pt(&in, 16, -1);
+	while (in.k < nfill)
+	{
+		double		x = 16 * urand(),
+					y = urand() - 1;
+
+		if (x - floor(x) < 1e-5 || x - floor(x) > 1 - 1e-5)
+			continue;
+		add_seg(&in, add_pt(&in, x, y), add_pt(&in, x + 1e-7, y + 3e-8));
+	}
+	g0 = in.k;
+	for (int row = 0; row < GADGET_ROWS; row++)
+		for (int b = 1; b < 16; b++)
+		{
+			double		y = 1 + row;
+
+			for (int i = 0; i < 30; i++)
+				add_pt(&in, b + 0.6 * (urand() - 0.5), y + 0.2 * (urand() - 0.5));
+			/* left of the border: stripe b - 1; right of it: stripe b */
+			add_seg(&in, add_pt(&in, b - 0.3, y + 0.02 * (urand() - 0.5)),
+					add_pt(&in, b - 0.002 - 0.02 * urand(), y + 0.02 * (urand() - 0.5)));
+			add_seg(&in, add_pt(&in, b + 0.002 + 0.02 * urand(), y + 0.03 + 0.02 * (urand() - 0.5)),
+					add_pt(&in, b + 0.3, y + 0.03 + 0.02 * (urand() - 0.5)));
+		}
+	ngad = in.k - g0;
+
+	/* the unconstrained triangles, and which gadget crosses each */
+	if (run(&(input) {.xy = in.xy, .n = in.n}, 1, &job, &cdt, err) == TDC_OK)
+		t = tri_set(job, &nt);
+	tdc_cdt_free(cdt);
+	tdc_job_free(job);
+	CHECK(t != NULL, "ownership: the unconstrained triangulation: %s", err);
+	if (t == NULL)
+		goto out;
+	owner = malloc(nt * sizeof(size_t));
+	for (size_t i = 0; i < nt; i++)
+		owner[i] = SIZE_MAX;
+	for (size_t s = g0; s < in.k; s++)
+	{
+		const double *p = in.xy + 2 * in.seg[2 * s],
+				   *q = in.xy + 2 * in.seg[2 * s + 1];
+		int			k = stripe_of(p[0]);
+		bool		out_corner = false;
+
+		CHECK(stripe_of(q[0]) == k, "ownership: gadget %zu has its ends in two stripes", s);
+		for (size_t i = 0; i < nt; i++)
+		{
+			const double *v = t + 6 * i;
+
+			if (!crosses(p, q, v, v + 2) && !crosses(p, q, v + 2, v + 4) && !crosses(p, q, v + 4, v))
+				continue;
+			if (owner[i] != SIZE_MAX &&
+				stripe_of(in.xy[2 * in.seg[2 * owner[i]]]) == k)
+				disjoint = false;
+			owner[i] = s;
+			for (int j = 0; j < 3; j++)
+				if (stripe_of(v[2 * j]) != k)
+					out_corner = true;
+		}
+		expect += out_corner;
+	}
+	CHECK(disjoint, "ownership: two gadgets of one stripe cross the same triangle (input unfit)");
+	CHECK(expect > 0 && expect < ngad,
+		  "ownership: %zu of %zu gadgets reach into another stripe; want some, not all", expect, ngad);
+	printf("cdt: ownership: %zu of %zu gadgets reach into another stripe\n", expect, ngad);
+	for (int th = 1; th <= 3; th++)
+	{
+		size_t		par = 0,
+					def = 0,
+					ser = 0;
+		int			rc = run(&in, th, &job, &cdt, err);
+
+		CHECK(rc == TDC_OK, "ownership, %d threads: %d %s", th, rc, err);
+		if (rc == TDC_OK)
+		{
+			tdc_cdt_pass_counts(cdt, &par, &def, &ser);
+			CHECK(def == expect && par == in.k - expect && ser == 0,
+				  "ownership, %d threads: the stripes inserted %zu and left %zu (and %zu in two stripes); want %zu and %zu (and 0)",
+				  th, par, def, ser, in.k - expect, expect);
+		}
+		tdc_cdt_free(cdt);
+		tdc_job_free(job);
+	}
+	check_threads("ownership gadgets", &in);
+	check_cgal("ownership gadgets", &in);
+out:
+	free(t);
+	free(owner);
+	free_input(&in);
+}
+
+/*
  * The GSHHG shoreline of the Stockholm archipelago (test/fixtures/
  * gshhg-stockholm.wkt: one POLYGON or LINESTRING per line, WKT), real
  * polygons: every ring's segments and the mainland line's, against CGAL and
@@ -1246,6 +1455,8 @@ test_cdt(void)
 	test_grid();
 	test_unique();
 	test_stripes();
+	test_ownership();
+	test_borders();
 	test_gshhg();
 	test_memory_limit();
 	test_cancel();

@@ -128,6 +128,8 @@ typedef struct cdt_ctx
 	uint32_t   *fresh;			/* new edges, then the Lawson stack */
 	size_t		cap;
 	size_t		nconstraint;	/* constraint edges this inserter made */
+	size_t		ndone;			/* a stripe's: segments it inserted */
+	size_t		ndeferred;		/* ... and left to the serial pass */
 	size_t		cross[2];		/* the two segments of a TDC_ECROSS */
 	long		steps;
 	int			rc;
@@ -148,6 +150,9 @@ struct tdc_cdt
 	uint32_t   *part_lists;		/* the stripes' lists, PART_CAP each, 2 per stripe */
 	size_t		nconstraint;	/* constraint edges */
 	size_t		cross[2];		/* the two segments of a TDC_ECROSS */
+	size_t		npar_done;		/* segments the stripes inserted */
+	size_t		npar_deferred;	/* ... and left to the serial pass */
+	size_t		npar_serial;	/* segments with ends in two stripes */
 
 	/* the parallel pass (only for at least PART_MIN_SEG segments) */
 	uint8_t    *spart;			/* per site: its stripe (x_part) */
@@ -806,8 +811,13 @@ part_task(void *arg, size_t k, int worker)
 		b = map[c->seg[2 * s + 1]];
 		rc = insert_segment(x, s, a, b);
 		if (rc == TDC_OK)
+		{
 			c->seg_done[s] = 1;
-		else if (rc != TDC_DEFER)
+			x->ndone++;
+		}
+		else if (rc == TDC_DEFER)
+			x->ndeferred++;
+		else
 		{
 			x->rc = rc;
 			return;
@@ -854,6 +864,8 @@ run_parts(tdc_cdt *c, tdc_pool *pool)
 	for (int k = 0; k < NPART; k++)
 	{
 		c->nconstraint += c->parts[k].nconstraint;
+		c->npar_done += c->parts[k].ndone;
+		c->npar_deferred += c->parts[k].ndeferred;
 		if (c->parts[k].rc != TDC_OK)
 			return take_error(c, &c->parts[k], c->parts[k].rc);
 	}
@@ -929,6 +941,8 @@ cdt_run(tdc_cdt *c)
 
 		if (c->seg_done != NULL && (c->seg_done[s] || c->seg_part[s] == SEG_NONE))
 			continue;
+		if (c->seg_done != NULL && c->seg_part[s] == SEG_SERIAL)
+			c->npar_serial++;
 		if (atomic_load_explicit(&c->cancel, memory_order_relaxed))
 			return TDC_ECANCELED;
 		rc = seg_sites(ser, s, &a, &b);
@@ -1060,6 +1074,14 @@ size_t
 tdc_cdt_num_constraint_edges(const tdc_cdt *c)
 {
 	return c->nconstraint;
+}
+
+void
+tdc_cdt_pass_counts(const tdc_cdt *c, size_t *parallel, size_t *deferred, size_t *serial)
+{
+	*parallel = c->npar_done;
+	*deferred = c->npar_deferred;
+	*serial = c->npar_serial;
 }
 
 void
