@@ -78,7 +78,8 @@
  * 4 per site for vedge, the job's input map (4 per input point), and the
  * serial lists of crossed and new edges, which start small and double up to
  * one entry per edge slot (12 bytes per point each, counted in full); the
- * parallel pass adds 2 bytes per segment, 1 per point and NPART fixed lists.  Cancel is
+ * parallel pass adds 6 bytes per segment (its stripe, whether it is done,
+ * and its place in the stripes' order), 1 per point and NPART fixed lists.  Cancel is
  * polled before every segment and every 4096 steps inside one.  The
  * insertion runs like a triangulation, on the caller's thread when it is
  * small, otherwise on a thread with every signal blocked that the host
@@ -158,6 +159,8 @@ struct tdc_cdt
 	uint8_t    *spart;			/* per site: its stripe (x_part) */
 	uint8_t    *seg_part;		/* per segment: its stripe, SEG_SERIAL or SEG_NONE */
 	uint8_t    *seg_done;		/* per segment: inserted by its stripe's inserter */
+	uint32_t   *order;			/* the segments of stripe 0, then of 1, ..., each in input order */
+	size_t		part_off[NPART + 1];	/* stripe k's: order[part_off[k] .. part_off[k + 1]) */
 	double		part_x0;		/* stripe of x: (x - part_x0) * part_scale */
 	double		part_scale;
 	cdt_ctx    *parts;			/* NPART inserters */
@@ -665,8 +668,12 @@ take_error(tdc_cdt *c, const cdt_ctx *x, int rc)
 /*
  * The preparation of the parallel pass, as tasks: task 0 sets vedge[],
  * task k > 0 sorts chunk k - 1 of the segments by stripe: both ends in
- * stripe i gives i, ends in two stripes SEG_SERIAL, one site SEG_NONE.  A
- * chunk stops at its first bad segment and notes it in bad[k - 1].
+ * stripe i gives i, ends in two stripes SEG_SERIAL, one site SEG_NONE, and
+ * counts the chunk's segments of each stripe.  A chunk stops at its first
+ * bad segment and notes it in bad[k - 1].  Then order_task lists each
+ * stripe's segments in order[], so that a stripe's inserter reads its own
+ * segments only, not every segment's stripe (16 passes over them cost more
+ * instructions than the insertion of contour lines).
  */
 #define PREP_CHUNK	65536
 
@@ -674,6 +681,7 @@ typedef struct cdt_prep
 {
 	tdc_cdt    *c;
 	size_t	   *bad;
+	size_t	   *pos;			/* per chunk and stripe: its count, then where it goes in order[] */
 } cdt_prep;
 
 /* Task k: the stripes of sites [k * PREP_CHUNK, (k + 1) * PREP_CHUNK). */
@@ -738,7 +746,28 @@ prep_task(void *arg, size_t k, int worker)
 		b = map[j];
 		pa = site_part(c, a);
 		c->seg_part[s] = a == b ? SEG_NONE : pa == site_part(c, b) ? (uint8_t) pa : SEG_SERIAL;
+		if (c->seg_part[s] < NPART)
+			pp->pos[(k - 1) * NPART + c->seg_part[s]]++;
 	}
+}
+
+/*
+ * Task k: chunk k's segments into order[], each to its stripe's range at the
+ * place prepare() computed for this chunk, so that every stripe's range
+ * holds its segments in input order.
+ */
+static void
+order_task(void *arg, size_t k, int worker)
+{
+	cdt_prep   *pp = arg;
+	tdc_cdt    *c = pp->c;
+	size_t		lo = k * PREP_CHUNK,
+				hi = lo + PREP_CHUNK < c->nseg ? lo + PREP_CHUNK : c->nseg,
+			   *pos = pp->pos + k * NPART;
+
+	for (size_t s = lo; s < hi; s++)
+		if (c->seg_part[s] < NPART)
+			c->order[pos[c->seg_part[s]]++] = (uint32_t) s;
 }
 
 /* Set vedge[] and sort the segments by stripe (prep_task), on the pool. */
@@ -747,12 +776,17 @@ prepare(tdc_cdt *c, tdc_pool *pool, cdt_ctx *ser)
 {
 	const tdc_job *job = c->job;
 	size_t		nchunks = (c->nseg + PREP_CHUNK - 1) / PREP_CHUNK;
-	cdt_prep	pp = {c, malloc(nchunks * sizeof(size_t))};
+	cdt_prep	pp = {c, malloc(nchunks * sizeof(size_t)), calloc(nchunks * NPART, sizeof(size_t))};
 	double		lo = INFINITY,
 				hi = -INFINITY;
+	size_t		at = 0;
 
-	if (pp.bad == NULL)
+	if (pp.bad == NULL || pp.pos == NULL)
+	{
+		free(pp.bad);
+		free(pp.pos);
 		return cdt_fail(ser, TDC_ENOMEM, "out of memory for the constraints");
+	}
 	for (size_t p = 0; p < job->nin; p++)
 	{
 		double		v = job->xy[2 * p];
@@ -769,6 +803,7 @@ prepare(tdc_cdt *c, tdc_pool *pool, cdt_ctx *ser)
 	if (atomic_load_explicit(&c->cancel, memory_order_relaxed))
 	{
 		free(pp.bad);
+		free(pp.pos);
 		return TDC_ECANCELED;
 	}
 	for (size_t k = 0; k < nchunks; k++)
@@ -779,9 +814,25 @@ prepare(tdc_cdt *c, tdc_pool *pool, cdt_ctx *ser)
 			int			rc = seg_sites(ser, pp.bad[k], &a, &b);
 
 			free(pp.bad);
+			free(pp.pos);
 			return rc != TDC_OK ? rc : internal_error(ser, pp.bad[k], "a segment was misread");
 		}
+	/* stripe by stripe, chunk by chunk: where each chunk's part of a stripe goes */
+	for (int p = 0; p < NPART; p++)
+	{
+		c->part_off[p] = at;
+		for (size_t k = 0; k < nchunks; k++)
+		{
+			size_t		n = pp.pos[k * NPART + p];
+
+			pp.pos[k * NPART + p] = at;
+			at += n;
+		}
+	}
+	c->part_off[NPART] = at;
+	tdc_pool_for(pool, nchunks, order_task, &pp);
 	free(pp.bad);
+	free(pp.pos);
 	return TDC_OK;
 }
 
@@ -794,14 +845,13 @@ part_task(void *arg, size_t k, int worker)
 	/* prepare() checked the ends and built the input map */
 	const uint32_t *map = atomic_load_explicit(&c->job->map, memory_order_acquire);
 
-	for (size_t s = 0; s < c->nseg; s++)
+	for (size_t i = c->part_off[k]; i < c->part_off[k + 1]; i++)
 	{
+		size_t		s = c->order[i];
 		uint32_t	a,
 					b;
 		int			rc;
 
-		if (c->seg_part[s] != k)
-			continue;
 		if (atomic_load_explicit(&c->cancel, memory_order_relaxed))
 		{
 			x->rc = TDC_ECANCELED;
@@ -901,11 +951,12 @@ cdt_run(tdc_cdt *c)
 	if (c->nseg >= PART_MIN_SEG)
 	{
 		c->seg_part = tdc_big_alloc(2 * c->nseg + job->nin);
+		c->order = tdc_big_alloc(c->nseg * sizeof(uint32_t));
 		c->parts = calloc(NPART, sizeof(cdt_ctx));
 		c->part_lists = malloc((size_t) 2 * NPART * PART_CAP * sizeof(uint32_t));
 	}
 	if (!c->cons || !c->vedge || !c->list || !c->fresh ||
-		(c->nseg >= PART_MIN_SEG && (!c->seg_part || !c->parts || !c->part_lists)))
+		(c->nseg >= PART_MIN_SEG && (!c->seg_part || !c->order || !c->parts || !c->part_lists)))
 		return take_error(c, ser, cdt_fail(ser, TDC_ENOMEM, "out of memory for the constraints of %zu points", job->nin));
 	ser->list = c->list;
 	ser->fresh = c->fresh;
@@ -967,9 +1018,10 @@ cdt_work(void *arg)
 	free(c->fresh);
 	tdc_big_free(c->vedge);
 	tdc_big_free(c->seg_part);
+	tdc_big_free(c->order);
 	free(c->parts);
 	free(c->part_lists);
-	c->list = c->fresh = c->vedge = c->part_lists = NULL;
+	c->list = c->fresh = c->vedge = c->part_lists = c->order = NULL;
 	c->seg_part = c->seg_done = c->spart = NULL;
 	c->parts = NULL;
 	if (rc == TDC_ECANCELED)
@@ -991,7 +1043,8 @@ static size_t
 cdt_seg_memory(size_t nseg, size_t n)
 {
 	return nseg >= PART_MIN_SEG ?
-		2 * nseg + n + NPART * (sizeof(cdt_ctx) + 2 * PART_CAP * sizeof(uint32_t)) : 0;
+		(2 + sizeof(uint32_t)) * nseg + n + NPART * (sizeof(cdt_ctx) + 2 * PART_CAP * sizeof(uint32_t)) +
+		((nseg + PREP_CHUNK - 1) / PREP_CHUNK) * (NPART + 1) * sizeof(size_t) : 0;
 }
 
 int
@@ -1095,6 +1148,7 @@ tdc_cdt_free(tdc_cdt *c)
 	free(c->fresh);
 	tdc_big_free(c->vedge);
 	tdc_big_free(c->seg_part);
+	tdc_big_free(c->order);
 	free(c->parts);
 	free(c->part_lists);
 	free(c);

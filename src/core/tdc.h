@@ -378,7 +378,7 @@ typedef struct tdc_cdt tdc_cdt;
 
 /*
  * Bytes tdc_cdt_start allocates at most, beyond the job, for n input points
- * (at least 8192 segments add 2 bytes each, 1 per point and about 0.5 MB,
+ * (at least 8192 segments add 6 bytes each, 1 per point and about 0.5 MB,
  * which tdc_cdt_start counts against options.max_memory as well).
  */
 extern size_t tdc_cdt_memory(size_t n);
