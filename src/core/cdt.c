@@ -444,19 +444,38 @@ restore_delaunay(cdt_ctx *x, size_t n)
 	return TDC_OK;
 }
 
-/* Is there an edge a-b?  Returns a half-edge a->b or TDC_NIL. */
+/*
+ * Is there an edge a-b?  Returns a half-edge a->b or TDC_NIL.  Each step
+ * around a is a cache miss (a's edges lie anywhere in the mesh), and this is
+ * most of the insertion's time for contour lines, whose segments are mostly
+ * edges already.  So it turns both ways at once, Onext from one side and
+ * Oprev from the other: the two chains of loads do not depend on each other,
+ * and the one that meets b is about half as long as a one-way turn (1M
+ * contour segments: 3.6 half-edges looked at per segment one way, all in a
+ * chain).  The half-edge a->b is unique, so the answer is the same.
+ */
 static uint32_t
 find_edge(const tdc_cdt *c, uint32_t a, uint32_t b)
 {
-	uint32_t	g = c->vedge[a];
+	const tdc_mesh *m = &c->m;
+	uint32_t	f = c->vedge[a],
+				r = f;
 
-	do
+	if (tdc_dest(m, f) == b)
+		return f;
+	for (;;)
 	{
-		if (tdc_dest(&c->m, g) == b)
-			return g;
-		g = tdc_onext(&c->m, g);
-	} while (g != c->vedge[a]);
-	return TDC_NIL;
+		f = tdc_onext(m, f);
+		if (f == r)
+			return TDC_NIL;		/* all of the ring seen */
+		if (tdc_dest(m, f) == b)
+			return f;
+		r = tdc_oprev(m, r);
+		if (r == f)
+			return TDC_NIL;
+		if (tdc_dest(m, r) == b)
+			return r;
+	}
 }
 
 /*
