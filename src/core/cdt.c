@@ -160,7 +160,8 @@ struct tdc_cdt
 	uint8_t    *seg_part;		/* per segment: its stripe, SEG_SERIAL or SEG_NONE */
 	uint8_t    *seg_done;		/* per segment: inserted by its stripe's inserter */
 	uint32_t   *order;			/* the segments of stripe 0, then of 1, ..., each in input order */
-	size_t		part_off[NPART + 1];	/* stripe k's: order[part_off[k] .. part_off[k + 1]) */
+	size_t		part_off[NPART + 2];	/* stripe k's: order[part_off[k] .. part_off[k + 1]);
+										 * k = NPART: those with ends in two stripes */
 	double		part_x0;		/* stripe of x: (x - part_x0) * part_scale */
 	double		part_scale;
 	cdt_ctx    *parts;			/* NPART inserters */
@@ -696,6 +697,13 @@ take_error(tdc_cdt *c, const cdt_ctx *x, int rc)
  */
 #define PREP_CHUNK	65536
 
+/* order[]'s range of a seg_part[] value other than SEG_NONE: its stripe, or NPART */
+static inline int
+bucket(uint8_t part)
+{
+	return part < NPART ? part : NPART;
+}
+
 typedef struct cdt_prep
 {
 	tdc_cdt    *c;
@@ -765,15 +773,16 @@ prep_task(void *arg, size_t k, int worker)
 		b = map[j];
 		pa = site_part(c, a);
 		c->seg_part[s] = a == b ? SEG_NONE : pa == site_part(c, b) ? (uint8_t) pa : SEG_SERIAL;
-		if (c->seg_part[s] < NPART)
-			pp->pos[(k - 1) * NPART + c->seg_part[s]]++;
+		if (c->seg_part[s] != SEG_NONE)
+			pp->pos[(k - 1) * (NPART + 1) + bucket(c->seg_part[s])]++;
 	}
 }
 
 /*
- * Task k: chunk k's segments into order[], each to its stripe's range at the
- * place prepare() computed for this chunk, so that every stripe's range
- * holds its segments in input order.
+ * Task k: chunk k's segments into order[], each to its stripe's range (or
+ * the range of those with ends in two stripes) at the place prepare()
+ * computed for this chunk, so that every range holds its segments in input
+ * order.
  */
 static void
 order_task(void *arg, size_t k, int worker)
@@ -782,11 +791,11 @@ order_task(void *arg, size_t k, int worker)
 	tdc_cdt    *c = pp->c;
 	size_t		lo = k * PREP_CHUNK,
 				hi = lo + PREP_CHUNK < c->nseg ? lo + PREP_CHUNK : c->nseg,
-			   *pos = pp->pos + k * NPART;
+			   *pos = pp->pos + k * (NPART + 1);
 
 	for (size_t s = lo; s < hi; s++)
-		if (c->seg_part[s] < NPART)
-			c->order[pos[c->seg_part[s]]++] = (uint32_t) s;
+		if (c->seg_part[s] != SEG_NONE)
+			c->order[pos[bucket(c->seg_part[s])]++] = (uint32_t) s;
 }
 
 /* Set vedge[] and sort the segments by stripe (prep_task), on the pool. */
@@ -795,7 +804,7 @@ prepare(tdc_cdt *c, tdc_pool *pool, cdt_ctx *ser)
 {
 	const tdc_job *job = c->job;
 	size_t		nchunks = (c->nseg + PREP_CHUNK - 1) / PREP_CHUNK;
-	cdt_prep	pp = {c, malloc(nchunks * sizeof(size_t)), calloc(nchunks * NPART, sizeof(size_t))};
+	cdt_prep	pp = {c, malloc(nchunks * sizeof(size_t)), calloc(nchunks * (NPART + 1), sizeof(size_t))};
 	double		lo = INFINITY,
 				hi = -INFINITY;
 	size_t		at = 0;
@@ -836,19 +845,19 @@ prepare(tdc_cdt *c, tdc_pool *pool, cdt_ctx *ser)
 			free(pp.pos);
 			return rc != TDC_OK ? rc : internal_error(ser, pp.bad[k], "a segment was misread");
 		}
-	/* stripe by stripe, chunk by chunk: where each chunk's part of a stripe goes */
-	for (int p = 0; p < NPART; p++)
+	/* range by range, chunk by chunk: where each chunk's part of a range goes */
+	for (int p = 0; p <= NPART; p++)
 	{
 		c->part_off[p] = at;
 		for (size_t k = 0; k < nchunks; k++)
 		{
-			size_t		n = pp.pos[k * NPART + p];
+			size_t		n = pp.pos[k * (NPART + 1) + p];
 
-			pp.pos[k * NPART + p] = at;
+			pp.pos[k * (NPART + 1) + p] = at;
 			at += n;
 		}
 	}
-	c->part_off[NPART] = at;
+	c->part_off[NPART + 1] = at;
 	tdc_pool_for(pool, nchunks, order_task, &pp);
 	free(pp.bad);
 	free(pp.pos);
@@ -885,7 +894,7 @@ part_task(void *arg, size_t k, int worker)
 			x->ndone++;
 		}
 		else if (rc == TDC_DEFER)
-			x->ndeferred++;
+			c->order[c->part_off[k] + x->ndeferred++] = (uint32_t) s;	/* behind i */
 		else
 		{
 			x->rc = rc;
@@ -939,6 +948,22 @@ run_parts(tdc_cdt *c, tdc_pool *pool)
 			return take_error(c, &c->parts[k], c->parts[k].rc);
 	}
 	return TDC_OK;
+}
+
+/* The serial inserter on segment s; an error is taken into c. */
+static int
+serial_insert(tdc_cdt *c, cdt_ctx *ser, size_t s)
+{
+	uint32_t	a,
+				b;
+	int			rc;
+
+	if (atomic_load_explicit(&c->cancel, memory_order_relaxed))
+		return TDC_ECANCELED;
+	rc = seg_sites(ser, s, &a, &b);
+	if (rc == TDC_OK && a != b)
+		rc = insert_segment(ser, s, a, b);
+	return rc == TDC_OK ? TDC_OK : take_error(c, ser, rc);
 }
 
 /*
@@ -1004,22 +1029,28 @@ cdt_run(tdc_cdt *c)
 			if (job->he[h].org != TDC_NIL)
 				c->vedge[job->he[h].org] = (uint32_t) h;
 
+	/*
+	 * The serial pass, in input order.  After the parallel pass with no
+	 * segment left over (contour lines: the common case), the ones with ends
+	 * in two stripes are all there is, already listed in input order.
+	 */
+	if (c->seg_done != NULL)
+		c->npar_serial = c->part_off[NPART + 1] - c->part_off[NPART];
+	if (c->seg_done != NULL && c->npar_deferred == 0)
+	{
+		for (size_t i = c->part_off[NPART]; i < c->part_off[NPART + 1]; i++)
+		{
+			if ((rc = serial_insert(c, ser, c->order[i])) != TDC_OK)
+				return rc;
+		}
+		return TDC_OK;
+	}
 	for (size_t s = 0; s < c->nseg; s++)
 	{
-		uint32_t	a,
-					b;
-
 		if (c->seg_done != NULL && (c->seg_done[s] || c->seg_part[s] == SEG_NONE))
 			continue;
-		if (c->seg_done != NULL && c->seg_part[s] == SEG_SERIAL)
-			c->npar_serial++;
-		if (atomic_load_explicit(&c->cancel, memory_order_relaxed))
-			return TDC_ECANCELED;
-		rc = seg_sites(ser, s, &a, &b);
-		if (rc == TDC_OK && a != b)
-			rc = insert_segment(ser, s, a, b);
-		if (rc != TDC_OK)
-			return take_error(c, ser, rc);
+		if ((rc = serial_insert(c, ser, s)) != TDC_OK)
+			return rc;
 	}
 	return TDC_OK;
 }
@@ -1063,7 +1094,7 @@ cdt_seg_memory(size_t nseg, size_t n)
 {
 	return nseg >= PART_MIN_SEG ?
 		(2 + sizeof(uint32_t)) * nseg + n + NPART * (sizeof(cdt_ctx) + 2 * PART_CAP * sizeof(uint32_t)) +
-		((nseg + PREP_CHUNK - 1) / PREP_CHUNK) * (NPART + 1) * sizeof(size_t) : 0;
+		((nseg + PREP_CHUNK - 1) / PREP_CHUNK) * (NPART + 2) * sizeof(size_t) : 0;
 }
 
 int
