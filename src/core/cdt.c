@@ -64,7 +64,16 @@
  * serial pass inserts, in input order, every segment not done (ends in two
  * stripes, or left over), finding the pieces already in place as edges.
  * An error is the one of the lowest stripe that failed, else the serial
- * pass's, so it does not depend on the thread count either.
+ * pass's, so it does not depend on the thread count either.  A counting
+ * sort in the preparation lists each stripe's segments (and those with ends
+ * in two stripes) in input order, so no inserter reads the others'.
+ *
+ * Speed.  Contour lines are mostly Delaunay edges already, so the insertion
+ * of a million of them is mostly find_edge: turning around a segment's first
+ * end to meet the other, a cache miss a step, each step depending on the
+ * last.  find_edge turns both ways at once, and a stripe's inserter fetches
+ * the first steps of its next segments ahead (part_task), so that several
+ * misses are in flight at a time.
  *
  * Invariants between segments: the mesh is a triangulation of the convex
  * hull of the sites (hull edges are never crossed, so never flipped, so the
@@ -79,8 +88,8 @@
  * serial lists of crossed and new edges, which start small and double up to
  * one entry per edge slot (12 bytes per point each, counted in full); the
  * parallel pass adds 6 bytes per segment (its stripe, whether it is done,
- * and its place in the stripes' order), 1 per point and NPART fixed lists.  Cancel is
- * polled before every segment and every 4096 steps inside one.  The
+ * and its place in the stripes' order), 1 per point and NPART fixed lists.
+ * Cancel is polled before every segment and every 4096 steps inside one.  The
  * insertion runs like a triangulation, on the caller's thread when it is
  * small, otherwise on a thread with every signal blocked that the host
  * waits for and cancels (the runner of runner.c), whose pool threads
