@@ -985,14 +985,21 @@ border_input(input *in, int pieces, int pts)
 	add_pt(in, 0, 0);
 	add_pt(in, 16, 1);
 	for (int i = 0; i < pts; i++)
-		add_pt(in, 16 * urand(), urand());
+	{
+		double		x = 16 * urand(),
+					y = urand();
+
+		add_pt(in, x, y);
+	}
 	for (int j = 0; j < pieces; j++)
 		for (int b = 1; b < 16; b++)
 			for (int side = -1; side <= 1; side += 2)
 			{
 				double		x = b + side * (1e-6 + 1e-4 * urand());
+				uint32_t	p = add_pt(in, x, (double) j / pieces),
+							q = add_pt(in, x, (j + 0.999) / pieces);
 
-				add_seg(in, add_pt(in, x, (double) j / pieces), add_pt(in, x, (j + 0.999) / pieces));
+				add_seg(in, p, q);
 			}
 	while (in->k < 8400)
 	{
@@ -1000,7 +1007,12 @@ border_input(input *in, int pieces, int pts)
 					y = urand();
 
 		if (x - floor(x) > 0.01 && x - floor(x) < 0.99)
-			add_seg(in, add_pt(in, x, y), add_pt(in, x + 1e-7, y + 3e-8));
+		{
+			uint32_t	p = add_pt(in, x, y),
+						q = add_pt(in, x + 1e-7, y + 3e-8);
+
+			add_seg(in, p, q);
+		}
 	}
 }
 
@@ -1088,10 +1100,14 @@ test_ownership(void)
 	{
 		double		x = 16 * urand(),
 					y = urand() - 1;
+		uint32_t	p,
+					q;
 
 		if (x - floor(x) < 1e-5 || x - floor(x) > 1 - 1e-5)
 			continue;
-		add_seg(&in, add_pt(&in, x, y), add_pt(&in, x + 1e-7, y + 3e-8));
+		p = add_pt(&in, x, y);
+		q = add_pt(&in, x + 1e-7, y + 3e-8);
+		add_seg(&in, p, q);
 	}
 	g0 = in.k;
 	for (int row = 0; row < GADGET_ROWS; row++)
@@ -1101,11 +1117,21 @@ test_ownership(void)
 
 			for (int i = 0; i < 30; i++)
 				add_pt(&in, b + 0.6 * (urand() - 0.5), y + 0.2 * (urand() - 0.5));
-			/* left of the border: stripe b - 1; right of it: stripe b */
-			add_seg(&in, add_pt(&in, b - 0.3, y + 0.02 * (urand() - 0.5)),
-					add_pt(&in, b - 0.002 - 0.02 * urand(), y + 0.02 * (urand() - 0.5)));
-			add_seg(&in, add_pt(&in, b + 0.002 + 0.02 * urand(), y + 0.03 + 0.02 * (urand() - 0.5)),
-					add_pt(&in, b + 0.3, y + 0.03 + 0.02 * (urand() - 0.5)));
+			/*
+			 * left of the border: stripe b - 1; right of it: stripe b (one
+			 * urand() a statement: the order of arguments is unspecified)
+			 */
+			for (int side = -1; side <= 1; side += 2)
+			{
+				double		far = b + 0.3 * side,
+							fy = y + 0.015 * (side + 1) + 0.02 * (urand() - 0.5),
+							near = b + side * (0.002 + 0.02 * urand()),
+							ny = y + 0.015 * (side + 1) + 0.02 * (urand() - 0.5);
+				uint32_t	p = add_pt(&in, far, fy),
+							q = add_pt(&in, near, ny);
+
+				add_seg(&in, p, q);
+			}
 		}
 	ngad = in.k - g0;
 
