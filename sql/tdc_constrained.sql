@@ -53,57 +53,6 @@ SELECT tdc_cdt_vs_sfcgal(ST_Collect(ARRAY[
 								 ST_Buffer('POINT(0.3 5)'::geometry, 1.7, 3)])),
 	ST_GeomFromText('MULTIPOINT(1.1 -3.3, -2.2 -6.1, 6.3 -2.9, -0.7 1.4)')])) AS polygon_with_holes;
 
--- Real polygons: the GSHHG shoreline of the Stockholm archipelago
--- (test/fixtures/gshhg-stockholm.wkt, one WKT geometry a line: 1,304
--- polygons and the mainland line, 17,548 vertices).  psql reads the file on
--- the client side (pg_regress gives the source directory in PG_ABS_SRCDIR),
--- so the server need not be able to read the clone.  Its coordinates lie on
--- a grid, so some sites are exactly cocircular, and there the constrained
--- triangulation is not unique: the triangles must be SFCGAL's but for
--- regions of ties, which both sides cover, each with its corners on one
--- circle (to 1e-9 of its radius; our own tie-break is exact).  Our
--- unconstrained triangulation must fail the same comparison.
-\getenv abs_srcdir PG_ABS_SRCDIR
-\set fixture :abs_srcdir '/test/fixtures/gshhg-stockholm.wkt'
-\set wkt `cat :'fixture'`
-CREATE TABLE tdc_gshhg AS
-SELECT ST_GeomFromText(w) AS g FROM regexp_split_to_table(rtrim(:'wkt', E'\n'), E'\n') w;
-\unset wkt
-SELECT GeometryType(g) AS gshhg, count(*), sum(ST_NPoints(g)) AS vertices
-FROM tdc_gshhg GROUP BY 1 ORDER BY 1;
--- Are the corners of polygon r on one circle (the circle through its first three)?
-CREATE FUNCTION tdc_cocircular(r geometry) RETURNS boolean LANGUAGE sql AS $$
-	WITH p AS (SELECT ST_X(d.geom) - ST_X(ST_PointN(ST_ExteriorRing(r), 1)) AS x,
-					  ST_Y(d.geom) - ST_Y(ST_PointN(ST_ExteriorRing(r), 1)) AS y, d.path[2] AS i
-			   FROM ST_DumpPoints(r) d),
-		 a AS (SELECT x, y FROM p WHERE i = 2),
-		 b AS (SELECT x, y FROM p WHERE i = 3),
-		 c AS (SELECT (b.y * (a.x ^ 2 + a.y ^ 2) - a.y * (b.x ^ 2 + b.y ^ 2)) / (2 * (a.x * b.y - a.y * b.x)) AS cx,
-					  (a.x * (b.x ^ 2 + b.y ^ 2) - b.x * (a.x ^ 2 + a.y ^ 2)) / (2 * (a.x * b.y - a.y * b.x)) AS cy
-			   FROM a, b)
-	SELECT bool_and(abs(sqrt((p.x - cx) ^ 2 + (p.y - cy) ^ 2) - sqrt(cx ^ 2 + cy ^ 2)) <= 1e-9 * sqrt(cx ^ 2 + cy ^ 2))
-	FROM p, c $$;
--- The triangle sets of a and b: counts, and where they differ, whether the
--- two differences cover the same regions, each cocircular.
-CREATE FUNCTION tdc_cdt_same_but_ties(a geometry, b geometry) RETURNS text LANGUAGE sql AS $$
-	WITH ta AS (SELECT tdc_cdt_tris(a) t),
-		 tb AS (SELECT tdc_cdt_tris(b) t),
-		 only_a AS (SELECT t::geometry AS t FROM (SELECT t FROM ta EXCEPT SELECT t FROM tb) x),
-		 only_b AS (SELECT t::geometry AS t FROM (SELECT t FROM tb EXCEPT SELECT t FROM ta) x),
-		 regions AS (SELECT (ST_Dump(ST_Union(t))).geom AS r FROM only_a)
-	SELECT format('%s triangles, %s; only first %s, only second %s, in %s regions; the same regions: %s; each cocircular: %s',
-				  (SELECT count(*) FROM ta), (SELECT count(*) FROM tb),
-				  (SELECT count(*) FROM only_a), (SELECT count(*) FROM only_b),
-				  (SELECT count(*) FROM regions),
-				  coalesce(ST_Equals((SELECT ST_Union(t) FROM only_a), (SELECT ST_Union(t) FROM only_b)), true),
-				  coalesce((SELECT bool_and(tdc_cocircular(r)) FROM regions), true)) $$;
-SELECT tdc_cdt_same_but_ties(ST_TDCConstrainedDelaunayTriangles(ST_Collect(g), 2),
-							 ST_ConstrainedDelaunayTriangles(ST_Collect(g))) AS gshhg_vs_sfcgal
-FROM tdc_gshhg;
-SELECT tdc_cdt_same_but_ties(ST_TDCDelaunayTriangles(ST_Collect(g), 0, 2),
-							 ST_ConstrainedDelaunayTriangles(ST_Collect(g))) AS gshhg_unconstrained_vs_sfcgal
-FROM tdc_gshhg;
-
 -- The aggregate over one row per contour segment (with free points) equals
 -- the function on their collection: serially, then under a parallel plan
 -- whose partial states carry the segments between processes.
@@ -121,9 +70,6 @@ FROM generate_series(1, 300) i;
 SELECT tdc_cdt_same((SELECT ST_TDCConstrainedDelaunay(g) FROM tdc_contour_segs),
 					(SELECT ST_TDCConstrainedDelaunayTriangles(ST_Collect(g)) FROM tdc_contour_segs))
 	AS aggregate_serial;
--- the GSHHG polygons' aggregate over its rows: the same triangles as the function
-SELECT tdc_cdt_same((SELECT ST_TDCConstrainedDelaunay(g) FROM tdc_gshhg),
-					(SELECT ST_TDCConstrainedDelaunayTriangles(ST_Collect(g)) FROM tdc_gshhg)) AS gshhg_aggregate;
 -- (serialization costs lowered for this small table, as in tdc_parallel)
 ALTER FUNCTION st_tdcconstraineddelaunay_serialfn(internal) COST 1;
 ALTER FUNCTION st_tdcconstraineddelaunay_deserialfn(bytea, internal) COST 1;
@@ -230,18 +176,22 @@ SELECT ST_TDCConstrainedDelaunayTriangles('LINESTRING(0 0,1 1)'::geometry, 4);
 \set VERBOSITY terse
 
 -- Cancel: a statement_timeout during a long constrained triangulation
--- (one thread; 1000 long lines across 300000 points) stops it, and the
--- session goes on.
+-- (one thread; 4000 long lines across 300000 points) stops it, and the
+-- session goes on.  Quiet, the statement would take some 380 ms: reading
+-- and triangulating about 80, the insertion about 175, writing and
+-- ST_NumGeometries the rest; the timeout falls in the insertion then, and
+-- earlier under load, never after the end (300 ms with 1000 lines fell
+-- after the insertion, and the statement could finish first).
 CREATE TABLE tdc_cdt_big AS
 SELECT ST_Collect(g) AS g FROM (
 	SELECT ST_MakePoint((hashint4(i) & 2147483647) / 2147483648.0,
 						(hashint4(-i) & 2147483647) / 2147483648.0) AS g
 	FROM generate_series(1, 300000) i
 	UNION ALL
-	SELECT ST_MakeLine(ST_MakePoint(-1, j / 1000.0), ST_MakePoint(2, j / 1000.0 + 0.0005))
-	FROM generate_series(0, 999) j) s;
+	SELECT ST_MakeLine(ST_MakePoint(-1, j / 4000.0), ST_MakePoint(2, j / 4000.0 + 0.0005))
+	FROM generate_series(0, 3999) j) s;
 SET tdc_delaunay.threads = 1;
-SET statement_timeout = '300ms';
+SET statement_timeout = '150ms';
 SELECT ST_NumGeometries(ST_TDCConstrainedDelaunayTriangles(g)) FROM tdc_cdt_big;
 RESET statement_timeout;
 RESET tdc_delaunay.threads;
