@@ -325,7 +325,8 @@ half_edges(const double *t, size_t nt)
  * edge of one that the other lacks must lie between two triangles (of its
  * own set) whose four corners are exactly cocircular: such an edge is a
  * diagonal of a cocircular polygon, which a constrained Delaunay
- * triangulation may split either way.  *ndiff is the number of such edges.
+ * triangulation may split either way.  *ndiff is the number of such
+ * half-edges, of both sets.
  */
 static bool
 same_up_to_cocircular(const double *a, size_t na, const double *b, size_t nb, size_t *ndiff)
@@ -400,8 +401,8 @@ check_cgal_mode(const char *name, const input *in, bool ties)
 
 		CHECK(ok, "%s: %zu triangles, CGAL %zu, sets differ beyond cocircular ties", name, na, nb);
 		if (ok)
-			printf("cdt: %s: the same triangles as CGAL's but for %zu edges between cocircular sites\n",
-				   name, nd);
+			printf("cdt: %s: the same triangles as CGAL's but for %zu edges (ours and CGAL's) between cocircular sites\n",
+				   name, nd / 2);
 	}
 	free(a);
 	free(b);
