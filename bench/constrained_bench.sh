@@ -47,7 +47,7 @@
 # Outputs: build/bench/constrained_runs.csv  every run (rep <= 0: warm-up)
 #          build/bench/constrained.csv       medians, ratios, triangle counts
 #          build/bench/constrained.txt       header + Markdown tables (for the README)
-# Knobs:   BENCH_CDT_REPS=3  BENCH_CDT_WARM=1  BENCH_CDT_TIMEOUT=600
+# Knobs:   BENCH_CDT_REPS=5  BENCH_CDT_WARM=1  BENCH_CDT_TIMEOUT=600
 #          BENCH_CDT_DATASETS="contours coast"  BENCH_CDT_RINGS=320
 #          BENCH_CDT_COAST_REGION=15/30/57/66  BENCH_CDT_RELOAD=1
 #          BENCH_CDT_SETTINGS="jit=off" (session settings, name=value ..., as in
@@ -58,7 +58,7 @@ ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 # shellcheck source=bench/lib.sh
 . "$ROOT/bench/lib.sh"
 
-REPS=${BENCH_CDT_REPS:-3}
+REPS=${BENCH_CDT_REPS:-5}
 WARM=${BENCH_CDT_WARM:-1}
 TIMEOUT=${BENCH_CDT_TIMEOUT:-600}
 DATASETS=${BENCH_CDT_DATASETS:-"contours coast"}

@@ -15,7 +15,7 @@
 #
 #   BENCH_SKIP_CORE=1   skip A          BENCH_SKIP_SQL=1   skip B
 #   BENCH_SKIP_SWEEP=1  skip C          BENCH_NO_INSTALL=1 do not run make install before B, C and D
-#   BENCH_CONSTRAINED=1 run D too (some 10 minutes: SFCGAL takes 5-20 s a statement)
+#   BENCH_CONSTRAINED=1 run D too (some 10 minutes: SFCGAL takes 5-20 s a statement, 12 times)
 # The knobs of the scripts (BENCH_SIZES, BENCH_SQL_SIZES, BENCH_SWEEP_*, BENCH_CDT_*, ...) pass through.
 set -euo pipefail
 
