@@ -5,14 +5,18 @@
 #   A  bench/core_bench.sh   ./tdc (1 thread, all threads) vs CGAL   -> build/bench/core*.csv
 #   B  bench/sql_bench.sh    tdc_delaunay vs PostGIS in PostgreSQL   -> build/bench/sql*.csv, docs/*.png
 #   C  bench/sweep_bench.sh  the same from 3 to 10^7 points per call -> build/bench/sweep*, docs/sweep.png
+#   D  bench/constrained_bench.sh  (optional, BENCH_CONSTRAINED=1) the constrained
+#      triangulation against SFCGAL and our unconstrained one, on 1M contour
+#      vertices and GSHHG coastline polygons          -> build/bench/constrained*
 #
 # B and C run against the server the PG* variables point at when one answers;
 # otherwise a throw-away cluster is started with scripts/lib.sh and stopped
 # afterwards.  Either way the extension is built and installed first.
 #
 #   BENCH_SKIP_CORE=1   skip A          BENCH_SKIP_SQL=1   skip B
-#   BENCH_SKIP_SWEEP=1  skip C          BENCH_NO_INSTALL=1 do not run make install before B and C
-# The knobs of the scripts (BENCH_SIZES, BENCH_SQL_SIZES, BENCH_SWEEP_*, ...) pass through.
+#   BENCH_SKIP_SWEEP=1  skip C          BENCH_NO_INSTALL=1 do not run make install before B, C and D
+#   BENCH_CONSTRAINED=1 run D too (some 10 minutes: SFCGAL takes 5-20 s a statement, 12 times)
+# The knobs of the scripts (BENCH_SIZES, BENCH_SQL_SIZES, BENCH_SWEEP_*, BENCH_CDT_*, ...) pass through.
 set -euo pipefail
 
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
@@ -27,7 +31,7 @@ if [ "${BENCH_SKIP_CORE:-0}" != 1 ]; then
 	bash "$ROOT/bench/core_bench.sh"
 fi
 
-# sql_parts: B and C, against the server the PG* variables now point at
+# sql_parts: B, C and D, against the server the PG* variables now point at
 sql_parts() {
 	if [ "${BENCH_SKIP_SQL:-0}" != 1 ]; then
 		log "=== B: SQL benchmark"
@@ -37,9 +41,13 @@ sql_parts() {
 		log "=== C: SQL size sweep"
 		bash "$ROOT/bench/sweep_bench.sh"
 	fi
+	if [ "${BENCH_CONSTRAINED:-0}" = 1 ]; then
+		log "=== D: constrained, against SFCGAL"
+		bash "$ROOT/bench/constrained_bench.sh"
+	fi
 }
 
-if [ "${BENCH_SKIP_SQL:-0}" != 1 ] || [ "${BENCH_SKIP_SWEEP:-0}" != 1 ]; then
+if [ "${BENCH_SKIP_SQL:-0}" != 1 ] || [ "${BENCH_SKIP_SWEEP:-0}" != 1 ] || [ "${BENCH_CONSTRAINED:-0}" = 1 ]; then
 	# shellcheck source=scripts/lib.sh
 	. "$ROOT/scripts/lib.sh"
 	if [ "${BENCH_NO_INSTALL:-0}" != 1 ]; then
@@ -89,5 +97,11 @@ fi
 			echo '![size sweep](sweep.png)'
 		fi
 	fi
+	if [ -s "$BENCH_OUT/constrained.txt" ]; then
+		echo
+		echo "## SQL constrained: tdc_delaunay vs SFCGAL"
+		echo
+		sed '1,2{/^###/d;/^$/d}' "$BENCH_OUT/constrained.txt"
+	fi
 } > "${BENCH_DOCS:-$ROOT/docs}/benchmarks.md"
-log "done: $BENCH_OUT/{core,sql,sweep}.txt, ${BENCH_DOCS:-$ROOT/docs}/{benchmarks.md,core.png,bench.png,coast_tin.png,sweep.png}"
+log "done: $BENCH_OUT/{core,sql,sweep,constrained}.txt, ${BENCH_DOCS:-$ROOT/docs}/{benchmarks.md,core.png,bench.png,coast_tin.png,sweep.png}"

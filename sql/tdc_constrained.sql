@@ -176,18 +176,22 @@ SELECT ST_TDCConstrainedDelaunayTriangles('LINESTRING(0 0,1 1)'::geometry, 4);
 \set VERBOSITY terse
 
 -- Cancel: a statement_timeout during a long constrained triangulation
--- (one thread; 1000 long lines across 300000 points) stops it, and the
--- session goes on.
+-- (one thread; 4000 long lines across 300000 points) stops it, and the
+-- session goes on.  Quiet, the statement would take some 380 ms: reading
+-- and triangulating about 80, the insertion about 175, writing and
+-- ST_NumGeometries the rest; the timeout falls in the insertion then, and
+-- earlier under load, never after the end (300 ms with 1000 lines fell
+-- after the insertion, and the statement could finish first).
 CREATE TABLE tdc_cdt_big AS
 SELECT ST_Collect(g) AS g FROM (
 	SELECT ST_MakePoint((hashint4(i) & 2147483647) / 2147483648.0,
 						(hashint4(-i) & 2147483647) / 2147483648.0) AS g
 	FROM generate_series(1, 300000) i
 	UNION ALL
-	SELECT ST_MakeLine(ST_MakePoint(-1, j / 1000.0), ST_MakePoint(2, j / 1000.0 + 0.0005))
-	FROM generate_series(0, 999) j) s;
+	SELECT ST_MakeLine(ST_MakePoint(-1, j / 4000.0), ST_MakePoint(2, j / 4000.0 + 0.0005))
+	FROM generate_series(0, 3999) j) s;
 SET tdc_delaunay.threads = 1;
-SET statement_timeout = '300ms';
+SET statement_timeout = '150ms';
 SELECT ST_NumGeometries(ST_TDCConstrainedDelaunayTriangles(g)) FROM tdc_cdt_big;
 RESET statement_timeout;
 RESET tdc_delaunay.threads;

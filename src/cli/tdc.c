@@ -13,7 +13,8 @@
  * line with the Voronoi time; and --segments FILE: constraint segments, one
  * per line "i j", two 0-based line numbers (point indices) of INPUT; the
  * result is then the constrained Delaunay triangulation (cdt.c), and with
- * --stats a second line "segments= constraint_edges= constrain=" follows.
+ * --stats a second line "segments= constraint_edges= constrain= parallel= deferred=
+ * two_stripes=" follows (the last three: tdc_cdt_pass_counts).
  *
  * INPUT is a .bin file of little-endian float64 x,y pairs, or any other file
  * (or - for stdin) of text lines "x y" or "x y z".  -o writes one triangle
@@ -1252,8 +1253,15 @@ main(int argc, char **argv)
 			fprintf(stderr, "voronoi=%.6f cell_vertices=%zu\n", vor_seconds,
 					tdc_voronoi_num_vertices(vor));
 		if (cdt)
-			fprintf(stderr, "segments=%zu constraint_edges=%zu constrain=%.6f\n",
-					nseg, tdc_cdt_num_constraint_edges(cdt), constrain_s);
+		{
+			size_t		par,
+						def,
+						ser;
+
+			tdc_cdt_pass_counts(cdt, &par, &def, &ser);
+			fprintf(stderr, "segments=%zu constraint_edges=%zu constrain=%.6f parallel=%zu deferred=%zu two_stripes=%zu\n",
+					nseg, tdc_cdt_num_constraint_edges(cdt), constrain_s, par, def, ser);
+		}
 	}
 	if (validate)
 	{

@@ -378,7 +378,7 @@ typedef struct tdc_cdt tdc_cdt;
 
 /*
  * Bytes tdc_cdt_start allocates at most, beyond the job, for n input points
- * (at least 8192 segments add 2 bytes each, 1 per point and about 0.5 MB,
+ * (at least 8192 segments add 6 bytes each, 1 per point and about 0.5 MB,
  * which tdc_cdt_start counts against options.max_memory as well).
  */
 extern size_t tdc_cdt_memory(size_t n);
@@ -394,6 +394,16 @@ extern int	tdc_cdt_run(tdc_job *job, const uint32_t *seg, size_t nseg,
 /* After TDC_ECROSS: the numbers of the two segments; returns 1, else 0. */
 extern int	tdc_cdt_crossing(const tdc_cdt *cdt, size_t *s1, size_t *s2);
 extern size_t tdc_cdt_num_constraint_edges(const tdc_cdt *cdt);
+/*
+ * The parallel pass (at least 8192 segments; else all three are 0): the
+ * segments its stripes inserted, those they left to the serial pass (a piece
+ * would have touched a triangle with a corner in another stripe, or crossed
+ * more edges than a stripe's lists hold), and those with ends in two
+ * stripes, which only the serial pass inserts.  The same for every thread
+ * count.
+ */
+extern void tdc_cdt_pass_counts(const tdc_cdt *cdt, size_t *parallel, size_t *deferred,
+								size_t *serial);
 /* Iterate the constraint edges like tdc_next_edge. */
 extern int	tdc_next_constraint_edge(const tdc_cdt *cdt, tdc_iter *it, uint32_t v[2]);
 /* tdc_validate_cdt on the result; the job must still exist. */

@@ -6,7 +6,9 @@
 # (SHA = sha256 of the tarball), as a staged install tree (make install
 # DESTDIR=...), so that a later run only copies the files (seconds instead of
 # minutes).  The cache key includes the patch and pg_config --version, since
-# a server update can break the ABI.
+# a server update can break the ABI, and pg_config --pkglibdir, since the
+# staged tree holds the install paths: one staged for another PostgreSQL
+# tree (say /opt/pgE) would be copied there, not here.
 #
 # Citus is not in Debian 12: the build needs a few -dev packages, installed
 # with apt-get when missing (as root).
@@ -27,7 +29,7 @@ fi
 TARBALL=$SRC/citus-13.2.2.tar.gz
 PATCH=$SRC/pg15-have_createdb_privilege.patch
 
-key=$( { sha256sum "$TARBALL" | cut -d' ' -f1; sha256sum "$PATCH" | cut -d' ' -f1; "$PG_CONFIG" --version; } \
+key=$( { sha256sum "$TARBALL" | cut -d' ' -f1; sha256sum "$PATCH" | cut -d' ' -f1; "$PG_CONFIG" --version; "$PG_CONFIG" --pkglibdir; } \
 	| sha256sum | cut -c1-16)
 CACHE=${TDC_CITUS_CACHE:-${XDG_CACHE_HOME:-$HOME/.cache}/tdc-citus}/$(sha256sum "$TARBALL" | cut -c1-16)-$key
 STAGE=$CACHE/stage
