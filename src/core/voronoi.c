@@ -142,8 +142,9 @@ struct tdc_voronoi
 	size_t		nhe;
 	size_t		ntri;
 	uint32_t   *tri_id;			/* half-edge -> triangle left of it, or NIL */
-	uint32_t   *tri_he;			/* triangle -> its smallest half-edge */
-	_Atomic(uint32_t) *parent;	/* union-find over triangles; root = class min */
+	_Atomic(uint32_t) *parent;	/* union-find over triangles, root = class min;
+								 * NULL when no two triangles are cocircular */
+	bool	   *range_cocircular;	/* half-edge range -> has a cocircular edge */
 	double	   *cc;				/* circumcenter of each class root, 2 per tri */
 	_Atomic(uint32_t) *site_he; /* site -> smallest outgoing half-edge */
 	size_t	   *range_first;	/* triangles: first id of each range */
@@ -600,6 +601,15 @@ is_outer(const tdc_job *job, size_t h)
 	return (job->outer[h >> 6] >> (h & 63)) & 1;
 }
 
+static void
+grow_box(double *box, const double *p)
+{
+	box[0] = fmin(box[0], p[0]);
+	box[1] = fmin(box[1], p[1]);
+	box[2] = fmax(box[2], p[0]);
+	box[3] = fmax(box[3], p[1]);
+}
+
 static size_t
 nranges_for(size_t n, size_t per)
 {
@@ -646,7 +656,47 @@ count_task(void *arg, size_t r, int worker)
 	v->range_first[r + 1] = n;
 }
 
-/* Number the triangles of range r (in half-edge order) and record their half-edges. */
+/* The Voronoi vertex of a triangle: its circumcenter, from its canonical rotation. */
+static inline void
+triangle_vertex(const tdc_voronoi *v, const uint32_t s[3], double out[2])
+{
+	const double *p[3];
+	int			k = 0;
+
+	for (int i = 0; i < 3; i++)
+		p[i] = site_pt(v, s[i]);
+	if (lex_less(p[1], p[k]))
+		k = 1;
+	if (lex_less(p[2], p[k]))
+		k = 2;
+	tdc_circumcenter(p[k], p[(k + 1) % 3], p[(k + 2) % 3], out);
+}
+
+/* Are the two triangles beside edge h, h + 1 (h even) cocircular? */
+static inline bool
+edge_cocircular(const tdc_voronoi *v, size_t h)
+{
+	const tdc_job *job = v->job;
+	uint32_t	a = job->he[h].org,
+				b = job->he[h + 1].org,
+				c,
+				d;
+
+	if (a == TDC_NIL || b == TDC_NIL || is_outer(job, h) || is_outer(job, h + 1))
+		return false;
+	c = job->he[job->he[h + 1].prev ^ 1].org;	/* apex left of h */
+	d = job->he[job->he[h].prev ^ 1].org;	/* apex left of h + 1 */
+	return tdc_incircle(site_pt(v, a), site_pt(v, b), site_pt(v, c), site_pt(v, d)) == 0;
+}
+
+/*
+ * One walk over half-edge range r: number its triangles (in half-edge
+ * order), record each triangle's number on its three half-edges, compute
+ * its circumcenter and the range's bounding box of them, and look for a
+ * cocircular edge.  Finding none anywhere, as on data in general position,
+ * spares the union-find and its passes; a range with one is walked again
+ * by cocircular_task.
+ */
 static void
 number_task(void *arg, size_t r, int worker)
 {
@@ -656,23 +706,42 @@ number_task(void *arg, size_t r, int worker)
 				hi = lo + ITEMS_PER_TASK < v->nhe ? lo + ITEMS_PER_TASK : v->nhe;
 	uint32_t	id = (uint32_t) v->range_first[r],
 				t[3];
+	double		box[4] = {INFINITY, INFINITY, -INFINITY, -INFINITY};
+	bool		cocircular = false;
 
 	if (vor_cancelled(v))
 		return;
 	for (size_t h = lo; h < hi; h++)
 	{
-		uint32_t	h1,
-					h2;
+		if (((h - lo) & 4095) == 4095 && vor_cancelled(v))
+			return;
+		if (!cocircular && (h & 1) == 0)
+			cocircular = edge_cocircular(v, h);
+		if (tdc_tri_at(job, h, t))
+		{
+			uint32_t	h1 = job->he[SYM(h)].prev,
+						h2 = job->he[SYM(h1)].prev;
+			double	   *c = v->cc + 2 * (size_t) id;
 
-		if (!tdc_tri_at(job, h, t))
-			continue;
-		h1 = job->he[SYM(h)].prev;
-		h2 = job->he[SYM(h1)].prev;
-		v->tri_id[h] = v->tri_id[h1] = v->tri_id[h2] = id;
-		v->tri_he[id] = (uint32_t) h;
-		atomic_init(&v->parent[id], id);
-		id++;
+			v->tri_id[h] = v->tri_id[h1] = v->tri_id[h2] = id;
+			triangle_vertex(v, t, c);
+			grow_box(box, c);
+			id++;
+		}
 	}
+	v->range_cocircular[r] = cocircular;
+	memcpy(v->range_box + 4 * r, box, sizeof(box));
+}
+
+static void
+parent_task(void *arg, size_t r, int worker)
+{
+	tdc_voronoi *v = arg;
+	size_t		lo = r * ITEMS_PER_TASK,
+				hi = lo + ITEMS_PER_TASK < v->ntri ? lo + ITEMS_PER_TASK : v->ntri;
+
+	for (size_t t = lo; t < hi; t++)
+		atomic_init(&v->parent[t], (uint32_t) t);
 }
 
 static uint32_t
@@ -714,82 +783,45 @@ uf_union(tdc_voronoi *v, uint32_t a, uint32_t b)
 	}
 }
 
-/* Join the two triangles of every edge of range r whose four sites are cocircular. */
+/* Join the two triangles of every cocircular edge of range r, if it has one. */
 static void
 cocircular_task(void *arg, size_t r, int worker)
 {
 	tdc_voronoi *v = arg;
-	const tdc_job *job = v->job;
 	size_t		lo = r * ITEMS_PER_TASK,
 				hi = lo + ITEMS_PER_TASK < v->nhe ? lo + ITEMS_PER_TASK : v->nhe;
 
-	if (vor_cancelled(v))
+	if (!v->range_cocircular[r] || vor_cancelled(v))
 		return;
 	for (size_t h = lo & ~(size_t) 1; h < hi; h += 2)
-	{
-		uint32_t	ta = v->tri_id[h],
-					tb = v->tri_id[h + 1];
-		uint32_t	a,
-					b,
-					c,
-					d;
-
-		if (ta == TDC_NIL || tb == TDC_NIL)
-			continue;
-		a = job->he[h].org;
-		b = job->he[h + 1].org;
-		c = job->he[job->he[h + 1].prev ^ 1].org;	/* apex left of h */
-		d = job->he[job->he[h].prev ^ 1].org;	/* apex left of h + 1 */
-		if (tdc_incircle(site_pt(v, a), site_pt(v, b), site_pt(v, c), site_pt(v, d)) == 0)
-			uf_union(v, ta, tb);
-	}
+		if (edge_cocircular(v, h))
+			uf_union(v, v->tri_id[h], v->tri_id[h + 1]);
 }
 
-/* Flatten the classes of triangle range r; circumcenters of its roots. */
+/*
+ * Flatten the classes of triangle range r, and the bounding box of its
+ * roots' circumcenters: a class's vertex is its root's.
+ */
 static void
-vertex_task(void *arg, size_t r, int worker)
+flatten_task(void *arg, size_t r, int worker)
 {
 	tdc_voronoi *v = arg;
-	const tdc_job *job = v->job;
 	size_t		lo = r * ITEMS_PER_TASK,
 				hi = lo + ITEMS_PER_TASK < v->ntri ? lo + ITEMS_PER_TASK : v->ntri;
-	double		bx0 = INFINITY,
-				by0 = INFINITY,
-				bx1 = -INFINITY,
-				by1 = -INFINITY;
+	double		box[4] = {INFINITY, INFINITY, -INFINITY, -INFINITY};
 
 	if (vor_cancelled(v))
 		return;
 	for (size_t t = lo; t < hi; t++)
 	{
 		uint32_t	root = uf_find(v, (uint32_t) t);
-		uint32_t	h,
-					s[3];
-		const double *p[3];
-		int			k = 0;
 
 		/* safe: other tasks only read parents while flattening */
 		atomic_store_explicit(&v->parent[t], root, memory_order_relaxed);
-		if (root != t)
-			continue;
-		h = v->tri_he[t];
-		tdc_tri_at(job, h, s);
-		for (int i = 0; i < 3; i++)
-			p[i] = site_pt(v, s[i]);
-		if (lex_less(p[1], p[k]))
-			k = 1;
-		if (lex_less(p[2], p[k]))
-			k = 2;
-		tdc_circumcenter(p[k], p[(k + 1) % 3], p[(k + 2) % 3], v->cc + 2 * t);
-		bx0 = fmin(bx0, v->cc[2 * t]);
-		bx1 = fmax(bx1, v->cc[2 * t]);
-		by0 = fmin(by0, v->cc[2 * t + 1]);
-		by1 = fmax(by1, v->cc[2 * t + 1]);
+		if (root == t)
+			grow_box(box, v->cc + 2 * t);
 	}
-	v->range_box[4 * r] = bx0;
-	v->range_box[4 * r + 1] = by0;
-	v->range_box[4 * r + 2] = bx1;
-	v->range_box[4 * r + 3] = by1;
+	memcpy(v->range_box + 4 * r, box, sizeof(box));
 }
 
 /* ----------------------------------------------------------------
@@ -1085,12 +1117,19 @@ hull_ray(const tdc_voronoi *v, const double *p, uint32_t a, uint32_t b,
 	box_exit(v->box, p, -(pb[1] - pa[1]), pb[0] - pa[0], out, side);
 }
 
+/* The class of the triangle left of h: its root, whose vertex is the class's. */
+static inline uint32_t
+class_of(const tdc_voronoi *v, uint32_t h)
+{
+	uint32_t	t = v->tri_id[h];
+
+	return v->parent ? atomic_load_explicit(&v->parent[t], memory_order_relaxed) : t;
+}
+
 static inline const double *
 vertex_of(const tdc_voronoi *v, uint32_t h)
 {
-	uint32_t	t = atomic_load_explicit(&v->parent[v->tri_id[h]], memory_order_relaxed);
-
-	return v->cc + 2 * (size_t) t;
+	return v->cc + 2 * (size_t) class_of(v, h);
 }
 
 /*
@@ -1148,7 +1187,7 @@ cell_of_mesh(const tdc_voronoi *v, uint32_t s, size_t deg, uint32_t ho, ring *r)
 		/* the edge to the next vertex is dual to onext(h) */
 		if (r->tagged)
 			g = job->he[SYM(hn)].org;
-		t = atomic_load_explicit(&v->parent[v->tri_id[h]], memory_order_relaxed);
+		t = class_of(v, h);
 		if (t != prev_t)
 		{
 			ring_push(r, v->cc[2 * (size_t) t], v->cc[2 * (size_t) t + 1], g);
@@ -1463,15 +1502,6 @@ cmp_site(const void *x, const void *y, void *arg)
 	return lex_less(p, q) ? -1 : lex_less(q, p) ? 1 : 0;
 }
 
-static void
-grow_box(double *box, const double *p)
-{
-	box[0] = fmin(box[0], p[0]);
-	box[1] = fmin(box[1], p[1]);
-	box[2] = fmax(box[2], p[0]);
-	box[3] = fmax(box[3], p[1]);
-}
-
 #define FAIL_OOM(msg) do { vor_fail(v, TDC_ENOMEM, msg); return TDC_ENOMEM; } while (0)
 
 /* Everything, on the driver thread (or the caller's for small jobs). */
@@ -1480,6 +1510,7 @@ vor_run(tdc_voronoi *v)
 {
 	const tdc_job *job = v->job;
 	size_t		nr = 0;
+	bool		cocircular = false;
 	double		box[4] = {v->env[0], v->env[1], v->env[2], v->env[3]},
 				lo[2],
 				hi[2],
@@ -1528,24 +1559,32 @@ vor_run(tdc_voronoi *v)
 			vor_fail(v, TDC_EINVAL, "the mesh does not hold the triangles counted");
 			return TDC_EINVAL;
 		}
+		/* a half-edge outside every triangle keeps a number never read */
 		v->tri_id = tdc_big_alloc(v->nhe * sizeof(uint32_t));
-		v->tri_he = tdc_big_alloc(v->ntri * sizeof(uint32_t));
-		v->parent = tdc_big_alloc(v->ntri * sizeof(uint32_t));
 		v->cc = tdc_big_alloc(v->ntri * 2 * sizeof(double));
-		v->range_box = malloc(ntr * 4 * sizeof(double));
-		if (!v->tri_id || !v->tri_he || !v->parent || !v->cc || !v->range_box)
+		v->range_box = malloc((nr > ntr ? nr : ntr) * 4 * sizeof(double));
+		v->range_cocircular = calloc(nr, sizeof(bool));
+		if (!v->tri_id || !v->cc || !v->range_box || !v->range_cocircular)
 			FAIL_OOM("out of memory for the Voronoi vertices");
-		memset(v->tri_id, 0xff, v->nhe * sizeof(uint32_t));
 		tdc_pool_for(v->pool, nr, number_task, v);
 		if (vor_cancelled(v))
 			return TDC_ECANCELED;
-		tdc_pool_for(v->pool, nr, cocircular_task, v);
-		if (vor_cancelled(v))
-			return TDC_ECANCELED;
-		tdc_pool_for(v->pool, ntr, vertex_task, v);
-		if (vor_cancelled(v))
-			return TDC_ECANCELED;
-		for (size_t r = 0; r < ntr; r++)
+		for (size_t r = 0; r < nr; r++)
+			cocircular = cocircular || v->range_cocircular[r];
+		if (cocircular)
+		{
+			v->parent = tdc_big_alloc(v->ntri * sizeof(uint32_t));
+			if (v->parent == NULL)
+				FAIL_OOM("out of memory joining cocircular triangles");
+			tdc_pool_for(v->pool, ntr, parent_task, v);
+			tdc_pool_for(v->pool, nr, cocircular_task, v);
+			if (vor_cancelled(v))
+				return TDC_ECANCELED;
+			tdc_pool_for(v->pool, ntr, flatten_task, v);
+			if (vor_cancelled(v))
+				return TDC_ECANCELED;
+		}
+		for (size_t r = 0; r < (cocircular ? ntr : nr); r++)
 		{
 			if (v->range_box[4 * r] <= v->range_box[4 * r + 2])
 			{
@@ -1553,8 +1592,6 @@ vor_run(tdc_voronoi *v)
 				grow_box(box, v->range_box + 4 * r + 2);
 			}
 		}
-		tdc_big_free(v->tri_he);
-		v->tri_he = NULL;
 	}
 	else if (job->nsites >= 2)
 	{
@@ -1738,8 +1775,8 @@ tdc_voronoi_free(tdc_voronoi *v)
 		return;
 	tdc_runner_destroy(&v->run);
 	tdc_big_free(v->tri_id);
-	tdc_big_free(v->tri_he);
 	tdc_big_free(v->parent);
+	free(v->range_cocircular);
 	tdc_big_free(v->cc);
 	tdc_big_free(v->site_he);
 	free(v->range_first);
