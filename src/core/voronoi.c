@@ -165,6 +165,20 @@ struct tdc_voronoi
 	double	  **range_buf;		/* ring storage of each site range */
 	size_t		total_vertices;
 
+	/* tdc_voronoi_start_emit: sizes, then the cells straight to the writer */
+	bool		emit;
+	bool		writing;		/* the second phase (tdc_voronoi_emit) */
+	tdc_cell_writer writer;
+	uint64_t	emit_bytes;
+	size_t		emit_cells;
+	uint64_t   *range_bytes;	/* per cell range: bytes of its cells */
+	size_t	   *range_cells;
+	char	   *dst;
+	size_t		ninput;
+	uint32_t   *first_in;		/* site -> first input (tolerance only) */
+	uint64_t   *inpos;			/* input -> its cell's size, then offset */
+	uint64_t   *block_start;	/* input block -> offset of its first cell */
+
 	tdc_pool   *pool;
 	atomic_int	cancel;
 	atomic_int	failed;
@@ -1492,6 +1506,254 @@ done:
 	free(sites);
 }
 
+#define FAIL_OOM(msg) do { vor_fail(v, TDC_ENOMEM, msg); return TDC_ENOMEM; } while (0)
+
+/* ----------------------------------------------------------------
+ *		writing the cells straight into the host's value
+ * ----------------------------------------------------------------
+ */
+/*
+ * Site s's final cell (cut to E) into scratch, as mesh_cell_task builds it:
+ * an inner site untagged into w, kept when inside E; otherwise tagged into
+ * a and clipped (b scratch).  *res is w or a; false when out of memory.
+ */
+static bool
+build_mesh_cell(const tdc_voronoi *v, uint32_t s, ring *w, ring *a, ring *b,
+				const ring **res)
+{
+	uint32_t	ho;
+	size_t		deg = site_degree(v, s, &ho);
+
+	if (ho == TDC_NIL)
+	{
+		bool		inside = true;
+
+		if (!ring_reserve(w, deg + 8))
+			return false;
+		cell_of_mesh(v, s, deg, ho, w);
+		for (size_t i = 0; i < w->n && inside; i++)
+			inside = w->p[2 * i] >= v->env[0] && w->p[2 * i] <= v->env[2] &&
+				w->p[2 * i + 1] >= v->env[1] && w->p[2 * i + 1] <= v->env[3];
+		if (inside)
+		{
+			*res = w;
+			return true;
+		}
+	}
+	if (!ring_reserve(a, deg + 8))
+		return false;
+	cell_of_mesh(v, s, deg, ho, a);
+	if (!clip_to_env(v, s, a, b))
+		return false;
+	*res = a;
+	return true;
+}
+
+/* Where site s's cell goes: the first input point that became s. */
+static inline size_t
+first_input(const tdc_voronoi *v, uint32_t s)
+{
+	return v->first_in ? v->first_in[s] : v->job->idx[s];
+}
+
+/*
+ * The sites whose smallest half-edge lies in half-edge range rg, in mesh
+ * order (see mesh_cell_task): in the sizing phase, each cell's vertex count
+ * and the range's bytes; in the writing phase, each cell built again, the
+ * same way, and handed to the writer at its offset.  Building twice costs
+ * less than keeping the cells: a million cells are some 100 MB of fresh
+ * memory, which the kernel must clear before they are written and copied.
+ */
+static void
+mesh_emit_task(void *arg, size_t rg, int worker)
+{
+	tdc_voronoi *v = arg;
+	const tdc_job *job = v->job;
+	size_t		lo = rg * v->cell_range,
+				hi = lo + v->cell_range < v->nhe ? lo + v->cell_range : v->nhe;
+	ring		w = {0},
+				a = {.tagged = true},
+				b = {.tagged = true};
+	uint64_t	bytes = 0;
+	size_t		cells = 0;
+
+	if (vor_cancelled(v))
+		return;
+	for (size_t h = lo; h < hi; h++)
+	{
+		uint32_t	s = job->he[h].org;
+		const ring *c;
+
+		if (((h - lo) & 4095) == 4095 && vor_cancelled(v))
+			goto done;
+		if (s == TDC_NIL ||
+			atomic_load_explicit(&v->site_he[s], memory_order_relaxed) != (uint32_t) h)
+			continue;
+		if (!build_mesh_cell(v, s, &w, &a, &b, &c))
+		{
+			vor_fail(v, TDC_ENOMEM, "out of memory building the Voronoi cells");
+			goto done;
+		}
+		if (!v->writing)
+		{
+			v->cell_n[s] = (uint32_t) c->n;
+			bytes += v->writer.size(v->writer.arg, c->n);
+			cells++;
+		}
+		else if (c->n != v->cell_n[s])
+		{
+			vor_fail(v, TDC_EINVAL, "a Voronoi cell came out different when written");
+			goto done;
+		}
+		else
+			v->writer.write(v->writer.arg, v->dst + v->inpos[first_input(v, s)], c->p, c->n);
+	}
+	if (!v->writing)
+	{
+		v->range_bytes[rg] = bytes;
+		v->range_cells[rg] = cells;
+	}
+done:
+	free(w.p);
+	free(a.p);
+	free(a.tag);
+	free(b.p);
+	free(b.tag);
+}
+
+/* Collinear input: the cells of site range rg, kept by cell_task, to the writer. */
+static void
+line_emit_task(void *arg, size_t rg, int worker)
+{
+	tdc_voronoi *v = arg;
+	size_t		lo = rg * SITES_PER_TASK,
+				hi = lo + SITES_PER_TASK < v->nsites ? lo + SITES_PER_TASK : v->nsites;
+
+	if (vor_cancelled(v))
+		return;
+	for (size_t s = lo; s < hi; s++)
+		if (v->cell_n[s] > 0)
+			v->writer.write(v->writer.arg, v->dst + v->inpos[first_input(v, (uint32_t) s)],
+							v->cell_xy[s], v->cell_n[s]);
+}
+
+/* Each cell's bytes at the place of its site's first input point. */
+static void
+scatter_task(void *arg, size_t r, int worker)
+{
+	tdc_voronoi *v = arg;
+	size_t		lo = r * ITEMS_PER_TASK,
+				hi = lo + ITEMS_PER_TASK < v->nsites ? lo + ITEMS_PER_TASK : v->nsites;
+
+	if (vor_cancelled(v))
+		return;
+	for (size_t s = lo; s < hi; s++)
+		if (v->cell_n[s] > 0)
+			v->inpos[first_input(v, (uint32_t) s)] = v->writer.size(v->writer.arg, v->cell_n[s]);
+}
+
+/* The bytes of the cells of input block r. */
+static void
+block_sum_task(void *arg, size_t r, int worker)
+{
+	tdc_voronoi *v = arg;
+	size_t		lo = r * ITEMS_PER_TASK,
+				hi = lo + ITEMS_PER_TASK < v->ninput ? lo + ITEMS_PER_TASK : v->ninput;
+	uint64_t	sum = 0;
+
+	if (vor_cancelled(v))
+		return;
+	for (size_t i = lo; i < hi; i++)
+		sum += v->inpos[i];
+	v->block_start[r + 1] = sum;
+}
+
+/*
+ * Sizes to offsets in input block r, and the block's part of the value
+ * mapped in now, in parallel, rather than a page fault at a time by the
+ * scattered writes that follow.
+ */
+static void
+offset_task(void *arg, size_t r, int worker)
+{
+	tdc_voronoi *v = arg;
+	size_t		lo = r * ITEMS_PER_TASK,
+				hi = lo + ITEMS_PER_TASK < v->ninput ? lo + ITEMS_PER_TASK : v->ninput;
+	uint64_t	off = v->block_start[r];
+
+	if (vor_cancelled(v))
+		return;
+	for (size_t i = lo; i < hi; i++)
+	{
+		uint64_t	size = v->inpos[i];
+
+		v->inpos[i] = off;
+		off += size;
+	}
+	tdc_prefault(v->dst + v->block_start[r], (size_t) (off - v->block_start[r]));
+}
+
+/*
+ * The writing phase, on the driver thread: offsets in input order (the
+ * sites' first input points, for a tolerance found through the input map),
+ * then every cell to the writer.
+ */
+static int
+vor_emit_run(tdc_voronoi *v)
+{
+	const tdc_job *job = v->job;
+	size_t		nb;
+	int			rc;
+
+	rc = tdc_pool_create(&v->pool, v->threads);
+	if (rc != 0)
+	{
+		vor_fail(v, rc, rc == TDC_ETHREAD ? "could not create worker threads" : "out of memory");
+		return rc;
+	}
+	v->ninput = tdc_num_input(job);
+	if (job->opt.tolerance > 0)
+	{
+		v->first_in = malloc(v->nsites * sizeof(uint32_t) + 1);
+		if (v->first_in == NULL)
+			FAIL_OOM("out of memory ordering the Voronoi cells");
+		memset(v->first_in, 0xff, v->nsites * sizeof(uint32_t));
+		for (size_t i = 0; i < v->ninput; i++)
+		{
+			uint32_t	s = tdc_input_site(job, i);
+
+			if (s == UINT32_MAX)
+				FAIL_OOM("out of memory mapping the input to its sites");
+			if (v->first_in[s] == TDC_NIL)
+				v->first_in[s] = (uint32_t) i;
+			if ((i & 65535) == 65535 && vor_cancelled(v))
+				return TDC_ECANCELED;
+		}
+	}
+	nb = nranges_for(v->ninput, ITEMS_PER_TASK);
+	v->inpos = tdc_big_alloc(v->ninput * sizeof(uint64_t) + 1);
+	v->block_start = calloc(nb + 1, sizeof(uint64_t));
+	if (v->inpos == NULL || v->block_start == NULL)
+		FAIL_OOM("out of memory ordering the Voronoi cells");
+	tdc_pool_for(v->pool, nranges_for(v->nsites, ITEMS_PER_TASK), scatter_task, v);
+	tdc_pool_for(v->pool, nb, block_sum_task, v);
+	if (vor_cancelled(v))
+		return TDC_ECANCELED;
+	for (size_t r = 0; r < nb; r++)
+		v->block_start[r + 1] += v->block_start[r];
+	if (v->block_start[nb] != v->emit_bytes)
+	{
+		vor_fail(v, TDC_EINVAL, "the Voronoi cells' offsets do not add up to their size");
+		return TDC_EINVAL;
+	}
+	tdc_pool_for(v->pool, nb, offset_task, v);
+	if (vor_cancelled(v))
+		return TDC_ECANCELED;
+	v->writing = true;
+	tdc_pool_for(v->pool, v->nranges, v->ntri > 0 ? mesh_emit_task : line_emit_task, v);
+	return vor_cancelled(v) ? TDC_ECANCELED : TDC_OK;
+}
+
 static int
 cmp_site(const void *x, const void *y, void *arg)
 {
@@ -1502,7 +1764,6 @@ cmp_site(const void *x, const void *y, void *arg)
 	return lex_less(p, q) ? -1 : lex_less(q, p) ? 1 : 0;
 }
 
-#define FAIL_OOM(msg) do { vor_fail(v, TDC_ENOMEM, msg); return TDC_ENOMEM; } while (0)
 
 /* Everything, on the driver thread (or the caller's for small jobs). */
 static int
@@ -1628,23 +1889,45 @@ vor_run(tdc_voronoi *v)
 	v->big_bufs = v->ntri > 0;
 	nr = v->ntri > 0 ? nranges_for(v->nhe, v->cell_range) : nranges_for(v->nsites, SITES_PER_TASK);
 	v->nranges = nr;
-	v->cell_xy = tdc_big_alloc(v->nsites * sizeof(double *) + 1);
+	/* zeroed: a site without a cell (a duplicate) keeps 0 */
 	v->cell_n = tdc_big_alloc(v->nsites * sizeof(uint32_t) + 1);
-	v->range_buf = calloc(nr + 1, sizeof(double *));
-	if (v->cell_xy == NULL || v->cell_n == NULL || v->range_buf == NULL)
+	if (v->cell_n == NULL)
 		FAIL_OOM("out of memory for the Voronoi cells");
-	/* a site without a cell (a duplicate) keeps 0 */
-	if (v->ntri > 0)
+	if (v->emit && v->ntri > 0)
 	{
-		memset(v->cell_n, 0, v->nsites * sizeof(uint32_t));
-		tdc_pool_for(v->pool, nr, mesh_cell_task, v);
+		v->range_bytes = calloc(nr + 1, sizeof(uint64_t));
+		v->range_cells = calloc(nr + 1, sizeof(size_t));
+		if (v->range_bytes == NULL || v->range_cells == NULL)
+			FAIL_OOM("out of memory for the Voronoi cells");
+		tdc_pool_for(v->pool, nr, mesh_emit_task, v);
+		if (vor_cancelled(v))
+			return TDC_ECANCELED;
+		for (size_t r = 0; r < nr; r++)
+		{
+			v->emit_bytes += v->range_bytes[r];
+			v->emit_cells += v->range_cells[r];
+		}
+		for (size_t s = 0; s < v->nsites; s++)
+			v->total_vertices += v->cell_n[s];
+		/* the writing phase builds the cells again from the same arrays */
+		return TDC_OK;
 	}
-	else
-		tdc_pool_for(v->pool, nr, cell_task, v);
+	v->cell_xy = tdc_big_alloc(v->nsites * sizeof(double *) + 1);
+	v->range_buf = calloc(nr + 1, sizeof(double *));
+	if (v->cell_xy == NULL || v->range_buf == NULL)
+		FAIL_OOM("out of memory for the Voronoi cells");
+	tdc_pool_for(v->pool, nr, v->ntri > 0 ? mesh_cell_task : cell_task, v);
 	if (vor_cancelled(v))
 		return TDC_ECANCELED;
 	for (size_t s = 0; s < v->nsites; s++)
+	{
 		v->total_vertices += v->cell_n[s];
+		if (v->emit && v->cell_n[s] > 0)
+		{
+			v->emit_bytes += v->writer.size(v->writer.arg, v->cell_n[s]);
+			v->emit_cells++;
+		}
+	}
 
 	/* what only the build needed */
 	tdc_big_free(v->tri_id);
@@ -1664,7 +1947,7 @@ static int
 vor_work(void *arg)
 {
 	tdc_voronoi *v = arg;
-	int			rc = vor_run(v);
+	int			rc = v->writing ? vor_emit_run(v) : vor_run(v);
 
 	tdc_pool_destroy(v->pool);
 	v->pool = NULL;
@@ -1697,9 +1980,10 @@ tdc_voronoi_memory(size_t n, int threads)
 	return n * (24 + 48 + 16 + 8 + 8 + 16 * 16 * 3 / 2) + (size_t) (threads + 1) * 65536 + 4096;
 }
 
-int
-tdc_voronoi_start(const tdc_job *job, const double env[4], int threads,
-				  tdc_voronoi **out, char *err, size_t errlen)
+static int
+voronoi_start(const tdc_job *job, const double env[4], int threads,
+			  const tdc_cell_writer *writer, tdc_voronoi **out, char *err,
+			  size_t errlen)
 {
 	tdc_voronoi *v;
 	int			rc;
@@ -1728,6 +2012,11 @@ tdc_voronoi_start(const tdc_job *job, const double env[4], int threads,
 	if (v == NULL)
 		FAIL(TDC_ENOMEM, "out of memory");
 	v->job = job;
+	if (writer)
+	{
+		v->emit = true;
+		v->writer = *writer;
+	}
 	memcpy(v->env, env, sizeof(v->env));
 	v->threads = threads > 0 ? threads : tdc_threads_used(job);
 	if (v->threads < 1)
@@ -1747,6 +2036,60 @@ tdc_voronoi_start(const tdc_job *job, const double env[4], int threads,
 	*out = v;
 	return TDC_OK;
 #undef FAIL
+}
+
+int
+tdc_voronoi_start(const tdc_job *job, const double env[4], int threads,
+				  tdc_voronoi **out, char *err, size_t errlen)
+{
+	return voronoi_start(job, env, threads, NULL, out, err, errlen);
+}
+
+int
+tdc_voronoi_start_emit(const tdc_job *job, const double env[4], int threads,
+					   const tdc_cell_writer *writer, tdc_voronoi **out,
+					   char *err, size_t errlen)
+{
+	if (writer == NULL || writer->size == NULL || writer->write == NULL)
+	{
+		*out = NULL;
+		if (err && errlen)
+			snprintf(err, errlen, "a Voronoi cell writer needs its size and write functions");
+		return TDC_EINVAL;
+	}
+	return voronoi_start(job, env, threads, writer, out, err, errlen);
+}
+
+uint64_t
+tdc_voronoi_emit_size(const tdc_voronoi *v, size_t *cells)
+{
+	if (cells)
+		*cells = v->emit_cells;
+	return v->emit_bytes;
+}
+
+int
+tdc_voronoi_emit(tdc_voronoi *v, char *dst, char *err, size_t errlen)
+{
+	int			rc;
+
+	if (err && errlen)
+		err[0] = '\0';
+	if (!v->emit || v->writing || tdc_runner_wait(&v->run, 0) != TDC_OK)
+	{
+		if (err && errlen)
+			snprintf(err, errlen, "the Voronoi cells cannot be written: %s",
+					 !v->emit ? "not started for writing" : v->writing ? "already written" :
+					 "their sizing has not finished successfully");
+		return TDC_EINVAL;
+	}
+	tdc_runner_rearm(&v->run);
+	v->dst = dst;
+	v->writing = true;
+	rc = tdc_runner_start(&v->run, v->job->nin <= TDC_INLINE_MAX, vor_work, v, err, errlen);
+	if (rc != TDC_OK)
+		tdc_runner_finish(&v->run, rc);
+	return rc;
 }
 
 int
@@ -1794,6 +2137,11 @@ tdc_voronoi_free(tdc_voronoi *v)
 	free(v->range_buf);
 	tdc_big_free(v->cell_xy);
 	tdc_big_free(v->cell_n);
+	free(v->range_bytes);
+	free(v->range_cells);
+	free(v->first_in);
+	tdc_big_free(v->inpos);
+	free(v->block_start);
 	free(v);
 }
 
@@ -1814,7 +2162,7 @@ tdc_voronoi_build(const tdc_job *job, const double env[4], int threads,
 size_t
 tdc_voronoi_cell(const tdc_voronoi *v, uint32_t site, const double **xy)
 {
-	if (site >= v->nsites || v->cell_n[site] == 0)
+	if (site >= v->nsites || v->cell_xy == NULL || v->cell_n[site] == 0)
 	{
 		*xy = NULL;
 		return 0;
