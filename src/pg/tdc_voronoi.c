@@ -168,11 +168,12 @@ tdc_voronoi_check_tolerance(bool isnull, double tolerance, const char *fname)
  * Triangulate buf and build its diagram clipped to GEOS's envelope (grown
  * to ext when given).  Returns NULL, with nothing running, when there are
  * fewer than 2 sites.  *runp owns the job, the returned VorRun the diagram;
- * the caller frees both with tdc_voronoi_result_free.
+ * the caller frees both with tdc_voronoi_result_free.  With a writer, the
+ * cells are only sized, for tdc_voronoi_write_polygons.
  */
 VorRun *
 tdc_voronoi_run(const TdcPointBuf *buf, double tolerance, const double *ext,
-				TdcRun **runp, const char *fname)
+				const tdc_cell_writer *writer, TdcRun **runp, const char *fname)
 {
 	TdcRun	   *run;
 	VorRun	   *vrun;
@@ -207,7 +208,8 @@ tdc_voronoi_run(const TdcPointBuf *buf, double tolerance, const double *ext,
 	cb->arg = vrun;
 	/* registered after the job's: runs before it, the diagram reads the job */
 	MemoryContextRegisterResetCallback(buf->cxt, cb);
-	rc = tdc_voronoi_start(run->job, env, 0, &vrun->v, err, sizeof(err));
+	rc = writer ? tdc_voronoi_start_emit(run->job, env, 0, writer, &vrun->v, err, sizeof(err)) :
+		tdc_voronoi_start(run->job, env, 0, &vrun->v, err, sizeof(err));
 	if (rc != TDC_OK)
 		ereport(ERROR, (errcode(vor_errcode(rc)), errmsg("%s: %s", fname, err)));
 	vor_wait(vrun, fname);
@@ -321,6 +323,63 @@ poly_member(void *arg, uint32 s)
 	w->p += m * 2 * sizeof(double);
 	memcpy(w->p, c, 2 * sizeof(double));
 	w->p += 2 * sizeof(double);
+}
+
+/*
+ * The cell writer of a polygon collection (tdc_cell_writer): runs on the
+ * core's worker threads, so it only copies bytes.  A cell of m vertices is
+ * a POLYGON of one ring closed by repeating its first vertex.
+ */
+static size_t
+polygon_cell_size(void *arg, size_t m)
+{
+	return 16 + 16 * (m + 1);
+}
+
+static void
+polygon_cell_write(void *arg, char *dst, const double *xy, size_t m)
+{
+	uint32		h[4] = {G_POLYGON, 1, (uint32) (m + 1), 0};	/* 0 pads the ring counts */
+
+	memcpy(dst, h, sizeof(h));
+	memcpy(dst + 16, xy, 16 * m);
+	memcpy(dst + 16 + 16 * m, xy, 16);
+}
+
+const tdc_cell_writer tdc_polygon_cell_writer = {polygon_cell_size, polygon_cell_write, NULL};
+
+/*
+ * The diagram of a run started with tdc_polygon_cell_writer as one
+ * GEOMETRYCOLLECTION of POLYGONs: the value is allocated here, at the size
+ * the core found, and the core's threads write the cells into it while
+ * this thread waits as for the diagram.
+ */
+struct varlena *
+tdc_voronoi_write_polygons(VorRun *vrun, int32 srid, uint64 have_bytes,
+						   const char *fname)
+{
+	size_t		count;
+	uint64		bytes = tdc_voronoi_emit_size(vrun->v, &count);
+	uint64		size = VARHDRSZ + G_HEADER + 8 + bytes;
+	uint64		limit = tdc_max_memory_bytes();
+	char	   *out,
+			   *p;
+	char		err[256];
+	int			rc;
+
+	tdc_gser_check_result_size(size, fname);
+	if (limit > 0 && have_bytes + size > limit)
+		tdc_report_memory_limit(fname, "writing the Voronoi diagram", have_bytes + size, 0);
+	out = write_header((Size) size, srid, &p);
+	/* the workers fault the pages in; on huge pages where the kernel has them */
+	tdc_advise_huge(out, (size_t) size);
+	p = put_u32(p, G_COLLECTION);
+	p = put_u32(p, (uint32) count);
+	rc = tdc_voronoi_emit(vrun->v, p, err, sizeof(err));
+	if (rc != TDC_OK)
+		ereport(ERROR, (errcode(vor_errcode(rc)), errmsg("%s: %s", fname, err)));
+	vor_wait(vrun, fname);
+	return (struct varlena *) out;
 }
 
 static bool
@@ -490,18 +549,22 @@ tdc_voronoi_to_value(const TdcPointBuf *buf, double tolerance, const double *ext
 	TdcRun	   *run;
 	VorRun	   *vrun;
 	struct varlena *result;
+	uint64		have;
 
-	vrun = tdc_voronoi_run(buf, tolerance, ext, &run, fname);
+	vrun = tdc_voronoi_run(buf, tolerance, ext, lines ? NULL : &tdc_polygon_cell_writer,
+						   &run, fname);
 	if (vrun == NULL)
 	{
 		if (run)
 			tdc_run_free(run);
 		return tdc_gser_empty(TDC_OUT_POLYGONS, buf->srid);
 	}
-	result = tdc_voronoi_write(run->job, vrun->v, lines, buf->srid,
-							   tdc_pointbuf_bytes(buf) +
-							   tdc_estimate_memory((size_t) buf->n, NULL) +
-							   tdc_voronoi_memory((size_t) buf->n, 0), fname);
+	have = tdc_pointbuf_bytes(buf) + tdc_estimate_memory((size_t) buf->n, NULL) +
+		tdc_voronoi_memory((size_t) buf->n, 0);
+	if (lines)
+		result = tdc_voronoi_write(run->job, vrun->v, true, buf->srid, have, fname);
+	else
+		result = tdc_voronoi_write_polygons(vrun, buf->srid, have, fname);
 	CHECK_FOR_INTERRUPTS();
 	tdc_voronoi_result_free(vrun, run);
 	return result;
