@@ -5,13 +5,16 @@
 #   A  bench/core_bench.sh   ./tdc (1 thread, all threads) vs CGAL   -> build/bench/core*.csv
 #   B  bench/sql_bench.sh    tdc_delaunay vs PostGIS in PostgreSQL   -> build/bench/sql*.csv, docs/*.png
 #   C  bench/sweep_bench.sh  the same from 3 to 10^7 points per call -> build/bench/sweep*, docs/sweep.png
+#   D  bench/voronoi_bench.sh  Voronoi: ours vs ST_VoronoiPolygons, 10^5 and 10^6 points -> build/bench/voronoi*
+#      (optional: only with BENCH_VORONOI=1)
 #
 # B and C run against the server the PG* variables point at when one answers;
 # otherwise a throw-away cluster is started with scripts/lib.sh and stopped
 # afterwards.  Either way the extension is built and installed first.
 #
 #   BENCH_SKIP_CORE=1   skip A          BENCH_SKIP_SQL=1   skip B
-#   BENCH_SKIP_SWEEP=1  skip C          BENCH_NO_INSTALL=1 do not run make install before B and C
+#   BENCH_SKIP_SWEEP=1  skip C          BENCH_NO_INSTALL=1 do not run make install before B, C and D
+#   BENCH_VORONOI=1     run D too (BENCH_VOR_* knobs: see bench/voronoi_bench.sh)
 # The knobs of the scripts (BENCH_SIZES, BENCH_SQL_SIZES, BENCH_SWEEP_*, ...) pass through.
 set -euo pipefail
 
@@ -37,9 +40,13 @@ sql_parts() {
 		log "=== C: SQL size sweep"
 		bash "$ROOT/bench/sweep_bench.sh"
 	fi
+	if [ "${BENCH_VORONOI:-0}" = 1 ]; then
+		log "=== D: Voronoi diagrams in SQL"
+		bash "$ROOT/bench/voronoi_bench.sh"
+	fi
 }
 
-if [ "${BENCH_SKIP_SQL:-0}" != 1 ] || [ "${BENCH_SKIP_SWEEP:-0}" != 1 ]; then
+if [ "${BENCH_SKIP_SQL:-0}" != 1 ] || [ "${BENCH_SKIP_SWEEP:-0}" != 1 ] || [ "${BENCH_VORONOI:-0}" = 1 ]; then
 	# shellcheck source=scripts/lib.sh
 	. "$ROOT/scripts/lib.sh"
 	if [ "${BENCH_NO_INSTALL:-0}" != 1 ]; then
@@ -89,5 +96,11 @@ fi
 			echo '![size sweep](sweep.png)'
 		fi
 	fi
+	if [ -s "$BENCH_OUT/voronoi.txt" ]; then
+		echo
+		echo "## Voronoi diagrams: tdc_delaunay vs PostGIS"
+		echo
+		sed '1,2{/^###/d;/^$/d}' "$BENCH_OUT/voronoi.txt"
+	fi
 } > "${BENCH_DOCS:-$ROOT/docs}/benchmarks.md"
-log "done: $BENCH_OUT/{core,sql,sweep}.txt, ${BENCH_DOCS:-$ROOT/docs}/{benchmarks.md,core.png,bench.png,coast_tin.png,sweep.png}"
+log "done: $BENCH_OUT/{core,sql,sweep,voronoi}.txt, ${BENCH_DOCS:-$ROOT/docs}/{benchmarks.md,core.png,bench.png,coast_tin.png,sweep.png}"
