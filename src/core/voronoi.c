@@ -177,6 +177,9 @@ struct tdc_voronoi
 	size_t		ninput;
 	uint32_t   *first_in;		/* site -> first input (tolerance only) */
 	uint64_t   *inpos;			/* input -> its cell's size, then offset */
+	uint64_t   *site_off;		/* site -> its cell's offset */
+	uint32_t  **range_rec;		/* cell range -> its record (mesh_size_task) */
+	size_t	   *range_rec_len;
 	uint64_t   *block_start;	/* input block -> offset of its first cell */
 
 	tdc_pool   *pool;
@@ -1556,32 +1559,119 @@ first_input(const tdc_voronoi *v, uint32_t s)
 	return v->first_in ? v->first_in[s] : v->job->idx[s];
 }
 
+/* Room for n more words in a range's record. */
+static bool
+rec_reserve(uint32_t **rec, size_t *cap, size_t len, size_t n)
+{
+	if (len + n > *cap)
+	{
+		size_t		c = (len + n) + (len + n) / 2 + 1024;
+		uint32_t   *p = realloc(*rec, c * sizeof(uint32_t));
+
+		if (p == NULL)
+			return false;
+		*rec = p;
+		*cap = c;
+	}
+	return true;
+}
+
 /*
- * The sites whose smallest half-edge lies in half-edge range rg, in mesh
- * order (see mesh_cell_task): in the sizing phase, each cell's vertex count
- * and the range's bytes; in the writing phase, each cell built again, the
- * same way, and handed to the writer at its offset.  Building twice costs
- * less than keeping the cells: a million cells are some 100 MB of fresh
- * memory, which the kernel must clear before they are written and copied.
+ * An inner site's cell as its classes, from one walk around the site: the
+ * vertices cell_of_mesh would give an untagged ring (a class once, a vertex
+ * equal to the one before dropped, then a closing repeat of the first), as
+ * class numbers into ids (room for deg).  Returns the count, or 0 when
+ * the site is on the hull or a vertex lies outside E: then the cell is
+ * built and clipped as a ring.  *deg: the site's degree.
+ */
+static size_t
+inner_cell_ids(const tdc_voronoi *v, uint32_t s, uint32_t *ids, size_t cap, size_t *deg)
+{
+	const tdc_job *job = v->job;
+	uint32_t	h0 = atomic_load_explicit(&v->site_he[s], memory_order_relaxed),
+				h = h0,
+				prev_t = TDC_NIL;
+	size_t		n = 0,
+				d = 0;
+	const double *last = NULL;
+
+	do
+	{
+		uint32_t	t;
+		const double *c;
+
+		if (is_outer(job, h))
+		{
+			*deg = 0;
+			return 0;
+		}
+		d++;
+		t = class_of(v, h);
+		h = job->he[h].next;
+		if (t == prev_t)
+			continue;
+		prev_t = t;
+		c = v->cc + 2 * (size_t) t;
+		if (last && c[0] == last[0] && c[1] == last[1])
+			continue;
+		if (!(c[0] >= v->env[0] && c[0] <= v->env[2] && c[1] >= v->env[1] && c[1] <= v->env[3]) ||
+			n == cap)
+		{
+			*deg = 0;
+			return 0;
+		}
+		ids[n++] = t;
+		last = c;
+	} while (h != h0);
+	*deg = d;
+	while (n > 1)
+	{
+		const double *f = v->cc + 2 * (size_t) ids[0],
+				   *l = v->cc + 2 * (size_t) ids[n - 1];
+
+		if (f[0] != l[0] || f[1] != l[1])
+			break;
+		n--;
+	}
+	return n;
+}
+
+#define INNER_MAX	64			/* longer inner cells go the ring's way */
+
+/*
+ * Sizing: the sites whose smallest half-edge lies in half-edge range rg, in
+ * mesh order (see mesh_cell_task), each cell's vertex count and the range's
+ * bytes, and a record of the range's cells for the writing phase: per site
+ * its number, its count m and, for an inner cell inside E (almost all of
+ * them), its m classes; m = 0 asks for the cell to be built again, as a
+ * clipped ring.  Writing then reads the record in order and looks up the
+ * vertices, with no walk around the sites: keeping the cells' coordinates
+ * instead would cost some 100 MB of fresh memory for a million points, which
+ * the kernel must clear, and walking twice, the mesh's random loads twice.
  */
 static void
-mesh_emit_task(void *arg, size_t rg, int worker)
+mesh_size_task(void *arg, size_t rg, int worker)
 {
 	tdc_voronoi *v = arg;
 	const tdc_job *job = v->job;
 	size_t		lo = rg * v->cell_range,
-				hi = lo + v->cell_range < v->nhe ? lo + v->cell_range : v->nhe;
+				hi = lo + v->cell_range < v->nhe ? lo + v->cell_range : v->nhe,
+				len = 0,
+				cap = 0;
 	ring		w = {0},
 				a = {.tagged = true},
 				b = {.tagged = true};
 	uint64_t	bytes = 0;
 	size_t		cells = 0;
+	uint32_t   *rec = NULL;
 
 	if (vor_cancelled(v))
 		return;
 	for (size_t h = lo; h < hi; h++)
 	{
 		uint32_t	s = job->he[h].org;
+		size_t		m,
+					deg;
 		const ring *c;
 
 		if (((h - lo) & 4095) == 4095 && vor_cancelled(v))
@@ -1589,29 +1679,84 @@ mesh_emit_task(void *arg, size_t rg, int worker)
 		if (s == TDC_NIL ||
 			atomic_load_explicit(&v->site_he[s], memory_order_relaxed) != (uint32_t) h)
 			continue;
-		if (!build_mesh_cell(v, s, &w, &a, &b, &c))
+		if (!rec_reserve(&rec, &cap, len, 2 + INNER_MAX))
+			goto oom;
+		m = inner_cell_ids(v, s, rec + len + 2, INNER_MAX, &deg);
+		rec[len] = s;
+		rec[len + 1] = (uint32_t) m;
+		len += 2 + m;
+		if (m == 0)
 		{
-			vor_fail(v, TDC_ENOMEM, "out of memory building the Voronoi cells");
-			goto done;
+			if (!build_mesh_cell(v, s, &w, &a, &b, &c))
+				goto oom;
+			m = c->n;
 		}
-		if (!v->writing)
-		{
-			v->cell_n[s] = (uint32_t) c->n;
-			bytes += v->writer.size(v->writer.arg, c->n);
-			cells++;
-		}
-		else if (c->n != v->cell_n[s])
-		{
-			vor_fail(v, TDC_EINVAL, "a Voronoi cell came out different when written");
+		v->cell_n[s] = (uint32_t) m;
+		bytes += v->writer.size(v->writer.arg, m);
+		cells++;
+	}
+	v->range_bytes[rg] = bytes;
+	v->range_cells[rg] = cells;
+	v->range_rec[rg] = rec;
+	v->range_rec_len[rg] = len;
+	rec = NULL;
+	goto done;
+oom:
+	vor_fail(v, TDC_ENOMEM, "out of memory sizing the Voronoi cells");
+done:
+	free(rec);
+	free(w.p);
+	free(a.p);
+	free(a.tag);
+	free(b.p);
+	free(b.tag);
+}
+
+/* Writing: range rg's cells, as its record lists them, to the writer. */
+static void
+mesh_write_task(void *arg, size_t rg, int worker)
+{
+	tdc_voronoi *v = arg;
+	const uint32_t *rec = v->range_rec[rg];
+	size_t		len = v->range_rec_len[rg];
+	ring		w = {0},
+				a = {.tagged = true},
+				b = {.tagged = true};
+	double		xy[2 * INNER_MAX];
+
+	if (vor_cancelled(v))
+		return;
+	for (size_t i = 0, k = 0; i < len; k++)
+	{
+		uint32_t	s = rec[i];
+		size_t		m = rec[i + 1];
+		char	   *dst = v->dst + v->site_off[s];
+
+		if ((k & 4095) == 4095 && vor_cancelled(v))
 			goto done;
+		if (m > 0)
+		{
+			for (size_t j = 0; j < m; j++)
+				memcpy(xy + 2 * j, v->cc + 2 * (size_t) rec[i + 2 + j], 2 * sizeof(double));
+			v->writer.write(v->writer.arg, dst, xy, m);
 		}
 		else
-			v->writer.write(v->writer.arg, v->dst + v->inpos[first_input(v, s)], c->p, c->n);
-	}
-	if (!v->writing)
-	{
-		v->range_bytes[rg] = bytes;
-		v->range_cells[rg] = cells;
+		{
+			const ring *c;
+
+			if (!build_mesh_cell(v, s, &w, &a, &b, &c))
+			{
+				vor_fail(v, TDC_ENOMEM, "out of memory building the Voronoi cells");
+				goto done;
+			}
+			if (c->n != v->cell_n[s])
+			{
+				vor_fail(v, TDC_EINVAL, "a Voronoi cell came out different when written");
+				goto done;
+			}
+			v->writer.write(v->writer.arg, dst, c->p, c->n);
+		}
+		i += 2 + m;
 	}
 done:
 	free(w.p);
@@ -1633,8 +1778,7 @@ line_emit_task(void *arg, size_t rg, int worker)
 		return;
 	for (size_t s = lo; s < hi; s++)
 		if (v->cell_n[s] > 0)
-			v->writer.write(v->writer.arg, v->dst + v->inpos[first_input(v, (uint32_t) s)],
-							v->cell_xy[s], v->cell_n[s]);
+			v->writer.write(v->writer.arg, v->dst + v->site_off[s], v->cell_xy[s], v->cell_n[s]);
 }
 
 /* Each cell's bytes at the place of its site's first input point. */
@@ -1694,6 +1838,25 @@ offset_task(void *arg, size_t r, int worker)
 }
 
 /*
+ * Each site's offset, from its first input point's: a loop of independent
+ * random loads, which overlap, rather than one in the middle of every
+ * cell's writing.
+ */
+static void
+gather_task(void *arg, size_t r, int worker)
+{
+	tdc_voronoi *v = arg;
+	size_t		lo = r * ITEMS_PER_TASK,
+				hi = lo + ITEMS_PER_TASK < v->nsites ? lo + ITEMS_PER_TASK : v->nsites;
+
+	if (vor_cancelled(v))
+		return;
+	for (size_t s = lo; s < hi; s++)
+		if (v->cell_n[s] > 0)
+			v->site_off[s] = v->inpos[first_input(v, (uint32_t) s)];
+}
+
+/*
  * The writing phase, on the driver thread: offsets in input order (the
  * sites' first input points, for a tolerance found through the input map),
  * then every cell to the writer.
@@ -1749,8 +1912,16 @@ vor_emit_run(tdc_voronoi *v)
 	tdc_pool_for(v->pool, nb, offset_task, v);
 	if (vor_cancelled(v))
 		return TDC_ECANCELED;
-	v->writing = true;
-	tdc_pool_for(v->pool, v->nranges, v->ntri > 0 ? mesh_emit_task : line_emit_task, v);
+	/* by site now; the input's offsets are no longer needed */
+	v->site_off = tdc_big_alloc(v->nsites * sizeof(uint64_t) + 1);
+	if (v->site_off == NULL)
+		FAIL_OOM("out of memory ordering the Voronoi cells");
+	tdc_pool_for(v->pool, nranges_for(v->nsites, ITEMS_PER_TASK), gather_task, v);
+	tdc_big_free(v->inpos);
+	v->inpos = NULL;
+	if (vor_cancelled(v))
+		return TDC_ECANCELED;
+	tdc_pool_for(v->pool, v->nranges, v->ntri > 0 ? mesh_write_task : line_emit_task, v);
 	return vor_cancelled(v) ? TDC_ECANCELED : TDC_OK;
 }
 
@@ -1897,9 +2068,12 @@ vor_run(tdc_voronoi *v)
 	{
 		v->range_bytes = calloc(nr + 1, sizeof(uint64_t));
 		v->range_cells = calloc(nr + 1, sizeof(size_t));
-		if (v->range_bytes == NULL || v->range_cells == NULL)
+		v->range_rec = calloc(nr + 1, sizeof(uint32_t *));
+		v->range_rec_len = calloc(nr + 1, sizeof(size_t));
+		if (v->range_bytes == NULL || v->range_cells == NULL || v->range_rec == NULL ||
+			v->range_rec_len == NULL)
 			FAIL_OOM("out of memory for the Voronoi cells");
-		tdc_pool_for(v->pool, nr, mesh_emit_task, v);
+		tdc_pool_for(v->pool, nr, mesh_size_task, v);
 		if (vor_cancelled(v))
 			return TDC_ECANCELED;
 		for (size_t r = 0; r < nr; r++)
@@ -2141,7 +2315,13 @@ tdc_voronoi_free(tdc_voronoi *v)
 	free(v->range_cells);
 	free(v->first_in);
 	tdc_big_free(v->inpos);
+	tdc_big_free(v->site_off);
 	free(v->block_start);
+	if (v->range_rec)
+		for (size_t r = 0; r < v->nranges; r++)
+			free(v->range_rec[r]);
+	free(v->range_rec);
+	free(v->range_rec_len);
 	free(v);
 }
 
