@@ -144,7 +144,7 @@ struct tdc_voronoi
 	uint32_t   *tri_id;			/* half-edge -> triangle left of it, or NIL */
 	_Atomic(uint32_t) *parent;	/* union-find over triangles, root = class min;
 								 * NULL when no two triangles are cocircular */
-	bool	   *range_cocircular;	/* half-edge range -> has a cocircular edge */
+	atomic_int	need_join;		/* two cocircular triangles' vertices differ */
 	double	   *cc;				/* circumcenter of each class root, 2 per tri */
 	_Atomic(uint32_t) *site_he; /* site -> smallest outgoing half-edge */
 	size_t	   *range_first;	/* triangles: first id of each range */
@@ -724,7 +724,6 @@ number_task(void *arg, size_t r, int worker)
 	uint32_t	id = (uint32_t) v->range_first[r],
 				t[3];
 	double		box[4] = {INFINITY, INFINITY, -INFINITY, -INFINITY};
-	bool		cocircular = false;
 
 	if (vor_cancelled(v))
 		return;
@@ -732,8 +731,6 @@ number_task(void *arg, size_t r, int worker)
 	{
 		if (((h - lo) & 4095) == 4095 && vor_cancelled(v))
 			return;
-		if (!cocircular && (h & 1) == 0)
-			cocircular = edge_cocircular(v, h);
 		if (tdc_tri_at(job, h, t))
 		{
 			uint32_t	h1 = job->he[SYM(h)].prev,
@@ -746,7 +743,6 @@ number_task(void *arg, size_t r, int worker)
 			id++;
 		}
 	}
-	v->range_cocircular[r] = cocircular;
 	memcpy(v->range_box + 4 * r, box, sizeof(box));
 }
 
@@ -800,7 +796,7 @@ uf_union(tdc_voronoi *v, uint32_t a, uint32_t b)
 	}
 }
 
-/* Join the two triangles of every cocircular edge of range r, if it has one. */
+/* Join the two triangles of every cocircular edge of range r. */
 static void
 cocircular_task(void *arg, size_t r, int worker)
 {
@@ -808,7 +804,7 @@ cocircular_task(void *arg, size_t r, int worker)
 	size_t		lo = r * ITEMS_PER_TASK,
 				hi = lo + ITEMS_PER_TASK < v->nhe ? lo + ITEMS_PER_TASK : v->nhe;
 
-	if (!v->range_cocircular[r] || vor_cancelled(v))
+	if (vor_cancelled(v))
 		return;
 	for (size_t h = lo & ~(size_t) 1; h < hi; h += 2)
 		if (edge_cocircular(v, h))
@@ -1150,6 +1146,37 @@ vertex_of(const tdc_voronoi *v, uint32_t h)
 }
 
 /*
+ * Consecutive triangles ta and tb around a site, beside edge h: if their
+ * vertices are close enough that the two triangles may be cocircular
+ * (within the documented bound of each, 1/2 ulp + 2^-55 of the coordinate,
+ * with room to spare), and they are, the classes are joined (vor_run).
+ * Two cocircular triangles whose vertices came out as the same doubles
+ * would need no join (the rings drop the repeat, as they must), but they
+ * are joined all the same: it is what makes exactly cocircular input
+ * (lattices) take, and so test, the path that the rare cocircular pair
+ * with different roundings needs, and it costs nothing on input with no
+ * four sites on a circle.  Once joined, every class has one vertex.
+ */
+static inline bool
+close_coordinate(double a, double b)
+{
+	return fabs(a - b) <= 0x1p-48 * fmax(fabs(a), fabs(b));
+}
+
+static inline void
+note_pair(const tdc_voronoi *v, uint32_t ta, uint32_t tb, uint32_t h)
+{
+	const double *a = v->cc + 2 * (size_t) ta,
+			   *b = v->cc + 2 * (size_t) tb;
+
+	if (v->parent)
+		return;
+	if (close_coordinate(a[0], b[0]) && close_coordinate(a[1], b[1]) &&
+		edge_cocircular(v, h & ~(uint32_t) 1))
+		atomic_store_explicit((atomic_int *) &v->need_join, 1, memory_order_relaxed);
+}
+
+/*
  * The ring of half-edges out of site s: its degree, and the one with the
  * outer face on its left (s is on the hull), or TDC_NIL.
  */
@@ -1207,12 +1234,21 @@ cell_of_mesh(const tdc_voronoi *v, uint32_t s, size_t deg, uint32_t ho, ring *r)
 		t = class_of(v, h);
 		if (t != prev_t)
 		{
+			if (prev_t != TDC_NIL)
+				note_pair(v, prev_t, t, h);
 			ring_push(r, v->cc[2 * (size_t) t], v->cc[2 * (size_t) t + 1], g);
 			prev_t = t;
 		}
 		else if (r->tagged)
 			r->tag[r->n - 1] = g;	/* a zero-length edge collapsed */
 		h = hn;
+	}
+	if (ho == TDC_NIL && prev_t != TDC_NIL)
+	{
+		uint32_t	first = class_of(v, h0);
+
+		if (first != prev_t)
+			note_pair(v, prev_t, first, h0);
 	}
 	if (ho != TDC_NIL)
 	{
@@ -1607,6 +1643,8 @@ inner_cell_ids(const tdc_voronoi *v, uint32_t s, uint32_t *ids, size_t cap, size
 		}
 		d++;
 		t = class_of(v, h);
+		if (t != prev_t && prev_t != TDC_NIL)
+			note_pair(v, prev_t, t, h);
 		h = job->he[h].next;
 		if (t == prev_t)
 			continue;
@@ -1624,6 +1662,12 @@ inner_cell_ids(const tdc_voronoi *v, uint32_t s, uint32_t *ids, size_t cap, size
 		last = c;
 	} while (h != h0);
 	*deg = d;
+	{
+		uint32_t	first = class_of(v, h0);
+
+		if (first != prev_t)
+			note_pair(v, prev_t, first, h0);
+	}
 	while (n > 1)
 	{
 		const double *f = v->cc + 2 * (size_t) ids[0],
@@ -1936,17 +1980,122 @@ cmp_site(const void *x, const void *y, void *arg)
 }
 
 
+/*
+ * B: around E, the sites (base) and the vertices of the ranges' boxes,
+ * widened on every side by its larger extent.
+ */
+static void
+set_outer_box(tdc_voronoi *v, const double base[4], size_t nboxes)
+{
+	double		box[4] = {base[0], base[1], base[2], base[3]},
+				w;
+
+	for (size_t r = 0; r < nboxes; r++)
+	{
+		if (v->range_box[4 * r] <= v->range_box[4 * r + 2])
+		{
+			grow_box(box, v->range_box + 4 * r);
+			grow_box(box, v->range_box + 4 * r + 2);
+		}
+	}
+	w = fmax(box[2] - box[0], box[3] - box[1]);
+	if (!(w > 0))
+		w = fmax(fabs(box[2]), fabs(box[3])) + 1;
+	v->box[0] = box[0] - w;
+	v->box[1] = box[1] - w;
+	v->box[2] = box[2] + w;
+	v->box[3] = box[3] + w;
+}
+
+/*
+ * The cells, into buffers or (emit) sized and recorded; every site's count
+ * in cell_n.  Run again from scratch after the classes were joined.
+ */
+static int
+build_cells(tdc_voronoi *v)
+{
+	size_t		nr = v->nranges;
+
+	v->total_vertices = 0;
+	v->emit_bytes = 0;
+	v->emit_cells = 0;
+	if (v->emit && v->ntri > 0)
+	{
+		for (size_t r = 0; r < nr; r++)
+		{
+			free(v->range_rec[r]);
+			v->range_rec[r] = NULL;
+			v->range_rec_len[r] = 0;
+		}
+		tdc_pool_for(v->pool, nr, mesh_size_task, v);
+		if (vor_cancelled(v))
+			return TDC_ECANCELED;
+		for (size_t r = 0; r < nr; r++)
+		{
+			v->emit_bytes += v->range_bytes[r];
+			v->emit_cells += v->range_cells[r];
+		}
+		for (size_t s = 0; s < v->nsites; s++)
+			v->total_vertices += v->cell_n[s];
+		return TDC_OK;
+	}
+	for (size_t r = 0; r < nr; r++)
+	{
+		if (v->big_bufs)
+			tdc_big_free(v->range_buf[r]);
+		else
+			free(v->range_buf[r]);
+		v->range_buf[r] = NULL;
+	}
+	tdc_pool_for(v->pool, nr, v->ntri > 0 ? mesh_cell_task : cell_task, v);
+	if (vor_cancelled(v))
+		return TDC_ECANCELED;
+	for (size_t s = 0; s < v->nsites; s++)
+	{
+		v->total_vertices += v->cell_n[s];
+		if (v->emit && v->cell_n[s] > 0)
+		{
+			v->emit_bytes += v->writer.size(v->writer.arg, v->cell_n[s]);
+			v->emit_cells++;
+		}
+	}
+	return TDC_OK;
+}
+
+/*
+ * Join the triangles of every cocircular edge into classes, each with its
+ * root's vertex, and B again from the roots' vertices.
+ */
+static int
+join_cocircular(tdc_voronoi *v, const double base[4])
+{
+	size_t		nr = nranges_for(v->nhe, ITEMS_PER_TASK),
+				ntr = nranges_for(v->ntri, ITEMS_PER_TASK);
+
+	v->parent = tdc_big_alloc(v->ntri * sizeof(uint32_t));
+	if (v->parent == NULL)
+		FAIL_OOM("out of memory joining cocircular triangles");
+	tdc_pool_for(v->pool, ntr, parent_task, v);
+	tdc_pool_for(v->pool, nr, cocircular_task, v);
+	if (vor_cancelled(v))
+		return TDC_ECANCELED;
+	tdc_pool_for(v->pool, ntr, flatten_task, v);
+	if (vor_cancelled(v))
+		return TDC_ECANCELED;
+	set_outer_box(v, base, ntr);
+	return TDC_OK;
+}
+
 /* Everything, on the driver thread (or the caller's for small jobs). */
 static int
 vor_run(tdc_voronoi *v)
 {
 	const tdc_job *job = v->job;
-	size_t		nr = 0;
-	bool		cocircular = false;
-	double		box[4] = {v->env[0], v->env[1], v->env[2], v->env[3]},
+	size_t		nr = 0,
+				nboxes = 0;
+	double		base[4] = {v->env[0], v->env[1], v->env[2], v->env[3]},
 				lo[2],
-				hi[2],
-				w;
+				hi[2];
 	int			rc;
 
 	rc = tdc_pool_create(&v->pool, v->threads);
@@ -1963,8 +2112,8 @@ vor_run(tdc_voronoi *v)
 	if (job->nsites > 0)
 	{
 		tdc_site_extent(job, lo, hi);
-		grow_box(box, lo);
-		grow_box(box, hi);
+		grow_box(base, lo);
+		grow_box(base, hi);
 	}
 
 	if (job->nsites >= 2)
@@ -1995,35 +2144,12 @@ vor_run(tdc_voronoi *v)
 		v->tri_id = tdc_big_alloc(v->nhe * sizeof(uint32_t));
 		v->cc = tdc_big_alloc(v->ntri * 2 * sizeof(double));
 		v->range_box = malloc((nr > ntr ? nr : ntr) * 4 * sizeof(double));
-		v->range_cocircular = calloc(nr, sizeof(bool));
-		if (!v->tri_id || !v->cc || !v->range_box || !v->range_cocircular)
+		if (!v->tri_id || !v->cc || !v->range_box)
 			FAIL_OOM("out of memory for the Voronoi vertices");
 		tdc_pool_for(v->pool, nr, number_task, v);
 		if (vor_cancelled(v))
 			return TDC_ECANCELED;
-		for (size_t r = 0; r < nr; r++)
-			cocircular = cocircular || v->range_cocircular[r];
-		if (cocircular)
-		{
-			v->parent = tdc_big_alloc(v->ntri * sizeof(uint32_t));
-			if (v->parent == NULL)
-				FAIL_OOM("out of memory joining cocircular triangles");
-			tdc_pool_for(v->pool, ntr, parent_task, v);
-			tdc_pool_for(v->pool, nr, cocircular_task, v);
-			if (vor_cancelled(v))
-				return TDC_ECANCELED;
-			tdc_pool_for(v->pool, ntr, flatten_task, v);
-			if (vor_cancelled(v))
-				return TDC_ECANCELED;
-		}
-		for (size_t r = 0; r < (cocircular ? ntr : nr); r++)
-		{
-			if (v->range_box[4 * r] <= v->range_box[4 * r + 2])
-			{
-				grow_box(box, v->range_box + 4 * r);
-				grow_box(box, v->range_box + 4 * r + 2);
-			}
-		}
+		nboxes = nr;
 	}
 	else if (job->nsites >= 2)
 	{
@@ -2041,13 +2167,7 @@ vor_run(tdc_voronoi *v)
 		for (size_t i = 0; i < k; i++)
 			v->line_pos[v->line[i]] = (uint32_t) i;
 	}
-	w = fmax(box[2] - box[0], box[3] - box[1]);
-	if (!(w > 0))
-		w = fmax(fabs(box[2]), fabs(box[3])) + 1;
-	v->box[0] = box[0] - w;
-	v->box[1] = box[1] - w;
-	v->box[2] = box[2] + w;
-	v->box[3] = box[3] + w;
+	set_outer_box(v, base, nboxes);
 
 	/*
 	 * Cells of a mesh by half-edge ranges of at least 2^18 (a few MB of
@@ -2073,39 +2193,37 @@ vor_run(tdc_voronoi *v)
 		if (v->range_bytes == NULL || v->range_cells == NULL || v->range_rec == NULL ||
 			v->range_rec_len == NULL)
 			FAIL_OOM("out of memory for the Voronoi cells");
-		tdc_pool_for(v->pool, nr, mesh_size_task, v);
-		if (vor_cancelled(v))
-			return TDC_ECANCELED;
-		for (size_t r = 0; r < nr; r++)
-		{
-			v->emit_bytes += v->range_bytes[r];
-			v->emit_cells += v->range_cells[r];
-		}
-		for (size_t s = 0; s < v->nsites; s++)
-			v->total_vertices += v->cell_n[s];
-		/* the writing phase builds the cells again from the same arrays */
-		return TDC_OK;
 	}
-	v->cell_xy = tdc_big_alloc(v->nsites * sizeof(double *) + 1);
-	v->range_buf = calloc(nr + 1, sizeof(double *));
-	if (v->cell_xy == NULL || v->range_buf == NULL)
-		FAIL_OOM("out of memory for the Voronoi cells");
-	tdc_pool_for(v->pool, nr, v->ntri > 0 ? mesh_cell_task : cell_task, v);
-	if (vor_cancelled(v))
-		return TDC_ECANCELED;
-	for (size_t s = 0; s < v->nsites; s++)
+	else
 	{
-		v->total_vertices += v->cell_n[s];
-		if (v->emit && v->cell_n[s] > 0)
-		{
-			v->emit_bytes += v->writer.size(v->writer.arg, v->cell_n[s]);
-			v->emit_cells++;
-		}
+		v->cell_xy = tdc_big_alloc(v->nsites * sizeof(double *) + 1);
+		v->range_buf = calloc(nr + 1, sizeof(double *));
+		if (v->cell_xy == NULL || v->range_buf == NULL)
+			FAIL_OOM("out of memory for the Voronoi cells");
+	}
+	rc = build_cells(v);
+	if (rc != TDC_OK)
+		return rc;
+
+	/*
+	 * Two cocircular triangles whose vertices came out different (see the
+	 * header comment): join the classes and build every cell again.
+	 */
+	if (atomic_load(&v->need_join))
+	{
+		rc = join_cocircular(v, base);
+		if (rc == TDC_OK)
+			rc = build_cells(v);
+		if (rc != TDC_OK)
+			return rc;
 	}
 
-	/* what only the build needed */
-	tdc_big_free(v->tri_id);
-	v->tri_id = NULL;
+	/* what only the build needed (emit: writing builds some cells again) */
+	if (!(v->emit && v->ntri > 0))
+	{
+		tdc_big_free(v->tri_id);
+		v->tri_id = NULL;
+	}
 	return TDC_OK;
 }
 
@@ -2293,7 +2411,6 @@ tdc_voronoi_free(tdc_voronoi *v)
 	tdc_runner_destroy(&v->run);
 	tdc_big_free(v->tri_id);
 	tdc_big_free(v->parent);
-	free(v->range_cocircular);
 	tdc_big_free(v->cc);
 	tdc_big_free(v->site_he);
 	free(v->range_first);
