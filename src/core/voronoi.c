@@ -24,11 +24,19 @@
  * incircle determinant of its two triangles is exactly zero), and the
  * triangles are merged into one class by a lock-free union-find whose root
  * is the smallest triangle number, so the class has one vertex, computed
- * once, and a cell never repeats it.
+ * once, and a cell never repeats it.  Testing every edge costs a tenth of
+ * the diagram, and on data in general position finds nothing; so the edges
+ * are tested where it is cheap and can matter: the walks that build the
+ * cells compare the vertices of consecutive triangles around each site,
+ * and only when the two are within rounding of each other (2^-48 of the
+ * coordinate, far above the bound below) is the edge between them tested.
+ * Every inner edge is between consecutive triangles around its end points,
+ * so none is missed.  If one is cocircular, the classes are joined (every
+ * edge tested, as above) and the cells are built again.
  *
- * One vertex, one value.  A Voronoi vertex is computed once per class, from
- * its root triangle with the vertices rotated to start at the
- * lexicographically smallest: every cell that uses it reads the same double
+ * One vertex, one value.  A Voronoi vertex is computed once per triangle,
+ * with the vertices rotated to start at the lexicographically smallest, and
+ * a class reads its root's: every cell that uses it reads the same double
  * pair, so neighbouring cells share their vertices bit for bit and the cells
  * form a coverage with no gap and no overlap beyond that rounding.  Points
  * made by clipping are computed from the segment's end points taken in
@@ -108,14 +116,29 @@
  * same way and the slabs are closed along B's boundary, then clipped.  One
  * site: its cell is E.
  *
- * Parallelism and cancel.  Numbering the triangles, joining cocircular
- * ones, computing the vertices and building the cells are parallel loops on
- * a pool of the job's thread count, run by a driver thread with all signals
- * blocked, like a triangulation, so the host's thread stays free to cancel.
- * Every loop polls the cancel flag at least once per 4096 items.  The cells
- * of a mesh are built by ranges of half-edges, each site in the range of its
- * smallest half-edge, so the walks follow the mesh's memory order; each
- * range writes its cells into one buffer of its own.
+ * Parallelism and cancel.  Numbering the triangles (with their vertices, in
+ * one walk over the half-edges), joining cocircular ones and building the
+ * cells are parallel loops on a pool of the job's thread count, run by a
+ * driver thread with all signals blocked, like a triangulation, so the
+ * host's thread stays free to cancel.  Every loop polls the cancel flag at
+ * least once per 4096 items.  The cells of a mesh are built by ranges of
+ * half-edges, each site in the range of its smallest half-edge, so the walks
+ * follow the mesh's memory order; each range writes its cells into one
+ * buffer of its own (tdc_voronoi_cell reads them there).
+ *
+ * Writing straight into the host's value (tdc_voronoi_start_emit).  A host
+ * that wants all cells as one value in input order would otherwise copy a
+ * million cells, some 130 MB, on its own thread, from buffers the kernel
+ * first had to clear.  Instead the first phase only sizes the cells: one
+ * walk around each site records an inner cell that lies inside E (almost
+ * all of them) as its classes, a few words, and any other cell as "build
+ * again".  The host allocates the total; the second phase computes every
+ * cell's offset by a parallel prefix sum over the input points (a cell sits
+ * at its site's first input point), maps the value in block by block on the
+ * workers, and writes the cells from the records by the host's writer, a
+ * pure function that copies bytes; the clipped ones are built again the same
+ * way, which gives the same ring.  The bytes do not depend on the thread
+ * count: the cells and the offsets do not.
  */
 #include <errno.h>
 #include <math.h>
@@ -709,10 +732,8 @@ edge_cocircular(const tdc_voronoi *v, size_t h)
 /*
  * One walk over half-edge range r: number its triangles (in half-edge
  * order), record each triangle's number on its three half-edges, compute
- * its circumcenter and the range's bounding box of them, and look for a
- * cocircular edge.  Finding none anywhere, as on data in general position,
- * spares the union-find and its passes; a range with one is walked again
- * by cocircular_task.
+ * its circumcenter and the range's bounding box of them.  Cocircular
+ * triangles are found later, by the cell walks (note_pair).
  */
 static void
 number_task(void *arg, size_t r, int worker)
@@ -2267,7 +2288,12 @@ tdc_voronoi_memory(size_t n, int threads)
 	 * point), clipping adds at most 4 per cell, a hull cell 2 exit points
 	 * and 4 corners of B: 16 vertices of 16 bytes per point, and a range's
 	 * buffer grows by half its size at a time (x 1.5).  Plus the collinear
-	 * sort (8) and per thread scratch rings.
+	 * sort (8) and per thread scratch rings.  A diagram written straight
+	 * into the host's value (tdc_voronoi_start_emit) has no ring storage
+	 * but, per point, its records (a site, a count and at most 6 classes
+	 * on average: 32, x 1.5 for growing), the input's sizes and offsets
+	 * (8), the sites' offsets (8) and, with a tolerance, their first
+	 * inputs (4): less.
 	 */
 	return n * (24 + 48 + 16 + 8 + 8 + 16 * 16 * 3 / 2) + (size_t) (threads + 1) * 65536 + 4096;
 }

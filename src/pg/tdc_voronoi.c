@@ -30,7 +30,12 @@
  * The diagram is built on the core's threads while the backend waits
  * interruptibly, as a triangulation is: a cancel stops the workers, and a
  * reset callback on the input's memory context frees the diagram (before
- * the job it reads) if an error leaves early.
+ * the job it reads) if an error leaves early.  The polygons are written the
+ * same way: the core sizes the cells, this thread allocates the value, and
+ * the core's threads write the cells into it in input order through
+ * tdc_polygon_cell_writer, which only copies bytes (no PostgreSQL call off
+ * this thread); so the bytes are the same whatever the thread count.  The
+ * lines, each edge once, are written here.
  */
 #include "postgres.h"
 
@@ -289,6 +294,7 @@ for_sites_in_input_order(const tdc_job *job, void (*fn) (void *, uint32), void *
 	pfree(seen);
 }
 
+/* ST_TDCVoronoiLines's writer: sized in a first pass, written in a second */
 typedef struct PolyWriter
 {
 	const tdc_voronoi *v;
@@ -297,33 +303,7 @@ typedef struct PolyWriter
 	uint32		count;			/* members */
 	char	   *p;				/* pass 2: where the next member goes */
 	bool		writing;
-	bool		lines;
 } PolyWriter;
-
-static void
-poly_member(void *arg, uint32 s)
-{
-	PolyWriter *w = arg;
-	const double *c;
-	size_t		m = tdc_voronoi_cell(w->v, s, &c);
-
-	if (m == 0)
-		return;
-	if (!w->writing)
-	{
-		w->size += 16 + 16 * (uint64) (m + 1);
-		w->count++;
-		return;
-	}
-	w->p = put_u32(w->p, G_POLYGON);
-	w->p = put_u32(w->p, 1);
-	w->p = put_u32(w->p, (uint32) (m + 1));
-	w->p = put_u32(w->p, 0);	/* pads the ring counts to 8 bytes */
-	memcpy(w->p, c, m * 2 * sizeof(double));
-	w->p += m * 2 * sizeof(double);
-	memcpy(w->p, c, 2 * sizeof(double));
-	w->p += 2 * sizeof(double);
-}
 
 /*
  * The cell writer of a polygon collection (tdc_cell_writer): runs on the
@@ -423,12 +403,13 @@ line_members(void *arg, uint32 s)
 }
 
 /*
- * The diagram as one value: a GEOMETRYCOLLECTION of POLYGONs, or for lines
- * a MULTILINESTRING (a LINESTRING when there is one edge).
+ * The diagram's edges as one value: a MULTILINESTRING, or a LINESTRING when
+ * there is one edge.  (The polygons are written by the core's threads:
+ * tdc_voronoi_write_polygons.)
  */
 struct varlena *
-tdc_voronoi_write(const tdc_job *job, const tdc_voronoi *v, bool lines,
-				  int32 srid, uint64 have_bytes, const char *fname)
+tdc_voronoi_write_lines(const tdc_job *job, const tdc_voronoi *v, int32 srid,
+						uint64 have_bytes, const char *fname)
 {
 	PolyWriter	w;
 	uint64		size;
@@ -441,30 +422,8 @@ tdc_voronoi_write(const tdc_job *job, const tdc_voronoi *v, bool lines,
 	w.v = v;
 	tdc_voronoi_env(v, env);
 	w.env = env;
-	w.lines = lines;
-	if (lines)
-		for_sites_in_input_order(job, line_members, &w);
-	else
-	{
-		/*
-		 * The polygons' size does not depend on their order: sum it over
-		 * the site ids, sequentially, rather than walk the input.
-		 */
-		uint32		lim = tdc_site_id_limit(job);
-		const double *c;
-
-		for (uint32 s = 0; s < lim; s++)
-		{
-			size_t		m = tdc_voronoi_cell(v, s, &c);
-
-			if (m > 0)
-			{
-				w.size += 16 + 16 * (uint64) (m + 1);
-				w.count++;
-			}
-		}
-	}
-	if (lines && w.count == 1)
+	for_sites_in_input_order(job, line_members, &w);
+	if (w.count == 1)
 		size = VARHDRSZ + G_HEADER + w.size;
 	else
 		size = VARHDRSZ + G_HEADER + 8 + w.size;
@@ -472,16 +431,15 @@ tdc_voronoi_write(const tdc_job *job, const tdc_voronoi *v, bool lines,
 	if (limit > 0 && have_bytes + size > limit)
 		tdc_report_memory_limit(fname, "writing the Voronoi diagram", have_bytes + size, 0);
 	out = write_header((Size) size, srid, &p);
-	/* a million cells are some 130 MB: map them in one call, not by faults */
 	tdc_prefault(out, (size_t) size);
-	if (!(lines && w.count == 1))
+	if (w.count != 1)
 	{
-		p = put_u32(p, lines ? G_MULTILINE : G_COLLECTION);
+		p = put_u32(p, G_MULTILINE);
 		p = put_u32(p, w.count);
 	}
 	w.writing = true;
 	w.p = p;
-	for_sites_in_input_order(job, lines ? line_members : poly_member, &w);
+	for_sites_in_input_order(job, line_members, &w);
 	Assert(w.p == out + size);
 	return (struct varlena *) out;
 }
@@ -562,7 +520,7 @@ tdc_voronoi_to_value(const TdcPointBuf *buf, double tolerance, const double *ext
 	have = tdc_pointbuf_bytes(buf) + tdc_estimate_memory((size_t) buf->n, NULL) +
 		tdc_voronoi_memory((size_t) buf->n, 0);
 	if (lines)
-		result = tdc_voronoi_write(run->job, vrun->v, true, buf->srid, have, fname);
+		result = tdc_voronoi_write_lines(run->job, vrun->v, buf->srid, have, fname);
 	else
 		result = tdc_voronoi_write_polygons(vrun, buf->srid, have, fname);
 	CHECK_FOR_INTERRUPTS();
