@@ -153,6 +153,7 @@
 #define SITES_PER_TASK	4096	/* cells built per task, and per cancel poll */
 #define ITEMS_PER_TASK	65536	/* half-edges or triangles per task */
 #define CELL_RANGE_MIN	262144	/* half-edges per cell task, at least */
+#define TRI_CHUNK		1024	/* triangle numbers claimed at a time */
 
 struct tdc_voronoi
 {
@@ -170,7 +171,12 @@ struct tdc_voronoi
 	atomic_int	need_join;		/* two cocircular triangles' vertices differ */
 	double	   *cc;				/* circumcenter of each class root, 2 per tri */
 	_Atomic(uint32_t) *site_he; /* site -> smallest outgoing half-edge */
-	size_t	   *range_first;	/* triangles: first id of each range */
+	size_t	   *range_ntri;		/* half-edge range -> triangles numbered */
+	size_t		nchunks;		/* triangle numbers come in chunks (number_task) */
+	size_t		ntri_cap;		/* nchunks * TRI_CHUNK: triangle numbers below */
+	uint32_t   *chunk_fill;		/* chunk -> numbers used */
+	atomic_size_t chunks_claimed;
+	uint32_t   *tri_he;			/* joining: triangle -> its smallest half-edge */
 	double	   *range_box;		/* 4 per range: bounding box of its vertices */
 
 	/* collinear input */
@@ -681,42 +687,6 @@ nranges_for(size_t n, size_t per)
  * ----------------------------------------------------------------
  */
 
-/* Count the triangles starting in half-edge range r; note each site's smallest half-edge. */
-static void
-count_task(void *arg, size_t r, int worker)
-{
-	tdc_voronoi *v = arg;
-	const tdc_job *job = v->job;
-	size_t		lo = r * ITEMS_PER_TASK,
-				hi = lo + ITEMS_PER_TASK < v->nhe ? lo + ITEMS_PER_TASK : v->nhe,
-				n = 0;
-	uint32_t	t[3];
-
-	if (vor_cancelled(v))
-		return;
-	for (size_t h = lo; h < hi; h++)
-	{
-		uint32_t	o = job->he[h].org;
-
-		prefetch_face(v, h, hi);
-		if (o == TDC_NIL)
-			continue;
-		/* smallest half-edge out of o: a CAS loop, contention is rare */
-		{
-			uint32_t	cur = atomic_load_explicit(&v->site_he[o], memory_order_relaxed);
-
-			while ((uint32_t) h < cur &&
-				   !atomic_compare_exchange_weak_explicit(&v->site_he[o], &cur, (uint32_t) h,
-														  memory_order_relaxed,
-														  memory_order_relaxed))
-				;
-		}
-		if (v->ntri > 0 && tdc_tri_at(job, h, t))
-			n++;
-	}
-	v->range_first[r + 1] = n;
-}
-
 /* The Voronoi vertex of a triangle: its circumcenter, from its canonical rotation. */
 static inline void
 triangle_vertex(const tdc_voronoi *v, const uint32_t s[3], double out[2])
@@ -751,10 +721,14 @@ edge_cocircular(const tdc_voronoi *v, size_t h)
 }
 
 /*
- * One walk over half-edge range r: number its triangles (in half-edge
- * order), record each triangle's number on its three half-edges, compute
- * its circumcenter and the range's bounding box of them.  Cocircular
- * triangles are found later, by the cell walks (note_pair).
+ * One walk over half-edge range r: note each site's smallest half-edge,
+ * number the range's triangles, record each triangle's number on its three
+ * half-edges, compute its circumcenter and the range's bounding box of them.
+ * The numbers come in chunks of TRI_CHUNK claimed with one atomic add, as
+ * emit.c collects triangles, so no walk is needed first to count them; the
+ * numbers then depend on the timing, so nothing may be ordered by them (see
+ * uf_union).  Cocircular triangles are found later, by the cell walks
+ * (note_pair).
  */
 static void
 number_task(void *arg, size_t r, int worker)
@@ -762,30 +736,64 @@ number_task(void *arg, size_t r, int worker)
 	tdc_voronoi *v = arg;
 	const tdc_job *job = v->job;
 	size_t		lo = r * ITEMS_PER_TASK,
-				hi = lo + ITEMS_PER_TASK < v->nhe ? lo + ITEMS_PER_TASK : v->nhe;
-	uint32_t	id = (uint32_t) v->range_first[r],
-				t[3];
+				hi = lo + ITEMS_PER_TASK < v->nhe ? lo + ITEMS_PER_TASK : v->nhe,
+				n = 0,
+				chunk = 0,
+				used = TRI_CHUNK;
+	uint32_t	t[3];
 	double		box[4] = {INFINITY, INFINITY, -INFINITY, -INFINITY};
 
 	if (vor_cancelled(v))
 		return;
 	for (size_t h = lo; h < hi; h++)
 	{
+		uint32_t	o = job->he[h].org;
+
 		if (((h - lo) & 4095) == 4095 && vor_cancelled(v))
-			return;
+			break;
 		prefetch_face(v, h, hi);
+		if (o == TDC_NIL)
+			continue;
+		/* smallest half-edge out of o: a CAS loop, contention is rare */
+		{
+			uint32_t	cur = atomic_load_explicit(&v->site_he[o], memory_order_relaxed);
+
+			while ((uint32_t) h < cur &&
+				   !atomic_compare_exchange_weak_explicit(&v->site_he[o], &cur, (uint32_t) h,
+														  memory_order_relaxed,
+														  memory_order_relaxed))
+				;
+		}
 		if (tdc_tri_at(job, h, t))
 		{
 			uint32_t	h1 = job->he[SYM(h)].prev,
-						h2 = job->he[SYM(h1)].prev;
-			double	   *c = v->cc + 2 * (size_t) id;
+						h2 = job->he[SYM(h1)].prev,
+						id;
+			double	   *c;
 
+			if (used == TRI_CHUNK)
+			{
+				if (n > 0)
+					v->chunk_fill[chunk] = (uint32_t) used;
+				chunk = atomic_fetch_add_explicit(&v->chunks_claimed, 1, memory_order_relaxed);
+				if (chunk >= v->nchunks)
+				{
+					vor_fail(v, TDC_EINVAL, "the mesh holds more triangles than it counted");
+					return;
+				}
+				used = 0;
+			}
+			id = (uint32_t) (chunk * TRI_CHUNK + used++);
+			c = v->cc + 2 * (size_t) id;
 			v->tri_id[h] = v->tri_id[h1] = v->tri_id[h2] = id;
 			triangle_vertex(v, t, c);
 			grow_box(box, c);
-			id++;
+			n++;
 		}
 	}
+	if (n > 0)
+		v->chunk_fill[chunk] = (uint32_t) used;
+	v->range_ntri[r] = n;
 	memcpy(v->range_box + 4 * r, box, sizeof(box));
 }
 
@@ -794,10 +802,26 @@ parent_task(void *arg, size_t r, int worker)
 {
 	tdc_voronoi *v = arg;
 	size_t		lo = r * ITEMS_PER_TASK,
-				hi = lo + ITEMS_PER_TASK < v->ntri ? lo + ITEMS_PER_TASK : v->ntri;
+				hi = lo + ITEMS_PER_TASK < v->ntri_cap ? lo + ITEMS_PER_TASK : v->ntri_cap;
 
 	for (size_t t = lo; t < hi; t++)
 		atomic_init(&v->parent[t], (uint32_t) t);
+}
+
+/* The join's order of the triangles: by their smallest half-edges. */
+static void
+tri_he_task(void *arg, size_t r, int worker)
+{
+	tdc_voronoi *v = arg;
+	size_t		lo = r * ITEMS_PER_TASK,
+				hi = lo + ITEMS_PER_TASK < v->nhe ? lo + ITEMS_PER_TASK : v->nhe;
+	uint32_t	t[3];
+
+	if (vor_cancelled(v))
+		return;
+	for (size_t h = lo; h < hi; h++)
+		if (tdc_tri_at(v->job, h, t))
+			v->tri_he[v->tri_id[h]] = (uint32_t) h;
 }
 
 static uint32_t
@@ -814,9 +838,11 @@ uf_find(tdc_voronoi *v, uint32_t x)
 }
 
 /*
- * Lock-free union: the larger root is linked below the smaller with a CAS,
- * so parents only ever decrease and every class ends with its smallest
- * triangle as root, whatever the order of the unions.
+ * Lock-free union: the later root, in the order of the triangles' smallest
+ * half-edges (not of their numbers, which depend on the timing), is linked
+ * below the earlier with a CAS, so a root only ever moves earlier and every
+ * class ends with its first triangle as root, whatever the order of the
+ * unions: the same class vertex whatever the thread count.
  */
 static void
 uf_union(tdc_voronoi *v, uint32_t a, uint32_t b)
@@ -830,8 +856,8 @@ uf_union(tdc_voronoi *v, uint32_t a, uint32_t b)
 		b = uf_find(v, b);
 		if (a == b)
 			return;
-		big = a > b ? a : b;
-		small = a > b ? b : a;
+		big = v->tri_he[a] > v->tri_he[b] ? a : b;
+		small = big == a ? b : a;
 		if (atomic_compare_exchange_strong_explicit(&v->parent[big], &big, small,
 													memory_order_relaxed,
 													memory_order_relaxed))
@@ -855,28 +881,32 @@ cocircular_task(void *arg, size_t r, int worker)
 }
 
 /*
- * Flatten the classes of triangle range r, and the bounding box of its
- * roots' circumcenters: a class's vertex is its root's.
+ * Flatten the classes of the triangles of chunks [r * FLATTEN_CHUNKS, ...),
+ * and the bounding box of its roots' circumcenters: a class's vertex is its
+ * root's.
  */
+#define FLATTEN_CHUNKS	64
+
 static void
 flatten_task(void *arg, size_t r, int worker)
 {
 	tdc_voronoi *v = arg;
-	size_t		lo = r * ITEMS_PER_TASK,
-				hi = lo + ITEMS_PER_TASK < v->ntri ? lo + ITEMS_PER_TASK : v->ntri;
+	size_t		lo = r * FLATTEN_CHUNKS,
+				hi = lo + FLATTEN_CHUNKS < v->nchunks ? lo + FLATTEN_CHUNKS : v->nchunks;
 	double		box[4] = {INFINITY, INFINITY, -INFINITY, -INFINITY};
 
 	if (vor_cancelled(v))
 		return;
-	for (size_t t = lo; t < hi; t++)
-	{
-		uint32_t	root = uf_find(v, (uint32_t) t);
+	for (size_t c = lo; c < hi; c++)
+		for (size_t t = c * TRI_CHUNK; t < c * TRI_CHUNK + v->chunk_fill[c]; t++)
+		{
+			uint32_t	root = uf_find(v, (uint32_t) t);
 
-		/* safe: other tasks only read parents while flattening */
-		atomic_store_explicit(&v->parent[t], root, memory_order_relaxed);
-		if (root == t)
-			grow_box(box, v->cc + 2 * t);
-	}
+			/* safe: other tasks only read parents while flattening */
+			atomic_store_explicit(&v->parent[t], root, memory_order_relaxed);
+			if (root == t)
+				grow_box(box, v->cc + 2 * t);
+		}
 	memcpy(v->range_box + 4 * r, box, sizeof(box));
 }
 
@@ -2113,19 +2143,22 @@ static int
 join_cocircular(tdc_voronoi *v, const double base[4])
 {
 	size_t		nr = nranges_for(v->nhe, ITEMS_PER_TASK),
-				ntr = nranges_for(v->ntri, ITEMS_PER_TASK);
+				ntr = nranges_for(v->ntri_cap, ITEMS_PER_TASK),
+				nfr = nranges_for(v->nchunks, FLATTEN_CHUNKS);
 
-	v->parent = tdc_big_alloc(v->ntri * sizeof(uint32_t));
-	if (v->parent == NULL)
+	v->parent = tdc_big_alloc(v->ntri_cap * sizeof(uint32_t));
+	v->tri_he = tdc_big_alloc(v->ntri_cap * sizeof(uint32_t));
+	if (v->parent == NULL || v->tri_he == NULL)
 		FAIL_OOM("out of memory joining cocircular triangles");
 	tdc_pool_for(v->pool, ntr, parent_task, v);
+	tdc_pool_for(v->pool, nr, tri_he_task, v);
 	tdc_pool_for(v->pool, nr, cocircular_task, v);
 	if (vor_cancelled(v))
 		return TDC_ECANCELED;
-	tdc_pool_for(v->pool, ntr, flatten_task, v);
+	tdc_pool_for(v->pool, nfr, flatten_task, v);
 	if (vor_cancelled(v))
 		return TDC_ECANCELED;
-	set_outer_box(v, base, ntr);
+	set_outer_box(v, base, nfr);
 	return TDC_OK;
 }
 
@@ -2159,39 +2192,37 @@ vor_run(tdc_voronoi *v)
 		grow_box(base, hi);
 	}
 
-	if (job->nsites >= 2)
-	{
-		nr = nranges_for(v->nhe, ITEMS_PER_TASK);
-		v->site_he = tdc_big_alloc(job->nin * sizeof(uint32_t));
-		v->range_first = calloc(nr + 1, sizeof(size_t));
-		if (v->site_he == NULL || v->range_first == NULL)
-			FAIL_OOM("out of memory numbering the triangles");
-		for (size_t s = 0; s < job->nin; s++)
-			atomic_init(&v->site_he[s], TDC_NIL);
-		tdc_pool_for(v->pool, nr, count_task, v);
-		if (vor_cancelled(v))
-			return TDC_ECANCELED;
-	}
 	if (v->ntri > 0)
 	{
-		size_t		ntr = nranges_for(v->ntri, ITEMS_PER_TASK);
+		size_t		ntri = 0;
 
+		nr = nranges_for(v->nhe, ITEMS_PER_TASK);
+		/* every range but one chunk per range fills its chunks */
+		v->nchunks = v->ntri / TRI_CHUNK + nr;
+		v->ntri_cap = v->nchunks * TRI_CHUNK;
+		v->site_he = tdc_big_alloc(job->nin * sizeof(uint32_t));
+		v->range_ntri = calloc(nr + 1, sizeof(size_t));
+		v->chunk_fill = calloc(v->nchunks + 1, sizeof(uint32_t));
+		/* a half-edge outside every triangle keeps a number never read */
+		v->tri_id = tdc_big_alloc(v->nhe * sizeof(uint32_t));
+		v->cc = tdc_big_alloc(v->ntri_cap * 2 * sizeof(double));
+		v->range_box = malloc((nr > v->nchunks ? nr : v->nchunks) * 4 * sizeof(double) + 1);
+		if (!v->site_he || !v->range_ntri || !v->chunk_fill || !v->tri_id || !v->cc ||
+			!v->range_box)
+			FAIL_OOM("out of memory for the Voronoi vertices");
+		atomic_init(&v->chunks_claimed, 0);
+		for (size_t s = 0; s < job->nin; s++)
+			atomic_init(&v->site_he[s], TDC_NIL);
+		tdc_pool_for(v->pool, nr, number_task, v);
+		if (vor_cancelled(v))
+			return TDC_ECANCELED;
 		for (size_t r = 0; r < nr; r++)
-			v->range_first[r + 1] += v->range_first[r];
-		if (v->range_first[nr] != v->ntri)
+			ntri += v->range_ntri[r];
+		if (ntri != v->ntri)
 		{
 			vor_fail(v, TDC_EINVAL, "the mesh does not hold the triangles counted");
 			return TDC_EINVAL;
 		}
-		/* a half-edge outside every triangle keeps a number never read */
-		v->tri_id = tdc_big_alloc(v->nhe * sizeof(uint32_t));
-		v->cc = tdc_big_alloc(v->ntri * 2 * sizeof(double));
-		v->range_box = malloc((nr > ntr ? nr : ntr) * 4 * sizeof(double));
-		if (!v->tri_id || !v->cc || !v->range_box)
-			FAIL_OOM("out of memory for the Voronoi vertices");
-		tdc_pool_for(v->pool, nr, number_task, v);
-		if (vor_cancelled(v))
-			return TDC_ECANCELED;
 		nboxes = nr;
 	}
 	else if (job->nsites >= 2)
@@ -2304,7 +2335,9 @@ tdc_voronoi_memory(size_t n, int threads)
 {
 	/*
 	 * Per input point: 6 half-edges' triangle numbers (24), at most 2
-	 * triangles' numbers, parents and circumcenters (8 + 8 + 32), the
+	 * triangles' parents, smallest half-edges (joining) and circumcenters
+	 * (8 + 8 + 32, and a partly used chunk of numbers per 2^16 half-edges,
+	 * under 2 bytes a point), the
 	 * smallest half-edge, ring pointer and count of its site (4 + 8 + 4);
 	 * ring storage: every triangle is in at most 3 rings (6 vertices per
 	 * point), clipping adds at most 4 per cell, a hull cell 2 exit points
@@ -2317,7 +2350,7 @@ tdc_voronoi_memory(size_t n, int threads)
 	 * (8), the sites' offsets (8) and, with a tolerance, their first
 	 * inputs (4): less.
 	 */
-	return n * (24 + 48 + 16 + 8 + 8 + 16 * 16 * 3 / 2) + (size_t) (threads + 1) * 65536 + 4096;
+	return n * (24 + 48 + 2 + 16 + 8 + 8 + 16 * 16 * 3 / 2) + (size_t) (threads + 1) * 65536 + 4096;
 }
 
 static int
@@ -2461,7 +2494,9 @@ tdc_voronoi_free(tdc_voronoi *v)
 	tdc_big_free(v->parent);
 	tdc_big_free(v->cc);
 	tdc_big_free(v->site_he);
-	free(v->range_first);
+	free(v->range_ntri);
+	free(v->chunk_fill);
+	tdc_big_free(v->tri_he);
 	free(v->range_box);
 	free(v->line);
 	free(v->line_pos);
