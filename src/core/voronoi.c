@@ -1686,61 +1686,43 @@ rec_reserve(uint32_t **rec, size_t *cap, size_t len, size_t n)
 }
 
 /*
- * An inner site's cell as its classes, from one walk around the site: the
+ * An inner site's cell as its classes, from its ring of half-edges hs (from
+ * its smallest, counter-clockwise) and their triangles' classes ts: the
  * vertices cell_of_mesh would give an untagged ring (a class once, a vertex
  * equal to the one before dropped, then a closing repeat of the first), as
- * class numbers into ids (room for deg).  Returns the count, or 0 when
- * the site is on the hull or a vertex lies outside E: then the cell is
- * built and clipped as a ring.  *deg: the site's degree.
+ * class numbers into ids (room for cap).  Returns the count, or 0 when a
+ * vertex lies outside E (or there are more than cap): then the cell is
+ * built and clipped as a ring.
  */
 static size_t
-inner_cell_ids(const tdc_voronoi *v, uint32_t s, uint32_t *ids, size_t cap, size_t *deg)
+inner_cell_ids(const tdc_voronoi *v, const uint32_t *hs, const uint32_t *ts, size_t deg,
+			   uint32_t *ids, size_t cap)
 {
-	const tdc_job *job = v->job;
-	uint32_t	h0 = atomic_load_explicit(&v->site_he[s], memory_order_relaxed),
-				h = h0,
-				prev_t = TDC_NIL;
-	size_t		n = 0,
-				d = 0;
+	uint32_t	prev_t = TDC_NIL;
+	size_t		n = 0;
 	const double *last = NULL;
 
-	do
+	for (size_t j = 0; j < deg; j++)
 	{
-		uint32_t	t;
+		uint32_t	t = ts[j];
 		const double *c;
 
-		if (is_outer(job, h))
-		{
-			*deg = 0;
-			return 0;
-		}
-		d++;
-		t = class_of(v, h);
-		if (t != prev_t && prev_t != TDC_NIL)
-			note_pair(v, prev_t, t, h);
-		h = job->he[h].next;
 		if (t == prev_t)
 			continue;
+		if (prev_t != TDC_NIL)
+			note_pair(v, prev_t, t, hs[j]);
 		prev_t = t;
 		c = v->cc + 2 * (size_t) t;
 		if (last && c[0] == last[0] && c[1] == last[1])
 			continue;
 		if (!(c[0] >= v->env[0] && c[0] <= v->env[2] && c[1] >= v->env[1] && c[1] <= v->env[3]) ||
 			n == cap)
-		{
-			*deg = 0;
 			return 0;
-		}
 		ids[n++] = t;
 		last = c;
-	} while (h != h0);
-	*deg = d;
-	{
-		uint32_t	first = class_of(v, h0);
-
-		if (first != prev_t)
-			note_pair(v, prev_t, first, h0);
 	}
+	if (ts[0] != prev_t)
+		note_pair(v, prev_t, ts[0], hs[0]);
 	while (n > 1)
 	{
 		const double *f = v->cc + 2 * (size_t) ids[0],
@@ -1753,7 +1735,6 @@ inner_cell_ids(const tdc_voronoi *v, uint32_t s, uint32_t *ids, size_t cap, size
 	return n;
 }
 
-#define INNER_MAX	64			/* longer inner cells go the ring's way */
 
 /*
  * Sizing: the sites whose smallest half-edge lies in half-edge range rg, in
@@ -1766,6 +1747,9 @@ inner_cell_ids(const tdc_voronoi *v, uint32_t s, uint32_t *ids, size_t cap, size
  * instead would cost some 100 MB of fresh memory for a million points, which
  * the kernel must clear, and walking twice, the mesh's random loads twice.
  */
+#define BATCH		16			/* sites walked together (mesh_size_task) */
+#define RING_MAX	32			/* longer rings go the ring's way */
+
 static void
 mesh_size_task(void *arg, size_t rg, int worker)
 {
@@ -1774,43 +1758,111 @@ mesh_size_task(void *arg, size_t rg, int worker)
 	size_t		lo = rg * v->cell_range,
 				hi = lo + v->cell_range < v->nhe ? lo + v->cell_range : v->nhe,
 				len = 0,
-				cap = 0;
+				cap = 0,
+				nb = 0;
 	ring		w = {0},
 				a = {.tagged = true},
 				b = {.tagged = true};
 	uint64_t	bytes = 0;
 	size_t		cells = 0;
 	uint32_t   *rec = NULL;
+	uint32_t	site[BATCH],
+				hs[BATCH][RING_MAX],
+				ts[BATCH][RING_MAX],
+				deg[BATCH];
+	bool		open[BATCH],
+				inner[BATCH];
 
 	if (vor_cancelled(v))
 		return;
-	for (size_t h = lo; h < hi; h++)
+	for (size_t h = lo; h <= hi; h++)
 	{
-		uint32_t	s = job->he[h].org;
-		size_t		m,
-					deg;
-		const ring *c;
+		uint32_t	s = h < hi ? job->he[h].org : TDC_NIL;
 
 		if (((h - lo) & 4095) == 4095 && vor_cancelled(v))
 			goto done;
-		if (s == TDC_NIL ||
-			atomic_load_explicit(&v->site_he[s], memory_order_relaxed) != (uint32_t) h)
+		if (h < hi && (s == TDC_NIL ||
+					   atomic_load_explicit(&v->site_he[s], memory_order_relaxed) != (uint32_t) h))
 			continue;
-		if (!rec_reserve(&rec, &cap, len, 2 + INNER_MAX))
-			goto oom;
-		m = inner_cell_ids(v, s, rec + len + 2, INNER_MAX, &deg);
-		rec[len] = s;
-		rec[len + 1] = (uint32_t) m;
-		len += 2 + m;
-		if (m == 0)
+		if (h < hi)
 		{
-			if (!build_mesh_cell(v, s, &w, &a, &b, &c))
-				goto oom;
-			m = c->n;
+			site[nb] = s;
+			hs[nb][0] = (uint32_t) h;
+			deg[nb] = 1;
+			open[nb] = true;
+			inner[nb] = true;
+			nb++;
+			if (nb < BATCH)
+				continue;
 		}
-		v->cell_n[s] = (uint32_t) m;
-		bytes += v->writer.size(v->writer.arg, m);
-		cells++;
+		if (nb == 0)
+			continue;
+
+		/*
+		 * The batch's rings, one step of every site at a time: the walks'
+		 * random loads are independent across the sites, so they overlap
+		 * instead of waiting for each other.  A ring with the outer face
+		 * or longer than RING_MAX goes the ring's way.
+		 */
+		for (bool any = true; any;)
+		{
+			any = false;
+			for (size_t i = 0; i < nb; i++)
+			{
+				uint32_t	hn;
+
+				if (!open[i])
+					continue;
+				hn = job->he[hs[i][deg[i] - 1]].next;
+				if (hn == hs[i][0])
+					open[i] = false;
+				else if (deg[i] == RING_MAX)
+				{
+					open[i] = false;
+					inner[i] = false;
+				}
+				else
+				{
+					hs[i][deg[i]++] = hn;
+					__builtin_prefetch(&v->tri_id[hn]);
+					any = true;
+				}
+			}
+		}
+		for (size_t i = 0; i < nb; i++)
+			for (size_t j = 0; j < deg[i] && inner[i]; j++)
+			{
+				if (is_outer(job, hs[i][j]))
+					inner[i] = false;
+				else
+				{
+					ts[i][j] = class_of(v, hs[i][j]);
+					__builtin_prefetch(v->cc + 2 * (size_t) ts[i][j]);
+				}
+			}
+		for (size_t i = 0; i < nb; i++)
+		{
+			size_t		m = 0;
+			const ring *c;
+
+			if (!rec_reserve(&rec, &cap, len, 2 + RING_MAX))
+				goto oom;
+			if (inner[i])
+				m = inner_cell_ids(v, hs[i], ts[i], deg[i], rec + len + 2, RING_MAX);
+			rec[len] = site[i];
+			rec[len + 1] = (uint32_t) m;
+			len += 2 + m;
+			if (m == 0)
+			{
+				if (!build_mesh_cell(v, site[i], &w, &a, &b, &c))
+					goto oom;
+				m = c->n;
+			}
+			v->cell_n[site[i]] = (uint32_t) m;
+			bytes += v->writer.size(v->writer.arg, m);
+			cells++;
+		}
+		nb = 0;
 	}
 	v->range_bytes[rg] = bytes;
 	v->range_cells[rg] = cells;
@@ -1839,7 +1891,7 @@ mesh_write_task(void *arg, size_t rg, int worker)
 	ring		w = {0},
 				a = {.tagged = true},
 				b = {.tagged = true};
-	double		xy[2 * INNER_MAX];
+	double		xy[2 * RING_MAX];
 
 	if (vor_cancelled(v))
 		return;
