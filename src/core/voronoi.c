@@ -207,6 +207,7 @@ struct tdc_voronoi
 	uint32_t   *first_in;		/* site -> first input (tolerance only) */
 	uint64_t   *inpos;			/* input -> its cell's size, then offset */
 	uint64_t   *site_off;		/* site -> its cell's offset */
+	bool		offsets_in_tri_id;	/* inpos and site_off live in tri_id's pages */
 	uint32_t  **range_rec;		/* cell range -> its record (mesh_size_task) */
 	size_t	   *range_rec_len;
 	uint64_t   *block_start;	/* input block -> offset of its first cell */
@@ -1741,13 +1742,15 @@ inner_cell_ids(const tdc_voronoi *v, const uint32_t *hs, const uint32_t *ts, siz
  * mesh order (see mesh_cell_task), each cell's vertex count and the range's
  * bytes, and a record of the range's cells for the writing phase: per site
  * its number, its count m and, for an inner cell inside E (almost all of
- * them), its m classes; m = 0 asks for the cell to be built again, as a
- * clipped ring.  Writing then reads the record in order and looks up the
- * vertices, with no walk around the sites: keeping the cells' coordinates
- * instead would cost some 100 MB of fresh memory for a million points, which
- * the kernel must clear, and walking twice, the mesh's random loads twice.
+ * them), its m classes; for any other cell (on the hull, or crossing E),
+ * built as a ring and clipped, m | REC_XY and its coordinates.  Writing then
+ * reads the record in order and looks up the vertices, with no walk around
+ * the sites and no mesh: keeping all cells' coordinates instead would cost
+ * some 100 MB of fresh memory for a million points, which the kernel must
+ * clear, and walking twice, the mesh's random loads twice.
  */
 #define BATCH		16			/* sites walked together (mesh_size_task) */
+#define REC_XY		0x80000000u	/* record: the cell's coordinates follow */
 #define RING_MAX	32			/* longer rings go the ring's way */
 
 static void
@@ -1851,13 +1854,19 @@ mesh_size_task(void *arg, size_t rg, int worker)
 				m = inner_cell_ids(v, hs[i], ts[i], deg[i], rec + len + 2, RING_MAX);
 			rec[len] = site[i];
 			rec[len + 1] = (uint32_t) m;
-			len += 2 + m;
 			if (m == 0)
 			{
-				if (!build_mesh_cell(v, site[i], &w, &a, &b, &c))
+				/* built as a ring and clipped: its coordinates, 4 words a vertex */
+				if (!build_mesh_cell(v, site[i], &w, &a, &b, &c) ||
+					!rec_reserve(&rec, &cap, len, 2 + 4 * c->n))
 					goto oom;
 				m = c->n;
+				rec[len + 1] = (uint32_t) m | REC_XY;
+				memcpy(rec + len + 2, c->p, 16 * m);
+				len += 2 + 4 * m;
 			}
+			else
+				len += 2 + m;
 			v->cell_n[site[i]] = (uint32_t) m;
 			bytes += v->writer.size(v->writer.arg, m);
 			cells++;
@@ -1888,9 +1897,7 @@ mesh_write_task(void *arg, size_t rg, int worker)
 	tdc_voronoi *v = arg;
 	const uint32_t *rec = v->range_rec[rg];
 	size_t		len = v->range_rec_len[rg];
-	ring		w = {0},
-				a = {.tagged = true},
-				b = {.tagged = true};
+	ring		w = {0};
 	double		xy[2 * RING_MAX];
 
 	if (vor_cancelled(v))
@@ -1898,41 +1905,32 @@ mesh_write_task(void *arg, size_t rg, int worker)
 	for (size_t i = 0, k = 0; i < len; k++)
 	{
 		uint32_t	s = rec[i];
-		size_t		m = rec[i + 1];
+		size_t		m = rec[i + 1] & ~REC_XY;
 		char	   *dst = v->dst + v->site_off[s];
 
 		if ((k & 4095) == 4095 && vor_cancelled(v))
-			goto done;
-		if (m > 0)
+			break;
+		if (rec[i + 1] & REC_XY)
+		{
+			/* the record's words are not aligned for doubles */
+			if (!ring_reserve(&w, m))
+			{
+				vor_fail(v, TDC_ENOMEM, "out of memory writing the Voronoi cells");
+				break;
+			}
+			memcpy(w.p, rec + i + 2, 16 * m);
+			v->writer.write(v->writer.arg, dst, w.p, m);
+			i += 2 + 4 * m;
+		}
+		else
 		{
 			for (size_t j = 0; j < m; j++)
 				memcpy(xy + 2 * j, v->cc + 2 * (size_t) rec[i + 2 + j], 2 * sizeof(double));
 			v->writer.write(v->writer.arg, dst, xy, m);
+			i += 2 + m;
 		}
-		else
-		{
-			const ring *c;
-
-			if (!build_mesh_cell(v, s, &w, &a, &b, &c))
-			{
-				vor_fail(v, TDC_ENOMEM, "out of memory building the Voronoi cells");
-				goto done;
-			}
-			if (c->n != v->cell_n[s])
-			{
-				vor_fail(v, TDC_EINVAL, "a Voronoi cell came out different when written");
-				goto done;
-			}
-			v->writer.write(v->writer.arg, dst, c->p, c->n);
-		}
-		i += 2 + m;
 	}
-done:
 	free(w.p);
-	free(a.p);
-	free(a.tag);
-	free(b.p);
-	free(b.tag);
 }
 
 /* Collinear input: the cells of site range rg, kept by cell_task, to the writer. */
@@ -2063,10 +2061,30 @@ vor_emit_run(tdc_voronoi *v)
 		}
 	}
 	nb = nranges_for(v->ninput, ITEMS_PER_TASK);
-	v->inpos = tdc_big_alloc(v->ninput * sizeof(uint64_t) + 1);
 	v->block_start = calloc(nb + 1, sizeof(uint64_t));
-	if (v->inpos == NULL || v->block_start == NULL)
+	if (v->block_start == NULL)
 		FAIL_OOM("out of memory ordering the Voronoi cells");
+
+	/*
+	 * Writing a mesh's cells reads only the records and the vertices: the
+	 * triangle numbers' pages, mapped and cleared already, hold the offsets
+	 * (the input's, then the sites'), when they fit, rather than fresh pages
+	 * the kernel must clear.
+	 */
+	if (v->tri_id && (v->ninput + v->nsites) * sizeof(uint64_t) <= v->nhe * sizeof(uint32_t))
+	{
+		v->inpos = (uint64_t *) (void *) v->tri_id;
+		v->site_off = v->inpos + v->ninput;
+		v->offsets_in_tri_id = true;
+		memset(v->inpos, 0, v->ninput * sizeof(uint64_t));
+	}
+	else
+	{
+		v->inpos = tdc_big_alloc(v->ninput * sizeof(uint64_t) + 1);
+		v->site_off = tdc_big_alloc(v->nsites * sizeof(uint64_t) + 1);
+		if (v->inpos == NULL || v->site_off == NULL)
+			FAIL_OOM("out of memory ordering the Voronoi cells");
+	}
 	tdc_pool_for(v->pool, nranges_for(v->nsites, ITEMS_PER_TASK), scatter_task, v);
 	tdc_pool_for(v->pool, nb, block_sum_task, v);
 	if (vor_cancelled(v))
@@ -2082,11 +2100,9 @@ vor_emit_run(tdc_voronoi *v)
 	if (vor_cancelled(v))
 		return TDC_ECANCELED;
 	/* by site now; the input's offsets are no longer needed */
-	v->site_off = tdc_big_alloc(v->nsites * sizeof(uint64_t) + 1);
-	if (v->site_off == NULL)
-		FAIL_OOM("out of memory ordering the Voronoi cells");
 	tdc_pool_for(v->pool, nranges_for(v->nsites, ITEMS_PER_TASK), gather_task, v);
-	tdc_big_free(v->inpos);
+	if (!v->offsets_in_tri_id)
+		tdc_big_free(v->inpos);
 	v->inpos = NULL;
 	if (vor_cancelled(v))
 		return TDC_ECANCELED;
@@ -2397,10 +2413,12 @@ tdc_voronoi_memory(size_t n, int threads)
 	 * buffer grows by half its size at a time (x 1.5).  Plus the collinear
 	 * sort (8) and per thread scratch rings.  A diagram written straight
 	 * into the host's value (tdc_voronoi_start_emit) has no ring storage
-	 * but, per point, its records (a site, a count and at most 6 classes
-	 * on average: 32, x 1.5 for growing), the input's sizes and offsets
-	 * (8), the sites' offsets (8) and, with a tolerance, their first
-	 * inputs (4): less.
+	 * but, per point, its records (a site, a count and 6 classes on
+	 * average; a clipped cell's coordinates instead, at most as many as
+	 * the ring storage's; x 1.5 for growing), the input's sizes and
+	 * offsets (8) and the sites' offsets (8), in the triangle numbers'
+	 * pages when they fit, and with a tolerance the sites' first inputs
+	 * (4): less.
 	 */
 	return n * (24 + 48 + 2 + 16 + 8 + 8 + 16 * 16 * 3 / 2) + (size_t) (threads + 1) * 65536 + 4096;
 }
@@ -2566,8 +2584,11 @@ tdc_voronoi_free(tdc_voronoi *v)
 	free(v->range_bytes);
 	free(v->range_cells);
 	free(v->first_in);
-	tdc_big_free(v->inpos);
-	tdc_big_free(v->site_off);
+	if (!v->offsets_in_tri_id)
+	{
+		tdc_big_free(v->inpos);
+		tdc_big_free(v->site_off);
+	}
 	free(v->block_start);
 	if (v->range_rec)
 		for (size_t r = 0; r < v->nranges; r++)
