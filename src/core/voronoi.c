@@ -121,7 +121,8 @@
  * cells are parallel loops on a pool of the job's thread count, run by a
  * driver thread with all signals blocked, like a triangulation, so the
  * host's thread stays free to cancel.  Every loop polls the cancel flag at
- * least once per 4096 items.  The cells of a mesh are built by ranges of
+ * least once per 4096 items, or, for the loops of a few loads an item (the
+ * offsets' prefix sums), once per task of 65536.  The cells of a mesh are built by ranges of
  * half-edges, each site in the range of its smallest half-edge, so the walks
  * follow the mesh's memory order; each range writes its cells into one
  * buffer of its own (tdc_voronoi_cell reads them there).
