@@ -131,14 +131,16 @@
  * that wants all cells as one value in input order would otherwise copy a
  * million cells, some 130 MB, on its own thread, from buffers the kernel
  * first had to clear.  Instead the first phase only sizes the cells: one
- * walk around each site records an inner cell that lies inside E (almost
- * all of them) as its classes, a few words, and any other cell as "build
- * again".  The host allocates the total; the second phase computes every
- * cell's offset by a parallel prefix sum over the input points (a cell sits
- * at its site's first input point), maps the value in block by block on the
+ * walk around each site (the rings of 16 sites walked a step at a time
+ * together, so that their random loads overlap) records an inner cell that
+ * lies inside E (almost all of them) as its classes, a few words, and any
+ * other cell, built and clipped as a ring, as its coordinates.  The host
+ * allocates the total; the second phase computes every cell's offset by a
+ * parallel prefix sum over the input points (a cell sits at its site's
+ * first input point; the offsets reuse the triangle numbers' pages, which
+ * writing no longer needs), maps the value in block by block on the
  * workers, and writes the cells from the records by the host's writer, a
- * pure function that copies bytes; the clipped ones are built again the same
- * way, which gives the same ring.  The bytes do not depend on the thread
+ * pure function that copies bytes.  The bytes do not depend on the thread
  * count: the cells and the offsets do not.
  */
 #include <errno.h>
