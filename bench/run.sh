@@ -8,6 +8,8 @@
 #   D  bench/constrained_bench.sh  (optional, BENCH_CONSTRAINED=1) the constrained
 #      triangulation against SFCGAL and our unconstrained one, on 1M contour
 #      vertices and GSHHG coastline polygons          -> build/bench/constrained*
+#   E  bench/voronoi_bench.sh  (optional, BENCH_VORONOI=1) Voronoi: ours vs
+#      ST_VoronoiPolygons, 10^5 and 10^6 points        -> build/bench/voronoi*
 #
 # B and C run against the server the PG* variables point at when one answers;
 # otherwise a throw-away cluster is started with scripts/lib.sh and stopped
@@ -16,6 +18,7 @@
 #   BENCH_SKIP_CORE=1   skip A          BENCH_SKIP_SQL=1   skip B
 #   BENCH_SKIP_SWEEP=1  skip C          BENCH_NO_INSTALL=1 do not run make install before B, C and D
 #   BENCH_CONSTRAINED=1 run D too (some 10 minutes: SFCGAL takes 5-20 s a statement, 12 times)
+#   BENCH_VORONOI=1     run E too (BENCH_VOR_* knobs: see bench/voronoi_bench.sh)
 # The knobs of the scripts (BENCH_SIZES, BENCH_SQL_SIZES, BENCH_SWEEP_*, BENCH_CDT_*, ...) pass through.
 set -euo pipefail
 
@@ -45,9 +48,14 @@ sql_parts() {
 		log "=== D: constrained, against SFCGAL"
 		bash "$ROOT/bench/constrained_bench.sh"
 	fi
+	if [ "${BENCH_VORONOI:-0}" = 1 ]; then
+		log "=== E: Voronoi diagrams in SQL"
+		bash "$ROOT/bench/voronoi_bench.sh"
+	fi
 }
 
-if [ "${BENCH_SKIP_SQL:-0}" != 1 ] || [ "${BENCH_SKIP_SWEEP:-0}" != 1 ] || [ "${BENCH_CONSTRAINED:-0}" = 1 ]; then
+if [ "${BENCH_SKIP_SQL:-0}" != 1 ] || [ "${BENCH_SKIP_SWEEP:-0}" != 1 ] || [ "${BENCH_CONSTRAINED:-0}" = 1 ] ||
+	[ "${BENCH_VORONOI:-0}" = 1 ]; then
 	# shellcheck source=scripts/lib.sh
 	. "$ROOT/scripts/lib.sh"
 	if [ "${BENCH_NO_INSTALL:-0}" != 1 ]; then
@@ -103,5 +111,11 @@ fi
 		echo
 		sed '1,2{/^###/d;/^$/d}' "$BENCH_OUT/constrained.txt"
 	fi
+	if [ -s "$BENCH_OUT/voronoi.txt" ]; then
+		echo
+		echo "## Voronoi diagrams: tdc_delaunay vs PostGIS"
+		echo
+		sed '1,2{/^###/d;/^$/d}' "$BENCH_OUT/voronoi.txt"
+	fi
 } > "${BENCH_DOCS:-$ROOT/docs}/benchmarks.md"
-log "done: $BENCH_OUT/{core,sql,sweep,constrained}.txt, ${BENCH_DOCS:-$ROOT/docs}/{benchmarks.md,core.png,bench.png,coast_tin.png,sweep.png}"
+log "done: $BENCH_OUT/{core,sql,sweep,constrained,voronoi}.txt, ${BENCH_DOCS:-$ROOT/docs}/{benchmarks.md,core.png,bench.png,coast_tin.png,sweep.png}"

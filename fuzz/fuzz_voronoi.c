@@ -107,6 +107,69 @@ near_ring(const double *c, size_t m, const double *q, double tol)
 	return in || best <= tol;
 }
 
+/* tdc_voronoi_emit's layout here: the count, then the ring */
+static size_t
+emit_size(void *arg, size_t m)
+{
+	return 8 + 16 * m;
+}
+
+static void
+emit_write(void *arg, char *dst, const double *xy, size_t m)
+{
+	uint64_t	n = m;
+
+	memcpy(dst, &n, 8);
+	memcpy(dst + 8, xy, 16 * m);
+}
+
+/*
+ * The cells written by tdc_voronoi_emit are the cells of v (built the other
+ * way), one per site in the input order of its first point.
+ */
+static void
+check_emit(const tdc_job *job, const tdc_voronoi *v, const double *env, int threads)
+{
+	tdc_cell_writer w = {emit_size, emit_write, NULL};
+	tdc_voronoi *e = NULL;
+	char		err[256];
+	size_t		cells,
+				bytes,
+				off = 0,
+				lim = tdc_site_id_limit(job);
+	char	   *out;
+	unsigned char *seen = calloc(lim + 1, 1);
+
+	if (tdc_voronoi_start_emit(job, env, threads, &w, &e, err, sizeof(err)) != TDC_OK ||
+		tdc_voronoi_wait(e, -1) != TDC_OK)
+		die("voronoi emit (sizing) failed: %s", e ? tdc_voronoi_error(e) : err);
+	bytes = tdc_voronoi_emit_size(e, &cells);
+	out = malloc(bytes + 1);
+	if (tdc_voronoi_emit(e, out, err, sizeof(err)) != TDC_OK || tdc_voronoi_wait(e, -1) != TDC_OK)
+		die("voronoi emit (writing) failed: %s", tdc_voronoi_error(e));
+	for (size_t i = 0; i < tdc_num_input(job); i++)
+	{
+		uint32_t	s = tdc_input_site(job, i);
+		const double *c;
+		size_t		m = tdc_voronoi_cell(v, s, &c);
+		uint64_t	n;
+
+		if (seen[s] || m == 0)
+			continue;
+		seen[s] = 1;
+		memcpy(&n, out + off, 8);
+		if (off + 8 + 16 * m > bytes || n != m || memcmp(out + off + 8, c, 16 * m) != 0)
+			die("emitted cell of site %u differs", s);
+		off += 8 + 16 * m;
+		cells--;
+	}
+	if (off != bytes || cells != 0)
+		die("emitted cells: not one per site");
+	free(out);
+	free(seen);
+	tdc_voronoi_free(e);
+}
+
 static void
 check(const tdc_job *job, const tdc_voronoi *v, const tdc_voronoi *v1, const double *env)
 {
@@ -328,6 +391,7 @@ LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 		if (tdc_voronoi_build(job, env, 1, &v1, err, sizeof(err)) != TDC_OK)
 			die("voronoi (1 thread) failed: %s", err);
 		check(job, v, v1, env);
+		check_emit(job, v, env, threads);
 	}
 	tdc_voronoi_free(v);
 	tdc_voronoi_free(v1);

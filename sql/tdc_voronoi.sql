@@ -59,6 +59,27 @@ SELECT 'clustered' AS set, * FROM tdc_vor_compare((SELECT ST_Collect(geom ORDER 
 SELECT 'srid+z' AS set, * FROM tdc_vor_compare(
 	(SELECT ST_SetSRID(ST_Collect(ST_MakePoint(ST_X(geom), ST_Y(geom), id) ORDER BY id), 32631)
 	 FROM vor_uniform WHERE id <= 500));
+-- coastline subset: the vertices of test/fixtures/gshhg-stockholm.wkt (17,548
+-- vertices of real, clustered shoreline, 16,244 distinct; one WKT geometry
+-- per line), read by psql on the client side: the server need not be able
+-- to read the source tree.  pg_regress (PG 15+) exports PG_ABS_SRCDIR, the
+-- input directory, which is the project's root.
+\getenv abs_srcdir PG_ABS_SRCDIR
+\set coast_file :abs_srcdir '/test/fixtures/gshhg-stockholm.wkt'
+\set coast `cat :coast_file`
+CREATE TABLE vor_coast AS
+	SELECT row_number() OVER (ORDER BY l.k, d.path) AS id, d.geom
+	FROM regexp_split_to_table(:'coast', E'\n') WITH ORDINALITY l(line, k),
+		 ST_DumpPoints(ST_GeomFromText(l.line, 4326)) d
+	WHERE l.line <> '';
+\unset coast
+SELECT count(*) AS vertices, count(DISTINCT (ST_X(geom), ST_Y(geom))) AS distinct_vertices
+FROM vor_coast;
+SELECT 'coastline' AS set, * FROM tdc_vor_compare((SELECT ST_Collect(geom ORDER BY id) FROM vor_coast));
+-- the aggregate gives the same bytes
+SELECT (SELECT ST_TDCVoronoi(geom ORDER BY id) FROM vor_coast)::bytea =
+	   ST_TDCVoronoiPolygons((SELECT ST_Collect(geom ORDER BY id) FROM vor_coast))::bytea AS agg_same;
+DROP TABLE vor_coast;
 -- extend_to, larger and smaller than the default envelope
 SELECT 'extend_to' AS set, * FROM tdc_vor_compare(
 	(SELECT ST_Collect(geom ORDER BY id) FROM vor_uniform WHERE id <= 300), 0,

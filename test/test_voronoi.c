@@ -311,6 +311,9 @@ test_circumcenters(void)
  */
 static bool vor_near_degenerate;
 
+/* the merge tolerance of check_diagram's triangulations */
+static double vor_tolerance = 0;
+
 /*
  * Is q inside the ring (crossing count), or within tol of its boundary?
  * For near-degenerate cells, whose rounded rings may zigzag by an ulp, where
@@ -360,6 +363,141 @@ on_env_side(const double *env, const double *p, const double *q)
 		(p[1] == env[1] && q[1] == env[1]) || (p[1] == env[3] && q[1] == env[3]);
 }
 
+/* ---------------- the cells written through tdc_voronoi_emit ---------------- */
+
+/* A test layout: the vertex count, a pad, the ring, its first vertex again. */
+static size_t
+test_cell_size(void *arg, size_t m)
+{
+	return 8 + 16 * (m + 1);
+}
+
+static void
+test_cell_write(void *arg, char *dst, const double *xy, size_t m)
+{
+	uint32_t	h[2] = {(uint32_t) m, 0xabcdef};
+
+	memcpy(dst, h, 8);
+	memcpy(dst + 8, xy, 16 * m);
+	memcpy(dst + 8 + 16 * m, xy, 16);
+}
+
+/*
+ * The diagram written by tdc_voronoi_emit on "threads" threads; NULL (and a
+ * failed CHECK) on error.
+ */
+static char *
+emit_diagram(const char *name, const tdc_job *job, const double env[4], int threads,
+			 size_t *bytes, size_t *cells)
+{
+	tdc_cell_writer w = {test_cell_size, test_cell_write, NULL};
+	tdc_voronoi *v = NULL;
+	char		err[256] = "";
+	char	   *out = NULL;
+	int			rc;
+
+	rc = tdc_voronoi_start_emit(job, env, threads, &w, &v, err, sizeof(err));
+	if (rc == TDC_OK && (rc = tdc_voronoi_wait(v, -1)) == TDC_OK)
+	{
+		*bytes = tdc_voronoi_emit_size(v, cells);
+		/* poisoned: every byte must be written */
+		out = malloc(*bytes + 1);
+		memset(out, 0x5a, *bytes + 1);
+		rc = tdc_voronoi_emit(v, out, err, sizeof(err));
+		if (rc == TDC_OK)
+			rc = tdc_voronoi_wait(v, -1);
+	}
+	if (rc != TDC_OK && v && !err[0])
+		snprintf(err, sizeof(err), "%s", tdc_voronoi_error(v));
+	CHECK(rc == TDC_OK, "%s: emit on %d threads: %s", name, threads, err);
+	CHECK(out == NULL || (unsigned char) out[*bytes] == 0x5a,
+		  "%s: emit on %d threads wrote past the end", name, threads);
+	tdc_voronoi_free(v);
+	if (rc != TDC_OK)
+	{
+		free(out);
+		return NULL;
+	}
+	return out;
+}
+
+/*
+ * tdc_voronoi_emit against the cells of tdc_voronoi_cell (v): the same
+ * rings, one per site, in the input order of each site's first point, and
+ * the same bytes on 1, 2 and 3 threads.
+ */
+static void
+check_emit(const char *name, const tdc_job *job, const tdc_voronoi *v, const double env[4])
+{
+	size_t		nin = tdc_num_input(job),
+				lim = tdc_site_id_limit(job),
+				bytes = 0,
+				cells = 0,
+				expect_bytes = 0,
+				expect_cells = 0;
+	unsigned char *seen = calloc(lim + 1, 1);
+	char	   *expect,
+			   *p,
+			   *got[3] = {NULL, NULL, NULL};
+	long		bad_threads = 0;
+
+	for (size_t i = 0; i < nin; i++)
+	{
+		const double *c;
+		uint32_t	s = tdc_input_site(job, i);
+		size_t		m = tdc_voronoi_cell(v, s, &c);
+
+		if (!seen[s] && m > 0)
+		{
+			expect_bytes += test_cell_size(NULL, m);
+			expect_cells++;
+		}
+		seen[s] = 1;
+	}
+	expect = malloc(expect_bytes + 1);
+	p = expect;
+	memset(seen, 0, lim + 1);
+	for (size_t i = 0; i < nin; i++)
+	{
+		const double *c;
+		uint32_t	s = tdc_input_site(job, i);
+		size_t		m = tdc_voronoi_cell(v, s, &c);
+
+		if (!seen[s] && m > 0)
+		{
+			test_cell_write(NULL, p, c, m);
+			p += test_cell_size(NULL, m);
+		}
+		seen[s] = 1;
+	}
+	for (int t = 0; t < 3; t++)
+	{
+		size_t		b = 0,
+					k = 0;
+
+		got[t] = emit_diagram(name, job, env, t + 1, &b, &k);
+		if (got[t] == NULL)
+			goto done;
+		if (t == 0)
+		{
+			bytes = b;
+			cells = k;
+		}
+		else if (b != bytes || k != cells || memcmp(got[0], got[t], bytes) != 0)
+			bad_threads++;
+	}
+	CHECK(bytes == expect_bytes && cells == expect_cells &&
+		  memcmp(got[0], expect, bytes) == 0,
+		  "%s: emitted cells (%zu bytes, %zu cells) differ from the cells in input order "
+		  "(%zu bytes, %zu cells)", name, bytes, cells, expect_bytes, expect_cells);
+	CHECK(bad_threads == 0, "%s: emitted bytes differ between 1, 2 and 3 threads", name);
+done:
+	for (int t = 0; t < 3; t++)
+		free(got[t]);
+	free(expect);
+	free(seen);
+}
+
 /*
  * All checks of one diagram; returns the number of failed checks (each also
  * reported through CHECK once per kind).
@@ -392,6 +530,7 @@ check_diagram(const char *name, const double *xy, size_t n, const double *env_in
 
 	tdc_options_init(&opt);
 	opt.threads = threads;
+	opt.tolerance = vor_tolerance;
 	rc = tdc_triangulate(xy, n, &opt, &job, err, sizeof(err));
 	CHECK(rc == TDC_OK, "%s: triangulate: %s", name, err);
 	if (rc != TDC_OK)
@@ -519,6 +658,7 @@ check_diagram(const char *name, const double *xy, size_t n, const double *env_in
 			(i > 0 && cmp_dedge(&edges[i], &edges[i - 1]) == 0 && !edges[i - 1].sliver))
 			bad_share++;
 	}
+	check_emit(name, job, v, env);
 	if (collapsed)
 		printf("voronoi: %s: %ld cells collapsed to slivers by rounding\n", name, collapsed);
 	CHECK(ncells == nsites, "%s: %zu cells for %zu sites", name, ncells, nsites);
@@ -597,6 +737,22 @@ test_voronoi(void)
 	xy = gen_clustered(big);
 	check_diagram("clustered threaded", xy, big, NULL, 2, 1e-12);
 	free(xy);
+	{
+		/* duplicates of earlier and later points, threaded; then a tolerance */
+		xy = gen_uniform(big, 1000, -500);
+		for (size_t i = 0; i < big; i += 3)
+		{
+			size_t		j = vrng() % big;
+
+			xy[2 * i] = xy[2 * j];
+			xy[2 * i + 1] = xy[2 * j + 1];
+		}
+		check_diagram("duplicates threaded", xy, big, NULL, 2, 1e-12);
+		vor_tolerance = 2.0;
+		check_diagram("tolerance threaded", xy, big, NULL, 2, 1e-12);
+		vor_tolerance = 0;
+		free(xy);
+	}
 	xy = gen_lattice(60);
 	check_diagram("lattice 60x60", xy, 3600, NULL, 1, 1e-12);
 	free(xy);

@@ -10,7 +10,8 @@
  * input's box grown by its larger side); -o then writes one cell per line,
  * for each distinct point in input order of its first occurrence, its ring
  * counter-clockwise and not closed, "x y" per vertex, %.17g; --stats adds a
- * line with the Voronoi time; and --segments FILE: constraint segments, one
+ * line with the Voronoi time (without -o: sizing the cells and writing them
+ * into one buffer, as the extension does); and --segments FILE: constraint segments, one
  * per line "i j", two 0-based line numbers (point indices) of INPUT; the
  * result is then the constrained Delaunay triangulation (cdt.c), and with
  * --stats a second line "segments= constraint_edges= constrain= parallel= deferred=
@@ -52,6 +53,26 @@ static const char usage[] =
 "  --segments FILE  constraint segments, lines 'i j' of 0-based INPUT point\n"
 "         indices: the constrained Delaunay triangulation; crossing segments\n"
 "         are an error (exit 1)\n";
+
+/*
+ * Cells written without -o, timed: a count, a pad, then the ring closed,
+ * the layout of a PostGIS polygon's ring.
+ */
+static size_t
+cli_cell_size(void *arg, size_t m)
+{
+	return 8 + 16 * (m + 1);
+}
+
+static void
+cli_cell_write(void *arg, char *dst, const double *xy, size_t m)
+{
+	uint32_t	h[2] = {(uint32_t) (m + 1), 0};
+
+	memcpy(dst, h, 8);
+	memcpy(dst + 8, xy, 16 * m);
+	memcpy(dst + 8 + 16 * m, xy, 16);
+}
 
 static void
 die(int code, const char *fmt, const char *arg)
@@ -964,6 +985,7 @@ main(int argc, char **argv)
 				voronoi = 0,
 				rc;
 	tdc_voronoi *vor = NULL;
+	char	   *cells = NULL;
 	double		vor_seconds = 0;
 	size_t		n;
 	double	   *xy,
@@ -1173,7 +1195,26 @@ main(int argc, char **argv)
 
 		clock_gettime(CLOCK_MONOTONIC, &t0);
 		tdc_voronoi_default_env(job, env);
-		rc = tdc_voronoi_build(job, env, opt.threads, &vor, err, sizeof(err));
+		if (outpath)
+			rc = tdc_voronoi_build(job, env, opt.threads, &vor, err, sizeof(err));
+		else
+		{
+			/* as the extension does: sized, then written into one buffer */
+			tdc_cell_writer w = {cli_cell_size, cli_cell_write, NULL};
+
+			rc = tdc_voronoi_start_emit(job, env, opt.threads, &w, &vor, err, sizeof(err));
+			if (rc == TDC_OK)
+				rc = tdc_voronoi_wait(vor, -1);
+			if (rc == TDC_OK)
+			{
+				cells = malloc(tdc_voronoi_emit_size(vor, NULL) + 1);
+				rc = cells == NULL ? TDC_ENOMEM : tdc_voronoi_emit(vor, cells, err, sizeof(err));
+			}
+			if (rc == TDC_OK)
+				rc = tdc_voronoi_wait(vor, -1);
+			if (rc != TDC_OK && vor && !err[0])
+				snprintf(err, sizeof(err), "%s", tdc_voronoi_error(vor));
+		}
 		clock_gettime(CLOCK_MONOTONIC, &t1);
 		if (rc != TDC_OK)
 		{
@@ -1276,6 +1317,7 @@ main(int argc, char **argv)
 				cdt ? ", constrained Delaunay" : "");
 	}
 	tdc_voronoi_free(vor);
+	free(cells);
 	tdc_cdt_free(cdt);
 	tdc_job_free(job);
 	free(seg);

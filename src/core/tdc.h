@@ -245,6 +245,33 @@ extern void tdc_voronoi_free(tdc_voronoi *v);
 extern int	tdc_voronoi_build(const tdc_job *job, const double env[4], int threads,
 							  tdc_voronoi **v, char *err, size_t errlen);
 
+/*
+ * Writing the cells straight into the host's value, on the worker threads,
+ * with no copy of them kept: tdc_voronoi_start_emit builds the vertices
+ * and sizes every cell (wait for it as for tdc_voronoi_start);
+ * tdc_voronoi_emit_size then gives the bytes of all cells together (and
+ * their count), the host allocates them, and tdc_voronoi_emit writes them
+ * there (wait, cancel and free as before).  The cells come in the input
+ * order of each site's first point, each at the offset where the previous
+ * one ended: write(arg, dst, xy, m) must write exactly size(arg, m) bytes
+ * for a cell of m vertices (a ring as tdc_voronoi_cell gives it).  Both run
+ * on worker threads, at once on disjoint cells, so they must be pure code.
+ * The bytes are the same whatever the thread count.  A diagram started this
+ * way has no cells for tdc_voronoi_cell.
+ */
+typedef struct tdc_cell_writer
+{
+	size_t		(*size) (void *arg, size_t m);
+	void		(*write) (void *arg, char *dst, const double *xy, size_t m);
+	void	   *arg;
+} tdc_cell_writer;
+
+extern int	tdc_voronoi_start_emit(const tdc_job *job, const double env[4], int threads,
+								   const tdc_cell_writer *writer, tdc_voronoi **v,
+								   char *err, size_t errlen);
+extern uint64_t tdc_voronoi_emit_size(const tdc_voronoi *v, size_t *cells);
+extern int	tdc_voronoi_emit(tdc_voronoi *v, char *dst, char *err, size_t errlen);
+
 /* Bytes a diagram of a job of n input points allocates at most. */
 extern size_t tdc_voronoi_memory(size_t n, int threads);
 

@@ -24,11 +24,19 @@
  * incircle determinant of its two triangles is exactly zero), and the
  * triangles are merged into one class by a lock-free union-find whose root
  * is the smallest triangle number, so the class has one vertex, computed
- * once, and a cell never repeats it.
+ * once, and a cell never repeats it.  Testing every edge costs a tenth of
+ * the diagram, and on data in general position finds nothing; so the edges
+ * are tested where it is cheap and can matter: the walks that build the
+ * cells compare the vertices of consecutive triangles around each site,
+ * and only when the two are within rounding of each other (2^-48 of the
+ * coordinate, far above the bound below) is the edge between them tested.
+ * Every inner edge is between consecutive triangles around its end points,
+ * so none is missed.  If one is cocircular, the classes are joined (every
+ * edge tested, as above) and the cells are built again.
  *
- * One vertex, one value.  A Voronoi vertex is computed once per class, from
- * its root triangle with the vertices rotated to start at the
- * lexicographically smallest: every cell that uses it reads the same double
+ * One vertex, one value.  A Voronoi vertex is computed once per triangle,
+ * with the vertices rotated to start at the lexicographically smallest, and
+ * a class reads its root's: every cell that uses it reads the same double
  * pair, so neighbouring cells share their vertices bit for bit and the cells
  * form a coverage with no gap and no overlap beyond that rounding.  Points
  * made by clipping are computed from the segment's end points taken in
@@ -108,14 +116,32 @@
  * same way and the slabs are closed along B's boundary, then clipped.  One
  * site: its cell is E.
  *
- * Parallelism and cancel.  Numbering the triangles, joining cocircular
- * ones, computing the vertices and building the cells are parallel loops on
- * a pool of the job's thread count, run by a driver thread with all signals
- * blocked, like a triangulation, so the host's thread stays free to cancel.
- * Every loop polls the cancel flag at least once per 4096 items.  The cells
- * of a mesh are built by ranges of half-edges, each site in the range of its
- * smallest half-edge, so the walks follow the mesh's memory order; each
- * range writes its cells into one buffer of its own.
+ * Parallelism and cancel.  Numbering the triangles (with their vertices, in
+ * one walk over the half-edges), joining cocircular ones and building the
+ * cells are parallel loops on a pool of the job's thread count, run by a
+ * driver thread with all signals blocked, like a triangulation, so the
+ * host's thread stays free to cancel.  Every loop polls the cancel flag at
+ * least once per 4096 items, or, for the loops of a few loads an item (the
+ * offsets' prefix sums), once per task of 65536.  The cells of a mesh are built by ranges of
+ * half-edges, each site in the range of its smallest half-edge, so the walks
+ * follow the mesh's memory order; each range writes its cells into one
+ * buffer of its own (tdc_voronoi_cell reads them there).
+ *
+ * Writing straight into the host's value (tdc_voronoi_start_emit).  A host
+ * that wants all cells as one value in input order would otherwise copy a
+ * million cells, some 130 MB, on its own thread, from buffers the kernel
+ * first had to clear.  Instead the first phase only sizes the cells: one
+ * walk around each site (the rings of 16 sites walked a step at a time
+ * together, so that their random loads overlap) records an inner cell that
+ * lies inside E (almost all of them) as its classes, a few words, and any
+ * other cell, built and clipped as a ring, as its coordinates.  The host
+ * allocates the total; the second phase computes every cell's offset by a
+ * parallel prefix sum over the input points (a cell sits at its site's
+ * first input point; the offsets reuse the triangle numbers' pages, which
+ * writing no longer needs), maps the value in block by block on the
+ * workers, and writes the cells from the records by the host's writer, a
+ * pure function that copies bytes.  The bytes do not depend on the thread
+ * count: the cells and the offsets do not.
  */
 #include <errno.h>
 #include <math.h>
@@ -130,6 +156,7 @@
 #define SITES_PER_TASK	4096	/* cells built per task, and per cancel poll */
 #define ITEMS_PER_TASK	65536	/* half-edges or triangles per task */
 #define CELL_RANGE_MIN	262144	/* half-edges per cell task, at least */
+#define TRI_CHUNK		1024	/* triangle numbers claimed at a time */
 
 struct tdc_voronoi
 {
@@ -142,11 +169,17 @@ struct tdc_voronoi
 	size_t		nhe;
 	size_t		ntri;
 	uint32_t   *tri_id;			/* half-edge -> triangle left of it, or NIL */
-	uint32_t   *tri_he;			/* triangle -> its smallest half-edge */
-	_Atomic(uint32_t) *parent;	/* union-find over triangles; root = class min */
+	_Atomic(uint32_t) *parent;	/* union-find over triangles, root = class min;
+								 * NULL when no two triangles are cocircular */
+	atomic_int	need_join;		/* two cocircular triangles' vertices differ */
 	double	   *cc;				/* circumcenter of each class root, 2 per tri */
 	_Atomic(uint32_t) *site_he; /* site -> smallest outgoing half-edge */
-	size_t	   *range_first;	/* triangles: first id of each range */
+	size_t	   *range_ntri;		/* half-edge range -> triangles numbered */
+	size_t		nchunks;		/* triangle numbers come in chunks (number_task) */
+	size_t		ntri_cap;		/* nchunks * TRI_CHUNK: triangle numbers below */
+	uint32_t   *chunk_fill;		/* chunk -> numbers used */
+	atomic_size_t chunks_claimed;
+	uint32_t   *tri_he;			/* joining: triangle -> its smallest half-edge */
 	double	   *range_box;		/* 4 per range: bounding box of its vertices */
 
 	/* collinear input */
@@ -163,6 +196,24 @@ struct tdc_voronoi
 	bool		big_bufs;		/* range_buf from tdc_big_alloc, not malloc */
 	double	  **range_buf;		/* ring storage of each site range */
 	size_t		total_vertices;
+
+	/* tdc_voronoi_start_emit: sizes, then the cells straight to the writer */
+	bool		emit;
+	bool		writing;		/* the second phase (tdc_voronoi_emit) */
+	tdc_cell_writer writer;
+	uint64_t	emit_bytes;
+	size_t		emit_cells;
+	uint64_t   *range_bytes;	/* per cell range: bytes of its cells */
+	size_t	   *range_cells;
+	char	   *dst;
+	size_t		ninput;
+	uint32_t   *first_in;		/* site -> first input (tolerance only) */
+	uint64_t   *inpos;			/* input -> its cell's size, then offset */
+	uint64_t   *site_off;		/* site -> its cell's offset */
+	bool		offsets_in_tri_id;	/* inpos and site_off live in tri_id's pages */
+	uint32_t  **range_rec;		/* cell range -> its record (mesh_size_task) */
+	size_t	   *range_rec_len;
+	uint64_t   *block_start;	/* input block -> offset of its first cell */
 
 	tdc_pool   *pool;
 	atomic_int	cancel;
@@ -600,6 +651,35 @@ is_outer(const tdc_job *job, size_t h)
 	return (job->outer[h >> 6] >> (h & 63)) & 1;
 }
 
+static void
+grow_box(double *box, const double *p)
+{
+	box[0] = fmin(box[0], p[0]);
+	box[1] = fmin(box[1], p[1]);
+	box[2] = fmax(box[2], p[0]);
+	box[3] = fmax(box[3], p[1]);
+}
+
+/*
+ * The walks over the half-edges look at the next half-edge around each face
+ * (tdc_tri_at), a random load in a mesh far bigger than the caches: ask for
+ * it PREFETCH half-edges early, as emit.c does.  A free slot's link may be
+ * anything: only prefetch inside the mesh.
+ */
+#define PREFETCH	16
+
+static inline void
+prefetch_face(const tdc_voronoi *v, size_t h, size_t hi)
+{
+	if (h + PREFETCH < hi)
+	{
+		uint32_t	ahead = v->job->he[SYM(h + PREFETCH)].prev;
+
+		if (ahead < v->nhe)
+			__builtin_prefetch(&v->job->he[SYM(ahead)]);
+	}
+}
+
 static size_t
 nranges_for(size_t n, size_t per)
 {
@@ -611,16 +691,61 @@ nranges_for(size_t n, size_t per)
  * ----------------------------------------------------------------
  */
 
-/* Count the triangles starting in half-edge range r; note each site's smallest half-edge. */
+/* The Voronoi vertex of a triangle: its circumcenter, from its canonical rotation. */
+static inline void
+triangle_vertex(const tdc_voronoi *v, const uint32_t s[3], double out[2])
+{
+	const double *p[3];
+	int			k = 0;
+
+	for (int i = 0; i < 3; i++)
+		p[i] = site_pt(v, s[i]);
+	if (lex_less(p[1], p[k]))
+		k = 1;
+	if (lex_less(p[2], p[k]))
+		k = 2;
+	tdc_circumcenter(p[k], p[(k + 1) % 3], p[(k + 2) % 3], out);
+}
+
+/* Are the two triangles beside edge h, h + 1 (h even) cocircular? */
+static inline bool
+edge_cocircular(const tdc_voronoi *v, size_t h)
+{
+	const tdc_job *job = v->job;
+	uint32_t	a = job->he[h].org,
+				b = job->he[h + 1].org,
+				c,
+				d;
+
+	if (a == TDC_NIL || b == TDC_NIL || is_outer(job, h) || is_outer(job, h + 1))
+		return false;
+	c = job->he[job->he[h + 1].prev ^ 1].org;	/* apex left of h */
+	d = job->he[job->he[h].prev ^ 1].org;	/* apex left of h + 1 */
+	return tdc_incircle(site_pt(v, a), site_pt(v, b), site_pt(v, c), site_pt(v, d)) == 0;
+}
+
+/*
+ * One walk over half-edge range r: note each site's smallest half-edge,
+ * number the range's triangles, record each triangle's number on its three
+ * half-edges, compute its circumcenter and the range's bounding box of them.
+ * The numbers come in chunks of TRI_CHUNK claimed with one atomic add, as
+ * emit.c collects triangles, so no walk is needed first to count them; the
+ * numbers then depend on the timing, so nothing may be ordered by them (see
+ * uf_union).  Cocircular triangles are found later, by the cell walks
+ * (note_pair).
+ */
 static void
-count_task(void *arg, size_t r, int worker)
+number_task(void *arg, size_t r, int worker)
 {
 	tdc_voronoi *v = arg;
 	const tdc_job *job = v->job;
 	size_t		lo = r * ITEMS_PER_TASK,
 				hi = lo + ITEMS_PER_TASK < v->nhe ? lo + ITEMS_PER_TASK : v->nhe,
-				n = 0;
+				n = 0,
+				chunk = 0,
+				used = TRI_CHUNK;
 	uint32_t	t[3];
+	double		box[4] = {INFINITY, INFINITY, -INFINITY, -INFINITY};
 
 	if (vor_cancelled(v))
 		return;
@@ -628,6 +753,9 @@ count_task(void *arg, size_t r, int worker)
 	{
 		uint32_t	o = job->he[h].org;
 
+		if (((h - lo) & 4095) == 4095 && vor_cancelled(v))
+			break;
+		prefetch_face(v, h, hi);
 		if (o == TDC_NIL)
 			continue;
 		/* smallest half-edge out of o: a CAS loop, contention is rare */
@@ -640,39 +768,64 @@ count_task(void *arg, size_t r, int worker)
 														  memory_order_relaxed))
 				;
 		}
-		if (v->ntri > 0 && tdc_tri_at(job, h, t))
+		if (tdc_tri_at(job, h, t))
+		{
+			uint32_t	h1 = job->he[SYM(h)].prev,
+						h2 = job->he[SYM(h1)].prev,
+						id;
+			double	   *c;
+
+			if (used == TRI_CHUNK)
+			{
+				if (n > 0)
+					v->chunk_fill[chunk] = (uint32_t) used;
+				chunk = atomic_fetch_add_explicit(&v->chunks_claimed, 1, memory_order_relaxed);
+				if (chunk >= v->nchunks)
+				{
+					vor_fail(v, TDC_EINVAL, "the mesh holds more triangles than it counted");
+					return;
+				}
+				used = 0;
+			}
+			id = (uint32_t) (chunk * TRI_CHUNK + used++);
+			c = v->cc + 2 * (size_t) id;
+			v->tri_id[h] = v->tri_id[h1] = v->tri_id[h2] = id;
+			triangle_vertex(v, t, c);
+			grow_box(box, c);
 			n++;
+		}
 	}
-	v->range_first[r + 1] = n;
+	if (n > 0)
+		v->chunk_fill[chunk] = (uint32_t) used;
+	v->range_ntri[r] = n;
+	memcpy(v->range_box + 4 * r, box, sizeof(box));
 }
 
-/* Number the triangles of range r (in half-edge order) and record their half-edges. */
 static void
-number_task(void *arg, size_t r, int worker)
+parent_task(void *arg, size_t r, int worker)
 {
 	tdc_voronoi *v = arg;
-	const tdc_job *job = v->job;
+	size_t		lo = r * ITEMS_PER_TASK,
+				hi = lo + ITEMS_PER_TASK < v->ntri_cap ? lo + ITEMS_PER_TASK : v->ntri_cap;
+
+	for (size_t t = lo; t < hi; t++)
+		atomic_init(&v->parent[t], (uint32_t) t);
+}
+
+/* The join's order of the triangles: by their smallest half-edges. */
+static void
+tri_he_task(void *arg, size_t r, int worker)
+{
+	tdc_voronoi *v = arg;
 	size_t		lo = r * ITEMS_PER_TASK,
 				hi = lo + ITEMS_PER_TASK < v->nhe ? lo + ITEMS_PER_TASK : v->nhe;
-	uint32_t	id = (uint32_t) v->range_first[r],
-				t[3];
+	uint32_t	t[3];
 
 	if (vor_cancelled(v))
 		return;
 	for (size_t h = lo; h < hi; h++)
-	{
-		uint32_t	h1,
-					h2;
-
-		if (!tdc_tri_at(job, h, t))
-			continue;
-		h1 = job->he[SYM(h)].prev;
-		h2 = job->he[SYM(h1)].prev;
-		v->tri_id[h] = v->tri_id[h1] = v->tri_id[h2] = id;
-		v->tri_he[id] = (uint32_t) h;
-		atomic_init(&v->parent[id], id);
-		id++;
-	}
+		if (tdc_tri_at(v->job, h, t))
+			v->tri_he[v->tri_id[h]] = (uint32_t) h;
 }
 
 static uint32_t
@@ -689,9 +842,11 @@ uf_find(tdc_voronoi *v, uint32_t x)
 }
 
 /*
- * Lock-free union: the larger root is linked below the smaller with a CAS,
- * so parents only ever decrease and every class ends with its smallest
- * triangle as root, whatever the order of the unions.
+ * Lock-free union: the later root, in the order of the triangles' smallest
+ * half-edges (not of their numbers, which depend on the timing), is linked
+ * below the earlier with a CAS, so a root only ever moves earlier and every
+ * class ends with its first triangle as root, whatever the order of the
+ * unions: the same class vertex whatever the thread count.
  */
 static void
 uf_union(tdc_voronoi *v, uint32_t a, uint32_t b)
@@ -705,8 +860,8 @@ uf_union(tdc_voronoi *v, uint32_t a, uint32_t b)
 		b = uf_find(v, b);
 		if (a == b)
 			return;
-		big = a > b ? a : b;
-		small = a > b ? b : a;
+		big = v->tri_he[a] > v->tri_he[b] ? a : b;
+		small = big == a ? b : a;
 		if (atomic_compare_exchange_strong_explicit(&v->parent[big], &big, small,
 													memory_order_relaxed,
 													memory_order_relaxed))
@@ -714,82 +869,49 @@ uf_union(tdc_voronoi *v, uint32_t a, uint32_t b)
 	}
 }
 
-/* Join the two triangles of every edge of range r whose four sites are cocircular. */
+/* Join the two triangles of every cocircular edge of range r. */
 static void
 cocircular_task(void *arg, size_t r, int worker)
 {
 	tdc_voronoi *v = arg;
-	const tdc_job *job = v->job;
 	size_t		lo = r * ITEMS_PER_TASK,
 				hi = lo + ITEMS_PER_TASK < v->nhe ? lo + ITEMS_PER_TASK : v->nhe;
 
 	if (vor_cancelled(v))
 		return;
 	for (size_t h = lo & ~(size_t) 1; h < hi; h += 2)
-	{
-		uint32_t	ta = v->tri_id[h],
-					tb = v->tri_id[h + 1];
-		uint32_t	a,
-					b,
-					c,
-					d;
-
-		if (ta == TDC_NIL || tb == TDC_NIL)
-			continue;
-		a = job->he[h].org;
-		b = job->he[h + 1].org;
-		c = job->he[job->he[h + 1].prev ^ 1].org;	/* apex left of h */
-		d = job->he[job->he[h].prev ^ 1].org;	/* apex left of h + 1 */
-		if (tdc_incircle(site_pt(v, a), site_pt(v, b), site_pt(v, c), site_pt(v, d)) == 0)
-			uf_union(v, ta, tb);
-	}
+		if (edge_cocircular(v, h))
+			uf_union(v, v->tri_id[h], v->tri_id[h + 1]);
 }
 
-/* Flatten the classes of triangle range r; circumcenters of its roots. */
+/*
+ * Flatten the classes of the triangles of chunks [r * FLATTEN_CHUNKS, ...),
+ * and the bounding box of its roots' circumcenters: a class's vertex is its
+ * root's.
+ */
+#define FLATTEN_CHUNKS	64
+
 static void
-vertex_task(void *arg, size_t r, int worker)
+flatten_task(void *arg, size_t r, int worker)
 {
 	tdc_voronoi *v = arg;
-	const tdc_job *job = v->job;
-	size_t		lo = r * ITEMS_PER_TASK,
-				hi = lo + ITEMS_PER_TASK < v->ntri ? lo + ITEMS_PER_TASK : v->ntri;
-	double		bx0 = INFINITY,
-				by0 = INFINITY,
-				bx1 = -INFINITY,
-				by1 = -INFINITY;
+	size_t		lo = r * FLATTEN_CHUNKS,
+				hi = lo + FLATTEN_CHUNKS < v->nchunks ? lo + FLATTEN_CHUNKS : v->nchunks;
+	double		box[4] = {INFINITY, INFINITY, -INFINITY, -INFINITY};
 
 	if (vor_cancelled(v))
 		return;
-	for (size_t t = lo; t < hi; t++)
-	{
-		uint32_t	root = uf_find(v, (uint32_t) t);
-		uint32_t	h,
-					s[3];
-		const double *p[3];
-		int			k = 0;
+	for (size_t c = lo; c < hi; c++)
+		for (size_t t = c * TRI_CHUNK; t < c * TRI_CHUNK + v->chunk_fill[c]; t++)
+		{
+			uint32_t	root = uf_find(v, (uint32_t) t);
 
-		/* safe: other tasks only read parents while flattening */
-		atomic_store_explicit(&v->parent[t], root, memory_order_relaxed);
-		if (root != t)
-			continue;
-		h = v->tri_he[t];
-		tdc_tri_at(job, h, s);
-		for (int i = 0; i < 3; i++)
-			p[i] = site_pt(v, s[i]);
-		if (lex_less(p[1], p[k]))
-			k = 1;
-		if (lex_less(p[2], p[k]))
-			k = 2;
-		tdc_circumcenter(p[k], p[(k + 1) % 3], p[(k + 2) % 3], v->cc + 2 * t);
-		bx0 = fmin(bx0, v->cc[2 * t]);
-		bx1 = fmax(bx1, v->cc[2 * t]);
-		by0 = fmin(by0, v->cc[2 * t + 1]);
-		by1 = fmax(by1, v->cc[2 * t + 1]);
-	}
-	v->range_box[4 * r] = bx0;
-	v->range_box[4 * r + 1] = by0;
-	v->range_box[4 * r + 2] = bx1;
-	v->range_box[4 * r + 3] = by1;
+			/* safe: other tasks only read parents while flattening */
+			atomic_store_explicit(&v->parent[t], root, memory_order_relaxed);
+			if (root == t)
+				grow_box(box, v->cc + 2 * t);
+		}
+	memcpy(v->range_box + 4 * r, box, sizeof(box));
 }
 
 /* ----------------------------------------------------------------
@@ -1085,12 +1207,50 @@ hull_ray(const tdc_voronoi *v, const double *p, uint32_t a, uint32_t b,
 	box_exit(v->box, p, -(pb[1] - pa[1]), pb[0] - pa[0], out, side);
 }
 
+/* The class of the triangle left of h: its root, whose vertex is the class's. */
+static inline uint32_t
+class_of(const tdc_voronoi *v, uint32_t h)
+{
+	uint32_t	t = v->tri_id[h];
+
+	return v->parent ? atomic_load_explicit(&v->parent[t], memory_order_relaxed) : t;
+}
+
 static inline const double *
 vertex_of(const tdc_voronoi *v, uint32_t h)
 {
-	uint32_t	t = atomic_load_explicit(&v->parent[v->tri_id[h]], memory_order_relaxed);
+	return v->cc + 2 * (size_t) class_of(v, h);
+}
 
-	return v->cc + 2 * (size_t) t;
+/*
+ * Consecutive triangles ta and tb around a site, beside edge h: if their
+ * vertices are close enough that the two triangles may be cocircular
+ * (within the documented bound of each, 1/2 ulp + 2^-55 of the coordinate,
+ * with room to spare), and they are, the classes are joined (vor_run).
+ * Two cocircular triangles whose vertices came out as the same doubles
+ * would need no join (the rings drop the repeat, as they must), but they
+ * are joined all the same: it is what makes exactly cocircular input
+ * (lattices) take, and so test, the path that the rare cocircular pair
+ * with different roundings needs, and it costs nothing on input with no
+ * four sites on a circle.  Once joined, every class has one vertex.
+ */
+static inline bool
+close_coordinate(double a, double b)
+{
+	return fabs(a - b) <= 0x1p-48 * fmax(fabs(a), fabs(b));
+}
+
+static inline void
+note_pair(const tdc_voronoi *v, uint32_t ta, uint32_t tb, uint32_t h)
+{
+	const double *a = v->cc + 2 * (size_t) ta,
+			   *b = v->cc + 2 * (size_t) tb;
+
+	if (v->parent)
+		return;
+	if (close_coordinate(a[0], b[0]) && close_coordinate(a[1], b[1]) &&
+		edge_cocircular(v, h & ~(uint32_t) 1))
+		atomic_store_explicit((atomic_int *) &v->need_join, 1, memory_order_relaxed);
 }
 
 /*
@@ -1148,15 +1308,24 @@ cell_of_mesh(const tdc_voronoi *v, uint32_t s, size_t deg, uint32_t ho, ring *r)
 		/* the edge to the next vertex is dual to onext(h) */
 		if (r->tagged)
 			g = job->he[SYM(hn)].org;
-		t = atomic_load_explicit(&v->parent[v->tri_id[h]], memory_order_relaxed);
+		t = class_of(v, h);
 		if (t != prev_t)
 		{
+			if (prev_t != TDC_NIL)
+				note_pair(v, prev_t, t, h);
 			ring_push(r, v->cc[2 * (size_t) t], v->cc[2 * (size_t) t + 1], g);
 			prev_t = t;
 		}
 		else if (r->tagged)
 			r->tag[r->n - 1] = g;	/* a zero-length edge collapsed */
 		h = hn;
+	}
+	if (ho == TDC_NIL && prev_t != TDC_NIL)
+	{
+		uint32_t	first = class_of(v, h0);
+
+		if (first != prev_t)
+			note_pair(v, prev_t, first, h0);
 	}
 	if (ho != TDC_NIL)
 	{
@@ -1453,6 +1622,497 @@ done:
 	free(sites);
 }
 
+#define FAIL_OOM(msg) do { vor_fail(v, TDC_ENOMEM, msg); return TDC_ENOMEM; } while (0)
+
+/* ----------------------------------------------------------------
+ *		writing the cells straight into the host's value
+ * ----------------------------------------------------------------
+ */
+/*
+ * Site s's final cell (cut to E) into scratch, as mesh_cell_task builds it:
+ * an inner site untagged into w, kept when inside E; otherwise tagged into
+ * a and clipped (b scratch).  *res is w or a; false when out of memory.
+ */
+static bool
+build_mesh_cell(const tdc_voronoi *v, uint32_t s, ring *w, ring *a, ring *b,
+				const ring **res)
+{
+	uint32_t	ho;
+	size_t		deg = site_degree(v, s, &ho);
+
+	if (ho == TDC_NIL)
+	{
+		bool		inside = true;
+
+		if (!ring_reserve(w, deg + 8))
+			return false;
+		cell_of_mesh(v, s, deg, ho, w);
+		for (size_t i = 0; i < w->n && inside; i++)
+			inside = w->p[2 * i] >= v->env[0] && w->p[2 * i] <= v->env[2] &&
+				w->p[2 * i + 1] >= v->env[1] && w->p[2 * i + 1] <= v->env[3];
+		if (inside)
+		{
+			*res = w;
+			return true;
+		}
+	}
+	if (!ring_reserve(a, deg + 8))
+		return false;
+	cell_of_mesh(v, s, deg, ho, a);
+	if (!clip_to_env(v, s, a, b))
+		return false;
+	*res = a;
+	return true;
+}
+
+/* Where site s's cell goes: the first input point that became s. */
+static inline size_t
+first_input(const tdc_voronoi *v, uint32_t s)
+{
+	return v->first_in ? v->first_in[s] : v->job->idx[s];
+}
+
+/* Room for n more words in a range's record. */
+static bool
+rec_reserve(uint32_t **rec, size_t *cap, size_t len, size_t n)
+{
+	if (len + n > *cap)
+	{
+		size_t		c = (len + n) + (len + n) / 2 + 1024;
+		uint32_t   *p = realloc(*rec, c * sizeof(uint32_t));
+
+		if (p == NULL)
+			return false;
+		*rec = p;
+		*cap = c;
+	}
+	return true;
+}
+
+/*
+ * An inner site's cell as its classes, from its ring of half-edges hs (from
+ * its smallest, counter-clockwise) and their triangles' classes ts: the
+ * vertices cell_of_mesh would give an untagged ring (a class once, a vertex
+ * equal to the one before dropped, then a closing repeat of the first), as
+ * class numbers into ids (room for cap).  Returns the count, or 0 when a
+ * vertex lies outside E (or there are more than cap): then the cell is
+ * built and clipped as a ring.
+ */
+static size_t
+inner_cell_ids(const tdc_voronoi *v, const uint32_t *hs, const uint32_t *ts, size_t deg,
+			   uint32_t *ids, size_t cap)
+{
+	uint32_t	prev_t = TDC_NIL;
+	size_t		n = 0;
+	const double *last = NULL;
+
+	for (size_t j = 0; j < deg; j++)
+	{
+		uint32_t	t = ts[j];
+		const double *c;
+
+		if (t == prev_t)
+			continue;
+		if (prev_t != TDC_NIL)
+			note_pair(v, prev_t, t, hs[j]);
+		prev_t = t;
+		c = v->cc + 2 * (size_t) t;
+		if (last && c[0] == last[0] && c[1] == last[1])
+			continue;
+		if (!(c[0] >= v->env[0] && c[0] <= v->env[2] && c[1] >= v->env[1] && c[1] <= v->env[3]) ||
+			n == cap)
+			return 0;
+		ids[n++] = t;
+		last = c;
+	}
+	if (ts[0] != prev_t)
+		note_pair(v, prev_t, ts[0], hs[0]);
+	while (n > 1)
+	{
+		const double *f = v->cc + 2 * (size_t) ids[0],
+				   *l = v->cc + 2 * (size_t) ids[n - 1];
+
+		if (f[0] != l[0] || f[1] != l[1])
+			break;
+		n--;
+	}
+	return n;
+}
+
+
+/*
+ * Sizing: the sites whose smallest half-edge lies in half-edge range rg, in
+ * mesh order (see mesh_cell_task), each cell's vertex count and the range's
+ * bytes, and a record of the range's cells for the writing phase: per site
+ * its number, its count m and, for an inner cell inside E (almost all of
+ * them), its m classes; for any other cell (on the hull, or crossing E),
+ * built as a ring and clipped, m | REC_XY and its coordinates.  Writing then
+ * reads the record in order and looks up the vertices, with no walk around
+ * the sites and no mesh: keeping all cells' coordinates instead would cost
+ * some 100 MB of fresh memory for a million points, which the kernel must
+ * clear, and walking twice, the mesh's random loads twice.
+ */
+#define BATCH		16			/* sites walked together (mesh_size_task) */
+#define REC_XY		0x80000000u	/* record: the cell's coordinates follow */
+#define RING_MAX	32			/* longer rings go the ring's way */
+
+static void
+mesh_size_task(void *arg, size_t rg, int worker)
+{
+	tdc_voronoi *v = arg;
+	const tdc_job *job = v->job;
+	size_t		lo = rg * v->cell_range,
+				hi = lo + v->cell_range < v->nhe ? lo + v->cell_range : v->nhe,
+				len = 0,
+				cap = 0,
+				nb = 0;
+	ring		w = {0},
+				a = {.tagged = true},
+				b = {.tagged = true};
+	uint64_t	bytes = 0;
+	size_t		cells = 0;
+	uint32_t   *rec = NULL;
+	uint32_t	site[BATCH],
+				hs[BATCH][RING_MAX],
+				ts[BATCH][RING_MAX],
+				deg[BATCH];
+	bool		open[BATCH],
+				inner[BATCH];
+
+	if (vor_cancelled(v))
+		return;
+	for (size_t h = lo; h <= hi; h++)
+	{
+		uint32_t	s = h < hi ? job->he[h].org : TDC_NIL;
+
+		if (((h - lo) & 4095) == 4095 && vor_cancelled(v))
+			goto done;
+		if (h < hi && (s == TDC_NIL ||
+					   atomic_load_explicit(&v->site_he[s], memory_order_relaxed) != (uint32_t) h))
+			continue;
+		if (h < hi)
+		{
+			site[nb] = s;
+			hs[nb][0] = (uint32_t) h;
+			deg[nb] = 1;
+			open[nb] = true;
+			inner[nb] = true;
+			nb++;
+			if (nb < BATCH)
+				continue;
+		}
+		if (nb == 0)
+			continue;
+
+		/*
+		 * The batch's rings, one step of every site at a time: the walks'
+		 * random loads are independent across the sites, so they overlap
+		 * instead of waiting for each other.  A ring with the outer face
+		 * or longer than RING_MAX goes the ring's way.
+		 */
+		for (bool any = true; any;)
+		{
+			any = false;
+			for (size_t i = 0; i < nb; i++)
+			{
+				uint32_t	hn;
+
+				if (!open[i])
+					continue;
+				hn = job->he[hs[i][deg[i] - 1]].next;
+				if (hn == hs[i][0])
+					open[i] = false;
+				else if (deg[i] == RING_MAX)
+				{
+					open[i] = false;
+					inner[i] = false;
+				}
+				else
+				{
+					hs[i][deg[i]++] = hn;
+					__builtin_prefetch(&v->tri_id[hn]);
+					any = true;
+				}
+			}
+		}
+		for (size_t i = 0; i < nb; i++)
+			for (size_t j = 0; j < deg[i] && inner[i]; j++)
+			{
+				if (is_outer(job, hs[i][j]))
+					inner[i] = false;
+				else
+				{
+					ts[i][j] = class_of(v, hs[i][j]);
+					__builtin_prefetch(v->cc + 2 * (size_t) ts[i][j]);
+				}
+			}
+		for (size_t i = 0; i < nb; i++)
+		{
+			size_t		m = 0;
+			const ring *c;
+
+			if (!rec_reserve(&rec, &cap, len, 2 + RING_MAX))
+				goto oom;
+			if (inner[i])
+				m = inner_cell_ids(v, hs[i], ts[i], deg[i], rec + len + 2, RING_MAX);
+			rec[len] = site[i];
+			rec[len + 1] = (uint32_t) m;
+			if (m == 0)
+			{
+				/* built as a ring and clipped: its coordinates, 4 words a vertex */
+				if (!build_mesh_cell(v, site[i], &w, &a, &b, &c) ||
+					!rec_reserve(&rec, &cap, len, 2 + 4 * c->n))
+					goto oom;
+				m = c->n;
+				rec[len + 1] = (uint32_t) m | REC_XY;
+				memcpy(rec + len + 2, c->p, 16 * m);
+				len += 2 + 4 * m;
+			}
+			else
+				len += 2 + m;
+			v->cell_n[site[i]] = (uint32_t) m;
+			bytes += v->writer.size(v->writer.arg, m);
+			cells++;
+		}
+		nb = 0;
+	}
+	v->range_bytes[rg] = bytes;
+	v->range_cells[rg] = cells;
+	v->range_rec[rg] = rec;
+	v->range_rec_len[rg] = len;
+	rec = NULL;
+	goto done;
+oom:
+	vor_fail(v, TDC_ENOMEM, "out of memory sizing the Voronoi cells");
+done:
+	free(rec);
+	free(w.p);
+	free(a.p);
+	free(a.tag);
+	free(b.p);
+	free(b.tag);
+}
+
+/* Writing: range rg's cells, as its record lists them, to the writer. */
+static void
+mesh_write_task(void *arg, size_t rg, int worker)
+{
+	tdc_voronoi *v = arg;
+	const uint32_t *rec = v->range_rec[rg];
+	size_t		len = v->range_rec_len[rg];
+	ring		w = {0};
+	double		xy[2 * RING_MAX];
+
+	if (vor_cancelled(v))
+		return;
+	for (size_t i = 0, k = 0; i < len; k++)
+	{
+		uint32_t	s = rec[i];
+		size_t		m = rec[i + 1] & ~REC_XY;
+		char	   *dst = v->dst + v->site_off[s];
+
+		if ((k & 4095) == 4095 && vor_cancelled(v))
+			break;
+		if (rec[i + 1] & REC_XY)
+		{
+			/* the record's words are not aligned for doubles */
+			if (!ring_reserve(&w, m))
+			{
+				vor_fail(v, TDC_ENOMEM, "out of memory writing the Voronoi cells");
+				break;
+			}
+			memcpy(w.p, rec + i + 2, 16 * m);
+			v->writer.write(v->writer.arg, dst, w.p, m);
+			i += 2 + 4 * m;
+		}
+		else
+		{
+			for (size_t j = 0; j < m; j++)
+				memcpy(xy + 2 * j, v->cc + 2 * (size_t) rec[i + 2 + j], 2 * sizeof(double));
+			v->writer.write(v->writer.arg, dst, xy, m);
+			i += 2 + m;
+		}
+	}
+	free(w.p);
+}
+
+/* Collinear input: the cells of site range rg, kept by cell_task, to the writer. */
+static void
+line_emit_task(void *arg, size_t rg, int worker)
+{
+	tdc_voronoi *v = arg;
+	size_t		lo = rg * SITES_PER_TASK,
+				hi = lo + SITES_PER_TASK < v->nsites ? lo + SITES_PER_TASK : v->nsites;
+
+	if (vor_cancelled(v))
+		return;
+	for (size_t s = lo; s < hi; s++)
+		if (v->cell_n[s] > 0)
+			v->writer.write(v->writer.arg, v->dst + v->site_off[s], v->cell_xy[s], v->cell_n[s]);
+}
+
+/* Each cell's bytes at the place of its site's first input point. */
+static void
+scatter_task(void *arg, size_t r, int worker)
+{
+	tdc_voronoi *v = arg;
+	size_t		lo = r * ITEMS_PER_TASK,
+				hi = lo + ITEMS_PER_TASK < v->nsites ? lo + ITEMS_PER_TASK : v->nsites;
+
+	if (vor_cancelled(v))
+		return;
+	for (size_t s = lo; s < hi; s++)
+		if (v->cell_n[s] > 0)
+			v->inpos[first_input(v, (uint32_t) s)] = v->writer.size(v->writer.arg, v->cell_n[s]);
+}
+
+/* The bytes of the cells of input block r. */
+static void
+block_sum_task(void *arg, size_t r, int worker)
+{
+	tdc_voronoi *v = arg;
+	size_t		lo = r * ITEMS_PER_TASK,
+				hi = lo + ITEMS_PER_TASK < v->ninput ? lo + ITEMS_PER_TASK : v->ninput;
+	uint64_t	sum = 0;
+
+	if (vor_cancelled(v))
+		return;
+	for (size_t i = lo; i < hi; i++)
+		sum += v->inpos[i];
+	v->block_start[r + 1] = sum;
+}
+
+/*
+ * Sizes to offsets in input block r, and the block's part of the value
+ * mapped in now, in parallel, rather than a page fault at a time by the
+ * scattered writes that follow.
+ */
+static void
+offset_task(void *arg, size_t r, int worker)
+{
+	tdc_voronoi *v = arg;
+	size_t		lo = r * ITEMS_PER_TASK,
+				hi = lo + ITEMS_PER_TASK < v->ninput ? lo + ITEMS_PER_TASK : v->ninput;
+	uint64_t	off = v->block_start[r];
+
+	if (vor_cancelled(v))
+		return;
+	for (size_t i = lo; i < hi; i++)
+	{
+		uint64_t	size = v->inpos[i];
+
+		v->inpos[i] = off;
+		off += size;
+	}
+	tdc_prefault(v->dst + v->block_start[r], (size_t) (off - v->block_start[r]));
+}
+
+/*
+ * Each site's offset, from its first input point's: a loop of independent
+ * random loads, which overlap, rather than one in the middle of every
+ * cell's writing.
+ */
+static void
+gather_task(void *arg, size_t r, int worker)
+{
+	tdc_voronoi *v = arg;
+	size_t		lo = r * ITEMS_PER_TASK,
+				hi = lo + ITEMS_PER_TASK < v->nsites ? lo + ITEMS_PER_TASK : v->nsites;
+
+	if (vor_cancelled(v))
+		return;
+	for (size_t s = lo; s < hi; s++)
+		if (v->cell_n[s] > 0)
+			v->site_off[s] = v->inpos[first_input(v, (uint32_t) s)];
+}
+
+/*
+ * The writing phase, on the driver thread: offsets in input order (the
+ * sites' first input points, for a tolerance found through the input map),
+ * then every cell to the writer.
+ */
+static int
+vor_emit_run(tdc_voronoi *v)
+{
+	const tdc_job *job = v->job;
+	size_t		nb;
+	int			rc;
+
+	rc = tdc_pool_create(&v->pool, v->threads);
+	if (rc != 0)
+	{
+		vor_fail(v, rc, rc == TDC_ETHREAD ? "could not create worker threads" : "out of memory");
+		return rc;
+	}
+	v->ninput = tdc_num_input(job);
+	if (job->opt.tolerance > 0)
+	{
+		v->first_in = malloc(v->nsites * sizeof(uint32_t) + 1);
+		if (v->first_in == NULL)
+			FAIL_OOM("out of memory ordering the Voronoi cells");
+		memset(v->first_in, 0xff, v->nsites * sizeof(uint32_t));
+		for (size_t i = 0; i < v->ninput; i++)
+		{
+			uint32_t	s = tdc_input_site(job, i);
+
+			if (s == UINT32_MAX)
+				FAIL_OOM("out of memory mapping the input to its sites");
+			if (v->first_in[s] == TDC_NIL)
+				v->first_in[s] = (uint32_t) i;
+			if ((i & 65535) == 65535 && vor_cancelled(v))
+				return TDC_ECANCELED;
+		}
+	}
+	nb = nranges_for(v->ninput, ITEMS_PER_TASK);
+	v->block_start = calloc(nb + 1, sizeof(uint64_t));
+	if (v->block_start == NULL)
+		FAIL_OOM("out of memory ordering the Voronoi cells");
+
+	/*
+	 * Writing a mesh's cells reads only the records and the vertices: the
+	 * triangle numbers' pages, mapped and cleared already, hold the offsets
+	 * (the input's, then the sites'), when they fit, rather than fresh pages
+	 * the kernel must clear.
+	 */
+	if (v->tri_id && (v->ninput + v->nsites) * sizeof(uint64_t) <= v->nhe * sizeof(uint32_t))
+	{
+		v->inpos = (uint64_t *) (void *) v->tri_id;
+		v->site_off = v->inpos + v->ninput;
+		v->offsets_in_tri_id = true;
+		memset(v->inpos, 0, v->ninput * sizeof(uint64_t));
+	}
+	else
+	{
+		v->inpos = tdc_big_alloc(v->ninput * sizeof(uint64_t) + 1);
+		v->site_off = tdc_big_alloc(v->nsites * sizeof(uint64_t) + 1);
+		if (v->inpos == NULL || v->site_off == NULL)
+			FAIL_OOM("out of memory ordering the Voronoi cells");
+	}
+	tdc_pool_for(v->pool, nranges_for(v->nsites, ITEMS_PER_TASK), scatter_task, v);
+	tdc_pool_for(v->pool, nb, block_sum_task, v);
+	if (vor_cancelled(v))
+		return TDC_ECANCELED;
+	for (size_t r = 0; r < nb; r++)
+		v->block_start[r + 1] += v->block_start[r];
+	if (v->block_start[nb] != v->emit_bytes)
+	{
+		vor_fail(v, TDC_EINVAL, "the Voronoi cells' offsets do not add up to their size");
+		return TDC_EINVAL;
+	}
+	tdc_pool_for(v->pool, nb, offset_task, v);
+	if (vor_cancelled(v))
+		return TDC_ECANCELED;
+	/* by site now; the input's offsets are no longer needed */
+	tdc_pool_for(v->pool, nranges_for(v->nsites, ITEMS_PER_TASK), gather_task, v);
+	if (!v->offsets_in_tri_id)
+		tdc_big_free(v->inpos);
+	v->inpos = NULL;
+	if (vor_cancelled(v))
+		return TDC_ECANCELED;
+	tdc_pool_for(v->pool, v->nranges, v->ntri > 0 ? mesh_write_task : line_emit_task, v);
+	return vor_cancelled(v) ? TDC_ECANCELED : TDC_OK;
+}
+
 static int
 cmp_site(const void *x, const void *y, void *arg)
 {
@@ -1463,27 +2123,126 @@ cmp_site(const void *x, const void *y, void *arg)
 	return lex_less(p, q) ? -1 : lex_less(q, p) ? 1 : 0;
 }
 
+
+/*
+ * B: around E, the sites (base) and the vertices of the ranges' boxes,
+ * widened on every side by its larger extent.
+ */
 static void
-grow_box(double *box, const double *p)
+set_outer_box(tdc_voronoi *v, const double base[4], size_t nboxes)
 {
-	box[0] = fmin(box[0], p[0]);
-	box[1] = fmin(box[1], p[1]);
-	box[2] = fmax(box[2], p[0]);
-	box[3] = fmax(box[3], p[1]);
+	double		box[4] = {base[0], base[1], base[2], base[3]},
+				w;
+
+	for (size_t r = 0; r < nboxes; r++)
+	{
+		if (v->range_box[4 * r] <= v->range_box[4 * r + 2])
+		{
+			grow_box(box, v->range_box + 4 * r);
+			grow_box(box, v->range_box + 4 * r + 2);
+		}
+	}
+	w = fmax(box[2] - box[0], box[3] - box[1]);
+	if (!(w > 0))
+		w = fmax(fabs(box[2]), fabs(box[3])) + 1;
+	v->box[0] = box[0] - w;
+	v->box[1] = box[1] - w;
+	v->box[2] = box[2] + w;
+	v->box[3] = box[3] + w;
 }
 
-#define FAIL_OOM(msg) do { vor_fail(v, TDC_ENOMEM, msg); return TDC_ENOMEM; } while (0)
+/*
+ * The cells, into buffers or (emit) sized and recorded; every site's count
+ * in cell_n.  Run again from scratch after the classes were joined.
+ */
+static int
+build_cells(tdc_voronoi *v)
+{
+	size_t		nr = v->nranges;
+
+	v->total_vertices = 0;
+	v->emit_bytes = 0;
+	v->emit_cells = 0;
+	if (v->emit && v->ntri > 0)
+	{
+		for (size_t r = 0; r < nr; r++)
+		{
+			free(v->range_rec[r]);
+			v->range_rec[r] = NULL;
+			v->range_rec_len[r] = 0;
+		}
+		tdc_pool_for(v->pool, nr, mesh_size_task, v);
+		if (vor_cancelled(v))
+			return TDC_ECANCELED;
+		for (size_t r = 0; r < nr; r++)
+		{
+			v->emit_bytes += v->range_bytes[r];
+			v->emit_cells += v->range_cells[r];
+		}
+		for (size_t s = 0; s < v->nsites; s++)
+			v->total_vertices += v->cell_n[s];
+		return TDC_OK;
+	}
+	for (size_t r = 0; r < nr; r++)
+	{
+		if (v->big_bufs)
+			tdc_big_free(v->range_buf[r]);
+		else
+			free(v->range_buf[r]);
+		v->range_buf[r] = NULL;
+	}
+	tdc_pool_for(v->pool, nr, v->ntri > 0 ? mesh_cell_task : cell_task, v);
+	if (vor_cancelled(v))
+		return TDC_ECANCELED;
+	for (size_t s = 0; s < v->nsites; s++)
+	{
+		v->total_vertices += v->cell_n[s];
+		if (v->emit && v->cell_n[s] > 0)
+		{
+			v->emit_bytes += v->writer.size(v->writer.arg, v->cell_n[s]);
+			v->emit_cells++;
+		}
+	}
+	return TDC_OK;
+}
+
+/*
+ * Join the triangles of every cocircular edge into classes, each with its
+ * root's vertex, and B again from the roots' vertices.
+ */
+static int
+join_cocircular(tdc_voronoi *v, const double base[4])
+{
+	size_t		nr = nranges_for(v->nhe, ITEMS_PER_TASK),
+				ntr = nranges_for(v->ntri_cap, ITEMS_PER_TASK),
+				nfr = nranges_for(v->nchunks, FLATTEN_CHUNKS);
+
+	v->parent = tdc_big_alloc(v->ntri_cap * sizeof(uint32_t));
+	v->tri_he = tdc_big_alloc(v->ntri_cap * sizeof(uint32_t));
+	if (v->parent == NULL || v->tri_he == NULL)
+		FAIL_OOM("out of memory joining cocircular triangles");
+	tdc_pool_for(v->pool, ntr, parent_task, v);
+	tdc_pool_for(v->pool, nr, tri_he_task, v);
+	tdc_pool_for(v->pool, nr, cocircular_task, v);
+	if (vor_cancelled(v))
+		return TDC_ECANCELED;
+	tdc_pool_for(v->pool, nfr, flatten_task, v);
+	if (vor_cancelled(v))
+		return TDC_ECANCELED;
+	set_outer_box(v, base, nfr);
+	return TDC_OK;
+}
 
 /* Everything, on the driver thread (or the caller's for small jobs). */
 static int
 vor_run(tdc_voronoi *v)
 {
 	const tdc_job *job = v->job;
-	size_t		nr = 0;
-	double		box[4] = {v->env[0], v->env[1], v->env[2], v->env[3]},
+	size_t		nr = 0,
+				nboxes = 0;
+	double		base[4] = {v->env[0], v->env[1], v->env[2], v->env[3]},
 				lo[2],
-				hi[2],
-				w;
+				hi[2];
 	int			rc;
 
 	rc = tdc_pool_create(&v->pool, v->threads);
@@ -1500,61 +2259,42 @@ vor_run(tdc_voronoi *v)
 	if (job->nsites > 0)
 	{
 		tdc_site_extent(job, lo, hi);
-		grow_box(box, lo);
-		grow_box(box, hi);
+		grow_box(base, lo);
+		grow_box(base, hi);
 	}
 
-	if (job->nsites >= 2)
-	{
-		nr = nranges_for(v->nhe, ITEMS_PER_TASK);
-		v->site_he = tdc_big_alloc(job->nin * sizeof(uint32_t));
-		v->range_first = calloc(nr + 1, sizeof(size_t));
-		if (v->site_he == NULL || v->range_first == NULL)
-			FAIL_OOM("out of memory numbering the triangles");
-		for (size_t s = 0; s < job->nin; s++)
-			atomic_init(&v->site_he[s], TDC_NIL);
-		tdc_pool_for(v->pool, nr, count_task, v);
-		if (vor_cancelled(v))
-			return TDC_ECANCELED;
-	}
 	if (v->ntri > 0)
 	{
-		size_t		ntr = nranges_for(v->ntri, ITEMS_PER_TASK);
+		size_t		ntri = 0;
 
+		nr = nranges_for(v->nhe, ITEMS_PER_TASK);
+		/* every range but one chunk per range fills its chunks */
+		v->nchunks = v->ntri / TRI_CHUNK + nr;
+		v->ntri_cap = v->nchunks * TRI_CHUNK;
+		v->site_he = tdc_big_alloc(job->nin * sizeof(uint32_t));
+		v->range_ntri = calloc(nr + 1, sizeof(size_t));
+		v->chunk_fill = calloc(v->nchunks + 1, sizeof(uint32_t));
+		/* a half-edge outside every triangle keeps a number never read */
+		v->tri_id = tdc_big_alloc(v->nhe * sizeof(uint32_t));
+		v->cc = tdc_big_alloc(v->ntri_cap * 2 * sizeof(double));
+		v->range_box = malloc((nr > v->nchunks ? nr : v->nchunks) * 4 * sizeof(double) + 1);
+		if (!v->site_he || !v->range_ntri || !v->chunk_fill || !v->tri_id || !v->cc ||
+			!v->range_box)
+			FAIL_OOM("out of memory for the Voronoi vertices");
+		atomic_init(&v->chunks_claimed, 0);
+		for (size_t s = 0; s < job->nin; s++)
+			atomic_init(&v->site_he[s], TDC_NIL);
+		tdc_pool_for(v->pool, nr, number_task, v);
+		if (vor_cancelled(v))
+			return TDC_ECANCELED;
 		for (size_t r = 0; r < nr; r++)
-			v->range_first[r + 1] += v->range_first[r];
-		if (v->range_first[nr] != v->ntri)
+			ntri += v->range_ntri[r];
+		if (ntri != v->ntri)
 		{
 			vor_fail(v, TDC_EINVAL, "the mesh does not hold the triangles counted");
 			return TDC_EINVAL;
 		}
-		v->tri_id = tdc_big_alloc(v->nhe * sizeof(uint32_t));
-		v->tri_he = tdc_big_alloc(v->ntri * sizeof(uint32_t));
-		v->parent = tdc_big_alloc(v->ntri * sizeof(uint32_t));
-		v->cc = tdc_big_alloc(v->ntri * 2 * sizeof(double));
-		v->range_box = malloc(ntr * 4 * sizeof(double));
-		if (!v->tri_id || !v->tri_he || !v->parent || !v->cc || !v->range_box)
-			FAIL_OOM("out of memory for the Voronoi vertices");
-		memset(v->tri_id, 0xff, v->nhe * sizeof(uint32_t));
-		tdc_pool_for(v->pool, nr, number_task, v);
-		if (vor_cancelled(v))
-			return TDC_ECANCELED;
-		tdc_pool_for(v->pool, nr, cocircular_task, v);
-		if (vor_cancelled(v))
-			return TDC_ECANCELED;
-		tdc_pool_for(v->pool, ntr, vertex_task, v);
-		if (vor_cancelled(v))
-			return TDC_ECANCELED;
-		for (size_t r = 0; r < ntr; r++)
-		{
-			if (v->range_box[4 * r] <= v->range_box[4 * r + 2])
-			{
-				grow_box(box, v->range_box + 4 * r);
-				grow_box(box, v->range_box + 4 * r + 2);
-			}
-		}
-		tdc_big_free(v->tri_he);
-		v->tri_he = NULL;
+		nboxes = nr;
 	}
 	else if (job->nsites >= 2)
 	{
@@ -1572,13 +2312,7 @@ vor_run(tdc_voronoi *v)
 		for (size_t i = 0; i < k; i++)
 			v->line_pos[v->line[i]] = (uint32_t) i;
 	}
-	w = fmax(box[2] - box[0], box[3] - box[1]);
-	if (!(w > 0))
-		w = fmax(fabs(box[2]), fabs(box[3])) + 1;
-	v->box[0] = box[0] - w;
-	v->box[1] = box[1] - w;
-	v->box[2] = box[2] + w;
-	v->box[3] = box[3] + w;
+	set_outer_box(v, base, nboxes);
 
 	/*
 	 * Cells of a mesh by half-edge ranges of at least 2^18 (a few MB of
@@ -1591,27 +2325,50 @@ vor_run(tdc_voronoi *v)
 	v->big_bufs = v->ntri > 0;
 	nr = v->ntri > 0 ? nranges_for(v->nhe, v->cell_range) : nranges_for(v->nsites, SITES_PER_TASK);
 	v->nranges = nr;
-	v->cell_xy = tdc_big_alloc(v->nsites * sizeof(double *) + 1);
+	/* zeroed: a site without a cell (a duplicate) keeps 0 */
 	v->cell_n = tdc_big_alloc(v->nsites * sizeof(uint32_t) + 1);
-	v->range_buf = calloc(nr + 1, sizeof(double *));
-	if (v->cell_xy == NULL || v->cell_n == NULL || v->range_buf == NULL)
+	if (v->cell_n == NULL)
 		FAIL_OOM("out of memory for the Voronoi cells");
-	/* a site without a cell (a duplicate) keeps 0 */
-	if (v->ntri > 0)
+	if (v->emit && v->ntri > 0)
 	{
-		memset(v->cell_n, 0, v->nsites * sizeof(uint32_t));
-		tdc_pool_for(v->pool, nr, mesh_cell_task, v);
+		v->range_bytes = calloc(nr + 1, sizeof(uint64_t));
+		v->range_cells = calloc(nr + 1, sizeof(size_t));
+		v->range_rec = calloc(nr + 1, sizeof(uint32_t *));
+		v->range_rec_len = calloc(nr + 1, sizeof(size_t));
+		if (v->range_bytes == NULL || v->range_cells == NULL || v->range_rec == NULL ||
+			v->range_rec_len == NULL)
+			FAIL_OOM("out of memory for the Voronoi cells");
 	}
 	else
-		tdc_pool_for(v->pool, nr, cell_task, v);
-	if (vor_cancelled(v))
-		return TDC_ECANCELED;
-	for (size_t s = 0; s < v->nsites; s++)
-		v->total_vertices += v->cell_n[s];
+	{
+		v->cell_xy = tdc_big_alloc(v->nsites * sizeof(double *) + 1);
+		v->range_buf = calloc(nr + 1, sizeof(double *));
+		if (v->cell_xy == NULL || v->range_buf == NULL)
+			FAIL_OOM("out of memory for the Voronoi cells");
+	}
+	rc = build_cells(v);
+	if (rc != TDC_OK)
+		return rc;
 
-	/* what only the build needed */
-	tdc_big_free(v->tri_id);
-	v->tri_id = NULL;
+	/*
+	 * Two cocircular triangles whose vertices came out different (see the
+	 * header comment): join the classes and build every cell again.
+	 */
+	if (atomic_load(&v->need_join))
+	{
+		rc = join_cocircular(v, base);
+		if (rc == TDC_OK)
+			rc = build_cells(v);
+		if (rc != TDC_OK)
+			return rc;
+	}
+
+	/* what only the build needed (emit: writing builds some cells again) */
+	if (!(v->emit && v->ntri > 0))
+	{
+		tdc_big_free(v->tri_id);
+		v->tri_id = NULL;
+	}
 	return TDC_OK;
 }
 
@@ -1627,7 +2384,7 @@ static int
 vor_work(void *arg)
 {
 	tdc_voronoi *v = arg;
-	int			rc = vor_run(v);
+	int			rc = v->writing ? vor_emit_run(v) : vor_run(v);
 
 	tdc_pool_destroy(v->pool);
 	v->pool = NULL;
@@ -1649,20 +2406,30 @@ tdc_voronoi_memory(size_t n, int threads)
 {
 	/*
 	 * Per input point: 6 half-edges' triangle numbers (24), at most 2
-	 * triangles' numbers, parents and circumcenters (8 + 8 + 32), the
+	 * triangles' parents, smallest half-edges (joining) and circumcenters
+	 * (8 + 8 + 32, and a partly used chunk of numbers per 2^16 half-edges,
+	 * under 2 bytes a point), the
 	 * smallest half-edge, ring pointer and count of its site (4 + 8 + 4);
 	 * ring storage: every triangle is in at most 3 rings (6 vertices per
 	 * point), clipping adds at most 4 per cell, a hull cell 2 exit points
 	 * and 4 corners of B: 16 vertices of 16 bytes per point, and a range's
 	 * buffer grows by half its size at a time (x 1.5).  Plus the collinear
-	 * sort (8) and per thread scratch rings.
+	 * sort (8) and per thread scratch rings.  A diagram written straight
+	 * into the host's value (tdc_voronoi_start_emit) has no ring storage
+	 * but, per point, its records (a site, a count and 6 classes on
+	 * average; a clipped cell's coordinates instead, at most as many as
+	 * the ring storage's; x 1.5 for growing), the input's sizes and
+	 * offsets (8) and the sites' offsets (8), in the triangle numbers'
+	 * pages when they fit, and with a tolerance the sites' first inputs
+	 * (4): less.
 	 */
-	return n * (24 + 48 + 16 + 8 + 8 + 16 * 16 * 3 / 2) + (size_t) (threads + 1) * 65536 + 4096;
+	return n * (24 + 48 + 2 + 16 + 8 + 8 + 16 * 16 * 3 / 2) + (size_t) (threads + 1) * 65536 + 4096;
 }
 
-int
-tdc_voronoi_start(const tdc_job *job, const double env[4], int threads,
-				  tdc_voronoi **out, char *err, size_t errlen)
+static int
+voronoi_start(const tdc_job *job, const double env[4], int threads,
+			  const tdc_cell_writer *writer, tdc_voronoi **out, char *err,
+			  size_t errlen)
 {
 	tdc_voronoi *v;
 	int			rc;
@@ -1691,6 +2458,11 @@ tdc_voronoi_start(const tdc_job *job, const double env[4], int threads,
 	if (v == NULL)
 		FAIL(TDC_ENOMEM, "out of memory");
 	v->job = job;
+	if (writer)
+	{
+		v->emit = true;
+		v->writer = *writer;
+	}
 	memcpy(v->env, env, sizeof(v->env));
 	v->threads = threads > 0 ? threads : tdc_threads_used(job);
 	if (v->threads < 1)
@@ -1710,6 +2482,60 @@ tdc_voronoi_start(const tdc_job *job, const double env[4], int threads,
 	*out = v;
 	return TDC_OK;
 #undef FAIL
+}
+
+int
+tdc_voronoi_start(const tdc_job *job, const double env[4], int threads,
+				  tdc_voronoi **out, char *err, size_t errlen)
+{
+	return voronoi_start(job, env, threads, NULL, out, err, errlen);
+}
+
+int
+tdc_voronoi_start_emit(const tdc_job *job, const double env[4], int threads,
+					   const tdc_cell_writer *writer, tdc_voronoi **out,
+					   char *err, size_t errlen)
+{
+	if (writer == NULL || writer->size == NULL || writer->write == NULL)
+	{
+		*out = NULL;
+		if (err && errlen)
+			snprintf(err, errlen, "a Voronoi cell writer needs its size and write functions");
+		return TDC_EINVAL;
+	}
+	return voronoi_start(job, env, threads, writer, out, err, errlen);
+}
+
+uint64_t
+tdc_voronoi_emit_size(const tdc_voronoi *v, size_t *cells)
+{
+	if (cells)
+		*cells = v->emit_cells;
+	return v->emit_bytes;
+}
+
+int
+tdc_voronoi_emit(tdc_voronoi *v, char *dst, char *err, size_t errlen)
+{
+	int			rc;
+
+	if (err && errlen)
+		err[0] = '\0';
+	if (!v->emit || v->writing || tdc_runner_wait(&v->run, 0) != TDC_OK)
+	{
+		if (err && errlen)
+			snprintf(err, errlen, "the Voronoi cells cannot be written: %s",
+					 !v->emit ? "not started for writing" : v->writing ? "already written" :
+					 "their sizing has not finished successfully");
+		return TDC_EINVAL;
+	}
+	tdc_runner_rearm(&v->run);
+	v->dst = dst;
+	v->writing = true;
+	rc = tdc_runner_start(&v->run, v->job->nin <= TDC_INLINE_MAX, vor_work, v, err, errlen);
+	if (rc != TDC_OK)
+		tdc_runner_finish(&v->run, rc);
+	return rc;
 }
 
 int
@@ -1738,11 +2564,12 @@ tdc_voronoi_free(tdc_voronoi *v)
 		return;
 	tdc_runner_destroy(&v->run);
 	tdc_big_free(v->tri_id);
-	tdc_big_free(v->tri_he);
 	tdc_big_free(v->parent);
 	tdc_big_free(v->cc);
 	tdc_big_free(v->site_he);
-	free(v->range_first);
+	free(v->range_ntri);
+	free(v->chunk_fill);
+	tdc_big_free(v->tri_he);
 	free(v->range_box);
 	free(v->line);
 	free(v->line_pos);
@@ -1757,6 +2584,20 @@ tdc_voronoi_free(tdc_voronoi *v)
 	free(v->range_buf);
 	tdc_big_free(v->cell_xy);
 	tdc_big_free(v->cell_n);
+	free(v->range_bytes);
+	free(v->range_cells);
+	free(v->first_in);
+	if (!v->offsets_in_tri_id)
+	{
+		tdc_big_free(v->inpos);
+		tdc_big_free(v->site_off);
+	}
+	free(v->block_start);
+	if (v->range_rec)
+		for (size_t r = 0; r < v->nranges; r++)
+			free(v->range_rec[r]);
+	free(v->range_rec);
+	free(v->range_rec_len);
 	free(v);
 }
 
@@ -1777,7 +2618,7 @@ tdc_voronoi_build(const tdc_job *job, const double env[4], int threads,
 size_t
 tdc_voronoi_cell(const tdc_voronoi *v, uint32_t site, const double **xy)
 {
-	if (site >= v->nsites || v->cell_n[site] == 0)
+	if (site >= v->nsites || v->cell_xy == NULL || v->cell_n[site] == 0)
 	{
 		*xy = NULL;
 		return 0;

@@ -30,7 +30,12 @@
  * The diagram is built on the core's threads while the backend waits
  * interruptibly, as a triangulation is: a cancel stops the workers, and a
  * reset callback on the input's memory context frees the diagram (before
- * the job it reads) if an error leaves early.
+ * the job it reads) if an error leaves early.  The polygons are written the
+ * same way: the core sizes the cells, this thread allocates the value, and
+ * the core's threads write the cells into it in input order through
+ * tdc_polygon_cell_writer, which only copies bytes (no PostgreSQL call off
+ * this thread); so the bytes are the same whatever the thread count.  The
+ * lines, each edge once, are written here.
  */
 #include "postgres.h"
 
@@ -168,11 +173,12 @@ tdc_voronoi_check_tolerance(bool isnull, double tolerance, const char *fname)
  * Triangulate buf and build its diagram clipped to GEOS's envelope (grown
  * to ext when given).  Returns NULL, with nothing running, when there are
  * fewer than 2 sites.  *runp owns the job, the returned VorRun the diagram;
- * the caller frees both with tdc_voronoi_result_free.
+ * the caller frees both with tdc_voronoi_result_free.  With a writer, the
+ * cells are only sized, for tdc_voronoi_write_polygons.
  */
 VorRun *
 tdc_voronoi_run(const TdcPointBuf *buf, double tolerance, const double *ext,
-				TdcRun **runp, const char *fname)
+				const tdc_cell_writer *writer, TdcRun **runp, const char *fname)
 {
 	TdcRun	   *run;
 	VorRun	   *vrun;
@@ -207,7 +213,8 @@ tdc_voronoi_run(const TdcPointBuf *buf, double tolerance, const double *ext,
 	cb->arg = vrun;
 	/* registered after the job's: runs before it, the diagram reads the job */
 	MemoryContextRegisterResetCallback(buf->cxt, cb);
-	rc = tdc_voronoi_start(run->job, env, 0, &vrun->v, err, sizeof(err));
+	rc = writer ? tdc_voronoi_start_emit(run->job, env, 0, writer, &vrun->v, err, sizeof(err)) :
+		tdc_voronoi_start(run->job, env, 0, &vrun->v, err, sizeof(err));
 	if (rc != TDC_OK)
 		ereport(ERROR, (errcode(vor_errcode(rc)), errmsg("%s: %s", fname, err)));
 	vor_wait(vrun, fname);
@@ -287,6 +294,7 @@ for_sites_in_input_order(const tdc_job *job, void (*fn) (void *, uint32), void *
 	pfree(seen);
 }
 
+/* ST_TDCVoronoiLines's writer: sized in a first pass, written in a second */
 typedef struct PolyWriter
 {
 	const tdc_voronoi *v;
@@ -295,32 +303,63 @@ typedef struct PolyWriter
 	uint32		count;			/* members */
 	char	   *p;				/* pass 2: where the next member goes */
 	bool		writing;
-	bool		lines;
 } PolyWriter;
 
-static void
-poly_member(void *arg, uint32 s)
+/*
+ * The cell writer of a polygon collection (tdc_cell_writer): runs on the
+ * core's worker threads, so it only copies bytes.  A cell of m vertices is
+ * a POLYGON of one ring closed by repeating its first vertex.
+ */
+static size_t
+polygon_cell_size(void *arg, size_t m)
 {
-	PolyWriter *w = arg;
-	const double *c;
-	size_t		m = tdc_voronoi_cell(w->v, s, &c);
+	return 16 + 16 * (m + 1);
+}
 
-	if (m == 0)
-		return;
-	if (!w->writing)
-	{
-		w->size += 16 + 16 * (uint64) (m + 1);
-		w->count++;
-		return;
-	}
-	w->p = put_u32(w->p, G_POLYGON);
-	w->p = put_u32(w->p, 1);
-	w->p = put_u32(w->p, (uint32) (m + 1));
-	w->p = put_u32(w->p, 0);	/* pads the ring counts to 8 bytes */
-	memcpy(w->p, c, m * 2 * sizeof(double));
-	w->p += m * 2 * sizeof(double);
-	memcpy(w->p, c, 2 * sizeof(double));
-	w->p += 2 * sizeof(double);
+static void
+polygon_cell_write(void *arg, char *dst, const double *xy, size_t m)
+{
+	uint32		h[4] = {G_POLYGON, 1, (uint32) (m + 1), 0};	/* 0 pads the ring counts */
+
+	memcpy(dst, h, sizeof(h));
+	memcpy(dst + 16, xy, 16 * m);
+	memcpy(dst + 16 + 16 * m, xy, 16);
+}
+
+const tdc_cell_writer tdc_polygon_cell_writer = {polygon_cell_size, polygon_cell_write, NULL};
+
+/*
+ * The diagram of a run started with tdc_polygon_cell_writer as one
+ * GEOMETRYCOLLECTION of POLYGONs: the value is allocated here, at the size
+ * the core found, and the core's threads write the cells into it while
+ * this thread waits as for the diagram.
+ */
+struct varlena *
+tdc_voronoi_write_polygons(VorRun *vrun, int32 srid, uint64 have_bytes,
+						   const char *fname)
+{
+	size_t		count;
+	uint64		bytes = tdc_voronoi_emit_size(vrun->v, &count);
+	uint64		size = VARHDRSZ + G_HEADER + 8 + bytes;
+	uint64		limit = tdc_max_memory_bytes();
+	char	   *out,
+			   *p;
+	char		err[256];
+	int			rc;
+
+	tdc_gser_check_result_size(size, fname);
+	if (limit > 0 && have_bytes + size > limit)
+		tdc_report_memory_limit(fname, "writing the Voronoi diagram", have_bytes + size, 0);
+	out = write_header((Size) size, srid, &p);
+	/* the workers fault the pages in; on huge pages where the kernel has them */
+	tdc_advise_huge(out, (size_t) size);
+	p = put_u32(p, G_COLLECTION);
+	p = put_u32(p, (uint32) count);
+	rc = tdc_voronoi_emit(vrun->v, p, err, sizeof(err));
+	if (rc != TDC_OK)
+		ereport(ERROR, (errcode(vor_errcode(rc)), errmsg("%s: %s", fname, err)));
+	vor_wait(vrun, fname);
+	return (struct varlena *) out;
 }
 
 static bool
@@ -364,12 +403,13 @@ line_members(void *arg, uint32 s)
 }
 
 /*
- * The diagram as one value: a GEOMETRYCOLLECTION of POLYGONs, or for lines
- * a MULTILINESTRING (a LINESTRING when there is one edge).
+ * The diagram's edges as one value: a MULTILINESTRING, or a LINESTRING when
+ * there is one edge.  (The polygons are written by the core's threads:
+ * tdc_voronoi_write_polygons.)
  */
 struct varlena *
-tdc_voronoi_write(const tdc_job *job, const tdc_voronoi *v, bool lines,
-				  int32 srid, uint64 have_bytes, const char *fname)
+tdc_voronoi_write_lines(const tdc_job *job, const tdc_voronoi *v, int32 srid,
+						uint64 have_bytes, const char *fname)
 {
 	PolyWriter	w;
 	uint64		size;
@@ -382,30 +422,8 @@ tdc_voronoi_write(const tdc_job *job, const tdc_voronoi *v, bool lines,
 	w.v = v;
 	tdc_voronoi_env(v, env);
 	w.env = env;
-	w.lines = lines;
-	if (lines)
-		for_sites_in_input_order(job, line_members, &w);
-	else
-	{
-		/*
-		 * The polygons' size does not depend on their order: sum it over
-		 * the site ids, sequentially, rather than walk the input.
-		 */
-		uint32		lim = tdc_site_id_limit(job);
-		const double *c;
-
-		for (uint32 s = 0; s < lim; s++)
-		{
-			size_t		m = tdc_voronoi_cell(v, s, &c);
-
-			if (m > 0)
-			{
-				w.size += 16 + 16 * (uint64) (m + 1);
-				w.count++;
-			}
-		}
-	}
-	if (lines && w.count == 1)
+	for_sites_in_input_order(job, line_members, &w);
+	if (w.count == 1)
 		size = VARHDRSZ + G_HEADER + w.size;
 	else
 		size = VARHDRSZ + G_HEADER + 8 + w.size;
@@ -413,16 +431,15 @@ tdc_voronoi_write(const tdc_job *job, const tdc_voronoi *v, bool lines,
 	if (limit > 0 && have_bytes + size > limit)
 		tdc_report_memory_limit(fname, "writing the Voronoi diagram", have_bytes + size, 0);
 	out = write_header((Size) size, srid, &p);
-	/* a million cells are some 130 MB: map them in one call, not by faults */
 	tdc_prefault(out, (size_t) size);
-	if (!(lines && w.count == 1))
+	if (w.count != 1)
 	{
-		p = put_u32(p, lines ? G_MULTILINE : G_COLLECTION);
+		p = put_u32(p, G_MULTILINE);
 		p = put_u32(p, w.count);
 	}
 	w.writing = true;
 	w.p = p;
-	for_sites_in_input_order(job, lines ? line_members : poly_member, &w);
+	for_sites_in_input_order(job, line_members, &w);
 	Assert(w.p == out + size);
 	return (struct varlena *) out;
 }
@@ -490,18 +507,22 @@ tdc_voronoi_to_value(const TdcPointBuf *buf, double tolerance, const double *ext
 	TdcRun	   *run;
 	VorRun	   *vrun;
 	struct varlena *result;
+	uint64		have;
 
-	vrun = tdc_voronoi_run(buf, tolerance, ext, &run, fname);
+	vrun = tdc_voronoi_run(buf, tolerance, ext, lines ? NULL : &tdc_polygon_cell_writer,
+						   &run, fname);
 	if (vrun == NULL)
 	{
 		if (run)
 			tdc_run_free(run);
 		return tdc_gser_empty(TDC_OUT_POLYGONS, buf->srid);
 	}
-	result = tdc_voronoi_write(run->job, vrun->v, lines, buf->srid,
-							   tdc_pointbuf_bytes(buf) +
-							   tdc_estimate_memory((size_t) buf->n, NULL) +
-							   tdc_voronoi_memory((size_t) buf->n, 0), fname);
+	have = tdc_pointbuf_bytes(buf) + tdc_estimate_memory((size_t) buf->n, NULL) +
+		tdc_voronoi_memory((size_t) buf->n, 0);
+	if (lines)
+		result = tdc_voronoi_write_lines(run->job, vrun->v, buf->srid, have, fname);
+	else
+		result = tdc_voronoi_write_polygons(vrun, buf->srid, have, fname);
 	CHECK_FOR_INTERRUPTS();
 	tdc_voronoi_result_free(vrun, run);
 	return result;

@@ -65,7 +65,7 @@ st_tdcvoronoidump(PG_FUNCTION_ARGS)
 
 	tdc_pointbuf_init(&buf, CurrentMemoryContext);
 	tdc_dump_collect(&buf, &ids, query, geomoid, fname, NULL, NULL);
-	vrun = tdc_voronoi_run(&buf, 0.0, have_ext ? ext : NULL, &run, fname);
+	vrun = tdc_voronoi_run(&buf, 0.0, have_ext ? ext : NULL, NULL, &run, fname);
 	if (vrun == NULL)
 	{
 		if (run)
