@@ -93,12 +93,16 @@ SET tdc_delaunay.max_memory = '64MB';
 SELECT ST_NumGeometries(ST_TDCDelaunay(geom)) = tdc_expected_triangles(ST_Collect(geom)) AS fits FROM tdc_guc_pts;
 RESET tdc_delaunay.max_memory;
 -- Arrays kept beside the vertices count with them, checked as they grow:
--- the row ids of ST_TDCVoronoiDump (8 bytes a vertex) and the owners and
--- source positions of a tile of tdc_delaunay_tiled (24 bytes a vertex).
--- At vertex 131073 the coordinates double to 4 MB; the ids then double to
--- 2 MB (6 MB in all, over 5) and a tile's arrays to 6 MB (10 MB, over 8).
+-- the row ids of ST_TDCVoronoiDump (8 bytes a vertex), the segments of a
+-- constrained triangulation (8 bytes each) and the owners and source
+-- positions of a tile of tdc_delaunay_tiled (24 bytes a vertex).  At vertex
+-- 131073 the coordinates double to 4 MB; the ids then double to 2 MB (6 MB
+-- in all, over 5); a line of 140,000 vertices holds 4 MB of coordinates and
+-- 1.1 MB of segments (over 5); a tile's arrays double to 6 MB (10 MB, over 8).
 SET tdc_delaunay.max_memory = '5MB';
 SELECT count(*) FROM ST_TDCVoronoiDump('SELECT i, ST_MakePoint(i, i % 7) FROM generate_series(1, 140000) i');
+SELECT ST_TDCConstrainedDelaunayTriangles(ST_MakeLine(array_agg(ST_MakePoint(i, i % 7) ORDER BY i))) IS NULL
+FROM generate_series(1, 140000) i;
 SET tdc_delaunay.max_memory = '8MB';
 SELECT _tdc_tile(ST_MakePoint(i, i % 7), 1, 1, '{0,0,140001,7}', '{0,0,140001,0,0,7}', '{}', i, 1) IS NULL
 FROM generate_series(1, 140000) i;

@@ -37,14 +37,36 @@
 #include "gser_format.h"
 #include "tdc_pg.h"
 
-/* Segments as pairs of vertex indices, in a memory context of their own choosing. */
+/*
+ * Segments as pairs of vertex indices, in a memory context of their own
+ * choosing; they count with the vertices of buf against
+ * tdc_delaunay.max_memory (tdc_pointbuf_side_grow).
+ */
 typedef struct SegList
 {
 	MemoryContext cxt;
+	TdcPointBuf *buf;
+	const char *fname;
 	uint32	   *seg;
 	uint64		nseg;
 	uint64		cap;
 } SegList;
+
+/* Room for "more" segments. */
+static void
+seg_reserve(SegList *l, uint64 more)
+{
+	if (l->nseg + more > l->cap)
+	{
+		uint64		cap = Max(l->cap * 2, l->nseg + more);
+
+		tdc_pointbuf_side_grow(l->buf, l->cap * 2 * sizeof(uint32),
+							   cap * 2 * sizeof(uint32), "their segments", l->fname);
+		l->seg = l->seg ? repalloc_huge(l->seg, cap * 2 * sizeof(uint32))
+			: MemoryContextAllocHuge(l->cxt, cap * 2 * sizeof(uint32));
+		l->cap = cap;
+	}
+}
 
 typedef struct SegWalk
 {
@@ -90,14 +112,7 @@ seg_chain(SegWalk *w, uint32 k, bool segments)
 			ereport(ERROR,
 					(errcode(ERRCODE_PROGRAM_LIMIT_EXCEEDED),
 					 errmsg("%s: more than %zu vertices", w->fname, TDC_MAX_POINTS)));
-		if (l->nseg + k - 1 > l->cap)
-		{
-			uint64		cap = Max(l->cap * 2, l->nseg + k - 1);
-
-			l->seg = l->seg ? repalloc_huge(l->seg, cap * 2 * sizeof(uint32))
-				: MemoryContextAllocHuge(l->cxt, cap * 2 * sizeof(uint32));
-			l->cap = cap;
-		}
+		seg_reserve(l, k - 1);
 		for (uint32 i = 0; i + 1 < k; i++)
 		{
 			l->seg[2 * l->nseg] = (uint32) (w->nvert + i);
@@ -367,12 +382,12 @@ constrained_to_datum(const TdcPointBuf *buf, const SegList *segs, int flags,
 		return PointerGetDatum(tdc_gser_empty(flags, buf->srid));
 
 	/*
-	 * The result and the segments, for max_memory; tdc_cdt_start adds the
-	 * insertion's own arrays (tdc_cdt_memory) to the engine's estimate.
+	 * The result, for max_memory (the segments count with the vertices);
+	 * tdc_cdt_start adds the insertion's own arrays (tdc_cdt_memory) to the
+	 * engine's estimate.
 	 */
 	extra = tdc_gser_result_bound(buf->n, flags == TDC_OUT_CONSTRAINTS ?
-								  TDC_OUT_EDGES : flags, buf->hasz) +
-		segs->nseg * 2 * sizeof(uint32);
+								  TDC_OUT_EDGES : flags, buf->hasz);
 	run = tdc_run(buf, 0.0, extra, fname);
 	hold = constrain(run, buf, segs, fname);
 	if (flags == TDC_OUT_CONSTRAINTS)
@@ -410,7 +425,7 @@ st_tdcconstraineddelaunaytriangles(PG_FUNCTION_ARGS)
 	struct varlena *geom = PG_DETOAST_DATUM(PG_GETARG_DATUM(0));
 	int32		flags = PG_NARGS() > 1 ? PG_GETARG_INT32(1) : 0;
 	TdcPointBuf buf;
-	SegList		segs = {CurrentMemoryContext, NULL, 0, 0};
+	SegList		segs = {CurrentMemoryContext, &buf, fname, NULL, 0, 0};
 
 	tdc_signal_guard();
 	cdt_check_flags(flags, fname);
@@ -459,6 +474,8 @@ cdt_state_new(MemoryContext cxt, TdcAggState *base)
 
 	st->base = base ? base : tdc_agg_state_new(cxt);
 	st->segs.cxt = cxt;
+	st->segs.buf = &st->base->pts;
+	st->segs.fname = CDT_AGG_NAME;
 	return st;
 }
 
@@ -471,19 +488,6 @@ cdt_state_set_flags(CdtAggState *st, int32 flags)
 				 errmsg("%s: flags must be the same for all rows (%d versus %d)",
 						CDT_AGG_NAME, st->base->flags, flags)));
 	tdc_agg_state_set_params(st->base, 0.0, flags);
-}
-
-static void
-seg_reserve(SegList *l, uint64 more)
-{
-	if (l->nseg + more > l->cap)
-	{
-		uint64		cap = Max(l->cap * 2, l->nseg + more);
-
-		l->seg = l->seg ? repalloc_huge(l->seg, cap * 2 * sizeof(uint32))
-			: MemoryContextAllocHuge(l->cxt, cap * 2 * sizeof(uint32));
-		l->cap = cap;
-	}
 }
 
 PG_FUNCTION_INFO_V1(st_tdcconstraineddelaunay_transfn);
@@ -663,7 +667,7 @@ st_tdcconstraineddelaunaydump(PG_FUNCTION_ARGS)
 	char	   *query;
 	Oid			geomoid;
 	TdcPointBuf buf;
-	SegList		segs = {CurrentMemoryContext, NULL, 0, 0};
+	SegList		segs = {CurrentMemoryContext, &buf, fname, NULL, 0, 0};
 	CdtDumpRows rows;
 	TdcRun	   *run;
 
@@ -680,7 +684,7 @@ st_tdcconstraineddelaunaydump(PG_FUNCTION_ARGS)
 	if (buf.n == 0)
 		return (Datum) 0;
 
-	run = tdc_run(&buf, 0.0, segs.nseg * 2 * sizeof(uint32), fname);
+	run = tdc_run(&buf, 0.0, 0, fname);
 	cdt_release(constrain(run, &buf, &segs, fname));
 	tdc_dump_triangles(rsinfo, run, &buf);
 	tdc_run_free(run);
