@@ -482,7 +482,22 @@ typedef struct tiled_stats
 	int			tiles,
 				threads;
 	tdc_times	t;
+	double		scan,			/* wall seconds: box, hull and counts */
+				bin,			/* the points to the tile files */
+				gather,			/* each tile's points read back */
+				engine,			/* tdc_triangulate */
+				finish,			/* tdc_tile_finish */
+				write;			/* the triangles to -o, and the frees */
 } tiled_stats;
+
+static double
+now_s(void)
+{
+	struct timespec t;
+
+	clock_gettime(CLOCK_MONOTONIC, &t);
+	return t.tv_sec + t.tv_nsec * 1e-9;
+}
 
 static void
 write_tri(FILE *f, const double *q, const double *qz, const size_t *v)
@@ -530,6 +545,7 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 	const double **xs;
 	FILE	  **tf;
 	char		err[512];
+	double		t0;
 
 	memset(st, 0, sizeof(*st));
 	st->n = n;
@@ -546,6 +562,7 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 #endif
 
 	/* 1: box and hull */
+	t0 = now_s();
 	source_open(&src, xypath, zpath);
 	while ((k = source_read(&src)) > 0)
 	{
@@ -623,6 +640,9 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 				cell_tile[r * FINE_GRID + c] = (int16_t) t;
 	}
 
+	st->scan = now_s() - t0;
+	t0 = now_s();
+
 	/* 3: bin */
 	tf = calloc((size_t) (nt > 0 ? nt : 1), sizeof(FILE *));
 	for (int t = 0; t < nt; t++)
@@ -652,6 +672,7 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 	free(tf);
 	free(cell_tile);
 	st->tiles = nt;
+	st->bin = now_s() - t0;
 
 	/* 4: the tiles */
 	extra = malloc(32 * (nhull + 1));
@@ -666,10 +687,20 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 		const double *a = hull + 2 * i,
 				   *b = hull + 2 * ((i + 1) % nhull);
 
-		bands[4 * i] = fmin(a[0], b[0]) - band;
-		bands[4 * i + 1] = fmin(a[1], b[1]) - band;
-		bands[4 * i + 2] = fmax(a[0], b[0]) + band;
-		bands[4 * i + 3] = fmax(a[1], b[1]) + band;
+		/*
+		 * Longer than the edge by three bands at each end: a sliver whose
+		 * circle passes through the edge's end has the part of its disk
+		 * inside C reach past that vertex by the disk's error bound, which
+		 * for such a circle (radius 1e8) is a few spacings; with one band
+		 * the top left tile of 10M uniform points ran twice for 0.7 of a
+		 * spacing.
+		 */
+		bool		along_x = fabs(b[0] - a[0]) >= fabs(b[1] - a[1]);
+
+		bands[4 * i] = fmin(a[0], b[0]) - (along_x ? 3 : 1) * band;
+		bands[4 * i + 1] = fmin(a[1], b[1]) - (along_x ? 1 : 3) * band;
+		bands[4 * i + 2] = fmax(a[0], b[0]) + (along_x ? 3 : 1) * band;
+		bands[4 * i + 3] = fmax(a[1], b[1]) + (along_x ? 1 : 3) * band;
 	}
 	for (int t = 0; t < nt; t++)
 	{
@@ -742,6 +773,7 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 
 			int			shrinks = 0;
 
+			t0 = now_s();
 			/* count, then fill: the buffers are allocated once, at their size */
 			for (int pass = 0; pass < 2; pass++)
 			{
@@ -835,10 +867,16 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 			memcpy(spec.known, K, sizeof(K));
 			spec.tile = ql;
 			st->runs++;
+			st->gather += now_s() - t0;
+			t0 = now_s();
 			if (tdc_triangulate(q, m, opt, &job, err, sizeof(err)) != TDC_OK)
 				die(1, "%s", err);
+			st->engine += now_s() - t0;
+			t0 = now_s();
 			if (tdc_tile_finish(job, &spec, &res, err, sizeof(err)) != TDC_OK)
 				die(1, "%s", err);
+			st->finish += now_s() - t0;
+			t0 = now_s();
 			tdc_job_times(job, &tt);
 			st->t.sort += tt.sort;
 			st->t.subdivide += tt.subdivide;
@@ -902,6 +940,7 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 			free(q);
 			free(ql);
 			free(qz);
+			st->write += now_s() - t0;
 			if (spec.known[0] == K[0] && spec.known[1] == K[1] &&
 				spec.known[2] == K[2] && spec.known[3] == K[3])
 				break;			/* final: K was not changed */
@@ -1114,11 +1153,12 @@ main(int argc, char **argv)
 
 				getrusage(RUSAGE_SELF, &ru);
 				fprintf(stderr,
-						"n=%zu unique=%zu triangles=%zu threads=%d sort=%.6f subdivide=%.6f leaves=%.6f merge=%.6f total=%.6f peak_rss_mb=%.1f tiles=%d halo_points=%zu tile_runs=%zu\n",
+						"n=%zu unique=%zu triangles=%zu threads=%d sort=%.6f subdivide=%.6f leaves=%.6f merge=%.6f total=%.6f peak_rss_mb=%.1f tiles=%d halo_points=%zu tile_runs=%zu scan=%.6f bin=%.6f gather=%.6f engine=%.6f finish=%.6f write=%.6f\n",
 						ts.n, ts.unique, ts.ntri, ts.threads, ts.t.sort, ts.t.subdivide,
 						ts.t.leaves, ts.t.merge,
 						(t1.tv_sec - t0.tv_sec) + (t1.tv_nsec - t0.tv_nsec) * 1e-9,
-						ru.ru_maxrss / 1024.0, ts.tiles, ts.halo, ts.runs);
+						ru.ru_maxrss / 1024.0, ts.tiles, ts.halo, ts.runs,
+						ts.scan, ts.bin, ts.gather, ts.engine, ts.finish, ts.write);
 			}
 			return 0;
 		}
