@@ -106,7 +106,9 @@ perl -e 'srand(11); for (1..600000) { print pack("d<d<", rand(1000), rand(1000))
   for (1..2000) { print pack("d<d<", 100 + int(rand(50)), 100 + int(rand(50))) }' > "$tmp/big.bin"
 $TDC -o "$tmp/big1.out" --stats "$tmp/big.bin" 2> "$tmp/big1.err"
 mkdir -p "$tmp/tiles"
-$TDC --max-memory 24 --tmpdir "$tmp/tiles" -o "$tmp/big2.out" --stats "$tmp/big.bin" 2> "$tmp/big2.err"
+# (TDC_TILE_CHECK: each tile's first run checks that its tile and halo files
+# hold exactly the points of its first known region, K and its hull bands)
+TDC_TILE_CHECK=1 $TDC --max-memory 24 --tmpdir "$tmp/tiles" -o "$tmp/big2.out" --stats "$tmp/big.bin" 2> "$tmp/big2.err"
 check "--max-memory: exit 0" "[ $? -eq 0 ]"
 one_rss=$(sed -n 's/.*peak_rss_mb=\([0-9.]*\).*/\1/p' "$tmp/big1.err")
 til_rss=$(sed -n 's/.*peak_rss_mb=\([0-9.]*\).*/\1/p' "$tmp/big2.err")
@@ -117,11 +119,21 @@ check "--max-memory: same triangle set as one-shot" "cmp -s <(canon_d $tmp/big1.
 check "--max-memory: same triangle count" "[ \$(wc -l < $tmp/big1.out) -eq \$(wc -l < $tmp/big2.out) ]"
 check "--max-memory: temporary files removed" "[ -z \"\$(ls -A $tmp/tiles)\" ]"
 
+# an integer lattice over [0, 512]: the fine grid's cells are 1 wide, so
+# points lie on cell sides, tile sides, and the sides of the first known
+# boxes (halo 8 spacings), which are closed; with duplicates
+perl -e 'use List::Util qw(shuffle); srand(3); @p = (); for $x (0..512) { for $y (0..512) { push @p, [$x, $y] } }
+  push @p, [int(rand(513)), int(rand(513))] for 1..2000; print pack("d<d<", @$_) for shuffle(@p)' > "$tmp/lat.bin"
+$TDC -o "$tmp/lat1.out" "$tmp/lat.bin"
+TDC_TILE_CHECK=1 $TDC --max-memory 14 --tmpdir "$tmp/tiles" -o "$tmp/lat2.out" --stats "$tmp/lat.bin" 2> "$tmp/lat2.err"
+check "--max-memory, lattice on cell sides: tiled" "grep -qE ' tiles=([2-9]|[1-9][0-9]+) ' $tmp/lat2.err"
+check "--max-memory, lattice on cell sides: same triangle set" "cmp -s <(canon_d $tmp/lat1.out 2) <(canon_d $tmp/lat2.out 2)"
+
 # text with z through the tiles: z of the first point with those x,y, as one-shot
 perl -e 'srand(5); for (1..150000) { printf "%.17g %.17g %.17g\n", rand(100), rand(100), rand(9) }
   for (1..3000) { printf "%d %d %d\n", int(rand(100)), int(rand(100)), 50 + int(rand(9)) }' > "$tmp/z3.txt"
 $TDC -o "$tmp/z31.out" "$tmp/z3.txt"
-$TDC --max-memory 10 --tmpdir "$tmp/tiles" -o "$tmp/z32.out" --stats "$tmp/z3.txt" 2> "$tmp/z32.err"
+TDC_TILE_CHECK=1 $TDC --max-memory 10 --tmpdir "$tmp/tiles" -o "$tmp/z32.out" --stats "$tmp/z3.txt" 2> "$tmp/z32.err"
 check "--max-memory, text with z: tiled" "grep -qE ' tiles=([2-9]|[1-9][0-9]+) ' $tmp/z32.err"
 check "--max-memory, text with z: same triangles and z" "cmp -s <(canon_d $tmp/z31.out 3) <(canon_d $tmp/z32.out 3)"
 

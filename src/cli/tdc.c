@@ -206,16 +206,22 @@ read_text(const char *path, size_t *n, double **zout)
  * written as each tile finishes.  The steps, each a sequential read of the
  * input (text input is first converted to a temporary .bin):
  *	1	count, bounding box, convex hull (in chunks: the hull of a union is
- *		the hull of the parts' hulls);
+ *		the hull of the parts' hulls, and a point inside a rectangle inside
+ *		the hull so far is skipped);
  *	2	counts on a fine grid, cut into tiles of at most tile_max points by
  *		median splits along the longer side (kd-tree of cells), so that
  *		clustered data gets small tiles where it is dense;
- *	3	each point appended to its tile's file.
- * Then for every tile: K = its box plus a halo of 8 mean point spacings, and
- * as extra known boxes the bands along the hull edges near it; gather every
- * point inside them from the tile files whose boxes meet them; triangulate; tdc_tile_finish either hands over the tile's triangles
- * or asks for a larger K, and the tile runs again (first with the bands of
- * the hull edges the request meets, then with a larger K).
+ *	3	each point appended to its tile's file, and to the halo file of
+ *		every other tile whose first known region holds it.
+ * A point's cell is decided exactly against the doubles of the cell sides,
+ * so a tile's points lie in its cells' box, and its first known region is
+ * fixed before binning: K = that box plus a halo of 8 mean point spacings,
+ * and as extra known boxes the bands along the hull edges near it.  The
+ * first run of a tile reads its two files, and nothing else; it
+ * triangulates; tdc_tile_finish either hands over the tile's triangles or
+ * asks for a larger K, and the tile runs again (first with the bands of the
+ * hull edges the request meets, then with a larger K), gathering every
+ * point inside the new region from the tile files whose boxes meet it.
  *
  * Memory: the largest tile with its halo is bounded by tile_max times a
  * growth allowance; a tile whose K would exceed the budget is an error,
@@ -462,9 +468,10 @@ box_add(double *b, double x, double y)
 
 /*
  * Bytes one tile run of m points (with z or not) may hold at once: the
- * gathered points and labels, the engine (with its input map), tile.c's
- * per-site arrays, and the triangle indices (at most 2m triangles of 3
- * size_t).
+ * gathered points and labels, the engine, tile.c's per-site arrays (the 4
+ * bytes once taken by the input map now hold its block grid for the deep
+ * sites, under a byte per point), and the triangle indices (at most 2m
+ * triangles of 3 size_t).
  */
 static size_t
 tile_bytes(size_t m, const tdc_options *opt, int has_z)
@@ -515,6 +522,183 @@ write_tri(FILE *f, const double *q, const double *qz, const size_t *v)
 }
 
 /*
+ * The fine grid's cell of v along one axis: the c with cut[c] <= v <
+ * cut[c + 1] (the last cell closed), cut[] the doubles of the cell sides,
+ * non-decreasing.  Exact: a tile's cell box holds every point binned to
+ * it, so its K and its halo are known before the points are binned.
+ */
+static int
+cell_of(double v, double lo, double scale, const double *cut)
+{
+	int			c = fine_cell(v, lo, scale);
+
+	while (c > 0 && v < cut[c])
+		c--;
+	while (c < FINE_GRID - 1 && v >= cut[c + 1])
+		c++;
+	return c;
+}
+
+/*
+ * The first K of tile ti (its cell box plus a halo of 8 mean spacings), h,
+ * and in mark[] (nhull bytes, cleared by the caller) the hull bands it
+ * takes as extra boxes.
+ */
+static void
+first_known(const tile_info *ti, const double *xcut, const double *ycut,
+			const double *bands, size_t nhull, double K[4], double *h, uint8_t *mark)
+{
+	double		near[4],
+				g;
+
+	K[0] = xcut[ti->c0];
+	K[1] = ycut[ti->r0];
+	K[2] = xcut[ti->c1];
+	K[3] = ycut[ti->r1];
+	*h = 8 * sqrt((K[2] - K[0]) * (K[3] - K[1]) / (double) ti->count);
+	K[0] -= *h;
+	K[1] -= *h;
+	K[2] += *h;
+	K[3] += *h;
+
+	/*
+	 * Extra known boxes: the boxes of the hull edges near K, grown by a
+	 * band of 16 mean spacings.  A long hull edge has one triangle whose
+	 * circle bulges far out of C: only its thin part inside C, along the
+	 * edge, must be known, and the band holds it, without widening K along
+	 * the whole edge.  The bands also bring in the hull's vertices, so
+	 * every own hull edge is certified at once.
+	 *
+	 * The bands of the hull edges near K, not only those meeting it:
+	 * slivers under a long hull edge have their circles' parts inside C
+	 * along the neighbouring edges too (border tiles of 100M uniform points
+	 * re-ran in 7 cases of 12 without this).  Within K's size of K, the
+	 * bands along a side hold about 96 / sqrt(count) of the tile's points
+	 * (a band is 32 spacings wide), against a whole tile for a re-run:
+	 * taken when that is under 5 %, else only the bands meeting K, and a
+	 * re-run adds what is missing.
+	 */
+	g = ti->count >= 4000000 ? fmax(K[2] - K[0], K[3] - K[1]) : 0;
+	near[0] = K[0] - g;
+	near[1] = K[1] - g;
+	near[2] = K[2] + g;
+	near[3] = K[3] + g;
+	for (size_t i = 0; nhull > 1 && i < nhull; i++)
+		mark[i] = box_meets(bands + 4 * i, near);
+}
+
+/* Buffered appends of fixed-size records to one temporary file. */
+typedef struct recfile
+{
+	FILE	   *f;
+	double	   *buf;
+	size_t		len,			/* doubles in buf */
+				cap;
+	size_t		count;			/* records written */
+} recfile;
+
+static void
+rec_flush(recfile *r)
+{
+	if (r->len > 0 && fwrite(r->buf, 8, r->len, r->f) != r->len)
+		die(1, "cannot write temporary files in %s", tmp_dir);
+	r->len = 0;
+}
+
+static inline void
+rec_put(recfile *r, const double *v, int w)
+{
+	if (r->len + w > r->cap)
+		rec_flush(r);
+	for (int k = 0; k < w; k++)
+		r->buf[r->len + k] = v[k];
+	r->len += w;
+	r->count++;
+}
+
+static void
+rec_open(recfile *r, const char *fmt, int t, size_t cap)
+{
+	char		name[32];
+
+	snprintf(name, sizeof(name), fmt, t);
+	r->f = tmp_open(name, "wb");
+	r->buf = malloc(8 * cap);
+	r->cap = cap;
+	r->len = 0;
+	r->count = 0;
+	if (r->buf == NULL)
+		die(1, "out of memory%s", "");
+}
+
+static void
+rec_close(recfile *r)
+{
+	if (r->f == NULL)
+		return;
+	rec_flush(r);
+	if (fclose(r->f) != 0)
+		die(1, "cannot write temporary files in %s (disk full?)", tmp_dir);
+	free(r->buf);
+	r->f = NULL;
+	r->buf = NULL;
+}
+
+/* Read exactly k records of w doubles from file tmp_dir/name into buf. */
+static void
+read_all(const char *fmt, int t, double *buf, size_t k, int w)
+{
+	char		name[32];
+	FILE	   *f;
+
+	snprintf(name, sizeof(name), fmt, t);
+	f = tmp_open(name, "rb");
+	if (fread(buf, 8 * (size_t) w, k, f) != k)
+		die(1, "short read on a temporary file in %s", tmp_dir);
+	fclose(f);
+}
+
+/*
+ * TDC_TILE_CHECK=1 (tests): the points inside K or an extra box, counted
+ * from every tile file, for checking a first run's tile and halo files.
+ */
+static size_t
+count_known(const tile_info *tiles, int nt, const double *K, const double *extra,
+			size_t nextra, int w)
+{
+	size_t		m = 0,
+				got;
+	double		rec[4 * 1024];
+
+	for (int s = 0; s < nt; s++)
+	{
+		char		name[32];
+		FILE	   *f;
+
+		if (tiles[s].count == 0)
+			continue;
+		snprintf(name, sizeof(name), "tile%d", s);
+		f = tmp_open(name, "rb");
+		while ((got = fread(rec, 8 * (size_t) w, 1024, f)) > 0)
+			for (size_t i = 0; i < got; i++)
+			{
+				const double *p = rec + w * i;
+				bool		in = p[0] >= K[0] && p[0] <= K[2] && p[1] >= K[1] && p[1] <= K[3];
+
+				for (size_t e = 0; e < nextra && !in; e++)
+				{
+					const double *x = extra + 4 * e;
+
+					in = p[0] >= x[0] && p[0] <= x[2] && p[1] >= x[1] && p[1] <= x[3];
+				}
+				m += in;
+			}
+		fclose(f);
+	}
+	return m;
+}
+
+/*
  * The tiled run.  xypath/zpath: the .bin source (z beside it for text input
  * with z).  budget: bytes.  Returns nothing; dies on errors.
  */
@@ -532,18 +716,29 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 				sx,
 				sy,
 				cw,
-				ch;
-	uint32_t   *counts;
-	int16_t    *cell_tile;
+				ch,
+				xcut[FINE_GRID + 1],
+				ycut[FINE_GRID + 1],
+				inner[4] = {INFINITY, INFINITY, -INFINITY, -INFINITY};
+	uint32_t   *counts,
+			   *cell_off = NULL;
+	int16_t    *cell_tile,
+			   *cell_halo = NULL;
 	tile_info  *tiles;
 	int			nt = 0,
-				has_z = zpath != NULL;
+				has_z = zpath != NULL,
+				w = has_z ? 3 : 2;
 	double	   *extra,
 			   *bands,			/* every hull edge's band */
-				band;
+				band,
+			   *kfirst = NULL;	/* each tile's first K */
 	uint8_t    *inband;			/* is it among this tile's extra boxes */
+	size_t	   *band_off = NULL,	/* each tile's first bands: band_idx[band_off[t] ..] */
+			   *band_idx = NULL;
 	const double **xs;
-	FILE	  **tf;
+	recfile    *own,
+			   *halo = NULL;
+	bool		use_halo;
 	char		err[512];
 	double		t0;
 
@@ -561,15 +756,24 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 	mallopt(M_TRIM_THRESHOLD, INT32_MAX);
 #endif
 
-	/* 1: box and hull */
+	/*
+	 * 1: box and hull.  The hull of a union is the hull of the parts'
+	 * hulls; a point strictly inside a rectangle inside the hull so far
+	 * (inner) cannot be a vertex of it, and for most data that rectangle
+	 * holds almost every point: only the others go to the chunk's hull.
+	 */
 	t0 = now_s();
 	source_open(&src, xypath, zpath);
 	while ((k = source_read(&src)) > 0)
 	{
 		double	   *buf,
 				   *h2;
-		size_t		n2;
+		size_t		n2,
+					m = 0;
 
+		buf = malloc(16 * (k + nhull));
+		if (buf == NULL)
+			die(1, "out of memory%s", "");
 		for (size_t i = 0; i < k; i++)
 		{
 			double		x = src.xy[2 * i],
@@ -579,20 +783,69 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 				(x != 0 && (fabs(x) < TDC_COORD_MIN || fabs(x) > TDC_COORD_MAX)) ||
 				(y != 0 && (fabs(y) < TDC_COORD_MIN || fabs(y) > TDC_COORD_MAX)))
 				die(1, "a point has a non-finite coordinate or one outside the supported magnitude range%s", "");
-			box_add(bb, x, y);
+			if (x < bb[0])
+				bb[0] = x;
+			if (x > bb[2])
+				bb[2] = x;
+			if (y < bb[1])
+				bb[1] = y;
+			if (y > bb[3])
+				bb[3] = y;
+			if (x > inner[0] && x < inner[2] && y > inner[1] && y < inner[3])
+				continue;
+			buf[2 * m] = x;
+			buf[2 * m + 1] = y;
+			m++;
 		}
-		buf = malloc(16 * (k + nhull));
-		if (buf == NULL)
-			die(1, "out of memory%s", "");
-		memcpy(buf, src.xy, 16 * k);
 		if (nhull)
-			memcpy(buf + 2 * k, hull, 16 * nhull);
-		if (tdc_convex_hull(buf, k + nhull, &h2, &n2) != TDC_OK)
+			memcpy(buf + 2 * m, hull, 16 * nhull);
+		if (tdc_convex_hull(buf, m + nhull, &h2, &n2) != TDC_OK)
 			die(1, "out of memory%s", "");
 		free(buf);
 		free(hull);
 		hull = h2;
 		nhull = n2;
+		/* the hull's box shrunk towards its centre until its corners are strictly inside */
+		if (nhull >= 3)
+		{
+			double		hb[4] = {INFINITY, INFINITY, -INFINITY, -INFINITY},
+						cx,
+						cy;
+
+			for (size_t i = 0; i < nhull; i++)
+				box_add(hb, hull[2 * i], hull[2 * i + 1]);
+			cx = 0.5 * (hb[0] + hb[2]);
+			cy = 0.5 * (hb[1] + hb[3]);
+			for (double f = 0.98; f > 0.2; f -= 0.16)
+			{
+				double		r[4] = {cx - f * (cx - hb[0]), cy - f * (cy - hb[1]),
+				cx + f * (hb[2] - cx), cy + f * (hb[3] - cy)};
+				bool		in = r[0] < r[2] && r[1] < r[3];
+				double	   *hb2 = malloc(16 * (nhull + 4)),
+						   *h3 = NULL;
+				size_t		n3 = 0;
+
+				/*
+				 * The closed rectangle is inside the closed hull when adding
+				 * its corners leaves the hull as it is; its open inside is
+				 * then inside the hull's, whose points are no vertices.
+				 */
+				if (hb2 == NULL)
+					die(1, "out of memory%s", "");
+				memcpy(hb2, hull, 16 * nhull);
+				memcpy(hb2 + 2 * nhull, (double[8]) {r[0], r[1], r[2], r[1], r[2], r[3], r[0], r[3]}, 64);
+				if (in && tdc_convex_hull(hb2, nhull + 4, &h3, &n3) != TDC_OK)
+					die(1, "out of memory%s", "");
+				in = in && n3 == nhull && memcmp(h3, hull, 16 * nhull) == 0;
+				free(hb2);
+				free(h3);
+				if (in)
+				{
+					memcpy(inner, r, sizeof(r));
+					break;
+				}
+			}
+		}
 	}
 	source_close(&src);
 
@@ -601,6 +854,13 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 	sy = bb[3] > bb[1] ? FINE_GRID / (bb[3] - bb[1]) : 0;
 	cw = (bb[2] - bb[0]) / FINE_GRID;
 	ch = (bb[3] - bb[1]) / FINE_GRID;
+	for (int c = 0; c <= FINE_GRID; c++)
+	{
+		xcut[c] = bb[0] + c * cw;
+		ycut[c] = bb[1] + c * ch;
+	}
+	xcut[FINE_GRID] = fmax(xcut[FINE_GRID], bb[2]);
+	ycut[FINE_GRID] = fmax(ycut[FINE_GRID], bb[3]);
 	counts = calloc((size_t) FINE_GRID * FINE_GRID, sizeof(uint32_t));
 	ps = calloc((size_t) (FINE_GRID + 1) * (FINE_GRID + 1), sizeof(size_t));
 	tiles = calloc(MAX_TILES, sizeof(tile_info));
@@ -610,8 +870,8 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 	source_open(&src, xypath, NULL);
 	while ((k = source_read(&src)) > 0)
 		for (size_t i = 0; i < k; i++)
-			counts[fine_cell(src.xy[2 * i + 1], bb[1], sy) * FINE_GRID +
-				   fine_cell(src.xy[2 * i], bb[0], sx)]++;
+			counts[cell_of(src.xy[2 * i + 1], bb[1], sy, ycut) * FINE_GRID +
+				   cell_of(src.xy[2 * i], bb[0], sx, xcut)]++;
 	source_close(&src);
 	for (int r = 0; r < FINE_GRID; r++)
 		for (int c = 0; c < FINE_GRID; c++)
@@ -639,45 +899,12 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 			for (int c = tiles[t].c0; c < tiles[t].c1; c++)
 				cell_tile[r * FINE_GRID + c] = (int16_t) t;
 	}
-
-	st->scan = now_s() - t0;
-	t0 = now_s();
-
-	/* 3: bin */
-	tf = calloc((size_t) (nt > 0 ? nt : 1), sizeof(FILE *));
-	for (int t = 0; t < nt; t++)
-	{
-		char		name[32];
-
-		snprintf(name, sizeof(name), "tile%d", t);
-		tf[t] = tmp_open(name, "wb");
-		setvbuf(tf[t], NULL, _IOFBF, 1 << 16);
-	}
-	source_open(&src, xypath, zpath);
-	while ((k = source_read(&src)) > 0)
-		for (size_t i = 0; i < k; i++)
-		{
-			double		rec[3] = {src.xy[2 * i], src.xy[2 * i + 1], has_z ? src.z[i] : 0};
-			int			t = cell_tile[fine_cell(rec[1], bb[1], sy) * FINE_GRID +
-									  fine_cell(rec[0], bb[0], sx)];
-
-			box_add(tiles[t].bb, rec[0], rec[1]);
-			if (fwrite(rec, 8, has_z ? 3 : 2, tf[t]) != (size_t) (has_z ? 3 : 2))
-				die(1, "cannot write temporary files in %s", tmp_dir);
-		}
-	source_close(&src);
-	for (int t = 0; t < nt; t++)
-		if (fclose(tf[t]) != 0)
-			die(1, "cannot write temporary files in %s (disk full?)", tmp_dir);
-	free(tf);
-	free(cell_tile);
 	st->tiles = nt;
-	st->bin = now_s() - t0;
 
-	/* 4: the tiles */
+	/* the hull bands */
 	extra = malloc(32 * (nhull + 1));
 	bands = malloc(32 * (nhull + 1));
-	inband = malloc(nhull + 1);
+	inband = calloc(nhull + 1, 1);
 	xs = malloc(sizeof(double *) * (nhull + 1));
 	band = 16 * sqrt((bb[2] - bb[0]) * (bb[3] - bb[1]) / (double) (n ? n : 1));
 	if (extra == NULL || bands == NULL || inband == NULL || xs == NULL)
@@ -702,56 +929,211 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 		bands[4 * i + 2] = fmax(a[0], b[0]) + (along_x ? 3 : 1) * band;
 		bands[4 * i + 3] = fmax(a[1], b[1]) + (along_x ? 1 : 3) * band;
 	}
+
+	/*
+	 * Each tile's first known region (K and its bands) is fixed by the
+	 * plan, so binning can also write every point that lies in another
+	 * tile's first region to that tile's halo file: a tile's first run
+	 * then reads its own file and its halo file once, without filtering,
+	 * instead of every neighbour's file twice (counting, then filling).
+	 * Per fine cell, the tiles whose first region meets the cell's box; a
+	 * point is tested only against those.  Two files per tile: with too
+	 * many tiles for the open files, every run gathers from the tile files.
+	 */
+	use_halo = nt <= 400;
+	if (use_halo)
+	{
+		size_t		npairs = 0,
+					cap = 1024;
+		uint32_t   *pairs = malloc(sizeof(uint32_t) * 2 * cap);
+
+		kfirst = malloc(32 * (size_t) (nt > 0 ? nt : 1));
+		band_off = malloc(sizeof(size_t) * (nt + 1));
+		cell_off = calloc((size_t) FINE_GRID * FINE_GRID + 1, sizeof(uint32_t));
+		if (!pairs || !kfirst || !band_off || !cell_off)
+			die(1, "out of memory%s", "");
+		band_off[0] = 0;
+		for (int t = 0; t < nt; t++)
+		{
+			double		h,
+					   *K = kfirst + 4 * t;
+			size_t		nb = 0;
+
+			band_off[t + 1] = band_off[t];
+			if (tiles[t].count == 0)
+				continue;
+			memset(inband, 0, nhull + 1);
+			first_known(&tiles[t], xcut, ycut, bands, nhull, K, &h, inband);
+			for (size_t i = 0; nhull > 1 && i < nhull; i++)
+				if (inband[i])
+					xs[nb++] = bands + 4 * i;
+			band_idx = realloc(band_idx, sizeof(size_t) * (band_off[t] + nb + 1));
+			if (band_idx == NULL)
+				die(1, "out of memory%s", "");
+			for (size_t i = 0; nhull > 1 && i < nhull; i++)
+				if (inband[i])
+					band_idx[band_off[t + 1]++] = i;
+			/* the cells each box of the region meets, but the tile's own */
+			for (size_t e = 0; e <= nb; e++)
+			{
+				const double *b = e == 0 ? K : xs[e - 1];
+				int			c0 = cell_of(b[0], bb[0], sx, xcut),
+							c1 = cell_of(b[2], bb[0], sx, xcut),
+							r0 = cell_of(b[1], bb[1], sy, ycut),
+							r1 = cell_of(b[3], bb[1], sy, ycut);
+
+				if (b[2] < bb[0] || b[0] > bb[2] || b[3] < bb[1] || b[1] > bb[3])
+					continue;
+				for (int r = r0; r <= r1; r++)
+					for (int c = c0; c <= c1; c++)
+					{
+						if (cell_tile[r * FINE_GRID + c] == t)
+							continue;
+						if (npairs == cap)
+						{
+							pairs = realloc(pairs, sizeof(uint32_t) * 2 * (cap *= 2));
+							if (pairs == NULL)
+								die(1, "out of memory%s", "");
+						}
+						pairs[2 * npairs] = (uint32_t) (r * FINE_GRID + c);
+						pairs[2 * npairs + 1] = (uint32_t) t;
+						npairs++;
+					}
+			}
+		}
+		/* per cell, its tiles (once each), as a counting sort by cell */
+		{
+			uint32_t   *fill;
+			uint8_t    *seen = calloc((size_t) nt + 1, 1);
+
+			for (size_t i = 0; i < npairs; i++)
+				cell_off[pairs[2 * i] + 1]++;
+			for (size_t c = 0; c < (size_t) FINE_GRID * FINE_GRID; c++)
+				cell_off[c + 1] += cell_off[c];
+			fill = malloc(sizeof(uint32_t) * ((size_t) FINE_GRID * FINE_GRID + 1));
+			cell_halo = malloc(sizeof(int16_t) * (npairs + 1));
+			if (!fill || !cell_halo || !seen)
+				die(1, "out of memory%s", "");
+			memcpy(fill, cell_off, sizeof(uint32_t) * ((size_t) FINE_GRID * FINE_GRID + 1));
+			for (size_t i = 0; i < npairs; i++)
+				cell_halo[fill[pairs[2 * i]]++] = (int16_t) pairs[2 * i + 1];
+			/* drop repeats within a cell (a tile whose K and bands meet it) */
+			for (size_t c = 0, at = 0; c < (size_t) FINE_GRID * FINE_GRID; c++)
+			{
+				uint32_t	a = cell_off[c],
+							b = cell_off[c + 1];
+
+				cell_off[c] = (uint32_t) at;
+				for (uint32_t j = a; j < b; j++)
+					if (!seen[cell_halo[j]])
+					{
+						seen[cell_halo[j]] = 1;
+						cell_halo[at++] = cell_halo[j];
+					}
+				for (uint32_t j = cell_off[c]; j < at; j++)
+					seen[cell_halo[j]] = 0;
+				if (c + 1 == (size_t) FINE_GRID * FINE_GRID)
+					cell_off[c + 1] = (uint32_t) at;
+			}
+			free(fill);
+			free(seen);
+			free(pairs);
+		}
+	}
+
+	st->scan = now_s() - t0;
+
+	/* 3: bin: every point to its tile's file, and to the halo files of the tiles whose first region holds it */
+	t0 = now_s();
+	{
+		/* buffers: a sixteenth of the budget over the files, 4 kB to 256 kB each */
+		size_t		per = budget / 16 / (size_t) (2 * (nt > 0 ? nt : 1)) / 8;
+
+		per = per < 512 ? 512 : per > 32768 ? 32768 : per;
+		own = calloc((size_t) (nt > 0 ? nt : 1), sizeof(recfile));
+		halo = use_halo ? calloc((size_t) (nt > 0 ? nt : 1), sizeof(recfile)) : NULL;
+		if (own == NULL || (use_halo && halo == NULL))
+			die(1, "out of memory%s", "");
+		for (int t = 0; t < nt; t++)
+		{
+			rec_open(&own[t], "tile%d", t, per - per % w);
+			if (use_halo)
+				rec_open(&halo[t], "halo%d", t, (per / 4) - (per / 4) % (w + 1));
+		}
+	}
+	source_open(&src, xypath, zpath);
+	while ((k = source_read(&src)) > 0)
+		for (size_t i = 0; i < k; i++)
+		{
+			double		rec[4] = {src.xy[2 * i], src.xy[2 * i + 1], has_z ? src.z[i] : 0, 0};
+			int			cell = cell_of(rec[1], bb[1], sy, ycut) * FINE_GRID +
+				cell_of(rec[0], bb[0], sx, xcut),
+						t = cell_tile[cell];
+			tile_info  *ti = &tiles[t];
+
+			if (rec[0] < ti->bb[0])
+				ti->bb[0] = rec[0];
+			if (rec[0] > ti->bb[2])
+				ti->bb[2] = rec[0];
+			if (rec[1] < ti->bb[1])
+				ti->bb[1] = rec[1];
+			if (rec[1] > ti->bb[3])
+				ti->bb[3] = rec[1];
+			rec_put(&own[t], rec, w);
+			if (!use_halo)
+				continue;
+			for (uint32_t j = cell_off[cell]; j < cell_off[cell + 1]; j++)
+			{
+				int			u = cell_halo[j];
+				const double *K = kfirst + 4 * u;
+				bool		in = rec[0] >= K[0] && rec[0] <= K[2] && rec[1] >= K[1] && rec[1] <= K[3];
+
+				for (size_t e = band_off[u]; e < band_off[u + 1] && !in; e++)
+				{
+					const double *x = bands + 4 * band_idx[e];
+
+					in = rec[0] >= x[0] && rec[0] <= x[2] && rec[1] >= x[1] && rec[1] <= x[3];
+				}
+				if (in)
+				{
+					rec[w] = t;
+					rec_put(&halo[u], rec, w + 1);
+				}
+			}
+		}
+	source_close(&src);
+	for (int t = 0; t < nt; t++)
+	{
+		rec_close(&own[t]);
+		if (use_halo)
+			rec_close(&halo[t]);
+	}
+	free(cell_tile);
+	free(cell_off);
+	free(cell_halo);
+	st->bin = now_s() - t0;
+
+	/* 4: the tiles */
 	for (int t = 0; t < nt; t++)
 	{
 		tile_info  *ti = &tiles[t];
 		double		K[4],
-					near[4],	/* hull edges meeting it give bands */
-					g,
 					Kmin[4],	/* the least K this round may shrink back to */
 					h;
-		size_t		nextra;
+		size_t		nextra = 0;
 		tdc_tile_spec spec = {0};
+		bool		first = use_halo;	/* the first run reads the tile and halo files */
 
 		if (ti->count == 0)
 			continue;			/* owns nothing */
-		/* its cells' box, and the exact box of its points (rounding of the cells) */
-		K[0] = fmin(bb[0] + ti->c0 * cw, ti->bb[0]);
-		K[1] = fmin(bb[1] + ti->r0 * ch, ti->bb[1]);
-		K[2] = fmax(bb[0] + ti->c1 * cw, ti->bb[2]);
-		K[3] = fmax(bb[1] + ti->r1 * ch, ti->bb[3]);
-		memcpy(Kmin, K, sizeof(K));
-		h = 8 * sqrt((K[2] - K[0]) * (K[3] - K[1]) / (double) ti->count);
-		K[0] -= h;
-		K[1] -= h;
-		K[2] += h;
-		K[3] += h;
-		/*
-		 * Extra known boxes: the boxes of the hull edges near K, grown by a
-		 * band of 16 mean spacings.  A long hull edge has one triangle whose
-		 * circle bulges far out of C: only its thin part inside C, along the
-		 * edge, must be known, and the band holds it, without widening K
-		 * along the whole edge.  The bands also bring in the hull's
-		 * vertices, so every own hull edge is certified at once.
-		 */
-		/*
-		 * The bands of the hull edges near K, not only those meeting it:
-		 * slivers under a long hull edge have their circles' parts inside
-		 * C along the neighbouring edges too (border tiles of 100M uniform
-		 * points re-ran in 7 cases of 12 without this).  Within K's size of
-		 * K, the bands along a side hold about 96 / sqrt(count) of the
-		 * tile's points (a band is 32 spacings wide), against a whole tile
-		 * for a re-run: taken when that is under 5 %, else only the bands
-		 * meeting K, and a re-run adds what is missing.
-		 */
-		g = ti->count >= 4000000 ? fmax(K[2] - K[0], K[3] - K[1]) : 0;
-		near[0] = K[0] - g;
-		near[1] = K[1] - g;
-		near[2] = K[2] + g;
-		near[3] = K[3] + g;
-		nextra = 0;
+		memset(inband, 0, nhull + 1);
+		first_known(ti, xcut, ycut, bands, nhull, K, &h, inband);
+		Kmin[0] = xcut[ti->c0];
+		Kmin[1] = ycut[ti->r0];
+		Kmin[2] = xcut[ti->c1];
+		Kmin[3] = ycut[ti->r1];
 		for (size_t i = 0; nhull > 1 && i < nhull; i++)
-			if ((inband[i] = box_meets(bands + 4 * i, near)))
+			if (inband[i])
 				memcpy(extra + 4 * nextra++, bands + 4 * i, 32);
 		spec.extra = extra;
 		spec.nextra = nextra;
@@ -768,102 +1150,166 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 			tdc_job    *job;
 			tdc_tile_result res;
 			tdc_times	tt;
-			double		rec[3 * 4096];
+			double		rec[4 * 4096];
 			size_t		nx;
 
 			int			shrinks = 0;
 
 			t0 = now_s();
-			/* count, then fill: the buffers are allocated once, at their size */
-			for (int pass = 0; pass < 2; pass++)
+			if (first && tile_bytes(ti->count + halo[t].count, opt, has_z) > budget)
+				first = false;
+			if (first)
 			{
-				for (int u = -1; u < nt; u++)
-				{
-					int			s = u < 0 ? t : u;
-					FILE	   *f;
-					char		name[32];
-					size_t		got;
-					int			w = has_z ? 3 : 2;
+				size_t		nh = halo[t].count;
+				char		name[32];
+				FILE	   *f;
+				size_t		got;
 
-					bool		meets = box_meets(tiles[s].bb, K);
-
-					for (size_t e = 0; e < nextra && !meets; e++)
-						meets = box_meets(tiles[s].bb, extra + 4 * e);
-					if ((u >= 0 && u == t) || tiles[s].count == 0 || !meets)
-						continue;
-					/* only the bands that meet this file's box need testing */
-					nx = 0;
-					for (size_t e = 0; e < nextra; e++)
-						if (box_meets(tiles[s].bb, extra + 4 * e))
-							xs[nx++] = extra + 4 * e;
-					snprintf(name, sizeof(name), "tile%d", s);
-					f = tmp_open(name, "rb");
-					while ((got = fread(rec, 8 * w, 4096, f)) > 0)
-						for (size_t i = 0; i < got; i++)
-						{
-							double	   *p = rec + w * i;
-
-							bool		in = p[0] >= K[0] && p[0] <= K[2] &&
-								p[1] >= K[1] && p[1] <= K[3];
-
-							for (size_t e = 0; e < nx && !in; e++)
-							{
-								const double *x = xs[e];
-
-								in = p[0] >= x[0] && p[0] <= x[2] && p[1] >= x[1] && p[1] <= x[3];
-							}
-							if (!in)
-								continue;
-							if (pass == 1)
-							{
-								q[2 * at] = p[0];
-								q[2 * at + 1] = p[1];
-								if (qz)
-									qz[at] = p[2];
-								ql[at] = s;
-								at++;
-							}
-							else
-								m++;
-						}
-					fclose(f);
-				}
-				if (pass == 0 && getenv("TDC_TILE_DEBUG"))
+				m = ti->count + nh;
+				if (getenv("TDC_TILE_DEBUG"))
 					fprintf(stderr, "tile %d/%d: own %zu, K %g %g %g %g: %zu points\n", t, nt,
 							ti->count, K[0], K[1], K[2], K[3], m);
-				if (pass == 0)
+				q = malloc(16 * m + 16);
+				ql = malloc(8 * m + 8);
+				qz = has_z ? malloc(8 * m + 8) : NULL;
+				if (!q || !ql || (has_z && !qz))
+					die(1, "out of memory%s", "");
+				if (!has_z)
+					read_all("tile%d", t, q, ti->count, 2);
+				else
 				{
-					if (tile_bytes(m, opt, has_z) > budget && shrinks < 4 &&
-						memcmp(K, Kmin, sizeof(K)) != 0)
-					{
-						/*
-						 * The halo (or the slack of a grown box) reaches
-						 * into denser data than the tile's: shrink it
-						 * towards the least box, the finality test will
-						 * ask for what is really needed.
-						 */
-						for (int c = 0; c < 4; c++)
-							K[c] = shrinks == 3 ? Kmin[c] : Kmin[c] + (K[c] - Kmin[c]) / 4;
-						shrinks++;
-						m = 0;
-						pass = -1;
-						continue;
-					}
-					if (tile_bytes(m, opt, has_z) > budget)
-					{
-						char		msg[160];
-
-						snprintf(msg, sizeof(msg), "tile %d needs %zu points with its halo, about %zu MB",
-								 t, m, tile_bytes(m, opt, has_z) >> 20);
-						die(1, "%s: more than --max-memory allows (the data is too clustered or the limit too small)", msg);
-					}
-					q = malloc(16 * m + 16);
-					ql = malloc(8 * m + 8);
-					qz = has_z ? malloc(8 * m + 8) : NULL;
-					if (!q || !ql || (has_z && !qz))
-						die(1, "out of memory%s", "");
+					snprintf(name, sizeof(name), "tile%d", t);
+					f = tmp_open(name, "rb");
+					while ((got = fread(rec, 24, 4096, f)) > 0)
+						for (size_t i = 0; i < got && at < ti->count; i++, at++)
+						{
+							q[2 * at] = rec[3 * i];
+							q[2 * at + 1] = rec[3 * i + 1];
+							qz[at] = rec[3 * i + 2];
+						}
+					fclose(f);
+					if (at != ti->count)
+						die(1, "short read on a temporary file in %s", tmp_dir);
 				}
+				for (size_t i = 0; i < ti->count; i++)
+					ql[i] = t;
+				at = ti->count;
+				snprintf(name, sizeof(name), "halo%d", t);
+				f = tmp_open(name, "rb");
+				while ((got = fread(rec, 8 * (size_t) (w + 1), 4096 * 4 / (w + 1), f)) > 0)
+					for (size_t i = 0; i < got && at < m; i++, at++)
+					{
+						const double *p = rec + (w + 1) * i;
+
+						q[2 * at] = p[0];
+						q[2 * at + 1] = p[1];
+						if (qz)
+							qz[at] = p[2];
+						ql[at] = (int64_t) p[w];
+					}
+				fclose(f);
+				if (at != m)
+					die(1, "short read on a temporary file in %s", tmp_dir);
+				if (getenv("TDC_TILE_CHECK") && count_known(tiles, nt, K, extra, nextra, w) != m)
+				{
+					char		msg[160];
+
+					snprintf(msg, sizeof(msg), "tile %d: %zu points in its files, %zu in its first region",
+							 t, m, count_known(tiles, nt, K, extra, nextra, w));
+					die(1, "TDC_TILE_CHECK: %s", msg);
+				}
+				first = false;
 			}
+			else
+				/* count, then fill: the buffers are allocated once, at their size */
+				for (int pass = 0; pass < 2; pass++)
+				{
+					for (int u = -1; u < nt; u++)
+					{
+						int			s = u < 0 ? t : u;
+						FILE	   *f;
+						char		name[32];
+						size_t		got;
+
+						bool		meets = box_meets(tiles[s].bb, K);
+
+						for (size_t e = 0; e < nextra && !meets; e++)
+							meets = box_meets(tiles[s].bb, extra + 4 * e);
+						if ((u >= 0 && u == t) || tiles[s].count == 0 || !meets)
+							continue;
+						/* only the bands that meet this file's box need testing */
+						nx = 0;
+						for (size_t e = 0; e < nextra; e++)
+							if (box_meets(tiles[s].bb, extra + 4 * e))
+								xs[nx++] = extra + 4 * e;
+						snprintf(name, sizeof(name), "tile%d", s);
+						f = tmp_open(name, "rb");
+						while ((got = fread(rec, 8 * (size_t) w, 4096, f)) > 0)
+							for (size_t i = 0; i < got; i++)
+							{
+								double	   *p = rec + w * i;
+
+								bool		in = p[0] >= K[0] && p[0] <= K[2] &&
+									p[1] >= K[1] && p[1] <= K[3];
+
+								for (size_t e = 0; e < nx && !in; e++)
+								{
+									const double *x = xs[e];
+
+									in = p[0] >= x[0] && p[0] <= x[2] && p[1] >= x[1] && p[1] <= x[3];
+								}
+								if (!in)
+									continue;
+								if (pass == 1)
+								{
+									q[2 * at] = p[0];
+									q[2 * at + 1] = p[1];
+									if (qz)
+										qz[at] = p[2];
+									ql[at] = s;
+									at++;
+								}
+								else
+									m++;
+							}
+						fclose(f);
+					}
+					if (pass == 0 && getenv("TDC_TILE_DEBUG"))
+						fprintf(stderr, "tile %d/%d: own %zu, K %g %g %g %g: %zu points\n", t, nt,
+								ti->count, K[0], K[1], K[2], K[3], m);
+					if (pass == 0)
+					{
+						if (tile_bytes(m, opt, has_z) > budget && shrinks < 4 &&
+							memcmp(K, Kmin, sizeof(K)) != 0)
+						{
+							/*
+							 * The halo (or the slack of a grown box) reaches
+							 * into denser data than the tile's: shrink it
+							 * towards the least box, the finality test will
+							 * ask for what is really needed.
+							 */
+							for (int c = 0; c < 4; c++)
+								K[c] = shrinks == 3 ? Kmin[c] : Kmin[c] + (K[c] - Kmin[c]) / 4;
+							shrinks++;
+							m = 0;
+							pass = -1;
+							continue;
+						}
+						if (tile_bytes(m, opt, has_z) > budget)
+						{
+							char		msg[160];
+
+							snprintf(msg, sizeof(msg), "tile %d needs %zu points with its halo, about %zu MB",
+									 t, m, tile_bytes(m, opt, has_z) >> 20);
+							die(1, "%s: more than --max-memory allows (the data is too clustered or the limit too small)", msg);
+						}
+						q = malloc(16 * m + 16);
+						ql = malloc(8 * m + 8);
+						qz = has_z ? malloc(8 * m + 8) : NULL;
+						if (!q || !ql || (has_z && !qz))
+							die(1, "out of memory%s", "");
+					}
+				}
 			memcpy(spec.known, K, sizeof(K));
 			spec.tile = ql;
 			st->runs++;
@@ -952,6 +1398,11 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 	free(xs);
 	free(tiles);
 	free(hull);
+	free(kfirst);
+	free(band_off);
+	free(band_idx);
+	free(own);
+	free(halo);
 }
 
 /* Segment file: lines "i j"; every index must be below n. */
