@@ -744,7 +744,7 @@ typedef struct tile_work
 	void		(*fn) (struct tile_work *w);
 } tile_work;
 
-#define PF		16				/* prefetch distance in half-edges */
+#define PF		24				/* prefetch distance in half-edges */
 
 static void
 check_range(tile_work *w)
@@ -770,25 +770,18 @@ check_range(tile_work *w)
 #ifdef __GNUC__
 
 		/*
-		 * The walk is bound by two dependent random loads per half-edge
-		 * (lnext's record, then the third corner's).  Fetch them ahead, the
-		 * first for h + 2 PF, the second for h + PF, whose first has arrived.
+		 * The walk is bound by one random load per half-edge: the record
+		 * of lnext's twin, which holds both the third corner and the next
+		 * link (lnext's own record is next to its twin's, and h's twin is
+		 * next to h).  Fetch it ahead.
 		 */
-		if (h + 2 * PF < w->hi)
+		if (h + PF < w->hi)
 		{
-			uint32_t	f1 = he[SYM(h + 2 * PF)].prev,
-						g1 = he[SYM(h + PF)].prev;
+			uint32_t	g1 = he[SYM(h + PF)].prev;
 
 			/* a free edge's links may be anything: stay in the array */
-			if (f1 < nhe)
-				__builtin_prefetch(&he[SYM(f1)]);
 			if (g1 < nhe)
-			{
-				uint32_t	g2 = he[SYM(g1)].prev;
-
-				if (g2 < nhe)
-					__builtin_prefetch(&he[g2]);
-			}
+				__builtin_prefetch(&he[SYM(g1)]);
 		}
 #endif
 		if (he[h].org == TDC_NIL)
@@ -805,8 +798,18 @@ check_range(tile_work *w)
 				w->unfinal++;
 			continue;
 		}
-		if (job->ntri == 0 || !tdc_tri_at(job, h, v))
+		if (job->ntri == 0)
 			continue;
+		/* the triangle on h's left, from its smallest half-edge (tdc_tri_at, one load less) */
+		hh[1] = he[SYM(h)].prev;
+		if (hh[1] < h)
+			continue;
+		hh[2] = he[SYM(hh[1])].prev;
+		if (hh[2] < h)
+			continue;
+		v[0] = he[h].org;
+		v[1] = he[hh[1]].org;
+		v[2] = he[SYM(hh[1])].org;	/* org of lnext(lnext(h)) = dest of lnext(h) */
 		fl = flag[v[0]] | flag[v[1]] | flag[v[2]];
 		if (!(fl & SITE_OWN))
 			continue;
@@ -852,8 +855,6 @@ check_range(tile_work *w)
 			continue;
 		}
 		hh[0] = (uint32_t) h;
-		hh[1] = he[SYM(hh[0])].prev;
-		hh[2] = he[SYM(hh[1])].prev;
 		for (int k = 0; k < 3; k++)
 		{
 			uint32_t	o = SYM(hh[k]);
@@ -985,6 +986,12 @@ tdc_tile_finish(const tdc_job *job, const tdc_tile_spec *spec, tdc_tile_result *
 		const double *p = job->xy + 2 * at;
 		size_t		i = job->idx[at];
 		uint32_t	s = job->site_of[at];
+
+#ifdef __GNUC__
+		/* the label is the one random read: fetch it ahead */
+		if (at + 64 < nin)
+			__builtin_prefetch(&spec->tile[job->idx[at + 64]]);
+#endif
 
 		if (!(p[0] >= K[0] && p[0] <= K[2] && p[1] >= K[1] && p[1] <= K[3]))
 		{
