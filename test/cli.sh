@@ -129,6 +129,18 @@ TDC_TILE_CHECK=1 $TDC --max-memory 14 --tmpdir "$tmp/tiles" -o "$tmp/lat2.out" -
 check "--max-memory, lattice on cell sides: tiled" "grep -qE ' tiles=([2-9]|[1-9][0-9]+) ' $tmp/lat2.err"
 check "--max-memory, lattice on cell sides: same triangle set" "cmp -s <(canon_d $tmp/lat1.out 2) <(canon_d $tmp/lat2.out 2)"
 
+# the counting grid comes from a sample of the file: points the sample
+# misses just beyond its box (the outer cells widen) and far beyond it (the
+# cells are counted again on the true box)
+for far in 1.005 1.05; do
+	perl -e 'srand(9); $f = $ARGV[0]; for $i (1..300000) { print pack("d<d<", rand(1), rand(1));
+	  if ($i == 1000) { print pack("d<d<", $f, 0.5), pack("d<d<", 0.5, -$f + 1), pack("d<d<", $f, $f) } }' $far > "$tmp/out.bin"
+	$TDC -o "$tmp/out1.out" "$tmp/out.bin"
+	TDC_TILE_CHECK=1 $TDC --max-memory 20 --tmpdir "$tmp/tiles" -o "$tmp/out2.out" --stats "$tmp/out.bin" 2> "$tmp/out2.err"
+	check "--max-memory, outliers at $far: tiled" "grep -qE ' tiles=([2-9]|[1-9][0-9]+) ' $tmp/out2.err"
+	check "--max-memory, outliers at $far: same triangle set" "cmp -s <(canon_d $tmp/out1.out 2) <(canon_d $tmp/out2.out 2)"
+done
+
 # text with z through the tiles: z of the first point with those x,y, as one-shot
 perl -e 'srand(5); for (1..150000) { printf "%.17g %.17g %.17g\n", rand(100), rand(100), rand(9) }
   for (1..3000) { printf "%d %d %d\n", int(rand(100)), int(rand(100)), 50 + int(rand(9)) }' > "$tmp/z3.txt"

@@ -699,6 +699,68 @@ count_known(const tile_info *tiles, int nt, const double *K, const double *extra
 }
 
 /*
+ * The counting grid's box from a sample of the .bin source (256 runs of 256
+ * points spread over the file), grown by two cells a side, so that pass 1
+ * can count as it finds the box and hull.  The cells stay exact whatever
+ * the sample (cell_of clamps, and the outer cells are then widened to the
+ * true box); a box far off the true one only makes a poor plan, and pass 1
+ * then counts again.  False when n is small or the sample is flat.
+ */
+static bool
+sample_grid(const char *xypath, size_t n, double g[4])
+{
+	FILE	   *f;
+	double		buf[2 * 256];
+
+	if (n < ((size_t) 1 << 18) || (f = fopen(xypath, "rb")) == NULL)
+		return false;
+	g[0] = g[1] = INFINITY;
+	g[2] = g[3] = -INFINITY;
+	for (size_t j = 0; j < 256; j++)
+	{
+		size_t		got;
+
+		if (fseeko(f, (off_t) ((n - 256) / 255 * j) * 16, SEEK_SET) != 0)
+			break;
+		got = fread(buf, 16, 256, f);
+		for (size_t i = 0; i < got; i++)
+			if (isfinite(buf[2 * i]) && isfinite(buf[2 * i + 1]))
+				box_add(g, buf[2 * i], buf[2 * i + 1]);
+	}
+	fclose(f);
+	if (!(g[2] > g[0]) || !(g[3] > g[1]) || !isfinite(g[2] - g[0]) || !isfinite(g[3] - g[1]))
+		return false;
+	{
+		double		mx = (g[2] - g[0]) * 2 / FINE_GRID,
+					my = (g[3] - g[1]) * 2 / FINE_GRID;
+
+		g[0] -= mx;
+		g[1] -= my;
+		g[2] += mx;
+		g[3] += my;
+	}
+	return isfinite(g[0]) && isfinite(g[1]) && isfinite(g[2]) && isfinite(g[3]);
+}
+
+/* The fine grid over box g: scales, cell sizes and the cell sides. */
+static void
+set_grid(const double *g, double *sx, double *sy, double *cw, double *ch,
+		 double *xcut, double *ycut)
+{
+	*sx = g[2] > g[0] ? FINE_GRID / (g[2] - g[0]) : 0;
+	*sy = g[3] > g[1] ? FINE_GRID / (g[3] - g[1]) : 0;
+	*cw = (g[2] - g[0]) / FINE_GRID;
+	*ch = (g[3] - g[1]) / FINE_GRID;
+	for (int c = 0; c <= FINE_GRID; c++)
+	{
+		xcut[c] = g[0] + c * *cw;
+		ycut[c] = g[1] + c * *ch;
+	}
+	xcut[FINE_GRID] = fmax(xcut[FINE_GRID], g[2]);
+	ycut[FINE_GRID] = fmax(ycut[FINE_GRID], g[3]);
+}
+
+/*
  * The tiled run.  xypath/zpath: the .bin source (z beside it for text input
  * with z).  budget: bytes.  Returns nothing; dies on errors.
  */
@@ -719,7 +781,9 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 				ch,
 				xcut[FINE_GRID + 1],
 				ycut[FINE_GRID + 1],
-				inner[4] = {INFINITY, INFINITY, -INFINITY, -INFINITY};
+				inner[4] = {INFINITY, INFINITY, -INFINITY, -INFINITY},
+				grid[4];		/* the fine grid's box */
+	bool		counted;		/* pass 1 counted the cells too */
 	uint32_t   *counts,
 			   *cell_off = NULL;
 	int16_t    *cell_tile,
@@ -763,7 +827,13 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 	 * holds almost every point: only the others go to the chunk's hull.
 	 */
 	t0 = now_s();
-	source_open(&src, xypath, zpath);
+	counts = calloc((size_t) FINE_GRID * FINE_GRID, sizeof(uint32_t));
+	if (counts == NULL)
+		die(1, "out of memory%s", "");
+	counted = sample_grid(xypath, n, grid);
+	if (counted)
+		set_grid(grid, &sx, &sy, &cw, &ch, xcut, ycut);
+	source_open(&src, xypath, NULL);
 	while ((k = source_read(&src)) > 0)
 	{
 		double	   *buf,
@@ -791,6 +861,8 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 				bb[1] = y;
 			if (y > bb[3])
 				bb[3] = y;
+			if (counted)
+				counts[cell_of(y, grid[1], sy, ycut) * FINE_GRID + cell_of(x, grid[0], sx, xcut)]++;
 			if (x > inner[0] && x < inner[2] && y > inner[1] && y < inner[3])
 				continue;
 			buf[2 * m] = x;
@@ -849,30 +921,40 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 	}
 	source_close(&src);
 
-	/* 2: fine counts and the tiles */
-	sx = bb[2] > bb[0] ? FINE_GRID / (bb[2] - bb[0]) : 0;
-	sy = bb[3] > bb[1] ? FINE_GRID / (bb[3] - bb[1]) : 0;
-	cw = (bb[2] - bb[0]) / FINE_GRID;
-	ch = (bb[3] - bb[1]) / FINE_GRID;
-	for (int c = 0; c <= FINE_GRID; c++)
+	/*
+	 * 2: fine counts (unless pass 1 made them on a grid near the box) and
+	 * the tiles.  The outer cells reach the true box: a point's cell still
+	 * holds it.
+	 */
+	if (counted && (bb[0] < grid[0] - cw || bb[2] > grid[2] + cw ||
+					bb[1] < grid[1] - ch || bb[3] > grid[3] + ch))
 	{
-		xcut[c] = bb[0] + c * cw;
-		ycut[c] = bb[1] + c * ch;
+		counted = false;
+		memset(counts, 0, sizeof(uint32_t) * FINE_GRID * FINE_GRID);
 	}
+	if (!counted)
+	{
+		memcpy(grid, bb, sizeof(grid));
+		set_grid(grid, &sx, &sy, &cw, &ch, xcut, ycut);
+	}
+	xcut[0] = fmin(xcut[0], bb[0]);
+	ycut[0] = fmin(ycut[0], bb[1]);
 	xcut[FINE_GRID] = fmax(xcut[FINE_GRID], bb[2]);
 	ycut[FINE_GRID] = fmax(ycut[FINE_GRID], bb[3]);
-	counts = calloc((size_t) FINE_GRID * FINE_GRID, sizeof(uint32_t));
 	ps = calloc((size_t) (FINE_GRID + 1) * (FINE_GRID + 1), sizeof(size_t));
 	tiles = calloc(MAX_TILES, sizeof(tile_info));
 	cell_tile = malloc((size_t) FINE_GRID * FINE_GRID * sizeof(int16_t));
-	if (!counts || !ps || !tiles || !cell_tile)
+	if (!ps || !tiles || !cell_tile)
 		die(1, "out of memory%s", "");
-	source_open(&src, xypath, NULL);
-	while ((k = source_read(&src)) > 0)
-		for (size_t i = 0; i < k; i++)
-			counts[cell_of(src.xy[2 * i + 1], bb[1], sy, ycut) * FINE_GRID +
-				   cell_of(src.xy[2 * i], bb[0], sx, xcut)]++;
-	source_close(&src);
+	if (!counted)
+	{
+		source_open(&src, xypath, NULL);
+		while ((k = source_read(&src)) > 0)
+			for (size_t i = 0; i < k; i++)
+				counts[cell_of(src.xy[2 * i + 1], grid[1], sy, ycut) * FINE_GRID +
+					   cell_of(src.xy[2 * i], grid[0], sx, xcut)]++;
+		source_close(&src);
+	}
 	for (int r = 0; r < FINE_GRID; r++)
 		for (int c = 0; c < FINE_GRID; c++)
 			ps[(r + 1) * (FINE_GRID + 1) + c + 1] = counts[r * FINE_GRID + c] +
@@ -977,10 +1059,10 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 			for (size_t e = 0; e <= nb; e++)
 			{
 				const double *b = e == 0 ? K : xs[e - 1];
-				int			c0 = cell_of(b[0], bb[0], sx, xcut),
-							c1 = cell_of(b[2], bb[0], sx, xcut),
-							r0 = cell_of(b[1], bb[1], sy, ycut),
-							r1 = cell_of(b[3], bb[1], sy, ycut);
+				int			c0 = cell_of(b[0], grid[0], sx, xcut),
+							c1 = cell_of(b[2], grid[0], sx, xcut),
+							r0 = cell_of(b[1], grid[1], sy, ycut),
+							r1 = cell_of(b[3], grid[1], sy, ycut);
 
 				if (b[2] < bb[0] || b[0] > bb[2] || b[3] < bb[1] || b[1] > bb[3])
 					continue;
@@ -1066,8 +1148,8 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 		for (size_t i = 0; i < k; i++)
 		{
 			double		rec[4] = {src.xy[2 * i], src.xy[2 * i + 1], has_z ? src.z[i] : 0, 0};
-			int			cell = cell_of(rec[1], bb[1], sy, ycut) * FINE_GRID +
-				cell_of(rec[0], bb[0], sx, xcut),
+			int			cell = cell_of(rec[1], grid[1], sy, ycut) * FINE_GRID +
+				cell_of(rec[0], grid[0], sx, xcut),
 						t = cell_tile[cell];
 			tile_info  *ti = &tiles[t];
 
