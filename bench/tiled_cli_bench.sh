@@ -129,7 +129,7 @@ table() {
 	w0=$(col oneshot "$n" wall)
 	c0=$(col oneshot "$n" cpu)
 	tri0=$(distinct oneshot "$n" triangles)
-	printf '%-16s %9s %9s %9s %6s %6s %10s %12s %9s %9s  %s\n' run wall_s cpu_s rss_mb tiles runs halo triangles wall/1 cpu/1 same_set_count
+	printf '%-16s %9s %9s %9s %6s %6s %10s %12s %9s %9s  %s\n' run wall_s cpu_s rss_mb tiles runs halo triangles wall/1 cpu/1 same_count
 	local k
 	for k in "$@"; do
 		local w c r tri same
