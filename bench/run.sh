@@ -5,6 +5,8 @@
 #   A  bench/core_bench.sh   ./tdc (1 thread, all threads) vs CGAL   -> build/bench/core*.csv
 #   B  bench/sql_bench.sh    tdc_delaunay vs PostGIS in PostgreSQL   -> build/bench/sql*.csv, docs/*.png
 #   C  bench/sweep_bench.sh  the same from 3 to 10^7 points per call -> build/bench/sweep*, docs/sweep.png
+#   D  bench/tiled_cli_bench.sh  ./tdc one-shot vs --max-memory 400/800 on 10M points
+#                                                                     -> build/bench/tiled_cli*
 #
 # B and C run against the server the PG* variables point at when one answers;
 # otherwise a throw-away cluster is started with scripts/lib.sh and stopped
@@ -12,7 +14,8 @@
 #
 #   BENCH_SKIP_CORE=1   skip A          BENCH_SKIP_SQL=1   skip B
 #   BENCH_SKIP_SWEEP=1  skip C          BENCH_NO_INSTALL=1 do not run make install before B and C
-# The knobs of the scripts (BENCH_SIZES, BENCH_SQL_SIZES, BENCH_SWEEP_*, ...) pass through.
+#   BENCH_SKIP_TILED=1  skip D (about a minute; its 100M case only with BENCH_TILED_100M=1)
+# The knobs of the scripts (BENCH_SIZES, BENCH_SQL_SIZES, BENCH_SWEEP_*, BENCH_TILED_*, ...) pass through.
 set -euo pipefail
 
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
@@ -25,6 +28,11 @@ log "tdc_delaunay benchmarks; results in $BENCH_OUT"
 if [ "${BENCH_SKIP_CORE:-0}" != 1 ]; then
 	log "=== A: core benchmark"
 	bash "$ROOT/bench/core_bench.sh"
+fi
+
+if [ "${BENCH_SKIP_TILED:-0}" != 1 ]; then
+	log "=== D: tiled command line (./tdc --max-memory)"
+	bash "$ROOT/bench/tiled_cli_bench.sh" || log "the tiled benchmark failed"
 fi
 
 # sql_parts: B and C, against the server the PG* variables now point at
@@ -74,6 +82,14 @@ fi
 		cat "$BENCH_OUT/$f.txt"
 		echo '```'
 	done
+	if [ -s "$BENCH_OUT/tiled_cli.txt" ]; then
+		echo
+		echo "## Tiled command line: ./tdc one-shot vs --max-memory"
+		echo
+		echo '```'
+		cat "$BENCH_OUT/tiled_cli.txt"
+		echo '```'
+	fi
 	echo
 	echo '![time vs n](bench.png)'
 	echo
