@@ -581,9 +581,9 @@ cmp_i64(int64_t a, int64_t b)
 
 /*
  * Deep sites: Lemma 1 for every triangle at a site at once, from counts.
- * The box of Q is cut into a grid of blocks of about BLOCK_POINTS points
- * each; take one block side beta at least as large as every block's
- * sides.  If every block within distance 2 rho of a site a is non-empty,
+ * G, K clipped to the box of Q, is cut into a grid of blocks of about
+ * BLOCK_POINTS points each (counting Q's points in G); take one block side
+ * beta at least as large as every block's sides.  If every block within distance 2 rho of a site a is non-empty,
  * where rho = sqrt(2) beta, then every triangle of T(Q) at a has a
  * circumradius R < rho.  Proof: if R >= rho, the disk D' of radius rho
  * inside D, tangent to it at a, lies within 2 rho of a and holds the
@@ -594,14 +594,17 @@ cmp_i64(int64_t a, int64_t b)
  * of a, and when the box of a grown by 2 rho is inside K the star of a
  * passes Lemma 1 without a disk being computed.
  *
- * Rounding.  The blocks are real boxes of width 1/sx (and 1/sy) from
- * Q's minimum, sx, sy being the doubles used; a point's computed block
+ * Rounding.  The blocks are real boxes of width 1/sx (and 1/sy) from the
+ * grid's corner, sx, sy being the doubles used; a point's computed block
  * index is within 1e-11 of a block of its true position for grids below
- * 1e4 blocks a side (two roundings of a value at most the block count),
- * so every block is taken 1e-6 of a width wider, beta is taken 1e-9
- * larger, rho 1e-5, and the site's box grown by 2 rho is widened by a
- * few ulps of its coordinates.  A block counted non-empty has a point in
- * its widened box; the square above holds such a widened block.
+ * 1e4 blocks a side (two roundings of a value at most the block count), so
+ * every block is taken 1e-6 of a width wider and beta is 4e-6 larger than
+ * the computed widths.  The disk D' is taken of radius rho' = rho (1 +
+ * 1e-5): the square of side 2 beta around its centre then lies in its
+ * interior, so the block's point is not a (on D's circle) but inside D.
+ * The distance used is 2 rho (1 + 2e-5) >= 2 rho', whose slack also
+ * covers the rounding of the site's box grown by it (with a few ulps of
+ * the site's coordinates).
  *
  * The uniform tiles of the CLI leave only their rim to the disk test;
  * where data has holes, the sites within 2 rho of an empty block are not
@@ -661,9 +664,9 @@ mark_deep(const tdc_job *job, const tile_ctx *cx, uint8_t *flag, bool weaken)
 	sy = by / H;
 	if (!(sx > 0) || !(sy > 0) || !isfinite(sx) || !isfinite(sy))
 		return true;
-	beta = fmax(1 / sx, 1 / sy) * (1 + 1e-9) * (1 + 4e-6);
-	/* 2 rho, widened */
-	rho2 = 2 * sqrt(2.0) * beta * (1 + 1e-5);
+	beta = fmax(1 / sx, 1 / sy) * (1 + 4e-6);
+	/* 2 rho', widened */
+	rho2 = 2 * sqrt(2.0) * beta * (1 + 2e-5);
 	kx = (long) ceil(rho2 * sx * (1 + 1e-9) + 1e-6);
 	ky = (long) ceil(rho2 * sy * (1 + 1e-9) + 1e-6);
 	if (2 * kx + 1 > bx || 2 * ky + 1 > by)
