@@ -225,9 +225,11 @@ read_text(const char *path, size_t *n, double **zout)
  *
  * Memory: the largest tile with its halo is bounded by tile_max times a
  * growth allowance; a tile whose K would exceed the budget is an error,
- * never a silent overrun.  Duplicates share their cell, hence their tile,
- * and a tile's file keeps input order, so the Z of a vertex is that of its
- * first input point, as in the one-shot run.
+ * never a silent overrun (a first region too big for the budget is
+ * gathered and shrunk as a re-run's is).  Duplicates share their cell,
+ * hence their tile, and the tile and halo files keep input order, so the Z
+ * of a vertex is that of its first input point, as in the one-shot run.
+ * The write buffers of the files take a sixteenth of the budget.
  */
 #include <dirent.h>
 #include <math.h>
