@@ -12,7 +12,8 @@
 # (all runs must give the same; the last column says whether they do), the
 # tiled run's phase times (scan, bin, gather, engine, finish, write: medians,
 # wall seconds) and the ratios tiled / one-shot of the median wall and CPU
-# times.  With BENCH_TILED_100M=1 it then runs 100M points once with
+# times; beside them, for a machine whose load changes during the run, the
+# median of each round's own ratio and the ratio of the best (least) walls.  With BENCH_TILED_100M=1 it then runs 100M points once with
 # --max-memory 2000 (and one-shot, when `free` shows room for it), prints
 # the same, whether the peak RSS stayed within 2000 MB and whether the
 # triangle counts agree, and deletes the 1.6 GB input.
@@ -120,6 +121,19 @@ distinct() {
 		$1 == k && $2 == n && !s[$c[f]]++ { printf "%s%s", (m++ ? "," : ""), $c[f] }' "$RUNS"
 }
 ratio() { awk -v a="$1" -v b="$2" 'BEGIN { if (a != "" && b != "" && b > 0) printf "%.2fx", a / b; else printf "-" }'; }
+# colmin KIND N FIELD: the least value of a column
+colmin() {
+	awk -F, -v k="$1" -v n="$2" -v f="$3" 'NR == 1 { for (i = 1; i <= NF; i++) c[$i] = i; next }
+		$1 == k && $2 == n && (m == "" || $c[f] + 0 < m + 0) { m = $c[f] } END { print m }' "$RUNS"
+}
+# paired KIND N: median over rounds of (KIND's wall / the one-shot wall of the same round)
+paired() {
+	awk -F, -v k="$1" -v n="$2" 'NR == 1 { for (i = 1; i <= NF; i++) c[$i] = i; next }
+		$2 == n && $1 == "oneshot" { o[$c["round"]] = $c["wall"] }
+		$2 == n && $1 == k { t[$c["round"]] = $c["wall"] }
+		END { for (r in t) if (o[r] > 0) printf "%.4f\n", t[r] / o[r] }' "$RUNS" | median |
+		awk '$1 != "" { printf "%.2fx", $1 }'
+}
 
 # table N KINDS...: the medians, one line per run kind
 table() {
@@ -143,6 +157,13 @@ table() {
 		printf '%-16s %9s %9s %9s %6s %6s %10s %12s %9s %9s  %s\n' "$k" "$w" "$c" "$r" \
 			"$(distinct "$k" "$n" tiles)" "$(distinct "$k" "$n" runs)" "$(distinct "$k" "$n" halo)" \
 			"$tri" "$(ratio "$w" "$w0")" "$(ratio "$c" "$c0")" "$same"
+	done
+	echo "wall/1 and cpu/1: ratios of the medians.  Less sensitive to a load that changes during the run:"
+	for k in "$@"; do
+		[ "$k" = oneshot ] && continue
+		printf '  %-14s median of the per-round ratios %s; best runs %s s vs %s s one-shot (%s)\n' "$k" \
+			"$(paired "$k" "$n")" "$(colmin "$k" "$n" wall)" "$(colmin oneshot "$n" wall)" \
+			"$(ratio "$(colmin "$k" "$n" wall)" "$(colmin oneshot "$n" wall)")"
 	done
 	echo "tiled phases (medians, wall s): scan = box, hull, counts; bin = tile files; gather = reading tiles back; engine = tdc_triangulate; finish = tdc_tile_finish"
 	for k in "$@"; do
