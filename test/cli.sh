@@ -142,8 +142,10 @@ for far in 1.005 1.05; do
 done
 
 # text with z through the tiles: z of the first point with those x,y, as one-shot
-perl -e 'srand(5); for (1..150000) { printf "%.17g %.17g %.17g\n", rand(100), rand(100), rand(9) }
-  for (1..3000) { printf "%d %d %d\n", int(rand(100)), int(rand(100)), 50 + int(rand(9)) }' > "$tmp/z3.txt"
+# (more than 2^18 points: binned in two parts, the z file read in two
+# ranges; the integer points' copies lie in both halves of the input)
+perl -e 'srand(5); for $i (1..270000) { printf "%.17g %.17g %.17g\n", rand(100), rand(100), rand(9);
+  printf "%d %d %d\n", int(rand(60)), int(rand(60)), 50 + int(rand(9)) if $i % 90 == 0 }' > "$tmp/z3.txt"
 $TDC -o "$tmp/z31.out" "$tmp/z3.txt"
 TDC_TILE_CHECK=1 $TDC --max-memory 10 --tmpdir "$tmp/tiles" -o "$tmp/z32.out" --stats "$tmp/z3.txt" 2> "$tmp/z32.err"
 check "--max-memory, text with z: tiled" "grep -qE ' tiles=([2-9]|[1-9][0-9]+) ' $tmp/z32.err"

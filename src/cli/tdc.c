@@ -233,6 +233,7 @@ read_text(const char *path, size_t *n, double **zout)
  */
 #include <dirent.h>
 #include <math.h>
+#include <pthread.h>
 #include <unistd.h>
 #ifdef __GLIBC__
 #include <malloc.h>
@@ -340,6 +341,7 @@ typedef struct source
 			   *fz;
 	double	   *xy,
 			   *z;
+	size_t		left;			/* points still to read */
 } source;
 
 static void
@@ -353,13 +355,25 @@ source_open(source *s, const char *xypath, const char *zpath)
 	s->z = zpath ? malloc(8 * (size_t) CHUNK) : NULL;
 	if (s->xy == NULL || (zpath && s->z == NULL))
 		die(1, "out of memory%s", "");
+	s->left = SIZE_MAX;
+}
+
+/* Read only the points [from, from + count) from now on. */
+static void
+source_range(source *s, size_t from, size_t count)
+{
+	if (fseeko(s->fxy, (off_t) from * 16, SEEK_SET) != 0 ||
+		(s->fz && fseeko(s->fz, (off_t) from * 8, SEEK_SET) != 0))
+		die(1, "cannot seek in the input%s", "");
+	s->left = count;
 }
 
 static size_t
 source_read(source *s)
 {
-	size_t		k = fread(s->xy, 16, CHUNK, s->fxy);
+	size_t		k = fread(s->xy, 16, s->left < CHUNK ? s->left : CHUNK, s->fxy);
 
+	s->left -= k;
 	if (s->fz && fread(s->z, 8, k, s->fz) != k)
 		die(1, "short read on the temporary z file%s", "");
 	return k;
@@ -466,6 +480,15 @@ box_add(double *b, double x, double y)
 	b[1] = fmin(b[1], y);
 	b[2] = fmax(b[2], x);
 	b[3] = fmax(b[3], y);
+}
+
+static void
+box_union2(double *b, const double *a)
+{
+	b[0] = fmin(b[0], a[0]);
+	b[1] = fmin(b[1], a[1]);
+	b[2] = fmax(b[2], a[2]);
+	b[3] = fmax(b[3], a[3]);
 }
 
 /*
@@ -618,13 +641,65 @@ rec_put(recfile *r, const double *v, int w)
 	r->count++;
 }
 
-static void
-rec_open(recfile *r, const char *fmt, int t, size_t cap)
+/*
+ * Tile t's file of a kind ("tile": its own points, "halo": the others of
+ * its first region) written by binning part `part`: the parts hold
+ * consecutive ranges of the input, so read one after the other they keep
+ * input order.
+ */
+static FILE *
+part_open(const char *kind, int t, int part, const char *mode)
 {
-	char		name[32];
+	char		name[48];
 
-	snprintf(name, sizeof(name), fmt, t);
-	r->f = tmp_open(name, "wb");
+	snprintf(name, sizeof(name), "%s%d.%d", kind, t, part);
+	return tmp_open(name, mode);
+}
+
+/* Reads a tile's file of a kind across its parts, in order. */
+typedef struct mreader
+{
+	const char *kind;
+	int			t,
+				part,
+				nparts;
+	FILE	   *f;
+} mreader;
+
+static void
+mr_open(mreader *m, const char *kind, int t, int nparts)
+{
+	m->kind = kind;
+	m->t = t;
+	m->part = 0;
+	m->nparts = nparts;
+	m->f = part_open(kind, t, 0, "rb");
+}
+
+/* Up to count whole records of size bytes; 0 at the end of the last part. */
+static size_t
+mr_read(mreader *m, void *buf, size_t size, size_t count)
+{
+	size_t		got;
+
+	while ((got = fread(buf, size, count, m->f)) == 0 && m->part + 1 < m->nparts)
+	{
+		fclose(m->f);
+		m->f = part_open(m->kind, m->t, ++m->part, "rb");
+	}
+	return got;
+}
+
+static void
+mr_close(mreader *m)
+{
+	fclose(m->f);
+}
+
+static void
+rec_open(recfile *r, const char *kind, int t, int part, size_t cap)
+{
+	r->f = part_open(kind, t, part, "wb");
 	r->buf = malloc(8 * cap);
 	r->cap = cap;
 	r->len = 0;
@@ -646,18 +721,20 @@ rec_close(recfile *r)
 	r->buf = NULL;
 }
 
-/* Read exactly k records of w doubles from file tmp_dir/name into buf. */
+/* Read exactly k records of w doubles of tile t's file of a kind into buf. */
 static void
-read_all(const char *fmt, int t, double *buf, size_t k, int w)
+read_all(const char *kind, int t, int nparts, double *buf, size_t k, int w)
 {
-	char		name[32];
-	FILE	   *f;
+	mreader		m;
+	size_t		at = 0,
+				got;
 
-	snprintf(name, sizeof(name), fmt, t);
-	f = tmp_open(name, "rb");
-	if (fread(buf, 8 * (size_t) w, k, f) != k)
+	mr_open(&m, kind, t, nparts);
+	while (at < k && (got = mr_read(&m, buf + w * at, 8 * (size_t) w, k - at)) > 0)
+		at += got;
+	mr_close(&m);
+	if (at != k)
 		die(1, "short read on a temporary file in %s", tmp_dir);
-	fclose(f);
 }
 
 /*
@@ -665,7 +742,7 @@ read_all(const char *fmt, int t, double *buf, size_t k, int w)
  * from every tile file, for checking a first run's tile and halo files.
  */
 static size_t
-count_known(const tile_info *tiles, int nt, const double *K, const double *extra,
+count_known(const tile_info *tiles, int nt, int nparts, const double *K, const double *extra,
 			size_t nextra, int w)
 {
 	size_t		m = 0,
@@ -674,14 +751,12 @@ count_known(const tile_info *tiles, int nt, const double *K, const double *extra
 
 	for (int s = 0; s < nt; s++)
 	{
-		char		name[32];
-		FILE	   *f;
+		mreader		f;
 
 		if (tiles[s].count == 0)
 			continue;
-		snprintf(name, sizeof(name), "tile%d", s);
-		f = tmp_open(name, "rb");
-		while ((got = fread(rec, 8 * (size_t) w, 1024, f)) > 0)
+		mr_open(&f, "tile", s, nparts);
+		while ((got = mr_read(&f, rec, 8 * (size_t) w, 1024)) > 0)
 			for (size_t i = 0; i < got; i++)
 			{
 				const double *p = rec + w * i;
@@ -695,9 +770,102 @@ count_known(const tile_info *tiles, int nt, const double *K, const double *extra
 				}
 				m += in;
 			}
-		fclose(f);
+		mr_close(&f);
 	}
 	return m;
+}
+
+/*
+ * Step 3 over the input points [from, from + count): each point to its
+ * tile's file, and to the halo file of every other tile whose first known
+ * region holds it; the exact box of each tile's points in bb.  Binning
+ * runs as two such parts on two threads when the files allow.
+ */
+typedef struct bin_work
+{
+	/* shared, read only */
+	const char *xypath,
+			   *zpath;
+	const double *grid,
+			   *xcut,
+			   *ycut,
+			   *kfirst,
+			   *bands;
+	double		sx,
+				sy;
+	const int16_t *cell_tile,
+			   *cell_halo;
+	const uint32_t *cell_off;
+	const size_t *band_off,
+			   *band_idx;
+	bool		use_halo;
+	int			w,
+				nt;
+	/* this part's */
+	size_t		from,
+				count;
+	recfile    *own,
+			   *halo;
+	double	   *bb;				/* nt boxes */
+} bin_work;
+
+static void *
+bin_range(void *arg)
+{
+	bin_work   *b = arg;
+	source		src;
+	size_t		k;
+	int			w = b->w;
+
+	source_open(&src, b->xypath, b->zpath);
+	source_range(&src, b->from, b->count);
+	while ((k = source_read(&src)) > 0)
+		for (size_t i = 0; i < k; i++)
+		{
+			double		rec[4] = {src.xy[2 * i], src.xy[2 * i + 1], src.z ? src.z[i] : 0, 0};
+			int			cell = cell_of(rec[1], b->grid[1], b->sy, b->ycut) * FINE_GRID +
+				cell_of(rec[0], b->grid[0], b->sx, b->xcut),
+						t = b->cell_tile[cell];
+			double	   *bb = b->bb + 4 * t;
+
+			if (rec[0] < bb[0])
+				bb[0] = rec[0];
+			if (rec[0] > bb[2])
+				bb[2] = rec[0];
+			if (rec[1] < bb[1])
+				bb[1] = rec[1];
+			if (rec[1] > bb[3])
+				bb[3] = rec[1];
+			rec_put(&b->own[t], rec, w);
+			if (!b->use_halo)
+				continue;
+			for (uint32_t j = b->cell_off[cell]; j < b->cell_off[cell + 1]; j++)
+			{
+				int			u = b->cell_halo[j];
+				const double *K = b->kfirst + 4 * u;
+				bool		in = rec[0] >= K[0] && rec[0] <= K[2] && rec[1] >= K[1] && rec[1] <= K[3];
+
+				for (size_t e = b->band_off[u]; e < b->band_off[u + 1] && !in; e++)
+				{
+					const double *x = b->bands + 4 * b->band_idx[e];
+
+					in = rec[0] >= x[0] && rec[0] <= x[2] && rec[1] >= x[1] && rec[1] <= x[3];
+				}
+				if (in)
+				{
+					rec[w] = t;
+					rec_put(&b->halo[u], rec, w + 1);
+				}
+			}
+		}
+	source_close(&src);
+	for (int t = 0; t < b->nt; t++)
+	{
+		rec_close(&b->own[t]);
+		if (b->use_halo)
+			rec_close(&b->halo[t]);
+	}
+	return NULL;
 }
 
 /*
@@ -802,8 +970,8 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 	size_t	   *band_off = NULL,	/* each tile's first bands: band_idx[band_off[t] ..] */
 			   *band_idx = NULL;
 	const double **xs;
-	recfile    *own,
-			   *halo = NULL;
+	size_t	   *halo_count = NULL;	/* each tile's halo file's points */
+	int			nparts;			/* binning parts: files per tile and kind */
 	bool		use_halo;
 	char		err[512];
 	double		t0;
@@ -1127,70 +1295,80 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 
 	st->scan = now_s() - t0;
 
-	/* 3: bin: every point to its tile's file, and to the halo files of the tiles whose first region holds it */
+	/*
+	 * 3: bin: every point to its tile's file, and to the halo files of the
+	 * tiles whose first region holds it; two halves of the input on two
+	 * threads (each with its own files) when there are file handles enough.
+	 */
 	t0 = now_s();
+	nparts = n >= ((size_t) 1 << 18) && (size_t) nt * (use_halo ? 2 : 1) * 2 <= 800 ? 2 : 1;
 	{
 		/* buffers: a sixteenth of the budget over the files, 4 kB to 256 kB each */
-		size_t		per = budget / 16 / (size_t) (2 * (nt > 0 ? nt : 1)) / 8;
+		size_t		per = budget / 16 / (size_t) (2 * nparts * (nt > 0 ? nt : 1)) / 8;
+		bin_work	bw[2];
+		pthread_t	th;
+		bool		started = false;
 
 		per = per < 512 ? 512 : per > 32768 ? 32768 : per;
-		own = calloc((size_t) (nt > 0 ? nt : 1), sizeof(recfile));
-		halo = use_halo ? calloc((size_t) (nt > 0 ? nt : 1), sizeof(recfile)) : NULL;
-		if (own == NULL || (use_halo && halo == NULL))
-			die(1, "out of memory%s", "");
-		for (int t = 0; t < nt; t++)
+		for (int p = 0; p < nparts; p++)
 		{
-			rec_open(&own[t], "tile%d", t, per - per % w);
-			if (use_halo)
-				rec_open(&halo[t], "halo%d", t, (per / 4) - (per / 4) % (w + 1));
-		}
-	}
-	source_open(&src, xypath, zpath);
-	while ((k = source_read(&src)) > 0)
-		for (size_t i = 0; i < k; i++)
-		{
-			double		rec[4] = {src.xy[2 * i], src.xy[2 * i + 1], has_z ? src.z[i] : 0, 0};
-			int			cell = cell_of(rec[1], grid[1], sy, ycut) * FINE_GRID +
-				cell_of(rec[0], grid[0], sx, xcut),
-						t = cell_tile[cell];
-			tile_info  *ti = &tiles[t];
+			bin_work   *b = &bw[p];
 
-			if (rec[0] < ti->bb[0])
-				ti->bb[0] = rec[0];
-			if (rec[0] > ti->bb[2])
-				ti->bb[2] = rec[0];
-			if (rec[1] < ti->bb[1])
-				ti->bb[1] = rec[1];
-			if (rec[1] > ti->bb[3])
-				ti->bb[3] = rec[1];
-			rec_put(&own[t], rec, w);
-			if (!use_halo)
-				continue;
-			for (uint32_t j = cell_off[cell]; j < cell_off[cell + 1]; j++)
+			b->xypath = xypath;
+			b->zpath = zpath;
+			b->grid = grid;
+			b->xcut = xcut;
+			b->ycut = ycut;
+			b->kfirst = kfirst;
+			b->bands = bands;
+			b->sx = sx;
+			b->sy = sy;
+			b->cell_tile = cell_tile;
+			b->cell_halo = cell_halo;
+			b->cell_off = cell_off;
+			b->band_off = band_off;
+			b->band_idx = band_idx;
+			b->use_halo = use_halo;
+			b->w = w;
+			b->nt = nt;
+			b->from = n / nparts * p;
+			b->count = p == nparts - 1 ? n - b->from : n / nparts;
+			b->own = calloc((size_t) (nt > 0 ? nt : 1), sizeof(recfile));
+			b->halo = use_halo ? calloc((size_t) (nt > 0 ? nt : 1), sizeof(recfile)) : NULL;
+			b->bb = malloc(32 * (size_t) (nt > 0 ? nt : 1));
+			if (b->own == NULL || (use_halo && b->halo == NULL) || b->bb == NULL)
+				die(1, "out of memory%s", "");
+			for (int t = 0; t < nt; t++)
 			{
-				int			u = cell_halo[j];
-				const double *K = kfirst + 4 * u;
-				bool		in = rec[0] >= K[0] && rec[0] <= K[2] && rec[1] >= K[1] && rec[1] <= K[3];
-
-				for (size_t e = band_off[u]; e < band_off[u + 1] && !in; e++)
-				{
-					const double *x = bands + 4 * band_idx[e];
-
-					in = rec[0] >= x[0] && rec[0] <= x[2] && rec[1] >= x[1] && rec[1] <= x[3];
-				}
-				if (in)
-				{
-					rec[w] = t;
-					rec_put(&halo[u], rec, w + 1);
-				}
+				b->bb[4 * t] = b->bb[4 * t + 1] = INFINITY;
+				b->bb[4 * t + 2] = b->bb[4 * t + 3] = -INFINITY;
+				rec_open(&b->own[t], "tile", t, p, per - per % w);
+				if (use_halo)
+					rec_open(&b->halo[t], "halo", t, p, (per / 4) - (per / 4) % (w + 1));
 			}
 		}
-	source_close(&src);
-	for (int t = 0; t < nt; t++)
-	{
-		rec_close(&own[t]);
-		if (use_halo)
-			rec_close(&halo[t]);
+		if (nparts == 2)
+			started = pthread_create(&th, NULL, bin_range, &bw[1]) == 0;
+		bin_range(&bw[0]);
+		if (started)
+			pthread_join(th, NULL);
+		else if (nparts == 2)
+			bin_range(&bw[1]);
+		halo_count = calloc((size_t) (nt > 0 ? nt : 1), sizeof(size_t));
+		if (halo_count == NULL)
+			die(1, "out of memory%s", "");
+		for (int p = 0; p < nparts; p++)
+		{
+			for (int t = 0; t < nt; t++)
+			{
+				box_union2(tiles[t].bb, bw[p].bb + 4 * t);
+				if (use_halo)
+					halo_count[t] += bw[p].halo[t].count;
+			}
+			free(bw[p].own);
+			free(bw[p].halo);
+			free(bw[p].bb);
+		}
 	}
 	free(cell_tile);
 	free(cell_off);
@@ -1240,13 +1418,12 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 			int			shrinks = 0;
 
 			t0 = now_s();
-			if (first && tile_bytes(ti->count + halo[t].count, opt, has_z) > budget)
+			if (first && tile_bytes(ti->count + halo_count[t], opt, has_z) > budget)
 				first = false;
 			if (first)
 			{
-				size_t		nh = halo[t].count;
-				char		name[32];
-				FILE	   *f;
+				size_t		nh = halo_count[t];
+				mreader		f;
 				size_t		got;
 
 				m = ti->count + nh;
@@ -1259,28 +1436,26 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 				if (!q || !ql || (has_z && !qz))
 					die(1, "out of memory%s", "");
 				if (!has_z)
-					read_all("tile%d", t, q, ti->count, 2);
+					read_all("tile", t, nparts, q, ti->count, 2);
 				else
 				{
-					snprintf(name, sizeof(name), "tile%d", t);
-					f = tmp_open(name, "rb");
-					while ((got = fread(rec, 24, 4096, f)) > 0)
+					mr_open(&f, "tile", t, nparts);
+					while ((got = mr_read(&f, rec, 24, 4096)) > 0)
 						for (size_t i = 0; i < got && at < ti->count; i++, at++)
 						{
 							q[2 * at] = rec[3 * i];
 							q[2 * at + 1] = rec[3 * i + 1];
 							qz[at] = rec[3 * i + 2];
 						}
-					fclose(f);
+					mr_close(&f);
 					if (at != ti->count)
 						die(1, "short read on a temporary file in %s", tmp_dir);
 				}
 				for (size_t i = 0; i < ti->count; i++)
 					ql[i] = t;
 				at = ti->count;
-				snprintf(name, sizeof(name), "halo%d", t);
-				f = tmp_open(name, "rb");
-				while ((got = fread(rec, 8 * (size_t) (w + 1), 4096 * 4 / (w + 1), f)) > 0)
+				mr_open(&f, "halo", t, nparts);
+				while ((got = mr_read(&f, rec, 8 * (size_t) (w + 1), 4096 * 4 / (w + 1))) > 0)
 					for (size_t i = 0; i < got && at < m; i++, at++)
 					{
 						const double *p = rec + (w + 1) * i;
@@ -1291,15 +1466,15 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 							qz[at] = p[2];
 						ql[at] = (int64_t) p[w];
 					}
-				fclose(f);
+				mr_close(&f);
 				if (at != m)
 					die(1, "short read on a temporary file in %s", tmp_dir);
-				if (getenv("TDC_TILE_CHECK") && count_known(tiles, nt, K, extra, nextra, w) != m)
+				if (getenv("TDC_TILE_CHECK") && count_known(tiles, nt, nparts, K, extra, nextra, w) != m)
 				{
 					char		msg[160];
 
 					snprintf(msg, sizeof(msg), "tile %d: %zu points in its files, %zu in its first region",
-							 t, m, count_known(tiles, nt, K, extra, nextra, w));
+							 t, m, count_known(tiles, nt, nparts, K, extra, nextra, w));
 					die(1, "TDC_TILE_CHECK: %s", msg);
 				}
 				first = false;
@@ -1311,8 +1486,7 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 					for (int u = -1; u < nt; u++)
 					{
 						int			s = u < 0 ? t : u;
-						FILE	   *f;
-						char		name[32];
+						mreader		f;
 						size_t		got;
 
 						bool		meets = box_meets(tiles[s].bb, K);
@@ -1326,9 +1500,8 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 						for (size_t e = 0; e < nextra; e++)
 							if (box_meets(tiles[s].bb, extra + 4 * e))
 								xs[nx++] = extra + 4 * e;
-						snprintf(name, sizeof(name), "tile%d", s);
-						f = tmp_open(name, "rb");
-						while ((got = fread(rec, 8 * (size_t) w, 4096, f)) > 0)
+						mr_open(&f, "tile", s, nparts);
+						while ((got = mr_read(&f, rec, 8 * (size_t) w, 4096)) > 0)
 							for (size_t i = 0; i < got; i++)
 							{
 								double	   *p = rec + w * i;
@@ -1356,7 +1529,7 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 								else
 									m++;
 							}
-						fclose(f);
+						mr_close(&f);
 					}
 					if (pass == 0 && getenv("TDC_TILE_DEBUG"))
 						fprintf(stderr, "tile %d/%d: own %zu, K %g %g %g %g: %zu points\n", t, nt,
@@ -1485,8 +1658,7 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 	free(kfirst);
 	free(band_off);
 	free(band_idx);
-	free(own);
-	free(halo);
+	free(halo_count);
 }
 
 /* Segment file: lines "i j"; every index must be below n. */
