@@ -203,16 +203,19 @@ read_text(const char *path, size_t *n, double **zout)
  * When the one-shot run (the input, the engine, the result) would not fit
  * in MB, the input is cut into tiles on disk and triangulated tile by tile
  * with the core's exact tiling (src/core/tile.c), and the triangles are
- * written as each tile finishes.  The steps, each a sequential read of the
- * input (text input is first converted to a temporary .bin):
- *	1	count, bounding box, convex hull (in chunks: the hull of a union is
- *		the hull of the parts' hulls, and a point inside a rectangle inside
- *		the hull so far is skipped);
- *	2	counts on a fine grid, cut into tiles of at most tile_max points by
- *		median splits along the longer side (kd-tree of cells), so that
- *		clustered data gets small tiles where it is dense;
- *	3	each point appended to its tile's file, and to the halo file of
- *		every other tile whose first known region holds it.
+ * written as each tile finishes.  Two sequential reads of the input (text
+ * input is first converted to a temporary .bin):
+ *	1	bounding box, convex hull (in chunks: the hull of a union is the
+ *		hull of the parts' hulls, and a point inside a rectangle inside the
+ *		hull so far is skipped) and counts on a fine grid, whose box comes
+ *		from a sample of the file (counted again in a pass of its own when
+ *		the sample was far off); the grid is cut into tiles of at most
+ *		tile_max points by median splits along the longer side (kd-tree of
+ *		cells), so that clustered data gets small tiles where it is dense;
+ *	2	each point appended to its tile's file, and to the halo file of
+ *		every other tile whose first known region holds it; the two halves
+ *		of the input on two threads, each with its own files, read back one
+ *		after the other.
  * A point's cell is decided exactly against the doubles of the cell sides,
  * so a tile's points lie in its cells' box, and its first known region is
  * fixed before binning: K = that box plus a halo of 8 mean point spacings,
