@@ -141,6 +141,12 @@ for far in 1.005 1.05; do
 	check "--max-memory, outliers at $far: same triangle set" "cmp -s <(canon_d $tmp/out1.out 2) <(canon_d $tmp/out2.out 2)"
 done
 
+# a NaN in the second half of the input, which the second thread of step 1 reads
+perl -e 'srand(4); $nan = unpack("d<", pack("Q<", 0x7ff8000000000000)); for $i (1..300000) {
+  print pack("d<d<", rand(1), $i == 250000 ? $nan : rand(1)) }' > "$tmp/nanbig.bin"
+expect_error "--max-memory: NaN in the second half" $TDC --max-memory 14 --tmpdir "$tmp/tiles" "$tmp/nanbig.bin"
+check "--max-memory: NaN: temporary files removed" "[ -z \"\$(ls -A $tmp/tiles)\" ]"
+
 # text with z through the tiles: z of the first point with those x,y, as one-shot
 # (more than 2^18 points: binned in two parts, the z file read in two
 # ranges; the integer points' copies lie in both halves of the input)

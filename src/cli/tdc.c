@@ -779,7 +779,151 @@ count_known(const tile_info *tiles, int nt, int nparts, const double *K, const d
 }
 
 /*
- * Step 3 over the input points [from, from + count): each point to its
+ * Step 1 over the input points [from, from + count): their box, convex
+ * hull and, when the grid is known (grid not NULL), the counts of its
+ * cells.  The hull of a union is the hull of the parts' hulls; a point
+ * strictly inside a rectangle inside the hull so far (inner) cannot be a
+ * vertex of it, and for most data that rectangle holds almost every point:
+ * only the others go to the chunk's hull.  Runs as two parts on two
+ * threads when the grid is known.
+ */
+typedef struct scan_work
+{
+	const char *xypath;
+	size_t		from,
+				count;
+	const double *grid,
+			   *xcut,
+			   *ycut;
+	double		sx,
+				sy;
+	uint32_t   *counts;
+	/* results */
+	double		bb[4];
+	double	   *hull;
+	size_t		nhull;
+	bool		bad;			/* a coordinate not finite or out of range */
+} scan_work;
+
+static void *
+scan_range(void *arg)
+{
+	scan_work  *sw = arg;
+	source		src;
+	size_t		k,
+				nhull = 0;
+	double	   *hull = NULL,
+				inner[4] = {INFINITY, INFINITY, -INFINITY, -INFINITY},
+			   *bb = sw->bb;
+	const double *grid = sw->grid,
+			   *xcut = sw->xcut,
+			   *ycut = sw->ycut;
+	double		sx = sw->sx,
+				sy = sw->sy;
+	uint32_t   *counts = sw->counts;
+	bool		counted = grid != NULL;
+
+	bb[0] = bb[1] = INFINITY;
+	bb[2] = bb[3] = -INFINITY;
+	sw->bad = false;
+	source_open(&src, sw->xypath, NULL);
+	source_range(&src, sw->from, sw->count);
+	while ((k = source_read(&src)) > 0)
+	{
+		double	   *buf,
+				   *h2;
+		size_t		n2,
+					m = 0;
+
+		buf = malloc(16 * (k + nhull));
+		if (buf == NULL)
+			die(1, "out of memory%s", "");
+		for (size_t i = 0; i < k; i++)
+		{
+			double		x = src.xy[2 * i],
+						y = src.xy[2 * i + 1];
+
+			if (!isfinite(x) || !isfinite(y) ||
+				(x != 0 && (fabs(x) < TDC_COORD_MIN || fabs(x) > TDC_COORD_MAX)) ||
+				(y != 0 && (fabs(y) < TDC_COORD_MIN || fabs(y) > TDC_COORD_MAX)))
+			{
+				sw->bad = true;
+				continue;
+			}
+			if (x < bb[0])
+				bb[0] = x;
+			if (x > bb[2])
+				bb[2] = x;
+			if (y < bb[1])
+				bb[1] = y;
+			if (y > bb[3])
+				bb[3] = y;
+			if (counted)
+				counts[cell_of(y, grid[1], sy, ycut) * FINE_GRID + cell_of(x, grid[0], sx, xcut)]++;
+			if (x > inner[0] && x < inner[2] && y > inner[1] && y < inner[3])
+				continue;
+			buf[2 * m] = x;
+			buf[2 * m + 1] = y;
+			m++;
+		}
+		if (nhull)
+			memcpy(buf + 2 * m, hull, 16 * nhull);
+		if (tdc_convex_hull(buf, m + nhull, &h2, &n2) != TDC_OK)
+			die(1, "out of memory%s", "");
+		free(buf);
+		free(hull);
+		hull = h2;
+		nhull = n2;
+		/* the hull's box shrunk towards its centre until its corners are strictly inside */
+		if (nhull >= 3)
+		{
+			double		hb[4] = {INFINITY, INFINITY, -INFINITY, -INFINITY},
+						cx,
+						cy;
+
+			for (size_t i = 0; i < nhull; i++)
+				box_add(hb, hull[2 * i], hull[2 * i + 1]);
+			cx = 0.5 * (hb[0] + hb[2]);
+			cy = 0.5 * (hb[1] + hb[3]);
+			for (double f = 0.98; f > 0.2; f -= 0.16)
+			{
+				double		r[4] = {cx - f * (cx - hb[0]), cy - f * (cy - hb[1]),
+				cx + f * (hb[2] - cx), cy + f * (hb[3] - cy)};
+				bool		in = r[0] < r[2] && r[1] < r[3];
+				double	   *hb2 = malloc(16 * (nhull + 4)),
+						   *h3 = NULL;
+				size_t		n3 = 0;
+
+				/*
+				 * The closed rectangle is inside the closed hull when adding
+				 * its corners leaves the hull as it is; its open inside is
+				 * then inside the hull's, whose points are no vertices.
+				 */
+				if (hb2 == NULL)
+					die(1, "out of memory%s", "");
+				memcpy(hb2, hull, 16 * nhull);
+				memcpy(hb2 + 2 * nhull, (double[8]) {r[0], r[1], r[2], r[1], r[2], r[3], r[0], r[3]}, 64);
+				if (in && tdc_convex_hull(hb2, nhull + 4, &h3, &n3) != TDC_OK)
+					die(1, "out of memory%s", "");
+				in = in && n3 == nhull && memcmp(h3, hull, 16 * nhull) == 0;
+				free(hb2);
+				free(h3);
+				if (in)
+				{
+					memcpy(inner, r, sizeof(r));
+					break;
+				}
+			}
+		}
+	}
+	source_close(&src);
+	sw->hull = hull;
+	sw->nhull = nhull;
+	return NULL;
+}
+
+/*
+ * Step 2 over the input points [from, from + count): each point to its
  * tile's file, and to the halo file of every other tile whose first known
  * region holds it; the exact box of each tile's points in bb.  Binning
  * runs as two such parts on two threads when the files allow.
@@ -948,13 +1092,12 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 				*ps;
 	double		bb[4] = {INFINITY, INFINITY, -INFINITY, -INFINITY},
 			   *hull = NULL,
-				sx,
-				sy,
+				sx = 0,
+				sy = 0,
 				cw,
 				ch,
 				xcut[FINE_GRID + 1],
 				ycut[FINE_GRID + 1],
-				inner[4] = {INFINITY, INFINITY, -INFINITY, -INFINITY},
 				grid[4];		/* the fine grid's box */
 	bool		counted;		/* pass 1 counted the cells too */
 	uint32_t   *counts,
@@ -994,10 +1137,8 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 #endif
 
 	/*
-	 * 1: box and hull.  The hull of a union is the hull of the parts'
-	 * hulls; a point strictly inside a rectangle inside the hull so far
-	 * (inner) cannot be a vertex of it, and for most data that rectangle
-	 * holds almost every point: only the others go to the chunk's hull.
+	 * 1: box, hull and, on a grid from a sample of the file, the cells'
+	 * counts (scan_range).
 	 */
 	t0 = now_s();
 	counts = calloc((size_t) FINE_GRID * FINE_GRID, sizeof(uint32_t));
@@ -1006,93 +1147,59 @@ run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *op
 	counted = sample_grid(xypath, n, grid);
 	if (counted)
 		set_grid(grid, &sx, &sy, &cw, &ch, xcut, ycut);
-	source_open(&src, xypath, NULL);
-	while ((k = source_read(&src)) > 0)
 	{
-		double	   *buf,
-				   *h2;
-		size_t		n2,
-					m = 0;
+		/* the two halves of the input on two threads when the grid is known */
+		int			np = counted ? 2 : 1;
+		scan_work	sw[2];
+		pthread_t	th;
+		bool		started = false;
 
-		buf = malloc(16 * (k + nhull));
-		if (buf == NULL)
-			die(1, "out of memory%s", "");
-		for (size_t i = 0; i < k; i++)
+		for (int p = 0; p < np; p++)
 		{
-			double		x = src.xy[2 * i],
-						y = src.xy[2 * i + 1];
-
-			if (!isfinite(x) || !isfinite(y) ||
-				(x != 0 && (fabs(x) < TDC_COORD_MIN || fabs(x) > TDC_COORD_MAX)) ||
-				(y != 0 && (fabs(y) < TDC_COORD_MIN || fabs(y) > TDC_COORD_MAX)))
-				die(1, "a point has a non-finite coordinate or one outside the supported magnitude range%s", "");
-			if (x < bb[0])
-				bb[0] = x;
-			if (x > bb[2])
-				bb[2] = x;
-			if (y < bb[1])
-				bb[1] = y;
-			if (y > bb[3])
-				bb[3] = y;
-			if (counted)
-				counts[cell_of(y, grid[1], sy, ycut) * FINE_GRID + cell_of(x, grid[0], sx, xcut)]++;
-			if (x > inner[0] && x < inner[2] && y > inner[1] && y < inner[3])
-				continue;
-			buf[2 * m] = x;
-			buf[2 * m + 1] = y;
-			m++;
+			sw[p].xypath = xypath;
+			sw[p].from = n / np * p;
+			sw[p].count = p == np - 1 ? n - sw[p].from : n / np;
+			sw[p].grid = counted ? grid : NULL;
+			sw[p].sx = sx;
+			sw[p].sy = sy;
+			sw[p].xcut = xcut;
+			sw[p].ycut = ycut;
+			sw[p].counts = p == 0 ? counts : calloc((size_t) FINE_GRID * FINE_GRID, sizeof(uint32_t));
+			if (sw[p].counts == NULL)
+				die(1, "out of memory%s", "");
 		}
-		if (nhull)
-			memcpy(buf + 2 * m, hull, 16 * nhull);
-		if (tdc_convex_hull(buf, m + nhull, &h2, &n2) != TDC_OK)
-			die(1, "out of memory%s", "");
-		free(buf);
-		free(hull);
-		hull = h2;
-		nhull = n2;
-		/* the hull's box shrunk towards its centre until its corners are strictly inside */
-		if (nhull >= 3)
+		if (np == 2)
+			started = pthread_create(&th, NULL, scan_range, &sw[1]) == 0;
+		scan_range(&sw[0]);
+		if (started)
+			pthread_join(th, NULL);
+		else if (np == 2)
+			scan_range(&sw[1]);
+		for (int p = 0; p < np; p++)
+			if (sw[p].bad)
+				die(1, "a point has a non-finite coordinate or one outside the supported magnitude range%s", "");
+		memcpy(bb, sw[0].bb, sizeof(bb));
+		hull = sw[0].hull;
+		nhull = sw[0].nhull;
+		if (np == 2)
 		{
-			double		hb[4] = {INFINITY, INFINITY, -INFINITY, -INFINITY},
-						cx,
-						cy;
+			double	   *buf = malloc(16 * (nhull + sw[1].nhull + 1));
 
-			for (size_t i = 0; i < nhull; i++)
-				box_add(hb, hull[2 * i], hull[2 * i + 1]);
-			cx = 0.5 * (hb[0] + hb[2]);
-			cy = 0.5 * (hb[1] + hb[3]);
-			for (double f = 0.98; f > 0.2; f -= 0.16)
-			{
-				double		r[4] = {cx - f * (cx - hb[0]), cy - f * (cy - hb[1]),
-				cx + f * (hb[2] - cx), cy + f * (hb[3] - cy)};
-				bool		in = r[0] < r[2] && r[1] < r[3];
-				double	   *hb2 = malloc(16 * (nhull + 4)),
-						   *h3 = NULL;
-				size_t		n3 = 0;
-
-				/*
-				 * The closed rectangle is inside the closed hull when adding
-				 * its corners leaves the hull as it is; its open inside is
-				 * then inside the hull's, whose points are no vertices.
-				 */
-				if (hb2 == NULL)
-					die(1, "out of memory%s", "");
-				memcpy(hb2, hull, 16 * nhull);
-				memcpy(hb2 + 2 * nhull, (double[8]) {r[0], r[1], r[2], r[1], r[2], r[3], r[0], r[3]}, 64);
-				if (in && tdc_convex_hull(hb2, nhull + 4, &h3, &n3) != TDC_OK)
-					die(1, "out of memory%s", "");
-				in = in && n3 == nhull && memcmp(h3, hull, 16 * nhull) == 0;
-				free(hb2);
-				free(h3);
-				if (in)
-				{
-					memcpy(inner, r, sizeof(r));
-					break;
-				}
-			}
+			if (buf == NULL)
+				die(1, "out of memory%s", "");
+			box_union2(bb, sw[1].bb);
+			memcpy(buf, hull, 16 * nhull);
+			memcpy(buf + 2 * nhull, sw[1].hull, 16 * sw[1].nhull);
+			free(hull);
+			if (tdc_convex_hull(buf, nhull + sw[1].nhull, &hull, &nhull) != TDC_OK)
+				die(1, "out of memory%s", "");
+			free(buf);
+			free(sw[1].hull);
+			for (size_t c = 0; c < (size_t) FINE_GRID * FINE_GRID; c++)
+				counts[c] += sw[1].counts[c];
+			free(sw[1].counts);
 		}
 	}
-	source_close(&src);
 
 	/*
 	 * 2: fine counts (unless pass 1 made them on a grid near the box) and
