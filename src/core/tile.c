@@ -747,7 +747,7 @@ typedef struct tile_work
 	void		(*fn) (struct tile_work *w);
 } tile_work;
 
-#define PF		24				/* prefetch distance in half-edges */
+#define PF		48				/* prefetch distance in half-edges */
 
 static void
 check_range(tile_work *w)
