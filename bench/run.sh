@@ -5,10 +5,12 @@
 #   A  bench/core_bench.sh   ./tdc (1 thread, all threads) vs CGAL   -> build/bench/core*.csv
 #   B  bench/sql_bench.sh    tdc_delaunay vs PostGIS in PostgreSQL   -> build/bench/sql*.csv, docs/*.png
 #   C  bench/sweep_bench.sh  the same from 3 to 10^7 points per call -> build/bench/sweep*, docs/sweep.png
-#   D  bench/constrained_bench.sh  (optional, BENCH_CONSTRAINED=1) the constrained
+#   D  bench/tiled_cli_bench.sh  ./tdc one-shot vs --max-memory 400/800 on 10M points
+#                                                                     -> build/bench/tiled_cli*
+#   E  bench/constrained_bench.sh  (optional, BENCH_CONSTRAINED=1) the constrained
 #      triangulation against SFCGAL and our unconstrained one, on 1M contour
 #      vertices and GSHHG coastline polygons          -> build/bench/constrained*
-#   E  bench/voronoi_bench.sh  (optional, BENCH_VORONOI=1) Voronoi: ours vs
+#   F  bench/voronoi_bench.sh  (optional, BENCH_VORONOI=1) Voronoi: ours vs
 #      ST_VoronoiPolygons, 10^5 and 10^6 points        -> build/bench/voronoi*
 #
 # B and C run against the server the PG* variables point at when one answers;
@@ -16,10 +18,12 @@
 # afterwards.  Either way the extension is built and installed first.
 #
 #   BENCH_SKIP_CORE=1   skip A          BENCH_SKIP_SQL=1   skip B
-#   BENCH_SKIP_SWEEP=1  skip C          BENCH_NO_INSTALL=1 do not run make install before B, C and D
-#   BENCH_CONSTRAINED=1 run D too (some 10 minutes: SFCGAL takes 5-20 s a statement, 12 times)
-#   BENCH_VORONOI=1     run E too (BENCH_VOR_* knobs: see bench/voronoi_bench.sh)
-# The knobs of the scripts (BENCH_SIZES, BENCH_SQL_SIZES, BENCH_SWEEP_*, BENCH_CDT_*, ...) pass through.
+#   BENCH_SKIP_SWEEP=1  skip C          BENCH_NO_INSTALL=1 do not run make install before B, C, E and F
+#   BENCH_SKIP_TILED=1  skip D (about a minute; its 100M case only with BENCH_TILED_100M=1)
+#   BENCH_CONSTRAINED=1 run E too (some 10 minutes: SFCGAL takes 5-20 s a statement, 12 times)
+#   BENCH_VORONOI=1     run F too (BENCH_VOR_* knobs: see bench/voronoi_bench.sh)
+# The knobs of the scripts (BENCH_SIZES, BENCH_SQL_SIZES, BENCH_SWEEP_*, BENCH_TILED_*, BENCH_CDT_*,
+# ...) pass through.
 set -euo pipefail
 
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
@@ -34,7 +38,12 @@ if [ "${BENCH_SKIP_CORE:-0}" != 1 ]; then
 	bash "$ROOT/bench/core_bench.sh"
 fi
 
-# sql_parts: B, C and D, against the server the PG* variables now point at
+if [ "${BENCH_SKIP_TILED:-0}" != 1 ]; then
+	log "=== D: tiled command line (./tdc --max-memory)"
+	bash "$ROOT/bench/tiled_cli_bench.sh" || log "the tiled benchmark failed"
+fi
+
+# sql_parts: B, C, E and F, against the server the PG* variables now point at
 sql_parts() {
 	if [ "${BENCH_SKIP_SQL:-0}" != 1 ]; then
 		log "=== B: SQL benchmark"
@@ -45,11 +54,11 @@ sql_parts() {
 		bash "$ROOT/bench/sweep_bench.sh"
 	fi
 	if [ "${BENCH_CONSTRAINED:-0}" = 1 ]; then
-		log "=== D: constrained, against SFCGAL"
+		log "=== E: constrained, against SFCGAL"
 		bash "$ROOT/bench/constrained_bench.sh"
 	fi
 	if [ "${BENCH_VORONOI:-0}" = 1 ]; then
-		log "=== E: Voronoi diagrams in SQL"
+		log "=== F: Voronoi diagrams in SQL"
 		bash "$ROOT/bench/voronoi_bench.sh"
 	fi
 }
@@ -90,6 +99,14 @@ fi
 		cat "$BENCH_OUT/$f.txt"
 		echo '```'
 	done
+	if [ -s "$BENCH_OUT/tiled_cli.txt" ]; then
+		echo
+		echo "## Tiled command line: ./tdc one-shot vs --max-memory"
+		echo
+		echo '```'
+		cat "$BENCH_OUT/tiled_cli.txt"
+		echo '```'
+	fi
 	echo
 	echo '![time vs n](bench.png)'
 	echo

@@ -106,7 +106,9 @@ perl -e 'srand(11); for (1..600000) { print pack("d<d<", rand(1000), rand(1000))
   for (1..2000) { print pack("d<d<", 100 + int(rand(50)), 100 + int(rand(50))) }' > "$tmp/big.bin"
 $TDC -o "$tmp/big1.out" --stats "$tmp/big.bin" 2> "$tmp/big1.err"
 mkdir -p "$tmp/tiles"
-$TDC --max-memory 24 --tmpdir "$tmp/tiles" -o "$tmp/big2.out" --stats "$tmp/big.bin" 2> "$tmp/big2.err"
+# (TDC_TILE_CHECK: each tile's first run checks that its tile and halo files
+# hold exactly the points of its first known region, K and its hull bands)
+TDC_TILE_CHECK=1 $TDC --max-memory 24 --tmpdir "$tmp/tiles" -o "$tmp/big2.out" --stats "$tmp/big.bin" 2> "$tmp/big2.err"
 check "--max-memory: exit 0" "[ $? -eq 0 ]"
 one_rss=$(sed -n 's/.*peak_rss_mb=\([0-9.]*\).*/\1/p' "$tmp/big1.err")
 til_rss=$(sed -n 's/.*peak_rss_mb=\([0-9.]*\).*/\1/p' "$tmp/big2.err")
@@ -117,11 +119,41 @@ check "--max-memory: same triangle set as one-shot" "cmp -s <(canon_d $tmp/big1.
 check "--max-memory: same triangle count" "[ \$(wc -l < $tmp/big1.out) -eq \$(wc -l < $tmp/big2.out) ]"
 check "--max-memory: temporary files removed" "[ -z \"\$(ls -A $tmp/tiles)\" ]"
 
+# an integer lattice over [0, 512]: the fine grid's cells are 1 wide, so
+# points lie on cell sides, tile sides, and the sides of the first known
+# boxes (halo 8 spacings), which are closed; with duplicates
+perl -e 'use List::Util qw(shuffle); srand(3); @p = (); for $x (0..512) { for $y (0..512) { push @p, [$x, $y] } }
+  push @p, [int(rand(513)), int(rand(513))] for 1..2000; print pack("d<d<", @$_) for shuffle(@p)' > "$tmp/lat.bin"
+$TDC -o "$tmp/lat1.out" "$tmp/lat.bin"
+TDC_TILE_CHECK=1 $TDC --max-memory 14 --tmpdir "$tmp/tiles" -o "$tmp/lat2.out" --stats "$tmp/lat.bin" 2> "$tmp/lat2.err"
+check "--max-memory, lattice on cell sides: tiled" "grep -qE ' tiles=([2-9]|[1-9][0-9]+) ' $tmp/lat2.err"
+check "--max-memory, lattice on cell sides: same triangle set" "cmp -s <(canon_d $tmp/lat1.out 2) <(canon_d $tmp/lat2.out 2)"
+
+# the counting grid comes from a sample of the file: points the sample
+# misses just beyond its box (the outer cells widen) and far beyond it (the
+# cells are counted again on the true box)
+for far in 1.005 1.05; do
+	perl -e 'srand(9); $f = $ARGV[0]; for $i (1..300000) { print pack("d<d<", rand(1), rand(1));
+	  if ($i == 1000) { print pack("d<d<", $f, 0.5), pack("d<d<", 0.5, -$f + 1), pack("d<d<", $f, $f) } }' $far > "$tmp/out.bin"
+	$TDC -o "$tmp/out1.out" "$tmp/out.bin"
+	TDC_TILE_CHECK=1 $TDC --max-memory 20 --tmpdir "$tmp/tiles" -o "$tmp/out2.out" --stats "$tmp/out.bin" 2> "$tmp/out2.err"
+	check "--max-memory, outliers at $far: tiled" "grep -qE ' tiles=([2-9]|[1-9][0-9]+) ' $tmp/out2.err"
+	check "--max-memory, outliers at $far: same triangle set" "cmp -s <(canon_d $tmp/out1.out 2) <(canon_d $tmp/out2.out 2)"
+done
+
+# a NaN in the second half of the input, which the second thread of step 1 reads
+perl -e 'srand(4); $nan = unpack("d<", pack("Q<", 0x7ff8000000000000)); for $i (1..300000) {
+  print pack("d<d<", rand(1), $i == 250000 ? $nan : rand(1)) }' > "$tmp/nanbig.bin"
+expect_error "--max-memory: NaN in the second half" $TDC --max-memory 14 --tmpdir "$tmp/tiles" "$tmp/nanbig.bin"
+check "--max-memory: NaN: temporary files removed" "[ -z \"\$(ls -A $tmp/tiles)\" ]"
+
 # text with z through the tiles: z of the first point with those x,y, as one-shot
-perl -e 'srand(5); for (1..150000) { printf "%.17g %.17g %.17g\n", rand(100), rand(100), rand(9) }
-  for (1..3000) { printf "%d %d %d\n", int(rand(100)), int(rand(100)), 50 + int(rand(9)) }' > "$tmp/z3.txt"
+# (more than 2^18 points: binned in two parts, the z file read in two
+# ranges; the integer points' copies lie in both halves of the input)
+perl -e 'srand(5); for $i (1..270000) { printf "%.17g %.17g %.17g\n", rand(100), rand(100), rand(9);
+  printf "%d %d %d\n", int(rand(60)), int(rand(60)), 50 + int(rand(9)) if $i % 90 == 0 }' > "$tmp/z3.txt"
 $TDC -o "$tmp/z31.out" "$tmp/z3.txt"
-$TDC --max-memory 10 --tmpdir "$tmp/tiles" -o "$tmp/z32.out" --stats "$tmp/z3.txt" 2> "$tmp/z32.err"
+TDC_TILE_CHECK=1 $TDC --max-memory 10 --tmpdir "$tmp/tiles" -o "$tmp/z32.out" --stats "$tmp/z3.txt" 2> "$tmp/z32.err"
 check "--max-memory, text with z: tiled" "grep -qE ' tiles=([2-9]|[1-9][0-9]+) ' $tmp/z32.err"
 check "--max-memory, text with z: same triangles and z" "cmp -s <(canon_d $tmp/z31.out 3) <(canon_d $tmp/z32.out 3)"
 

@@ -32,6 +32,7 @@ typedef struct tile_stats
 	size_t		rounds;			/* tile runs, retries included */
 	size_t		retries;
 	size_t		tiles;
+	size_t		deep;			/* triangles final by a deep vertex, final rounds */
 	int			rc;
 } tile_stats;
 
@@ -255,6 +256,7 @@ tiled(const double *xy, size_t n, const int64_t *lab, int64_t ntiles, double hal
 			}
 			if (res.final)
 			{
+				st->deep += res.deep;
 				for (size_t k = 0; k < res.ntri; k++)
 					tset_add(s, &cap, q + 2 * res.tri[3 * k], q + 2 * res.tri[3 * k + 1],
 							 q + 2 * res.tri[3 * k + 2]);
@@ -790,6 +792,81 @@ test_weakened_check_is_caught(void)
 	free(hull);
 }
 
+/*
+ * Deep sites (tile.c, mark_deep): a site whose neighbourhood of blocks has
+ * no empty block has every circumdisk inside K, unless it is near K's side.
+ * Uniform points with a round hole of radius 60 centred on x = 500; tile 0
+ * owns the points left of x = 450 and is run with K reaching x = 520, so
+ * that all its own sites near the hole are far enough from K's side to be
+ * deep if the hole's empty blocks were not counted.  The hole's local
+ * triangles have circles of about its radius, which reach past K to the
+ * rim points of tile 1 at x = 560: not global triangles.  Taking every
+ * block as non-empty (TDC_TILE_WEAKEN_BLOCKS) certifies them and the tiled
+ * set differs from the one-shot set; counting the empty blocks sends them
+ * through the disk test, tile 0 grows, and the sets agree.  On the same
+ * points without the hole, most triangles are certified from the counts
+ * alone (res.deep), with the same set.
+ */
+static void
+test_deep_sites(void)
+{
+	size_t		n = tdc_test_quick ? 20000 : 60000,
+				m = 0;
+	double	   *xy,
+			   *holed = malloc(16 * n);
+	int64_t    *lab = malloc(8 * n);
+	tset		one,
+				weak,
+				good;
+	tile_stats	st;
+
+	rs = 5;
+	xy = gen_uniform(n, 1000, 0, 0);
+	for (size_t i = 0; i < n; i++)
+	{
+		double		dx = xy[2 * i] - 500,
+					dy = xy[2 * i + 1] - 500;
+
+		if (dx * dx + dy * dy > 60 * 60)
+		{
+			holed[2 * m] = xy[2 * i];
+			holed[2 * m + 1] = xy[2 * i + 1];
+			m++;
+		}
+	}
+
+	/* bands along the hull, as the CLI gives: tile 0 is final at once on its other sides */
+	band = 0.01;
+	for (size_t i = 0; i < n; i++)
+		lab[i] = xy[2 * i] < 450 ? 0 : 1;
+	CHECK(oneshot(xy, n, &one), "one-shot failed");
+	tiled(xy, n, lab, 2, 0.07, false, 0, &good, &st);
+	CHECK(tset_equal(&one, &good), "uniform, 2 tiles: %zu vs %zu triangles", good.ntri, one.ntri);
+	CHECK(st.deep > one.ntri / 4,
+		  "uniform, 2 tiles: only %zu of %zu triangles certified by deep sites", st.deep, one.ntri);
+	free(one.t);
+	free(good.t);
+
+	for (size_t i = 0; i < m; i++)
+		lab[i] = holed[2 * i] < 450 ? 0 : 1;
+	CHECK(oneshot(holed, m, &one), "one-shot failed");
+	tiled(holed, m, lab, 2, 0.07, false, TDC_TILE_WEAKEN_BLOCKS, &weak, &st);
+	CHECK(!tset_equal(&one, &weak),
+		  "every block taken as non-empty: tiled set equals one-shot (%zu vs %zu), the test shows nothing",
+		  weak.ntri, one.ntri);
+	tiled(holed, m, lab, 2, 0.07, false, 0, &good, &st);
+	CHECK(tset_equal(&one, &good), "hole across K's side: %zu vs %zu triangles", good.ntri,
+		  one.ntri);
+	CHECK(st.retries > 0, "hole across K's side: no tile had to grow");
+	band = 0;
+	free(one.t);
+	free(weak.t);
+	free(good.t);
+	free(lab);
+	free(holed);
+	free(xy);
+}
+
 static void
 test_tile_errors(void)
 {
@@ -916,4 +993,5 @@ test_tile(void)
 	test_distributions();
 	test_small_tiles_and_duplicates();
 	test_weakened_check_is_caught();
+	test_deep_sites();
 }

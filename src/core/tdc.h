@@ -326,11 +326,13 @@ typedef struct tdc_tile_spec
 	size_t		nextra;			/* too: thin bands along long edges of C, say (may be 0) */
 	const double *hull;			/* convex polygon C containing P: nhull x,y vertices */
 	size_t		nhull;			/* (the convex hull of P, or the 4 corners of P's bounding box) */
-	int			test_weaken;	/* tests only: 0, or TDC_TILE_WEAKEN_DISKS */
+	int			test_weaken;	/* tests only: 0, TDC_TILE_WEAKEN_DISKS or _BLOCKS */
 } tdc_tile_spec;
 
 /* tests only: take every triangle as final (shows that the disk test matters) */
 #define TDC_TILE_WEAKEN_DISKS	1
+/* tests only: take every block as non-empty (shows that the deep sites' counts matter) */
+#define TDC_TILE_WEAKEN_BLOCKS	2
 
 typedef struct tdc_tile_result
 {
@@ -342,6 +344,8 @@ typedef struct tdc_tile_result
 	size_t		sites;			/* distinct sites in K */
 	size_t		own_sites;		/* of them owned by this tile */
 	size_t		unfinal;		/* triangles and hull edges at own sites found not final */
+	size_t		deep;			/* triangles at own sites found final from block counts
+								 * alone (a deep vertex, see tile.c), without a disk */
 } tdc_tile_result;
 
 /*

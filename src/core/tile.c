@@ -101,6 +101,14 @@
  * (segment_box): a computed centre 1e8 away carries more error than the
  * segment is high.
  *
+ * Deep sites.  Computing every circumdisk was a fifth of a tiled run.  Most
+ * stars are certified at once: where every block of a grid of about ten
+ * points per block is non-empty around a site, no empty circle through it
+ * can be large, so its star lies within a known distance of it (mark_deep
+ * has the proof and its rounding); a triangle with such a vertex inside K
+ * by that distance needs no disk.  Only the rim of K, holes in the data and
+ * sparse regions go through the disk test.
+ *
  * The halo is a thin ring in practice: for uniform points, circumdisks are a
  * few point spacings wide, so a margin of some ten spacings around a tile
  * almost always suffices on the first round.
@@ -567,21 +575,171 @@ cmp_i64(int64_t a, int64_t b)
 	return a < b ? -1 : a > b;
 }
 
+/* Per-site flags of tdc_tile_finish. */
+#define SITE_OWN	1			/* the site belongs to this tile */
+#define SITE_DEEP	2			/* every triangle at it is final (mark_deep) */
+
+/*
+ * Deep sites: Lemma 1 for every triangle at a site at once, from counts.
+ * G, K clipped to the box of Q, is cut into a grid of blocks of about
+ * BLOCK_POINTS points each (counting Q's points in G); take one block side
+ * beta at least as large as every block's sides.  If every block within distance 2 rho of a site a is non-empty,
+ * where rho = sqrt(2) beta, then every triangle of T(Q) at a has a
+ * circumradius R < rho.  Proof: if R >= rho, the disk D' of radius rho
+ * inside D, tangent to it at a, lies within 2 rho of a and holds the
+ * axis-aligned square of side sqrt(2) rho = 2 beta around its centre,
+ * which holds a whole block; that block has a point of Q, which lies in
+ * the open disk D', hence in the open circumdisk of a triangle of T(Q): no
+ * such triangle exists.  So the closed circumdisk lies within 2R < 2 rho
+ * of a, and when the box of a grown by 2 rho is inside K the star of a
+ * passes Lemma 1 without a disk being computed.
+ *
+ * Rounding.  The blocks are real boxes of width 1/sx (and 1/sy) from the
+ * grid's corner, sx, sy being the doubles used; a point's computed block
+ * index is within 1e-11 of a block of its true position for grids below
+ * 1e4 blocks a side (two roundings of a value at most the block count), so
+ * every block is taken 1e-6 of a width wider and beta is 4e-6 larger than
+ * the computed widths.  The disk D' is taken of radius rho' = rho (1 +
+ * 1e-5): the square of side 2 beta around its centre then lies in its
+ * interior, so the block's point is not a (on D's circle) but inside D.
+ * The distance used is 2 rho (1 + 2e-5) >= 2 rho', whose slack also
+ * covers the rounding of the site's box grown by it (with a few ulps of
+ * the site's coordinates).
+ *
+ * The uniform tiles of the CLI leave only their rim to the disk test;
+ * where data has holes, the sites within 2 rho of an empty block are not
+ * deep and go through the disk test as before.
+ */
+#define BLOCK_POINTS	10
+
+static int
+block_of(double v, double lo, double scale, int nb)
+{
+	double		t = (v - lo) * scale;
+	int			b = (int) t;
+
+	return b < 0 ? 0 : b >= nb ? nb - 1 : b;
+}
+
+/*
+ * Set SITE_DEEP in flag[] for the deep sites (any owner), as above.
+ * Returns false only when out of memory (then no site is deep).
+ */
+static bool
+mark_deep(const tdc_job *job, const tile_ctx *cx, uint8_t *flag, bool weaken)
+{
+	const double *K = cx->spec->known;
+	size_t		nin = job->nin,
+				ng = 0;
+	/* the grid covers G, K clipped to Q's box: the bands' points lie outside */
+	double		lo[2] = {fmax(K[0], job->bmin[0]), fmax(K[1], job->bmin[1])},
+				hi[2] = {fmin(K[2], job->bmax[0]), fmin(K[3], job->bmax[1])},
+				W = hi[0] - lo[0],
+				H = hi[1] - lo[1],
+				side,
+				sx,
+				sy,
+				beta,
+				rho2;
+	long		bx,
+				by,
+				kx,
+				ky;
+	uint32_t   *ps;
+	uint8_t    *ok;
+
+#define IN_G(a) ((a)[0] >= lo[0] && (a)[0] <= hi[0] && (a)[1] >= lo[1] && (a)[1] <= hi[1])
+	if (!(W > 0) || !(H > 0) || !isfinite(W) || !isfinite(H))
+		return true;
+	for (size_t p = 0; p < nin; p++)
+		ng += IN_G(job->xy + 2 * p);
+	if (ng < 64 * BLOCK_POINTS)
+		return true;
+	side = sqrt(W / ng * H * BLOCK_POINTS);
+	if (!(side > 0) || !isfinite(side))
+		return true;
+	bx = (long) fmin(fmax(W / side, 1), 8192);
+	by = (long) fmin(fmax(H / side, 1), 8192);
+	sx = bx / W;
+	sy = by / H;
+	if (!(sx > 0) || !(sy > 0) || !isfinite(sx) || !isfinite(sy))
+		return true;
+	beta = fmax(1 / sx, 1 / sy) * (1 + 4e-6);
+	/* 2 rho', widened */
+	rho2 = 2 * sqrt(2.0) * beta * (1 + 2e-5);
+	kx = (long) ceil(rho2 * sx * (1 + 1e-9) + 1e-6);
+	ky = (long) ceil(rho2 * sy * (1 + 1e-9) + 1e-6);
+	if (2 * kx + 1 > bx || 2 * ky + 1 > by)
+		return true;
+	ps = calloc((size_t) (bx + 1) * (by + 1), sizeof(uint32_t));
+	ok = malloc((size_t) bx * by);
+	if (ps == NULL || ok == NULL)
+	{
+		free(ps);
+		free(ok);
+		return false;
+	}
+	/* non-empty blocks, then their 2-D prefix sums */
+	for (size_t p = 0; p < nin; p++)
+		if (IN_G(job->xy + 2 * p))
+			ps[(size_t) (block_of(job->xy[2 * p + 1], lo[1], sy, by) + 1) * (bx + 1) +
+			   block_of(job->xy[2 * p], lo[0], sx, bx) + 1] = 1;
+	if (weaken)
+		for (long j = 0; j < by; j++)
+			for (long i = 0; i < bx; i++)
+				ps[(size_t) (j + 1) * (bx + 1) + i + 1] = 1;
+	for (long j = 1; j <= by; j++)
+		for (long i = 1; i <= bx; i++)
+			ps[(size_t) j * (bx + 1) + i] += ps[(size_t) (j - 1) * (bx + 1) + i] +
+				ps[(size_t) j * (bx + 1) + i - 1] - ps[(size_t) (j - 1) * (bx + 1) + i - 1];
+	/* a block is ok when its neighbourhood lies in the grid and has no empty block */
+	for (long j = 0; j < by; j++)
+		for (long i = 0; i < bx; i++)
+		{
+			long		i0 = i - kx,
+						i1 = i + kx + 1,
+						j0 = j - ky,
+						j1 = j + ky + 1;
+
+			ok[(size_t) j * bx + i] = i0 >= 0 && j0 >= 0 && i1 <= bx && j1 <= by &&
+				ps[(size_t) j1 * (bx + 1) + i1] - ps[(size_t) j0 * (bx + 1) + i1] -
+				ps[(size_t) j1 * (bx + 1) + i0] + ps[(size_t) j0 * (bx + 1) + i0] ==
+				(uint32_t) ((i1 - i0) * (j1 - j0));
+		}
+	free(ps);
+	for (size_t p = 0; p < nin; p++)
+	{
+		const double *a = job->xy + 2 * p;
+		double		r = rho2 + 4 * EPS * (fabs(a[0]) + fabs(a[1])),
+					box[4] = {a[0] - r, a[1] - r, a[0] + r, a[1] + r};
+
+		if (IN_G(a) &&
+			ok[(size_t) block_of(a[1], lo[1], sy, by) * bx + block_of(a[0], lo[0], sx, bx)] &&
+			box[0] > cx->keff[0] && box[1] > cx->keff[1] &&
+			box[2] < cx->keff[2] && box[3] < cx->keff[3])
+			flag[p] |= SITE_DEEP;
+	}
+	free(ok);
+	return true;
+#undef IN_G
+}
+
 /*
  * The checks run on the job's thread count, each thread over a range of
  * half-edges, with its own copy of the context (its requests are merged
  * afterwards); on the way each keeps the triangles whose smallest vertex is
- * owned, handed over if the tile turns out final.  bad[] (1 for an owned
- * site) is only read.
+ * owned, handed over if the tile turns out final.  flag[] (SITE_OWN,
+ * SITE_DEEP per site) is only read.
  */
 typedef struct tile_work
 {
 	const tdc_job *job;
 	tile_ctx	cx;
-	const uint8_t *bad;
+	const uint8_t *flag;
 	size_t		lo,
 				hi;
 	size_t		unfinal;		/* failing triangles and hull edges at own sites */
+	size_t		deep;			/* triangles at own sites final by a deep vertex */
 	size_t		ntri,
 				cap;
 	size_t	   *tri;
@@ -589,14 +747,14 @@ typedef struct tile_work
 	void		(*fn) (struct tile_work *w);
 } tile_work;
 
-#define PF		16				/* prefetch distance in half-edges */
+#define PF		48				/* prefetch distance in half-edges */
 
 static void
 check_range(tile_work *w)
 {
 	const tdc_job *job = w->job;
 	const tdc_he *he = job->he;
-	const uint8_t *bad = w->bad;
+	const uint8_t *flag = w->flag;
 	const tdc_tile_spec *spec = w->cx.spec;
 #ifdef __GNUC__
 	const size_t nhe = w->job->nin * 6;
@@ -610,29 +768,23 @@ check_range(tile_work *w)
 					hh[3];
 		const double *p[3];
 		bool		glob[3];
+		uint8_t		fl;
 
 #ifdef __GNUC__
 
 		/*
-		 * The walk is bound by two dependent random loads per half-edge
-		 * (lnext's record, then the third corner's).  Fetch them ahead, the
-		 * first for h + 2 PF, the second for h + PF, whose first has arrived.
+		 * The walk is bound by one random load per half-edge: the record
+		 * of lnext's twin, which holds both the third corner and the next
+		 * link (lnext's own record is next to its twin's, and h's twin is
+		 * next to h).  Fetch it ahead.
 		 */
-		if (h + 2 * PF < w->hi)
+		if (h + PF < w->hi)
 		{
-			uint32_t	f1 = he[SYM(h + 2 * PF)].prev,
-						g1 = he[SYM(h + PF)].prev;
+			uint32_t	g1 = he[SYM(h + PF)].prev;
 
 			/* a free edge's links may be anything: stay in the array */
-			if (f1 < nhe)
-				__builtin_prefetch(&he[SYM(f1)]);
 			if (g1 < nhe)
-			{
-				uint32_t	g2 = he[SYM(g1)].prev;
-
-				if (g2 < nhe)
-					__builtin_prefetch(&he[g2]);
-			}
+				__builtin_prefetch(&he[SYM(g1)]);
 		}
 #endif
 		if (he[h].org == TDC_NIL)
@@ -644,24 +796,37 @@ check_range(tile_work *w)
 				continue;
 			b = he[h].org;
 			a = he[SYM(h)].org;
-			if ((bad[a] || bad[b]) &&
+			if (((flag[a] | flag[b]) & SITE_OWN) &&
 				!hull_edge_final(&w->cx, job->xy + 2 * (size_t) a, job->xy + 2 * (size_t) b))
 				w->unfinal++;
 			continue;
 		}
-		if (job->ntri == 0 || !tdc_tri_at(job, h, v))
+		if (job->ntri == 0)
 			continue;
-		if (!bad[v[0]] && !bad[v[1]] && !bad[v[2]])
+		/* the triangle on h's left, from its smallest half-edge (tdc_tri_at, one load less) */
+		hh[1] = he[SYM(h)].prev;
+		if (hh[1] < h)
+			continue;
+		hh[2] = he[SYM(hh[1])].prev;
+		if (hh[2] < h)
+			continue;
+		v[0] = he[h].org;
+		v[1] = he[hh[1]].org;
+		v[2] = he[SYM(hh[1])].org;	/* org of lnext(lnext(h)) = dest of lnext(h) */
+		fl = flag[v[0]] | flag[v[1]] | flag[v[2]];
+		if (!(fl & SITE_OWN))
 			continue;
 		/* keep it if its smallest vertex is ours: used when the tile is final */
 		if (w->unfinal == 0 && !w->failed)
 		{
 			int			lo = 0;
 
-			for (int k = 1; k < 3; k++)
-				if (tdc_key_less(job->xy + 2 * (size_t) v[k], job->xy + 2 * (size_t) v[lo], 0))
-					lo = k;
-			if (bad[v[lo]])
+			/* all three ours (most): no need to know which is smallest */
+			if (!(flag[v[0]] & flag[v[1]] & flag[v[2]] & SITE_OWN))
+				for (int k = 1; k < 3; k++)
+					if (tdc_key_less(job->xy + 2 * (size_t) v[k], job->xy + 2 * (size_t) v[lo], 0))
+						lo = k;
+			if (flag[v[lo]] & SITE_OWN)
 			{
 				if (w->ntri == w->cap)
 				{
@@ -687,9 +852,12 @@ check_range(tile_work *w)
 		}
 		if (w->cx.skip_checks)
 			continue;
+		if (fl & SITE_DEEP)
+		{
+			w->deep++;
+			continue;
+		}
 		hh[0] = (uint32_t) h;
-		hh[1] = he[SYM(hh[0])].prev;
-		hh[2] = he[SYM(hh[1])].prev;
 		for (int k = 0; k < 3; k++)
 		{
 			uint32_t	o = SYM(hh[k]);
@@ -721,7 +889,7 @@ work_main(void *arg)
 
 /* Run fn over the half-edges in nthreads ranges; threads that cannot start run inline. */
 static void
-run_parallel(const tdc_job *job, const tile_ctx *cx, const uint8_t *bad,
+run_parallel(const tdc_job *job, const tile_ctx *cx, const uint8_t *flag,
 			 void (*fn) (tile_work *w), tile_work *tw, int nthreads)
 {
 	size_t		nhe = job->nin * 6;
@@ -732,7 +900,7 @@ run_parallel(const tdc_job *job, const tile_ctx *cx, const uint8_t *bad,
 	{
 		tw[i].job = job;
 		tw[i].cx = *cx;
-		tw[i].bad = bad;
+		tw[i].flag = flag;
 		tw[i].lo = nhe / nthreads * i;
 		tw[i].hi = i == nthreads - 1 ? nhe : nhe / nthreads * (i + 1);
 		tw[i].fn = fn;
@@ -760,7 +928,7 @@ tdc_tile_finish(const tdc_job *job, const tdc_tile_spec *spec, tdc_tile_result *
 	size_t		nin = job->nin,
 				nhe = nin * 6;
 	int64_t    *lab = NULL;
-	uint8_t    *bad = NULL;		/* per site: 1 if owned */
+	uint8_t    *flag = NULL;		/* per site: SITE_OWN, SITE_DEEP */
 	const double **known_list = NULL;
 	tile_work  *tw = NULL;
 	int			nthreads;
@@ -771,7 +939,7 @@ tdc_tile_finish(const tdc_job *job, const tdc_tile_spec *spec, tdc_tile_result *
 	if (err && errlen)
 		err[0] = '\0';
 #define FAIL(code, ...) do { if (err && errlen) snprintf(err, errlen, __VA_ARGS__); \
-		free(lab); free(bad); free(known_list); free(tw); tdc_tile_result_free(res); return (code); } while (0)
+		free(lab); free(flag); free(known_list); free(tw); tdc_tile_result_free(res); return (code); } while (0)
 
 	if (job->opt.tolerance > 0)
 		FAIL(TDC_EINVAL, "a tiled triangulation cannot use a tolerance: which points it merges depends on all of them");
@@ -804,15 +972,29 @@ tdc_tile_finish(const tdc_job *job, const tdc_tile_spec *spec, tdc_tile_result *
 
 	/* ownership: the smallest label among a site's copies */
 	lab = malloc(sizeof(int64_t) * (nin + 1));
-	bad = calloc(nin + 1, 1);
-	if (lab == NULL || bad == NULL)
+	flag = calloc(nin + 1, 1);
+	if (lab == NULL || flag == NULL)
 		FAIL(TDC_ENOMEM, "out of memory");
 	for (size_t s = 0; s < nin; s++)
 		lab[s] = INT64_MAX;
-	for (size_t i = 0; i < job->n; i++)
+	/*
+	 * In position order: the coordinates, input index and site of a
+	 * position are read in sequence, only the label is a random read (a
+	 * loop over the input would look up the site of each point, and its
+	 * label slot, at random).  Without a tolerance every input point has a
+	 * position.
+	 */
+	for (size_t at = 0; at < nin; at++)
 	{
-		const double *p = job->input + 2 * i;
-		uint32_t	s;
+		const double *p = job->xy + 2 * at;
+		size_t		i = job->idx[at];
+		uint32_t	s = job->site_of[at];
+
+#ifdef __GNUC__
+		/* the label is the one random read: fetch it ahead */
+		if (at + 64 < nin)
+			__builtin_prefetch(&spec->tile[job->idx[at + 64]]);
+#endif
 
 		if (!(p[0] >= K[0] && p[0] <= K[2] && p[1] >= K[1] && p[1] <= K[3]))
 		{
@@ -830,16 +1012,13 @@ tdc_tile_finish(const tdc_job *job, const tdc_tile_spec *spec, tdc_tile_result *
 		}
 		if (!(p[0] >= cx.B[0] && p[0] <= cx.B[2] && p[1] >= cx.B[1] && p[1] <= cx.B[3]))
 			FAIL(TDC_EINVAL, "point %zu (%.17g %.17g) lies outside the extent polygon", i, p[0], p[1]);
-		s = tdc_input_site(job, i);
-		if (s == UINT32_MAX)
-			FAIL(TDC_ENOMEM, "out of memory");
 		if (cmp_i64(spec->tile[i], lab[s]) < 0)
 			lab[s] = spec->tile[i];
 	}
 	for (size_t s = 0; s < nin; s++)
 		if (lab[s] == spec->self)
 		{
-			bad[s] = 1;
+			flag[s] = SITE_OWN;
 			nsites_own++;
 		}
 	free(lab);
@@ -855,7 +1034,7 @@ tdc_tile_finish(const tdc_job *job, const tdc_tile_spec *spec, tdc_tile_result *
 
 	cx.skip_checks = covers;	/* Q = P: every star is final */
 	if (covers)
-		run_parallel(job, &cx, bad, check_range, tw, nthreads);
+		run_parallel(job, &cx, flag, check_range, tw, nthreads);
 	else if (job->nsites < 2)
 	{
 		/* a lone site is final only when it is alone in P */
@@ -866,11 +1045,16 @@ tdc_tile_finish(const tdc_job *job, const tdc_tile_spec *spec, tdc_tile_result *
 		}
 	}
 	else
-		run_parallel(job, &cx, bad, check_range, tw, nthreads);
+	{
+		if (!mark_deep(job, &cx, flag, spec->test_weaken == TDC_TILE_WEAKEN_BLOCKS))
+			FAIL(TDC_ENOMEM, "out of memory");
+		run_parallel(job, &cx, flag, check_range, tw, nthreads);
+	}
 
 	for (int w = 0; w < nthreads; w++)
 	{
 		res->unfinal += tw[w].unfinal;
+		res->deep += tw[w].deep;
 		box_union(cx.need, tw[w].cx.need);
 		cx.want_all |= tw[w].cx.want_all;
 	}
@@ -883,7 +1067,7 @@ tdc_tile_finish(const tdc_job *job, const tdc_tile_spec *spec, tdc_tile_result *
 		res->final = 0;
 		for (int w = 0; w < nthreads; w++)
 			free(tw[w].tri);
-		free(bad);
+		free(flag);
 		free(known_list);
 		free(tw);
 		return TDC_OK;
@@ -916,7 +1100,7 @@ tdc_tile_finish(const tdc_job *job, const tdc_tile_spec *spec, tdc_tile_result *
 		at += tw[w].ntri;
 		free(tw[w].tri);
 	}
-	free(bad);
+	free(flag);
 	free(known_list);
 	free(tw);
 	return TDC_OK;
