@@ -39,8 +39,8 @@ TEST_CFLAGS = -Itest -DTDC_SOURCE_DIR='"$(CURDIR)"'
 
 .PHONY: check-core check-core-asan check-core-tsan test demo bench
 
-tdc: src/cli/tdc.c $(CORE_SRCS) $(wildcard src/core/*.h)
-	$(CC_CORE) $(CORE_CFLAGS) -o $@ src/cli/tdc.c $(CORE_SRCS) -lm
+tdc: src/cli/tdc.c src/cli/tiled.c src/cli/cli.h $(CORE_SRCS) $(wildcard src/core/*.h)
+	$(CC_CORE) $(CORE_CFLAGS) -o $@ src/cli/tdc.c src/cli/tiled.c $(CORE_SRCS) -lm
 
 build/test_core: $(TEST_SRCS) $(wildcard test/*.h) $(CORE_SRCS) $(wildcard src/core/*.h)
 	@mkdir -p build
