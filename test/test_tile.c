@@ -458,9 +458,13 @@ gen_circles(size_t *n)
 	return xy;
 }
 
-/* The numbers of a JSON array of [x, y] pairs, in order. */
+/*
+ * The numbers of a file, in order, as x, y pairs: a JSON array of [x, y]
+ * pairs, or WKT lines of 2-D geometries (a word such as LINESTRING is no
+ * number: a token counts only when strtod reads it whole).
+ */
 static double *
-read_json_pairs(const char *path, size_t *n)
+read_number_pairs(const char *path, size_t *n)
 {
 	FILE	   *f = fopen(path, "r");
 	size_t		cap = 1024,
@@ -483,10 +487,17 @@ read_json_pairs(const char *path, size_t *n)
 		}
 		if (len)
 		{
+			char	   *end;
+			double		x;
+
 			buf[len] = '\0';
-			if (k == cap)
-				v = realloc(v, 8 * (cap *= 2));
-			v[k++] = strtod(buf, NULL);
+			x = strtod(buf, &end);
+			if (end == buf + len)
+			{
+				if (k == cap)
+					v = realloc(v, 8 * (cap *= 2));
+				v[k++] = x;
+			}
 			len = 0;
 		}
 		if (c == EOF)
@@ -607,12 +618,26 @@ test_distributions(void)
 
 			snprintf(path, sizeof(path), "%s/test/fixtures/delaunator/%s.json",
 					 TDC_SOURCE_DIR, files[f]);
-			xy = read_json_pairs(path, &n);
+			xy = read_number_pairs(path, &n);
 			CHECK(xy != NULL && n > 10, "cannot read %s", path);
 			if (xy)
 				retries += check_grids(files[f], xy, n, 0.05);
 			free(xy);
 		}
+	}
+	/*
+	 * The GSHHG shoreline of the Stockholm archipelago: real, clustered
+	 * coastline vertices, every ring's first vertex twice.
+	 */
+	{
+		char		path[512];
+
+		snprintf(path, sizeof(path), "%s/test/fixtures/gshhg-stockholm.wkt", TDC_SOURCE_DIR);
+		xy = read_number_pairs(path, &n);
+		CHECK(xy != NULL && n == 17548, "%s: %zu vertices, want 17548", path, n);
+		if (xy && n == 17548)
+			retries += check_grids("gshhg-stockholm", xy, n, 0.05);
+		free(xy);
 	}
 	/* at 5 % halo some tiles of these sets must have grown */
 	CHECK(retries > 0, "no tile ever retried over all distributions");
