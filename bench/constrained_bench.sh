@@ -100,91 +100,7 @@ fmt_ms() {
 }
 thousands() { awk -v x="$1" 'BEGIN { s = sprintf("%.0f", x); while (s ~ /[0-9][0-9][0-9][0-9]/) sub(/[0-9][0-9][0-9]($|,)/, ",&", s); print s }'; }
 
-sql <<EOF >/dev/null
-CREATE SCHEMA IF NOT EXISTS $S;
-
--- Applies the settings "name=value name=value ..." (value DEFAULT: the
--- server's, pg_settings.reset_val) for the session.
-CREATE OR REPLACE FUNCTION $S.apply(settings text) RETURNS void
-LANGUAGE plpgsql AS \$\$
-DECLARE
-	kv text;
-	n text;
-	v text;
-BEGIN
-	FOREACH kv IN ARRAY regexp_split_to_array(btrim(settings), '\s+') LOOP
-		CONTINUE WHEN kv = '';
-		n := split_part(kv, '=', 1);
-		v := substr(kv, length(n) + 2);
-		IF v = 'DEFAULT' THEN
-			SELECT reset_val INTO v FROM pg_settings WHERE name = n;
-		END IF;
-		PERFORM set_config(n, v, false);
-	END LOOP;
-END \$\$;
-
--- Runs q once under the settings and times its EXECUTE alone.  Never
--- raises: a failure becomes status/message, with the time until it happened,
--- and marks the statement as failed for the rest of the session, after which
--- every call for it returns 'skipped' at once.
-CREATE OR REPLACE FUNCTION $S.time_query(sys text, rep int, settings text, q text,
-	OUT o_sys text, OUT o_rep int, OUT ms float8, OUT result text, OUT status text, OUT message text)
-LANGUAGE plpgsql AS \$\$
-DECLARE
-	t0 timestamptz;
-BEGIN
-	o_sys := sys;
-	o_rep := rep;
-	status := 'ok';
-	message := '';
-	IF current_setting('$S.failed_' || sys, true) = '1' THEN
-		status := 'skipped';
-		message := 'not run: an earlier run of this statement failed';
-		RETURN;
-	END IF;
-	PERFORM $S.apply(settings);
-	BEGIN
-		t0 := clock_timestamp();
-		EXECUTE q INTO result;
-		ms := 1000 * extract(epoch FROM clock_timestamp() - t0);
-	EXCEPTION
-		WHEN query_canceled THEN
-			ms := 1000 * extract(epoch FROM clock_timestamp() - t0);
-			status := 'timeout';
-			message := SQLERRM;
-		WHEN OTHERS THEN
-			ms := 1000 * extract(epoch FROM clock_timestamp() - t0);
-			status := 'error';
-			message := SQLERRM;
-	END;
-	IF status <> 'ok' THEN
-		PERFORM set_config('$S.failed_' || sys, '1', false);
-	END IF;
-	message := regexp_replace(message, '[,|\t\r\n]+', ' ', 'g');
-	result := regexp_replace(result, '[,|\t\r\n]+', ' ', 'g');
-END \$\$;
-
--- The plan's shape under the settings: parallel workers, JIT.
-CREATE OR REPLACE FUNCTION $S.plan_of(settings text, q text) RETURNS text
-LANGUAGE plpgsql AS \$\$
-DECLARE
-	l text;
-	w text := '';
-	jit bool := false;
-BEGIN
-	PERFORM $S.apply(settings);
-	FOR l IN EXECUTE 'EXPLAIN ' || q LOOP
-		IF l ~ 'Workers Planned' THEN
-			w := substring(l FROM '[0-9]+');
-		END IF;
-		IF l ~ '^JIT:' THEN
-			jit := true;
-		END IF;
-	END LOOP;
-	RETURN CASE WHEN w = '' THEN 'serial' ELSE w || ' workers' END ||
-		CASE WHEN jit THEN ' jit' ELSE '' END;
-END \$\$;
-EOF
+bench_sql_helpers "$S" | sql >/dev/null
 
 # ---------------------------------------------------------------- data
 # is_current TABLE SPEC: the table exists and its comment is SPEC
@@ -320,14 +236,14 @@ run_dataset() {
 		for st in "${STMTS[@]}"; do
 			IFS='|' read -r name set expr <<< "$st"
 			q="SELECT $(form_sql pcs "$expr") FROM $S.$d"
-			echo "SELECT 'plan', '$name', $S.plan_of('$set', \$bq\$$q\$bq\$);"
+			echo "SELECT 'plan', '$name', $S.plan_of(\$bq\$$q\$bq\$, '$set');"
 		done
 		for rep in $(seq $((1 - WARM)) "$REPS"); do
 			for form in "${FORMS[@]}"; do
 				for st in "${STMTS[@]}"; do
 					IFS='|' read -r name set expr <<< "$st"
 					q="SELECT $(form_sql "$form" "$expr") FROM $S.$d"
-					echo "SELECT 'run', '$form', * FROM $S.time_query('${name}_$form', $rep, '$set', \$bq\$$q\$bq\$);"
+					echo "SELECT 'run', '$form', * FROM $S.time_query('${name}_$form', $rep, \$bq\$$q\$bq\$, '$set');"
 				done
 			done
 		done

@@ -106,6 +106,109 @@ first_touch_note() {
 		END { printf "fresh memory: 256 MB touched at %s GB/s the first time, %s GB/s right after (see bench/first_touch.c)\n", r[1], r[2] }'
 }
 
+# bench_sql_helpers SCHEMA: the SQL that creates the timing functions the SQL
+# benchmarks share, in SCHEMA (feed it to psql):
+#   pt(i)                 point i of one deterministic sequence, uniform in [0,1)^2
+#   apply(settings)       SET "name=value ..." for the session (value DEFAULT: the server's)
+#   time_query(sys, rep, q, settings)   runs q once under the settings and times
+#                         its EXECUTE alone, server side.  Never raises: a failure
+#                         (error or statement_timeout) becomes status/message, with
+#                         the time until it happened, and marks sys as failed for
+#                         the rest of the session, after which every call for it
+#                         returns 'skipped' at once.
+#   plan_of(q, settings)  the plan's shape as far as it matters here: parallel
+#                         workers, JIT
+bench_sql_helpers() {
+	local S=$1
+	cat <<EOF
+CREATE SCHEMA IF NOT EXISTS $S;
+-- earlier forms of these functions, in a schema kept between runs
+DROP FUNCTION IF EXISTS $S.time_query(text, int, text), $S.time_query(text, int, text, text),
+	$S.plan_of(text), $S.plan_of(text, text);
+
+CREATE OR REPLACE FUNCTION $S.pt(i bigint) RETURNS geometry
+LANGUAGE sql IMMUTABLE PARALLEL SAFE AS
+\$\$ SELECT ST_MakePoint((hashint8extended(i, 1) & 4503599627370495)::float8 / 4503599627370496.0,
+						(hashint8extended(i, 2) & 4503599627370495)::float8 / 4503599627370496.0) \$\$;
+
+CREATE OR REPLACE FUNCTION $S.apply(settings text) RETURNS void
+LANGUAGE plpgsql AS \$\$
+DECLARE
+	kv text;
+	n text;
+	v text;
+BEGIN
+	FOREACH kv IN ARRAY regexp_split_to_array(btrim(settings), '\s+') LOOP
+		CONTINUE WHEN kv = '';
+		n := split_part(kv, '=', 1);
+		v := substr(kv, length(n) + 2);
+		IF v = 'DEFAULT' THEN
+			SELECT reset_val INTO v FROM pg_settings WHERE name = n;
+		END IF;
+		PERFORM set_config(n, v, false);
+	END LOOP;
+END \$\$;
+
+CREATE OR REPLACE FUNCTION $S.time_query(sys text, rep int, q text, settings text DEFAULT '',
+	OUT o_sys text, OUT o_rep int, OUT ms float8, OUT result text, OUT status text, OUT message text)
+LANGUAGE plpgsql AS \$\$
+DECLARE
+	t0 timestamptz;
+BEGIN
+	o_sys := sys;
+	o_rep := rep;
+	status := 'ok';
+	message := '';
+	IF current_setting('$S.failed_' || sys, true) = '1' THEN
+		status := 'skipped';
+		message := 'not run: an earlier run of this statement failed';
+		RETURN;
+	END IF;
+	PERFORM $S.apply(settings);
+	BEGIN
+		t0 := clock_timestamp();
+		EXECUTE q INTO result;
+		ms := 1000 * extract(epoch FROM clock_timestamp() - t0);
+	EXCEPTION
+		WHEN query_canceled THEN
+			ms := 1000 * extract(epoch FROM clock_timestamp() - t0);
+			status := 'timeout';
+			message := SQLERRM;
+		WHEN OTHERS THEN
+			ms := 1000 * extract(epoch FROM clock_timestamp() - t0);
+			status := 'error';
+			message := SQLERRM;
+	END;
+	IF status <> 'ok' THEN
+		PERFORM set_config('$S.failed_' || sys, '1', false);
+	END IF;
+	-- one CSV field, one line
+	message := regexp_replace(message, '[,|\t\r\n]+', ' ', 'g');
+	result := regexp_replace(result, '[,|\t\r\n]+', ' ', 'g');
+END \$\$;
+
+CREATE OR REPLACE FUNCTION $S.plan_of(q text, settings text DEFAULT '') RETURNS text
+LANGUAGE plpgsql AS \$\$
+DECLARE
+	l text;
+	w text := '';
+	jit bool := false;
+BEGIN
+	PERFORM $S.apply(settings);
+	FOR l IN EXECUTE 'EXPLAIN ' || q LOOP
+		IF l ~ 'Workers Planned' THEN
+			w := substring(l FROM '[0-9]+');
+		END IF;
+		IF l ~ '^JIT:' THEN
+			jit := true;
+		END IF;
+	END LOOP;
+	RETURN CASE WHEN w = '' THEN 'serial' ELSE w || ' workers' END ||
+		CASE WHEN jit THEN ' jit' ELSE '' END;
+END \$\$;
+EOF
+}
+
 # kv FILE KEY: value of KEY=value on the last line of FILE containing "KEY="
 kv() {
 	awk -v k="$2" '{ for (i = 1; i <= NF; i++) { n = index($i, "="); if (n > 0 && substr($i, 1, n - 1) == k) v = substr($i, n + 1) } } END { print v }' "$1"

@@ -210,76 +210,7 @@ for kvp in $SETTINGS; do
 	SET_SQL+="SET ${kvp%%=*} = '${kvp#*=}';"$'\n'
 done
 
-sql <<EOF >/dev/null
-CREATE SCHEMA IF NOT EXISTS $S;
-
--- point i of the sweep's one deterministic sequence, uniform in [0,1)^2
-CREATE OR REPLACE FUNCTION $S.pt(i bigint) RETURNS geometry
-LANGUAGE sql IMMUTABLE PARALLEL SAFE AS
-\$\$ SELECT ST_MakePoint((hashint8extended(i, 1) & 4503599627370495)::float8 / 4503599627370496.0,
-						(hashint8extended(i, 2) & 4503599627370495)::float8 / 4503599627370496.0) \$\$;
-
--- Runs q once and times its EXECUTE alone.  Never raises: a failure (error or
--- statement_timeout) becomes status/message, with the time until it happened,
--- and marks the system as failed for the rest of the session, after which
--- every call for it returns 'skipped' at once (a cell is one session).
-CREATE OR REPLACE FUNCTION $S.time_query(sys text, rep int, q text,
-	OUT o_sys text, OUT o_rep int, OUT ms float8, OUT result text, OUT status text, OUT message text)
-LANGUAGE plpgsql AS \$\$
-DECLARE
-	t0 timestamptz;
-BEGIN
-	o_sys := sys;
-	o_rep := rep;
-	status := 'ok';
-	message := '';
-	IF current_setting('$S.failed_' || sys, true) = '1' THEN
-		status := 'skipped';
-		message := 'not run: an earlier run of this statement failed';
-		RETURN;
-	END IF;
-	BEGIN
-		t0 := clock_timestamp();
-		EXECUTE q INTO result;
-		ms := 1000 * extract(epoch FROM clock_timestamp() - t0);
-	EXCEPTION
-		WHEN query_canceled THEN
-			ms := 1000 * extract(epoch FROM clock_timestamp() - t0);
-			status := 'timeout';
-			message := SQLERRM;
-		WHEN OTHERS THEN
-			ms := 1000 * extract(epoch FROM clock_timestamp() - t0);
-			status := 'error';
-			message := SQLERRM;
-	END;
-	IF status <> 'ok' THEN
-		PERFORM set_config('$S.failed_' || sys, '1', false);
-	END IF;
-	-- one CSV field, one line
-	message := regexp_replace(message, '[,|\t\r\n]+', ' ', 'g');
-	result := regexp_replace(result, '[,|\t\r\n]+', ' ', 'g');
-END \$\$;
-
--- The plan's shape as far as it matters here: parallel workers, JIT.
-CREATE OR REPLACE FUNCTION $S.plan_of(q text) RETURNS text
-LANGUAGE plpgsql AS \$\$
-DECLARE
-	l text;
-	w text := '';
-	jit bool := false;
-BEGIN
-	FOR l IN EXECUTE 'EXPLAIN ' || q LOOP
-		IF l ~ 'Workers Planned' THEN
-			w := substring(l FROM '[0-9]+');
-		END IF;
-		IF l ~ '^JIT:' THEN
-			jit := true;
-		END IF;
-	END LOOP;
-	RETURN CASE WHEN w = '' THEN 'serial' ELSE w || ' workers' END ||
-		CASE WHEN jit THEN ' jit' ELSE '' END;
-END \$\$;
-EOF
+bench_sql_helpers "$S" | sql >/dev/null
 
 # ---------------------------------------------------------------- cells
 # CELLS: "workload k calls" in run order, k = points per call
