@@ -75,9 +75,6 @@ TXT=$BENCH_OUT/constrained.txt
 WORK=$(mktemp -d)
 trap 'rm -rf "$WORK"' EXIT
 
-PSQL=(psql -X -q -A -t -v ON_ERROR_STOP=1)
-export PGOPTIONS="${PGOPTIONS:-} -c client_min_messages=warning"
-sql() { "${PSQL[@]}" "$@"; }
 
 command -v psql >/dev/null || die "psql not found"
 sql -c 'SELECT 1' >/dev/null 2>&1 ||
@@ -92,13 +89,6 @@ else
 	log "postgis_sfcgal not available ($(head -1 "$WORK/err")): SFCGAL not run"
 fi
 
-# fmt_ms MS: 3 significant digits in ms or s ("-" when empty)
-fmt_ms() {
-	awk -v x="$1" 'function f(v, u) { return sprintf(v >= 100 ? "%.0f %s" : v >= 10 ? "%.1f %s" : "%.2f %s", v, u) }
-		BEGIN { if (x == "") { print "-"; exit }
-			x += 0; if (x >= 1000) print f(x / 1000, "s"); else print f(x, "ms") }'
-}
-thousands() { awk -v x="$1" 'BEGIN { s = sprintf("%.0f", x); while (s ~ /[0-9][0-9][0-9][0-9]/) sub(/[0-9][0-9][0-9]($|,)/, ",&", s); print s }'; }
 
 bench_sql_helpers "$S" | sql >/dev/null
 
@@ -211,13 +201,6 @@ unc_of() {
 
 # ---------------------------------------------------------------- timing
 SO=$(pg_config --pkglibdir 2>/dev/null)/tdc_delaunay.so
-so_id() {
-	if [ -r "$SO" ]; then
-		echo "md5 $(md5sum < "$SO" | cut -c1-12), installed $(date -u -r "$SO" '+%Y-%m-%d %H:%M:%S UTC')"
-	else
-		echo "?"
-	fi
-}
 SET_SQL=""
 for kvp in $SETTINGS; do
 	case $kvp in *=*) ;; *) die "BENCH_CDT_SETTINGS: '$kvp' is not name=value" ;; esac

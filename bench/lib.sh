@@ -209,6 +209,34 @@ END \$\$;
 EOF
 }
 
+# psql for the SQL benchmarks: unaligned, tuples only, stop on error, no notices
+PSQL=(psql -X -q -A -t -v ON_ERROR_STOP=1)
+case " ${PGOPTIONS:-} " in
+	*" -c client_min_messages=warning "*) ;;
+	*) export PGOPTIONS="${PGOPTIONS:-} -c client_min_messages=warning" ;;
+esac
+sql() { "${PSQL[@]}" "$@"; }
+
+# fmt_ms MS: 3 significant digits in s, ms or µs ("-" when empty)
+fmt_ms() {
+	awk -v x="$1" 'function f(v, u) { return sprintf(v >= 100 ? "%.0f %s" : v >= 10 ? "%.1f %s" : "%.2f %s", v, u) }
+		BEGIN { if (x == "") { print "-"; exit }
+			x += 0; if (x >= 1000) print f(x / 1000, "s"); else if (x >= 1) print f(x, "ms"); else print f(x * 1000, "µs") }'
+}
+
+# thousands N: 10000 -> 10,000
+thousands() { awk -v x="$1" 'BEGIN { s = sprintf("%.0f", x); while (s ~ /[0-9][0-9][0-9][0-9]/) sub(/[0-9][0-9][0-9]($|,)/, ",&", s); print s }'; }
+
+# so_id: md5 and mtime of the installed tdc_delaunay.so ($SO), so that a run
+# can tell whether the file was replaced while it ran
+so_id() {
+	if [ -r "$SO" ]; then
+		echo "md5 $(md5sum < "$SO" | cut -c1-12), installed $(date -u -r "$SO" '+%Y-%m-%d %H:%M:%S UTC')"
+	else
+		echo "?"
+	fi
+}
+
 # kv FILE KEY: value of KEY=value on the last line of FILE containing "KEY="
 kv() {
 	awk -v k="$2" '{ for (i = 1; i <= NF; i++) { n = index($i, "="); if (n > 0 && substr($i, 1, n - 1) == k) v = substr($i, n + 1) } } END { print v }' "$1"

@@ -57,8 +57,6 @@ TXT=$BENCH_OUT/sql.txt
 WORK=$(mktemp -d)
 trap 'rm -rf "$WORK"' EXIT
 
-PSQL=(psql -X -q -A -t -v ON_ERROR_STOP=1)
-export PGOPTIONS="${PGOPTIONS:-} -c client_min_messages=warning"
 
 command -v psql >/dev/null || die "psql not found"
 "${PSQL[@]}" -c 'SELECT 1' >/dev/null 2>&1 ||
@@ -67,7 +65,6 @@ command -v gnuplot >/dev/null || ensure_debs gnuplot-nox
 build_helpers
 build_cgal
 
-sql() { "${PSQL[@]}" "$@"; }
 
 sql -c "CREATE EXTENSION IF NOT EXISTS postgis" >/dev/null
 HAVE_TDC=1

@@ -97,22 +97,11 @@ TXT=$BENCH_OUT/sweep.txt
 WORK=$(mktemp -d)
 trap 'rm -rf "$WORK"' EXIT
 
-PSQL=(psql -X -q -A -t -v ON_ERROR_STOP=1)
-export PGOPTIONS="${PGOPTIONS:-} -c client_min_messages=warning"
-sql() { "${PSQL[@]}" "$@"; }
 
 command -v psql >/dev/null || die "psql not found"
 command -v gnuplot >/dev/null || ensure_debs gnuplot-nox
 
 # ---------------------------------------------------------------- formatting
-# fmt_ms MS: 3 significant digits in us, ms or s ("-" when empty)
-fmt_ms() {
-	awk -v x="$1" 'function f(v, u) { return sprintf(v >= 100 ? "%.0f %s" : v >= 10 ? "%.1f %s" : "%.2f %s", v, u) }
-		BEGIN { if (x == "") { print "-"; exit }
-			x += 0; if (x >= 1000) print f(x / 1000, "s"); else if (x >= 1) print f(x, "ms"); else print f(x * 1000, "µs") }'
-}
-# thousands N: 10000 -> 10,000
-thousands() { awk -v x="$1" 'BEGIN { s = sprintf("%.0f", x); while (s ~ /[0-9][0-9][0-9][0-9]/) sub(/[0-9][0-9][0-9]($|,)/, ",&", s); print s }'; }
 
 # ---------------------------------------------------------------- plot
 # make_plot: $PNG from sweep.csv (+ the failures in sweep_runs.csv)
@@ -312,13 +301,6 @@ done
 # pg_config's pkglibdir).  Every cell is a new session that loads the file
 # afresh, so a make install during the run would mix two builds in the table.
 SO=$(pg_config --pkglibdir 2>/dev/null)/tdc_delaunay.so
-so_id() {
-	if [ -r "$SO" ]; then
-		echo "md5 $(md5sum < "$SO" | cut -c1-12), installed $(date -u -r "$SO" '+%Y-%m-%d %H:%M:%S UTC')"
-	else
-		echo "?"
-	fi
-}
 SO_START=$(so_id)
 LOAD_START=$(cut -d' ' -f1-3 /proc/loadavg)
 echo "workload,k,calls,points,system,rep,ms,result,status,message,plan" > "$RUNS"
