@@ -98,12 +98,18 @@ ensure_gshhg() {
 }
 
 # first_touch_note: one line on what fresh memory costs on this machine
-# (bench/first_touch.c): 256 MB touched once, then again right away
+# (bench/first_touch.c): 256 MB in 4 kB pages touched once, then again right
+# away; then, after 5 s for the host to take back what was freed, 256 MB in
+# transparent huge pages touched once
 first_touch_note() {
+	local small huge
 	build_tool first_touch "$ROOT/bench/first_touch.c" cc -O2 -Wall
-	"$BENCH_BIN/first_touch" 256 2 | awk '
+	small=$("$BENCH_BIN/first_touch" 256 2 | awk '
 		{ r[NR] = $9; gsub(/[()]/, "", r[NR]) }
-		END { printf "fresh memory: 256 MB touched at %s GB/s the first time, %s GB/s right after (see bench/first_touch.c)\n", r[1], r[2] }'
+		END { printf "%s GB/s the first time, %s GB/s right after", r[1], r[2] }')
+	sleep 5
+	huge=$("$BENCH_BIN/first_touch" 256 1 huge | awk '{ r = $9; gsub(/[()]/, "", r); print r }')
+	printf 'fresh memory: 256 MB in 4 kB pages touched at %s; in huge pages, 5 s later, at %s GB/s (see bench/first_touch.c)\n' "$small" "$huge"
 }
 
 # bench_sql_helpers SCHEMA: the SQL that creates the timing functions the SQL

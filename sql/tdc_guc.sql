@@ -58,6 +58,30 @@ SELECT tdc_norm(ST_TDCDelaunay(geom)) = (SELECT t FROM tdc_guc_ref) AS max_threa
 RESET tdc_delaunay.max_threads;
 RESET tdc_delaunay.threads;
 
+-- keep_memory: a session keeps the engine's freed arrays for its next run
+-- (the stats DETAIL of a value ends with "kept N kB": what is kept after
+-- the run), up to tdc_delaunay.keep_memory, and gives them back
+-- keep_memory_time after its last run, when a transaction aborts, and when
+-- a run's max_memory needs the room.  Each line is one session (one -c per
+-- transaction); the figure depends on the thread count, so only its size
+-- class is printed.
+\! psql -X -q -c "SET tdc_delaunay.stats = on" -c "SELECT ST_TDCDelaunay(geom) IS NOT NULL FROM tdc_random_points(30000, 3)" 2>&1 | sed -n 's/^DETAIL: .* kept \([0-9]*\) kB$/\1/p' | tail -1 | awk '{ print "after a run:", ($1 > 1024 ? "more than 1 MB kept" : $1 " kB kept") }'
+\! psql -X -q -c "SET tdc_delaunay.stats = on" -c "SET tdc_delaunay.keep_memory = 0" -c "SELECT ST_TDCDelaunay(geom) IS NOT NULL FROM tdc_random_points(30000, 3)" 2>&1 | sed -n 's/^DETAIL: .* kept \([0-9]*\) kB$/\1/p' | tail -1 | awk '{ print "keep_memory 0:", ($1 > 1024 ? "more than 1 MB kept" : $1 " kB kept") }'
+\! psql -X -q -c "SET tdc_delaunay.stats = on" -c "SELECT ST_TDCDelaunay(geom) IS NOT NULL FROM tdc_random_points(30000, 3)" -c "SELECT pg_sleep(0.3)" -c "SELECT ST_TDCDelaunayTriangles('MULTIPOINT(0 0, 1 0, 0 1)') IS NOT NULL" 2>&1 | sed -n 's/^DETAIL: .* kept \([0-9]*\) kB$/\1/p' | tail -1 | awk '{ print "0.3 s later, default keep_memory_time:", ($1 > 1024 ? "more than 1 MB kept" : $1 " kB kept") }'
+\! psql -X -q -c "SET tdc_delaunay.stats = on" -c "SET tdc_delaunay.keep_memory_time = '20ms'" -c "SELECT ST_TDCDelaunay(geom) IS NOT NULL FROM tdc_random_points(30000, 3)" -c "SELECT pg_sleep(0.3)" -c "SELECT ST_TDCDelaunayTriangles('MULTIPOINT(0 0, 1 0, 0 1)') IS NOT NULL" 2>&1 | sed -n 's/^DETAIL: .* kept \([0-9]*\) kB$/\1/p' | tail -1 | awk '{ print "0.3 s later, keep_memory_time 20ms:", ($1 > 1024 ? "more than 1 MB kept" : $1 " kB kept") }'
+\! psql -X -q -c "SET tdc_delaunay.stats = on" -c "SELECT ST_TDCDelaunay(geom) IS NOT NULL FROM tdc_random_points(30000, 3)" -c "SELECT 1 / 0" -c "SELECT ST_TDCDelaunayTriangles('MULTIPOINT(0 0, 1 0, 0 1)') IS NOT NULL" 2>&1 | sed -n 's/^DETAIL: .* kept \([0-9]*\) kB$/\1/p' | tail -1 | awk '{ print "after an aborted transaction:", ($1 > 1024 ? "more than 1 MB kept" : $1 " kB kept") }'
+\! psql -X -q -c "SET tdc_delaunay.stats = on" -c "SELECT ST_TDCDelaunay(geom) IS NOT NULL FROM tdc_random_points(100000, 3)" -c "SELECT ST_TDCDelaunayTriangles('MULTIPOINT(0 0, 1 0, 0 1)') IS NOT NULL" 2>&1 | sed -n 's/^DETAIL: .* kept \([0-9]*\) kB$/\1/p' | tail -1 | awk '{ print "100000 points, then a run without a limit:", ($1 >= 6144 ? "6 MB or more kept" : "less than 6 MB kept") }'
+\! psql -X -q -c "SET tdc_delaunay.stats = on" -c "SELECT ST_TDCDelaunay(geom) IS NOT NULL FROM tdc_random_points(100000, 3)" -c "SET tdc_delaunay.max_memory = '6MB'" -c "SELECT ST_TDCDelaunayTriangles('MULTIPOINT(0 0, 1 0, 0 1)') IS NOT NULL" 2>&1 | sed -n 's/^DETAIL: .* kept \([0-9]*\) kB$/\1/p' | tail -1 | awk '{ print "100000 points, then a run under max_memory 6MB:", ($1 >= 6144 ? "6 MB or more kept" : "less than 6 MB kept") }'
+-- and the triangles do not depend on what was kept
+SET tdc_delaunay.keep_memory = 0;
+CREATE TEMP TABLE tdc_keep_ref AS SELECT tdc_norm(ST_TDCDelaunay(geom)) AS t FROM tdc_random_points(30000, 5);
+RESET tdc_delaunay.keep_memory;
+SELECT ST_TDCDelaunay(geom) IS NOT NULL AS filled FROM tdc_random_points(30000, 6);
+SELECT tdc_norm(ST_TDCDelaunay(geom)) = (SELECT t FROM tdc_keep_ref) AS same_from_kept_arrays FROM tdc_random_points(30000, 5);
+SELECT tdc_norm(ST_TDCDelaunay(geom)) = (SELECT t FROM tdc_keep_ref) AS same_again FROM tdc_random_points(30000, 5);
+DROP TABLE tdc_keep_ref;
+SET tdc_delaunay.keep_memory = -1;
+
 -- stats: a NOTICE with the counts (timings and threads go to the DETAIL).
 \set VERBOSITY terse
 SET tdc_delaunay.stats = on;

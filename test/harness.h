@@ -40,6 +40,7 @@ extern void test_predicates(void);
 extern void test_engine(void);
 extern void test_conformance(void);
 extern void test_memory(void);
+extern void test_cache(void);
 extern void test_concurrency(void);
 extern void test_tolerance(void);
 extern void test_voronoi(void);

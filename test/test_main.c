@@ -28,6 +28,8 @@ main(int argc, char **argv)
 	printf("engine: %ld passed, %ld failed so far\n", tdc_test_passed, tdc_test_failed);
 	test_memory();
 	printf("memory: %ld passed, %ld failed so far\n", tdc_test_passed, tdc_test_failed);
+	test_cache();
+	printf("cache: %ld passed, %ld failed so far\n", tdc_test_passed, tdc_test_failed);
 	test_conformance();
 	printf("conformance: %ld passed, %ld failed so far\n", tdc_test_passed, tdc_test_failed);
 	test_concurrency();

@@ -149,6 +149,7 @@ typedef struct cdt_ctx
 struct tdc_cdt
 {
 	tdc_job    *job;
+	tdc_cache  *cache;			/* the job's, kept: the job may be freed first */
 	const uint32_t *seg;		/* caller's pairs of input indices */
 	size_t		nseg;
 	tdc_mesh	m;
@@ -1032,15 +1033,15 @@ cdt_run(tdc_cdt *c)
 	ser->c = c;
 	ser->part = -1;
 	ser->cross[0] = ser->cross[1] = SIZE_MAX;
-	c->cons = tdc_big_alloc(nslots * sizeof(uint32_t) + 4);
-	c->vedge = tdc_big_alloc(job->nin * sizeof(uint32_t) + 4);
+	c->cons = tdc_big_alloc(c->cache, nslots * sizeof(uint32_t) + 4);
+	c->vedge = tdc_big_alloc(c->cache, job->nin * sizeof(uint32_t) + 4);
 	ser->cap = nslots < LIST_MIN ? nslots : LIST_MIN;
 	c->list = malloc(ser->cap * sizeof(uint32_t) + 4);
 	c->fresh = malloc(ser->cap * sizeof(uint32_t) + 4);
 	if (c->nseg >= PART_MIN_SEG)
 	{
-		c->seg_part = tdc_big_alloc(2 * c->nseg + job->nin);
-		c->order = tdc_big_alloc(c->nseg * sizeof(uint32_t));
+		c->seg_part = tdc_big_alloc(c->cache, 2 * c->nseg + job->nin);
+		c->order = tdc_big_alloc(c->cache, c->nseg * sizeof(uint32_t));
 		c->parts = calloc(NPART, sizeof(cdt_ctx));
 		c->part_lists = malloc((size_t) 2 * NPART * PART_CAP * sizeof(uint32_t));
 	}
@@ -1111,9 +1112,9 @@ cdt_work(void *arg)
 	/* the lists are only needed while inserting */
 	free(c->list);
 	free(c->fresh);
-	tdc_big_free(c->vedge);
-	tdc_big_free(c->seg_part);
-	tdc_big_free(c->order);
+	tdc_big_free(c->cache, c->vedge);
+	tdc_big_free(c->cache, c->seg_part);
+	tdc_big_free(c->cache, c->order);
 	free(c->parts);
 	free(c->part_lists);
 	c->list = c->fresh = c->vedge = c->part_lists = c->order = NULL;
@@ -1170,6 +1171,7 @@ tdc_cdt_start(tdc_job *job, const uint32_t *seg, size_t nseg, tdc_cdt **out,
 	if (c == NULL)
 		FAIL(TDC_ENOMEM, "out of memory");
 	c->job = job;
+	c->cache = job->opt.cache;
 	c->seg = seg;
 	c->nseg = nseg;
 	c->cross[0] = c->cross[1] = SIZE_MAX;
@@ -1238,12 +1240,12 @@ tdc_cdt_free(tdc_cdt *c)
 	if (c == NULL)
 		return;
 	tdc_runner_destroy(&c->run);
-	tdc_big_free(c->cons);
+	tdc_big_free(c->cache, c->cons);
 	free(c->list);
 	free(c->fresh);
-	tdc_big_free(c->vedge);
-	tdc_big_free(c->seg_part);
-	tdc_big_free(c->order);
+	tdc_big_free(c->cache, c->vedge);
+	tdc_big_free(c->cache, c->seg_part);
+	tdc_big_free(c->cache, c->order);
 	free(c->parts);
 	free(c->part_lists);
 	free(c);

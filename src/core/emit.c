@@ -160,7 +160,7 @@ plan_free(emit_plan *p)
 	free(p->first);
 	free(p->head);
 	free(p->link);
-	tdc_big_free(p->tri);
+	tdc_big_free(p->job->opt.cache, p->tri);
 }
 
 /* Ranges of half-edges to collect from: several per thread, none tiny. */
@@ -214,7 +214,7 @@ tdc_emit_phase(tdc_job *job)
 	p.first = calloc(p.nranges + 1, sizeof(size_t));
 	p.head = malloc(p.nranges * sizeof(uint32_t));
 	p.link = malloc(p.nchunks * sizeof(uint32_t));
-	p.tri = tdc_big_alloc(p.nchunks * (3 * CHUNK) * sizeof(uint32_t));
+	p.tri = tdc_big_alloc(job->opt.cache, p.nchunks * (3 * CHUNK) * sizeof(uint32_t));
 	if (p.first == NULL || p.head == NULL || p.link == NULL || p.tri == NULL)
 	{
 		plan_free(&p);

@@ -71,15 +71,14 @@ typedef struct tdc_mesh
 } tdc_mesh;
 
 /*
- * Arrays that grow with the input (pool.c): big ones are mapped and unmapped
- * directly, so their memory goes back to the system as soon as a job is
- * freed, whatever malloc's thresholds have drifted to in a long-lived host
- * process (a PostgreSQL backend); small ones come from malloc.  The memory
- * comes zeroed and 64-aligned.  NULL on failure; tdc_big_free(NULL) does
- * nothing.
+ * Arrays that grow with the input (mem.c): big ones are mapped (or taken
+ * from the host's cache, which may be NULL) and unmapped (or kept in it),
+ * small ones come from malloc.  The memory comes zeroed and 64-aligned.
+ * NULL on failure; tdc_big_free(cache, NULL) does nothing.  An array must be
+ * freed with the cache it was allocated with, or NULL.
  */
-extern void *tdc_big_alloc(size_t size);
-extern void tdc_big_free(void *p);
+extern void *tdc_big_alloc(tdc_cache *cache, size_t size);
+extern void tdc_big_free(tdc_cache *cache, void *p);
 
 /* Thread pool (pool.c): a parallel-for on which the calling thread helps. */
 typedef struct tdc_pool tdc_pool;

@@ -105,7 +105,7 @@ tdc_job_alloc(tdc_job *job, size_t size)
 		return memset(p, 0, size);
 	}
 	job->off_arena = true;
-	return tdc_big_alloc(size);
+	return tdc_big_alloc(job->opt.cache, size);
 }
 
 void
@@ -115,7 +115,7 @@ tdc_job_release(tdc_job *job, void *ptr)
 
 	if (p != NULL && job->arena != NULL && p >= job->arena && p < job->arena + job->arena_size)
 		return;
-	tdc_big_free(ptr);
+	tdc_big_free(job->opt.cache, ptr);
 }
 
 static void
@@ -124,7 +124,7 @@ free_arrays(tdc_job *job)
 	/* the input map never comes from the arena (see above) */
 	if (job->arena != NULL && !job->off_arena)
 	{
-		tdc_big_free(job->map);
+		tdc_big_free(job->opt.cache, job->map);
 		return;
 	}
 	tdc_job_release(job, job->xy);
@@ -322,6 +322,8 @@ tdc_job_free_background(tdc_job *job)
 	if (job == NULL)
 		return;
 	tdc_runner_destroy(&job->run);
+	/* the host's cache is not ours to touch from another thread */
+	job->opt.cache = NULL;
 
 	if (pthread_attr_init(&attr) != 0)
 		rc = -1;

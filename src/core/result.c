@@ -37,7 +37,7 @@ build_input_map(tdc_job *job)
 	map = atomic_load_explicit(&job->map, memory_order_relaxed);
 	if (map == NULL)
 	{
-		map = tdc_big_alloc(job->n * sizeof(uint32_t) + 4);
+		map = tdc_big_alloc(job->opt.cache, job->n * sizeof(uint32_t) + 4);
 		if (map != NULL)
 		{
 			for (size_t p = 0; p < job->nin; p++)

@@ -239,7 +239,7 @@ typedef struct rankset
 } rankset;
 
 static bool
-rankset_init(rankset *s, size_t n)
+rankset_init(rankset *s, size_t n, tdc_cache *cache)
 {
 	size_t		m = n,
 				total = 0;
@@ -253,7 +253,7 @@ rankset_init(rankset *s, size_t n)
 		l++;
 	} while (m > 1 && l < RS_LEVELS);
 	s->top = l - 1;
-	s->mem = tdc_big_alloc(total * sizeof(uint64_t));	/* zeroed */
+	s->mem = tdc_big_alloc(cache, total * sizeof(uint64_t));	/* zeroed */
 	if (s->mem == NULL)
 		return false;
 	total = 0;
@@ -423,8 +423,8 @@ tdc_tolerance_filter(tdc_job *job)
 
 	if (n == 0)
 		return 0;
-	r = tdc_big_alloc(n * sizeof(rec));
-	tmp = tdc_big_alloc(n * sizeof(rec));
+	r = tdc_big_alloc(job->opt.cache, n * sizeof(rec));
+	tmp = tdc_big_alloc(job->opt.cache, n * sizeof(rec));
 	if (r == NULL || tmp == NULL)
 		goto nomem;
 	if (atomic_load_explicit(&job->cancel, memory_order_relaxed))
@@ -448,14 +448,14 @@ tdc_tolerance_filter(tdc_job *job)
 	if (!sort_recs(r, tmp, n, &sorted, &pl, &oom))
 		goto stop;
 	if (sorted == r)
-		tdc_big_free(tmp);
+		tdc_big_free(job->opt.cache, tmp);
 	else
-		tdc_big_free(r), r = tmp;
+		tdc_big_free(job->opt.cache, r), r = tmp;
 	tmp = NULL;
 
-	krank = tdc_big_alloc(n * sizeof(uint32_t));
-	site_at = tdc_big_alloc(n * sizeof(uint32_t));
-	if (krank == NULL || site_at == NULL || !rankset_init(&rs, n))
+	krank = tdc_big_alloc(job->opt.cache, n * sizeof(uint32_t));
+	site_at = tdc_big_alloc(job->opt.cache, n * sizeof(uint32_t));
+	if (krank == NULL || site_at == NULL || !rankset_init(&rs, n, job->opt.cache))
 		goto nomem;
 
 	c.t = job->opt.tolerance;
@@ -530,8 +530,9 @@ tdc_tolerance_filter(tdc_job *job)
 	job->nin = kept;
 
 stop:
-	tdc_big_free(r), tdc_big_free(tmp), tdc_big_free(krank), tdc_big_free(site_at);
-	tdc_big_free(rs.mem);
+	tdc_big_free(job->opt.cache, r), tdc_big_free(job->opt.cache, tmp);
+	tdc_big_free(job->opt.cache, krank), tdc_big_free(job->opt.cache, site_at);
+	tdc_big_free(job->opt.cache, rs.mem);
 	return oom ? TDC_ENOMEM : 0;
 
 nomem:

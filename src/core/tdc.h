@@ -19,6 +19,7 @@
 #ifndef TDC_H
 #define TDC_H
 
+#include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
 
@@ -58,6 +59,22 @@
 #define TDC_COORD_MIN		1e-60
 #define TDC_COORD_MAX		1e60
 
+/*
+ * Freed big arrays a host keeps for its next jobs (mem.c).  The host creates
+ * one, passes it in options.cache to the jobs it runs one after another, and
+ * decides when to give the memory back; the jobs of one cache must not run
+ * at the same time as tdc_cache_trim.  The cache never holds more than its
+ * limit, and an array it has no room for is unmapped as without it.
+ */
+typedef struct tdc_cache tdc_cache;
+
+extern tdc_cache *tdc_cache_create(size_t limit);	/* NULL: out of memory */
+extern void tdc_cache_set_limit(tdc_cache *c, size_t limit);	/* trims to it */
+/* Unmap until at most keep bytes are kept; false (nothing done) if the cache is in use. */
+extern bool tdc_cache_trim(tdc_cache *c, size_t keep);
+extern size_t tdc_cache_kept(tdc_cache *c);
+extern void tdc_cache_destroy(tdc_cache *c);
+
 typedef struct tdc_options
 {
 	int			threads;		/* worker threads; 0 = all online CPUs */
@@ -66,6 +83,7 @@ typedef struct tdc_options
 	double		tolerance;		/* > 0: drop a site closer than this to a kept one */
 	size_t		max_memory;		/* bytes the engine may allocate; 0 = no limit */
 	int			times;			/* measure phase times for tdc_job_times; 0 = zeros */
+	tdc_cache  *cache;			/* where big arrays come from and go; NULL = none */
 } tdc_options;
 
 /* Phase timings in seconds, as in Table 1 of the paper. */
@@ -155,9 +173,6 @@ extern int	tdc_job_emit_start(tdc_job *job, tdc_emit_fn emit, void *arg,
  * kernel's support the writes fault the pages in as usual.
  */
 extern void tdc_prefault(void *p, size_t len);
-
-/* Ask for transparent huge pages over the 2 MB pages inside [p, p + len). */
-extern void tdc_advise_huge(void *p, size_t len);
 
 /* Convenience: start + wait forever. */
 extern int	tdc_triangulate(const double *xy, size_t n, const tdc_options *opt,

@@ -161,6 +161,7 @@
 struct tdc_voronoi
 {
 	const tdc_job *job;
+	tdc_cache  *cache;			/* the job's, kept: the job may be freed first */
 	double		env[4];			/* E: xmin, ymin, xmax, ymax */
 	double		box[4];			/* B, strictly around E, sites and vertices */
 	int			threads;
@@ -932,6 +933,7 @@ typedef struct ring
 	size_t		n;
 	size_t		cap;
 	bool		tagged;
+	tdc_cache  *cache;			/* untagged: where p comes from (tdc_big_alloc) */
 } ring;
 
 static bool
@@ -1498,9 +1500,9 @@ done:
 
 /*
  * Room for extra more vertices in a range's untagged buffer, which comes
- * from tdc_big_alloc (mapped, on huge pages where the kernel gives them: a
- * million points' cells are some 100 MB written once, and a 4 kB page
- * fault costs microseconds on a virtual machine).  Grows by half, copying;
+ * from tdc_big_alloc (mapped, or kept from an earlier run: a million
+ * points' cells are some 100 MB written once, and a 4 kB page fault costs
+ * microseconds on a virtual machine).  Grows by half, copying;
  * the first size is meant to make that rare.
  */
 static bool
@@ -1509,13 +1511,13 @@ out_reserve(ring *r, size_t extra)
 	if (r->n + extra > r->cap)
 	{
 		size_t		cap = (r->n + extra) + (r->n + extra) / 2 + 16;
-		double	   *p = tdc_big_alloc(cap * 2 * sizeof(double));
+		double	   *p = tdc_big_alloc(r->cache, cap * 2 * sizeof(double));
 
 		if (p == NULL)
 			return false;
 		if (r->n > 0)
 			memcpy(p, r->p, r->n * 2 * sizeof(double));
-		tdc_big_free(r->p);
+		tdc_big_free(r->cache, r->p);
 		r->p = p;
 		r->cap = cap;
 	}
@@ -1541,7 +1543,7 @@ mesh_cell_task(void *arg, size_t rg, int worker)
 				hi = lo + v->cell_range < v->nhe ? lo + v->cell_range : v->nhe;
 	ring		a = {.tagged = true},
 				b = {.tagged = true},
-				out = {0};
+				out = {.cache = v->cache};
 	uint32_t   *sites = NULL;
 	size_t		nsites = 0;
 
@@ -1618,7 +1620,7 @@ done:
 	free(a.tag);
 	free(b.p);
 	free(b.tag);
-	tdc_big_free(out.p);
+	tdc_big_free(out.cache, out.p);
 	free(sites);
 }
 
@@ -2083,8 +2085,8 @@ vor_emit_run(tdc_voronoi *v)
 	}
 	else
 	{
-		v->inpos = tdc_big_alloc(v->ninput * sizeof(uint64_t) + 1);
-		v->site_off = tdc_big_alloc(v->nsites * sizeof(uint64_t) + 1);
+		v->inpos = tdc_big_alloc(v->cache, v->ninput * sizeof(uint64_t) + 1);
+		v->site_off = tdc_big_alloc(v->cache, v->nsites * sizeof(uint64_t) + 1);
 		if (v->inpos == NULL || v->site_off == NULL)
 			FAIL_OOM("out of memory ordering the Voronoi cells");
 	}
@@ -2105,7 +2107,7 @@ vor_emit_run(tdc_voronoi *v)
 	/* by site now; the input's offsets are no longer needed */
 	tdc_pool_for(v->pool, nranges_for(v->nsites, ITEMS_PER_TASK), gather_task, v);
 	if (!v->offsets_in_tri_id)
-		tdc_big_free(v->inpos);
+		tdc_big_free(v->cache, v->inpos);
 	v->inpos = NULL;
 	if (vor_cancelled(v))
 		return TDC_ECANCELED;
@@ -2186,7 +2188,7 @@ build_cells(tdc_voronoi *v)
 	for (size_t r = 0; r < nr; r++)
 	{
 		if (v->big_bufs)
-			tdc_big_free(v->range_buf[r]);
+			tdc_big_free(v->cache, v->range_buf[r]);
 		else
 			free(v->range_buf[r]);
 		v->range_buf[r] = NULL;
@@ -2217,8 +2219,8 @@ join_cocircular(tdc_voronoi *v, const double base[4])
 				ntr = nranges_for(v->ntri_cap, ITEMS_PER_TASK),
 				nfr = nranges_for(v->nchunks, FLATTEN_CHUNKS);
 
-	v->parent = tdc_big_alloc(v->ntri_cap * sizeof(uint32_t));
-	v->tri_he = tdc_big_alloc(v->ntri_cap * sizeof(uint32_t));
+	v->parent = tdc_big_alloc(v->cache, v->ntri_cap * sizeof(uint32_t));
+	v->tri_he = tdc_big_alloc(v->cache, v->ntri_cap * sizeof(uint32_t));
 	if (v->parent == NULL || v->tri_he == NULL)
 		FAIL_OOM("out of memory joining cocircular triangles");
 	tdc_pool_for(v->pool, ntr, parent_task, v);
@@ -2271,12 +2273,12 @@ vor_run(tdc_voronoi *v)
 		/* every range but one chunk per range fills its chunks */
 		v->nchunks = v->ntri / TRI_CHUNK + nr;
 		v->ntri_cap = v->nchunks * TRI_CHUNK;
-		v->site_he = tdc_big_alloc(job->nin * sizeof(uint32_t));
+		v->site_he = tdc_big_alloc(v->cache, job->nin * sizeof(uint32_t));
 		v->range_ntri = calloc(nr + 1, sizeof(size_t));
 		v->chunk_fill = calloc(v->nchunks + 1, sizeof(uint32_t));
 		/* a half-edge outside every triangle keeps a number never read */
-		v->tri_id = tdc_big_alloc(v->nhe * sizeof(uint32_t));
-		v->cc = tdc_big_alloc(v->ntri_cap * 2 * sizeof(double));
+		v->tri_id = tdc_big_alloc(v->cache, v->nhe * sizeof(uint32_t));
+		v->cc = tdc_big_alloc(v->cache, v->ntri_cap * 2 * sizeof(double));
 		v->range_box = malloc((nr > v->nchunks ? nr : v->nchunks) * 4 * sizeof(double) + 1);
 		if (!v->site_he || !v->range_ntri || !v->chunk_fill || !v->tri_id || !v->cc ||
 			!v->range_box)
@@ -2316,7 +2318,7 @@ vor_run(tdc_voronoi *v)
 
 	/*
 	 * Cells of a mesh by half-edge ranges of at least 2^18 (a few MB of
-	 * cells each, so their buffers get huge pages), yet eight ranges per
+	 * cells each: few buffers to map and grow), yet eight ranges per
 	 * thread where there is enough, for balance.
 	 */
 	v->cell_range = v->nhe / ((size_t) v->threads * 8) + 1;
@@ -2326,7 +2328,7 @@ vor_run(tdc_voronoi *v)
 	nr = v->ntri > 0 ? nranges_for(v->nhe, v->cell_range) : nranges_for(v->nsites, SITES_PER_TASK);
 	v->nranges = nr;
 	/* zeroed: a site without a cell (a duplicate) keeps 0 */
-	v->cell_n = tdc_big_alloc(v->nsites * sizeof(uint32_t) + 1);
+	v->cell_n = tdc_big_alloc(v->cache, v->nsites * sizeof(uint32_t) + 1);
 	if (v->cell_n == NULL)
 		FAIL_OOM("out of memory for the Voronoi cells");
 	if (v->emit && v->ntri > 0)
@@ -2341,7 +2343,7 @@ vor_run(tdc_voronoi *v)
 	}
 	else
 	{
-		v->cell_xy = tdc_big_alloc(v->nsites * sizeof(double *) + 1);
+		v->cell_xy = tdc_big_alloc(v->cache, v->nsites * sizeof(double *) + 1);
 		v->range_buf = calloc(nr + 1, sizeof(double *));
 		if (v->cell_xy == NULL || v->range_buf == NULL)
 			FAIL_OOM("out of memory for the Voronoi cells");
@@ -2366,7 +2368,7 @@ vor_run(tdc_voronoi *v)
 	/* what only the build needed (emit: writing builds some cells again) */
 	if (!(v->emit && v->ntri > 0))
 	{
-		tdc_big_free(v->tri_id);
+		tdc_big_free(v->cache, v->tri_id);
 		v->tri_id = NULL;
 	}
 	return TDC_OK;
@@ -2458,6 +2460,7 @@ voronoi_start(const tdc_job *job, const double env[4], int threads,
 	if (v == NULL)
 		FAIL(TDC_ENOMEM, "out of memory");
 	v->job = job;
+	v->cache = job->opt.cache;
 	if (writer)
 	{
 		v->emit = true;
@@ -2563,13 +2566,13 @@ tdc_voronoi_free(tdc_voronoi *v)
 	if (v == NULL)
 		return;
 	tdc_runner_destroy(&v->run);
-	tdc_big_free(v->tri_id);
-	tdc_big_free(v->parent);
-	tdc_big_free(v->cc);
-	tdc_big_free(v->site_he);
+	tdc_big_free(v->cache, v->tri_id);
+	tdc_big_free(v->cache, v->parent);
+	tdc_big_free(v->cache, v->cc);
+	tdc_big_free(v->cache, v->site_he);
 	free(v->range_ntri);
 	free(v->chunk_fill);
-	tdc_big_free(v->tri_he);
+	tdc_big_free(v->cache, v->tri_he);
 	free(v->range_box);
 	free(v->line);
 	free(v->line_pos);
@@ -2577,20 +2580,20 @@ tdc_voronoi_free(tdc_voronoi *v)
 		for (size_t r = 0; r < v->nranges; r++)
 		{
 			if (v->big_bufs)
-				tdc_big_free(v->range_buf[r]);
+				tdc_big_free(v->cache, v->range_buf[r]);
 			else
 				free(v->range_buf[r]);
 		}
 	free(v->range_buf);
-	tdc_big_free(v->cell_xy);
-	tdc_big_free(v->cell_n);
+	tdc_big_free(v->cache, v->cell_xy);
+	tdc_big_free(v->cache, v->cell_n);
 	free(v->range_bytes);
 	free(v->range_cells);
 	free(v->first_in);
 	if (!v->offsets_in_tri_id)
 	{
-		tdc_big_free(v->inpos);
-		tdc_big_free(v->site_off);
+		tdc_big_free(v->cache, v->inpos);
+		tdc_big_free(v->cache, v->site_off);
 	}
 	free(v->block_start);
 	if (v->range_rec)

@@ -257,7 +257,6 @@ tdc_gser_result_alloc(const tdc_job *job, int flags, const TdcPointBuf *buf,
 	tdc_gser_check_result_size(size, fname);
 
 	out = palloc((Size) size);
-	tdc_advise_huge(out, (Size) size);
 	write_header(out, (Size) size, buf->srid, hasz, m > 0);
 	p = VARDATA(out) + G_HEADER;
 	if (m > 0)

@@ -185,6 +185,8 @@ run_reset_callback(void *arg)
 	{
 		tdc_job_free_background(run->job);
 		run->job = NULL;
+		/* after the arrays of any object built on the job (freed first) */
+		tdc_backend_cache_release();
 	}
 }
 
@@ -402,6 +404,10 @@ tdc_run(const TdcPointBuf *buf, double tolerance, uint64 result_bytes,
 	int			rc;
 
 	run_options(buf, tolerance, result_bytes, fname, &opt);
+	/* arrays kept from earlier runs, within what max_memory leaves over */
+	opt.cache = tdc_backend_cache(opt.max_memory > 0 ?
+								  opt.max_memory - Min(opt.max_memory, tdc_estimate_memory((size_t) buf->n, &opt)) :
+								  PG_UINT64_MAX);
 
 	/* both live as long as the context they are registered with */
 	ra = MemoryContextAllocZero(buf->cxt, sizeof(RunAlloc));
@@ -452,6 +458,7 @@ tdc_run_free(TdcRun *run)
 		tdc_job_free(run->job);
 		run->job = NULL;
 	}
+	tdc_backend_cache_idle();
 }
 
 /*
@@ -500,15 +507,16 @@ triangulate_to_datum(const TdcPointBuf *buf, double tolerance, int flags,
 	tdc_run_free(run);
 	if (tdc_guc_stats)
 	{
-		char		phases[128];
+		char		phases[160];
 		double		free_ms = ms_since(start);
 
+		/* kept: what the next run may take back (tdc_cache.c) */
 		if (read_ms >= 0)
-			snprintf(phases, sizeof(phases), "; read %.3f ms, write %.3f ms, free %.3f ms",
-					 read_ms, write_ms, free_ms);
+			snprintf(phases, sizeof(phases), "; read %.3f ms, write %.3f ms, free %.3f ms, kept %llu kB",
+					 read_ms, write_ms, free_ms, tdc_backend_cache_kept_kb());
 		else
-			snprintf(phases, sizeof(phases), "; write %.3f ms, free %.3f ms",
-					 write_ms, free_ms);
+			snprintf(phases, sizeof(phases), "; write %.3f ms, free %.3f ms, kept %llu kB",
+					 write_ms, free_ms, tdc_backend_cache_kept_kb());
 		stats_report(&st, fname, phases);
 	}
 	return PointerGetDatum(result);

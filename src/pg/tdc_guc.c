@@ -17,6 +17,10 @@
  *	tdc_delaunay.memory_ceiling	superuser-only ceiling on the above, 0 = half
  *								of the machine's physical memory (default),
  *								-1 = none
+ *	tdc_delaunay.keep_memory	MB of freed engine arrays a session keeps for
+ *								its next triangulation (default 256, 0 = none)
+ *	tdc_delaunay.keep_memory_time  how long it keeps them after its last
+ *								triangulation (default 10 s; tdc_cache.c)
  *	tdc_delaunay.stats			NOTICE with counts, DETAIL with timings
  *	tdc_delaunay.max_result_bytes  test-only, superuser: lowers the 1 GB
  *								limit of a single result value so that the
@@ -191,6 +195,22 @@ _PG_init(void)
 							&tdc_guc_max_memory_mb,
 							0, 0, INT_MAX,
 							PGC_USERSET, GUC_UNIT_MB,
+							NULL, NULL, NULL);
+
+	DefineCustomIntVariable("tdc_delaunay.keep_memory",
+							"Memory of freed engine arrays a session keeps for its next triangulation (0 = none).",
+							"Released tdc_delaunay.keep_memory_time after the last triangulation, and on any error.",
+							&tdc_guc_keep_memory_mb,
+							256, 0, INT_MAX,
+							PGC_USERSET, GUC_UNIT_MB,
+							NULL, NULL, NULL);
+
+	DefineCustomIntVariable("tdc_delaunay.keep_memory_time",
+							"How long a session keeps freed engine arrays after its last triangulation (0 = not at all).",
+							NULL,
+							&tdc_guc_keep_memory_time_ms,
+							10000, 0, INT_MAX,
+							PGC_USERSET, GUC_UNIT_MS,
 							NULL, NULL, NULL);
 
 	DefineCustomIntVariable("tdc_delaunay.memory_ceiling",

@@ -47,6 +47,14 @@ extern int	tdc_guc_max_memory_mb;
 extern int	tdc_guc_memory_ceiling_mb;
 extern bool tdc_guc_stats;
 extern int	tdc_guc_max_result_bytes;
+extern int	tdc_guc_keep_memory_mb;
+extern int	tdc_guc_keep_memory_time_ms;
+
+/* tdc_cache.c: the engine's big arrays kept between runs */
+extern tdc_cache *tdc_backend_cache(uint64 room);
+extern void tdc_backend_cache_idle(void);
+extern void tdc_backend_cache_release(void);
+extern unsigned long long tdc_backend_cache_kept_kb(void);
 
 /*
  * The memory limit of one triangulation: tdc_delaunay.max_memory within

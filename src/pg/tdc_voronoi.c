@@ -351,8 +351,7 @@ tdc_voronoi_write_polygons(VorRun *vrun, int32 srid, uint64 have_bytes,
 	if (limit > 0 && have_bytes + size > limit)
 		tdc_report_memory_limit(fname, "writing the Voronoi diagram", have_bytes + size, 0);
 	out = write_header((Size) size, srid, &p);
-	/* the workers fault the pages in; on huge pages where the kernel has them */
-	tdc_advise_huge(out, (size_t) size);
+	/* the workers fault the pages in, each its own cells' */
 	p = put_u32(p, G_COLLECTION);
 	p = put_u32(p, (uint32) count);
 	rc = tdc_voronoi_emit(vrun->v, p, err, sizeof(err));

@@ -1,0 +1,311 @@
+/*
+ * mem.c
+ *		The big arrays of a run, and the cache a host may keep them in
+ *		between runs.
+ *
+ * A job's arrays grow with its input: a million points map some 120 MB of
+ * mesh, coordinates, orders and triangle lists.  Big arrays are mapped and
+ * unmapped directly, so that their memory goes back to the system when the
+ * job is freed, whatever malloc's thresholds have drifted to in a long-lived
+ * host process (a PostgreSQL backend raises them after every big free).
+ * Small ones come from malloc: a small job's arrays are cheaper to take from
+ * the heap than to map, fault in and unmap.  Either way the memory comes
+ * zeroed and 64-aligned, with its size and origin in a header in front.
+ *
+ * Page faults.  Every 4 kB page of a fresh mapping is a fault, a page the
+ * kernel zeroes and, at unmap, a TLB shootdown on every CPU the threads ran
+ * on: a third of the CPU time of a million-point aggregate in a backend went
+ * to the kernel for its arrays and its result.  Two things help.
+ * tdc_prefault maps a range in with one system call where a writer is about
+ * to fill it.  And a host that runs one big triangulation after another (a
+ * GROUP BY of big groups, a session repeating a query) can give its jobs a
+ * tdc_cache (options.cache): a freed mapping is then kept, up to the
+ * cache's limit, and a later array of the same size or a little less takes
+ * it back, cut to size and cleared with memset, with no fault at all.  The
+ * cache is the host's object; the core keeps no memory of its own between
+ * runs.  The host chooses the limit and when to give the memory back
+ * (tdc_cache_trim), and a mapping the cache has no room for is unmapped as
+ * before, so a run's memory is never more than without the cache plus the
+ * limit.
+ *
+ * No transparent huge pages.  They made a warm run faster (a 2 MB page is
+ * one fault), but on a virtual machine whose host takes back the memory a
+ * guest leaves free (free page reporting, which hands back whole 2 MB
+ * blocks), a huge page that was not in use a moment before costs some 4 ms
+ * to fault in: 0.4-0.7 GB/s, against 3-5 GB/s for the same memory in 4 kB
+ * pages (bench/first_touch.c prints both).  A backend's next big query
+ * usually comes seconds after its last, so the slow case was the common
+ * one.
+ */
+#include <pthread.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/mman.h>
+#include <unistd.h>
+
+#include "internal.h"
+
+#define BIG_HEADER		64
+#define BIG_MAP_MIN		((size_t) 256 << 10)
+#define PREFAULT_MIN	((size_t) 64 << 10)
+#define CACHE_SLOTS		32
+/* a kept mapping is cut to size when it is this much bigger than asked */
+#define CACHE_CUT_MIN	((size_t) 64 << 10)
+
+typedef struct big_header
+{
+	size_t		total;			/* bytes from the header on; mapped: page multiple */
+	void	   *heap;			/* malloc'd block to free, or NULL: mapped */
+} big_header;
+
+/*
+ * Kept mappings, each whole (header included), none in use, the longest
+ * kept first.  Invariant: kept is the sum of slot[0..n).total, at most limit.
+ */
+struct tdc_cache
+{
+	pthread_mutex_t lock;
+	size_t		limit;
+	size_t		kept;
+	int			n;
+	struct
+	{
+		char	   *base;
+		size_t		total;
+	}			slot[CACHE_SLOTS];
+};
+
+static size_t
+page_size(void)
+{
+	long		ps = sysconf(_SC_PAGESIZE);
+
+	return ps > 0 ? (size_t) ps : 4096;
+}
+
+static size_t
+page_round(size_t n)
+{
+	size_t		ps = page_size();
+
+	return (n + ps - 1) & ~(ps - 1);
+}
+
+/* Remove slot i, keeping the others in the order they were kept. */
+static void
+cache_drop(tdc_cache *c, int i)
+{
+	c->kept -= c->slot[i].total;
+	memmove(&c->slot[i], &c->slot[i + 1], (size_t) (c->n - i - 1) * sizeof(c->slot[0]));
+	c->n--;
+}
+
+/*
+ * The smallest kept mapping of total bytes up to half as much again, taken
+ * out of the cache and cut down to total; NULL if there is none.  A bigger
+ * one is left for the bigger array it probably came from.
+ */
+static char *
+cache_take(tdc_cache *c, size_t total)
+{
+	int			best = -1;
+	char	   *p;
+	size_t		have;
+
+	if (pthread_mutex_lock(&c->lock) != 0)
+		return NULL;
+	for (int i = 0; i < c->n; i++)
+		if (c->slot[i].total >= total && c->slot[i].total - total <= total / 2 &&
+			(best < 0 || c->slot[i].total < c->slot[best].total))
+			best = i;
+	if (best < 0)
+	{
+		pthread_mutex_unlock(&c->lock);
+		return NULL;
+	}
+	p = c->slot[best].base;
+	have = c->slot[best].total;
+	cache_drop(c, best);
+	pthread_mutex_unlock(&c->lock);
+
+	/* the run's memory is what it asked for, as without the cache */
+	if (have - total >= CACHE_CUT_MIN)
+	{
+		(void) munmap(p + total, have - total);
+		have = total;
+	}
+	((big_header *) p)->total = have;
+	return p;
+}
+
+/*
+ * Keep a whole mapping, unmapping the longest-kept ones if that makes room
+ * for it; false if it cannot be kept: the caller unmaps it.
+ */
+static bool
+cache_put(tdc_cache *c, char *base, size_t total)
+{
+	bool		kept = false;
+
+	if (pthread_mutex_lock(&c->lock) != 0)
+		return false;
+	if (total <= c->limit)
+	{
+		while (c->n > 0 && (c->n == CACHE_SLOTS || total > c->limit - c->kept))
+		{
+			(void) munmap(c->slot[0].base, c->slot[0].total);
+			cache_drop(c, 0);
+		}
+		c->slot[c->n].base = base;
+		c->slot[c->n].total = total;
+		c->n++;
+		c->kept += total;
+		kept = true;
+	}
+	pthread_mutex_unlock(&c->lock);
+	return kept;
+}
+
+void *
+tdc_big_alloc(tdc_cache *cache, size_t size)
+{
+	size_t		total = size + BIG_HEADER;
+	char	   *p;
+	big_header *h;
+
+	if (total < size)
+		return NULL;
+	if (total < BIG_MAP_MIN)
+	{
+		char	   *raw = malloc(total + BIG_HEADER);
+
+		if (raw == NULL)
+			return NULL;
+		p = (char *) (((uintptr_t) raw + BIG_HEADER - 1) & ~(uintptr_t) (BIG_HEADER - 1));
+		memset(p, 0, total);
+		h = (big_header *) p;
+		h->heap = raw;
+		h->total = total;
+		return p + BIG_HEADER;
+	}
+	total = page_round(total);
+	if (total < size)
+		return NULL;
+	if (cache != NULL && (p = cache_take(cache, total)) != NULL)
+		memset(p + BIG_HEADER, 0, size);
+	else
+	{
+		p = mmap(NULL, total, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+		if (p == MAP_FAILED)
+			return NULL;
+		((big_header *) p)->total = total;
+	}
+	((big_header *) p)->heap = NULL;
+	return p + BIG_HEADER;
+}
+
+void
+tdc_big_free(tdc_cache *cache, void *ptr)
+{
+	big_header *h;
+
+	if (ptr == NULL)
+		return;
+	h = (big_header *) ((char *) ptr - BIG_HEADER);
+	if (h->heap)
+		free(h->heap);
+	else if (cache == NULL || !cache_put(cache, (char *) h, h->total))
+		munmap(h, h->total);
+}
+
+void
+tdc_prefault(void *ptr, size_t len)
+{
+#ifdef MADV_POPULATE_WRITE
+	uintptr_t	page = page_size(),
+				a,
+				b;
+
+	/* a system call costs more than faulting in a few pages */
+	if (len < PREFAULT_MIN)
+		return;
+	a = (uintptr_t) ptr & ~(page - 1);
+	b = ((uintptr_t) ptr + len + page - 1) & ~(page - 1);
+	(void) madvise((void *) a, b - a, MADV_POPULATE_WRITE);
+#else
+	(void) ptr;
+	(void) len;
+#endif
+}
+
+tdc_cache *
+tdc_cache_create(size_t limit)
+{
+	tdc_cache  *c = calloc(1, sizeof(tdc_cache));
+
+	if (c == NULL)
+		return NULL;
+	if (pthread_mutex_init(&c->lock, NULL) != 0)
+	{
+		free(c);
+		return NULL;
+	}
+	c->limit = limit;
+	return c;
+}
+
+/*
+ * Unmap kept mappings, the longest-kept first, until at most keep bytes are
+ * kept.  Only takes the
+ * lock if it is free, so that a host may call it from a signal handler that
+ * interrupted nothing of ours; returns false, doing nothing, if the lock was
+ * held.
+ */
+bool
+tdc_cache_trim(tdc_cache *c, size_t keep)
+{
+	if (c == NULL)
+		return true;
+	if (pthread_mutex_trylock(&c->lock) != 0)
+		return false;
+	while (c->kept > keep && c->n > 0)
+	{
+		(void) munmap(c->slot[0].base, c->slot[0].total);
+		cache_drop(c, 0);
+	}
+	pthread_mutex_unlock(&c->lock);
+	return true;
+}
+
+void
+tdc_cache_set_limit(tdc_cache *c, size_t limit)
+{
+	if (c == NULL)
+		return;
+	(void) tdc_cache_trim(c, limit);
+	pthread_mutex_lock(&c->lock);
+	c->limit = limit;
+	pthread_mutex_unlock(&c->lock);
+}
+
+size_t
+tdc_cache_kept(tdc_cache *c)
+{
+	size_t		kept;
+
+	if (c == NULL || pthread_mutex_lock(&c->lock) != 0)
+		return 0;
+	kept = c->kept;
+	pthread_mutex_unlock(&c->lock);
+	return kept;
+}
+
+void
+tdc_cache_destroy(tdc_cache *c)
+{
+	if (c == NULL)
+		return;
+	(void) tdc_cache_trim(c, 0);
+	pthread_mutex_destroy(&c->lock);
+	free(c);
+}
