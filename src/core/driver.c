@@ -497,7 +497,8 @@ tdc_run_phase(tdc_job *job)
 	if (atomic_load(&job->cancel))
 		return TDC_ECANCELED;
 
-	job->he = tdc_job_alloc(job, job->nin * 6 * sizeof(tdc_he) + sizeof(tdc_he));
+	/* every subset writes each of its slots (tdc_triangulate_leaf) */
+	job->he = tdc_job_alloc_uninit(job, job->nin * 6 * sizeof(tdc_he) + sizeof(tdc_he));
 	if (job->he == NULL)
 	{
 		tdc_job_fail(job, TDC_ENOMEM, "out of memory for the mesh of %zu points (%zu bytes)",

@@ -214,7 +214,8 @@ tdc_emit_phase(tdc_job *job)
 	p.first = calloc(p.nranges + 1, sizeof(size_t));
 	p.head = malloc(p.nranges * sizeof(uint32_t));
 	p.link = malloc(p.nchunks * sizeof(uint32_t));
-	p.tri = tdc_big_alloc(job->opt.cache, p.nchunks * (3 * CHUNK) * sizeof(uint32_t));
+	/* read only where collect_task wrote */
+	p.tri = tdc_big_alloc_uninit(job->opt.cache, p.nchunks * (3 * CHUNK) * sizeof(uint32_t));
 	if (p.first == NULL || p.head == NULL || p.link == NULL || p.tri == NULL)
 	{
 		plan_free(&p);

@@ -78,6 +78,8 @@ typedef struct tdc_mesh
  * freed with the cache it was allocated with, or NULL.
  */
 extern void *tdc_big_alloc(tdc_cache *cache, size_t size);
+/* The same, for an array its user fills before reading: contents undefined. */
+extern void *tdc_big_alloc_uninit(tdc_cache *cache, size_t size);
 extern void tdc_big_free(tdc_cache *cache, void *p);
 
 /* Thread pool (pool.c): a parallel-for on which the calling thread helps. */

@@ -90,9 +90,12 @@ arena_bytes(size_t n)
 	return n <= ARENA_MAX_POINTS ? ARENA_FIXED + n * ARENA_PER_POINT : 0;
 }
 
-/* Zeroed, 16-aligned memory for one of the job's arrays; NULL if out of memory. */
-void *
-tdc_job_alloc(tdc_job *job, size_t size)
+/*
+ * 16-aligned memory for one of the job's arrays, zeroed unless the caller
+ * fills it before reading it; NULL if out of memory.
+ */
+static void *
+job_alloc(tdc_job *job, size_t size, bool zero)
 {
 	size_t		rounded = (size + ARENA_ALIGN - 1) & ~(size_t) (ARENA_ALIGN - 1);
 
@@ -102,10 +105,23 @@ tdc_job_alloc(tdc_job *job, size_t size)
 		void	   *p = job->arena + job->arena_used;
 
 		job->arena_used += rounded;
-		return memset(p, 0, size);
+		return zero ? memset(p, 0, size) : p;
 	}
 	job->off_arena = true;
-	return tdc_big_alloc(job->opt.cache, size);
+	return zero ? tdc_big_alloc(job->opt.cache, size) :
+		tdc_big_alloc_uninit(job->opt.cache, size);
+}
+
+void *
+tdc_job_alloc(tdc_job *job, size_t size)
+{
+	return job_alloc(job, size, true);
+}
+
+void *
+tdc_job_alloc_uninit(tdc_job *job, size_t size)
+{
+	return job_alloc(job, size, false);
 }
 
 void

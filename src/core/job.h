@@ -157,6 +157,7 @@ extern void tdc_triangulate_leaf(tdc_job *job, size_t k, tdc_sub *out);
 
 /* job.c: a job's arrays, from its arena when they fit (driver thread only) */
 extern void *tdc_job_alloc(tdc_job *job, size_t size);
+extern void *tdc_job_alloc_uninit(tdc_job *job, size_t size);
 extern void tdc_job_release(tdc_job *job, void *ptr);
 
 #endif							/* TDC_JOB_H */

@@ -166,8 +166,13 @@ cache_put(tdc_cache *c, char *base, size_t total)
 	return kept;
 }
 
-void *
-tdc_big_alloc(tdc_cache *cache, size_t size)
+/*
+ * Zeroed or not: an array whose every byte its user writes before reading
+ * it needs no clearing, and a kept mapping of the mesh is some 70 MB of
+ * memset a run would pay on one thread.  A fresh mapping is zero anyway.
+ */
+static void *
+big_alloc(tdc_cache *cache, size_t size, bool zero)
 {
 	size_t		total = size + BIG_HEADER;
 	char	   *p;
@@ -182,7 +187,8 @@ tdc_big_alloc(tdc_cache *cache, size_t size)
 		if (raw == NULL)
 			return NULL;
 		p = (char *) (((uintptr_t) raw + BIG_HEADER - 1) & ~(uintptr_t) (BIG_HEADER - 1));
-		memset(p, 0, total);
+		if (zero)
+			memset(p, 0, total);
 		h = (big_header *) p;
 		h->heap = raw;
 		h->total = total;
@@ -192,7 +198,10 @@ tdc_big_alloc(tdc_cache *cache, size_t size)
 	if (total < size)
 		return NULL;
 	if (cache != NULL && (p = cache_take(cache, total)) != NULL)
-		memset(p + BIG_HEADER, 0, size);
+	{
+		if (zero)
+			memset(p + BIG_HEADER, 0, size);
+	}
 	else
 	{
 		p = mmap(NULL, total, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
@@ -202,6 +211,18 @@ tdc_big_alloc(tdc_cache *cache, size_t size)
 	}
 	((big_header *) p)->heap = NULL;
 	return p + BIG_HEADER;
+}
+
+void *
+tdc_big_alloc(tdc_cache *cache, size_t size)
+{
+	return big_alloc(cache, size, true);
+}
+
+void *
+tdc_big_alloc_uninit(tdc_cache *cache, size_t size)
+{
+	return big_alloc(cache, size, false);
 }
 
 void
