@@ -42,6 +42,7 @@ int			tdc_guc_keep_memory_mb = 256;
 int			tdc_guc_keep_memory_time_ms = 10000;
 
 static tdc_cache *backend_cache = NULL;
+static uint64 backend_limit = 0;	/* the limit last set on it */
 static TimeoutId release_timeout;
 static bool release_registered = false;
 
@@ -68,37 +69,43 @@ tdc_backend_cache_release(void)
 
 /*
  * The cache for a run that leaves room bytes of tdc_delaunay.max_memory
- * unused, or NULL when tdc_delaunay.keep_memory is 0 (or no cache could be
- * made: the run then maps and unmaps as usual).  Switches the release
- * timeout off until tdc_backend_cache_idle.
+ * unused: first trimmed to that room and to tdc_delaunay.keep_memory, then,
+ * if use, returned with the release timeout switched off until
+ * tdc_backend_cache_idle.  NULL when not to be used, when keep_memory is 0,
+ * or when no cache could be made (the run then maps and unmaps as usual).
+ * A run that does not use it costs no system call here, and nothing at all
+ * unless its limit leaves less room than the cache may keep.
  */
 tdc_cache *
-tdc_backend_cache(uint64 room)
+tdc_backend_cache(uint64 room, bool use)
 {
 	uint64		limit = (uint64) tdc_guc_keep_memory_mb << 20;
 
-	if (release_registered)
-		disable_timeout(release_timeout, false);
-	if (limit == 0)
-	{
-		/* kept under an earlier setting: give it back now */
-		tdc_backend_cache_release();
-		return NULL;
-	}
 	if (backend_cache == NULL)
 	{
+		if (!use || limit == 0)
+			return NULL;
 		backend_cache = tdc_cache_create((size_t) limit);
 		if (backend_cache == NULL)
 			return NULL;
 		RegisterXactCallback(release_on_abort, NULL);
 	}
+	if (use && release_registered)
+		disable_timeout(release_timeout, false);
+	if (use || limit != backend_limit || room < limit)
+	{
+		/* kept under a higher setting, or more than this run leaves room for */
+		tdc_cache_set_limit(backend_cache, (size_t) limit);
+		(void) tdc_cache_trim(backend_cache, (size_t) Min(room, limit));
+		backend_limit = limit;
+	}
+	if (!use || limit == 0)
+		return NULL;
 	if (!release_registered)
 	{
 		release_timeout = RegisterTimeout(USER_TIMEOUT, release_on_timeout);
 		release_registered = true;
 	}
-	tdc_cache_set_limit(backend_cache, (size_t) limit);
-	(void) tdc_cache_trim(backend_cache, (size_t) Min(room, limit));
 	return backend_cache;
 }
 

@@ -91,6 +91,13 @@
 #define WAIT_SLICE_MS		10
 
 /*
+ * Runs on this many points or more keep their freed arrays for the next run
+ * (tdc_cache.c): below it the core's arrays come from malloc (its mapping
+ * threshold is 256 kB, the mesh of some 3,600 points).
+ */
+#define KEEP_MIN_POINTS		4096
+
+/*
  * Dump rows put into the tuplestore between two interrupt checks: a row is
  * a small POLYGON value, and once the tuplestore spills to disk each costs
  * a write, so 65536 rows are some ms of work.  A power of two.
@@ -345,10 +352,13 @@ tdc_check_params(double tolerance, int flags, const char *fname)
 				 errhint("Use 0 for a GEOMETRYCOLLECTION of polygons, 1 for a MULTILINESTRING of edges, 2 for a TIN.")));
 }
 
-/* The options of a run on buf: the session's settings and the memory limit. */
+/*
+ * The options of a run on buf: the session's settings and the memory limit.
+ * *room: what the limit leaves over once the run and its result are counted.
+ */
 static void
 run_options(const TdcPointBuf *buf, double tolerance, uint64 result_bytes,
-			const char *fname, tdc_options *opt)
+			const char *fname, tdc_options *opt, uint64 *room)
 {
 	uint64		limit = tdc_max_memory_bytes();
 
@@ -370,7 +380,10 @@ run_options(const TdcPointBuf *buf, double tolerance, uint64 result_bytes,
 											 (unsigned long long) buf->n),
 									run_bytes, result_bytes);
 		opt->max_memory = (size_t) (limit - tdc_pointbuf_bytes(buf) - result_bytes);
+		*room = limit - run_bytes - result_bytes;
 	}
+	else
+		*room = PG_UINT64_MAX;
 }
 
 /*
@@ -383,8 +396,9 @@ tdc_check_run_memory(const TdcPointBuf *buf, double tolerance,
 					 uint64 result_bytes, const char *fname)
 {
 	tdc_options opt;
+	uint64		room;
 
-	run_options(buf, tolerance, result_bytes, fname, &opt);
+	run_options(buf, tolerance, result_bytes, fname, &opt, &room);
 }
 
 /*
@@ -398,20 +412,27 @@ tdc_run(const TdcPointBuf *buf, double tolerance, uint64 result_bytes,
 		const char *fname)
 {
 	tdc_options opt;
+	uint64		room;
 	TdcRun	   *run;
 	RunAlloc   *ra;
 	char		err[256];
 	int			rc;
 
-	run_options(buf, tolerance, result_bytes, fname, &opt);
-	/* arrays kept from earlier runs, within what max_memory leaves over */
-	opt.cache = tdc_backend_cache(opt.max_memory > 0 ?
-								  opt.max_memory - Min(opt.max_memory, tdc_estimate_memory((size_t) buf->n, &opt)) :
-								  PG_UINT64_MAX);
+	run_options(buf, tolerance, result_bytes, fname, &opt, &room);
 
 	/* both live as long as the context they are registered with */
 	ra = MemoryContextAllocZero(buf->cxt, sizeof(RunAlloc));
 	run = &ra->run;
+
+	/*
+	 * Arrays kept from earlier runs, within what max_memory leaves over.  A
+	 * run on fewer than KEEP_MIN_POINTS points has its arrays from malloc,
+	 * nothing to keep, and the release timeout's two system calls would be
+	 * a tenth of a call on a few points: it only gives back what its limit
+	 * needs.
+	 */
+	run->kept = buf->n >= KEEP_MIN_POINTS;
+	opt.cache = tdc_backend_cache(room, run->kept);
 	ra->cb.func = run_reset_callback;
 	ra->cb.arg = run;
 	/* on the buffer's context: it must not be freed before the job is */
@@ -458,7 +479,9 @@ tdc_run_free(TdcRun *run)
 		tdc_job_free(run->job);
 		run->job = NULL;
 	}
-	tdc_backend_cache_idle();
+	if (run->kept)
+		tdc_backend_cache_idle();
+	run->kept = false;
 }
 
 /*

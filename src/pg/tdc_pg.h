@@ -51,7 +51,7 @@ extern int	tdc_guc_keep_memory_mb;
 extern int	tdc_guc_keep_memory_time_ms;
 
 /* tdc_cache.c: the engine's big arrays kept between runs */
-extern tdc_cache *tdc_backend_cache(uint64 room);
+extern tdc_cache *tdc_backend_cache(uint64 room, bool use);
 extern void tdc_backend_cache_idle(void);
 extern void tdc_backend_cache_release(void);
 extern unsigned long long tdc_backend_cache_kept_kb(void);
@@ -232,6 +232,7 @@ extern MemoryContext tdc_agg_context(FunctionCallInfo fcinfo, const char *fn);
 typedef struct TdcRun
 {
 	tdc_job    *job;			/* NULL once freed */
+	bool		kept;			/* its arrays come from the backend's cache */
 } TdcRun;
 
 extern void tdc_check_params(double tolerance, int flags, const char *fname);
