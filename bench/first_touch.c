@@ -5,8 +5,8 @@
  *
  *	first_touch [MB] [ROUNDS] [huge]
  *
- * Maps MB megabytes (default 256) in 4 kB pages, as the engine maps its
- * arrays (with "huge": asking for transparent huge pages instead), writes
+ * Maps MB megabytes (default 256) in 4 kB pages (with "huge": asking for
+ * transparent huge pages instead), writes
  * one byte per 4 kB page, unmaps, and does it ROUNDS times (default 4),
  * printing each round's rate.  On a physical machine every round costs the
  * same: the kernel zeroes the pages.  On a virtual machine whose host backs
@@ -14,9 +14,9 @@
  * left free for a while (free page reporting, in 2 MB blocks), memory the
  * guest has not used for a few seconds costs more, and most of all in huge
  * pages: on the 2-core benchmark machines, 0.4-0.7 GB/s for huge pages
- * against 3-5 GB/s in 4 kB pages, which is why the engine asks for none
- * (src/core/mem.c).  The benchmarks print these figures in their header so
- * that a reader can tell such a machine.
+ * against 3-5 GB/s in 4 kB pages, which is why the engine times its first
+ * huge page before it asks for more (src/core/mem.c).  The benchmarks print
+ * these figures in their header so that a reader can tell such a machine.
  */
 #define _GNU_SOURCE
 #include <stdio.h>

@@ -86,6 +86,22 @@ CREATE FUNCTION tdc_random_points(n int, seed int DEFAULT 0) RETURNS TABLE(id in
 						   (hashint4(i + 1000000007 + seed) & 2147483647)::float8 / 2147483648.0)
 	FROM generate_series(1, n) i $$;
 
+-- The backend's threads once the one that unmaps a cancelled job's memory
+-- (started while the error goes out) is done; a worker left running would
+-- still be counted after 5 s (tdc_cancel, tdc_voronoi).
+CREATE FUNCTION tdc_backend_threads() RETURNS int LANGUAGE plpgsql AS $$
+DECLARE
+	t0 timestamptz := clock_timestamp();
+	n int;
+BEGIN
+	LOOP
+		n := substring(pg_read_file('/proc/' || pg_backend_pid() || '/status') FROM 'Threads:\s*(\d+)')::int;
+		EXIT WHEN n = 1 OR clock_timestamp() > t0 + interval '5 s';
+		PERFORM pg_sleep(0.005);
+	END LOOP;
+	RETURN n;
+END $$;
+
 --
 -- Basic outputs for the three flags (normalized: start vertex and member
 -- order are not part of the contract).

@@ -9,22 +9,6 @@ CREATE TABLE tdc_big AS
 	FROM (SELECT (hashint4(i) & 2147483647)::float8, (hashint4(-i) & 2147483647)::float8
 		  FROM generate_series(1, 1500000) i) p(x, y);
 
--- The backend's threads once the one that unmaps a cancelled job's memory
--- (started while the error goes out) is done; a worker left running would
--- still be counted after the 5 s.
-CREATE FUNCTION tdc_backend_threads() RETURNS int LANGUAGE plpgsql AS $$
-DECLARE
-	t0 timestamptz := clock_timestamp();
-	n int;
-BEGIN
-	LOOP
-		n := substring(pg_read_file('/proc/' || pg_backend_pid() || '/status') FROM 'Threads:\s*(\d+)')::int;
-		EXIT WHEN n = 1 OR clock_timestamp() > t0 + interval '5 s';
-		PERFORM pg_sleep(0.005);
-	END LOOP;
-	RETURN n;
-END $$;
-
 -- One worker thread: the engine then needs over a second for this input,
 -- far more than the timeouts below.
 SET tdc_delaunay.threads = 1;
@@ -115,5 +99,4 @@ DROP FUNCTION tdc_cancel_probe(int);
 DROP FUNCTION tdc_read_ms();
 DROP FUNCTION tdc_engine_ticks();
 DROP FUNCTION tdc_proc_ticks(text);
-DROP FUNCTION tdc_backend_threads();
 DROP TABLE tdc_big;

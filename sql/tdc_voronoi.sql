@@ -161,21 +161,8 @@ SET statement_timeout = '300ms';
 SELECT ST_NumGeometries(ST_TDCVoronoiPolygons(g)) FROM vor_big;
 RESET statement_timeout;
 \set VERBOSITY default
--- The backend's threads once the one that unmaps a cancelled job's memory
--- (started while the error goes out) is done; a worker left running would
--- still be counted after 5 s.
-DO $$
-DECLARE
-	t0 timestamptz := clock_timestamp();
-	n int;
-BEGIN
-	LOOP
-		n := substring(pg_read_file('/proc/' || pg_backend_pid() || '/status') FROM 'Threads:\s*(\d+)')::int;
-		EXIT WHEN n = 1 OR clock_timestamp() > t0 + interval '5 s';
-		PERFORM pg_sleep(0.005);
-	END LOOP;
-	RAISE NOTICE 'threads: %', n;
-END $$;
+-- no thread left behind (tdc_backend_threads: tdc_basic.sql)
+SELECT tdc_backend_threads() AS threads;
 RESET tdc_delaunay.threads;
 SELECT ST_NumGeometries(ST_TDCVoronoiPolygons('MULTIPOINT(0 0, 1 1, 2 0)')) AS after_cancel;
 DROP TABLE vor_big;

@@ -174,6 +174,14 @@ extern int	tdc_job_emit_start(tdc_job *job, tdc_emit_fn emit, void *arg,
  */
 extern void tdc_prefault(void *p, size_t len);
 
+/*
+ * Transparent huge pages over the 2 MB pages inside [p, p + len) of memory
+ * just allocated and not yet touched, if the first of them maps in faster
+ * than 4 kB pages would (on a virtual machine whose host has taken back the
+ * guest's free memory, a huge page can cost 4 ms); it is then mapped in.
+ */
+extern void tdc_advise_huge(void *p, size_t len);
+
 /* Convenience: start + wait forever. */
 extern int	tdc_triangulate(const double *xy, size_t n, const tdc_options *opt,
 							tdc_job **job, char *err, size_t errlen);

@@ -257,6 +257,7 @@ tdc_gser_result_alloc(const tdc_job *job, int flags, const TdcPointBuf *buf,
 	tdc_gser_check_result_size(size, fname);
 
 	out = palloc((Size) size);
+	tdc_advise_huge(out, (Size) size);
 	write_header(out, (Size) size, buf->srid, hasz, m > 0);
 	p = VARDATA(out) + G_HEADER;
 	if (m > 0)
@@ -377,6 +378,7 @@ tdc_gser_edge_list(const tdc_job *job, const TdcPointBuf *buf, uint64 count,
 
 	tdc_gser_check_result_size(size, fname);
 	out = palloc((Size) size);
+	tdc_advise_huge(out, (Size) size);
 	write_header(out, (Size) size, buf->srid, hasz, false);
 	p = VARDATA(out) + G_HEADER;
 	p = put_u32(p, G_MULTILINE);

@@ -257,6 +257,7 @@ write_header(Size size, int32 srid, char **body)
 	unsigned char *h = (unsigned char *) VARDATA(out);
 	uint32		s = (uint32) srid & 0x1fffff;
 
+	tdc_advise_huge(out, size);
 	SET_VARSIZE(out, size);
 	h[0] = (unsigned char) (s >> 16);
 	h[1] = (unsigned char) (s >> 8);
@@ -351,7 +352,7 @@ tdc_voronoi_write_polygons(VorRun *vrun, int32 srid, uint64 have_bytes,
 	if (limit > 0 && have_bytes + size > limit)
 		tdc_report_memory_limit(fname, "writing the Voronoi diagram", have_bytes + size, 0);
 	out = write_header((Size) size, srid, &p);
-	/* the workers fault the pages in, each its own cells' */
+	/* the workers fault the pages in */
 	p = put_u32(p, G_COLLECTION);
 	p = put_u32(p, (uint32) count);
 	rc = tdc_voronoi_emit(vrun->v, p, err, sizeof(err));
