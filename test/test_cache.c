@@ -176,6 +176,27 @@ test_cache_contract(void)
 		  "an array over the limit is not kept (%zu kept)", tdc_cache_kept(c));
 	CHECK(tdc_cache_trim(c, 0) && tdc_cache_kept(c) == 0, "trim(0) empties the cache");
 	tdc_cache_destroy(c);
+
+	/*
+	 * A fresh array big enough for the huge-page probe (which maps its first
+	 * 2 MB page in, and may turn the rest back to 4 kB pages) still reads
+	 * as zeroes and takes writes everywhere, up to its last byte.
+	 */
+	p = tdc_big_alloc(NULL, (size_t) 24 << 20);
+	CHECK(p != NULL, "a 24 MB array");
+	if (p != NULL)
+	{
+		size_t		n = (size_t) 24 << 20;
+
+		zero = true;
+		for (size_t i = 0; i < n; i += 4096)
+			zero &= p[i] == 0;
+		zero &= p[n - 1] == 0;
+		memset(p, 0x5a, n);
+		CHECK(zero && p[0] == 0x5a && p[n - 1] == 0x5a,
+			  "an array after the huge-page probe reads as zeroes and takes writes");
+		tdc_big_free(NULL, p);
+	}
 }
 
 /*
