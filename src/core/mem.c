@@ -35,10 +35,10 @@
  * (free page reporting, which hands back whole 2 MB blocks), a huge page that
  * was not in use a moment before costs some 4 ms to fault in: 0.4-0.7 GB/s
  * (bench/first_touch.c prints both).  Which case holds depends on what ran
- * in the last seconds, so tdc_advise_huge asks: it maps in the first huge
- * page of a big fresh array and times it, and if that took longer than the
- * 512 small faults it replaces would, the rest of the array stays in 4 kB
- * pages.  A kept mapping keeps the pages it was first given.
+ * in the last seconds, so tdc_advise_huge asks: it maps in the huge pages of
+ * a big fresh array one by one, timing each, and once one takes longer than
+ * the 512 small faults it replaces would, the rest of the array stays in 4
+ * kB pages.  A kept mapping keeps the pages it was first given.
  */
 #include <pthread.h>
 #include <stdlib.h>
@@ -254,10 +254,16 @@ elapsed_ns(const struct timespec *a, const struct timespec *b)
 
 /*
  * Huge pages over the 2 MB-aligned interior of [p, p + len) of fresh
- * memory, if the first of them maps in faster than 4 kB pages would (see
- * above).  Only the interior: a huge page never reaches past the array, so
+ * memory, mapped in one at a time for as long as each comes faster than 4
+ * kB pages would (see above); from the first that does not, the rest of
+ * the array stays in 4 kB pages, left to its writers.  One at a time,
+ * because the kernel hands out the free blocks it has not yet reported to
+ * the host first: a big array gets warm huge pages until they run out,
+ * then cold ones, and a probe of its first page alone said nothing of its
+ * last.  Only the interior: a huge page never reaches past the array, so
  * the resident size stays what the arrays use.  Arrays under 8 MB are left
- * alone: the probe would be a large part of them.
+ * alone: the probe would be a large part of them.  Mapping in warm huge
+ * pages costs about 0.1 ms each, on the calling thread.
  */
 void
 tdc_advise_huge(void *ptr, size_t len)
@@ -265,18 +271,26 @@ tdc_advise_huge(void *ptr, size_t len)
 #if defined(MADV_HUGEPAGE) && defined(MADV_NOHUGEPAGE) && defined(MADV_POPULATE_WRITE)
 	uintptr_t	a = ((uintptr_t) ptr + HUGE_SIZE - 1) & ~(uintptr_t) (HUGE_SIZE - 1),
 				b = ((uintptr_t) ptr + len) & ~(uintptr_t) (HUGE_SIZE - 1);
-	struct timespec t0,
-				t1;
 
 	if (len < 4 * HUGE_SIZE || b <= a + HUGE_SIZE)
 		return;
 	if (madvise((void *) a, b - a, MADV_HUGEPAGE) != 0)
 		return;
-	clock_gettime(CLOCK_MONOTONIC, &t0);
-	(void) madvise((void *) a, HUGE_SIZE, MADV_POPULATE_WRITE);
-	clock_gettime(CLOCK_MONOTONIC, &t1);
-	if (elapsed_ns(&t0, &t1) > HUGE_PROBE_MAX_NS)
-		(void) madvise((void *) (a + HUGE_SIZE), b - a - HUGE_SIZE, MADV_NOHUGEPAGE);
+	for (uintptr_t p = a; p < b; p += HUGE_SIZE)
+	{
+		struct timespec t0,
+					t1;
+
+		clock_gettime(CLOCK_MONOTONIC, &t0);
+		(void) madvise((void *) p, HUGE_SIZE, MADV_POPULATE_WRITE);
+		clock_gettime(CLOCK_MONOTONIC, &t1);
+		if (elapsed_ns(&t0, &t1) > HUGE_PROBE_MAX_NS)
+		{
+			if (p + HUGE_SIZE < b)
+				(void) madvise((void *) (p + HUGE_SIZE), b - p - HUGE_SIZE, MADV_NOHUGEPAGE);
+			break;
+		}
+	}
 #else
 	(void) ptr;
 	(void) len;

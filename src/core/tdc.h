@@ -176,9 +176,10 @@ extern void tdc_prefault(void *p, size_t len);
 
 /*
  * Transparent huge pages over the 2 MB pages inside [p, p + len) of memory
- * just allocated and not yet touched, if the first of them maps in faster
- * than 4 kB pages would (on a virtual machine whose host has taken back the
- * guest's free memory, a huge page can cost 4 ms); it is then mapped in.
+ * just allocated and not yet touched, mapped in one by one for as long as
+ * each comes faster than 4 kB pages would (on a virtual machine whose host
+ * has taken back the guest's free memory, a huge page can cost 4 ms); the
+ * rest stays in 4 kB pages.
  */
 extern void tdc_advise_huge(void *p, size_t len);
 
