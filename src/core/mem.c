@@ -172,6 +172,8 @@ cache_put(tdc_cache *c, char *base, size_t total)
 	return kept;
 }
 
+static void advise_array(char *p, size_t total);
+
 /*
  * Zeroed or not: an array whose every byte its user writes before reading
  * it needs no clearing, and a kept mapping of the mesh is some 70 MB of
@@ -214,7 +216,7 @@ big_alloc(tdc_cache *cache, size_t size, bool zero)
 		if (p == MAP_FAILED)
 			return NULL;
 		((big_header *) p)->total = total;
-		tdc_advise_huge(p, total);
+		advise_array(p, total);
 	}
 	((big_header *) p)->heap = NULL;
 	return p + BIG_HEADER;
@@ -263,9 +265,11 @@ elapsed_ns(const struct timespec *a, const struct timespec *b)
  * last.  Only the interior: a huge page never reaches past the array, so
  * the resident size stays what the arrays use.  Arrays under 8 MB are left
  * alone: the probe would be a large part of them.  Mapping in warm huge
- * pages costs about 0.1 ms each, on the calling thread.
+ * pages costs about 0.1 ms each, on the calling thread, with no cancel
+ * check: a host maps a big value in slices (tdc_advise_result).  Returns
+ * false if it met a slow page, and the next slices should not ask.
  */
-void
+bool
 tdc_advise_huge(void *ptr, size_t len)
 {
 #if defined(MADV_HUGEPAGE) && defined(MADV_NOHUGEPAGE) && defined(MADV_POPULATE_WRITE)
@@ -273,9 +277,9 @@ tdc_advise_huge(void *ptr, size_t len)
 				b = ((uintptr_t) ptr + len) & ~(uintptr_t) (HUGE_SIZE - 1);
 
 	if (len < 4 * HUGE_SIZE || b <= a + HUGE_SIZE)
-		return;
+		return true;
 	if (madvise((void *) a, b - a, MADV_HUGEPAGE) != 0)
-		return;
+		return false;
 	for (uintptr_t p = a; p < b; p += HUGE_SIZE)
 	{
 		struct timespec t0,
@@ -288,12 +292,40 @@ tdc_advise_huge(void *ptr, size_t len)
 		{
 			if (p + HUGE_SIZE < b)
 				(void) madvise((void *) (p + HUGE_SIZE), b - p - HUGE_SIZE, MADV_NOHUGEPAGE);
-			break;
+			return false;
 		}
 	}
+	return true;
 #else
 	(void) ptr;
 	(void) len;
+	return false;
+#endif
+}
+
+/*
+ * The same for one of the engine's arrays, mapped by a thread that polls no
+ * cancel flag meanwhile: only the first ARRAY_PROBE bytes are mapped in
+ * page by page; if all of those came fast, the rest asks for huge pages
+ * too and is faulted in by the array's writers, each in its own part.  A
+ * kept array is not asked again.
+ */
+#define ARRAY_PROBE		((size_t) 32 << 20)
+
+static void
+advise_array(char *p, size_t total)
+{
+#if defined(MADV_HUGEPAGE)
+	uintptr_t	cut = ((uintptr_t) p + ARRAY_PROBE) & ~(uintptr_t) (HUGE_SIZE - 1),
+				b = ((uintptr_t) p + total) & ~(uintptr_t) (HUGE_SIZE - 1);
+
+	if (total <= ARRAY_PROBE + HUGE_SIZE)
+		(void) tdc_advise_huge(p, total);
+	else if (tdc_advise_huge(p, cut - (uintptr_t) p) && b > cut)
+		(void) madvise((void *) cut, b - cut, MADV_HUGEPAGE);
+#else
+	(void) p;
+	(void) total;
 #endif
 }
 

@@ -226,6 +226,34 @@ tdc_gser_result_bound(uint64 n, int flags, bool hasz)
 	return VARHDRSZ + G_HEADER + box_size(hasz) + 8 + m * member_size(flags, hasz);
 }
 
+/*
+ * Huge pages for a result value just palloc'd, where they map in fast
+ * (tdc_advise_huge), a slice at a time with an interrupt check between: a
+ * value of a few hundred MB of warm huge pages takes tens of ms to map in,
+ * and a cancel must not wait for it.  Slices end on 32 MB boundaries, so no
+ * 2 MB page is cut between two of them.
+ */
+#define RESULT_SLICE	((uintptr_t) 32 << 20)
+
+void
+tdc_advise_result(void *out, Size size)
+{
+	uintptr_t	p = (uintptr_t) out,
+				end = p + size;
+
+	while (p < end)
+	{
+		uintptr_t	next = (p & ~(RESULT_SLICE - 1)) + RESULT_SLICE;
+
+		if (next > end)
+			next = end;
+		if (!tdc_advise_huge((void *) p, (size_t) (next - p)))
+			break;
+		p = next;
+		CHECK_FOR_INTERRUPTS();
+	}
+}
+
 void
 tdc_gser_check_result_size(uint64 size, const char *fname)
 {
@@ -257,7 +285,7 @@ tdc_gser_result_alloc(const tdc_job *job, int flags, const TdcPointBuf *buf,
 	tdc_gser_check_result_size(size, fname);
 
 	out = palloc((Size) size);
-	tdc_advise_huge(out, (Size) size);
+	tdc_advise_result(out, (Size) size);
 	write_header(out, (Size) size, buf->srid, hasz, m > 0);
 	p = VARDATA(out) + G_HEADER;
 	if (m > 0)
@@ -378,7 +406,7 @@ tdc_gser_edge_list(const tdc_job *job, const TdcPointBuf *buf, uint64 count,
 
 	tdc_gser_check_result_size(size, fname);
 	out = palloc((Size) size);
-	tdc_advise_huge(out, (Size) size);
+	tdc_advise_result(out, (Size) size);
 	write_header(out, (Size) size, buf->srid, hasz, false);
 	p = VARDATA(out) + G_HEADER;
 	p = put_u32(p, G_MULTILINE);

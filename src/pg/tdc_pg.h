@@ -176,6 +176,7 @@ extern Size tdc_gser_triangle_size(bool hasz);
 extern void tdc_gser_write_triangle(struct varlena *out, const tdc_job *job,
 									const uint32 v[3], const TdcPointBuf *buf);
 extern void tdc_gser_check_result_size(uint64 size, const char *fname);
+extern void tdc_advise_result(void *out, Size size);
 
 /* tdc_agg_state.c: the state of the ST_TDCDelaunay aggregates */
 #define TDC_AGG_NAME		"ST_TDCDelaunay"

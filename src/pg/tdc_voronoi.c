@@ -257,7 +257,7 @@ write_header(Size size, int32 srid, char **body)
 	unsigned char *h = (unsigned char *) VARDATA(out);
 	uint32		s = (uint32) srid & 0x1fffff;
 
-	tdc_advise_huge(out, size);
+	tdc_advise_result(out, size);
 	SET_VARSIZE(out, size);
 	h[0] = (unsigned char) (s >> 16);
 	h[1] = (unsigned char) (s >> 8);
