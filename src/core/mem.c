@@ -14,7 +14,7 @@
  *
  * Page faults.  Every 4 kB page of a fresh mapping is a fault, a page the
  * kernel zeroes and, at unmap, a TLB shootdown on every CPU the threads ran
- * on: a third of the CPU time of a million-point aggregate in a backend went
+ * on: 29% of the CPU time of a million-point aggregate in a backend went
  * to the kernel for its arrays and its result.  Two things help.
  * tdc_prefault maps a range in with one system call where a writer is about
  * to fill it.  And a host that runs one big triangulation after another (a
@@ -35,10 +35,11 @@
  * (free page reporting, which hands back whole 2 MB blocks), a huge page that
  * was not in use a moment before costs some 4 ms to fault in: 0.4-0.7 GB/s
  * (bench/first_touch.c prints both).  Which case holds depends on what ran
- * in the last seconds, so tdc_advise_huge asks: it maps in the huge pages of
- * a big fresh array one by one, timing each, and once one takes longer than
- * the 512 small faults it replaces would, the rest of the array stays in 4
- * kB pages.  A kept mapping keeps the pages it was first given.
+ * in the last seconds, so tdc_advise_huge asks: it maps in huge pages one by
+ * one, timing each, and once one takes longer than the 512 small faults it
+ * replaces would, the rest stays in 4 kB pages.  A result value goes through
+ * it whole, in slices; an engine array only its first 32 MB (advise_array).
+ * A kept mapping keeps the pages it was first given.
  */
 #include <pthread.h>
 #include <stdlib.h>
@@ -367,8 +368,7 @@ tdc_cache_create(size_t limit)
 
 /*
  * Unmap kept mappings, the longest-kept first, until at most keep bytes are
- * kept.  Only takes the
- * lock if it is free, so that a host may call it from a signal handler that
+ * kept.  Only takes the lock if it is free, so that a host may call it from a signal handler that
  * interrupted nothing of ours; returns false, doing nothing, if the lock was
  * held.
  */

@@ -531,15 +531,14 @@ triangulate_to_datum(const TdcPointBuf *buf, double tolerance, int flags,
 	if (tdc_guc_stats)
 	{
 		char		phases[160];
+		char		read[40] = "";
 		double		free_ms = ms_since(start);
 
-		/* kept: what the next run may take back (tdc_cache.c) */
 		if (read_ms >= 0)
-			snprintf(phases, sizeof(phases), "; read %.3f ms, write %.3f ms, free %.3f ms, kept %llu kB",
-					 read_ms, write_ms, free_ms, tdc_backend_cache_kept_kb());
-		else
-			snprintf(phases, sizeof(phases), "; write %.3f ms, free %.3f ms, kept %llu kB",
-					 write_ms, free_ms, tdc_backend_cache_kept_kb());
+			snprintf(read, sizeof(read), "read %.3f ms, ", read_ms);
+		/* kept: what the next run may take back (tdc_cache.c) */
+		snprintf(phases, sizeof(phases), "; %swrite %.3f ms, free %.3f ms, kept %llu kB",
+				 read, write_ms, free_ms, tdc_backend_cache_kept_kb());
 		stats_report(&st, fname, phases);
 	}
 	return PointerGetDatum(result);
