@@ -396,6 +396,13 @@ DECLARE
 	r record;
 	tile_sql text;
 	tile_box text;
+	px text := 'ST_X(g)';
+	py text := 'ST_Y(g)';
+	cells text;
+	cell float8;				-- side of the halo join's grid cells
+	ncx bigint;
+	ncy bigint;
+	cell_of text;				-- SQL of a staged point's cell
 BEGIN
 	-- the geometry column
 	SELECT t.typname INTO gtyp
@@ -539,7 +546,11 @@ BEGIN
 		tiles := 'pg_temp.tdc_tiled_tiles';
 		rt := tiles;
 		halo := 'pg_temp.tdc_tiled_halo';
-		EXECUTE format('CREATE TEMP TABLE %s (tile %s, seq bigint, vi bigint, g geometry)', 'tdc_tiled_pts', ttype);
+		cells := 'pg_temp.tdc_tiled_cells';
+		EXECUTE format('CREATE TEMP TABLE %s (tile %s, seq bigint, vi bigint, g geometry, x float8, y float8)',
+					   'tdc_tiled_pts', ttype);
+		px := 'x';
+		py := 'y';
 	END IF;
 
 	-- every vertex, in the source's order (block, offset, vertex), with its
@@ -547,11 +558,27 @@ BEGIN
 	IF tile_column IS NOT NULL THEN
 		tv := format('s.%I', tile_column);
 	END IF;
-	EXECUTE format('INSERT INTO %s (tile, seq, vi, g)
-					SELECT %s, ((s.ctid::text::point)[0])::bigint * 65536 + ((s.ctid::text::point)[1])::bigint,
-						   d.vi, d.geom
-					  FROM %s s, LATERAL ST_DumpPoints(s.%I) WITH ORDINALITY AS d(path, geom, vi)
-					 WHERE s.%I IS NOT NULL', pts, tv, source, geom_column, geom_column);
+	IF citus THEN
+		EXECUTE format('INSERT INTO %s (tile, seq, vi, g)
+						SELECT %s, ((s.ctid::text::point)[0])::bigint * 65536 + ((s.ctid::text::point)[1])::bigint,
+							   d.vi, d.geom
+						  FROM %s s, LATERAL ST_DumpPoints(s.%I) WITH ORDINALITY AS d(path, geom, vi)
+						 WHERE s.%I IS NOT NULL', pts, tv, source, geom_column, geom_column);
+	ELSE
+		-- a row that is one point is its own vertex: ST_DumpPoints is most
+		-- of the cost of a point table, and only the other rows need it
+		EXECUTE format('INSERT INTO %1$s (tile, seq, vi, g, x, y)
+						SELECT %2$s, (d.c[0])::bigint * 65536 + (d.c[1])::bigint, 1, d.geom, ST_X(d.geom), ST_Y(d.geom)
+						  FROM %3$s s, LATERAL (SELECT s.%4$I AS geom, s.ctid::text::point AS c) d
+						 WHERE ST_GeometryType(s.%4$I) = ''ST_Point'' AND NOT ST_IsEmpty(s.%4$I)',
+					   pts, tv, source, geom_column);
+		EXECUTE format('INSERT INTO %1$s (tile, seq, vi, g, x, y)
+						SELECT %2$s, ((s.ctid::text::point)[0])::bigint * 65536 + ((s.ctid::text::point)[1])::bigint,
+							   d.vi, d.geom, ST_X(d.geom), ST_Y(d.geom)
+						  FROM %3$s s, LATERAL ST_DumpPoints(s.%4$I) WITH ORDINALITY AS d(path, geom, vi)
+						 WHERE ST_GeometryType(s.%4$I) <> ''ST_Point''',
+					   pts, tv, source, geom_column);
+	END IF;
 	IF tile_column IS NOT NULL THEN
 		EXECUTE format('SELECT EXISTS (SELECT 1 FROM %s WHERE tile IS NULL)', pts) INTO has_null;
 		IF has_null THEN
@@ -562,13 +589,13 @@ BEGIN
 
 
 	-- the tiles, labelled 1.. in the order of their tile values
-	EXECUTE format('CREATE TEMP TABLE %s AS
+	EXECUTE format('CREATE TEMP TABLE %1$s AS
 					SELECT tile, row_number() OVER (ORDER BY tile) AS label, n, x0, y0, x1, y1,
 						   NULL::float8[] AS known, NULL::float8[] AS extra, true AS pending
-					  FROM (SELECT tile, count(*) AS n, min(ST_X(g)) AS x0, min(ST_Y(g)) AS y0,
-								   max(ST_X(g)) AS x1, max(ST_Y(g)) AS y1
-							  FROM %s GROUP BY tile) t',
-				   'tdc_tiled_tiles', pts);
+					  FROM (SELECT tile, count(*) AS n, min(%3$s) AS x0, min(%4$s) AS y0,
+								   max(%3$s) AS x1, max(%4$s) AS y1
+							  FROM %2$s GROUP BY tile) t',
+				   'tdc_tiled_tiles', pts, px, py);
 	-- a first K: the tile's extent plus some eight point spacings
 	margin := 8 * spacing;
 	EXECUTE format('UPDATE %s SET known = ARRAY[x0 - %2$L::float8, y0 - %2$L::float8, x1 + %2$L::float8, y1 + %2$L::float8]',
@@ -610,9 +637,14 @@ BEGIN
 		EXECUTE format('CREATE TEMP TABLE %s (tile %s, label bigint, seq bigint, vi bigint, g geometry)',
 					   'tdc_tiled_halo', ttype);
 		EXECUTE format('CREATE INDEX ON %s (tile)', halo);
+		-- the halo join's grid: a row per box and grid cell it meets (below)
+		EXECUTE format('CREATE TEMP TABLE %s (cell bigint, tile %s, nprior int, boxes float8[])',
+					   'tdc_tiled_cells', ttype);
 	END IF;
 	IF npts > 0 THEN
-		EXECUTE format('CREATE INDEX ON %s USING gist (g)', pts);
+		IF citus THEN
+			EXECUTE format('CREATE INDEX ON %s USING gist (g)', pts);
+		END IF;
 		EXECUTE format('ANALYZE %s', pts);
 	END IF;
 
@@ -644,23 +676,70 @@ BEGIN
 		-- the halo of every pending tile: every point in its closed K, with its owner
 		EXECUTE format('DELETE FROM %s', halo);
 		-- (K and the extra boxes: a point is taken from the first box that holds it)
-		-- (the boxes are materialized on plain PostgreSQL: inlined, known ||
-		-- extra would be evaluated again for every point; Citus pushes the
-		-- statement down only with the subquery inline)
-		tile_box := format('SELECT k.tile, k.bx, i, k.bx[4*i+1] AS x0, k.bx[4*i+2] AS y0,
-								   k.bx[4*i+3] AS x1, k.bx[4*i+4] AS y1
-							  FROM (SELECT tile, known || extra AS bx FROM %s WHERE pending) k,
-								   generate_series(0, cardinality(k.bx) / 4 - 1) i', rt);
-		EXECUTE format('%5$s
-						INSERT INTO %1$s (tile, label, seq, vi, g)
-						SELECT b.tile, o.label, p.seq, p.vi, p.g
-						  FROM %6$s b
-						  JOIN %2$s p ON p.g && ST_MakeEnvelope(b.x0, b.y0, b.x1, b.y1, %4$s)
-									AND _tdc_first_box(ST_X(p.g), ST_Y(p.g), b.bx, b.i)
-						  JOIN %3$s o ON o.tile = p.tile',
-					   halo, pts, rt, coalesce(srid_lo, 0),
-					   CASE WHEN citus THEN '' ELSE 'WITH b AS MATERIALIZED (' || tile_box || ')' END,
-					   CASE WHEN citus THEN '(' || tile_box || ')' ELSE '' END);
+		IF citus THEN
+			-- each box against the points' GiST index; Citus pushes the
+			-- statement down only with the subquery inline
+			tile_box := format('SELECT k.tile, k.bx, i, k.bx[4*i+1] AS x0, k.bx[4*i+2] AS y0,
+									   k.bx[4*i+3] AS x1, k.bx[4*i+4] AS y1
+								  FROM (SELECT tile, known || extra AS bx FROM %s WHERE pending) k,
+									   generate_series(0, cardinality(k.bx) / 4 - 1) i', rt);
+			EXECUTE format('INSERT INTO %1$s (tile, label, seq, vi, g)
+							SELECT b.tile, o.label, p.seq, p.vi, p.g
+							  FROM (%5$s) b
+							  JOIN %2$s p ON p.g && ST_MakeEnvelope(b.x0, b.y0, b.x1, b.y1, %4$s)
+										AND _tdc_first_box(ST_X(p.g), ST_Y(p.g), b.bx, b.i)
+							  JOIN %3$s o ON o.tile = p.tile',
+						   halo, pts, rt, coalesce(srid_lo, 0), tile_box);
+		ELSE
+			-- One pass over the points, hashed against a grid: every box
+			-- lists the cells it meets, with the tile's earlier boxes that
+			-- overlap it (a point in box i and in no earlier box of its tile
+			-- comes from box i; an earlier box holding it must overlap box i).
+			-- The cell side is about 32 point spacings, coarser where the
+			-- boxes together would make more than npts / 64 + 1000 cells, and
+			-- at least 2^-20 of the extent, so that both cell numbers fit one
+			-- key.  A point's cell number rises with its coordinate (each
+			-- step rounds monotonically), so a point in a box is in one of its
+			-- cells; the exact test is _tdc_first_box.  Cells outside the
+			-- extent (gx0 .. gx1: the values' boxes, rounded outward) hold
+			-- no point and are left out.
+			EXECUTE format('SELECT coalesce(sum(greatest(least(b.x1, %3$L::float8) - greatest(b.x0, %1$L::float8), 0)
+												* greatest(least(b.y1, %4$L::float8) - greatest(b.y0, %2$L::float8), 0)), 0)
+							  FROM (SELECT k.bx[4*i+1] AS x0, k.bx[4*i+2] AS y0, k.bx[4*i+3] AS x1, k.bx[4*i+4] AS y1
+									  FROM (SELECT known || extra AS bx FROM %5$s WHERE pending) k,
+										   generate_series(0, cardinality(k.bx) / 4 - 1) i) b',
+						   gx0, gy0, gx1, gy1, tiles) INTO cell;
+			cell := greatest(32 * spacing, sqrt(cell / (npts::float8 / 64 + 1000)),
+							 (gx1 - gx0) / 1048576, (gy1 - gy0) / 1048576);
+			ncx := floor((gx1 - gx0) / cell);
+			ncy := floor((gy1 - gy0) / cell);
+			EXECUTE format('DELETE FROM %s', cells);
+			EXECUTE format('INSERT INTO %1$s (cell, tile, nprior, boxes)
+							SELECT cx * 2097152 + cy, b.tile, cardinality(b.boxes) / 4 - 1, b.boxes
+							  FROM (SELECT k.tile, k.bx[4*i+1] AS x0, k.bx[4*i+2] AS y0,
+										   k.bx[4*i+3] AS x1, k.bx[4*i+4] AS y1,
+										   coalesce((SELECT array_agg(k.bx[4*j+m] ORDER BY j, m)
+													   FROM generate_series(0, i - 1) j, generate_series(1, 4) m
+													  WHERE k.bx[4*j+1] <= k.bx[4*i+3] AND k.bx[4*i+1] <= k.bx[4*j+3]
+														AND k.bx[4*j+2] <= k.bx[4*i+4] AND k.bx[4*i+2] <= k.bx[4*j+4]),
+													''{}'') || k.bx[4*i+1:4*i+4] AS boxes
+									  FROM (SELECT tile, known || extra AS bx FROM %2$s WHERE pending) k,
+										   generate_series(0, cardinality(k.bx) / 4 - 1) i) b,
+								   generate_series(greatest(floor((b.x0 - %3$L::float8) / %5$L::float8), 0)::bigint,
+												   least(floor((b.x1 - %3$L::float8) / %5$L::float8), %6$s)::bigint) cx,
+								   generate_series(greatest(floor((b.y0 - %4$L::float8) / %5$L::float8), 0)::bigint,
+												   least(floor((b.y1 - %4$L::float8) / %5$L::float8), %7$s)::bigint) cy',
+						   cells, tiles, gx0, gy0, cell, ncx, ncy);
+			EXECUTE format('ANALYZE %s', cells);
+			cell_of := format('floor((p.x - %1$L::float8) / %3$L::float8)::bigint * 2097152
+							   + floor((p.y - %2$L::float8) / %3$L::float8)::bigint', gx0, gy0, cell);
+			EXECUTE format('INSERT INTO %1$s (tile, label, seq, vi, g)
+							SELECT c.tile, o.label, p.seq, p.vi, p.g
+							  FROM %2$s p
+							  JOIN %3$s c ON c.cell = %5$s AND _tdc_first_box(p.x, p.y, c.boxes, c.nprior)
+							  JOIN %4$s o ON o.tile = p.tile',
+						   halo, pts, cells, tiles, cell_of);
+		END IF;
 		GET DIAGNOSTICS ntri = ROW_COUNT;
 		halo_pts := halo_pts + ntri;
 		IF citus THEN
@@ -701,6 +780,8 @@ BEGIN
 	EXECUTE format('DROP TABLE %s, %s, %s', halo, tiles, pts);
 	IF citus THEN
 		EXECUTE format('DROP TABLE %s', rt);
+	ELSE
+		EXECUTE format('DROP TABLE %s', cells);
 	END IF;
 	RAISE NOTICE '%: % triangles from % points in % tiles, % rounds, % halo points', fn, ntri, npts, ntiles,
 		round, halo_pts;
