@@ -403,6 +403,7 @@ DECLARE
 	ncx bigint;
 	ncy bigint;
 	cell_of text;				-- SQL of a staged point's cell
+	nparts bigint;
 BEGIN
 	-- the geometry column
 	SELECT t.typname INTO gtyp
@@ -634,11 +635,21 @@ BEGIN
 					   rt, ttype);
 		EXECUTE format('SELECT create_reference_table(%L)', rt);
 	ELSE
-		EXECUTE format('CREATE TEMP TABLE %s (tile %s, label bigint, seq bigint, vi bigint, g geometry)',
-					   'tdc_tiled_halo', ttype);
-		EXECUTE format('CREATE INDEX ON %s (tile)', halo);
+		-- The halo, partitioned by the label of its tile (tl): a tile's
+		-- statement reads its own partition from end to end, where an index
+		-- on a table of every tile's rows, in the points' order, sent it
+		-- to almost every block.  One partition per tile, or per run of
+		-- consecutive labels beyond 64 tiles.
+		EXECUTE format('CREATE TEMP TABLE %s (tile %s, label bigint, seq bigint, vi bigint, g geometry, tl bigint)
+						PARTITION BY RANGE (tl)', 'tdc_tiled_halo', ttype);
+		nparts := least(ntiles, 64);
+		FOR part IN 0 .. nparts - 1 LOOP
+			EXECUTE format('CREATE TEMP TABLE %I PARTITION OF %s FOR VALUES FROM (%s) TO (%s)',
+						   'tdc_tiled_halo_' || part, halo, 1 + part * ntiles / nparts,
+						   1 + (part + 1) * ntiles / nparts);
+		END LOOP;
 		-- the halo join's grid: a row per box and grid cell it meets (below)
-		EXECUTE format('CREATE TEMP TABLE %s (cell bigint, tile %s, nprior int, boxes float8[])',
+		EXECUTE format('CREATE TEMP TABLE %s (cell bigint, tile %s, tl bigint, nprior int, boxes float8[])',
 					   'tdc_tiled_cells', ttype);
 	END IF;
 	IF npts > 0 THEN
@@ -657,7 +668,7 @@ BEGIN
 				 WHERE k.pending %s
 				 GROUP BY h.tile, k.label) s,
 			   LATERAL _tdc_tile_triangles(s.r) t',
-		qtarget, hull, halo, rt, CASE WHEN citus THEN '' ELSE format('AND h.tile = $1::%s', ttype) END);
+		qtarget, hull, halo, rt, CASE WHEN citus THEN '' ELSE format('AND h.tile = $1::%s AND h.tl = $2', ttype) END);
 
 	done := 0;
 	LOOP
@@ -714,16 +725,16 @@ BEGIN
 			ncx := floor((gx1 - gx0) / cell);
 			ncy := floor((gy1 - gy0) / cell);
 			EXECUTE format('DELETE FROM %s', cells);
-			EXECUTE format('INSERT INTO %1$s (cell, tile, nprior, boxes)
-							SELECT cx * 2097152 + cy, b.tile, cardinality(b.boxes) / 4 - 1, b.boxes
-							  FROM (SELECT k.tile, k.bx[4*i+1] AS x0, k.bx[4*i+2] AS y0,
+			EXECUTE format('INSERT INTO %1$s (cell, tile, tl, nprior, boxes)
+							SELECT cx * 2097152 + cy, b.tile, b.label, cardinality(b.boxes) / 4 - 1, b.boxes
+							  FROM (SELECT k.tile, k.label, k.bx[4*i+1] AS x0, k.bx[4*i+2] AS y0,
 										   k.bx[4*i+3] AS x1, k.bx[4*i+4] AS y1,
 										   coalesce((SELECT array_agg(k.bx[4*j+m] ORDER BY j, m)
 													   FROM generate_series(0, i - 1) j, generate_series(1, 4) m
 													  WHERE k.bx[4*j+1] <= k.bx[4*i+3] AND k.bx[4*i+1] <= k.bx[4*j+3]
 														AND k.bx[4*j+2] <= k.bx[4*i+4] AND k.bx[4*i+2] <= k.bx[4*j+4]),
 													''{}'') || k.bx[4*i+1:4*i+4] AS boxes
-									  FROM (SELECT tile, known || extra AS bx FROM %2$s WHERE pending) k,
+									  FROM (SELECT tile, label, known || extra AS bx FROM %2$s WHERE pending) k,
 										   generate_series(0, cardinality(k.bx) / 4 - 1) i) b,
 								   generate_series(greatest(floor((b.x0 - %3$L::float8) / %5$L::float8), 0)::bigint,
 												   least(floor((b.x1 - %3$L::float8) / %5$L::float8), %6$s)::bigint) cx,
@@ -733,8 +744,8 @@ BEGIN
 			EXECUTE format('ANALYZE %s', cells);
 			cell_of := format('floor((p.x - %1$L::float8) / %3$L::float8)::bigint * 2097152
 							   + floor((p.y - %2$L::float8) / %3$L::float8)::bigint', gx0, gy0, cell);
-			EXECUTE format('INSERT INTO %1$s (tile, label, seq, vi, g)
-							SELECT c.tile, o.label, p.seq, p.vi, p.g
+			EXECUTE format('INSERT INTO %1$s (tile, label, seq, vi, g, tl)
+							SELECT c.tile, o.label, p.seq, p.vi, p.g, c.tl
 							  FROM %2$s p
 							  JOIN %3$s c ON c.cell = %5$s AND _tdc_first_box(p.x, p.y, c.boxes, c.nprior)
 							  JOIN %4$s o ON o.tile = p.tile',
@@ -747,8 +758,8 @@ BEGIN
 		ELSE
 			reported := 0;
 			i := 0;
-			FOR r IN EXECUTE format('SELECT tile::text AS tile FROM %s WHERE pending ORDER BY label', tiles) LOOP
-				EXECUTE tile_sql USING r.tile;
+			FOR r IN EXECUTE format('SELECT tile::text AS tile, label FROM %s WHERE pending ORDER BY label', tiles) LOOP
+				EXECUTE tile_sql USING r.tile, r.label;
 				i := i + 1;
 				IF (i * 10 / pending)::int > reported THEN
 					reported := (i * 10 / pending)::int;
