@@ -515,6 +515,34 @@ tdc_gser_append(TdcPointBuf *buf, const struct varlena *geom,
 	int32		srid;
 
 	Assert(!VARATT_IS_EXTERNAL(geom) && !VARATT_IS_COMPRESSED(geom));
+
+	/*
+	 * A 2D point with no box and no extended flags, into a buffer that has
+	 * room and holds 2D vertices of its SRID: the row of a point table
+	 * after the first.  Its exact length rules out every optional part, so
+	 * the type, the count and the coordinates are all left to check.
+	 * Anything else, or a coordinate that is not finite (for the error),
+	 * takes the walk below.
+	 */
+	if (VARSIZE_ANY_EXHDR(geom) == G_HEADER + 8 + 2 * sizeof(double) &&
+		buf->n < buf->cap && buf->have_first && !buf->hasz)
+	{
+		const char *d = VARDATA_ANY(geom);
+		double		c[2];
+
+		memcpy(c, d + G_HEADER + 8, sizeof(c));
+		if (((unsigned char) d[3] & (GF_Z | GF_M | GF_BBOX | GF_GEODETIC)) == 0 &&
+			read_u32(d + G_HEADER) == G_POINT && read_u32(d + G_HEADER + 4) == 1 &&
+			read_srid((const unsigned char *) d) == buf->srid &&
+			isfinite(c[0]) && isfinite(c[1]))
+		{
+			buf->xy[2 * buf->n] = c[0];
+			buf->xy[2 * buf->n + 1] = c[1];
+			buf->n++;
+			return;
+		}
+	}
+
 	memset(&w, 0, sizeof(w));
 	w.buf = buf;
 	w.fname = fname;
