@@ -659,16 +659,31 @@ BEGIN
 		EXECUTE format('ANALYZE %s', pts);
 	END IF;
 
-	-- the per-tile statement: $1 restricts it to one tile on plain PostgreSQL
-	tile_sql := format('INSERT INTO %s (id, tile, geom)
-		SELECT CASE WHEN t.k = 0 THEN -1 ELSE s.label * 4294967296 + t.k END, s.tile, t.geom
-		  FROM (SELECT h.tile, k.label,
-					   _tdc_tile(h.g, h.label, k.label, k.known, %L::float8[], k.extra, h.seq, h.vi) AS r
-				  FROM %s h JOIN %s k ON k.tile = h.tile
-				 WHERE k.pending %s
-				 GROUP BY h.tile, k.label) s,
-			   LATERAL _tdc_tile_triangles(s.r) t',
-		qtarget, hull, halo, rt, CASE WHEN citus THEN '' ELSE format('AND h.tile = $1::%s AND h.tl = $2', ttype) END);
+	-- the per-tile statement: on Citus one for all tiles, the function in
+	-- FROM; on plain PostgreSQL one tile ($1, its label $2) at a time, the
+	-- function in the select list, where its rows stream into the INSERT
+	-- (in FROM the executor first collects a tile's rows in a tuplestore)
+	IF citus THEN
+		tile_sql := format('INSERT INTO %s (id, tile, geom)
+			SELECT CASE WHEN t.k = 0 THEN -1 ELSE s.label * 4294967296 + t.k END, s.tile, t.geom
+			  FROM (SELECT h.tile, k.label,
+						   _tdc_tile(h.g, h.label, k.label, k.known, %L::float8[], k.extra, h.seq, h.vi) AS r
+					  FROM %s h JOIN %s k ON k.tile = h.tile
+					 WHERE k.pending
+					 GROUP BY h.tile, k.label) s,
+				   LATERAL _tdc_tile_triangles(s.r) t',
+			qtarget, hull, halo, rt);
+	ELSE
+		tile_sql := format('INSERT INTO %s (id, tile, geom)
+			SELECT CASE WHEN (q.t).k = 0 THEN -1 ELSE q.label * 4294967296 + (q.t).k END, q.tile, (q.t).geom
+			  FROM (SELECT s.tile, s.label, _tdc_tile_triangles(s.r) AS t
+					  FROM (SELECT h.tile, k.label,
+								   _tdc_tile(h.g, h.label, k.label, k.known, %L::float8[], k.extra, h.seq, h.vi) AS r
+							  FROM %s h JOIN %s k ON k.tile = h.tile
+							 WHERE k.pending AND h.tile = $1::%s AND h.tl = $2
+							 GROUP BY h.tile, k.label) s) q',
+			qtarget, hull, halo, rt, ttype);
+	END IF;
 
 	done := 0;
 	LOOP

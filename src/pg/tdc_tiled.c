@@ -438,34 +438,63 @@ PG_FUNCTION_INFO_V1(_tdc_tile_triangles);
  * A final tile's triangles numbered k = 1.., or for a tile that is not
  * final one row k = 0 holding the box it needs as a POLYGON
  * (xmin ymin, xmax ymin, xmax ymax, xmin ymax, xmin ymin).
+ *
+ * One row per call: called in a select list (ProjectSet), as the plain
+ * PostgreSQL procedure does, the rows go straight to the INSERT, where a
+ * materialized set of a tile's million triangles was written to a
+ * tuplestore, spilled to disk past work_mem, and read back.  (In FROM, as
+ * on Citus, the executor collects the rows itself.)
  */
 Datum
 _tdc_tile_triangles(PG_FUNCTION_ARGS)
 {
-	ReturnSetInfo *rsinfo = (ReturnSetInfo *) fcinfo->resultinfo;
-	bytea	   *in = PG_GETARG_BYTEA_P(0);
+	FuncCallContext *fctx;
+	const bytea *in;
 	TileOut		h;
+	int			dim;
 	Datum		values[2];
 	bool		nulls[2] = {false, false};
-	int			dim;
+	double		ring[15];
+	HeapTuple	tuple;
 
 	tdc_signal_guard();
-	InitMaterializedSRF(fcinfo, 0);
-	if (VARSIZE(in) < sizeof(TileOut))
-		ereport(ERROR,
-				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
-				 errmsg("%s: not a tile result", TILE_FNAME)));
+	if (SRF_IS_FIRSTCALL())
+	{
+		MemoryContext old;
+		TupleDesc	desc;
+
+		fctx = SRF_FIRSTCALL_INIT();
+		old = MemoryContextSwitchTo(fctx->multi_call_memory_ctx);
+		/* no copy of a plain value: the argument stays valid across calls */
+		in = (const bytea *) PG_DETOAST_DATUM(PG_GETARG_DATUM(0));
+		if (VARSIZE(in) < sizeof(TileOut))
+			ereport(ERROR,
+					(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
+					 errmsg("%s: not a tile result", TILE_FNAME)));
+		memcpy(&h, in, sizeof(h));
+		dim = h.hasz ? 3 : 2;
+		if ((h.final != 0 && h.final != 1) ||
+			VARSIZE(in) != sizeof(TileOut) + h.ntri * 3 * dim * sizeof(double))
+			ereport(ERROR,
+					(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
+					 errmsg("%s: corrupt tile result", TILE_FNAME)));
+		if (get_call_result_type(fcinfo, NULL, &desc) != TYPEFUNC_COMPOSITE)
+			elog(ERROR, "%s: return type must be a row type", TILE_FNAME);
+		fctx->tuple_desc = BlessTupleDesc(desc);
+		fctx->user_fctx = (void *) in;
+		fctx->max_calls = h.final ? h.ntri : 1;
+		MemoryContextSwitchTo(old);
+	}
+	fctx = SRF_PERCALL_SETUP();
+	if (fctx->call_cntr >= fctx->max_calls)
+		SRF_RETURN_DONE(fctx);
+	CHECK_FOR_INTERRUPTS();
+
+	in = (const bytea *) fctx->user_fctx;
 	memcpy(&h, in, sizeof(h));
 	dim = h.hasz ? 3 : 2;
-	if ((h.final != 0 && h.final != 1) ||
-		VARSIZE(in) != sizeof(TileOut) + h.ntri * 3 * dim * sizeof(double))
-		ereport(ERROR,
-				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
-				 errmsg("%s: corrupt tile result", TILE_FNAME)));
-
 	if (!h.final)
 	{
-		double		ring[15];
 		double		c[5][2] = {{h.need[0], h.need[1]}, {h.need[2], h.need[1]},
 		{h.need[2], h.need[3]}, {h.need[0], h.need[3]}, {h.need[0], h.need[1]}};
 
@@ -478,25 +507,19 @@ _tdc_tile_triangles(PG_FUNCTION_ARGS)
 		}
 		values[0] = Int64GetDatum(0);
 		values[1] = make_polygon(ring, 5, dim, h.srid);
-		tuplestore_putvalues(rsinfo->setResult, rsinfo->setDesc, values, nulls);
 	}
 	else
 	{
-		const double *tri = (const double *) ((const char *) in + sizeof(TileOut));
-		double		ring[12];
+		const double *tri = (const double *) ((const char *) in + sizeof(TileOut)) +
+			fctx->call_cntr * 3 * dim;
 
-		for (uint64 t = 0; t < h.ntri; t++)
-		{
-			CHECK_FOR_INTERRUPTS();
-			memcpy(ring, tri + t * 3 * dim, 3 * dim * sizeof(double));
-			memcpy(ring + 3 * dim, tri + t * 3 * dim, dim * sizeof(double));
-			values[0] = Int64GetDatum((int64) t + 1);
-			values[1] = make_polygon(ring, 4, dim, h.srid);
-			tuplestore_putvalues(rsinfo->setResult, rsinfo->setDesc, values, nulls);
-			pfree(DatumGetPointer(values[1]));
-		}
+		memcpy(ring, tri, 3 * dim * sizeof(double));
+		memcpy(ring + 3 * dim, tri, dim * sizeof(double));
+		values[0] = Int64GetDatum((int64) fctx->call_cntr + 1);
+		values[1] = make_polygon(ring, 4, dim, h.srid);
 	}
-	return (Datum) 0;
+	tuple = heap_form_tuple(fctx->tuple_desc, values, nulls);
+	SRF_RETURN_NEXT(fctx, HeapTupleGetDatum(tuple));
 }
 
 PG_FUNCTION_INFO_V1(_tdc_first_box);
