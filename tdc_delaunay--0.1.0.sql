@@ -404,6 +404,9 @@ DECLARE
 	ncy bigint;
 	cell_of text;				-- SQL of a staged point's cell
 	nparts bigint;
+	one_row text[];				-- plain PostgreSQL: tiles whose statement wrote one row
+	written bigint := 0;		-- plain PostgreSQL: rows written, boxes included
+	nrows bigint;
 BEGIN
 	-- the geometry column
 	SELECT t.typname INTO gtyp
@@ -695,6 +698,7 @@ BEGIN
 				USING ERRCODE = 'internal_error';
 		END IF;
 		rerun := 0;
+		one_row := '{}';
 		IF citus THEN
 			EXECUTE format('DELETE FROM %s', rt);
 			EXECUTE format('INSERT INTO %s SELECT tile, label, known, extra, pending FROM %s', rt, tiles);
@@ -775,6 +779,12 @@ BEGIN
 			i := 0;
 			FOR r IN EXECUTE format('SELECT tile::text AS tile, label FROM %s WHERE pending ORDER BY label', tiles) LOOP
 				EXECUTE tile_sql USING r.tile, r.label;
+				GET DIAGNOSTICS nrows = ROW_COUNT;
+				written := written + nrows;
+				-- a tile that is not final writes one row: its box
+				IF nrows = 1 THEN
+					one_row := one_row || r.tile;
+				END IF;
 				i := i + 1;
 				IF (i * 10 / pending)::int > reported THEN
 					reported := (i * 10 / pending)::int;
@@ -783,12 +793,18 @@ BEGIN
 			END LOOP;
 		END IF;
 		-- tiles that were not final: K := the box they need, grown by a tenth
+		-- (on plain PostgreSQL only the tiles that wrote one row can be
+		-- among them: the target is scanned for their boxes only if there
+		-- are such tiles)
 		EXECUTE format('UPDATE %s SET pending = false WHERE pending', tiles);
 		FOR r IN EXECUTE format('SELECT tile::text AS tile, ST_X(ST_PointN(ST_ExteriorRing(geom), 1)) AS x0,
 									   ST_Y(ST_PointN(ST_ExteriorRing(geom), 1)) AS y0,
 									   ST_X(ST_PointN(ST_ExteriorRing(geom), 3)) AS x1,
 									   ST_Y(ST_PointN(ST_ExteriorRing(geom), 3)) AS y1
-								  FROM %s WHERE id = -1', qtarget) LOOP
+								  FROM %s WHERE id = -1 %s', qtarget,
+								CASE WHEN citus THEN '' WHEN cardinality(one_row) = 0 THEN 'AND false'
+									 ELSE 'AND tile::text = ANY($1)' END)
+						 USING one_row LOOP
 			EXECUTE format('UPDATE %s SET pending = true,
 								known = ARRAY[%2$L::float8 - %6$L::float8, %3$L::float8 - %7$L::float8,
 											  %4$L::float8 + %6$L::float8, %5$L::float8 + %7$L::float8]
@@ -797,12 +813,19 @@ BEGIN
 			USING r.tile;
 			rerun := rerun + 1;
 		END LOOP;
-		EXECUTE format('DELETE FROM %s WHERE id = -1', qtarget);
+		IF citus OR rerun > 0 THEN
+			EXECUTE format('DELETE FROM %s WHERE id = -1', qtarget);
+		END IF;
+		written := written - rerun;
 		done := done + pending - rerun;
 		RAISE NOTICE '%: round %: % of % tiles final', fn, round, done, ntiles;
 	END LOOP;
 
-	EXECUTE format('SELECT count(*) FROM %s', qtarget) INTO ntri;
+	IF citus THEN
+		EXECUTE format('SELECT count(*) FROM %s', qtarget) INTO ntri;
+	ELSE
+		ntri := written;
+	END IF;
 	EXECUTE format('DROP TABLE %s, %s, %s', halo, tiles, pts);
 	IF citus THEN
 		EXECUTE format('DROP TABLE %s', rt);
