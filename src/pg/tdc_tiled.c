@@ -17,8 +17,11 @@
  *
  * A GROUP BY on the distribution column runs whole on the shard that holds
  * the group, so the points and the triangles stay on the worker.  On plain
- * PostgreSQL the procedure runs the same statement one tile at a time, so
- * a backend holds one tile and its halo.
+ * PostgreSQL the procedure runs the statement one tile at a time, so a
+ * backend holds one tile and its halo: the tile's halo is a partition of
+ * its own, and _tdc_tile_triangles is called in the select list, where its
+ * rows (one per call) stream into the INSERT rather than being collected
+ * in a tuplestore first.
  *
  * The aggregate's result is a bytea in the format below, not a geometry
  * collection, because a tile that is not final yet must report the box it
