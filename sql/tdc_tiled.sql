@@ -42,6 +42,10 @@ SELECT * FROM tiled_vs_dump('tt_uni_sq', 'SELECT geom FROM tt_uni');
 SELECT count(DISTINCT tile) AS tiles FROM tt_uni_sq;
 CALL tdc_delaunay_tiled('tt_uni', 'public.tt_uni_auto');
 SELECT * FROM tiled_vs_dump('tt_uni_auto', 'SELECT geom FROM tt_uni');
+-- more tiles than the halo has partitions (64): several tiles share one
+CALL tdc_delaunay_tiled('tt_uni', 'tt_uni_many', tile_size => 10);
+SELECT * FROM tiled_vs_dump('tt_uni_many', 'SELECT geom FROM tt_uni');
+SELECT count(DISTINCT tile) AS tiles FROM tt_uni_many;
 
 -- progress and the summary are NOTICEs
 SET client_min_messages = notice;
@@ -161,6 +165,6 @@ SELECT to_regclass('tt_big_tri') AS no_target, count(*) AS staging FROM pg_class
 SELECT 1 AS alive;
 \set VERBOSITY default
 
-DROP TABLE tt_uni, tt_uni_tri, tt_uni_sq, tt_uni_auto, tt_uni_notice, tt_dup, tt_dup_tri, tt_dup_one, tt_dup_sq, tt_lat, tt_lat_tri,
+DROP TABLE tt_uni, tt_uni_tri, tt_uni_sq, tt_uni_auto, tt_uni_many, tt_uni_notice, tt_dup, tt_dup_tri, tt_dup_one, tt_dup_sq, tt_lat, tt_lat_tri,
 	tt_col, tt_col_tri, tt_line, tt_line_tri, tt_empty, tt_empty_tri, tt_ring, tt_ring_tri, tt_srid, tt_nulltile, tt_big;
 DROP FUNCTION tiled_vs_dump(regclass, text);
