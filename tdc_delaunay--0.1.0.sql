@@ -677,15 +677,18 @@ BEGIN
 				   LATERAL _tdc_tile_triangles(s.r) t',
 			qtarget, hull, halo, rt);
 	ELSE
+		-- (the tile's label, known box and extra boxes come as $2 to $4,
+		-- not from a join with the tiles: the halo's partitions have no
+		-- statistics, and with a thousand tiles the planner's nested loop
+		-- over the tiles for every halo row took most of the time)
 		tile_sql := format('INSERT INTO %s (id, tile, geom)
-			SELECT CASE WHEN (q.t).k = 0 THEN -1 ELSE q.label * 4294967296 + (q.t).k END, q.tile, (q.t).geom
-			  FROM (SELECT s.tile, s.label, _tdc_tile_triangles(s.r) AS t
-					  FROM (SELECT h.tile, k.label,
-								   _tdc_tile(h.g, h.label, k.label, k.known, %L::float8[], k.extra, h.seq, h.vi) AS r
-							  FROM %s h JOIN %s k ON k.tile = h.tile
-							 WHERE k.pending AND h.tile = $1::%s AND h.tl = $2
-							 GROUP BY h.tile, k.label) s) q',
-			qtarget, hull, halo, rt, ttype);
+			SELECT CASE WHEN (q.t).k = 0 THEN -1 ELSE $2 * 4294967296 + (q.t).k END, q.tile, (q.t).geom
+			  FROM (SELECT s.tile, _tdc_tile_triangles(s.r) AS t
+					  FROM (SELECT h.tile, _tdc_tile(h.g, h.label, $2, $3, %L::float8[], $4, h.seq, h.vi) AS r
+							  FROM %s h
+							 WHERE h.tile = $1::%s AND h.tl = $2
+							 GROUP BY h.tile) s) q',
+			qtarget, hull, halo, ttype);
 	END IF;
 
 	done := 0;
@@ -777,8 +780,9 @@ BEGIN
 		ELSE
 			reported := 0;
 			i := 0;
-			FOR r IN EXECUTE format('SELECT tile::text AS tile, label FROM %s WHERE pending ORDER BY label', tiles) LOOP
-				EXECUTE tile_sql USING r.tile, r.label;
+			FOR r IN EXECUTE format('SELECT tile::text AS tile, label, known, extra FROM %s WHERE pending ORDER BY label',
+									tiles) LOOP
+				EXECUTE tile_sql USING r.tile, r.label, r.known, r.extra;
 				GET DIAGNOSTICS nrows = ROW_COUNT;
 				written := written + nrows;
 				-- a tile that is not final writes one row: its box
