@@ -709,13 +709,13 @@ BEGIN
 		-- the halo of every pending tile: every point in its closed K, with its owner
 		EXECUTE format('DELETE FROM %s', halo);
 		-- (K and the extra boxes: a point is taken from the first box that holds it)
+		tile_box := format('SELECT k.tile, k.label, k.bx, i, k.bx[4*i+1] AS x0, k.bx[4*i+2] AS y0,
+								   k.bx[4*i+3] AS x1, k.bx[4*i+4] AS y1
+							  FROM (SELECT tile, label, known || extra AS bx FROM %s WHERE pending) k,
+								   generate_series(0, cardinality(k.bx) / 4 - 1) i', rt);
 		IF citus THEN
 			-- each box against the points' GiST index; Citus pushes the
 			-- statement down only with the subquery inline
-			tile_box := format('SELECT k.tile, k.bx, i, k.bx[4*i+1] AS x0, k.bx[4*i+2] AS y0,
-									   k.bx[4*i+3] AS x1, k.bx[4*i+4] AS y1
-								  FROM (SELECT tile, known || extra AS bx FROM %s WHERE pending) k,
-									   generate_series(0, cardinality(k.bx) / 4 - 1) i', rt);
 			EXECUTE format('INSERT INTO %1$s (tile, label, seq, vi, g)
 							SELECT b.tile, o.label, p.seq, p.vi, p.g
 							  FROM (%5$s) b
@@ -738,10 +738,8 @@ BEGIN
 			-- no point and are left out.
 			EXECUTE format('SELECT coalesce(sum(greatest(least(b.x1, %3$L::float8) - greatest(b.x0, %1$L::float8), 0)
 												* greatest(least(b.y1, %4$L::float8) - greatest(b.y0, %2$L::float8), 0)), 0)
-							  FROM (SELECT k.bx[4*i+1] AS x0, k.bx[4*i+2] AS y0, k.bx[4*i+3] AS x1, k.bx[4*i+4] AS y1
-									  FROM (SELECT known || extra AS bx FROM %5$s WHERE pending) k,
-										   generate_series(0, cardinality(k.bx) / 4 - 1) i) b',
-						   gx0, gy0, gx1, gy1, tiles) INTO cell;
+							  FROM (%5$s) b',
+						   gx0, gy0, gx1, gy1, tile_box) INTO cell;
 			cell := greatest(32 * spacing, sqrt(cell / (npts::float8 / 64 + 1000)),
 							 (gx1 - gx0) / 1048576, (gy1 - gy0) / 1048576);
 			ncx := floor((gx1 - gx0) / cell);
@@ -749,20 +747,18 @@ BEGIN
 			EXECUTE format('DELETE FROM %s', cells);
 			EXECUTE format('INSERT INTO %1$s (cell, tile, tl, nprior, boxes)
 							SELECT cx * 2097152 + cy, b.tile, b.label, cardinality(b.boxes) / 4 - 1, b.boxes
-							  FROM (SELECT k.tile, k.label, k.bx[4*i+1] AS x0, k.bx[4*i+2] AS y0,
-										   k.bx[4*i+3] AS x1, k.bx[4*i+4] AS y1,
+							  FROM (SELECT k.tile, k.label, k.x0, k.y0, k.x1, k.y1,
 										   coalesce((SELECT array_agg(k.bx[4*j+m] ORDER BY j, m)
-													   FROM generate_series(0, i - 1) j, generate_series(1, 4) m
-													  WHERE k.bx[4*j+1] <= k.bx[4*i+3] AND k.bx[4*i+1] <= k.bx[4*j+3]
-														AND k.bx[4*j+2] <= k.bx[4*i+4] AND k.bx[4*i+2] <= k.bx[4*j+4]),
-													''{}'') || k.bx[4*i+1:4*i+4] AS boxes
-									  FROM (SELECT tile, label, known || extra AS bx FROM %2$s WHERE pending) k,
-										   generate_series(0, cardinality(k.bx) / 4 - 1) i) b,
+													   FROM generate_series(0, k.i - 1) j, generate_series(1, 4) m
+													  WHERE k.bx[4*j+1] <= k.x1 AND k.x0 <= k.bx[4*j+3]
+														AND k.bx[4*j+2] <= k.y1 AND k.y0 <= k.bx[4*j+4]),
+													''{}'') || k.bx[4*k.i+1:4*k.i+4] AS boxes
+									  FROM (%2$s) k) b,
 								   generate_series(greatest(floor((b.x0 - %3$L::float8) / %5$L::float8), 0)::bigint,
 												   least(floor((b.x1 - %3$L::float8) / %5$L::float8), %6$s)::bigint) cx,
 								   generate_series(greatest(floor((b.y0 - %4$L::float8) / %5$L::float8), 0)::bigint,
 												   least(floor((b.y1 - %4$L::float8) / %5$L::float8), %7$s)::bigint) cy',
-						   cells, tiles, gx0, gy0, cell, ncx, ncy);
+						   cells, tile_box, gx0, gy0, cell, ncx, ncy);
 			EXECUTE format('ANALYZE %s', cells);
 			cell_of := format('floor((p.x - %1$L::float8) / %3$L::float8)::bigint * 2097152
 							   + floor((p.y - %2$L::float8) / %3$L::float8)::bigint', gx0, gy0, cell);

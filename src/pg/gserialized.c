@@ -520,7 +520,9 @@ tdc_gser_append(TdcPointBuf *buf, const struct varlena *geom,
 	 * A 2D point with no box and no extended flags, into a buffer that has
 	 * room and holds 2D vertices of its SRID: the row of a point table
 	 * after the first.  Its exact length rules out every optional part, so
-	 * the type, the count and the coordinates are all left to check.
+	 * the type, the count, the SRID and the coordinates are all left to
+	 * check (append_point below does the same for any point, after the
+	 * header walk and with the buffer's checks).
 	 * Anything else, or a coordinate that is not finite (for the error),
 	 * takes the walk below.
 	 */
