@@ -301,6 +301,15 @@ COMMENT ON FUNCTION _tdc_tile_triangles(bytea) IS
 'Internal, for tdc_delaunay_tiled: the rows of a _tdc_tile result, triangles numbered k = 1.., '
 'or one row k = 0 with the box a tile that is not final yet needs.';
 
+CREATE FUNCTION _tdc_curve_to_line(geometry)
+RETURNS geometry
+AS 'MODULE_PATHNAME', '_tdc_curve_to_line'
+LANGUAGE C IMMUTABLE STRICT PARALLEL SAFE;
+
+COMMENT ON FUNCTION _tdc_curve_to_line(geometry) IS
+'Internal, for tdc_delaunay_tiled: the geometry as the Delaunay functions read it, stroked by ST_CurveToLine '
+'(as ST_DelaunayTriangles strokes it) when it has arcs, else unchanged.';
+
 CREATE FUNCTION _tdc_first_box(float8, float8, float8[], int4)
 RETURNS boolean
 AS 'MODULE_PATHNAME', '_tdc_first_box'
@@ -379,6 +388,7 @@ DECLARE
 	gtyp name;
 	ttype text := 'bigint';
 	tv text;					-- SQL of a vertex's tile value
+	stroked text;				-- SQL of a row's geometry with its arcs stroked
 	citus boolean := false;
 	npts bigint;
 	srid_lo int; srid_hi int; zm_lo int; zm_hi int;
@@ -474,13 +484,20 @@ BEGIN
 		END IF;
 	END IF;
 
+	-- a value with arcs is stroked as ST_TDCDelaunayDump strokes it (see
+	-- tdc_curves.c); GeometryType reads only the header, so only
+	-- collections and curve types are looked into
+	stroked := format('CASE WHEN GeometryType(s.%1$I) IN (''CIRCULARSTRING'', ''COMPOUNDCURVE'', ''CURVEPOLYGON'',
+															 ''MULTICURVE'', ''MULTISURFACE'', ''GEOMETRYCOLLECTION'')
+							 THEN _tdc_curve_to_line(s.%1$I) ELSE s.%1$I END', geom_column);
+
 	-- SRID and dimensions, as ST_TDCDelaunayDump checks them, and the number
 	-- and extent of the vertices (the extent from the values' boxes, which
 	-- may be rounded outward: it only sizes the tiles)
-	EXECUTE format('SELECT min(ST_SRID(%1$I)), max(ST_SRID(%1$I)), min(ST_Zmflag(%1$I)), max(ST_Zmflag(%1$I)),
-						   coalesce(sum(ST_NPoints(%1$I)), 0), min(ST_XMin(%1$I)), min(ST_YMin(%1$I)),
-						   max(ST_XMax(%1$I)), max(ST_YMax(%1$I))
-					  FROM %2$s WHERE %1$I IS NOT NULL', geom_column, source)
+	EXECUTE format('SELECT min(ST_SRID(s.%1$I)), max(ST_SRID(s.%1$I)), min(ST_Zmflag(s.%1$I)), max(ST_Zmflag(s.%1$I)),
+						   coalesce(sum(ST_NPoints(%3$s)), 0), min(ST_XMin(s.%1$I)), min(ST_YMin(s.%1$I)),
+						   max(ST_XMax(s.%1$I)), max(ST_YMax(s.%1$I))
+					  FROM %2$s s WHERE s.%1$I IS NOT NULL', geom_column, source, stroked)
 	   INTO srid_lo, srid_hi, zm_lo, zm_hi, npts, gx0, gy0, gx1, gy1;
 	IF srid_lo <> srid_hi THEN
 		RAISE EXCEPTION '%: mixed SRIDs in %.% (% and %)', fn, source, geom_column, srid_lo, srid_hi
@@ -566,8 +583,8 @@ BEGIN
 		EXECUTE format('INSERT INTO %s (tile, seq, vi, g)
 						SELECT %s, ((s.ctid::text::point)[0])::bigint * 65536 + ((s.ctid::text::point)[1])::bigint,
 							   d.vi, d.geom
-						  FROM %s s, LATERAL ST_DumpPoints(s.%I) WITH ORDINALITY AS d(path, geom, vi)
-						 WHERE s.%I IS NOT NULL', pts, tv, source, geom_column, geom_column);
+						  FROM %s s, LATERAL ST_DumpPoints(%s) WITH ORDINALITY AS d(path, geom, vi)
+						 WHERE s.%I IS NOT NULL', pts, tv, source, stroked, geom_column);
 	ELSE
 		-- a row that is one point is its own vertex: ST_DumpPoints is most
 		-- of the cost of a point table, and only the other rows need it
@@ -579,9 +596,9 @@ BEGIN
 		EXECUTE format('INSERT INTO %1$s (tile, seq, vi, g, x, y)
 						SELECT %2$s, ((s.ctid::text::point)[0])::bigint * 65536 + ((s.ctid::text::point)[1])::bigint,
 							   d.vi, d.geom, ST_X(d.geom), ST_Y(d.geom)
-						  FROM %3$s s, LATERAL ST_DumpPoints(s.%4$I) WITH ORDINALITY AS d(path, geom, vi)
+						  FROM %3$s s, LATERAL ST_DumpPoints(%5$s) WITH ORDINALITY AS d(path, geom, vi)
 						 WHERE ST_GeometryType(s.%4$I) <> ''ST_Point''',
-					   pts, tv, source, geom_column);
+					   pts, tv, source, geom_column, stroked);
 	END IF;
 	IF tile_column IS NOT NULL THEN
 		EXECUTE format('SELECT EXISTS (SELECT 1 FROM %s WHERE tile IS NULL)', pts) INTO has_null;

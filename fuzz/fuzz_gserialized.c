@@ -17,6 +17,13 @@
  *	  SRID, Z flag and bit-identical coordinates (the only accepted
  *	  differences are the stack-depth and memory-limit errors the reference
  *	  does not model);
+ *	- curves, by the input's length: refused (the constrained functions),
+ *	  read as their stored vertices (Voronoi: the reference then reads
+ *	  arc strings as point lists and the other curve types as
+ *	  collections), or stroked (Delaunay: read the same way first; a
+ *	  value with a non-empty arc string is then stroked, which the shim's
+ *	  ST_CurveToLine refuses, so it must be rejected; empty ones add
+ *	  nothing);
  *	- appending the value twice to one buffer doubles it; the second time
  *	  with a 1-byte varlena header when it fits, as stored small values
  *	  arrive (PG_DETOAST_DATUM_PACKED);
@@ -52,6 +59,8 @@ typedef struct Ref
 	uint64		count;
 	double	   *xy;				/* NULL: count only */
 	double	   *z;
+	bool		curves;			/* curves read as their vertices */
+	bool		arcs;			/* met an arc string with vertices */
 } Ref;
 
 static uint32
@@ -81,8 +90,10 @@ ref_walk(Ref *r, const uint8 *p, int depth)
 	type = ru32(p);
 	count = ru32(p + 4);
 	p += 8;
-	if (type == 1 || type == 2 || type == 14)
+	if (type == 1 || type == 2 || type == 14 || (r->curves && type == 8))
 	{
+		if (type == 8 && count > 0)
+			r->arcs = true;
 		size_t		vb = (size_t) r->ndims * 8;
 
 		if (type == 1 && count > 1)
@@ -143,7 +154,8 @@ ref_walk(Ref *r, const uint8 *p, int depth)
 		}
 		return p;
 	}
-	if ((type >= 4 && type <= 7) || type == 13 || type == 15)
+	if ((type >= 4 && type <= 7) || type == 13 || type == 15 ||
+		(r->curves && type >= 9 && type <= 12))
 	{
 		for (uint32 i = 0; i < count; i++)
 		{
@@ -342,18 +354,27 @@ LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 	bool		ref_ok;
 	volatile int stage = 0;
 	volatile uint64 n1 = 0;
+	TdcCurves	curves;
 
 	fuzz_pg_stack_base(&jb);
 	fuzz_pg_max_memory_mb = (size % 7 == 3) ? 1 : 0;
 
 	/* reference: count, then copy */
+	/* how curves are read: see the top of this file */
+	curves = size % 3 == 0 ? TDC_CURVES_REFUSE :
+		size % 3 == 1 ? TDC_CURVES_VERTICES : TDC_CURVES_STROKE;
 	memset(&ref, 0, sizeof(ref));
+	ref.curves = curves != TDC_CURVES_REFUSE;
 	rp = ref_header(&ref, data, size, &rsrid);
 	if (rp != NULL)
 		rp = ref_walk(&ref, rp, 0);
 	ref_ok = rp != NULL && rp == data + size && !ref.nonfinite;
+	/* a value to stroke goes to the shim's ST_CurveToLine, which refuses */
+	if (curves == TDC_CURVES_STROKE && ref.arcs)
+		ref_ok = false;
 
 	tdc_pointbuf_init(&buf, CurrentMemoryContext);
+	buf.curves = curves;
 	if (sigsetjmp(jb, 0) == 0)
 	{
 		fuzz_pg_jmp = &jb;

@@ -409,6 +409,19 @@ pg_detoast_datum_packed(struct varlena *datum)
 	return datum;
 }
 
+/*
+ * PostGIS's ST_CurveToLine is not here: a reader that strokes curves
+ * (TDC_CURVES_STROKE) gets an ERROR once it has stopped at the first one.
+ */
+struct varlena *
+tdc_curve_to_line(Datum geom, const char *fname)
+{
+	ereport(ERROR,
+			(errcode(ERRCODE_FEATURE_NOT_SUPPORTED),
+			 errmsg("%s: the fuzzer has no ST_CurveToLine", fname)));
+	return NULL;
+}
+
 int			tdc_guc_max_result_bytes = MaxAllocSize;
 
 int			tdc_guc_max_memory_mb;

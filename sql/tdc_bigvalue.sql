@@ -123,7 +123,12 @@ SELECT ST_TDCDelaunayTriangles(g) FROM tdc_bv_bad WHERE name = 'trailing' AND st
 SELECT ST_TDCDelaunayTriangles(g) FROM tdc_bv_bad WHERE name = 'trailing' AND storage = 'external lz4';
 SELECT ST_TDCDelaunayTriangles(g) FROM tdc_bv_bad WHERE name = 'nan' AND storage = 'external';
 SELECT ST_TDCDelaunayTriangles(g) FROM tdc_bv_bad WHERE name = 'nan' AND storage = 'external pglz';
-SELECT ST_TDCDelaunayTriangles(g) FROM tdc_bv_bad WHERE name = 'curve' AND storage = 'external lz4';
+-- a curve at the end is not an error: it is met after the first slices,
+-- and the whole value is read again as PostGIS strokes it, which gives the
+-- triangles of the stroked value read in memory, byte for byte
+SELECT storage, md5(ST_AsBinary(ST_TDCDelaunayTriangles(g))) = md5(ST_AsBinary(ST_TDCDelaunayTriangles(ST_CurveToLine(g)))) AS as_stroked,
+	   ST_NPoints(ST_CurveToLine(g)) - ST_NPoints(g) AS vertices_added_by_stroking
+FROM tdc_bv_bad WHERE name = 'curve' ORDER BY storage;
 
 -- An interrupt is answered while the value is being read: this cancel is
 -- pending when the function starts (pg_cancel_backend of the backend

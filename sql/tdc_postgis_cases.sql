@@ -183,10 +183,36 @@ SELECT f, ST_SRID(ST_TDCDelaunayTriangles('SRID=4326;MULTIPOINT(0 0,1 0,0 1)', 0
 FROM generate_series(0, 2) f;
 -- Difference: flags out of range is an error in both, with our own message.
 SELECT ST_TDCDelaunayTriangles('MULTIPOINT(0 0,1 0,0 1)', 0, 3);
--- Difference: PostGIS strokes curves silently; we ask for ST_CurveToLine,
--- after which the results agree.
-SELECT ST_TDCDelaunayTriangles('CIRCULARSTRING(0 0,1 1,2 0)');
-SELECT tdc_geos_agrees(ST_CurveToLine('CIRCULARSTRING(0 0,1 1,2 0)'), 0, 0) AS after_curvetoline;
+-- Curves: PostGIS strokes them for GEOS as ST_CurveToLine does with its
+-- defaults, and so do we (tdc_curves.c): the same triangles, every type of
+-- curve, at top level and nested, with Z and SRID, in every output form.
+SELECT c, f, tdc_geos_agrees(g::geometry, 0, f) AS agrees,
+	   ST_NumGeometries(ST_TDCDelaunayTriangles(g::geometry, 0, f)) AS n,
+	   ST_SRID(ST_TDCDelaunayTriangles(g::geometry, 0, f)) AS srid,
+	   ST_CoordDim(ST_TDCDelaunayTriangles(g::geometry, 0, f)) AS dims
+FROM (VALUES
+	(1, 'CIRCULARSTRING(0 0,1 1,2 0)'),
+	(2, 'COMPOUNDCURVE(CIRCULARSTRING(0 0,1 1,1 0),(1 0,0 1))'),
+	(3, 'CURVEPOLYGON(CIRCULARSTRING(0 0,4 0,4 4,0 4,0 0))'),
+	(4, 'MULTICURVE((0 0,5 5),CIRCULARSTRING(4 0,4 4,8 4))'),
+	(5, 'MULTISURFACE(CURVEPOLYGON(CIRCULARSTRING(0 0,4 0,4 4,0 4,0 0)))'),
+	(6, 'SRID=3857;CIRCULARSTRING Z (0 0 1,1 1 2,2 0 3)'),
+	(7, 'GEOMETRYCOLLECTION(POINT(2 2),LINESTRING(1 1,3 2),CURVEPOLYGON(CIRCULARSTRING(0 0,4 0,4 4,0 4,0 0)))')
+) v(c, g), generate_series(0, 2) f
+ORDER BY c, f;
+-- Empty curves have no vertices.  PostGIS agrees alone; beside points it
+-- strokes an empty CIRCULARSTRING into a vertex of uninitialized memory
+-- (not shown: it differs from run to run), and CURVEPOLYGON EMPTY is an
+-- error there.
+SELECT g, ST_AsText(ST_TDCDelaunayTriangles(g::geometry)) AS ours
+FROM (VALUES ('CIRCULARSTRING EMPTY'), ('COMPOUNDCURVE EMPTY'), ('CURVEPOLYGON EMPTY'), ('MULTICURVE EMPTY'),
+			 ('MULTISURFACE EMPTY'), ('GEOMETRYCOLLECTION(CIRCULARSTRING EMPTY, POINT(0 0), POINT(1 0), POINT(0 1))')) v(g);
+SELECT ST_AsText(ST_DelaunayTriangles('CIRCULARSTRING EMPTY')) AS postgis_alone;
+-- The aggregate and the Dump, a row at a time, read the same stroked vertices.
+SELECT tdc_norm(ST_TDCDelaunay(g)) = tdc_norm(ST_DelaunayTriangles(ST_Collect(g))) AS aggregate,
+	   (SELECT count(*) FROM ST_TDCDelaunayDump($$SELECT g FROM (VALUES ('POINT(2 2)'::geometry), ('LINESTRING(1 1,3 2)'), ('CURVEPOLYGON(CIRCULARSTRING(0 0,4 0,4 4,0 4,0 0))')) v(g)$$))
+	   = ST_NumGeometries(ST_DelaunayTriangles(ST_Collect(g))) AS dump
+FROM (VALUES ('POINT(2 2)'::geometry), ('LINESTRING(1 1,3 2)'), ('CURVEPOLYGON(CIRCULARSTRING(0 0,4 0,4 4,0 4,0 0))')) v(g);
 
 -- GEOS robustness cases (geos-cases.txt 13-19): nearly collinear chains,
 -- flat triangles, near-duplicates.  Ours always has exactly 2n - 2 - h.

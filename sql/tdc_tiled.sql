@@ -106,6 +106,17 @@ INSERT INTO tt_col SELECT ST_MakePoint(i, 0), 1 FROM generate_series(0, 20) i;
 INSERT INTO tt_col VALUES ('POINT(3 5)', 2), ('POINT(15 -4)', 3), ('POINT(30 30)', 4);
 CALL tdc_delaunay_tiled('tt_col', 'tt_col_tri', tile_column => 't');
 SELECT * FROM tiled_vs_dump('tt_col_tri', 'SELECT geom FROM tt_col');
+-- curves, whole or inside collections, in several tiles: stroked as the
+-- one-shot dump (and ST_DelaunayTriangles) strokes them, not their control
+-- points
+CREATE TABLE tt_curve (geom geometry, t int);
+INSERT INTO tt_curve VALUES
+	('CIRCULARSTRING(0 0, 10 10, 20 0)', 1),
+	('GEOMETRYCOLLECTION(POINT(30 5), CURVEPOLYGON(CIRCULARSTRING(25 -10, 35 -10, 35 0, 25 0, 25 -10)))', 2),
+	('MULTIPOINT(5 -5, 12 -8, 40 12)', 3), ('LINESTRING(-5 12, 22 14)', 3);
+CALL tdc_delaunay_tiled('tt_curve', 'tt_curve_tri', tile_column => 't');
+SELECT * FROM tiled_vs_dump('tt_curve_tri', 'SELECT geom FROM tt_curve');
+SELECT count(*) > 2 * (SELECT sum(ST_NPoints(geom)) FROM tt_curve) AS more_than_control_points FROM tt_curve_tri;
 -- all collinear: no triangle, no error
 CREATE TABLE tt_line AS SELECT ST_MakePoint(i, 2 * i) AS geom, i % 3 AS t FROM generate_series(1, 30) i;
 CALL tdc_delaunay_tiled('tt_line', 'tt_line_tri', tile_column => 't');

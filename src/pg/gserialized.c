@@ -18,9 +18,11 @@
  * piece into the point buffer (pointbuf.c), which grows as point lists are
  * met; NaN and infinities are rejected.  An ERROR half-way leaves the
  * vertices read so far in the buffer: every caller gives the buffer up on an
- * ERROR.  Curves are rejected: PostGIS would stroke them into segments
- * first, with a precision we should not guess for the user, so we ask for an
- * explicit ST_CurveToLine.
+ * ERROR.  A curve is read as its function's PostGIS counterpart reads it
+ * (the buffer's "curves", see tdc_curves.c): refused, read as its stored
+ * vertices, or, for the Delaunay functions, read as its stored vertices
+ * and noted: once the value is read (and so known to be sound), its
+ * vertices are dropped and the value is read again as PostGIS strokes it.
  */
 #include "postgres.h"
 
@@ -52,6 +54,8 @@ typedef struct GserWalk
 	bool		hasz;
 	TdcPointBuf *buf;
 	const char *fname;
+	bool		arcs;			/* met a CIRCULARSTRING with vertices */
+	bool		empty_arc;		/* met an empty CIRCULARSTRING */
 } GserWalk;
 
 /*
@@ -415,11 +419,31 @@ walk_geom(GserWalk *w)
 		case G_CURVEPOLY:
 		case G_MULTICURVE:
 		case G_MULTISURFACE:
-			ereport(ERROR,
-					(errcode(ERRCODE_FEATURE_NOT_SUPPORTED),
-					 errmsg("%s: curved geometries (%s) are not supported",
-							w->fname, curve_name(type)),
-					 errhint("Convert them to line segments first with ST_CurveToLine.")));
+			if (w->buf->curves == TDC_CURVES_REFUSE)
+				ereport(ERROR,
+						(errcode(ERRCODE_FEATURE_NOT_SUPPORTED),
+						 errmsg("%s: curved geometries (%s) are not supported",
+								w->fname, curve_name(type)),
+						 errhint("Convert them to line segments first with ST_CurveToLine.")));
+			/*
+			 * The stored vertices (to be stroked later, if the buffer
+			 * strokes): an arc string's are a point list, and the others
+			 * hold their parts (arc strings, line strings, compound curves,
+			 * rings, curve polygons) as whole geometries, as a collection
+			 * does.
+			 */
+			if (type == G_CIRCSTRING)
+			{
+				if (count > 0)
+					w->arcs = true;
+				else
+					w->empty_arc = true;
+				walk_points(w, count);
+			}
+			else
+				for (i = 0; i < count; i++)
+					walk_geom(w);
+			return;
 	}
 	corrupt(w, at, psprintf("unknown geometry type %u", type));
 }
@@ -483,6 +507,48 @@ walk_value(GserWalk *w, int32 srid)
 		corrupt(w, walk_pos(w), "trailing bytes after the geometry");
 }
 
+/*
+ * Does a value just read need stroking?  Only when it has arcs and the
+ * buffer strokes them.  An empty CIRCULARSTRING has no vertices to give
+ * and needs nothing, alone; but beside arcs it cannot be stroked:
+ * ST_CurveToLine (PostGIS 3.3) turns it into a vertex of uninitialized
+ * memory, which ST_DelaunayTriangles then triangulates.
+ */
+static bool
+needs_stroke(const GserWalk *w)
+{
+	if (!w->arcs || w->buf->curves != TDC_CURVES_STROKE)
+		return false;
+	if (w->empty_arc)
+		ereport(ERROR,
+				(errcode(ERRCODE_FEATURE_NOT_SUPPORTED),
+				 errmsg("%s: an empty CIRCULARSTRING beside arcs cannot be stroked",
+						w->fname),
+				 errdetail("PostGIS's ST_CurveToLine, which strokes the arcs as ST_DelaunayTriangles does, makes a vertex of uninitialized memory of it."),
+				 errhint("Remove the empty CIRCULARSTRING from the geometry.")));
+	return true;
+}
+
+/*
+ * A value with arcs, for a buffer that strokes them: its vertices (from
+ * index first on) are dropped and the value stroked by PostGIS is read
+ * instead.  A stroked value has no curves left; if it had, that would be
+ * refused, not stroked again.
+ */
+static void
+append_stroked(TdcPointBuf *buf, uint64 first, Datum whole, const char *fname)
+{
+	struct varlena *lin;
+
+	buf->n = first;
+	lin = tdc_curve_to_line(whole, fname);
+	/* an ERROR leaves the mode changed, but callers give the buffer up then */
+	buf->curves = TDC_CURVES_REFUSE;
+	tdc_gser_append(buf, lin, fname);
+	buf->curves = TDC_CURVES_STROKE;
+	pfree(lin);
+}
+
 /* Store the one vertex at v of a point value (tdc_gser_append's fast path). */
 static void
 append_point(TdcPointBuf *buf, const GserWalk *w, int32 srid, const char *v)
@@ -506,13 +572,15 @@ append_point(TdcPointBuf *buf, const GserWalk *w, int32 srid, const char *v)
  * detoasted but may keep a short (1-byte) header: small values such as
  * points are stored that way, and PG_DETOAST_DATUM_PACKED spares a palloc
  * and copy per row.  Nothing here needs alignment, every read is a memcpy.
+ * Returns true when the value had arcs and was read stroked (see the top).
  */
-void
+bool
 tdc_gser_append(TdcPointBuf *buf, const struct varlena *geom,
 				const char *fname)
 {
 	GserWalk	w;
 	int32		srid;
+	uint64		first;
 
 	Assert(!VARATT_IS_EXTERNAL(geom) && !VARATT_IS_COMPRESSED(geom));
 
@@ -541,7 +609,7 @@ tdc_gser_append(TdcPointBuf *buf, const struct varlena *geom,
 			buf->xy[2 * buf->n] = c[0];
 			buf->xy[2 * buf->n + 1] = c[1];
 			buf->n++;
-			return;
+			return false;
 		}
 	}
 
@@ -552,6 +620,7 @@ tdc_gser_append(TdcPointBuf *buf, const struct varlena *geom,
 	w.pend = (const char *) geom + VARSIZE_ANY(geom);
 	w.hdrsz = (int) (w.p - (const char *) geom);
 	w.size = w.pend_pos = (uint64) (w.pend - w.p);
+	first = buf->n;
 
 	srid = walk_header(&w);
 
@@ -564,9 +633,15 @@ tdc_gser_append(TdcPointBuf *buf, const struct varlena *geom,
 		read_u32(w.p) == G_POINT && read_u32(w.p + 4) == 1)
 	{
 		append_point(buf, &w, srid, w.p + 8);
-		return;
+		return false;
 	}
 	walk_value(&w, srid);
+	if (needs_stroke(&w))
+	{
+		append_stroked(buf, first, PointerGetDatum(geom), fname);
+		return true;
+	}
+	return false;
 }
 
 /*
@@ -577,12 +652,15 @@ tdc_gser_append(TdcPointBuf *buf, const struct varlena *geom,
  * met (by doubling, see tdc_pointbuf_reserve), and an ERROR half-way leaves
  * the vertices read so far in it, which is fine for callers that give up
  * the buffer on an ERROR.  The source checks for interrupts between pieces.
+ * Returns true when the value had arcs to stroke: it was then read again,
+ * stroked, from src->whole.
  */
-void
+bool
 tdc_gser_append_source(TdcPointBuf *buf, TdcGserSource *src,
 					   const char *fname)
 {
 	GserWalk	w;
+	uint64		first = buf->n;
 
 	memset(&w, 0, sizeof(w));
 	w.buf = buf;
@@ -591,5 +669,9 @@ tdc_gser_append_source(TdcPointBuf *buf, TdcGserSource *src,
 	w.hdrsz = VARHDRSZ;
 	w.size = src->size;
 	walk_value(&w, walk_header(&w));
+	if (!needs_stroke(&w))
+		return false;
+	append_stroked(buf, first, src->whole, fname);
+	return true;
 }
 

@@ -68,7 +68,10 @@ st_tdcdelaunay_transfn(PG_FUNCTION_ARGS)
 	}
 
 	if (st == NULL)
+	{
 		st = tdc_agg_state_new(aggcxt);
+		st->pts.curves = TDC_CURVES_STROKE;
+	}
 	tdc_agg_state_set_params(st, tolerance, flags);
 
 	geom = PG_DETOAST_DATUM_PACKED(PG_GETARG_DATUM(1));

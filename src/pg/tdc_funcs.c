@@ -957,6 +957,7 @@ read_toasted_value(TdcPointBuf *buf, struct varlena *attr, const char *fname)
 	error_context_stack = &errcb;
 
 	r.src.size = r.rawsize;
+	r.src.whole = PointerGetDatum(attr);
 	if (r.method == -1)
 		r.src.next = plain_next;
 	else
@@ -984,7 +985,11 @@ read_toasted_value(TdcPointBuf *buf, struct varlena *attr, const char *fname)
 		r.step = LZ4_TOKEN;
 	}
 
-	tdc_gser_append_source(buf, &r.src, fname);
+	/*
+	 * A value with arcs, for a buffer that strokes them, is read whole here
+	 * first (so checked) and read again stroked from r.src.whole.
+	 */
+	(void) tdc_gser_append_source(buf, &r.src, fname);
 
 	/* every stored byte must have been used, and no more */
 	if (r.method != -1 &&
@@ -1038,6 +1043,7 @@ st_tdcdelaunaytriangles(PG_FUNCTION_ARGS)
 	if (tdc_guc_stats)
 		INSTR_TIME_SET_CURRENT(start);
 	tdc_pointbuf_init(&buf, CurrentMemoryContext);
+	buf.curves = TDC_CURVES_STROKE;
 	if (!read_toasted_value(&buf, arg, fname))
 		tdc_gser_append(&buf, PG_DETOAST_DATUM_PACKED(PointerGetDatum(arg)),
 						fname);
@@ -1104,6 +1110,7 @@ st_tdcdelaunaydump(PG_FUNCTION_ARGS)
 	geomoid = TupleDescAttr(rsinfo->setDesc, 1)->atttypid;
 
 	tdc_pointbuf_init(&buf, CurrentMemoryContext);
+	buf.curves = TDC_CURVES_STROKE;
 	tdc_dump_collect(&buf, NULL, query, geomoid, fname, NULL, NULL);
 	if (buf.n == 0)
 		return (Datum) 0;

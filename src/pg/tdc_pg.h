@@ -7,6 +7,8 @@
  *	pointbuf.c		the point buffer the vertices of the input collect in
  *	gserialized.c	reads PostGIS geometry values straight into a point
  *					buffer (the format is in gser_format.h)
+ *	tdc_curves.c	curved input: stroked by PostGIS's ST_CurveToLine for
+ *					the Delaunay functions, as ST_DelaunayTriangles does
  *	gser_write.c	writes triangulations back as geometry values
  *	tdc_agg.c		the ST_TDCDelaunay aggregates' SQL entry points
  *	tdc_agg_state.c	their state, its merging and its serialized form
@@ -90,9 +92,22 @@ typedef struct TdcPointMap
 } TdcPointMap;
 
 /*
+ * What the reader does with a curve (CIRCULARSTRING and the types made of
+ * them), as the PostGIS or SFCGAL counterpart of the function does: see
+ * tdc_curves.c.
+ */
+typedef enum TdcCurves
+{
+	TDC_CURVES_REFUSE = 0,		/* an ERROR with a hint (the constrained functions) */
+	TDC_CURVES_STROKE,			/* the value through ST_CurveToLine (Delaunay) */
+	TDC_CURVES_VERTICES			/* the stored vertices, control points (Voronoi) */
+} TdcCurves;
+
+/*
  * Vertices collected from geometry values: interleaved x,y (what the core
  * takes) plus, for XYZ input, one Z per vertex.  The arrays are mappings
  * that belong to "cxt" (see pointbuf.c), so a buffer may exceed 1 GB.
+ * "curves" is the owner's to set after tdc_pointbuf_init (which refuses).
  */
 typedef struct TdcPointBuf
 {
@@ -106,6 +121,7 @@ typedef struct TdcPointBuf
 	bool		hasz;
 	int32		srid;
 	uint64		side_bytes;		/* the owner's arrays beside the vertices */
+	TdcCurves	curves;
 } TdcPointBuf;
 
 /*
@@ -119,6 +135,7 @@ typedef struct TdcGserSource
 {
 	bool		(*next) (struct TdcGserSource *src, const char **data, Size *len);
 	uint64		size;
+	Datum		whole;			/* the value itself, to stroke it if it has curves */
 } TdcGserSource;
 
 /* pointbuf.c */
@@ -135,10 +152,13 @@ extern void tdc_pointbuf_append_buf(TdcPointBuf *dst, const TdcPointBuf *src,
 									const char *fname);
 
 /* gserialized.c */
-extern void tdc_gser_append(TdcPointBuf *buf, const struct varlena *geom,
+extern bool tdc_gser_append(TdcPointBuf *buf, const struct varlena *geom,
 							const char *fname);
-extern void tdc_gser_append_source(TdcPointBuf *buf, TdcGserSource *src,
+extern bool tdc_gser_append_source(TdcPointBuf *buf, TdcGserSource *src,
 								   const char *fname);
+
+/* tdc_curves.c */
+extern struct varlena *tdc_curve_to_line(Datum geom, const char *fname);
 
 /* gser_write.c */
 extern uint64 tdc_gser_result_size(const tdc_job *job, int flags, bool hasz);

@@ -25,7 +25,9 @@
  * clockwise).  Differences: "tolerance" is the exact merge rule of
  * ST_TDCDelaunayTriangles (GEOS only snaps during insertion, and keeps
  * points closer than the tolerance apart); NaN and infinite tolerances are
- * errors; curved input is an error, as in every function of the extension.
+ * errors.  A curve's sites are its stored vertices, its control points, as
+ * GEOS gets them from PostGIS (the Delaunay functions stroke curves instead,
+ * as ST_DelaunayTriangles does: see tdc_curves.c).
  *
  * The diagram is built on the core's threads while the backend waits
  * interruptibly, as a triangulation is: a cancel stops the workers, and a
@@ -491,6 +493,7 @@ voronoi_function(FunctionCallInfo fcinfo, bool lines, const char *fname)
 	}
 	g = (struct varlena *) PG_DETOAST_DATUM(PG_GETARG_DATUM(0));
 	tdc_pointbuf_init(&buf, CurrentMemoryContext);
+	buf.curves = TDC_CURVES_VERTICES;
 	tdc_gser_append(&buf, g, fname);
 	PG_RETURN_POINTER(tdc_voronoi_to_value(&buf, tolerance, have_ext ? ext : NULL,
 										   lines, fname));

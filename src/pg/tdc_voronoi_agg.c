@@ -108,7 +108,10 @@ st_tdcvoronoi_transfn(PG_FUNCTION_ARGS)
 		}
 	}
 	if (st == NULL)
+	{
 		st = vor_state_new(aggcxt);
+		st->base->pts.curves = TDC_CURVES_VERTICES;
+	}
 	vor_state_params(st, tolerance, has_ext, ext);
 
 	geom = PG_DETOAST_DATUM_PACKED(PG_GETARG_DATUM(1));

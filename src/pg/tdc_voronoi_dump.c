@@ -64,6 +64,7 @@ st_tdcvoronoidump(PG_FUNCTION_ARGS)
 	geomoid = TupleDescAttr(rsinfo->setDesc, 1)->atttypid;
 
 	tdc_pointbuf_init(&buf, CurrentMemoryContext);
+	buf.curves = TDC_CURVES_VERTICES;
 	tdc_dump_collect(&buf, &ids, query, geomoid, fname, NULL, NULL);
 	vrun = tdc_voronoi_run(&buf, 0.0, have_ext ? ext : NULL, NULL, &run, fname);
 	if (vrun == NULL)
