@@ -84,6 +84,14 @@ DROP TABLE vor_coast;
 SELECT 'extend_to' AS set, * FROM tdc_vor_compare(
 	(SELECT ST_Collect(geom ORDER BY id) FROM vor_uniform WHERE id <= 300), 0,
 	'LINESTRING(-5000 -200, 9000 1200)');
+-- an extend_to whose box is not made of floats: PostGIS rounds it outward
+-- to floats, as it stores boxes, and so do we (a point too); the exact
+-- box would move the cells along three sides by some 1e-7
+SELECT 'extend_to floats' AS set, * FROM tdc_vor_compare(
+	(SELECT ST_Collect(geom ORDER BY id) FROM vor_uniform WHERE id <= 300), 0,
+	'LINESTRING(-5000.3 -200.7, 9000.1 1200.9)');
+SELECT 'extend_to point' AS set, * FROM tdc_vor_compare('MULTIPOINT(1 1, 2 2)', 0, 'POINT(-10.3 -5.7)');
+SELECT ST_AsText(ST_TDCVoronoiPolygons('MULTIPOINT(1 1, 2 2)', 0, 'POINT(-10.3 -5.7)')) AS float_box;
 SELECT 'extend_to inside' AS set, * FROM tdc_vor_compare(
 	(SELECT ST_Collect(geom ORDER BY id) FROM vor_uniform WHERE id <= 300), 0,
 	'POINT(500 500)');

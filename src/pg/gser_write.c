@@ -90,16 +90,16 @@ write_header(char *out, Size size, int32 srid, bool hasz, bool hasbox)
  * must contain the double coordinates it bounds.  Beyond the float range
  * they give +-FLT_MAX and +-Inf, still bounds.
  */
-static float
-float_down(double d)
+float
+tdc_float_down(double d)
 {
 	float		f = (float) d;
 
 	return (double) f <= d ? f : nextafterf(f, -INFINITY);
 }
 
-static float
-float_up(double d)
+float
+tdc_float_up(double d)
 {
 	float		f = (float) d;
 
@@ -122,10 +122,10 @@ put_box(char *p, const tdc_job *job, const TdcPointBuf *buf, bool hasz,
 	float		box[6];
 
 	tdc_site_extent(job, lo, hi);
-	box[0] = float_down(lo[0]);
-	box[1] = float_up(hi[0]);
-	box[2] = float_down(lo[1]);
-	box[3] = float_up(hi[1]);
+	box[0] = tdc_float_down(lo[0]);
+	box[1] = tdc_float_up(hi[0]);
+	box[2] = tdc_float_down(lo[1]);
+	box[3] = tdc_float_up(hi[1]);
 	if (hasz)
 	{
 		double		zlo = INFINITY,
@@ -147,8 +147,8 @@ put_box(char *p, const tdc_job *job, const TdcPointBuf *buf, bool hasz,
 			if ((i & (ZBOX_POLL_VERTICES - 1)) == 0)
 				CHECK_FOR_INTERRUPTS();
 		}
-		box[4] = float_down(zlo);
-		box[5] = float_up(zhi);
+		box[4] = tdc_float_down(zlo);
+		box[5] = tdc_float_up(zhi);
 	}
 	memcpy(p, box, box_size(hasz));
 	return p + box_size(hasz);

@@ -161,6 +161,8 @@ extern bool tdc_gser_append_source(TdcPointBuf *buf, TdcGserSource *src,
 extern struct varlena *tdc_curve_to_line(Datum geom, const char *fname);
 
 /* gser_write.c */
+extern float tdc_float_down(double d);
+extern float tdc_float_up(double d);
 extern uint64 tdc_gser_result_size(const tdc_job *job, int flags, bool hasz);
 extern uint64 tdc_gser_result_bound(uint64 n, int flags, bool hasz);
 extern struct varlena *tdc_gser_result(const tdc_job *job, int flags,

@@ -13,8 +13,8 @@
  *	  SRID, for both functions;
  *	- the clip envelope is GEOS's VoronoiDiagramBuilder rule: the sites'
  *	  bounding box grown on every side by the larger of its width and
- *	  height, then grown to include extend_to's bounding box; an EMPTY
- *	  extend_to is an error;
+ *	  height, then grown to include extend_to's bounding box, rounded
+ *	  outward to floats as PostGIS reads it; an EMPTY extend_to is an error;
  *	- the result has g1's SRID (extend_to's SRID is ignored, as in PostGIS),
  *	  and is 2D whatever g1's dimensions;
  *	- ST_TDCVoronoiLines gives a LINESTRING when the diagram has one edge,
@@ -41,6 +41,7 @@
  */
 #include "postgres.h"
 
+#include <float.h>
 #include <math.h>
 
 #include "fmgr.h"
@@ -128,8 +129,13 @@ vor_wait(VorRun *run, const char *fname)
 }
 
 /*
- * The bounding box of extend_to's vertices into ext[4]; an EMPTY geometry
- * is an error, as in PostGIS.
+ * The bounding box of extend_to's vertices into ext[4], as PostGIS reads
+ * it: rounded outward to floats, the form in which every geometry's box is
+ * stored, and in which PostGIS hands even a point's to GEOS.  The exact
+ * extent would move the cells along that side by up to a float's rounding
+ * (a relative 6e-8) from PostGIS's.  A bound beyond the float range stays
+ * exact: rounded, it would be infinite.  An EMPTY geometry is an error, as
+ * in PostGIS.
  */
 void
 tdc_voronoi_extend_to_box(struct varlena *g, double ext[4], const char *fname)
@@ -153,6 +159,13 @@ tdc_voronoi_extend_to_box(struct varlena *g, double ext[4], const char *fname)
 		ext[2] = fmax(ext[2], b.xy[2 * i]);
 		ext[1] = fmin(ext[1], b.xy[2 * i + 1]);
 		ext[3] = fmax(ext[3], b.xy[2 * i + 1]);
+	}
+	for (int k = 0; k < 4; k++)
+	{
+		double		r = k < 2 ? tdc_float_down(ext[k]) : tdc_float_up(ext[k]);
+
+		if (isfinite(r) && fabs(r) <= FLT_MAX)
+			ext[k] = r;
 	}
 	MemoryContextDelete(cxt);
 }
