@@ -116,9 +116,10 @@ $(PG_SRCS:.c=.o): src/pg/tdc_pg.h src/pg/gser_format.h src/core/tdc.h
 # against PostGIS, so nothing more precise exists), or "unknown".
 POSTGIS_BUILD_VERSION := $(shell sed -n "s/^default_version *= *'\([^']*\)'.*/\1/p" \
 	'$(shell $(PG_CONFIG) --sharedir)/extension/postgis.control' 2>/dev/null)
-src/pg/tdc_version.o: override CPPFLAGS += -DTDC_LIB_VERSION='"$(EXTVERSION)"' \
-	-DTDC_BUILD_POSTGIS='"$(or $(POSTGIS_BUILD_VERSION),unknown)"'
-src/pg/tdc_version.o: Makefile
+# (the .bc is the JIT's bitcode of the same file)
+src/pg/tdc_version.o src/pg/tdc_version.bc: override CPPFLAGS += \
+	-DTDC_LIB_VERSION='"$(EXTVERSION)"' -DTDC_BUILD_POSTGIS='"$(or $(POSTGIS_BUILD_VERSION),unknown)"'
+src/pg/tdc_version.o src/pg/tdc_version.bc: Makefile
 else
 all: tdc
 endif

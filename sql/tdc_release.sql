@@ -49,14 +49,14 @@ RESET search_path;
 -- A missing function, operator or type gets the HINT too, after the hint
 -- it had; other errors keep theirs and get none.
 CREATE FUNCTION tdc_release_error(query text,
-								  OUT sqlstate text, OUT has_own_hint boolean, OUT schema_hint boolean)
+								  OUT code text, OUT has_own_hint boolean, OUT schema_hint boolean)
 LANGUAGE plpgsql AS $$
 DECLARE
 	hint text;
 BEGIN
 	EXECUTE query;
 EXCEPTION WHEN OTHERS THEN
-	GET STACKED DIAGNOSTICS sqlstate = RETURNED_SQLSTATE, hint = PG_EXCEPTION_HINT;
+	GET STACKED DIAGNOSTICS code = RETURNED_SQLSTATE, hint = PG_EXCEPTION_HINT;
 	schema_hint := hint LIKE '%search_path, which pg_restore empties: schema-qualify %';
 	has_own_hint := hint LIKE '_%' || E'\n' || '%';
 END $$;
