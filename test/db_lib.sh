@@ -40,7 +40,9 @@ same() {
 	fi
 }
 
+DB_FINISHED=0
 finish() {
+	DB_FINISHED=1
 	echo "$DB_PASSED passed, $DB_FAILED failed"
 	((DB_FAILED == 0))
 }
@@ -77,8 +79,14 @@ fresh_db() {
 	DB_MADE+=("$1")
 }
 
+# On exit: the databases go; a script that a failing command stopped
+# (they run under set -e) still ends with its count line, one failure more.
 db_cleanup() {
-	local d
+	local rc=$? d
+	if ((!DB_FINISHED)); then
+		bad "stopped early by a failing command (exit $rc)"
+		finish || true
+	fi
 	for d in "${DB_MADE[@]}"; do
 		q postgres -c "DROP DATABASE IF EXISTS $d" >/dev/null 2>&1 || true
 	done
