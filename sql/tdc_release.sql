@@ -57,7 +57,7 @@ BEGIN
 	EXECUTE query;
 EXCEPTION WHEN OTHERS THEN
 	GET STACKED DIAGNOSTICS code = RETURNED_SQLSTATE, hint = PG_EXCEPTION_HINT;
-	schema_hint := hint LIKE '%search_path, which pg_restore empties: schema-qualify %';
+	schema_hint := hint LIKE '%Schema-qualify every table, function and type in the query %';
 	has_own_hint := hint LIKE '_%' || E'\n' || '%';
 END $$;
 SET search_path = '';

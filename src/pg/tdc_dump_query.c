@@ -240,9 +240,10 @@ dump_collect(TdcPointBuf *buf, TdcIdBuf *ids, const char *query,
 
 /*
  * The query is text, so its names are looked up when it runs, in the
- * caller's search_path.  pg_restore empties the search_path, and a
- * materialized view over a Dump function whose query names "pts" rather
- * than "public.pts" then fails to refresh.  An error that says a table,
+ * search_path of the moment.  pg_restore empties it, and PostgreSQL 17+
+ * sets it to pg_catalog, pg_temp while it creates or refreshes a
+ * materialized view: a materialized view over a Dump function whose query
+ * names "pts" rather than "public.pts" then fails to refresh.  An error that says a table,
  * function, operator or type was not found gets a HINT that says so (after
  * the hint it had, if any); it keeps its code, message and CONTEXT.
  */
@@ -260,8 +261,9 @@ tdc_dump_collect(TdcPointBuf *buf, TdcIdBuf *ids, const char *query,
 	PG_CATCH();
 	{
 		ErrorData  *edata;
-		const char *hint = "The query's names are looked up in the caller's search_path, which pg_restore empties: "
-			"schema-qualify every table, function and type in it (public.pts rather than pts).";
+		const char *hint = "Schema-qualify every table, function and type in the query (public.pts, not pts): "
+			"its names are looked up in the search_path it runs in, which pg_restore empties, "
+			"and which is pg_catalog, pg_temp in a materialized view from PostgreSQL 17 on.";
 
 		MemoryContextSwitchTo(outer);
 		edata = CopyErrorData();
