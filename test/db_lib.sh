@@ -6,45 +6,28 @@
 # databases of their own, named tdc_<script>_*.
 # shellcheck shell=bash
 
-DB_PASSED=0
-DB_FAILED=0
-export PGOPTIONS="${PGOPTIONS:-} -c client_min_messages=warning"
+# pass, fail, check and finish ("N passed, N failed") are the hardening
+# scripts' (test/hardening/lib.sh; its other helpers are not used here).
+# shellcheck source=test/hardening/lib.sh
+source "$(dirname "${BASH_SOURCE[0]}")/hardening/lib.sh"
 DB_WORK=$(mktemp -d)
 DB_MADE=()
+DB_FINISHED=0
 
-ok() {
-	DB_PASSED=$((DB_PASSED + 1))
-	echo "  ok    $*"
+db_finish() {
+	DB_FINISHED=1
+	finish
 }
 
-bad() {
-	DB_FAILED=$((DB_FAILED + 1))
-	echo "  FAIL  $*"
-}
-
-# check NAME COMMAND...: ok or bad on the command's status.
-check() {
-	local name=$1
-	shift
-	if "$@"; then ok "$name"; else bad "$name"; fi
-}
-
-# same NAME WANT GOT: ok when equal, else bad with both.
+# same NAME WANT GOT: pass when equal, else fail with both.
 same() {
 	if [ "$2" = "$3" ]; then
-		ok "$1"
+		pass "$1"
 	else
-		bad "$1"
+		fail "$1"
 		echo "        want: $2"
 		echo "        got:  $3"
 	fi
-}
-
-DB_FINISHED=0
-finish() {
-	DB_FINISHED=1
-	echo "$DB_PASSED passed, $DB_FAILED failed"
-	((DB_FAILED == 0))
 }
 
 # The client programs of the server's major (pg_dump refuses a newer
@@ -84,7 +67,7 @@ fresh_db() {
 db_cleanup() {
 	local rc=$? d
 	if ((!DB_FINISHED)); then
-		bad "stopped early by a failing command (exit $rc)"
+		fail "stopped early by a failing command (exit $rc)"
 		finish || true
 	fi
 	for d in "${DB_MADE[@]}"; do
@@ -96,15 +79,15 @@ trap db_cleanup EXIT
 
 # Abort with one failure when no server answers or the role is not a
 # superuser.
-require_server() {
+db_require_server() {
 	if ! q postgres -c 'SELECT 1' >/dev/null 2>&1; then
 		echo "no server answers (PGHOST=${PGHOST:-} PGPORT=${PGPORT:-}); set the libpq environment" >&2
-		bad "server reachable"
-		finish || exit 1
+		fail "server reachable"
+		db_finish || exit 1
 	fi
 	if [ "$(q postgres -c 'SELECT rolsuper FROM pg_roles WHERE rolname = current_user')" != t ]; then
-		bad "the role is a superuser"
-		finish || exit 1
+		fail "the role is a superuser"
+		db_finish || exit 1
 	fi
 	echo "  (server $(q postgres -c 'SHOW server_version'), client programs from $PGBIN)"
 }
@@ -115,6 +98,27 @@ require_server() {
 digest() {
 	q "$1" -c "SELECT count(*) || ' ' || md5(coalesce(string_agg(r::text, E'\\n' ORDER BY r::text), ''))
 				 FROM ($2) r"
+}
+
+# take_digests DB OBJECT...: BEFORE[object] := the digest of its rows, each
+# checked to have some; same_digests DB WHEN OBJECT...: compare with them.
+declare -A BEFORE=()
+take_digests() {
+	local db=$1 o n
+	shift
+	for o in "$@"; do
+		BEFORE[$o]=$(digest "$db" "SELECT * FROM $o")
+		n=${BEFORE[$o]%% *}
+		check "$o has rows ($n)" test "$n" -gt 0
+	done
+}
+
+same_digests() {
+	local db=$1 when=$2 o
+	shift 2
+	for o in "$@"; do
+		same "$when $o gives the same rows" "${BEFORE[$o]}" "$(digest "$db" "SELECT * FROM $o")"
+	done
 }
 
 # The test data, in the current database: 600 points (id, geom) on a

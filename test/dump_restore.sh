@@ -26,7 +26,7 @@ SRC=tdc_dump_src
 DST=tdc_dump_dst
 
 echo "== dump_restore.sh: pg_dump -Fc, pg_restore into a fresh database"
-require_server
+db_require_server
 fresh_db "$SRC"
 fresh_db "$DST"
 q "$SRC" -c "CREATE EXTENSION tdc_delaunay CASCADE" -c "$TEST_DATA" >/dev/null
@@ -66,12 +66,7 @@ SQL
 
 OBJECTS=(v_triangles mv_aggregate mv_dump t_constrained v_constrained mv_constrained_dump
 	v_voronoi mv_voronoi_aggregate mv_voronoi_dump tiled)
-declare -A before=()
-for o in "${OBJECTS[@]}"; do
-	before[$o]=$(digest "$SRC" "SELECT * FROM $o")
-	n=${before[$o]%% *}
-	check "$o has rows ($n)" test "$n" -gt 0
-done
+take_digests "$SRC" "${OBJECTS[@]}"
 IDX="SET enable_seqscan = off; SELECT grp FROM t_groups WHERE ST_NumGeometries(ST_TDCDelaunayTriangles(g)) > 0 ORDER BY grp"
 before_idx=$(q "$SRC" -c "$IDX" | tr '\n' ' ')
 
@@ -83,15 +78,11 @@ same "pg_restore exits 0" 0 "$rc"
 same "the restored database has tdc_delaunay $(q "$SRC" -c "SELECT extversion FROM pg_extension WHERE extname = 'tdc_delaunay'")" \
 	"$(q "$SRC" -c "SELECT extversion FROM pg_extension WHERE extname = 'tdc_delaunay'")" \
 	"$(q "$DST" -c "SELECT extversion FROM pg_extension WHERE extname = 'tdc_delaunay'")"
-for o in "${OBJECTS[@]}"; do
-	same "restored $o gives the same rows" "${before[$o]}" "$(digest "$DST" "SELECT * FROM $o")"
-done
+same_digests "$DST" restored "${OBJECTS[@]}"
 same "the restored expression index answers as before" "$before_idx" "$(q "$DST" -c "$IDX" | tr '\n' ' ')"
 q "$DST" -c "REFRESH MATERIALIZED VIEW mv_dump" -c "REFRESH MATERIALIZED VIEW mv_voronoi_dump" \
 	-c "REFRESH MATERIALIZED VIEW mv_constrained_dump" >/dev/null
-for o in mv_dump mv_voronoi_dump mv_constrained_dump; do
-	same "restored $o refreshed gives the same rows" "${before[$o]}" "$(digest "$DST" "SELECT * FROM $o")"
-done
+same_digests "$DST" "restored and refreshed" mv_dump mv_voronoi_dump mv_constrained_dump
 
 # The unqualified query.  PostgreSQL 17 and later run CREATE and REFRESH
 # MATERIALIZED VIEW with the search_path "pg_catalog, pg_temp", so there the
@@ -122,4 +113,4 @@ check "... with the HINT to schema-qualify the query" grep -q 'HINT: .*Schema-qu
 check "... and the CONTEXT naming the query" grep -q 'query of ST_TDCDelaunayDump: select geom from pts' "$DB_WORK/bad.log"
 echo "  ($what said:)"
 grep -E 'ERROR|HINT|CONTEXT|errors ignored' "$DB_WORK/bad.log" | sed 's/^/        /'
-finish
+db_finish

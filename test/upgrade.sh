@@ -31,7 +31,7 @@ NEW=tdc_upgrade_new
 FROM=0.1.0
 
 echo "== upgrade.sh: tdc_delaunay $FROM, then ALTER EXTENSION UPDATE"
-require_server
+db_require_server
 TO=$(q postgres -c "SELECT default_version FROM pg_available_extensions WHERE name = 'tdc_delaunay'")
 fresh_db "$OLD"
 fresh_db "$NEW"
@@ -62,14 +62,8 @@ CREATE MATERIALIZED VIEW mv_voronoi AS
 CALL tdc_delaunay_tiled('pts', 'tiled', tile_size => 30);
 SQL
 
-OBJECTS=("SELECT * FROM v_families" "SELECT * FROM t_dump" "SELECT * FROM mv_voronoi"
-	"SELECT id, geom FROM tiled")
-declare -A before=()
-for o in "${OBJECTS[@]}"; do
-	before[$o]=$(digest "$OLD" "$o")
-	n=${before[$o]%% *}
-	check "before the update: $o has rows ($n)" test "$n" -gt 0
-done
+OBJECTS=(v_families t_dump mv_voronoi tiled)
+take_digests "$OLD" "${OBJECTS[@]}"
 # The tiled triangulation and the Dump have the same triangles.
 same "tdc_delaunay_tiled's triangles are ST_TDCDelaunayDump's" \
 	"$(digest "$OLD" "SELECT ST_Normalize(geom) FROM t_dump WHERE f = 'delaunay'")" \
@@ -127,23 +121,20 @@ nagg=$(grep -c '^aggregate ' "$DB_WORK/fresh.txt" || true)
 check "a fresh install has functions, aggregates and a procedure ($nfun routines, $nagg aggregates)" \
 	test "$nfun" -gt 40 -a "$nagg" -ge 8 -a "$(grep -c ' kind p ' "$DB_WORK/fresh.txt")" = 1
 if diff -u "$DB_WORK/fresh.txt" "$DB_WORK/updated.txt" >"$DB_WORK/catalogue.diff"; then
-	ok "the updated catalogue equals a fresh $TO install ($(wc -l <"$DB_WORK/fresh.txt") lines)"
+	pass "the updated catalogue equals a fresh $TO install ($(wc -l <"$DB_WORK/fresh.txt") lines)"
 else
-	bad "the updated catalogue differs from a fresh $TO install (- fresh, + updated):"
+	fail "the updated catalogue differs from a fresh $TO install (- fresh, + updated):"
 	sed 's/^/        /' "$DB_WORK/catalogue.diff"
 fi
 missing=$(grep -c 'NO COMMENT' "$DB_WORK/fresh.txt" || true)
 same "every function, aggregate and procedure has a COMMENT" 0 "$missing"
 ((missing == 0)) || grep 'NO COMMENT' "$DB_WORK/fresh.txt" | sed 's/^/        /'
 
-for o in "${OBJECTS[@]}"; do
-	same "after the update: $o gives the same rows" "${before[$o]}" "$(digest "$OLD" "$o")"
-done
+same_digests "$OLD" "after the update:" "${OBJECTS[@]}"
 q "$OLD" -c "REFRESH MATERIALIZED VIEW mv_voronoi" >/dev/null
-same "after the update: mv_voronoi refreshed gives the same rows" "${before[SELECT * FROM mv_voronoi]}" \
-	"$(digest "$OLD" "SELECT * FROM mv_voronoi")"
+same_digests "$OLD" "after the update and a refresh:" mv_voronoi
 out=$(q "$OLD" -c "SELECT tdc_delaunay_full_version()" 2>&1)
 echo "  (tdc_delaunay_full_version(): $out)"
 check "after the update the report says EXTENSION=\"$TO\"" grep -qF "EXTENSION=\"$TO\" PGSQL=" <<<"$out"
 check "... with no warning" test -z "$(grep -e WARNING -e 'needs ALTER' <<<"$out")"
-finish
+db_finish
