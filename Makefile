@@ -12,9 +12,16 @@
 #   make bench                  benchmarks (bench/run.sh)
 
 EXTENSION = tdc_delaunay
-EXTVERSION = 0.1.0
+EXTVERSION = 1.0.0
 MODULE_big = tdc_delaunay
-DATA = tdc_delaunay--$(EXTVERSION).sql
+# The install script of this version is made from one file per feature, in
+# this order (the rule is below); older base scripts and the upgrade scripts
+# ship as they were released, and test/release.sh checks that the library
+# still has every C function any of them names.
+SQL_SRCS = $(addprefix src/sql/,header.sql delaunay.sql diagnostics.sql voronoi.sql \
+	tiled_internals.sql tiled.sql constrained.sql version.sql)
+DATA_built = $(EXTENSION)--$(EXTVERSION).sql
+DATA = $(EXTENSION)--0.1.0.sql $(EXTENSION)--0.1.0--1.0.0.sql
 
 CORE_SRCS = $(sort $(wildcard src/core/*.c))
 PG_SRCS = $(sort $(wildcard src/pg/*.c))
@@ -77,6 +84,11 @@ check-core-tsan: build/test_core_tsan
 test:
 	bash scripts/test.sh
 
+# A blank line between the files; written whole or not at all.
+$(EXTENSION)--$(EXTVERSION).sql: $(SQL_SRCS)
+	awk 'FNR == 1 && NR > 1 { print "" } { print }' $^ > $@.tmp
+	mv $@.tmp $@
+
 demo:
 	bash scripts/demo.sh
 
@@ -99,6 +111,15 @@ src/core/%.o: src/core/%.c $(wildcard src/core/*.h)
 	$(CC) $(CFLAGS) -std=c11 -D_GNU_SOURCE -ffp-contract=off -pthread -Isrc/core -c -o $@ $<
 # PGXS does not track headers: a changed struct must rebuild every user.
 $(PG_SRCS:.c=.o): src/pg/tdc_pg.h src/pg/gser_format.h src/core/tdc.h
+# tdc_delaunay_full_version() reports the PostGIS found here at build time:
+# the default_version of its control file (the library does not compile
+# against PostGIS, so nothing more precise exists), or "unknown".
+POSTGIS_BUILD_VERSION := $(shell sed -n "s/^default_version *= *'\([^']*\)'.*/\1/p" \
+	'$(shell $(PG_CONFIG) --sharedir)/extension/postgis.control' 2>/dev/null)
+# (the .bc is the JIT's bitcode of the same file)
+src/pg/tdc_version.o src/pg/tdc_version.bc: override CPPFLAGS += \
+	-DTDC_LIB_VERSION='"$(EXTVERSION)"' -DTDC_BUILD_POSTGIS='"$(or $(POSTGIS_BUILD_VERSION),unknown)"'
+src/pg/tdc_version.o src/pg/tdc_version.bc: Makefile
 else
 all: tdc
 endif

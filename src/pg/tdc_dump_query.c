@@ -9,7 +9,8 @@
  * DUMP_BATCH rows with an interrupt check after each, so its result never
  * has to fit in memory as rows: only the vertices (and ids) are kept.  An
  * ERROR raised while the query runs carries a CONTEXT line naming the
- * function and the query.
+ * function and the query, and one that says a name was not found carries a
+ * HINT to schema-qualify the names (see tdc_dump_collect).
  */
 #include "postgres.h"
 
@@ -153,10 +154,10 @@ dump_check_columns(TupleDesc desc, bool with_ids, Oid geomoid,
  * outlive SPI_finish.  row_fn, when not NULL, sees each geometry read
  * (see TdcDumpRowFn); it allocates in its own context, not SPI's.
  */
-void
-tdc_dump_collect(TdcPointBuf *buf, TdcIdBuf *ids, const char *query,
-				 Oid geomoid, const char *fname, TdcDumpRowFn row_fn,
-				 void *row_arg)
+static void
+dump_collect(TdcPointBuf *buf, TdcIdBuf *ids, const char *query,
+			 Oid geomoid, const char *fname, TdcDumpRowFn row_fn,
+			 void *row_arg)
 {
 	ErrorContextCallback errcb;
 	DumpContext dc;
@@ -235,4 +236,47 @@ tdc_dump_collect(TdcPointBuf *buf, TdcIdBuf *ids, const char *query,
 	SPI_cursor_close(portal);
 	SPI_finish();
 	error_context_stack = errcb.previous;
+}
+
+/*
+ * The query is text, so its names are looked up when it runs, in the
+ * search_path of the moment.  pg_restore empties it, and PostgreSQL 17+
+ * sets it to pg_catalog, pg_temp while it creates or refreshes a
+ * materialized view: a materialized view over a Dump function whose query
+ * names "pts" rather than "public.pts" then fails to refresh.  An error that says a table,
+ * function, operator or type was not found gets a HINT that says so (after
+ * the hint it had, if any); it keeps its code, message and CONTEXT.
+ */
+void
+tdc_dump_collect(TdcPointBuf *buf, TdcIdBuf *ids, const char *query,
+				 Oid geomoid, const char *fname, TdcDumpRowFn row_fn,
+				 void *row_arg)
+{
+	MemoryContext outer = CurrentMemoryContext;
+
+	PG_TRY();
+	{
+		dump_collect(buf, ids, query, geomoid, fname, row_fn, row_arg);
+	}
+	PG_CATCH();
+	{
+		ErrorData  *edata;
+		const char *hint = "Schema-qualify every table, function and type in the query (public.pts, not pts): "
+			"its names are looked up in the search_path it runs in, which pg_restore empties, "
+			"and which is pg_catalog, pg_temp in a materialized view from PostgreSQL 17 on.";
+
+		MemoryContextSwitchTo(outer);
+		edata = CopyErrorData();
+		if (edata->sqlerrcode != ERRCODE_UNDEFINED_TABLE &&
+			edata->sqlerrcode != ERRCODE_UNDEFINED_FUNCTION &&
+			edata->sqlerrcode != ERRCODE_UNDEFINED_OBJECT)
+		{
+			FreeErrorData(edata);
+			PG_RE_THROW();
+		}
+		FlushErrorState();
+		edata->hint = edata->hint ? psprintf("%s\n%s", edata->hint, hint) : pstrdup(hint);
+		ReThrowError(edata);
+	}
+	PG_END_TRY();
 }

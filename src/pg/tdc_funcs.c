@@ -197,8 +197,8 @@ run_reset_callback(void *arg)
 	}
 }
 
-static int
-effective_threads(void)
+int
+tdc_effective_threads(void)
 {
 	/* sysconf reads /sys on every call: once per backend is enough */
 	static int	cpus = 0;
@@ -363,7 +363,7 @@ run_options(const TdcPointBuf *buf, double tolerance, uint64 result_bytes,
 	uint64		limit = tdc_max_memory_bytes();
 
 	tdc_options_init(opt);
-	opt->threads = effective_threads();
+	opt->threads = tdc_effective_threads();
 	opt->grid_size = tdc_guc_grid_size;
 	opt->levels = tdc_guc_levels;
 	opt->tolerance = tolerance;

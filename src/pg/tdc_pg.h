@@ -18,6 +18,7 @@
  *	tdc_guc.c		_PG_init and the tdc_delaunay.* settings
  *	tdc_signal.c	keeps PostGIS's cancel handler from allocating inside a
  *					signal; every SQL entry point calls tdc_signal_guard()
+ *	tdc_version.c	the versions and thread count a bug report needs
  *
  * Only the backend's main thread ever calls PostgreSQL.  The core's worker
  * threads see nothing but plain malloc'd arrays.
@@ -259,6 +260,8 @@ typedef struct TdcRun
 } TdcRun;
 
 extern void tdc_check_params(double tolerance, int flags, const char *fname);
+/* the threads a triangulation starts now: the settings within the CPUs */
+extern int	tdc_effective_threads(void);
 extern void tdc_check_run_memory(const TdcPointBuf *buf, double tolerance,
 								 uint64 result_bytes, const char *fname);
 extern TdcRun *tdc_run(const TdcPointBuf *buf, double tolerance,
