@@ -98,7 +98,8 @@ build/regress:
 src/core/%.o: src/core/%.c $(wildcard src/core/*.h)
 	$(CC) $(CFLAGS) -std=c11 -D_GNU_SOURCE -ffp-contract=off -pthread -Isrc/core -c -o $@ $<
 # PGXS does not track headers: a changed struct must rebuild every user.
-$(PG_SRCS:.c=.o): src/pg/tdc_pg.h src/pg/gser_format.h src/core/tdc.h
+$(PG_SRCS:.c=.o): src/pg/tdc_pg.h src/pg/pg_version_compat.h src/pg/gser_format.h \
+	src/pg/fn_voronoi.h src/core/tdc.h
 else
 all: tdc
 endif
@@ -136,9 +137,10 @@ build/fuzz/fuzz_cdt: fuzz/fuzz_cdt.c $(FUZZ_CORE_DEPS)
 	$(FUZZ_CC) $(FUZZ_CFLAGS) -std=c11 -Isrc/core -o $@ fuzz/fuzz_cdt.c $(CORE_SRCS) -lm
 
 # The reader and writers, and the aggregate state, each with the point buffer.
-FUZZ_GSER_SRCS = src/pg/gserialized.c src/pg/gser_write.c src/pg/pointbuf.c
-FUZZ_STATE_SRCS = src/pg/tdc_agg_state.c src/pg/pointbuf.c
-FUZZ_PG_DEPS = fuzz/pg_shim.c fuzz/pg_shim.h src/pg/tdc_pg.h src/pg/gser_format.h
+FUZZ_GSER_SRCS = src/pg/gser_read.c src/pg/gser_write.c src/pg/pointbuf.c
+FUZZ_STATE_SRCS = src/pg/agg_state.c src/pg/pointbuf.c
+FUZZ_PG_DEPS = fuzz/pg_shim.c fuzz/pg_shim.h src/pg/tdc_pg.h src/pg/pg_version_compat.h \
+	src/pg/gser_format.h
 
 build/fuzz/fuzz_voronoi: fuzz/fuzz_voronoi.c $(FUZZ_CORE_DEPS)
 	@mkdir -p build/fuzz

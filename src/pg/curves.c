@@ -1,5 +1,5 @@
 /*
- * tdc_curves.c
+ * curves.c
  *		Curved input of the Delaunay functions, stroked by PostGIS itself.
  *
  * ST_DelaunayTriangles hands its input to GEOS, and PostGIS converts a
@@ -11,7 +11,7 @@
  * ours that meets a curve (TDC_CURVES_STROKE) calls ST_CurveToLine on the
  * whole value and reads the result instead: the same vertices as PostGIS,
  * with no stroking arithmetic of our own to drift from it.  The reader
- * (gserialized.c) only notices the curve, drops what it had read of that
+ * (gser_read.c) only notices the curve, drops what it had read of that
  * value, and comes here.
  *
  * The other families follow their PostGIS or SFCGAL counterparts too:

@@ -1,5 +1,5 @@
 /*
- * tdc_tiled.c
+ * fn_tiled.c
  *		The per-tile step of tdc_delaunay_tiled (tdc_delaunay--0.1.0.sql):
  *		an aggregate that triangulates one tile with its halo and keeps the
  *		tile's final triangles (src/core/tile.c), and a set-returning
@@ -232,7 +232,6 @@ _tdc_tile_transfn(PG_FUNCTION_ARGS)
 {
 	MemoryContext aggcxt;
 	TileState  *st = PG_ARGISNULL(0) ? NULL : (TileState *) PG_GETARG_POINTER(0);
-	struct varlena *geom;
 	int64		label;
 	int64		seq;
 	int64		vi;
@@ -280,9 +279,7 @@ _tdc_tile_transfn(PG_FUNCTION_ARGS)
 	}
 
 	before = st->pts.n;
-	geom = PG_DETOAST_DATUM_PACKED(PG_GETARG_DATUM(1));
-	tdc_gser_append(&st->pts, geom, TILE_FNAME);
-	PG_FREE_IF_COPY(geom, 1);
+	(void) tdc_read_geometry(&st->pts, PG_GETARG_DATUM(1), TILE_FNAME);
 
 	if (st->pts.n > st->label_cap)
 	{
@@ -653,13 +650,11 @@ _tdc_hull_transfn(PG_FUNCTION_ARGS)
 	else
 	{
 		TdcPointBuf buf;
-		struct varlena *geom = PG_DETOAST_DATUM_PACKED(PG_GETARG_DATUM(1));
 
 		tdc_pointbuf_init(&buf, CurrentMemoryContext);
-		tdc_gser_append(&buf, geom, TILE_FNAME);
+		(void) tdc_read_geometry(&buf, PG_GETARG_DATUM(1), TILE_FNAME);
 		if (buf.n > 0)
 			hull_add(st, buf.xy, buf.n, aggcxt);
-		PG_FREE_IF_COPY(geom, 1);
 	}
 	PG_RETURN_POINTER(st);
 }
