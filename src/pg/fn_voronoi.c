@@ -80,23 +80,21 @@ vor_cancel_fn(void *work)
 	tdc_voronoi_cancel((tdc_voronoi *) work);
 }
 
-static const TdcWorkOps vor_ops = {vor_wait_fn, vor_cancel_fn, "Voronoi diagram"};
-
-/* Wait for the diagram (or its writing); any failure is an ERROR. */
-static void
-vor_wait(VorRun *run, const char *fname)
+static const char *
+vor_error_fn(const void *work)
 {
-	char		err[256];
-	int			rc = tdc_wait_work(run->v, &vor_ops, fname);
-
-	if (rc != TDC_OK)
-	{
-		snprintf(err, sizeof(err), "%s", tdc_voronoi_error(run->v));
-		tdc_voronoi_free(run->v);
-		run->v = NULL;
-		tdc_report_status(rc, err, fname);
-	}
+	return tdc_voronoi_error((const tdc_voronoi *) work);
 }
+
+static void
+vor_free_fn(void *work)
+{
+	tdc_voronoi_free((tdc_voronoi *) work);
+}
+
+static const TdcWorkOps vor_ops = {
+	vor_wait_fn, vor_cancel_fn, vor_error_fn, vor_free_fn, "Voronoi diagram"
+};
 
 /*
  * The bounding box of extend_to's vertices into ext[4], as PostGIS reads
@@ -188,7 +186,7 @@ tdc_voronoi_run(const TdcPointBuf *buf, double tolerance, const double *ext,
 		tdc_voronoi_start(run->job, env, 0, &vrun->v, err, sizeof(err));
 	if (rc != TDC_OK)
 		tdc_report_status(rc, err, fname);
-	vor_wait(vrun, fname);
+	tdc_finish_work((void **) &vrun->v, &vor_ops, fname);
 	return vrun;
 }
 
@@ -329,7 +327,7 @@ tdc_voronoi_write_polygons(VorRun *vrun, int32 srid, uint64 have_bytes,
 	rc = tdc_voronoi_emit(vrun->v, p, err, sizeof(err));
 	if (rc != TDC_OK)
 		tdc_report_status(rc, err, fname);
-	vor_wait(vrun, fname);
+	tdc_finish_work((void **) &vrun->v, &vor_ops, fname);
 	return (struct varlena *) out;
 }
 

@@ -200,7 +200,39 @@ job_cancel(void *work)
 	tdc_job_cancel((tdc_job *) work);
 }
 
-static const TdcWorkOps job_ops = {job_wait, job_cancel, "triangulation"};
+static const char *
+job_error(const void *work)
+{
+	return tdc_job_error((const tdc_job *) work);
+}
+
+static void
+job_free(void *work)
+{
+	tdc_job_free((tdc_job *) work);
+}
+
+static const TdcWorkOps job_ops = {job_wait, job_cancel, job_error, job_free, "triangulation"};
+
+/*
+ * Wait for *workp as tdc_wait_work does; returns when it succeeded.  On a
+ * failure the work is freed (*workp set to NULL) and the ERROR carries its
+ * message.
+ */
+void
+tdc_finish_work(void **workp, const TdcWorkOps *ops, const char *fname)
+{
+	char		err[256];
+	int			rc = tdc_wait_work(*workp, ops, fname);
+
+	if (rc != TDC_OK)
+	{
+		snprintf(err, sizeof(err), "%s", ops->error(*workp));
+		ops->free(*workp);
+		*workp = NULL;
+		tdc_report_status(rc, err, fname);
+	}
+}
 
 /*
  * Wait for the job's current phase (the triangulation, or the hand-over of
@@ -209,16 +241,7 @@ static const TdcWorkOps job_ops = {job_wait, job_cancel, "triangulation"};
 static void
 wait_for_job(TdcRun *run, const char *fname)
 {
-	char		err[256];
-	int			rc = tdc_wait_work(run->job, &job_ops, fname);
-
-	if (rc != TDC_OK)
-	{
-		snprintf(err, sizeof(err), "%s", tdc_job_error(run->job));
-		tdc_job_free(run->job);
-		run->job = NULL;
-		tdc_report_status(rc, err, fname);
-	}
+	tdc_finish_work((void **) &run->job, &job_ops, fname);
 }
 
 /* A run and the callback that frees its job on an error: one allocation. */

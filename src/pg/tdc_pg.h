@@ -289,17 +289,22 @@ typedef struct TdcRun
 
 /*
  * Work on the core's threads that the backend waits for (a job phase, a
- * Voronoi diagram, a constrained insertion): wait() as tdc_job_wait,
- * cancel() as tdc_job_cancel; "what" names it in the cancel message.
+ * Voronoi diagram, a constrained insertion), as the core offers each:
+ * wait() as tdc_job_wait, cancel() as tdc_job_cancel, error() as
+ * tdc_job_error, free() as tdc_job_free; "what" names it in the cancel
+ * message.
  */
 typedef struct TdcWorkOps
 {
 	int			(*wait) (void *work, int timeout_ms);
 	void		(*cancel) (void *work);
+	const char *(*error) (const void *work);
+	void		(*free) (void *work);
 	const char *what;
 } TdcWorkOps;
 
 extern int	tdc_wait_work(void *work, const TdcWorkOps *ops, const char *fname);
+extern void tdc_finish_work(void **workp, const TdcWorkOps *ops, const char *fname);
 extern pg_noreturn void tdc_report_status(int rc, const char *msg, const char *fname);
 
 extern void tdc_check_flags(int flags, bool constraints, const char *fname);

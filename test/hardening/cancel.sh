@@ -380,6 +380,20 @@ sql() {
 	echo "$SQLN $1 $2" >>"$SQLF.map"
 }
 
+# sql_run K KIND OFFSET STATEMENT: one signalled run (tagged run:K:) of the
+# session being written, between the watcher's hand-shakes; KIND timeout
+# sets statement_timeout to OFFSET around it
+sql_run() {
+	local k=$1 kind=$2 off=$3
+	sql begin "$k" "SELECT 'begin $k'"
+	sql wait "$k" "SELECT tdc_hard.wait_for_watcher('run:$k:')"
+	[ "$kind" != timeout ] || sql set "$k" "SET statement_timeout = $off"
+	sql target "$k" "$4"
+	[ "$kind" != timeout ] || sql reset "$k" "RESET statement_timeout"
+	sql guard "$k" "SELECT tdc_hard.watcher_done('run:$k:')"
+	sql probe "$k" "SELECT 'after $k ' || ($PROBE) || ' ' || ($STATUS)"
+}
+
 # run_session FILE: the session under test runs FILE; stdout and stderr go to
 # one file, FILE.out, in order
 run_session() {
@@ -526,13 +540,7 @@ sql_open "$sweep"
 sql pid 0 "SELECT 'pid ' || pg_backend_pid()"
 for r in "${runs[@]}"; do
 	read -r k kind base off <<<"$r"
-	sql begin "$k" "SELECT 'begin $k'"
-	sql wait "$k" "SELECT tdc_hard.wait_for_watcher('run:$k:')"
-	[ "$kind" != timeout ] || sql set "$k" "SET statement_timeout = $off"
-	sql target "$k" "$(bigq "run:$k:")"
-	[ "$kind" != timeout ] || sql reset "$k" "RESET statement_timeout"
-	sql guard "$k" "SELECT tdc_hard.watcher_done('run:$k:')"
-	sql probe "$k" "SELECT 'after $k ' || ($PROBE) || ' ' || ($STATUS)"
+	sql_run "$k" "$kind" "$off" "$(bigq "run:$k:")"
 done
 run_session "$sweep"
 sweep_pid=${HARD_BG[-1]}
@@ -570,13 +578,7 @@ if ((${#VALUE_TIMEOUTS[@]} > 0)); then
 	sql_open "$vsweep"
 	for r in "${vruns[@]}"; do
 		read -r k fn d <<<"$r"
-		sql begin "$k" "SELECT 'begin $k'"
-		sql wait "$k" "SELECT tdc_hard.wait_for_watcher('run:$k:')"
-		sql set "$k" "SET statement_timeout = $d"
-		sql target "$k" "$(valueq "run:$k:" "$fn")"
-		sql reset "$k" "RESET statement_timeout"
-		sql guard "$k" "SELECT tdc_hard.watcher_done('run:$k:')"
-		sql probe "$k" "SELECT 'after $k ' || ($PROBE) || ' ' || ($STATUS)"
+		sql_run "$k" timeout "$d" "$(valueq "run:$k:" "$fn")"
 	done
 	run_session "$vsweep"
 	vsweep_pid=${HARD_BG[-1]}
