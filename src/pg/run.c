@@ -26,7 +26,8 @@
  * tdc_job_start, the context is reset during error recovery and the
  * callback cancels and joins the job and hands its memory to a detached
  * core thread to unmap, so the cancel does not wait for it.  On success
- * tdc_run_free frees the job and clears the pointer (see there).
+ * tdc_run_free frees the job (a big one on such a thread too) and clears
+ * the pointer, so the callback has nothing left to do.
  *
  * Memory limit.  tdc_delaunay.max_memory (within the superuser's
  * tdc_delaunay.memory_ceiling) caps the collected vertices, the engine's
@@ -62,6 +63,13 @@
  * threshold is 256 kB, the mesh of some 3,600 points).
  */
 #define KEEP_MIN_POINTS		4096
+
+/*
+ * What a successful run may leave to unmap in place, beyond what the cache
+ * keeps (tdc_run_free): unmapping runs at some 7 ms per 64 MB on a quiet
+ * machine, with no interrupt check.
+ */
+#define FREE_IN_PLACE_MAX	((uint64) 64 << 20)
 
 /* ----------------------------------------------------------------
  *		status and waiting
@@ -448,6 +456,7 @@ tdc_run(const TdcPointBuf *buf, double tolerance, uint64 result_bytes,
 	 * needs.
 	 */
 	run->kept = buf->n >= KEEP_MIN_POINTS;
+	run->engine_bytes = tdc_estimate_memory((size_t) buf->n, &opt);
 	opt.cache = tdc_backend_cache(room, run->kept);
 	ra->cb.func = run_reset_callback;
 	ra->cb.arg = run;
@@ -487,12 +496,29 @@ tdc_run_emit(TdcRun *run, tdc_emit_fn emit, void *arg, const char *fname)
 	return true;
 }
 
+/*
+ * Free a successful run's job.  In place, its arrays go to the backend's
+ * cache (up to tdc_delaunay.keep_memory) for the next run and the rest is
+ * unmapped, so no thread outlives the statement.  But unmapping takes time
+ * in proportion to the size and cannot be interrupted: at 5 million points
+ * (a 600 MB job) some 150 ms on a quiet machine, during which a
+ * statement_timeout or cancel waited while the result was handed back.
+ * So a job that would leave more than FREE_IN_PLACE_MAX to unmap goes to a
+ * detached core thread instead, as a failed one does (the cache then keeps
+ * none of it), and the statement ends at once.  Pending interrupts are the
+ * caller's to process before.
+ */
 void
 tdc_run_free(TdcRun *run)
 {
 	if (run->job != NULL)
 	{
-		tdc_job_free(run->job);
+		uint64		keep = run->kept ? (uint64) tdc_guc_keep_memory_mb << 20 : 0;
+
+		if (run->engine_bytes > keep + FREE_IN_PLACE_MAX)
+			tdc_job_free_background(run->job);
+		else
+			tdc_job_free(run->job);
 		run->job = NULL;
 	}
 	if (run->kept)

@@ -285,6 +285,7 @@ typedef struct TdcRun
 {
 	tdc_job    *job;			/* NULL once freed */
 	bool		kept;			/* its arrays come from the backend's cache */
+	uint64		engine_bytes;	/* the engine's estimate, for tdc_run_free */
 } TdcRun;
 
 /*
