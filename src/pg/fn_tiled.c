@@ -40,6 +40,9 @@
  * the core names each vertex by the first point with its coordinates, so a
  * vertex's Z is that of its first copy in the source, as in
  * ST_TDCDelaunayDump.
+ *
+ * _tdc_curve_to_line, at the end, is the procedure's way to read curve rows
+ * as the Delaunay functions read them (curves.c strokes them).
  */
 #include "postgres.h"
 
@@ -676,4 +679,36 @@ _tdc_hull_finalfn(PG_FUNCTION_ARGS)
 		d[i] = Float8GetDatum(st->xy[i]);
 	PG_RETURN_ARRAYTYPE_P(construct_array(d, (int) st->n * 2, FLOAT8OID, 8,
 										  FLOAT8PASSBYVAL, TYPALIGN_DOUBLE));
+}
+
+PG_FUNCTION_INFO_V1(_tdc_curve_to_line);
+
+/*
+ * _tdc_curve_to_line(geometry) RETURNS geometry
+ *		The geometry as the Delaunay functions read it: stroked when it has
+ *		arcs, else itself.  tdc_delaunay_tiled stages the vertices of its
+ *		source with ST_DumpPoints in SQL, and runs its curve rows through
+ *		this first, so that its tiles see what ST_TDCDelaunayDump sees.  The
+ *		value is read once to decide (its arcs, its empty arcs), as the
+ *		Delaunay functions decide.
+ */
+Datum
+_tdc_curve_to_line(PG_FUNCTION_ARGS)
+{
+	const char *fname = "tdc_delaunay_tiled";
+	Datum		d = PG_GETARG_DATUM(0);
+	MemoryContext cxt;
+	TdcPointBuf buf;
+	bool		stroked;
+
+	tdc_signal_guard();
+	cxt = AllocSetContextCreate(CurrentMemoryContext, "tdc curve check",
+								ALLOCSET_SMALL_SIZES);
+	tdc_pointbuf_init(&buf, cxt);
+	buf.curves = TDC_CURVES_STROKE;
+	stroked = tdc_read_geometry(&buf, d, fname);
+	MemoryContextDelete(cxt);
+	if (!stroked)
+		PG_RETURN_DATUM(d);
+	PG_RETURN_POINTER(tdc_curve_to_line(d, fname));
 }
