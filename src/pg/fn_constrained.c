@@ -178,31 +178,7 @@ report_crossing(const CdtHold *hold, const TdcPointBuf *buf, const SegList *w,
 	}
 }
 
-static int
-cdt_wait(void *work, int timeout_ms)
-{
-	return tdc_cdt_wait((tdc_cdt *) work, timeout_ms);
-}
-
-static void
-cdt_cancel(void *work)
-{
-	tdc_cdt_cancel((tdc_cdt *) work);
-}
-
-static const char *
-cdt_error(const void *work)
-{
-	return tdc_cdt_error((const tdc_cdt *) work);
-}
-
-static void
-cdt_free(void *work)
-{
-	tdc_cdt_free((tdc_cdt *) work);
-}
-
-static const TdcWorkOps cdt_ops = {cdt_wait, cdt_cancel, cdt_error, cdt_free, "triangulation"};
+TDC_WORK_OPS(cdt_ops, tdc_cdt, tdc_cdt, "triangulation");
 
 /*
  * Insert the segments into the finished job of run, waiting interruptibly.
@@ -238,7 +214,7 @@ constrain(TdcRun *run, const TdcPointBuf *buf, const SegList *w,
 	if (rc == TDC_ECROSS)
 		report_crossing(hold, buf, w, fname);
 	if (rc != TDC_OK)
-		tdc_report_status(rc, cdt_error(hold->cdt), fname);
+		tdc_report_status(rc, tdc_cdt_error(hold->cdt), fname);
 	if (tdc_guc_stats)
 	{
 		INSTR_TIME_SET_CURRENT(stop);

@@ -68,33 +68,7 @@ vor_reset_callback(void *arg)
 	}
 }
 
-static int
-vor_wait_fn(void *work, int timeout_ms)
-{
-	return tdc_voronoi_wait((tdc_voronoi *) work, timeout_ms);
-}
-
-static void
-vor_cancel_fn(void *work)
-{
-	tdc_voronoi_cancel((tdc_voronoi *) work);
-}
-
-static const char *
-vor_error_fn(const void *work)
-{
-	return tdc_voronoi_error((const tdc_voronoi *) work);
-}
-
-static void
-vor_free_fn(void *work)
-{
-	tdc_voronoi_free((tdc_voronoi *) work);
-}
-
-static const TdcWorkOps vor_ops = {
-	vor_wait_fn, vor_cancel_fn, vor_error_fn, vor_free_fn, "Voronoi diagram"
-};
+TDC_WORK_OPS(vor_ops, tdc_voronoi, tdc_voronoi, "Voronoi diagram");
 
 /*
  * The bounding box of extend_to's vertices into ext[4], as PostGIS reads

@@ -196,31 +196,7 @@ tdc_wait_work(void *work, const TdcWorkOps *ops, const char *fname)
 	return rc;
 }
 
-static int
-job_wait(void *work, int timeout_ms)
-{
-	return tdc_job_wait((tdc_job *) work, timeout_ms);
-}
-
-static void
-job_cancel(void *work)
-{
-	tdc_job_cancel((tdc_job *) work);
-}
-
-static const char *
-job_error(const void *work)
-{
-	return tdc_job_error((const tdc_job *) work);
-}
-
-static void
-job_free(void *work)
-{
-	tdc_job_free((tdc_job *) work);
-}
-
-static const TdcWorkOps job_ops = {job_wait, job_cancel, job_error, job_free, "triangulation"};
+TDC_WORK_OPS(job_ops, tdc_job, tdc_job, "triangulation");
 
 /*
  * Wait for *workp as tdc_wait_work does; returns when it succeeded.  On a

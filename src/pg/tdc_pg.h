@@ -304,6 +304,18 @@ typedef struct TdcWorkOps
 	const char *what;
 } TdcWorkOps;
 
+/*
+ * "static const TdcWorkOps name" for a core type whose functions are
+ * prefix_wait, prefix_cancel, prefix_error and prefix_free (tdc_job,
+ * tdc_voronoi, tdc_cdt), through adapters that take void *.
+ */
+#define TDC_WORK_OPS(name, type, prefix, what) \
+static int name##_wait(void *w, int ms) { return prefix##_wait((type *) w, ms); } \
+static void name##_cancel(void *w) { prefix##_cancel((type *) w); } \
+static const char *name##_error(const void *w) { return prefix##_error((const type *) w); } \
+static void name##_free(void *w) { prefix##_free((type *) w); } \
+static const TdcWorkOps name = {name##_wait, name##_cancel, name##_error, name##_free, what}
+
 extern int	tdc_wait_work(void *work, const TdcWorkOps *ops, const char *fname);
 extern void tdc_finish_work(void **workp, const TdcWorkOps *ops, const char *fname);
 extern pg_noreturn void tdc_report_status(int rc, const char *msg, const char *fname);
