@@ -29,7 +29,8 @@
  * ST_TDCDelaunayDump), fn_delaunay_agg (ST_TDCDelaunay), fn_constrained
  * (ST_TDCConstrainedDelaunayTriangles, its Dump and aggregate), fn_voronoi
  * (ST_TDCVoronoiPolygons/Lines; fn_voronoi.h for its aggregate and Dump),
- * fn_tiled (tdc_delaunay_tiled).  docs/design/pg-runtime.md tells why.
+ * fn_tiled (tdc_delaunay_tiled's per-tile step and curve helper).
+ * docs/design/pg-runtime.md tells why.
  *
  * Only the backend's main thread ever calls PostgreSQL.  The core's worker
  * threads see nothing but plain malloc'd arrays.
