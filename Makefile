@@ -110,16 +110,17 @@ build/regress:
 src/core/%.o: src/core/%.c $(wildcard src/core/*.h)
 	$(CC) $(CFLAGS) -std=c11 -D_GNU_SOURCE -ffp-contract=off -pthread -Isrc/core -c -o $@ $<
 # PGXS does not track headers: a changed struct must rebuild every user.
-$(PG_SRCS:.c=.o): src/pg/tdc_pg.h src/pg/gser_format.h src/core/tdc.h
+$(PG_SRCS:.c=.o): src/pg/tdc_pg.h src/pg/pg_version_compat.h src/pg/gser_format.h \
+	src/pg/fn_voronoi.h src/core/tdc.h
 # tdc_delaunay_full_version() reports the PostGIS found here at build time:
 # the default_version of its control file (the library does not compile
 # against PostGIS, so nothing more precise exists), or "unknown".
 POSTGIS_BUILD_VERSION := $(shell sed -n "s/^default_version *= *'\([^']*\)'.*/\1/p" \
 	'$(shell $(PG_CONFIG) --sharedir)/extension/postgis.control' 2>/dev/null)
 # (the .bc is the JIT's bitcode of the same file)
-src/pg/tdc_version.o src/pg/tdc_version.bc: override CPPFLAGS += \
+src/pg/version.o src/pg/version.bc: override CPPFLAGS += \
 	-DTDC_LIB_VERSION='"$(EXTVERSION)"' -DTDC_BUILD_POSTGIS='"$(or $(POSTGIS_BUILD_VERSION),unknown)"'
-src/pg/tdc_version.o src/pg/tdc_version.bc: Makefile
+src/pg/version.o src/pg/version.bc: Makefile
 else
 all: tdc
 endif
@@ -157,9 +158,10 @@ build/fuzz/fuzz_cdt: fuzz/fuzz_cdt.c $(FUZZ_CORE_DEPS)
 	$(FUZZ_CC) $(FUZZ_CFLAGS) -std=c11 -Isrc/core -o $@ fuzz/fuzz_cdt.c $(CORE_SRCS) -lm
 
 # The reader and writers, and the aggregate state, each with the point buffer.
-FUZZ_GSER_SRCS = src/pg/gserialized.c src/pg/gser_write.c src/pg/pointbuf.c
-FUZZ_STATE_SRCS = src/pg/tdc_agg_state.c src/pg/pointbuf.c
-FUZZ_PG_DEPS = fuzz/pg_shim.c fuzz/pg_shim.h src/pg/tdc_pg.h src/pg/gser_format.h
+FUZZ_GSER_SRCS = src/pg/gser_read.c src/pg/gser_write.c src/pg/pointbuf.c
+FUZZ_STATE_SRCS = src/pg/agg_state.c src/pg/pointbuf.c
+FUZZ_PG_DEPS = fuzz/pg_shim.c fuzz/pg_shim.h src/pg/tdc_pg.h src/pg/pg_version_compat.h \
+	src/pg/gser_format.h
 
 build/fuzz/fuzz_voronoi: fuzz/fuzz_voronoi.c $(FUZZ_CORE_DEPS)
 	@mkdir -p build/fuzz

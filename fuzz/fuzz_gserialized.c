@@ -1,7 +1,7 @@
 /*
  * fuzz_gserialized.c
  *		libFuzzer target for the PostGIS geometry reader and writer of
- *		tdc_delaunay (src/pg/gserialized.c, gser_write.c, pointbuf.c), linked
+ *		tdc_delaunay (src/pg/gser_read.c, gser_write.c, pointbuf.c), linked
  *		with the PostgreSQL shims of pg_shim.c and the real core.
  *
  * Input: one serialized geometry value without its 4-byte varlena header

@@ -1,10 +1,10 @@
 /*
  * fuzz_state.c
  *		libFuzzer target for the serialized ST_TDCDelaunay aggregate state
- *		(src/pg/tdc_agg_state.c: tdc_agg_state_deserialize, _serialize,
+ *		(src/pg/agg_state.c: tdc_agg_state_deserialize, _serialize,
  *		_merge), the bytes that travel between parallel workers.
  *
- * Linked with tdc_agg_state.c and pointbuf.c, compiled against the real
+ * Linked with agg_state.c and pointbuf.c, compiled against the real
  * server headers, and with the shims of pg_shim.c.
  *
  * Input: uint16 little-endian length L, then L bytes of a first serialized
@@ -146,7 +146,7 @@ try_deserialize(const uint8 *data, size_t size, bool *ok)
 	return st;
 }
 
-/* A format of another aggregate, as tdc_constrained.c and tdc_voronoi_agg.c have. */
+/* A format of another aggregate, as fn_constrained.c and fn_voronoi_agg.c have. */
 static const TdcStateFormat other_format = {
 	0x5a5a4454, 1, "fuzz_other", "a hint", -1
 };

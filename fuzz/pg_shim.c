@@ -433,7 +433,7 @@ tdc_max_memory_bytes(void)
 	return (uint64) fuzz_pg_max_memory_mb << 20;
 }
 
-/* Same error as tdc_guc.c, with the limit the fuzzer picked. */
+/* Same error as settings.c, with the limit the fuzzer picked. */
 void
 tdc_report_memory_limit(const char *fname, const char *what, uint64 need,
 						uint64 result)

@@ -1,8 +1,8 @@
 /*
  * pg_shim.h
  *		Stand-ins for the few PostgreSQL backend services that the
- *		tdc_delaunay reader and writers (src/pg/gserialized.c, gser_write.c,
- *		pointbuf.c) and the aggregate state (src/pg/tdc_agg_state.c) use, so
+ *		tdc_delaunay reader and writers (src/pg/gser_read.c, gser_write.c,
+ *		pointbuf.c) and the aggregate state (src/pg/agg_state.c) use, so
  *		that they run inside a libFuzzer process without a server.
  *
  * Memory: palloc and friends allocate with malloc and remember every chunk;
@@ -25,7 +25,7 @@ extern int	fuzz_pg_sqlstate;
 extern char fuzz_pg_message[1024];
 extern int	fuzz_pg_verbose;
 
-/* Settings the code under test reads (tdc_guc.c in the server). */
+/* Settings the code under test reads (settings.c in the server). */
 extern int	fuzz_pg_max_memory_mb;
 
 /* Free every allocation made since the last reset. */

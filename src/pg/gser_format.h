@@ -1,7 +1,7 @@
 /*
  * gser_format.h
  *		The PostGIS serialized geometry format, as far as tdc_delaunay reads
- *		(gserialized.c) and writes (gser_write.c) it.  Not installed.
+ *		(gser_read.c) and writes (gser_write.c) it.  Not installed.
  *
  * PostGIS 3 stores a geometry as
  *

@@ -1,24 +1,37 @@
 /*
  * tdc_pg.h
- *		Declarations shared by the PostgreSQL side of tdc_delaunay.
+ *		The runtime of the PostgreSQL side of tdc_delaunay: what every SQL
+ *		function is built from.
  *
- * The PostgreSQL layer has these parts:
+ * src/pg is a runtime plus one file set per feature.  The runtime:
  *
- *	pointbuf.c		the point buffer the vertices of the input collect in
- *	gserialized.c	reads PostGIS geometry values straight into a point
+ *	run.c			runs a job (and any work on it) while watching for
+ *					interrupts: the one wait loop; core status to SQLSTATE;
+ *					the parameter checks every function shares
+ *	toast_stream.c	reads a function's geometry argument, a big TOASTed
+ *					value a slice at a time (tdc_read_geometry)
+ *	gser_read.c		reads PostGIS geometry values straight into a point
  *					buffer (the format is in gser_format.h)
- *	tdc_curves.c	curved input: stroked by PostGIS's ST_CurveToLine for
- *					the Delaunay functions, as ST_DelaunayTriangles does
  *	gser_write.c	writes triangulations back as geometry values
- *	tdc_agg.c		the ST_TDCDelaunay aggregates' SQL entry points
- *	tdc_agg_state.c	their state, its merging and its serialized form
- *	tdc_funcs.c		ST_TDCDelaunayTriangles, ST_TDCDelaunayDump and the
- *					helper that runs the core while watching for interrupts
- *	tdc_dump_query.c	the Dump functions' query: checked, run, collected
- *	tdc_guc.c		_PG_init and the tdc_delaunay.* settings
- *	tdc_signal.c	keeps PostGIS's cancel handler from allocating inside a
+ *	curves.c		curved input: stroked by PostGIS's ST_CurveToLine for
+ *					the Delaunay functions, as ST_DelaunayTriangles does
+ *	pointbuf.c		the point buffer the vertices of the input collect in
+ *	agg_state.c		the aggregates' state, its merging and serialized form
+ *	dump_query.c	the Dump functions' query: checked, run, collected
+ *	settings.c		_PG_init and the tdc_delaunay.* settings
+ *	mem_cache.c		the engine's big arrays kept between runs
+ *	signals.c		keeps PostGIS's cancel handler from allocating inside a
  *					signal; every SQL entry point calls tdc_signal_guard()
- *	tdc_version.c	the versions and thread count a bug report needs
+ *	version.c		the versions and thread count a bug report needs
+ *	pg_version_compat.h  every difference between PostgreSQL majors
+ *
+ * The features, each a set of thin fmgr adapters over the runtime
+ * (fn_<feature>[_agg|_dump].c): fn_delaunay (ST_TDCDelaunayTriangles,
+ * ST_TDCDelaunayDump), fn_delaunay_agg (ST_TDCDelaunay), fn_constrained
+ * (ST_TDCConstrainedDelaunayTriangles, its Dump and aggregate), fn_voronoi
+ * (ST_TDCVoronoiPolygons/Lines; fn_voronoi.h for its aggregate and Dump),
+ * fn_tiled (tdc_delaunay_tiled's per-tile step and curve helper).
+ * docs/design/pg-runtime.md tells why.
  *
  * Only the backend's main thread ever calls PostgreSQL.  The core's worker
  * threads see nothing but plain malloc'd arrays.
@@ -28,10 +41,10 @@
 
 #include "postgres.h"
 
+#include "pg_version_compat.h"
+
 #include "fmgr.h"
-#if PG_VERSION_NUM >= 160000
-#include "varatt.h"				/* VARSIZE and friends left postgres.h in 16 */
-#endif
+#include "portability/instr_time.h"
 #include "tdc.h"
 
 /* Output kinds, the "flags" argument of ST_DelaunayTriangles. */
@@ -41,7 +54,20 @@
 /* Constrained functions only: 1 | 4, a MULTILINESTRING of the constraint edges alone. */
 #define TDC_OUT_CONSTRAINTS	5
 
-/* Settings (tdc_guc.c). */
+/*
+ * Is flags an output kind of the function?  The Delaunay functions take
+ * 0..2; the constrained ones (constraints true) also 5.  The one test of
+ * flags: tdc_check_flags (run.c) raises its ERROR, and the aggregate
+ * states' readers (agg_state.c) use it on what they read.
+ */
+static inline bool
+tdc_flags_valid(int flags, bool constraints)
+{
+	return (flags >= TDC_OUT_POLYGONS && flags <= TDC_OUT_TIN) ||
+		(constraints && flags == TDC_OUT_CONSTRAINTS);
+}
+
+/* Settings (settings.c). */
 extern int	tdc_guc_threads;
 extern int	tdc_guc_max_threads;
 extern int	tdc_guc_grid_size;
@@ -53,7 +79,7 @@ extern int	tdc_guc_max_result_bytes;
 extern int	tdc_guc_keep_memory_mb;
 extern int	tdc_guc_keep_memory_time_ms;
 
-/* tdc_cache.c: the engine's big arrays kept between runs */
+/* mem_cache.c: the engine's big arrays kept between runs */
 extern tdc_cache *tdc_backend_cache(uint64 room, bool use);
 extern void tdc_backend_cache_idle(void);
 extern void tdc_backend_cache_release(void);
@@ -74,14 +100,8 @@ extern const char *tdc_memory_limit_hint(void);
  * reported apart so that the same triangulation gets the same figure from
  * every function, whether or not it builds one result value.
  */
-#if PG_VERSION_NUM >= 180000
-/* 18 replaced the trailing pg_attribute_noreturn() by a leading pg_noreturn */
 extern pg_noreturn void tdc_report_memory_limit(const char *fname, const char *what,
 												uint64 need, uint64 result);
-#else
-extern void tdc_report_memory_limit(const char *fname, const char *what,
-									uint64 need, uint64 result) pg_attribute_noreturn();
-#endif
 
 /* The mappings behind a point buffer, released with its context. */
 typedef struct TdcPointMap
@@ -95,7 +115,7 @@ typedef struct TdcPointMap
 /*
  * What the reader does with a curve (CIRCULARSTRING and the types made of
  * them), as the PostGIS or SFCGAL counterpart of the function does: see
- * tdc_curves.c.
+ * curves.c.
  */
 typedef enum TdcCurves
 {
@@ -105,10 +125,18 @@ typedef enum TdcCurves
 } TdcCurves;
 
 /*
+ * Called by the reader for every chain of k > 1 vertices it appends (a
+ * linestring, a triangle, a polygon ring), the first at index "first": the
+ * constrained functions take their segments from the chains.
+ */
+typedef void (*TdcChainFn) (void *arg, uint64 first, uint32 k);
+
+/*
  * Vertices collected from geometry values: interleaved x,y (what the core
  * takes) plus, for XYZ input, one Z per vertex.  The arrays are mappings
  * that belong to "cxt" (see pointbuf.c), so a buffer may exceed 1 GB.
- * "curves" is the owner's to set after tdc_pointbuf_init (which refuses).
+ * "curves" and "chain" are the owner's to set after tdc_pointbuf_init
+ * (which refuses curves and sets no chain function).
  */
 typedef struct TdcPointBuf
 {
@@ -123,13 +151,15 @@ typedef struct TdcPointBuf
 	int32		srid;
 	uint64		side_bytes;		/* the owner's arrays beside the vertices */
 	TdcCurves	curves;
+	TdcChainFn	chain;			/* NULL: chains are not reported */
+	void	   *chain_arg;
 } TdcPointBuf;
 
 /*
  * A geometry value that arrives in pieces, front to back: next() sets *data
  * and *len to the next piece, valid until the following call, or returns
  * false after the last.  The pieces add up to "size" bytes, the value
- * without its varlena header.  tdc_funcs.c reads big TOASTed values this
+ * without its varlena header.  toast_stream.c reads big TOASTed values this
  * way, a slice at a time.
  */
 typedef struct TdcGserSource
@@ -152,13 +182,16 @@ extern void tdc_pointbuf_check_meta(TdcPointBuf *buf, int32 srid, bool hasz,
 extern void tdc_pointbuf_append_buf(TdcPointBuf *dst, const TdcPointBuf *src,
 									const char *fname);
 
-/* gserialized.c */
+/* gser_read.c */
 extern bool tdc_gser_append(TdcPointBuf *buf, const struct varlena *geom,
 							const char *fname);
 extern bool tdc_gser_append_source(TdcPointBuf *buf, TdcGserSource *src,
 								   const char *fname);
 
-/* tdc_curves.c */
+/* toast_stream.c: any geometry argument, TOASTed or not */
+extern bool tdc_read_geometry(TdcPointBuf *buf, Datum d, const char *fname);
+
+/* curves.c */
 extern struct varlena *tdc_curve_to_line(Datum geom, const char *fname);
 
 /* gser_write.c */
@@ -201,7 +234,7 @@ extern void tdc_gser_write_triangle(struct varlena *out, const tdc_job *job,
 extern void tdc_gser_check_result_size(uint64 size, const char *fname);
 extern void tdc_advise_result(void *out, Size size);
 
-/* tdc_agg_state.c: the state of the ST_TDCDelaunay aggregates */
+/* agg_state.c: the state of the ST_TDCDelaunay aggregates */
 #define TDC_AGG_NAME		"ST_TDCDelaunay"
 
 typedef struct TdcAggState
@@ -222,7 +255,7 @@ extern TdcAggState *tdc_agg_state_deserialize(const bytea *in,
 
 /*
  * The serialized form of an aggregate whose state holds a TdcAggState plus
- * a part of its own, which follows the vertices (see tdc_agg_state.c).
+ * a part of its own, which follows the vertices (see agg_state.c).
  */
 typedef struct TdcStateFormat
 {
@@ -230,7 +263,8 @@ typedef struct TdcStateFormat
 	uint32		version;
 	const char *fname;			/* the aggregate, in errors */
 	const char *hint;			/* for a state too large to pass on */
-	int32		more_flags;		/* a flags value beyond 0..2 it accepts, or -1 */
+	int32		more_flags;		/* TDC_OUT_CONSTRAINTS: takes the constrained
+								 * functions' flags (tdc_flags_valid); -1: not */
 } TdcStateFormat;
 
 extern bytea *tdc_agg_state_serialize_with(const TdcAggState *st,
@@ -243,22 +277,53 @@ extern TdcAggState *tdc_agg_state_deserialize_with(const bytea *in,
 												   const char **extra,
 												   Size *extra_len);
 /* ERROR: "fname: corrupt serialized aggregate state: what" */
-#if PG_VERSION_NUM >= 180000
 extern pg_noreturn void tdc_agg_state_corrupt(const char *fname, const char *what);
-#else
-extern void tdc_agg_state_corrupt(const char *fname, const char *what) pg_attribute_noreturn();
-#endif
 
-/* tdc_agg.c, for the support functions of every aggregate */
+/* fn_delaunay_agg.c, for the support functions of every aggregate */
 extern MemoryContext tdc_agg_context(FunctionCallInfo fcinfo, const char *fn);
 
-/* tdc_funcs.c */
+/* run.c */
 typedef struct TdcRun
 {
 	tdc_job    *job;			/* NULL once freed */
 	bool		kept;			/* its arrays come from the backend's cache */
+	uint64		engine_bytes;	/* the engine's estimate, for tdc_run_free */
 } TdcRun;
 
+/*
+ * Work on the core's threads that the backend waits for (a job phase, a
+ * Voronoi diagram, a constrained insertion), as the core offers each:
+ * wait() as tdc_job_wait, cancel() as tdc_job_cancel, error() as
+ * tdc_job_error, free() as tdc_job_free; "what" names it in the cancel
+ * message.
+ */
+typedef struct TdcWorkOps
+{
+	int			(*wait) (void *work, int timeout_ms);
+	void		(*cancel) (void *work);
+	const char *(*error) (const void *work);
+	void		(*free) (void *work);
+	const char *what;
+} TdcWorkOps;
+
+/*
+ * "static const TdcWorkOps name" for a core type whose functions are
+ * prefix_wait, prefix_cancel, prefix_error and prefix_free (tdc_job,
+ * tdc_voronoi, tdc_cdt), through adapters that take void *.
+ */
+#define TDC_WORK_OPS(name, type, prefix, what) \
+static int name##_wait(void *w, int ms) { return prefix##_wait((type *) w, ms); } \
+static void name##_cancel(void *w) { prefix##_cancel((type *) w); } \
+static const char *name##_error(const void *w) { return prefix##_error((const type *) w); } \
+static void name##_free(void *w) { prefix##_free((type *) w); } \
+static const TdcWorkOps name = {name##_wait, name##_cancel, name##_error, name##_free, what}
+
+extern int	tdc_wait_work(void *work, const TdcWorkOps *ops, const char *fname);
+extern void tdc_finish_work(void **workp, const TdcWorkOps *ops, const char *fname);
+extern pg_noreturn void tdc_report_status(int rc, const char *msg, const char *fname);
+
+extern void tdc_check_flags(int flags, bool constraints, const char *fname);
+extern void tdc_check_tolerance(bool isnull, double tolerance, const char *fname);
 extern void tdc_check_params(double tolerance, int flags, const char *fname);
 /* the threads a triangulation starts now: the settings within the CPUs */
 extern int	tdc_effective_threads(void);
@@ -269,13 +334,33 @@ extern TdcRun *tdc_run(const TdcPointBuf *buf, double tolerance,
 extern bool tdc_run_emit(TdcRun *run, tdc_emit_fn emit, void *arg,
 						 const char *fname);
 extern void tdc_run_free(TdcRun *run);
+
+/* What the stats NOTICE reports of a finished job, kept past its free. */
+typedef struct TdcRunStats
+{
+	size_t		input;
+	size_t		sites;
+	size_t		triangles;
+	size_t		edges;
+	int			threads;
+	int			levels;
+	int			grid;
+	tdc_times	t;
+} TdcRunStats;
+
+extern void tdc_stats_take(const tdc_job *job, TdcRunStats *st);
+extern void tdc_stats_report(const TdcRunStats *st, const char *fname,
+							 const char *phases);
+extern double tdc_ms_since(instr_time start);
+
+/* fn_delaunay.c */
 struct ReturnSetInfo;
 extern void tdc_dump_triangles(struct ReturnSetInfo *rsinfo, TdcRun *run,
 							   const TdcPointBuf *buf);
 extern Datum tdc_triangulate_to_datum(const TdcPointBuf *buf, double tolerance,
 									  int flags, const char *fname);
 
-/* tdc_dump_query.c */
+/* dump_query.c */
 
 /* The row id of every collected vertex: id[k] for vertex k. */
 typedef struct TdcIdBuf
@@ -288,20 +373,19 @@ typedef struct TdcIdBuf
 /*
  * Called for each non-NULL geometry of the query after its vertices were
  * appended to buf, the first of them at index "first" (the constrained
- * Dump collects the segments this way).
+ * Dump makes the row's chains segments this way).
  */
-typedef void (*TdcDumpRowFn) (void *arg, const struct varlena *geom,
-							  uint64 first);
+typedef void (*TdcDumpRowFn) (void *arg, uint64 first);
 
 extern void tdc_dump_collect(TdcPointBuf *buf, TdcIdBuf *ids, const char *query,
 							 Oid geomoid, const char *fname,
 							 TdcDumpRowFn row_fn, void *row_arg);
 
-/* tdc_signal.c */
+/* signals.c */
 extern bool tdc_signal_settled;
 extern void tdc_signal_settle(void);
 
-/* First thing in every SQL entry point: see tdc_signal.c. */
+/* First thing in every SQL entry point: see signals.c. */
 static inline void
 tdc_signal_guard(void)
 {

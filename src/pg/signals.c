@@ -1,5 +1,5 @@
 /*
- * tdc_signal.c
+ * signals.c
  *		Keep PostGIS's cancel handler from allocating memory inside a signal.
  *
  * PostGIS installs its own SIGINT handler when its library is loaded.  The

@@ -1,5 +1,5 @@
 /*
- * tdc_tiled.c
+ * fn_tiled.c
  *		The per-tile step of tdc_delaunay_tiled (tdc_delaunay--0.1.0.sql):
  *		an aggregate that triangulates one tile with its halo and keeps the
  *		tile's final triangles (src/core/tile.c), and a set-returning
@@ -40,6 +40,9 @@
  * the core names each vertex by the first point with its coordinates, so a
  * vertex's Z is that of its first copy in the source, as in
  * ST_TDCDelaunayDump.
+ *
+ * _tdc_curve_to_line, at the end, is the procedure's way to read curve rows
+ * as the Delaunay functions read them (curves.c strokes them).
  */
 #include "postgres.h"
 
@@ -232,7 +235,6 @@ _tdc_tile_transfn(PG_FUNCTION_ARGS)
 {
 	MemoryContext aggcxt;
 	TileState  *st = PG_ARGISNULL(0) ? NULL : (TileState *) PG_GETARG_POINTER(0);
-	struct varlena *geom;
 	int64		label;
 	int64		seq;
 	int64		vi;
@@ -280,9 +282,7 @@ _tdc_tile_transfn(PG_FUNCTION_ARGS)
 	}
 
 	before = st->pts.n;
-	geom = PG_DETOAST_DATUM_PACKED(PG_GETARG_DATUM(1));
-	tdc_gser_append(&st->pts, geom, TILE_FNAME);
-	PG_FREE_IF_COPY(geom, 1);
+	(void) tdc_read_geometry(&st->pts, PG_GETARG_DATUM(1), TILE_FNAME);
 
 	if (st->pts.n > st->label_cap)
 	{
@@ -653,13 +653,11 @@ _tdc_hull_transfn(PG_FUNCTION_ARGS)
 	else
 	{
 		TdcPointBuf buf;
-		struct varlena *geom = PG_DETOAST_DATUM_PACKED(PG_GETARG_DATUM(1));
 
 		tdc_pointbuf_init(&buf, CurrentMemoryContext);
-		tdc_gser_append(&buf, geom, TILE_FNAME);
+		(void) tdc_read_geometry(&buf, PG_GETARG_DATUM(1), TILE_FNAME);
 		if (buf.n > 0)
 			hull_add(st, buf.xy, buf.n, aggcxt);
-		PG_FREE_IF_COPY(geom, 1);
 	}
 	PG_RETURN_POINTER(st);
 }
@@ -681,4 +679,36 @@ _tdc_hull_finalfn(PG_FUNCTION_ARGS)
 		d[i] = Float8GetDatum(st->xy[i]);
 	PG_RETURN_ARRAYTYPE_P(construct_array(d, (int) st->n * 2, FLOAT8OID, 8,
 										  FLOAT8PASSBYVAL, TYPALIGN_DOUBLE));
+}
+
+PG_FUNCTION_INFO_V1(_tdc_curve_to_line);
+
+/*
+ * _tdc_curve_to_line(geometry) RETURNS geometry
+ *		The geometry as the Delaunay functions read it: stroked when it has
+ *		arcs, else itself.  tdc_delaunay_tiled stages the vertices of its
+ *		source with ST_DumpPoints in SQL, and runs its curve rows through
+ *		this first, so that its tiles see what ST_TDCDelaunayDump sees.  The
+ *		value is read once to decide (its arcs, its empty arcs), as the
+ *		Delaunay functions decide.
+ */
+Datum
+_tdc_curve_to_line(PG_FUNCTION_ARGS)
+{
+	const char *fname = "tdc_delaunay_tiled";
+	Datum		d = PG_GETARG_DATUM(0);
+	MemoryContext cxt;
+	TdcPointBuf buf;
+	bool		stroked;
+
+	tdc_signal_guard();
+	cxt = AllocSetContextCreate(CurrentMemoryContext, "tdc curve check",
+								ALLOCSET_SMALL_SIZES);
+	tdc_pointbuf_init(&buf, cxt);
+	buf.curves = TDC_CURVES_STROKE;
+	stroked = tdc_read_geometry(&buf, d, fname);
+	MemoryContextDelete(cxt);
+	if (!stroked)
+		PG_RETURN_DATUM(d);
+	PG_RETURN_POINTER(tdc_curve_to_line(d, fname));
 }

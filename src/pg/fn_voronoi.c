@@ -1,5 +1,5 @@
 /*
- * tdc_voronoi.c
+ * fn_voronoi.c
  *		ST_TDCVoronoiPolygons and ST_TDCVoronoiLines: the Voronoi diagram of
  *		a geometry's vertices, built by the core (voronoi.c) from the exact
  *		triangulation, as drop-ins for PostGIS's ST_VoronoiPolygons and
@@ -27,7 +27,7 @@
  * points closer than the tolerance apart); NaN and infinite tolerances are
  * errors.  A curve's sites are its stored vertices, its control points, as
  * GEOS gets them from PostGIS (the Delaunay functions stroke curves instead,
- * as ST_DelaunayTriangles does: see tdc_curves.c).
+ * as ST_DelaunayTriangles does: see curves.c).
  *
  * The diagram is built on the core's threads while the backend waits
  * interruptibly, as a triangulation is: a cancel stops the workers, and a
@@ -49,7 +49,7 @@
 #include "utils/memutils.h"
 
 #include "gser_format.h"
-#include "tdc_voronoi.h"
+#include "fn_voronoi.h"
 
 struct VorRun
 {
@@ -68,65 +68,7 @@ vor_reset_callback(void *arg)
 	}
 }
 
-static int
-vor_errcode(int rc)
-{
-	switch (rc)
-	{
-		case TDC_ENOMEM:
-			return ERRCODE_OUT_OF_MEMORY;
-		case TDC_ECANCELED:
-			return ERRCODE_QUERY_CANCELED;
-		case TDC_EINVAL:
-			return ERRCODE_INVALID_PARAMETER_VALUE;
-		default:
-			return ERRCODE_INTERNAL_ERROR;
-	}
-}
-
-/* Wait for the diagram, cancelling it on a query cancel or terminate. */
-static void
-vor_wait(VorRun *run, const char *fname)
-{
-	int			rc;
-	char		err[256];
-
-	PG_TRY();
-	{
-		while ((rc = tdc_voronoi_wait(run->v, 10)) == TDC_RUNNING)
-		{
-			if (!InterruptPending)
-				continue;
-			if (QueryCancelPending || ProcDiePending)
-			{
-				tdc_voronoi_cancel(run->v);
-				(void) tdc_voronoi_wait(run->v, -1);
-				CHECK_FOR_INTERRUPTS();
-				ereport(ERROR,
-						(errcode(ERRCODE_QUERY_CANCELED),
-						 errmsg("%s: Voronoi diagram canceled", fname)));
-			}
-			CHECK_FOR_INTERRUPTS();
-		}
-	}
-	PG_CATCH();
-	{
-		if (run->v != NULL)
-		{
-			tdc_voronoi_cancel(run->v);
-			(void) tdc_voronoi_wait(run->v, -1);
-		}
-		PG_RE_THROW();
-	}
-	PG_END_TRY();
-	if (rc != TDC_OK)
-	{
-		snprintf(err, sizeof(err), "%s", tdc_voronoi_error(run->v));
-		tdc_voronoi_free(run->v);
-		run->v = NULL;
-		ereport(ERROR, (errcode(vor_errcode(rc)), errmsg("%s: %s", fname, err)));
-	}
-}
+TDC_WORK_OPS(vor_ops, tdc_voronoi, tdc_voronoi, "Voronoi diagram");
 
 /*
  * The bounding box of extend_to's vertices into ext[4], as PostGIS reads
@@ -138,14 +80,14 @@ vor_wait(VorRun *run, const char *fname)
  * in PostGIS.
  */
 void
-tdc_voronoi_extend_to_box(struct varlena *g, double ext[4], const char *fname)
+tdc_voronoi_extend_to_box(Datum g, double ext[4], const char *fname)
 {
 	TdcPointBuf b;
 	MemoryContext cxt = AllocSetContextCreate(CurrentMemoryContext, "tdc extend_to",
 											  ALLOCSET_SMALL_SIZES);
 
 	tdc_pointbuf_init(&b, cxt);
-	tdc_gser_append(&b, g, fname);
+	(void) tdc_read_geometry(&b, g, fname);
 	if (b.n == 0)
 		ereport(ERROR,
 				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
@@ -168,20 +110,6 @@ tdc_voronoi_extend_to_box(struct varlena *g, double ext[4], const char *fname)
 			ext[k] = r;
 	}
 	MemoryContextDelete(cxt);
-}
-
-/*
- * The tolerance check of ST_VoronoiPolygons, plus what our merge rule
- * cannot take (NaN, infinity).
- */
-void
-tdc_voronoi_check_tolerance(bool isnull, double tolerance, const char *fname)
-{
-	if (isnull || !(tolerance >= 0) || isinf(tolerance))
-		ereport(ERROR,
-				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
-				 errmsg("%s: tolerance must be a finite number >= 0, not %s", fname,
-						isnull ? "NULL" : psprintf("%g", tolerance))));
 }
 
 /*
@@ -231,8 +159,8 @@ tdc_voronoi_run(const TdcPointBuf *buf, double tolerance, const double *ext,
 	rc = writer ? tdc_voronoi_start_emit(run->job, env, 0, writer, &vrun->v, err, sizeof(err)) :
 		tdc_voronoi_start(run->job, env, 0, &vrun->v, err, sizeof(err));
 	if (rc != TDC_OK)
-		ereport(ERROR, (errcode(vor_errcode(rc)), errmsg("%s: %s", fname, err)));
-	vor_wait(vrun, fname);
+		tdc_report_status(rc, err, fname);
+	tdc_finish_work((void **) &vrun->v, &vor_ops, fname);
 	return vrun;
 }
 
@@ -372,8 +300,8 @@ tdc_voronoi_write_polygons(VorRun *vrun, int32 srid, uint64 have_bytes,
 	p = put_u32(p, (uint32) count);
 	rc = tdc_voronoi_emit(vrun->v, p, err, sizeof(err));
 	if (rc != TDC_OK)
-		ereport(ERROR, (errcode(vor_errcode(rc)), errmsg("%s: %s", fname, err)));
-	vor_wait(vrun, fname);
+		tdc_report_status(rc, err, fname);
+	tdc_finish_work((void **) &vrun->v, &vor_ops, fname);
 	return (struct varlena *) out;
 }
 
@@ -487,7 +415,6 @@ tdc_voronoi_cell_value(const tdc_voronoi *v, uint32 site, int32 srid)
 static Datum
 voronoi_function(FunctionCallInfo fcinfo, bool lines, const char *fname)
 {
-	struct varlena *g;
 	double		tolerance,
 				ext[4];
 	bool		have_ext = false;
@@ -495,19 +422,18 @@ voronoi_function(FunctionCallInfo fcinfo, bool lines, const char *fname)
 
 	if (PG_ARGISNULL(0))
 		PG_RETURN_NULL();
-	tdc_voronoi_check_tolerance(PG_NARGS() > 1 && PG_ARGISNULL(1),
-								PG_NARGS() > 1 && !PG_ARGISNULL(1) ? PG_GETARG_FLOAT8(1) : 0.0,
-								fname);
+	tdc_check_tolerance(PG_NARGS() > 1 && PG_ARGISNULL(1),
+						PG_NARGS() > 1 && !PG_ARGISNULL(1) ? PG_GETARG_FLOAT8(1) : 0.0,
+						fname);
 	tolerance = PG_NARGS() > 1 ? PG_GETARG_FLOAT8(1) : 0.0;
 	if (PG_NARGS() > 2 && !PG_ARGISNULL(2))
 	{
-		tdc_voronoi_extend_to_box((struct varlena *) PG_DETOAST_DATUM(PG_GETARG_DATUM(2)), ext, fname);
+		tdc_voronoi_extend_to_box(PG_GETARG_DATUM(2), ext, fname);
 		have_ext = true;
 	}
-	g = (struct varlena *) PG_DETOAST_DATUM(PG_GETARG_DATUM(0));
 	tdc_pointbuf_init(&buf, CurrentMemoryContext);
 	buf.curves = TDC_CURVES_VERTICES;
-	tdc_gser_append(&buf, g, fname);
+	(void) tdc_read_geometry(&buf, PG_GETARG_DATUM(0), fname);
 	PG_RETURN_POINTER(tdc_voronoi_to_value(&buf, tolerance, have_ext ? ext : NULL,
 										   lines, fname));
 }

@@ -1,5 +1,5 @@
 /*
- * tdc_cache.c
+ * mem_cache.c
  *		The backend's cache of the engine's big arrays between
  *		triangulations.
  *
@@ -26,7 +26,7 @@
  * it touches the cache and on again once its arrays are freed, and the
  * core's trim only takes the cache's lock if it is free.  Error recovery
  * switches every timeout off; the abort callback empties the cache then,
- * and the reset callback of a failed run (tdc_funcs.c) empties it again
+ * and the reset callback of a failed run (run.c) empties it again
  * once the job's arrays are freed, the failed job's own going straight back
  * to the system (tdc_job_free_background), so nothing stays kept without a
  * timeout to release it.

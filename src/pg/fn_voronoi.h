@@ -1,6 +1,6 @@
 /*
- * tdc_voronoi.h
- *		The Voronoi functions' shared pieces (tdc_voronoi.c), for the
+ * fn_voronoi.h
+ *		The Voronoi functions' shared pieces (fn_voronoi.c), for the
  *		aggregate and the Dump function.
  */
 #ifndef TDC_VORONOI_H
@@ -10,9 +10,7 @@
 
 typedef struct VorRun VorRun;
 
-extern void tdc_voronoi_check_tolerance(bool isnull, double tolerance,
-										const char *fname);
-extern void tdc_voronoi_extend_to_box(struct varlena *g, double ext[4],
+extern void tdc_voronoi_extend_to_box(Datum g, double ext[4],
 									  const char *fname);
 extern struct varlena *tdc_voronoi_to_value(const TdcPointBuf *buf, double tolerance,
 											const double *ext, bool lines,

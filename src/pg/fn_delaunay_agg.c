@@ -1,13 +1,13 @@
 /*
- * tdc_agg.c
+ * fn_delaunay_agg.c
  *		The ST_TDCDelaunay aggregates: their SQL entry points.
  *
  * ST_TDCDelaunay(geometry) and ST_TDCDelaunay(geometry, tolerance, flags)
  * mean ST_DelaunayTriangles(ST_Collect(geometry), tolerance, flags), without
  * building the collection: the transition function reads each value's
- * vertices straight into the state (see gserialized.c), and the final
+ * vertices straight into the state (see gser_read.c), and the final
  * function hands the whole array to the core.  The state, its merging and
- * its serialized form for parallel plans are in tdc_agg_state.c.
+ * its serialized form for parallel plans are in agg_state.c.
  *
  * Rows whose geometry, tolerance or flags is NULL are skipped, as a STRICT
  * transition function would (with an internal state the transition function
@@ -53,7 +53,6 @@ st_tdcdelaunay_transfn(PG_FUNCTION_ARGS)
 		(TdcAggState *) PG_GETARG_POINTER(0);
 	double		tolerance = 0.0;
 	int32		flags = TDC_OUT_POLYGONS;
-	struct varlena *geom;
 
 	tdc_signal_guard();
 	if (PG_ARGISNULL(1))
@@ -74,9 +73,7 @@ st_tdcdelaunay_transfn(PG_FUNCTION_ARGS)
 	}
 	tdc_agg_state_set_params(st, tolerance, flags);
 
-	geom = PG_DETOAST_DATUM_PACKED(PG_GETARG_DATUM(1));
-	tdc_gser_append(&st->pts, geom, TDC_AGG_NAME);
-	PG_FREE_IF_COPY(geom, 1);
+	(void) tdc_read_geometry(&st->pts, PG_GETARG_DATUM(1), TDC_AGG_NAME);
 	PG_RETURN_POINTER(st);
 
 skip:

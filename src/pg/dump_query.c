@@ -1,5 +1,5 @@
 /*
- * tdc_dump_query.c
+ * dump_query.c
  *		The query of a Dump function (ST_TDCDelaunayDump, ST_TDCVoronoiDump):
  *		refuse it unless it only reads, run it, and collect the vertices of
  *		its geometry column, with the id of each vertex's row when asked.
@@ -204,7 +204,6 @@ dump_collect(TdcPointBuf *buf, TdcIdBuf *ids, const char *query,
 			Datum		d;
 			int64		id = 0;
 			uint64		first;
-			struct varlena *gv;
 
 			if (gnull)
 				continue;
@@ -220,13 +219,10 @@ dump_collect(TdcPointBuf *buf, TdcIdBuf *ids, const char *query,
 					idtype == INT4OID ? (int64) DatumGetInt32(d) :
 					(int64) DatumGetInt16(d);
 			}
-			gv = PG_DETOAST_DATUM_PACKED(g);
 			first = buf->n;
-			tdc_gser_append(buf, gv, fname);
+			(void) tdc_read_geometry(buf, g, fname);
 			if (row_fn)
-				row_fn(row_arg, gv, first);
-			if ((Pointer) gv != DatumGetPointer(g))
-				pfree(gv);
+				row_fn(row_arg, first);
 			if (ids)
 				idbuf_fill(ids, (Size) buf->n, id, outer, buf, fname);
 		}

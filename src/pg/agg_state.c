@@ -1,5 +1,5 @@
 /*
- * tdc_agg_state.c
+ * agg_state.c
  *		The state of the ST_TDCDelaunay aggregates, and its serialized form
  *		for parallel aggregation.
  *
@@ -30,7 +30,7 @@
  * the vertices: the _with functions write it and hand it back to be
  * checked, so the vertex part and its checks exist once.
  *
- * This file is linked, without the SQL entry points of tdc_agg.c, into the
+ * This file is linked, without the SQL entry points of fn_delaunay_agg.c, into the
  * fuzz target.
  */
 #include "postgres.h"
@@ -209,8 +209,7 @@ tdc_agg_state_deserialize_with(const bytea *in, const TdcStateFormat *fmt,
 	if (!(bits & SB_HAVE_FIRST) && ((bits & SB_HASZ) || n != 0))
 		tdc_agg_state_corrupt(fname, "vertices without dimensions");
 	if ((bits & SB_PARAMS) &&
-		(((fmt->more_flags < 0 || flags != fmt->more_flags) &&
-		  (flags < TDC_OUT_POLYGONS || flags > TDC_OUT_TIN)) ||
+		(!tdc_flags_valid(flags, fmt->more_flags == TDC_OUT_CONSTRAINTS) ||
 		 !(tolerance >= 0) || isinf(tolerance)))
 		tdc_agg_state_corrupt(fname, "bad tolerance or flags");
 	per = ((bits & SB_HASZ) ? 3 : 2) * sizeof(double);

@@ -1,5 +1,5 @@
 /*
- * tdc_guc.c
+ * settings.c
  *		Module initialisation and the tdc_delaunay.* settings.
  *
  * The settings only fill in the core's tdc_options and a few limits of the
@@ -20,7 +20,7 @@
  *	tdc_delaunay.keep_memory	MB of freed engine arrays a session keeps for
  *								its next triangulation (default 256, 0 = none)
  *	tdc_delaunay.keep_memory_time  how long it keeps them after its last
- *								triangulation (default 10 s; tdc_cache.c)
+ *								triangulation (default 10 s; mem_cache.c)
  *	tdc_delaunay.stats			NOTICE with counts, DETAIL with timings
  *	tdc_delaunay.max_result_bytes  test-only, superuser: lowers the 1 GB
  *								limit of a single result value so that the
@@ -239,7 +239,7 @@ _PG_init(void)
 
 	MarkGUCPrefixReserved("tdc_delaunay");
 
-	/* PostGIS's cancel handler must never allocate: see tdc_signal.c */
+	/* PostGIS's cancel handler must never allocate: see signals.c */
 	if (IsTransactionState())
 		tdc_signal_settle();
 }

@@ -1,15 +1,15 @@
 /*
- * tdc_voronoi_agg.c
+ * fn_voronoi_agg.c
  *		The ST_TDCVoronoi aggregates: the Voronoi cells of the vertices of
  *		all rows, the same as ST_TDCVoronoiPolygons(ST_Collect(geom),
  *		tolerance, extend_to) without the collection.
  *
  * The state is the Delaunay aggregate's (the collected vertices and the
- * tolerance, tdc_agg_state.c) plus extend_to's bounding box, which must be
+ * tolerance, agg_state.c) plus extend_to's bounding box, which must be
  * the same in every row, as the tolerance must.  Rows whose geometry or
  * tolerance is NULL are skipped; a NULL extend_to means none.  Under a
  * parallel plan a worker's state travels in the Delaunay state's serialized
- * form (tdc_agg_state.c) under magic "VRN2", followed by
+ * form (agg_state.c) under magic "VRN2", followed by
  *
  *		uint32 has_extend_to (0 or 1), uint32 zero, 4 float8 (xmin, ymin,
  *		xmax, ymax; a box with min <= max when has_extend_to)
@@ -21,7 +21,7 @@
 #include "fmgr.h"
 #include "utils/memutils.h"
 
-#include "tdc_voronoi.h"
+#include "fn_voronoi.h"
 
 #define VOR_AGG_NAME		"ST_TDCVoronoi"
 #define VOR_EXTRA			40		/* bytes after the vertices */
@@ -87,7 +87,6 @@ st_tdcvoronoi_transfn(PG_FUNCTION_ARGS)
 	double		tolerance = 0.0,
 				ext[4];
 	bool		has_ext = false;
-	struct varlena *geom;
 
 	tdc_signal_guard();
 	if (PG_ARGISNULL(1) || (PG_NARGS() > 2 && PG_ARGISNULL(2)))
@@ -99,10 +98,10 @@ st_tdcvoronoi_transfn(PG_FUNCTION_ARGS)
 	if (PG_NARGS() > 2)
 	{
 		tolerance = PG_GETARG_FLOAT8(2);
-		tdc_voronoi_check_tolerance(false, tolerance, VOR_AGG_NAME);
+		tdc_check_tolerance(false, tolerance, VOR_AGG_NAME);
 		if (!PG_ARGISNULL(3))
 		{
-			tdc_voronoi_extend_to_box((struct varlena *) PG_DETOAST_DATUM(PG_GETARG_DATUM(3)),
+			tdc_voronoi_extend_to_box(PG_GETARG_DATUM(3),
 									  ext, VOR_AGG_NAME);
 			has_ext = true;
 		}
@@ -114,9 +113,7 @@ st_tdcvoronoi_transfn(PG_FUNCTION_ARGS)
 	}
 	vor_state_params(st, tolerance, has_ext, ext);
 
-	geom = PG_DETOAST_DATUM_PACKED(PG_GETARG_DATUM(1));
-	tdc_gser_append(&st->base->pts, geom, VOR_AGG_NAME);
-	PG_FREE_IF_COPY(geom, 1);
+	(void) tdc_read_geometry(&st->base->pts, PG_GETARG_DATUM(1), VOR_AGG_NAME);
 	PG_RETURN_POINTER(st);
 }
 

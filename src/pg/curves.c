@@ -1,5 +1,5 @@
 /*
- * tdc_curves.c
+ * curves.c
  *		Curved input of the Delaunay functions, stroked by PostGIS itself.
  *
  * ST_DelaunayTriangles hands its input to GEOS, and PostGIS converts a
@@ -11,7 +11,7 @@
  * ours that meets a curve (TDC_CURVES_STROKE) calls ST_CurveToLine on the
  * whole value and reads the result instead: the same vertices as PostGIS,
  * with no stroking arithmetic of our own to drift from it.  The reader
- * (gserialized.c) only notices the curve, drops what it had read of that
+ * (gser_read.c) only notices the curve, drops what it had read of that
  * value, and comes here.
  *
  * The other families follow their PostGIS or SFCGAL counterparts too:
@@ -88,36 +88,4 @@ tdc_curve_to_line(Datum geom, const char *fname)
 		PG_DETOAST_DATUM(OidFunctionCall4(curvetoline_oid, geom,
 										  Float8GetDatum(STROKE_SEGMENTS_PER_QUADRANT),
 										  Int32GetDatum(0), Int32GetDatum(0)));
-}
-
-PG_FUNCTION_INFO_V1(_tdc_curve_to_line);
-
-/*
- * _tdc_curve_to_line(geometry) RETURNS geometry
- *		The geometry as the Delaunay functions read it: stroked when it has
- *		arcs, else itself.  tdc_delaunay_tiled stages the vertices of its
- *		source with ST_DumpPoints in SQL, and runs its curve rows through
- *		this first, so that its tiles see what ST_TDCDelaunayDump sees.  The
- *		value is read once to decide (its arcs, its empty arcs), as the
- *		Delaunay functions decide.
- */
-Datum
-_tdc_curve_to_line(PG_FUNCTION_ARGS)
-{
-	const char *fname = "tdc_delaunay_tiled";
-	Datum		d = PG_GETARG_DATUM(0);
-	MemoryContext cxt;
-	TdcPointBuf buf;
-	bool		stroked;
-
-	tdc_signal_guard();
-	cxt = AllocSetContextCreate(CurrentMemoryContext, "tdc curve check",
-								ALLOCSET_SMALL_SIZES);
-	tdc_pointbuf_init(&buf, cxt);
-	buf.curves = TDC_CURVES_STROKE;
-	stroked = tdc_gser_append(&buf, PG_DETOAST_DATUM_PACKED(d), fname);
-	MemoryContextDelete(cxt);
-	if (!stroked)
-		PG_RETURN_DATUM(d);
-	PG_RETURN_POINTER(tdc_curve_to_line(d, fname));
 }

@@ -1,11 +1,11 @@
 /*
- * tdc_voronoi_dump.c
+ * fn_voronoi_dump.c
  *		ST_TDCVoronoiDump(query, extend_to): the Voronoi cell of every vertex
  *		a query returns, keyed by the id of its row.
  *
  * The query returns (id bigint, geom geometry); it is run as the caller,
  * and must be a plain read-only SELECT, as for ST_TDCDelaunayDump (both
- * collect their query's vertices in tdc_dump_query.c).  Every vertex of
+ * collect their query's vertices in dump_query.c).  Every vertex of
  * every row's geometry gives one output row (id, cell), in the query's
  * order: a vertex that duplicates another (or that a tolerance
  * merged, when there is one) gets that site's cell, so the cells can be
@@ -23,7 +23,7 @@
 #include "utils/memutils.h"
 #include "utils/tuplestore.h"
 
-#include "tdc_voronoi.h"
+#include "fn_voronoi.h"
 
 PG_FUNCTION_INFO_V1(st_tdcvoronoidump);
 
@@ -46,18 +46,14 @@ st_tdcvoronoidump(PG_FUNCTION_ARGS)
 	bool		nulls[2] = {false, false};
 
 	tdc_signal_guard();
-#if PG_VERSION_NUM >= 150001
 	InitMaterializedSRF(fcinfo, 0);
-#else
-	SetSingleFuncCall(fcinfo, 0);
-#endif
 	/* a NULL query gives no rows, as ST_TDCDelaunayDump's */
 	if (PG_ARGISNULL(0))
 		return (Datum) 0;
 	query = text_to_cstring(PG_GETARG_TEXT_PP(0));
 	if (PG_NARGS() > 1 && !PG_ARGISNULL(1))
 	{
-		tdc_voronoi_extend_to_box((struct varlena *) PG_DETOAST_DATUM(PG_GETARG_DATUM(1)),
+		tdc_voronoi_extend_to_box(PG_GETARG_DATUM(1),
 								  ext, fname);
 		have_ext = true;
 	}

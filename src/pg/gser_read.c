@@ -1,5 +1,5 @@
 /*
- * gserialized.c
+ * gser_read.c
  *		Read PostGIS geometry values into a point buffer.
  *
  * A triangulation only needs the vertices of its input, and going through
@@ -9,7 +9,7 @@
  *
  * A value is read once, front to back, and may arrive in pieces: a value in
  * memory is one piece, a big TOASTed value read by ST_TDCDelaunayTriangles
- * comes a slice at a time (tdc_funcs.c), so it is never whole in memory and
+ * comes a slice at a time (toast_stream.c), so it is never whole in memory and
  * an interrupt is answered between slices.  Every count read from a value is
  * checked against the bytes that remain in the whole value before it is
  * used, with 64-bit arithmetic, whether those bytes have arrived or not, so
@@ -19,7 +19,7 @@
  * met; NaN and infinities are rejected.  An ERROR half-way leaves the
  * vertices read so far in the buffer: every caller gives the buffer up on an
  * ERROR.  A curve is read as its function's PostGIS counterpart reads it
- * (the buffer's "curves", see tdc_curves.c): refused, read as its stored
+ * (the buffer's "curves", see curves.c): refused, read as its stored
  * vertices, or, for the Delaunay functions, read as its stored vertices
  * and noted: once the value is read (and so known to be sound), its
  * vertices are dropped and the value is read again as PostGIS strokes it.
@@ -232,12 +232,17 @@ prefault_batch(const TdcPointBuf *buf, Size n)
 		tdc_prefault(buf->z + buf->n, n * sizeof(double));
 }
 
-/* The vertices of one point list, appended to the buffer. */
+/*
+ * The vertices of one point list, appended to the buffer.  chain: the list
+ * is a linestring, a triangle or a ring, whose consecutive vertices the
+ * buffer's chain function (if any) hears about.
+ */
 static void
-walk_points(GserWalk *w, uint32 npoints)
+walk_points(GserWalk *w, uint32 npoints, bool chain)
 {
 	TdcPointBuf *buf = w->buf;
 	uint32		left = npoints;
+	uint64		first = buf->n;
 
 	if ((uint64) npoints * w->vsize > walk_left(w))
 		corrupt(w, walk_pos(w), "vertex list longer than the value");
@@ -276,6 +281,8 @@ walk_points(GserWalk *w, uint32 npoints)
 		left -= (uint32) k;
 		CHECK_FOR_INTERRUPTS();
 	}
+	if (chain && npoints > 1 && buf->chain != NULL)
+		buf->chain(buf->chain_arg, first, npoints);
 }
 
 static void walk_geom(GserWalk *w);
@@ -373,10 +380,11 @@ walk_geom(GserWalk *w)
 		case G_POINT:
 			if (count > 1)
 				corrupt(w, at, "point with more than one vertex");
-			/* FALLTHROUGH */
+			walk_points(w, count, false);
+			return;
 		case G_LINE:
 		case G_TRIANGLE:
-			walk_points(w, count);
+			walk_points(w, count, true);
 			return;
 
 		case G_POLYGON:
@@ -394,7 +402,7 @@ walk_geom(GserWalk *w)
 					rings = palloc((Size) hdr);
 				read_bytes(w, rings, hdr);
 				for (i = 0; i < count; i++)
-					walk_points(w, rings[i]);
+					walk_points(w, rings[i], true);
 				if (rings != small)
 					pfree(rings);
 				return;
@@ -438,7 +446,7 @@ walk_geom(GserWalk *w)
 					w->arcs = true;
 				else
 					w->empty_arc = true;
-				walk_points(w, count);
+				walk_points(w, count, false);
 			}
 			else
 				for (i = 0; i < count; i++)
@@ -646,7 +654,7 @@ tdc_gser_append(TdcPointBuf *buf, const struct varlena *geom,
 
 /*
  * The same for a value that arrives in pieces (a big TOASTed value read a
- * slice at a time, see tdc_funcs.c): the vertices go from each piece
+ * slice at a time, see toast_stream.c): the vertices go from each piece
  * straight into the buffer, so the value is never whole in memory.  The
  * value is read once, front to back: the buffer grows as point lists are
  * met (by doubling, see tdc_pointbuf_reserve), and an ERROR half-way leaves

@@ -1,5 +1,5 @@
 /*
- * tdc_version.c
+ * version.c
  *		tdc_delaunay_lib_version() and tdc_delaunay_full_version(): what a
  *		bug report needs, as postgis_lib_version() and postgis_full_version()
  *		give it for PostGIS.

@@ -1,27 +1,31 @@
 /*
- * tdc_constrained.c
- *		ST_TDCConstrainedDelaunayTriangles: the constrained Delaunay
- *		triangulation of a geometry's vertices, its linework as constraints.
+ * fn_constrained.c
+ *		ST_TDCConstrainedDelaunayTriangles, its aggregate
+ *		ST_TDCConstrainedDelaunay and ST_TDCConstrainedDelaunayDump: the
+ *		constrained Delaunay triangulation of a geometry's vertices, its
+ *		linework as constraints; adapters over the runtime plus the
+ *		segments.
  *
- * The vertices are read by the same reader as ST_TDCDelaunayTriangles
- * (gserialized.c: NaN and infinities rejected, Z kept, M dropped, SRID
- * carried), in the order they are stored.  The segments come from a second,
- * structural walk over the same value here: every linestring and every
- * polygon ring (triangles and the faces of TINs and polyhedral surfaces
- * included) contributes the segments between its consecutive vertices, as
- * indices into that vertex order; points contribute none.  The reader has
- * already checked the value, so this walk only has to count the same way,
- * and still checks every count against the bytes left.
+ * The vertices are read by the runtime's reader (tdc_read_geometry: a big
+ * TOASTed value a slice at a time, NaN and infinities rejected, Z kept, M
+ * dropped, SRID carried), in the order they are stored.  The segments come
+ * from the same read: the reader reports every chain of vertices it
+ * stores (every linestring and every polygon ring, triangles and the faces
+ * of TINs and polyhedral surfaces included; points are no chain), and each
+ * chain contributes the segments between its consecutive vertices, as
+ * indices into that vertex order.  They are made once the value's vertices
+ * are all in (seg_flush), so the memory limit counts a value's vertices
+ * before its segments.
  *
  * The triangulation runs as usual (tdc_run), then the segments are inserted
- * by the core (cdt.c) on a thread of its own, while this backend waits in
- * 10 ms slices and watches for interrupts.  A proper crossing is an ERROR
+ * by the core (cdt.c) on a thread of its own, while this backend waits and
+ * watches for interrupts (tdc_wait_work).  A proper crossing is an ERROR
  * that names both segments by their end points: an exact triangulation
  * cannot invent the crossing point, so the lines must be noded first.
  *
  * ST_TDCConstrainedDelaunayDump(query) reads its query with the Dump
- * functions' collector (tdc_dump_query.c), taking each row's segments as
- * its vertices arrive, and returns one row per triangle like
+ * functions' collector (dump_query.c), taking each row's segments as its
+ * vertices arrive, and returns one row per triangle like
  * ST_TDCDelaunayDump, so no single value bounds the result.
  */
 #include "postgres.h"
@@ -34,13 +38,15 @@
 #include "utils/builtins.h"
 #include "utils/memutils.h"
 
-#include "gser_format.h"
 #include "tdc_pg.h"
 
 /*
  * Segments as pairs of vertex indices, in a memory context of their own
  * choosing; they count with the vertices of buf against
- * tdc_delaunay.max_memory (tdc_pointbuf_side_grow).
+ * tdc_delaunay.max_memory (tdc_pointbuf_side_grow).  While a value is read,
+ * the reader reports its chains (TdcChainFn) and they are only noted:
+ * seg_flush makes them segments once the value's vertices are all in buf,
+ * so that the vertices of a value are counted before its segments.
  */
 typedef struct SegList
 {
@@ -50,6 +56,9 @@ typedef struct SegList
 	uint32	   *seg;
 	uint64		nseg;
 	uint64		cap;
+	uint64	   *chain;			/* (first, k) pairs noted, not yet segments */
+	Size		nchain;
+	Size		chaincap;
 } SegList;
 
 /* Room for "more" segments. */
@@ -68,148 +77,59 @@ seg_reserve(SegList *l, uint64 more)
 	}
 }
 
-typedef struct SegWalk
-{
-	const char *p;
-	const char *end;
-	Size		vsize;			/* bytes per vertex */
-	uint64		nvert;			/* vertex index of the next vertex */
-	SegList    *out;
-	const char *fname;
-} SegWalk;
-
+/* TdcChainFn: a chain of k vertices from index first, noted for seg_flush. */
 static void
-seg_corrupt(const SegWalk *w)
+seg_note_chain(void *arg, uint64 first, uint32 k)
 {
-	ereport(ERROR,
-			(errcode(ERRCODE_DATA_CORRUPTED),
-			 errmsg("%s: corrupt geometry value", w->fname)));
-}
+	SegList    *l = (SegList *) arg;
 
-static uint32
-seg_u32(SegWalk *w)
-{
-	uint32		v;
-
-	if (w->end - w->p < 4)
-		seg_corrupt(w);
-	memcpy(&v, w->p, 4);
-	w->p += 4;
-	return v;
-}
-
-/* A chain of k vertices: its k - 1 segments, then skip the vertices. */
-static void
-seg_chain(SegWalk *w, uint32 k, bool segments)
-{
-	if ((uint64) k * w->vsize > (uint64) (w->end - w->p))
-		seg_corrupt(w);
-	if (segments && k > 1)
+	if (l->nchain == l->chaincap)
 	{
-		SegList    *l = w->out;
+		Size		cap = Max(l->chaincap * 2, 64);
 
-		if (w->nvert + k > TDC_MAX_POINTS)
+		l->chain = l->chain ? repalloc_huge(l->chain, cap * 2 * sizeof(uint64))
+			: MemoryContextAllocHuge(l->cxt, cap * 2 * sizeof(uint64));
+		l->chaincap = cap;
+	}
+	l->chain[2 * l->nchain] = first;
+	l->chain[2 * l->nchain + 1] = k;
+	l->nchain++;
+}
+
+/* The noted chains as segments: each chain of k vertices gives k - 1. */
+static void
+seg_flush(SegList *l)
+{
+	for (Size c = 0; c < l->nchain; c++)
+	{
+		uint64		first = l->chain[2 * c];
+		uint32		k = (uint32) l->chain[2 * c + 1];
+
+		if (first + k > TDC_MAX_POINTS)
 			ereport(ERROR,
 					(errcode(ERRCODE_PROGRAM_LIMIT_EXCEEDED),
-					 errmsg("%s: more than %zu vertices", w->fname, TDC_MAX_POINTS)));
+					 errmsg("%s: more than %zu vertices", l->fname, TDC_MAX_POINTS)));
 		seg_reserve(l, k - 1);
 		for (uint32 i = 0; i + 1 < k; i++)
 		{
-			l->seg[2 * l->nseg] = (uint32) (w->nvert + i);
-			l->seg[2 * l->nseg + 1] = (uint32) (w->nvert + i + 1);
+			l->seg[2 * l->nseg] = (uint32) (first + i);
+			l->seg[2 * l->nseg + 1] = (uint32) (first + i + 1);
 			l->nseg++;
 		}
 	}
-	w->nvert += k;
-	w->p += (Size) k * w->vsize;
+	l->nchain = 0;
 }
 
+/* An empty list for the vertices of buf, which from now on reports its chains. */
 static void
-seg_geom(SegWalk *w)
+seg_init(SegList *l, MemoryContext cxt, TdcPointBuf *buf, const char *fname)
 {
-	uint32		type,
-				count;
-
-	check_stack_depth();
-	CHECK_FOR_INTERRUPTS();
-	type = seg_u32(w);
-	count = seg_u32(w);
-	switch (type)
-	{
-		case G_POINT:
-			seg_chain(w, count, false);
-			return;
-		case G_LINE:
-		case G_TRIANGLE:
-			seg_chain(w, count, true);
-			return;
-		case G_POLYGON:
-			{
-				const char *sizes = w->p;
-
-				if ((uint64) count * 4 + (count % 2) * 4 > (uint64) (w->end - w->p))
-					seg_corrupt(w);
-				w->p += (Size) count * 4 + (count % 2) * 4;
-				for (uint32 i = 0; i < count; i++)
-				{
-					uint32		k;
-
-					memcpy(&k, sizes + 4 * (Size) i, 4);
-					seg_chain(w, k, true);
-				}
-				return;
-			}
-		case G_MULTIPOINT:
-		case G_MULTILINE:
-		case G_MULTIPOLYGON:
-		case G_COLLECTION:
-		case G_POLYHEDRAL:
-		case G_TIN:
-			for (uint32 i = 0; i < count; i++)
-				seg_geom(w);
-			return;
-	}
-	/* the vertex reader rejected curves and unknown types already */
-	seg_corrupt(w);
-}
-
-/*
- * Append to out the segments of a detoasted value whose vertices were
- * appended to a point buffer, the first of them at index "first"; returns
- * the number of vertices walked, which must match.
- */
-static uint64
-collect_segments(const struct varlena *geom, SegList *out, uint64 first,
-				 const char *fname)
-{
-	const unsigned char *h = (const unsigned char *) VARDATA_ANY(geom);
-	uint8		gflags;
-	int			ndims;
-	SegWalk		ww,
-			   *w = &ww;
-
-	memset(w, 0, sizeof(*w));
-	w->fname = fname;
-	w->out = out;
-	w->nvert = first;
-	w->p = (const char *) h;
-	w->end = (const char *) geom + VARSIZE_ANY(geom);
-	if (w->end - w->p < 8)
-		seg_corrupt(w);
-	gflags = h[3];
-	ndims = 2 + ((gflags & GF_Z) ? 1 : 0) + ((gflags & GF_M) ? 1 : 0);
-	w->vsize = ndims * sizeof(double);
-	w->p += 4;
-	if ((gflags & GF_VERSION) && (gflags & GF_EXTENDED))
-		w->p += 8;
-	if (gflags & GF_BBOX)
-		w->p += sizeof(float) * ((gflags & GF_GEODETIC) ? 6 : 2 * ndims);
-	if (w->p > w->end)
-		seg_corrupt(w);
-	seg_geom(w);
-	if (w->p != w->end)
-		seg_corrupt(w);
-	return w->nvert - first;
+	memset(l, 0, sizeof(*l));
+	l->cxt = cxt;
+	l->buf = buf;
+	l->fname = fname;
+	buf->chain = seg_note_chain;
+	buf->chain_arg = l;
 }
 
 /* ----------------------------------------------------------------
@@ -258,6 +178,8 @@ report_crossing(const CdtHold *hold, const TdcPointBuf *buf, const SegList *w,
 	}
 }
 
+TDC_WORK_OPS(cdt_ops, tdc_cdt, tdc_cdt, "triangulation");
+
 /*
  * Insert the segments into the finished job of run, waiting interruptibly.
  * Any failure is an ERROR.  The caller frees the insertion with cdt_release
@@ -287,34 +209,12 @@ constrain(TdcRun *run, const TdcPointBuf *buf, const SegList *w,
 	rc = tdc_cdt_start(run->job, w->seg, (size_t) w->nseg, &hold->cdt, err,
 					   sizeof(err));
 	if (rc != TDC_OK)
-		ereport(ERROR,
-				(errcode(rc == TDC_EMEMLIMIT ? ERRCODE_PROGRAM_LIMIT_EXCEEDED :
-						 rc == TDC_ENOMEM ? ERRCODE_OUT_OF_MEMORY :
-						 ERRCODE_INTERNAL_ERROR),
-				 errmsg("%s: %s", fname, err)));
-	while ((rc = tdc_cdt_wait(hold->cdt, 10)) == TDC_RUNNING)
-	{
-		if (!InterruptPending)
-			continue;
-		if (QueryCancelPending || ProcDiePending)
-		{
-			tdc_cdt_cancel(hold->cdt);
-			(void) tdc_cdt_wait(hold->cdt, -1);
-			CHECK_FOR_INTERRUPTS();
-			ereport(ERROR,
-					(errcode(ERRCODE_QUERY_CANCELED),
-					 errmsg("%s: triangulation canceled", fname)));
-		}
-		CHECK_FOR_INTERRUPTS();
-	}
+		tdc_report_status(rc, err, fname);
+	rc = tdc_wait_work(hold->cdt, &cdt_ops, fname);
 	if (rc == TDC_ECROSS)
 		report_crossing(hold, buf, w, fname);
 	if (rc != TDC_OK)
-		ereport(ERROR,
-				(errcode(rc == TDC_ECANCELED ? ERRCODE_QUERY_CANCELED :
-						 rc == TDC_ENOMEM ? ERRCODE_OUT_OF_MEMORY :
-						 ERRCODE_INTERNAL_ERROR),
-				 errmsg("%s: %s", fname, tdc_cdt_error(hold->cdt))));
+		tdc_report_status(rc, tdc_cdt_error(hold->cdt), fname);
 	if (tdc_guc_stats)
 	{
 		INSTR_TIME_SET_CURRENT(stop);
@@ -349,19 +249,6 @@ next_constraint_edge(void *arg, uint32 v[2])
 	CdtEdgeWalk *walk = arg;
 
 	return tdc_next_constraint_edge(walk->cdt, &walk->it, v) != 0;
-}
-
-/* The flags of the constrained functions: ST_TDCDelaunayTriangles's and 5. */
-static void
-cdt_check_flags(int flags, const char *fname)
-{
-	if (flags != TDC_OUT_CONSTRAINTS &&
-		(flags < TDC_OUT_POLYGONS || flags > TDC_OUT_TIN))
-		ereport(ERROR,
-				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
-				 errmsg("%s: invalid flags %d", fname, flags),
-				 errhint("Use 0 for a GEOMETRYCOLLECTION of polygons, 1 for a MULTILINESTRING of edges, "
-						 "2 for a TIN, 5 for a MULTILINESTRING of the constraint edges alone.")));
 }
 
 /*
@@ -422,19 +309,16 @@ Datum
 st_tdcconstraineddelaunaytriangles(PG_FUNCTION_ARGS)
 {
 	const char *fname = "ST_TDCConstrainedDelaunayTriangles";
-	struct varlena *geom = PG_DETOAST_DATUM(PG_GETARG_DATUM(0));
 	int32		flags = PG_NARGS() > 1 ? PG_GETARG_INT32(1) : 0;
 	TdcPointBuf buf;
-	SegList		segs = {CurrentMemoryContext, &buf, fname, NULL, 0, 0};
+	SegList		segs;
 
 	tdc_signal_guard();
-	cdt_check_flags(flags, fname);
+	tdc_check_flags(flags, true, fname);
 	tdc_pointbuf_init(&buf, CurrentMemoryContext);
-	tdc_gser_append(&buf, geom, fname);
-	if (collect_segments(geom, &segs, 0, fname) != buf.n)
-		ereport(ERROR,
-				(errcode(ERRCODE_DATA_CORRUPTED),
-				 errmsg("%s: corrupt geometry value", fname)));
+	seg_init(&segs, CurrentMemoryContext, &buf, fname);
+	(void) tdc_read_geometry(&buf, PG_GETARG_DATUM(0), fname);
+	seg_flush(&segs);
 	PG_RETURN_DATUM(constrained_to_datum(&buf, &segs, flags, fname));
 }
 
@@ -446,7 +330,7 @@ st_tdcconstraineddelaunaytriangles(PG_FUNCTION_ARGS)
  * 0) plus the segments, as indices into that buffer, both in the aggregate
  * context.  Combining appends the second state's vertices and its segments
  * shifted by the first state's vertex count.  Serialized for parallel plans
- * in ST_TDCDelaunay's form (tdc_agg_state.c) under magic "TDC2", followed
+ * in ST_TDCDelaunay's form (agg_state.c) under magic "TDC2", followed
  * by k*2 uint32 segment ends (k from the length); the deserializer checks
  * ST_TDCDelaunay's part as for that aggregate, then that the rest is whole
  * segments whose ends are below n.
@@ -473,9 +357,7 @@ cdt_state_new(MemoryContext cxt, TdcAggState *base)
 	CdtAggState *st = MemoryContextAllocZero(cxt, sizeof(CdtAggState));
 
 	st->base = base ? base : tdc_agg_state_new(cxt);
-	st->segs.cxt = cxt;
-	st->segs.buf = &st->base->pts;
-	st->segs.fname = CDT_AGG_NAME;
+	seg_init(&st->segs, cxt, &st->base->pts, CDT_AGG_NAME);
 	return st;
 }
 
@@ -499,8 +381,6 @@ st_tdcconstraineddelaunay_transfn(PG_FUNCTION_ARGS)
 	MemoryContext aggcxt = tdc_agg_context(fcinfo, "st_tdcconstraineddelaunay_transfn");
 	CdtAggState *st = PG_ARGISNULL(0) ? NULL : (CdtAggState *) PG_GETARG_POINTER(0);
 	int32		flags = TDC_OUT_POLYGONS;
-	struct varlena *geom;
-	uint64		first;
 
 	tdc_signal_guard();
 	if (PG_ARGISNULL(1) || (PG_NARGS() > 2 && PG_ARGISNULL(2)))
@@ -512,18 +392,14 @@ st_tdcconstraineddelaunay_transfn(PG_FUNCTION_ARGS)
 	if (PG_NARGS() > 2)
 	{
 		flags = PG_GETARG_INT32(2);
-		cdt_check_flags(flags, CDT_AGG_NAME);
+		tdc_check_flags(flags, true, CDT_AGG_NAME);
 	}
 	if (st == NULL)
 		st = cdt_state_new(aggcxt, NULL);
 	cdt_state_set_flags(st, flags);
 
-	geom = PG_DETOAST_DATUM(PG_GETARG_DATUM(1));
-	first = st->base->pts.n;
-	tdc_gser_append(&st->base->pts, geom, CDT_AGG_NAME);
-	if (collect_segments(geom, &st->segs, first, CDT_AGG_NAME) != st->base->pts.n - first)
-		tdc_agg_state_corrupt(CDT_AGG_NAME, "vertex count");
-	PG_FREE_IF_COPY(geom, 1);
+	(void) tdc_read_geometry(&st->base->pts, PG_GETARG_DATUM(1), CDT_AGG_NAME);
+	seg_flush(&st->segs);
 	PG_RETURN_POINTER(st);
 }
 
@@ -634,23 +510,11 @@ st_tdcconstraineddelaunay_finalfn(PG_FUNCTION_ARGS)
  * ----------------------------------------------------------------
  */
 
-typedef struct CdtDumpRows
-{
-	SegList    *segs;
-	const TdcPointBuf *buf;
-	const char *fname;
-} CdtDumpRows;
-
 /* TdcDumpRowFn: the segments of one row of the query. */
 static void
-cdt_dump_row(void *arg, const struct varlena *geom, uint64 first)
+cdt_dump_row(void *arg, uint64 first)
 {
-	CdtDumpRows *rows = (CdtDumpRows *) arg;
-
-	if (collect_segments(geom, rows->segs, first, rows->fname) != rows->buf->n - first)
-		ereport(ERROR,
-				(errcode(ERRCODE_DATA_CORRUPTED),
-				 errmsg("%s: corrupt geometry value", rows->fname)));
+	seg_flush((SegList *) arg);
 }
 
 PG_FUNCTION_INFO_V1(st_tdcconstraineddelaunaydump);
@@ -667,8 +531,7 @@ st_tdcconstraineddelaunaydump(PG_FUNCTION_ARGS)
 	char	   *query;
 	Oid			geomoid;
 	TdcPointBuf buf;
-	SegList		segs = {CurrentMemoryContext, &buf, fname, NULL, 0, 0};
-	CdtDumpRows rows;
+	SegList		segs;
 	TdcRun	   *run;
 
 	tdc_signal_guard();
@@ -677,10 +540,8 @@ st_tdcconstraineddelaunaydump(PG_FUNCTION_ARGS)
 	geomoid = TupleDescAttr(rsinfo->setDesc, 1)->atttypid;
 
 	tdc_pointbuf_init(&buf, CurrentMemoryContext);
-	rows.segs = &segs;
-	rows.buf = &buf;
-	rows.fname = fname;
-	tdc_dump_collect(&buf, NULL, query, geomoid, fname, cdt_dump_row, &rows);
+	seg_init(&segs, CurrentMemoryContext, &buf, fname);
+	tdc_dump_collect(&buf, NULL, query, geomoid, fname, cdt_dump_row, &segs);
 	if (buf.n == 0)
 		return (Datum) 0;
 
