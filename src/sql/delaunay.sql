@@ -1,6 +1,6 @@
 -- src/sql/delaunay.sql: Delaunay triangulation (ST_TDCDelaunayTriangles, the
--- ST_TDCDelaunay aggregates, ST_TDCDelaunayDump; C side: src/pg/tdc_funcs.c,
--- tdc_agg.c, tdc_agg_state.c, tdc_dump_query.c)
+-- ST_TDCDelaunay aggregates, ST_TDCDelaunayDump; C side: src/pg/fn_delaunay.c,
+-- fn_delaunay_agg.c, agg_state.c, dump_query.c)
 
 -- ST_TDCDelaunayTriangles: drop-in for ST_DelaunayTriangles
 
