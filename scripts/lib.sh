@@ -16,6 +16,7 @@
 #                         dir's .pgdata/ and .pgrun/, or /tmp/tdc_delaunay-UID-HASH
 #                         when the cluster's owner cannot reach the project dir)
 #   TDC_PORT_START=N      first port probed for the throw-away cluster (5433)
+#   TDC_EXTRA_PACKAGES="p q"  more Debian packages for tdc_ensure_packages
 #   PG_CONFIG=PATH        pg_config to build against; its major picks the
 #                         packages.  Default: /usr/lib/postgresql/MAJOR/bin/pg_config,
 #                         MAJOR being the one this Debian release packages
@@ -119,11 +120,13 @@ tdc_ensure_packages() {
 	local from="the major this Debian release packages"
 	[ -n "$TDC_PG_CONFIG_GIVEN" ] && from="from PG_CONFIG"
 	tdc_say "$(tdc_pg_name) ($from): $PG_CONFIG"
-	for p in "${TDC_PACKAGES[@]}"; do
+	# shellcheck disable=SC2206  # TDC_EXTRA_PACKAGES: a list of package names
+	local want=("${TDC_PACKAGES[@]}" ${TDC_EXTRA_PACKAGES:-})
+	for p in "${want[@]}"; do
 		tdc_pkg_installed "$p" || missing+=("$p")
 	done
 	if ((${#missing[@]} == 0)); then
-		tdc_say "Debian packages: all ${#TDC_PACKAGES[@]} present"
+		tdc_say "Debian packages: all ${#want[@]} present"
 		return 0
 	fi
 	tdc_say "Debian packages missing: ${missing[*]}"
