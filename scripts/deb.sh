@@ -21,27 +21,26 @@
 #                      package instead.
 set -euo pipefail
 
-# shellcheck source=scripts/lib.sh
-. "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
-# PROTOTYPE until scripts/lib.sh has tdc_pg_major (branch h-matrix)
-declare -F tdc_pg_major >/dev/null ||
-	tdc_pg_major() { /usr/share/postgresql-common/supported-versions | grep -E '^[0-9]+$' | tail -n 1; }
+# roots.sh for its tree copy; it sources lib.sh.
+# shellcheck source=scripts/roots.sh
+. "$(dirname "${BASH_SOURCE[0]}")/roots.sh"
 
 out=$TDC_ROOT/build/deb
 log=$TDC_LOGDIR/deb.log
 
-# pg_buildext and supported-versions (postgresql-common), dpkg-buildpackage,
-# dh: what it takes to know the major and read debian/.
-TDC_PACKAGES=(postgresql-common dpkg-dev debhelper)
-tdc_ensure_packages
-major=$(tdc_pg_major)
-[ -n "$major" ] || tdc_die "no PostgreSQL major: postgresql-common's supported-versions gave none (or set PG_CONFIG)"
+# A fresh machine: postgresql-common first, to learn the release's major.
+if [ -z "$TDC_PG_MAJOR" ]; then
+	tdc_apt_install postgresql-common
+	tdc_set_major
+	[ -n "$TDC_PG_MAJOR" ] || tdc_die "postgresql-common names no PostgreSQL major ($TDC_SUPPORTED_VERSIONS); set PG_CONFIG"
+fi
+major=$TDC_PG_MAJOR
 
 check=0
 case "${TDC_DEB_CHECK:-0}" in 1 | yes | true) check=1 ;; esac
-# debian/control.in's Build-Depends for this major (the PostGIS one only
-# without the nocheck profile); dpkg-checkbuilddeps below checks the list.
-TDC_PACKAGES=(postgresql-server-dev-all "postgresql-server-dev-$major")
+# debian/control.in's Build-Depends for this major (PostGIS only without the
+# nocheck profile), and dpkg-buildpackage; dpkg-checkbuilddeps checks the list.
+TDC_PACKAGES=(dpkg-dev debhelper postgresql-server-dev-all "postgresql-server-dev-$major")
 ((check)) && TDC_PACKAGES+=("postgresql-$major" "postgresql-$major-postgis-3")
 tdc_ensure_packages
 [ -x "/usr/lib/postgresql/$major/bin/pg_config" ] ||
@@ -54,17 +53,8 @@ src=$out/src/tdc-delaunay-$version
 tdc_say "copying the tree to $src"
 rm -rf "$out"
 mkdir -p "$src" "$TDC_LOGDIR"
-if git -C "$TDC_ROOT" rev-parse --is-inside-work-tree >/dev/null 2>&1; then
-	# What git tracks or would track, as it is in the work tree (edits included).
-	git -C "$TDC_ROOT" ls-files -z --cached --others --exclude-standard |
-		(cd "$TDC_ROOT" && while IFS= read -r -d '' f; do
-			[ -e "$f" ] && printf '%s\0' "$f"
-		done) |
-		tar -C "$TDC_ROOT" --null -T - -cf - | tar -C "$src" -xf -
-else
-	tar -C "$TDC_ROOT" --exclude=./build --exclude=./.git --exclude=./.pgdata --exclude=./.pgrun \
-		--exclude=./debian/control -cf - . | tar -C "$src" -xf -
-fi
+# the files git tracks or would track, edits included ("/" + the path)
+tdc_root_copy_tree / "$src"
 
 export PG_SUPPORTED_VERSIONS=$major
 profile=()
@@ -79,15 +69,14 @@ pg_buildext updatecontrol
 dpkg-checkbuilddeps "${profile[@]}" ||
 	tdc_die "build dependencies missing: debian/control.in and scripts/deb.sh's package list disagree"
 
-tdc_say "dpkg-buildpackage -us -uc -b ${profile[*]} for PostgreSQL $major (log: $log)"
-if ! dpkg-buildpackage -us -uc -b "${profile[@]}" >"$log" 2>&1; then
+jobs=$(nproc 2>/dev/null || echo 2)
+tdc_say "dpkg-buildpackage -us -uc -b -j$jobs ${profile[*]} for PostgreSQL $major (log: $log)"
+if ! dpkg-buildpackage -us -uc -b -j"$jobs" "${profile[@]}" >"$log" 2>&1; then
 	tail -n 40 "$log" >&2
 	tdc_die "dpkg-buildpackage failed (full log: $log)"
 fi
 cd "$out"
 mv src/*.deb src/*.buildinfo src/*.changes "$out"/
-shopt -s nullglob
-mv src/*.ddeb "$out"/ 2>/dev/null || true
 for f in "$out"/*.deb; do
 	printf '%8s  %s\n' "$(du -h "$f" | cut -f1)" "build/deb/${f##*/}"
 done
