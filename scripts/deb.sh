@@ -28,9 +28,11 @@ set -euo pipefail
 out=$TDC_ROOT/build/deb
 log=$TDC_LOGDIR/deb.log
 
-# A fresh machine: postgresql-common first, to learn the release's major.
+# A fresh machine: the build dependency that brings supported-versions first
+# (postgresql-common on Debian 12, postgresql-common-dev from 13 on), to
+# learn the release's major.
 if [ -z "$TDC_PG_MAJOR" ]; then
-	tdc_apt_install postgresql-common
+	tdc_apt_install postgresql-server-dev-all
 	tdc_set_major
 	[ -n "$TDC_PG_MAJOR" ] || tdc_die "postgresql-common names no PostgreSQL major ($TDC_SUPPORTED_VERSIONS); set PG_CONFIG"
 fi

@@ -7,7 +7,7 @@
 # which pulls PostgreSQL and PostGIS from the mirror; then, in that root:
 # pg_createcluster NN test --start, CREATE EXTENSION tdc_delaunay CASCADE, a
 # triangulation whose triangle count and area are known exactly, the installed
-# tdc (--help, and debian/tests/tdc-smoke), and the pg_regress suite against
+# tdc-delaunay (--help, and debian/tests/tdc-smoke), and the pg_regress suite against
 # the installed files as autopkgtest's installcheck runs it (debian/tests/
 # installcheck: pg_buildext installcheck, in a pg_virtualenv cluster).
 # Prints "package: N passed, N failed" last, with the time of each phase.
@@ -89,10 +89,10 @@ inside() {
 	as_pg pg_dropcluster --stop "$major" test
 
 	# The command-line tool
-	if out=$(tdc --help 2>&1) && grep -q -- '--max-memory' <<<"$out"; then
-		ok "$(command -v tdc) --help"
+	if out=$(tdc-delaunay --help 2>&1) && grep -q -- '--max-memory' <<<"$out"; then
+		ok "$(command -v tdc-delaunay) --help"
 	else
-		bad "tdc --help: $out"
+		bad "tdc-delaunay --help: $out"
 	fi
 	if out=$(/var/tmp/tdc-src/debian/tests/tdc-smoke 2>&1); then
 		ok "debian/tests/tdc-smoke: $(tail -n 1 <<<"$out")"
@@ -189,7 +189,11 @@ tdc_root_chroot "$scratch" env TDC_PKG_PORT="$(tdc_free_port)" \
 	bash /var/tmp/tdc-src/test/package/check.sh --inside || true
 cp -p "$scratch"/var/cache/apt/archives/*.deb "$archives/" 2>/dev/null || true
 pass=0 fail=1
-[ -f "$scratch/var/tmp/counts" ] && read -r pass fail <"$scratch/var/tmp/counts"
+if [ -f "$scratch/var/tmp/counts" ]; then
+	read -r pass fail <"$scratch/var/tmp/counts"
+else
+	echo "FAIL - the checks in the root stopped before the end"
+fi
 echo "check.sh: $suite, $cached minbase root; prepare $t_prepare s, copy $t_copy s, total $((SECONDS - t_all)) s"
 echo "package: $pass passed, $fail failed"
 ((fail == 0))
