@@ -56,7 +56,7 @@ inside() {
 	# machine's network), on the port the caller found free.
 	port=$TDC_PKG_PORT
 	t=$SECONDS
-	if pg_createcluster -p "$port" "$major" test --start -o "listen_addresses=''" >/var/tmp/cluster.log 2>&1; then
+	if pg_createcluster -p "$port" "$major" test --start -o listen_addresses= >/var/tmp/cluster.log 2>&1; then
 		ok "pg_createcluster $major test --start ($((SECONDS - t)) s)"
 	else
 		cat /var/tmp/cluster.log
@@ -194,6 +194,8 @@ if [ -f "$scratch/var/tmp/counts" ]; then
 else
 	echo "FAIL - the checks in the root stopped before the end"
 fi
-echo "check.sh: $suite, $cached minbase root; prepare $t_prepare s, copy $t_copy s, total $((SECONDS - t_all)) s"
+t=$SECONDS
+cleanup
+echo "check.sh: $suite, $cached minbase root: prepare $t_prepare s, copy $t_copy s, removal $((SECONDS - t)) s, total $((SECONDS - t_all)) s"
 echo "package: $pass passed, $fail failed"
 ((fail == 0))
