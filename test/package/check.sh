@@ -64,7 +64,7 @@ inside() {
 		finish
 	fi
 	sql -d postgres -c 'CREATE DATABASE pkgtest'
-	if out=$(sql -d pkgtest -c 'CREATE EXTENSION tdc_delaunay CASCADE' \
+	if out=$(sql -d pkgtest -c 'SET client_min_messages = warning' -c 'CREATE EXTENSION tdc_delaunay CASCADE' \
 		-c "SELECT string_agg(extname || ' ' || extversion, ', ' ORDER BY extname) FROM pg_extension WHERE extname <> 'plpgsql'" 2>&1); then
 		ok "CREATE EXTENSION tdc_delaunay CASCADE: $out"
 	else
