@@ -180,3 +180,9 @@ build/fuzz/fuzz_state: fuzz/fuzz_state.c $(FUZZ_STATE_SRCS) $(FUZZ_PG_DEPS) $(FU
 
 fuzz-run: fuzz
 	FUZZ_SECONDS=$(FUZZ_SECONDS) bash fuzz/run.sh $(FUZZ_RUN_TARGETS)
+
+# Debian packages for this machine's PostgreSQL major, in build/deb/
+# (scripts/deb.sh, debian/README.source).
+.PHONY: deb
+deb:
+	bash scripts/deb.sh

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# scripts/cluster.sh: the throw-away PostgreSQL 15 cluster that `make demo`
+# scripts/cluster.sh: the throw-away PostgreSQL cluster that `make demo`
 # and `make test` use, by hand.
 #
 #   bash scripts/cluster.sh start    start it (fresh) and print how to connect
@@ -16,7 +16,7 @@ set -euo pipefail
 # shellcheck source=scripts/lib.sh
 source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
 
-[ -x "$PG_CONFIG" ] || tdc_die "PostgreSQL $TDC_PG_MAJOR is not installed: run \`make demo\` first"
+[ -x "$PG_CONFIG" ] || tdc_die "$(tdc_pg_name) is not installed: run \`make demo\` first"
 tdc_cluster_paths
 
 running_port() {

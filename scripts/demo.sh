@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
-# scripts/demo.sh (`make demo`): from a bare Debian 12 to ST_TDCDelaunay
+# scripts/demo.sh (`make demo`): from a bare Debian (12, 13 or testing) to ST_TDCDelaunay
 # running beside PostGIS's ST_DelaunayTriangles.
 #
 #   1. apt-get installs the missing Debian packages (scripts/lib.sh lists them)
 #   2. builds and installs the extension
-#   3. starts a throw-away PostgreSQL 15 cluster on a free port, socket only
+#   3. starts a throw-away cluster of the release's PostgreSQL (or PG_CONFIG's)
+#      on a free port, socket only
 #      (or uses your server: set PGHOST/PGPORT/PGDATABASE or TDC_USE_EXISTING=1)
 #   4. creates postgis and tdc_delaunay, generates random points in a
 #      temporary table and triangulates them both ways

@@ -1,10 +1,10 @@
 # shellcheck shell=bash disable=SC2034  # variables set here are read by the scripts that source it
-# scripts/lib.sh: shared set-up for scripts/demo.sh, scripts/test.sh and
-# scripts/cluster.sh.  Source it; it defines functions only (plus a few
-# variables) and changes nothing until they are called.
+# scripts/lib.sh: shared set-up for scripts/demo.sh, scripts/test.sh,
+# scripts/cluster.sh, scripts/roots.sh and test/citus/.  Source it; it defines
+# functions and a few variables and changes nothing until they are called.
 #
 #   tdc_ensure_packages   apt-get install what is missing (Debian/Ubuntu)
-#   tdc_build_install     make && make install against PostgreSQL 15
+#   tdc_build_install     make && make install against $PG_CONFIG
 #   tdc_server_up         use the user's server (PGHOST/PGPORT/PGDATABASE set,
 #                         or TDC_USE_EXISTING=1) or start a throw-away cluster
 #   tdc_server_down       stop the throw-away cluster (no-op for the user's)
@@ -16,24 +16,57 @@
 #                         dir's .pgdata/ and .pgrun/, or /tmp/tdc_delaunay-UID-HASH
 #                         when the cluster's owner cannot reach the project dir)
 #   TDC_PORT_START=N      first port probed for the throw-away cluster (5433)
-#   PG_CONFIG=PATH        pg_config to build against (/usr/lib/postgresql/15/bin/pg_config)
+#   TDC_EXTRA_PACKAGES="p q"  more Debian packages for tdc_ensure_packages
+#   PG_CONFIG=PATH        pg_config to build against; its major picks the
+#                         packages.  Default: /usr/lib/postgresql/MAJOR/bin/pg_config,
+#                         MAJOR being the one this Debian release packages
+#                         (postgresql-common's supported-versions: 15 on Debian 12,
+#                         17 on Debian 13, 18 on testing)
 
 TDC_ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd -P)
-TDC_PG_MAJOR=15
-PG_CONFIG=${PG_CONFIG:-/usr/lib/postgresql/$TDC_PG_MAJOR/bin/pg_config}
 TDC_LOGDIR=$TDC_ROOT/build/logs
+# postgresql-common's list of the release's majors; the last line is the default
+TDC_SUPPORTED_VERSIONS=/usr/share/postgresql-common/supported-versions
 
-# Debian packages: what each one is for is in README.md ("Dependencies").
-TDC_PACKAGES=(
-	postgresql-15				# the server, initdb, pg_ctl, psql
-	postgresql-server-dev-15	# headers, pg_config, PGXS and pg_regress
-	postgresql-15-postgis-3		# PostGIS 3.3 (the geometry type, ST_DelaunayTriangles)
-	build-essential				# gcc, make, libc headers
-	libgmp-dev					# exact rational arithmetic in the core tests' oracle
-	libcgal-dev					# CGAL reference for the constrained tests (test/cgal_cdt.cpp)
-	clang						# the sanitizer builds (check-core-asan, check-core-tsan)
-	libclang-rt-14-dev			# clang's ASan/UBSan/TSan runtime libraries
-)
+# The PostgreSQL major: PG_CONFIG's when given (from its --version, or from a
+# /usr/lib/postgresql/MAJOR/ path not installed yet), else the release's
+# default.  Empty on a machine without postgresql-common: tdc_ensure_packages
+# installs it and asks again.
+tdc_pg_major() {
+	local v
+	if [ -n "${PG_CONFIG:-}" ]; then
+		v=$("$PG_CONFIG" --version 2>/dev/null | sed -n 's/^PostgreSQL \([0-9][0-9]*\).*/\1/p')
+		[ -n "$v" ] || v=$(printf '%s\n' "$PG_CONFIG" | sed -n 's|^/usr/lib/postgresql/\([0-9][0-9]*\)/bin/pg_config$|\1|p')
+	elif [ -x "$TDC_SUPPORTED_VERSIONS" ]; then
+		v=$("$TDC_SUPPORTED_VERSIONS" 2>/dev/null | grep -E '^[0-9]+$' | tail -n 1)
+	fi
+	printf '%s' "$v"
+}
+
+# Set TDC_PG_MAJOR, PG_CONFIG (unless given) and TDC_PACKAGES from the major.
+tdc_set_major() {
+	TDC_PG_MAJOR=$(tdc_pg_major)
+	if [ -z "${TDC_PG_CONFIG_GIVEN:-}" ]; then
+		PG_CONFIG=${TDC_PG_MAJOR:+/usr/lib/postgresql/$TDC_PG_MAJOR/bin/pg_config}
+	fi
+	# Debian packages: what each one is for is in README.md ("Dependencies").
+	TDC_PACKAGES=(
+		postgresql-common						# supported-versions: the release's major
+		${TDC_PG_MAJOR:+postgresql-$TDC_PG_MAJOR}				# the server, initdb, pg_ctl, psql
+		${TDC_PG_MAJOR:+postgresql-server-dev-$TDC_PG_MAJOR}	# headers, pg_config, PGXS and pg_regress
+		${TDC_PG_MAJOR:+postgresql-$TDC_PG_MAJOR-postgis-3}	# PostGIS 3 (the geometry type, ST_DelaunayTriangles)
+		build-essential							# gcc, make, libc headers
+		libgmp-dev								# exact rational arithmetic in the core tests' oracle
+		libcgal-dev								# CGAL reference for the constrained tests (test/cgal_cdt.cpp)
+		clang									# the sanitizer builds (check-core-asan, check-core-tsan)
+		libclang-rt-dev							# that clang's ASan/UBSan/TSan and libFuzzer runtimes
+	)
+}
+TDC_PG_CONFIG_GIVEN=${PG_CONFIG:+1}
+tdc_set_major
+
+# "PostgreSQL 17" in messages, or "PostgreSQL" while the major is unknown
+tdc_pg_name() { printf 'PostgreSQL%s' "${TDC_PG_MAJOR:+ $TDC_PG_MAJOR}"; }
 
 tdc_say() { printf '==> %s\n' "$*"; }
 tdc_warn() { printf 'tdc: warning: %s\n' "$*" >&2; }
@@ -55,37 +88,55 @@ tdc_pkg_installed() {
 	[ "$(dpkg-query -W -f='${db:Status-Status}' "$1" 2>/dev/null)" = installed ]
 }
 
-tdc_ensure_packages() {
-	local p missing=()
-	command -v dpkg-query >/dev/null 2>&1 ||
-		tdc_die "not a Debian system: install PostgreSQL 15 with its server headers, PostGIS 3, gcc, make, GMP and clang yourself (see README.md), then run again"
-	for p in "${TDC_PACKAGES[@]}"; do
-		tdc_pkg_installed "$p" || missing+=("$p")
-	done
-	if ((${#missing[@]} == 0)); then
-		tdc_say "Debian packages: all ${#TDC_PACKAGES[@]} present"
-		return 0
-	fi
+# apt-get install PACKAGES..., after an apt-get update, as root; log in build/logs/apt.log.
+tdc_apt_install() {
 	mkdir -p "$TDC_LOGDIR"
-	local log=$TDC_LOGDIR/apt.log
-	tdc_say "Debian packages missing: ${missing[*]}"
-	tdc_say "apt-get update && apt-get install (a few minutes on a fresh machine; log: $log)"
-	if ! tdc_as_root env DEBIAN_FRONTEND=noninteractive apt-get update -q </dev/null >"$log" 2>&1 ||
+	local p log=$TDC_LOGDIR/apt.log
+	tdc_say "apt-get update && apt-get install $* (a few minutes on a fresh machine; log: $log)"
+	if ! tdc_as_root env DEBIAN_FRONTEND=noninteractive apt-get update -q </dev/null >>"$log" 2>&1 ||
 		! tdc_as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends \
 			-o Dpkg::Options::=--force-confdef -o Dpkg::Options::=--force-confold \
-			"${missing[@]}" </dev/null >>"$log" 2>&1; then
+			"$@" </dev/null >>"$log" 2>&1; then
 		tail -n 30 "$log" >&2
 		tdc_die "apt-get failed (full log: $log)"
 	fi
-	for p in "${missing[@]}"; do
+	for p in "$@"; do
 		tdc_pkg_installed "$p" || tdc_die "package $p still not installed after apt-get (log: $log)"
 	done
-	tdc_say "installed: ${missing[*]}"
+	tdc_say "installed: $*"
 }
 
-# Build the extension and install it into PostgreSQL 15's directories.
+tdc_ensure_packages() {
+	local p missing=()
+	command -v dpkg-query >/dev/null 2>&1 ||
+		tdc_die "not a Debian system: install PostgreSQL (15, 17 or 18) with its server headers, PostGIS 3, gcc, make, GMP and clang yourself (see README.md), then run again with PG_CONFIG set"
+	if [ -z "$TDC_PG_MAJOR" ]; then
+		# a fresh machine: postgresql-common says which major this release packages
+		tdc_say "Debian packages: postgresql-common first, to learn this release's PostgreSQL major"
+		tdc_apt_install postgresql-common
+		tdc_set_major
+		[ -n "$TDC_PG_MAJOR" ] || tdc_die "postgresql-common names no PostgreSQL major ($TDC_SUPPORTED_VERSIONS); set PG_CONFIG"
+	fi
+	local from="the major this Debian release packages"
+	[ -n "$TDC_PG_CONFIG_GIVEN" ] && from="from PG_CONFIG"
+	tdc_say "$(tdc_pg_name) ($from): $PG_CONFIG"
+	# shellcheck disable=SC2206  # TDC_EXTRA_PACKAGES: a list of package names
+	local want=("${TDC_PACKAGES[@]}" ${TDC_EXTRA_PACKAGES:-})
+	for p in "${want[@]}"; do
+		tdc_pkg_installed "$p" || missing+=("$p")
+	done
+	if ((${#missing[@]} == 0)); then
+		tdc_say "Debian packages: all ${#want[@]} present"
+		return 0
+	fi
+	tdc_say "Debian packages missing: ${missing[*]}"
+	tdc_apt_install "${missing[@]}"
+}
+
+# Build the extension and install it into $PG_CONFIG's directories.
 tdc_build_install() {
-	[ -x "$PG_CONFIG" ] || tdc_die "no pg_config at $PG_CONFIG (package postgresql-server-dev-15; or set PG_CONFIG)"
+	[ -x "$PG_CONFIG" ] ||
+		tdc_die "no pg_config at ${PG_CONFIG:-<unknown>} (package postgresql-server-dev-${TDC_PG_MAJOR:-MAJOR}; or set PG_CONFIG)"
 	local jobs
 	jobs=$(nproc 2>/dev/null || echo 2)
 	tdc_say "building the extension (make -j$jobs PG_CONFIG=$PG_CONFIG all)"
@@ -230,7 +281,7 @@ tdc_cluster_start() {
 
 	local port
 	port=$(tdc_free_port)
-	tdc_say "initdb: throw-away PostgreSQL $TDC_PG_MAJOR cluster in $TDC_PGDATA (owner $TDC_OWNER)"
+	tdc_say "initdb: throw-away $(tdc_pg_name) cluster in $TDC_PGDATA (owner $TDC_OWNER)"
 	if ! tdc_as_owner "$TDC_PGBIN/initdb" -D "$TDC_PGDATA" -U "$TDC_OWNER" -A trust \
 		--no-locale -E UTF8 --no-sync >"$TDC_LOGDIR/initdb.log" 2>&1; then
 		cat "$TDC_LOGDIR/initdb.log" >&2

@@ -1,12 +1,13 @@
 #!/usr/bin/env bash
-# scripts/test.sh (`make test`): every test of tdc_delaunay, from a bare Debian 12.
+# scripts/test.sh (`make test`): every test of tdc_delaunay, from a bare Debian
+# (12, 13 or testing), on the release's PostgreSQL major or PG_CONFIG's.
 #
 #   1. apt-get installs the missing Debian packages (scripts/lib.sh lists them)
 #   2. builds and installs the extension, and builds ./tdc
 #   3. the core suite: make check-core, check-core-asan, check-core-tsan,
 #      test/hardening/core_cancel.sh with CI limits, and a short run of the
 #      libFuzzer targets (make fuzz-run)
-#   4. starts a throw-away PostgreSQL 15 cluster (or uses yours, see README.md)
+#   4. starts a throw-away PostgreSQL cluster (or uses yours, see README.md)
 #      and runs pg_regress against it (make installcheck)
 #   5. every executable test/*.sh, with the server's PG* settings exported
 #   6. the CI-sized hardening scripts in test/hardening/ (settings,
@@ -14,6 +15,12 @@
 #      throw-away cluster
 #   7. test/citus/run.sh: tdc_delaunay_tiled on a throw-away 3-node Citus
 #      cluster (Citus built from ../shared/citus, cached between runs)
+#   8. with TDC_MATRIX=1 (.ci/run sets it): on the PostgreSQL of other Debian
+#      releases (TDC_MATRIX_SUITES, default "trixie forky": PostgreSQL 17 and
+#      18), in debootstrap roots (scripts/roots.sh, kept between runs in
+#      TDC_ROOTS_DIR), the build, pg_regress and a 100k-point smoke test.
+#      The roots are prepared in the background from the start (network and
+#      dpkg, mostly); each release is one part.  Needs root.
 #
 # Each part prints "N passed, N failed" (pg_regress: "All N tests passed." or
 # "N of M tests failed."); they are added up into the last line of output,
@@ -142,6 +149,9 @@ CHILD=
 on_exit() {
 	local rc=$?
 	[ -z "$CHILD" ] || kill -TERM "$CHILD" 2>/dev/null || true
+	for s in "${!MATRIX_PID[@]}"; do
+		[ -z "${MATRIX_PID[$s]}" ] || kill -TERM -- "-${MATRIX_PID[$s]}" 2>/dev/null || true
+	done
 	tdc_server_down
 	if ((!FINISHED)); then
 		record "(aborted)" 0 1 "scripts/test.sh stopped early with status $rc"
@@ -196,7 +206,24 @@ run_step() {	# name command...
 echo "tdc_delaunay: make test ($(date -u '+%Y-%m-%d %H:%M:%S UTC'), $(nproc) CPUs)"
 
 run_part test.sh-counting plain bash scripts/test.sh --self-test
+MATRIX=${TDC_MATRIX:-0}
+# shellcheck disable=SC2206  # a list of suite names
+MATRIX_SUITES=(${TDC_MATRIX_SUITES:-trixie forky})
+((MATRIX)) && TDC_EXTRA_PACKAGES="${TDC_EXTRA_PACKAGES:-} debootstrap"
 run_step packages tdc_ensure_packages || true
+# on a fresh machine the step above learnt the major (in its subshell)
+tdc_set_major
+
+# The matrix's roots, made (or updated) in the background while the rest runs.
+declare -A MATRIX_PID=()
+if ((MATRIX)); then
+	for s in "${MATRIX_SUITES[@]}"; do
+		# a process group of its own, so that on_exit can stop debootstrap and apt-get too
+		setsid bash scripts/roots.sh prepare "$s" >"$TDC_LOGDIR/root-$s.log" 2>&1 </dev/null &
+		MATRIX_PID[$s]=$!
+		tdc_say "[matrix] preparing the $s root in the background (log: build/logs/root-$s.log)"
+	done
+fi
 built=0
 run_step build+install tdc_build_install && built=1
 
@@ -231,7 +258,7 @@ if tdc_use_existing || (tdc_cluster_paths && [ -x "$TDC_PGBIN/initdb" ]) >/dev/n
 	tdc_server_up
 	server=1
 else
-	record server 0 1 "(PostgreSQL $TDC_PG_MAJOR is not installed)"
+	record server 0 1 "($(tdc_pg_name) is not installed)"
 fi
 
 if ((built && server)); then
@@ -270,17 +297,44 @@ fi
 # tdc_delaunay_tiled on its own throw-away coordinator and two workers
 # (about 40 s).  TDC_CITUS=0 skips it, and so does a clone without the
 # Citus source beside it (../shared/citus, or TDC_CITUS_SRC): Debian has no
-# Citus to install instead.  The summary says so.
+# Citus to install instead; and a PostgreSQL major Citus 13.2.2 does not
+# support (18).  The summary says so.
 citus_src=${TDC_CITUS_SRC:-$TDC_ROOT/../shared/citus}
 if ((${TDC_CITUS:-1} && built)); then
-	if [ -f "$citus_src/citus-13.2.2.tar.gz" ]; then
-		# its first run builds Citus: up to 12 minutes on a loaded 2-core machine
-		PART_TIMEOUT=$((PART_TIMEOUT * 2)) run_part citus plain bash test/citus/run.sh
-	else
+	if [ ! -f "$citus_src/citus-13.2.2.tar.gz" ]; then
 		tdc_warn "no Citus source ($citus_src/citus-13.2.2.tar.gz): the Citus part is skipped"
 		record citus 0 0 "skipped: no Citus source (../shared/citus or TDC_CITUS_SRC)"
+	elif ! why=$(PG_CONFIG=$PG_CONFIG bash test/citus/build.sh --supported 2>&1); then
+		tdc_say "[citus] skipped: ${why#citus-build: }"
+		record citus 0 0 "skipped: ${why#citus-build: }"
+	else
+		# its first run builds Citus: up to 12 minutes on a loaded 2-core machine
+		PART_TIMEOUT=$((PART_TIMEOUT * 2)) run_part citus plain env PG_CONFIG="$PG_CONFIG" bash test/citus/run.sh
 	fi
 fi
+
+# The matrix: each release's root, once ready, builds and tests a copy of
+# this tree (scripts/roots.sh check).  A root not ready within the part's
+# timeout, or that failed, counts as one failure.
+for s in "${MATRIX_SUITES[@]}"; do
+	[ -n "${MATRIX_PID[$s]:-}" ] || continue
+	t0=$SECONDS
+	while kill -0 "${MATRIX_PID[$s]}" 2>/dev/null && ((SECONDS - t0 < PART_TIMEOUT)); do
+		sleep 2
+	done
+	if kill -0 "${MATRIX_PID[$s]}" 2>/dev/null; then
+		kill -TERM -- "-${MATRIX_PID[$s]}" 2>/dev/null || true
+	fi
+	rc=0
+	wait "${MATRIX_PID[$s]}" || rc=$?
+	MATRIX_PID[$s]=
+	sed 's/^/    /' "$TDC_LOGDIR/root-$s.log"
+	if ((rc == 0)); then
+		run_part "matrix-$s" plain bash scripts/roots.sh check "$s"
+	else
+		record "matrix-$s" 0 1 "(root not ready: exit $rc after $((SECONDS - t0)) s of waiting; build/logs/root-$s.log)"
+	fi
+done
 
 tdc_server_down
 FINISHED=1

@@ -1,6 +1,16 @@
 #!/usr/bin/env bash
-# test/citus/build.sh: build Citus 13.2.2 from ../shared/citus (tarball +
-# patch) and install it into this machine's PostgreSQL 15.
+# test/citus/build.sh: build Citus 13.2.2 from ../shared/citus (tarball, and
+# on PostgreSQL 15 its patch) and install it into PG_CONFIG's PostgreSQL
+# (default: the one scripts/lib.sh picks, the major this Debian release
+# packages).
+#
+#   bash test/citus/build.sh              build (or take from the cache) and install
+#   bash test/citus/build.sh --supported  exit 0 if Citus 13.2.2 supports this
+#                                         major, else say why and exit 3
+#
+# Citus 13.2.2 supports PostgreSQL 15, 16 and 17 (its configure refuses 18).
+# The patch is for 15 only: 15.15 and later export have_createdb_privilege(),
+# which Citus still defines itself for 15.
 #
 # The build is cached in ${TDC_CITUS_CACHE:-${XDG_CACHE_HOME:-$HOME/.cache}/tdc-citus}/SHA
 # (SHA = sha256 of the tarball), as a staged install tree (make install
@@ -10,12 +20,23 @@
 # staged tree holds the install paths: one staged for another PostgreSQL
 # tree (say /opt/pgE) would be copied there, not here.
 #
-# Citus is not in Debian 12: the build needs a few -dev packages, installed
-# with apt-get when missing (as root).
+# Debian does not package Citus: the build needs a few -dev packages,
+# installed with apt-get when missing (as root).
 set -euo pipefail
 HERE=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
 ROOT=$(cd "$HERE/../.." && pwd)
-PG_CONFIG=${PG_CONFIG:-$(command -v pg_config || echo /usr/lib/postgresql/15/bin/pg_config)}
+# shellcheck source=scripts/lib.sh
+source "$ROOT/scripts/lib.sh"
+[ -x "${PG_CONFIG:-}" ] || { echo "citus-build: no pg_config (${PG_CONFIG:-PostgreSQL not installed})" >&2; exit 1; }
+major=$(tdc_pg_major)
+case $major in
+	15 | 16 | 17) ;;
+	*)
+		echo "citus-build: Citus 13.2.2 supports PostgreSQL 15 to 17, not $major"
+		exit 3
+		;;
+esac
+[ "${1:-}" = --supported ] && exit 0
 SRC=${TDC_CITUS_SRC:-}
 if [ -z "$SRC" ]; then
 	for d in "$ROOT/../shared/citus" "$ROOT/../../shared/citus" /work/shared/citus; do
@@ -27,9 +48,10 @@ fi
 	exit 1
 }
 TARBALL=$SRC/citus-13.2.2.tar.gz
-PATCH=$SRC/pg15-have_createdb_privilege.patch
+PATCH=
+[ "$major" = 15 ] && PATCH=$SRC/pg15-have_createdb_privilege.patch
 
-key=$( { sha256sum "$TARBALL" | cut -d' ' -f1; sha256sum "$PATCH" | cut -d' ' -f1; "$PG_CONFIG" --version; "$PG_CONFIG" --pkglibdir; } \
+key=$( { sha256sum "$TARBALL" | cut -d' ' -f1; [ -z "$PATCH" ] || sha256sum "$PATCH" | cut -d' ' -f1; "$PG_CONFIG" --version; "$PG_CONFIG" --pkglibdir; } \
 	| sha256sum | cut -c1-16)
 CACHE=${TDC_CITUS_CACHE:-${XDG_CACHE_HOME:-$HOME/.cache}/tdc-citus}/$(sha256sum "$TARBALL" | cut -c1-16)-$key
 STAGE=$CACHE/stage
@@ -50,11 +72,11 @@ if [ ! -f "$CACHE/done" ]; then
 	fi
 	rm -rf "$CACHE"
 	mkdir -p "$CACHE"
-	echo "citus-build: building Citus 13.2.2 in $CACHE (a few minutes)"
+	echo "citus-build: building Citus 13.2.2 for PostgreSQL $major in $CACHE (a few minutes)"
 	tar -xzf "$TARBALL" -C "$CACHE"
 	(
 		cd "$CACHE/citus-13.2.2"
-		patch -p1 -s <"$PATCH"
+		[ -z "$PATCH" ] || patch -p1 -s <"$PATCH"
 		./configure PG_CONFIG="$PG_CONFIG" >"$CACHE/configure.log" 2>&1 ||
 			{ tail -30 "$CACHE/configure.log"; exit 1; }
 		make -j2 >"$CACHE/make.log" 2>&1 || { tail -30 "$CACHE/make.log"; exit 1; }
