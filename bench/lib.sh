@@ -346,7 +346,7 @@ Written by \`$script\` (part of \`make bench\`; see [the index](README.md)). Eve
 | date | ${BENCH_T0:-?} to $BENCH_T1 |
 | commit | $rev |
 | CPU | $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ *//'), $(nproc) cores |
-| memory | $(free -g | awk '/Mem:/ { print $2 }') GB |
+| memory | $(awk '/^MemTotal:/ { printf "%.0f", $2 / 1048576 }' /proc/meminfo) GB |
 | kernel | $(uname -sr) |
 | Debian | $os ($(cat /etc/debian_version 2>/dev/null || echo ?)) |
 | PostgreSQL | $(pkg_ver "postgresql-${major:-?}") |
