@@ -207,8 +207,7 @@ for kvp in $SETTINGS; do
 	SET_SQL+="SET ${kvp%%=*} = '${kvp#*=}';"$'\n'
 done
 SO_START=$(so_id)
-LOAD_START=$(cut -d' ' -f1-3 /proc/loadavg)
-DATE_START=$(date -u '+%Y-%m-%d %H:%M UTC')
+bench_begin
 echo "dataset,statement,form,rep,ms,result,status,message,plan" > "$RUNS"
 
 run_dataset() {
@@ -262,7 +261,7 @@ run_dataset() {
 for d in $DATASETS; do
 	run_dataset "$d"
 done
-LOAD_END=$(cut -d' ' -f1-3 /proc/loadavg)
+bench_end
 SO_END=$(so_id)
 [ "$SO_START" = "$SO_END" ] || log "WARNING: $SO changed during the run ($SO_START -> $SO_END)"
 
@@ -283,9 +282,6 @@ MPWG_DEF=$(sql -c "SELECT reset_val FROM pg_settings WHERE name = 'max_parallel_
 
 echo "dataset,statement,settings,plan,pcs_median_ms,ng_median_ms,pcs_runs,ng_runs,pcs_min_ms,pcs_max_ms,ng_min_ms,ng_max_ms,bytes,triangles,sfcgal_over_this_pcs,sfcgal_over_this_ng,this_over_unconstrained_pcs,this_over_unconstrained_ng,triangles_as_sfcgal,failure" > "$CSV"
 {
-	echo "### Constrained Delaunay: tdc_delaunay vs SFCGAL, $DATE_START"
-	echo
-	echo "- machine: $(nproc) CPUs ($(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ *//')), $(free -g | awk '/Mem:/ { print $2 }') GB RAM; load average $LOAD_START at start, $LOAD_END at end ($(date -u '+%H:%M UTC'))"
 	echo "- server: $PG_VER, PostGIS $PGIS_VER, $SFCGAL_VER, tdc_delaunay $TDC_VER (git $(git -C "$ROOT" rev-parse --short HEAD 2>/dev/null || echo '?')$(git -C "$ROOT" diff --quiet HEAD 2>/dev/null || echo ', with uncommitted changes'); $SO: $SO_START)"
 	if [ "$SO_START" != "$SO_END" ]; then
 		echo "- **WARNING: tdc_delaunay.so was replaced during the run ($SO_START -> $SO_END): the figures mix two builds; run again.**"
@@ -348,5 +344,6 @@ for d in $DATASETS; do
 	unset PCS NG TRI
 done
 
+bench_publish constrained "Constrained Delaunay in SQL: tdc_delaunay against SFCGAL" "$TXT"
 cat "$TXT"
 log "wrote $RUNS, $CSV, $TXT"

@@ -13,7 +13,8 @@
 #   core.csv       medians per set
 #   phases.csv     phase times for threads 1..N on the phase set (1e7 uniform)
 #   core.txt       the printed tables
-#   docs/core.png  seconds vs n for the synthetic sets
+# and docs/benchmarks/core.md (bench_publish's header, then core.txt) and
+# docs/benchmarks/core.png (seconds vs n for the synthetic sets).
 #
 # Environment knobs:
 #   BENCH_SIZES="1e5 1e6 1e7"  BENCH_SETS="uniform clustered grid"
@@ -22,8 +23,8 @@
 #   BENCH_PHASE_SET=uniform_1e7   BENCH_PHASE_REPS=3
 #   BENCH_TIMEOUT=900 (seconds per single run)
 #   BENCH_NO_TDC=1   only CGAL
-#   BENCH_DOCS=DIR   where core.png goes (default docs/)
-#   BENCH_PLOT_ONLY=1  only redraw docs/core.png from build/bench/core.csv
+#   BENCH_DOCS=DIR   where core.md and core.png go (default docs/benchmarks/)
+#   BENCH_PLOT_ONLY=1  only redraw core.png from build/bench/core.csv
 set -euo pipefail
 
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
@@ -63,11 +64,11 @@ fi
 TDC_BIN=$WORK/tdc
 [ $HAVE_TDC = 1 ] && cp -p "$ROOT/tdc" "$TDC_BIN"
 
-# make_plot: docs/core.png (seconds vs n, log-log) from core.csv, per synthetic set:
+# make_plot: $BENCH_DOCS/core.png (seconds vs n, log-log) from core.csv, per synthetic set:
 # tdc 1 thread / all threads / CGAL
 make_plot() {
 	if command -v gnuplot >/dev/null; then
-		DOCS=${BENCH_DOCS:-$ROOT/docs}
+		DOCS=$BENCH_DOCS
 		mkdir -p "$DOCS"
 		pl=()
 		colors=("#1f77b4" "#2ca02c" "#9467bd")
@@ -182,12 +183,10 @@ fmt() { awk -v x="$1" -v f="$2" 'BEGIN { if (x == "") print "-"; else printf f "
 div() { awk -v a="$1" -v b="$2" 'BEGIN { if (a == "" || b == "" || b + 0 == 0) print ""; else printf "%.6g\n", a / b }'; }
 
 echo "$RUNS_HDR" > "$RUNS"
+bench_begin
 
 {
-	echo "# tdc_delaunay core benchmark, $(date -u '+%Y-%m-%d %H:%M UTC')"
-	echo "# host: $(uname -srm), $NCPU CPUs ($(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ *//')), $(free -g | awk '/Mem:/ { print $2 }') GB RAM"
-	echo "# load average at start: $(cut -d' ' -f1-3 /proc/loadavg)"
-	echo "# tree: git $(git -C "$ROOT" rev-parse --short HEAD 2>/dev/null || echo '?')$(git -C "$ROOT" diff --quiet HEAD -- src 2>/dev/null || echo ' + uncommitted changes in src/'); ./tdc built $(date -u -r "$TDC_BIN" '+%H:%M UTC' 2>/dev/null || echo '-')"
+	echo "# ./tdc: make tdc of this tree (copied before the runs)"
 	echo "# CGAL $(awk '$2 == "CGAL_VERSION" { print $3 }' /usr/include/CGAL/version.h 2>/dev/null), Epick, range insert; g++ -O2 -DNDEBUG -DCGAL_NDEBUG"
 	if [ "$COAST" = 1 ]; then echo "# GSHHG full resolution (gmt coast -Rd -Df -W -M): $GSHHG_META"; fi
 	echo "# times: tdc = engine 'total' from --stats (file reading excluded), CGAL = dt.insert only; both single-process, medians"
@@ -307,7 +306,10 @@ if [ $HAVE_TDC = 1 ]; then
 	done
 fi
 
-echo "# load average at end: $(cut -d' ' -f1-3 /proc/loadavg)" | tee -a "$TXT"
+bench_end
 
 make_plot
+[ -s "$BENCH_DOCS/core.png" ] && printf '\n![engine time against n](core.png)\n' > "$WORK/png" || : > "$WORK/png"
+bench_publish core "The engine: ./tdc against CGAL" "$TXT" text
+cat "$WORK/png" >> "$BENCH_DOCS/core.md"
 log "wrote $CSV, $RUNS$([ $HAVE_TDC = 1 ] && echo ", $PHASES"), $TXT"

@@ -1,13 +1,17 @@
 # shellcheck shell=bash
-# bench/lib.sh -- helpers shared by bench/core_bench.sh and bench/sql_bench.sh.
+# bench/lib.sh -- helpers shared by the benchmark scripts of bench/.
 # Sourced, not executed.  Expects ROOT (the repository root) to be set.
 #
-# Data files (git-ignored) go to $BENCH_DATA (default data/bench), results to
-# $BENCH_OUT (default build/bench), helper binaries to build/.
+# Data files (git-ignored) go to $BENCH_DATA (default data/bench), raw results
+# (CSV, every run) to $BENCH_OUT (default build/bench), helper binaries to
+# build/.  Each benchmark writes its report to $BENCH_DOCS/<name>.md (default
+# docs/benchmarks/) with bench_publish, which gives every report the same
+# header: date, commit, machine, software versions and load.
 
 BENCH_DATA=${BENCH_DATA:-$ROOT/data/bench}
 BENCH_OUT=${BENCH_OUT:-$ROOT/build/bench}
 BENCH_BIN=$ROOT/build
+BENCH_DOCS=${BENCH_DOCS:-$ROOT/docs/benchmarks}
 GSHHG_SUBSET_N=1000000
 GSHHG_SUBSET_SEED=7
 POINT_SEED=42
@@ -269,4 +273,109 @@ ensure_tdc() {
 		fi
 	fi
 	[ -x "$ROOT/tdc" ]
+}
+
+# ---------------------------------------------------------------- reports
+
+# busy_procs: the processes that used at least 20% of a CPU over one second,
+# busiest first ("name pid NN%"), or "none"; read from /proc, so inside a
+# chroot it sees the whole machine
+busy_procs() {
+	local a b
+	a=$(cat /proc/[0-9]*/stat 2>/dev/null || true)
+	sleep 1
+	b=$(cat /proc/[0-9]*/stat 2>/dev/null || true)
+	awk -v hz="$(getconf CLK_TCK)" '
+		# pid (comm) state ppid ...: utime and stime are the 12th and 13th
+		# fields after the closing parenthesis (comm may hold spaces)
+		function parse(line,   i, rest, f) {
+			i = index(line, "(")
+			pid = substr(line, 1, i - 2)
+			rest = line
+			sub(/^.*\) /, "", rest)
+			comm = substr(line, i + 1)
+			sub(/\) [^)]*$/, "", comm)
+			split(rest, f, " ")
+			return f[12] + f[13]
+		}
+		NR == FNR { x = parse($0); t0[pid] = x; next }
+		{ x = parse($0); if (pid in t0) { d = (x - t0[pid]) * 100 / hz; if (d >= 20) printf "%d\t%s %s\n", d, comm, pid } }
+	' <(printf '%s\n' "$a") <(printf '%s\n' "$b") | sort -rn | awk -F'\t' '
+		{ printf "%s%s %d%%", (NR > 1 ? ", " : ""), $2, $1; n++ }
+		END { if (n == 0) printf "none" }'
+}
+
+# bench_begin, bench_end: note the time, the load average and the busy
+# processes before and after a benchmark's timed runs, for bench_publish
+bench_begin() {
+	BENCH_BUSY0=$(busy_procs)
+	BENCH_T0=$(date -u '+%Y-%m-%d %H:%M UTC')
+	BENCH_LOAD0=$(cut -d' ' -f1-3 /proc/loadavg)
+}
+bench_end() {
+	BENCH_T1=$(date -u '+%Y-%m-%d %H:%M UTC')
+	BENCH_LOAD1=$(cut -d' ' -f1-3 /proc/loadavg)
+	BENCH_BUSY1=$(busy_procs)
+}
+
+# pkg_ver PATTERN: "package version" of the installed Debian packages matching
+# PATTERN (a dpkg-query glob), or "-"
+pkg_ver() {
+	dpkg-query -W -f='${db:Status-Abbrev} ${Package} ${Version}\n' "$1" 2>/dev/null |
+		awk '$1 == "ii" { printf "%s%s %s", sep, $2, $3; sep = ", " } END { if (sep == "") printf "-" }'
+}
+
+# bench_header TITLE SCRIPT: the header every report under docs/benchmarks/
+# starts with: what wrote it, when, on which commit, machine and software, and
+# how busy the machine was before and after the timed runs (bench_begin,
+# bench_end; without bench_end, "after" is now)
+bench_header() {
+	local title=$1 script=$2 rev os major
+	[ -n "${BENCH_T1:-}" ] || bench_end
+	rev=$(git -C "$ROOT" rev-parse --short HEAD 2>/dev/null || echo unknown)
+	git -C "$ROOT" diff --quiet HEAD -- src bench 2>/dev/null || rev="$rev, with uncommitted changes in src/ or bench/"
+	os=$(. /etc/os-release 2>/dev/null && echo "${PRETTY_NAME:-?}")
+	major=$(pg_config --version 2>/dev/null | awk '{ split($2, v, "."); print v[1] }')
+	cat <<EOF
+# $title
+
+Written by \`$script\` (part of \`make bench\`; see [the index](README.md)). Every run is in \`build/bench/\`.
+
+| | |
+|---|---|
+| date | ${BENCH_T0:-?} to $BENCH_T1 |
+| commit | $rev |
+| CPU | $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ *//'), $(nproc) cores |
+| memory | $(awk '/^MemTotal:/ { printf "%.0f", $2 / 1048576 }' /proc/meminfo) GB |
+| kernel | $(uname -sr) |
+| Debian | $os ($(cat /etc/debian_version 2>/dev/null || echo ?)) |
+| PostgreSQL | $(pkg_ver "postgresql-${major:-?}") |
+| PostGIS | $(pkg_ver "postgresql-${major:-?}-postgis-3") |
+| GEOS | $(pkg_ver 'libgeos-c1*') |
+| SFCGAL | $(pkg_ver 'libsfcgal[0-9]*') |
+| CGAL | $(pkg_ver libcgal-dev) |
+| load average (1, 5, 15 min) | ${BENCH_LOAD0:-?} before, $BENCH_LOAD1 after |
+| other processes over 20% of a CPU | before: ${BENCH_BUSY0:-?}; after: $BENCH_BUSY1 |
+EOF
+}
+
+# bench_publish NAME TITLE TXT [text]: $BENCH_DOCS/NAME.md, the shared header
+# then the tables in TXT as the script printed them ("text": fixed-width
+# tables, put in a code block)
+bench_publish() {
+	local name=$1 title=$2 txt=$3 kind=${4:-md} out
+	mkdir -p "$BENCH_DOCS"
+	out=$BENCH_DOCS/$name.md
+	{
+		bench_header "$title" "bench/$(basename "$0")"
+		echo
+		if [ "$kind" = text ]; then
+			echo '```text'
+			cat "$txt"
+			echo '```'
+		else
+			cat "$txt"
+		fi
+	} > "$out.tmp" && mv "$out.tmp" "$out"
+	log "wrote $out"
 }

@@ -25,13 +25,14 @@
 # CGAL (exact predicates) on the same coordinates: its finite-face count.
 #
 # Outputs: build/bench/sql_runs.csv, build/bench/sql.csv, build/bench/sql.txt,
-#          docs/bench.png (time vs n, log-log), docs/coast_tin.png.
+#          docs/benchmarks/sql.md (bench_publish's header, then sql.txt),
+#          docs/benchmarks/sql.png (time vs n, log-log), docs/benchmarks/coast_tin.png.
 # Knobs: BENCH_SQL_SIZES="1e4 1e5 1e6" BENCH_SQL_SETS="uniform clustered"
 #        BENCH_SQL_REPS_SMALL=5 (n <= 1e5) BENCH_SQL_REPS_MID=3 (n <= 1e6)
 #        BENCH_SQL_COAST=1  BENCH_SQL_PG_COAST=1 (try PostGIS on the coastlines)
 #        BENCH_SQL_TDC_COAST_AGG=1 (try the ST_TDCDelaunay aggregate there)
 #        BENCH_SQL_HULLCHECK=1 (count unique vertices and hull vertices in SQL)
-#        BENCH_DOCS=DIR (where the PNGs go, default docs/)  BENCH_SQL_PLOT_ONLY=1 (replot from the CSVs)
+#        BENCH_DOCS=DIR (where the report and PNGs go, default docs/benchmarks/)  BENCH_SQL_PLOT_ONLY=1 (replot from the CSVs)
 set -euo pipefail
 
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
@@ -48,7 +49,7 @@ TDC_COAST_AGG=${BENCH_SQL_TDC_COAST_AGG:-1}
 HULLCHECK=${BENCH_SQL_HULLCHECK:-1}
 TIMEOUT=${BENCH_SQL_TIMEOUT:-600}
 RELOAD=${BENCH_SQL_RELOAD:-0}
-DOCS=${BENCH_DOCS:-$ROOT/docs}
+DOCS=$BENCH_DOCS
 
 mkdir -p "$BENCH_OUT" "$DOCS"
 RUNS=$BENCH_OUT/sql_runs.csv
@@ -94,9 +95,9 @@ END $$;
 EOF
 
 # ---------------------------------------------------------------- plots
-# make_plots: docs/bench.png from sql.csv/sql_runs.csv, docs/coast_tin.png from the server
+# make_plots: $DOCS/sql.png from sql.csv/sql_runs.csv, $DOCS/coast_tin.png from the server
 make_plots() {
-	log "plotting $DOCS/bench.png"
+	log "plotting $DOCS/sql.png"
 	for tool in tdc tdc_1t postgis; do
 		for k in $SETS; do
 			awk -F, -v k="$k" -v t="$tool" 'NR > 1 && $4 == t && index($1, k "_") == 1 && $6 != "-" { print $2, $6 }' "$CSV" > "$WORK/$tool.$k.dat"
@@ -123,7 +124,7 @@ make_plots() {
 	if [ ${#plotcmds[@]} -gt 0 ]; then
 		{
 			echo "set terminal pngcairo size 900,600 font 'DejaVu Sans,11'"
-			echo "set output '$DOCS/bench.png'"
+			echo "set output '$DOCS/sql.png'"
 			echo "set logscale xy"
 			echo "set format x '10^{%L}'"
 			echo "set xlabel 'points n'"
@@ -282,6 +283,7 @@ timed() {
 TDC_Q='SELECT ST_NumGeometries(ST_TDCDelaunay(geom)) FROM bench.%s'
 PG_Q='SELECT ST_NumGeometries(ST_DelaunayTriangles(ST_Collect(geom))) FROM bench.%s'
 
+bench_begin
 for s in "${PT_SETS[@]}"; do
 	n=$(table_rows "bench.$s")
 	reps=1
@@ -322,6 +324,7 @@ if [ "$COAST" = 1 ]; then
 	if [ "$PG_COAST" = 1 ]; then
 		timed coastlines "$n" postgis 1 "" "$(printf "$PG_Q" coastlines)"
 	fi
+	bench_end
 	if [ "$HULLCHECK" = 1 ]; then
 		log "coastlines: unique vertices and convex-hull vertices (collinear ones included) in SQL"
 		sql -F ' ' > "$WORK/hull" <<'EOF' || log "hull check failed"
@@ -337,6 +340,8 @@ EOF
 	fi
 fi
 
+[ -n "${BENCH_T1:-}" ] || bench_end
+
 # ---------------------------------------------------------------- tables
 med() {	# SET TOOL FIELD(ms)
 	awk -F, -v s="$1" -v t="$2" '$1 == s && $3 == t && $7 == "ok" { print $5 }' "$RUNS" | median
@@ -348,10 +353,8 @@ sec() { awk -v x="$1" 'BEGIN { if (x == "") print "-"; else printf "%.3f\n", x /
 
 echo "set,n,exact_triangles,tool,runs,median_s,min_s,max_s,triangles,triangles_exact,status" > "$CSV"
 {
-	echo "# tdc_delaunay SQL benchmark, $(date -u '+%Y-%m-%d %H:%M UTC')"
 	echo "# server: $(sql -c "SELECT split_part(version(), ' on ', 1)"), PostGIS $(sql -c "SELECT extversion FROM pg_extension WHERE extname = 'postgis'") (GEOS $(sql -c "SELECT split_part(postgis_geos_version(), '-', 1)")), tdc_delaunay $(sql -c "SELECT coalesce((SELECT extversion FROM pg_extension WHERE extname = 'tdc_delaunay'), 'absent')")"
-	echo "# tree: git $(git -C "$ROOT" rev-parse --short HEAD 2>/dev/null || echo '?'); tdc_delaunay.so installed $(date -u -r "$(pg_config --pkglibdir 2>/dev/null)/tdc_delaunay.so" '+%H:%M UTC' 2>/dev/null || echo '?') (if this server uses that pkglibdir)"
-	echo "# host: $(nproc) CPUs, load average at report: $(cut -d' ' -f1-3 /proc/loadavg); shared_buffers=$(sql -c 'SHOW shared_buffers') work_mem=$(sql -c 'SHOW work_mem'); statement_timeout=${TIMEOUT}s"
+	echo "# shared_buffers=$(sql -c 'SHOW shared_buffers') work_mem=$(sql -c 'SHOW work_mem'); statement_timeout=${TIMEOUT}s"
 	echo "# times: server-side (clock_timestamp around EXECUTE), medians; tdc = all CPUs, tdc_1t = tdc_delaunay.threads=1, postgis = ST_DelaunayTriangles(ST_Collect(geom)),"
 	echo "#        collect = ST_Collect(geom) alone (cost of reading + aggregating the input, a floor for both)"
 	echo "# exact = 2n-2-h from CGAL (exact predicates) on the same coordinates"
@@ -404,4 +407,8 @@ fi
 
 make_plots
 ls -l "$DOCS"/*.png 2>/dev/null >&2 || true
+bench_publish sql "Aggregates in SQL: tdc_delaunay against PostGIS on uniform, clustered and coastline points" "$TXT" text
+for png in sql.png coast_tin.png; do
+	[ -s "$DOCS/$png" ] && printf '\n![%s](%s)\n' "${png%.png}" "$png" >> "$DOCS/sql.md"
+done
 log "wrote $CSV, $RUNS, $TXT"

@@ -42,8 +42,10 @@
 # Outputs: build/bench/sweep_runs.csv  every run (rep <= 0: warm-up)
 #          build/bench/sweep.csv       medians, PostGIS/ours ratio, time per call
 #          build/bench/sweep.txt       header + Markdown table (for the README)
-#          docs/sweep.png              log-log time per call vs points per call,
-#                                      and the ratio (quick mode: build/bench/sweep.png)
+#          docs/benchmarks/sweep.md    the report: bench_publish's header + that table
+#          docs/benchmarks/sweep.png   log-log time per call vs points per call,
+#                                      and the ratio (quick mode: build/bench/sweep.png,
+#                                      and no report)
 # Knobs:   BENCH_SWEEP_REPS=5  BENCH_SWEEP_WORKLOADS="row group agg"
 #          BENCH_SWEEP_MAX_N (skip cells with more points per call; e.g. 1e5)
 #          BENCH_SWEEP_QUICK=1 (3 reps, at most 1e3 points per call: to try it out)
@@ -86,8 +88,7 @@ ROW_SIZES=${BENCH_SWEEP_ROW_SIZES:-"3:10000 5:10000 10:10000 20:10000 100:2000 1
 [ "$BIG" = 1 ] && [ -z "${BENCH_SWEEP_ROW_SIZES:-}" ] && ROW_SIZES="$ROW_SIZES 5e6:1"
 GROUP_SIZES=${BENCH_SWEEP_GROUP_SIZES:-"3:1000 10:1000 30:1000 100:1000 1000:100 1e4:10"}
 AGG_SIZES=${BENCH_SWEEP_AGG_SIZES:-"3 10 100 1e3 1e4 1e5 1e6 1e7"}
-DOCS=${BENCH_DOCS:-$ROOT/docs}
-if [ "$QUICK" = 1 ]; then PNG=${BENCH_SWEEP_PNG:-$BENCH_OUT/sweep.png}; else PNG=${BENCH_SWEEP_PNG:-$DOCS/sweep.png}; fi
+if [ "$QUICK" = 1 ]; then PNG=${BENCH_SWEEP_PNG:-$BENCH_OUT/sweep.png}; else PNG=${BENCH_SWEEP_PNG:-$BENCH_DOCS/sweep.png}; fi
 S=bench_sweep
 
 mkdir -p "$BENCH_OUT" "$(dirname "$PNG")"
@@ -302,7 +303,7 @@ done
 # afresh, so a make install during the run would mix two builds in the table.
 SO=$(pg_config --pkglibdir 2>/dev/null)/tdc_delaunay.so
 SO_START=$(so_id)
-LOAD_START=$(cut -d' ' -f1-3 /proc/loadavg)
+bench_begin
 echo "workload,k,calls,points,system,rep,ms,result,status,message,plan" > "$RUNS"
 
 # run_cell WORKLOAD K CALLS: one psql session, warm-up then REPS interleaved runs
@@ -358,7 +359,7 @@ for cell in "${CELLS[@]}"; do
 	# shellcheck disable=SC2086
 	run_cell $cell
 done
-LOAD_END=$(cut -d' ' -f1-3 /proc/loadavg)
+bench_end
 SO_END=$(so_id)
 [ "$SO_START" = "$SO_END" ] || log "WARNING: $SO changed during the run ($SO_START -> $SO_END)"
 
@@ -395,9 +396,6 @@ FIRST_TOUCH=$(first_touch_note)
 THREADS=$(sql -c "SELECT ST_TDCDelaunayTriangles('MULTIPOINT(0 0,1 0,0 1)') IS NOT NULL" -c "SELECT current_setting('tdc_delaunay.threads', true)" | tail -1)
 setting() { sql -c "$SET_SQL" -c "SELECT current_setting('$1', true)" | tail -1; }
 {
-	echo "### Size sweep: tdc_delaunay vs PostGIS, $(date -u '+%Y-%m-%d %H:%M UTC')"
-	echo
-	echo "- machine: $(nproc) CPUs ($(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ *//')), $(free -g | awk '/Mem:/ { print $2 }') GB RAM; load average $LOAD_START at start, $LOAD_END at end"
 	echo "- $FIRST_TOUCH"
 	echo "- server: $PG_VER, PostGIS $PGIS_VER, GEOS $GEOS_VER, tdc_delaunay $TDC_VER (git $(git -C "$ROOT" rev-parse --short HEAD 2>/dev/null || echo '?'); $SO: $SO_START)"
 	if [ "$SO_START" != "$SO_END" ]; then
@@ -470,6 +468,10 @@ done
 	for n in "${NOTES[@]}"; do echo "- $n"; done
 } >> "$TXT"
 
-cat "$TXT"
 make_plot
+if [ "$QUICK" != 1 ]; then
+	[ -s "$PNG" ] && printf '\n![time per call and ratio against points per call](%s)\n' "$(basename "$PNG")" >> "$TXT"
+	bench_publish sweep "Size sweep in SQL: tdc_delaunay against PostGIS, 3 to 10^7 points per call" "$TXT"
+fi
+cat "$TXT"
 log "wrote $RUNS, $CSV, $TXT, $PNG"

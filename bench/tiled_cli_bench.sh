@@ -18,9 +18,9 @@
 # the same, whether the peak RSS stayed within 2000 MB and whether the
 # triangle counts agree, and deletes the 1.6 GB input.
 #
-# The header gives the date, machine, git revision and the load average; the
-# footer the load average at the end.  On a loaded machine the ratios mean
-# more than the times.
+# The report, docs/benchmarks/tiled.md, starts with bench_publish's header
+# (date, commit, machine, load).  On a loaded machine the ratios mean more
+# than the times.
 #
 # Environment knobs:
 #   BENCH_TILED_N=1e7          points of the main case (a gen_points count label)
@@ -38,8 +38,8 @@
 #                              free memory for its one-shot run, skipped if not)
 #   BENCH_TILED_100M_LIMIT=2000
 #   BENCH_TIMEOUT=1800         seconds per single run
-# Output: stdout, and build/bench/tiled_cli.txt (the same), tiled_cli_runs.csv
-# (every run).
+# Output: stdout, build/bench/tiled_cli.txt (the same), tiled_cli_runs.csv
+# (every run), and docs/benchmarks/tiled.md.
 set -euo pipefail
 
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
@@ -76,11 +76,7 @@ exec > >(tee "$TXT")
 TEE_PID=$!
 
 loadavg() { cut -d' ' -f1-3 /proc/loadavg; }
-rev=$(git -C "$ROOT" rev-parse --short HEAD 2>/dev/null || echo unknown)
-git -C "$ROOT" diff --quiet HEAD 2>/dev/null || rev="$rev+uncommitted"
-echo "tiled_cli_bench: $(date -u '+%Y-%m-%d %H:%M:%S UTC'), git $rev"
-echo "machine: $(nproc) CPUs ($(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ *//')), $(free -g | awk '/Mem:/ { print $2 }') GB RAM, $(uname -sr)"
-echo "load at start: $(loadavg)"
+bench_begin
 echo "runs: ./tdc -t $THREADS --stats, output: $OUTPUT$([ "$OUTPUT" = none ] && echo ' (no -o: the triangulation alone)'), tiles in $TMPD"
 echo "timing: whole process, GNU time (wall, user+sys CPU, peak RSS); medians of $REPS alternating rounds"
 
@@ -216,7 +212,7 @@ if [ "$BIG" = 1 ]; then
 		[ -z "$rss" ] || echo "peak RSS of --max-memory $BIG_LIMIT: $rss MB, $(awk -v r="$rss" -v l="$BIG_LIMIT" 'BEGIN { print (r <= l ? "within" : "OVER") }') the limit; triangles $(distinct "mm$BIG_LIMIT" "$BN" triangles) (2n - 2 - h for n distinct points with h on the hull)"
 	fi
 fi
-echo
-echo "load at end: $(loadavg), $(date -u '+%Y-%m-%d %H:%M:%S UTC')"
 exec >&-
 wait "$TEE_PID" 2>/dev/null || true
+bench_end
+bench_publish tiled "Tiles: ./tdc one-shot against ./tdc --max-memory" "$TXT" text

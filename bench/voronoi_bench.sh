@@ -134,8 +134,7 @@ done
 
 SO=$(pg_config --pkglibdir 2>/dev/null)/tdc_delaunay.so
 SO_START=$(so_id)
-LOAD_START=$(cut -d' ' -f1-3 /proc/loadavg)
-DATE_START=$(date -u '+%Y-%m-%d %H:%M UTC')
+bench_begin
 echo "n,form,system,rep,ms,result,status,message,plan" > "$RUNS"
 
 # run_size N: one session; warm-up, then REPS rounds of every statement
@@ -191,7 +190,7 @@ run_size() {
 for n in "${SIZE_NS[@]}"; do
 	run_size "$n"
 done
-LOAD_END=$(cut -d' ' -f1-3 /proc/loadavg)
+bench_end
 SO_END=$(so_id)
 [ "$SO_START" = "$SO_END" ] || log "WARNING: $SO changed during the run ($SO_START -> $SO_END)"
 
@@ -214,9 +213,6 @@ setting() { sql -c "$SET_SQL" -c "SELECT current_setting('$1', true)" | tail -1;
 
 echo "n,form,system,median_ms,min_ms,max_ms,runs,geos_over_this,result,expected_result,status,plan" > "$CSV"
 {
-	echo "### Voronoi diagrams: tdc_delaunay vs PostGIS, $DATE_START"
-	echo
-	echo "- machine: $(nproc) CPUs ($(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ *//')), $(free -g | awk '/Mem:/ { print $2 }') GB RAM; load average $LOAD_START at start, $LOAD_END at end"
 	echo "- server: $PG_VER, PostGIS $PGIS_VER, GEOS $GEOS_VER, tdc_delaunay $TDC_VER (git $(git -C "$ROOT" rev-parse --short HEAD 2>/dev/null || echo '?'); $SO: $SO_START)"
 	if [ "$SO_START" != "$SO_END" ]; then
 		echo "- **WARNING: tdc_delaunay.so was replaced during the run ($SO_START -> $SO_END): the figures mix two builds; run again.**"
@@ -272,5 +268,6 @@ done
 	for note in "${NOTES[@]}"; do echo "- $note"; done
 } >> "$TXT"
 
+bench_publish voronoi "Voronoi diagrams in SQL: tdc_delaunay against PostGIS (GEOS)" "$TXT"
 cat "$TXT"
 log "wrote $RUNS, $CSV, $TXT"
