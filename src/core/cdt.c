@@ -218,36 +218,16 @@ orient(const tdc_cdt *c, uint32_t a, uint32_t b, uint32_t p)
 }
 
 /*
- * In-circle with merge.c's tie rule: is d inside the circle through the
- * counter-clockwise a, b, c, exact zeros decided by perturbing the lift of
- * the lexicographically smallest of the four distinct sites.
+ * In-circle with the merge's tie rule (the kernel's tdc_incircle_sos): is d
+ * inside the circle through the counter-clockwise a, b, c, exact zeros
+ * decided by perturbing the lift of the lexicographically smallest of the
+ * four distinct sites.
  */
-static bool
+static inline bool
 incircle_sos(const tdc_cdt *c, uint32_t a, uint32_t b, uint32_t cc, uint32_t d)
 {
-	const double *pa = tdc_pt(&c->m, a),
-			   *pb = tdc_pt(&c->m, b),
-			   *pc = tdc_pt(&c->m, cc),
-			   *pd = tdc_pt(&c->m, d),
-			   *low;
-	double		det = tdc_incircle(pa, pb, pc, pd);
-
-	if (det != 0)
-		return det > 0;
-	low = pa;
-	if (tdc_key_less(pb, low, 0))
-		low = pb;
-	if (tdc_key_less(pc, low, 0))
-		low = pc;
-	if (tdc_key_less(pd, low, 0))
-		low = pd;
-	if (low == pa)
-		return tdc_orient2d(pb, pc, pd) > 0;
-	if (low == pb)
-		return -tdc_orient2d(pa, pc, pd) > 0;
-	if (low == pc)
-		return tdc_orient2d(pa, pb, pd) > 0;
-	return -tdc_orient2d(pa, pb, pc) > 0;
+	return tdc_incircle_sos(tdc_pt(&c->m, a), tdc_pt(&c->m, b),
+							tdc_pt(&c->m, cc), tdc_pt(&c->m, d));
 }
 
 /*

@@ -24,7 +24,7 @@
  * lexicographically smaller sites).  The perturbed lift is in general
  * position, so T(S) is unique, and a triangle abc of S is in T(S) iff every
  * other site of S is strictly outside its circle or, exactly on it, loses
- * the perturbed in-circle test.  That test (incircle_tie) looks only at the
+ * the perturbed in-circle test.  That test (tdc_incircle_tie, predicates.c) looks only at the
  * coordinates of the four sites involved, never at S: it is the same in
  * every subset of P.
  *

@@ -151,6 +151,7 @@
 #include <string.h>
 #include <time.h>
 
+#include "exact.h"
 #include "job.h"
 
 #define SITES_PER_TASK	4096	/* cells built per task, and per cancel poll */
@@ -225,171 +226,6 @@ struct tdc_voronoi
 	char		err[256];
 };
 
-/* ----------------------------------------------------------------
- *		double-double arithmetic (error-free transformations)
- * ----------------------------------------------------------------
- */
-typedef struct dd
-{
-	double		hi,
-				lo;
-} dd;
-
-static inline dd
-two_sum(double a, double b)
-{
-	double		s = a + b;
-	double		bb = s - a;
-	double		e = (a - (s - bb)) + (b - bb);
-
-	return (dd) {s, e};
-}
-
-static inline dd
-fast_two_sum(double a, double b)
-{
-	double		s = a + b;
-
-	return (dd) {s, b - (s - a)};
-}
-
-/* Veltkamp split: exact unless |a| > 2^996, far beyond TDC_COORD_MAX^3. */
-static inline void
-split(double a, double *hi, double *lo)
-{
-	double		c = 134217729.0 * a;	/* 2^27 + 1 */
-	double		abig = c - a;
-
-	*hi = c - abig;
-	*lo = a - *hi;
-}
-
-static inline dd
-two_prod(double a, double b)
-{
-	double		p = a * b,
-				ah,
-				al,
-				bh,
-				bl;
-
-	split(a, &ah, &al);
-	split(b, &bh, &bl);
-	return (dd) {p, ((ah * bh - p) + ah * bl + al * bh) + al * bl};
-}
-
-static inline dd
-dd_add(dd a, dd b)
-{
-	dd			s = two_sum(a.hi, b.hi);
-	dd			t = two_sum(a.lo, b.lo);
-
-	s.lo += t.hi;
-	s = fast_two_sum(s.hi, s.lo);
-	s.lo += t.lo;
-	return fast_two_sum(s.hi, s.lo);
-}
-
-static inline dd
-dd_neg(dd a)
-{
-	return (dd) {-a.hi, -a.lo};
-}
-
-static inline dd
-dd_mul(dd a, dd b)
-{
-	dd			p = two_prod(a.hi, b.hi);
-
-	p.lo += a.hi * b.lo + a.lo * b.hi;
-	return fast_two_sum(p.hi, p.lo);
-}
-
-static inline dd
-dd_div(dd a, dd b)
-{
-	double		q1 = a.hi / b.hi;
-	dd			r = dd_add(a, dd_neg(dd_mul((dd) {q1, 0}, b)));
-	double		q2 = r.hi / b.hi;
-
-	r = dd_add(r, dd_neg(dd_mul((dd) {q2, 0}, b)));
-	return dd_add(fast_two_sum(q1, q2), (dd) {r.hi / b.hi, 0});
-}
-
-/*
- * Exact expansions (Shewchuk, "Adaptive precision floating-point arithmetic
- * and fast robust geometric predicates", 1997): a value as a sum of
- * nonoverlapping doubles in increasing magnitude, zeros dropped.  Used only
- * by the circumcenter's exact path, so kept simple: every sum grows one
- * component at a time (quadratic, on at most 128 components).
- */
-
-#define CC_EXP_MAX	160			/* parts of 2 a D + N, at most */
-
-/* h = e + b; h has room for elen + 1; returns the length of h. */
-static int
-exp_grow(int elen, const double *e, double b, double *h)
-{
-	int			n = 0;
-	double		q = b;
-
-	for (int i = 0; i < elen; i++)
-	{
-		dd			s = two_sum(q, e[i]);
-
-		if (s.lo != 0)
-			h[n++] = s.lo;
-		q = s.hi;
-	}
-	if (q != 0)
-		h[n++] = q;
-	return n;
-}
-
-/* e += sign * (f * g), in place; e has room for elen + 2 * flen * glen. */
-static int
-exp_add_product(int elen, double *e, int flen, const double *f, int glen,
-				const double *g, double sign)
-{
-	double		t[CC_EXP_MAX + 1];
-
-	for (int i = 0; i < flen; i++)
-		for (int j = 0; j < glen; j++)
-		{
-			dd			p = two_prod(f[i], g[j]);
-
-			elen = exp_grow(elen, e, sign * p.lo, t);
-			memcpy(e, t, elen * sizeof(double));
-			elen = exp_grow(elen, e, sign * p.hi, t);
-			memcpy(e, t, elen * sizeof(double));
-		}
-	return elen;
-}
-
-/* The expansion rounded to double-double: summed from its smallest part. */
-static dd
-exp_to_dd(int elen, const double *e)
-{
-	dd			s = {0, 0};
-
-	for (int i = 0; i < elen; i++)
-		s = dd_add(s, (dd) {e[i], 0});
-	return s;
-}
-
-/* x as an expansion of at most 2 parts, increasing */
-static int
-dd_exp(dd x, double *e)
-{
-	int			n = 0;
-
-	if (x.lo != 0)
-		e[n++] = x.lo;
-	if (x.hi != 0)
-		e[n++] = x.hi;
-	return n;
-}
-
 /*
  * Circumcenter of the counter-clockwise, non-degenerate triangle a, b, c,
  * rounded once per coordinate (the bound is in the header comment).  The
@@ -401,7 +237,7 @@ dd_exp(dd x, double *e)
  * numerators of the coordinates themselves, 2 a D + N, are computed exactly
  * as expansions (the differences b - a and c - a are exact double-doubles,
  * so every product is a sum of exact two-products: at most 16 parts for D,
- * CC_EXP_MAX for a numerator) and rounded to double-double only for the
+ * TDC_EXP_PRODUCT_MAX for a numerator) and rounded to double-double only for the
  * division, so a coordinate near 0 keeps its own digits.  Without it, a
  * triangle 2^-250 thin (two sites 1e-37 apart under a third at 1e40:
  * fuzz/known/voronoi_box_exit_side) lost D entirely, divided by zero and
@@ -515,7 +351,7 @@ circumcenter_fast(const double *a, const double *b, const double *c,
 		double		u = n[k] / (2 * d),
 					q = 0x1.c1p-51 * pn[k] / (2 * fabs(d)),
 					eu = 1.01 * (q + (ed / fabs(d)) * (fabs(u) + q) + 0x1.01p-53 * fabs(u)) + 0x1p-1000;
-		dd			s = two_sum(a[k], u);
+		dd			s = dd_two_sum(a[k], u);
 
 		/* NaN fails every comparison */
 		if (!(fabs(s.hi) >= 0x1p-900 && fabs(s.hi) < INFINITY &&
@@ -543,10 +379,10 @@ static void
 circumcenter_careful(const double *a, const double *b, const double *c,
 						 double out[2])
 {
-	dd			bx = two_sum(b[0], -a[0]),
-				by = two_sum(b[1], -a[1]),
-				cx = two_sum(c[0], -a[0]),
-				cy = two_sum(c[1], -a[1]);
+	dd			bx = dd_two_sum(b[0], -a[0]),
+				by = dd_two_sum(b[1], -a[1]),
+				cx = dd_two_sum(c[0], -a[0]),
+				cy = dd_two_sum(c[1], -a[1]);
 	dd			bb = dd_add(dd_mul(bx, bx), dd_mul(by, by));
 	dd			cc = dd_add(dd_mul(cx, cx), dd_mul(cy, cy));
 	dd			d = dd_add(dd_mul(bx, cy), dd_neg(dd_mul(by, cx)));
@@ -584,7 +420,7 @@ circumcenter_careful(const double *a, const double *b, const double *c,
 					eb[16],
 					ec[16],
 					ed[16],
-					en[CC_EXP_MAX];
+					en[TDC_EXP_PRODUCT_MAX];
 		int			nex = dd_exp(bx, ex),
 					ney = dd_exp(by, ey),
 					nfx = dd_exp(cx, fx),
@@ -594,23 +430,23 @@ circumcenter_careful(const double *a, const double *b, const double *c,
 					nd,
 					nn;
 
-		nb = exp_add_product(0, eb, nex, ex, nex, ex, 1);
-		nb = exp_add_product(nb, eb, ney, ey, ney, ey, 1);
-		nc = exp_add_product(0, ec, nfx, fx, nfx, fx, 1);
-		nc = exp_add_product(nc, ec, nfy, fy, nfy, fy, 1);
-		nd = exp_add_product(0, ed, nex, ex, nfy, fy, 1);
-		nd = exp_add_product(nd, ed, ney, ey, nfx, fx, -1);
-		d = exp_to_dd(nd, ed);
+		nb = expansion_add_product(0, eb, nex, ex, nex, ex, 1);
+		nb = expansion_add_product(nb, eb, ney, ey, ney, ey, 1);
+		nc = expansion_add_product(0, ec, nfx, fx, nfx, fx, 1);
+		nc = expansion_add_product(nc, ec, nfy, fy, nfy, fy, 1);
+		nd = expansion_add_product(0, ed, nex, ex, nfy, fy, 1);
+		nd = expansion_add_product(nd, ed, ney, ey, nfx, fx, -1);
+		d = expansion_to_dd(nd, ed);
 		d2 = (dd) {2 * d.hi, 2 * d.lo};
 		/* x = (2 ax D + Nx) / 2D: a coordinate near 0 keeps its own digits */
-		nn = exp_add_product(0, en, nfy, fy, nb, eb, 1);
-		nn = exp_add_product(nn, en, ney, ey, nc, ec, -1);
-		nn = exp_add_product(nn, en, 1, two_a, nd, ed, 1);
-		out[0] = dd_div(exp_to_dd(nn, en), d2).hi;
-		nn = exp_add_product(0, en, nex, ex, nc, ec, 1);
-		nn = exp_add_product(nn, en, nfx, fx, nb, eb, -1);
-		nn = exp_add_product(nn, en, 1, two_a + 1, nd, ed, 1);
-		out[1] = dd_div(exp_to_dd(nn, en), d2).hi;
+		nn = expansion_add_product(0, en, nfy, fy, nb, eb, 1);
+		nn = expansion_add_product(nn, en, ney, ey, nc, ec, -1);
+		nn = expansion_add_product(nn, en, 1, two_a, nd, ed, 1);
+		out[0] = dd_div(expansion_to_dd(nn, en), d2).hi;
+		nn = expansion_add_product(0, en, nex, ex, nc, ec, 1);
+		nn = expansion_add_product(nn, en, nfx, fx, nb, eb, -1);
+		nn = expansion_add_product(nn, en, 1, two_a + 1, nd, ed, 1);
+		out[1] = dd_div(expansion_to_dd(nn, en), d2).hi;
 	}
 }
 
@@ -632,12 +468,6 @@ vor_fail(tdc_voronoi *v, int code, const char *msg)
 	if (atomic_compare_exchange_strong(&v->failed, &expected, code))
 		snprintf(v->task_err, sizeof(v->task_err), "%s", msg);
 	atomic_store(&v->cancel, 1);
-}
-
-static inline bool
-lex_less(const double *p, const double *q)
-{
-	return p[0] < q[0] || (p[0] == q[0] && p[1] < q[1]);
 }
 
 static inline const double *
@@ -701,9 +531,9 @@ triangle_vertex(const tdc_voronoi *v, const uint32_t s[3], double out[2])
 
 	for (int i = 0; i < 3; i++)
 		p[i] = site_pt(v, s[i]);
-	if (lex_less(p[1], p[k]))
+	if (tdc_lex_less(p[1], p[k]))
 		k = 1;
-	if (lex_less(p[2], p[k]))
+	if (tdc_lex_less(p[2], p[k]))
 		k = 2;
 	tdc_circumcenter(p[k], p[(k + 1) % 3], p[(k + 2) % 3], out);
 }
@@ -1063,15 +893,15 @@ corner_closer(const tdc_voronoi *v, int k, uint32_t s, uint32_t g)
 		double		d[2],
 					t1[2],
 					t2[3];
-		int			nd = dd_exp(two_sum(pg[i], -ps[i]), d),
-					n1 = dd_exp(two_sum(2 * c[i], -ps[i]), t1),
-					n2 = exp_grow(n1, t1, -pg[i], t2);
+		int			nd = dd_exp(dd_two_sum(pg[i], -ps[i]), d),
+					n1 = dd_exp(dd_two_sum(2 * c[i], -ps[i]), t1),
+					n2 = grow_expansion(n1, t1, -pg[i], t2);
 
-		n = exp_add_product(n, e, nd, d, n2, t2, 1);
+		n = expansion_add_product(n, e, nd, d, n2, t2, 1);
 	}
 	if (n > 0)
 		return e[n - 1] < 0;
-	return lex_less(ps, pg);
+	return tdc_lex_less(ps, pg);
 }
 
 /*
@@ -1134,7 +964,7 @@ clip_side(const tdc_voronoi *v, uint32_t site, const ring *in, ring *out,
 			 */
 			double		dp = fabs(p[axis] - c),
 						dq = fabs(q[axis] - c);
-			bool		p_first = dp < dq || (dp == dq && lex_less(p, q));
+			bool		p_first = dp < dq || (dp == dq && tdc_lex_less(p, q));
 			const double *a = p_first ? p : q,
 					   *b = p_first ? q : p;
 			int			o = 1 - axis;
@@ -1152,8 +982,8 @@ clip_side(const tdc_voronoi *v, uint32_t site, const ring *in, ring *out,
 				 */
 				const double *s0 = site_pt(v, site),
 						   *s1 = site_pt(v, g),
-						   *sa = lex_less(s0, s1) ? s0 : s1,
-						   *sb = lex_less(s0, s1) ? s1 : s0;
+						   *sa = tdc_lex_less(s0, s1) ? s0 : s1,
+						   *sb = tdc_lex_less(s0, s1) ? s1 : s0;
 				double		m[2] = {sa[0] * 0.5 + sb[0] * 0.5, sa[1] * 0.5 + sb[1] * 0.5};
 				double		da = sb[axis] - sa[axis],
 							dn = sb[o] - sa[o];
@@ -2122,7 +1952,7 @@ cmp_site(const void *x, const void *y, void *arg)
 	const double *p = site_pt(v, *(const uint32_t *) x),
 			   *q = site_pt(v, *(const uint32_t *) y);
 
-	return lex_less(p, q) ? -1 : lex_less(q, p) ? 1 : 0;
+	return tdc_lex_less(p, q) ? -1 : tdc_lex_less(q, p) ? 1 : 0;
 }
 
 
