@@ -36,7 +36,7 @@ extern double tdc_incircle_exact(const double *a, const double *b,
 
 /*
  * Exact sign (-1, 0 or +1) of |a - b|^2 - |c - d|^2, for the tolerance pass
- * (sites.c), which filters in double arithmetic first.  Exact when every
+ * (tolerance.c), which filters in double arithmetic first.  Exact when every
  * coordinate is 0 or of magnitude in [2^-252, 2^202]: a wider range than the
  * input's, so that a clamped tolerance can be passed as a point (t, 0).
  */
