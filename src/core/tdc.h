@@ -32,7 +32,7 @@
 #define TDC_ETOOBIG			(-4)	/* more points than the 32-bit index width allows */
 #define TDC_EMEMLIMIT		(-5)	/* would exceed options.max_memory */
 #define TDC_ETHREAD			(-6)	/* pthread_create failed */
-#define TDC_ECROSS			(-7)	/* two constraint segments cross (cdt.c) */
+#define TDC_ECROSS			(-7)	/* two constraint segments cross (cdt_insert.c) */
 
 /*
  * Largest input size: the mesh numbers half-edges with uint32_t and needs
@@ -319,7 +319,7 @@ extern void tdc_voronoi_default_env(const tdc_job *job, double env[4]);
 
 /*
  * Circumcenter of the counter-clockwise triangle a, b, c, computed in
- * double-double and rounded once (error bound in voronoi.c).
+ * double-double and rounded once (error bound in voronoi_geom.c).
  */
 extern void tdc_circumcenter(const double *a, const double *b, const double *c,
 							 double out[2]);
