@@ -93,7 +93,7 @@ typedef struct run_result
 	uint64_t	cell_hash;
 } run_result;
 
-/* Triangulate (with tolerance, to use the sites.c arrays too) and build the cells. */
+/* Triangulate (with tolerance, to use the tolerance.c arrays too) and build the cells. */
 static run_result
 run(const double *xy, size_t n, double tolerance, tdc_cache *cache)
 {

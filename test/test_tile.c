@@ -1,6 +1,6 @@
 /*
  * test_tile.c
- *		Tiled triangulation (tile.c): the union of the tiles' triangles must be
+ *		Tiled triangulation (tile_final.c): the union of the tiles' triangles must be
  *		the one-shot triangle set, triangle for triangle.
  *
  * The driver below is the caller's loop of tdc.h: every tile starts from the
@@ -818,7 +818,7 @@ test_weakened_check_is_caught(void)
 }
 
 /*
- * Deep sites (tile.c, mark_deep): a site whose neighbourhood of blocks has
+ * Deep sites (tile_final.c, mark_deep): a site whose neighbourhood of blocks has
  * no empty block has every circumdisk inside K, unless it is near K's side.
  * Uniform points with a round hole of radius 60 centred on x = 500; tile 0
  * owns the points left of x = 450 and is run with K reaching x = 520, so

@@ -1,6 +1,6 @@
 /*
  * test_tolerance.c
- *		The tolerance rule (sites.c) against an exact reference, and the cost
+ *		The tolerance rule (tolerance.c) against an exact reference, and the cost
  *		of the tolerance pass on inputs that used to make it slow.
  *
  * The rule: take the points in lexicographic (x, y) order, ties by input

@@ -1,6 +1,6 @@
 /*
  * test_voronoi.c
- *		The Voronoi cells of voronoi.c: the circumcenter against exact
+ *		The Voronoi cells (voronoi*.c): the circumcenter against exact
  *		rational arithmetic (GMP), and the cells' validity on uniform,
  *		clustered, lattice, collinear, duplicated, tiny, huge and
  *		border-touching inputs.

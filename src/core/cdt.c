@@ -2,50 +2,9 @@
  * cdt.c
  *		Constrained Delaunay triangulation: constraint segments inserted into
  *		a finished Delaunay triangulation, in place, with exact predicates.
- *
- * Method.  Segments are inserted one at a time by the edge
- * flipping scheme of Sloan (1993, "A fast algorithm for generating
- * constrained Delaunay triangulations", Computers & Structures 47(3)):
- *
- *	1. walk from the segment's first end point a towards its other end b
- *	   through the triangles the open segment crosses, listing the edges it
- *	   crosses properly;
- *	2. take listed edges in turn: an edge whose two triangles form a strictly
- *	   convex quadrilateral is flipped, and if the new diagonal still crosses
- *	   the segment it goes back to the end of the list, otherwise it is kept
- *	   aside as a new edge; an edge whose quadrilateral is not convex goes back
- *	   to the end of the list.  Sloan shows some listed edge always has a
- *	   convex quadrilateral, so the list empties and a-b is an edge;
- *	3. restore the Delaunay property by Lawson flips (incircle) among the new
- *	   edges only; the constraint itself is never flipped.
- *
- * Why only the new edges: inserting a-b changes the constrained Delaunay
- * triangulation (CDT) only inside the union of the triangles a-b crosses
- * (Anglada 1997, "An improved incremental algorithm for constructing
- * restricted Delaunay triangulations"), whose two halves are then
- * triangulated Delaunay-wise relative to the constraint.  Every flip stays
- * inside that region, and a triangulation of a polygon whose inner edges are
- * all locally Delaunay is its CDT (the constrained Delaunay lemma), which is
- * what Lawson's flips reach.
- *
- * Ties.  The in-circle test breaks exact cocircularity with the same
- * symbolic perturbation of the lifting map as merge.c (simulation of
- * simplicity on the lift, smaller sites lifted more), so the perturbed sites
- * admit exactly one CDT for a given set of segments: the result depends on
- * the site set and the constraint set only, not on the insertion order or the
- * thread count of the unconstrained triangulation.
- *
- * Rules for the segments (the endpoints are input indices; the job already
- * merged exact duplicates, so they are mapped to sites first):
- *	- both ends on the same site: ignored (zero length);
- *	- a site lying exactly on the open segment splits it there: the walk
- *	  meets that site (as the far end of an edge out of the current end, or
- *	  as the apex of a crossed triangle) and continues from it; no site is
- *	  ever created;
- *	- collinear overlaps: the shared stretch is already a chain of
- *	  constraint edges, found as existing edges by the walk;
- *	- a proper crossing with an earlier segment is found when the walk
- *	  would cross one of its edges: TDC_ECROSS, naming both segments.
+ *		This file shares the segments out (the parallel pass, then the
+ *		serial one) and runs them; the insertion of one segment, with its
+ *		method, ties and rules, is cdt_insert.c's.
  *
  * Parallel pass.  With at least PART_MIN_SEG segments, the sites are cut
  * into NPART vertical stripes of equal width (a function of the sites alone,
@@ -75,14 +34,6 @@
  * the first steps of its next segments ahead (part_task), so that several
  * misses are in flight at a time.
  *
- * Invariants between segments: the mesh is a triangulation of the convex
- * hull of the sites (hull edges are never crossed, so never flipped, so the
- * job's outer-face bitmap and triangle count stay right); every constraint
- * edge carries the smallest number (+ 1) of the segments that made it,
- * every other edge NO_SEG; vedge[s] is a half-edge leaving site s.  The
- * number of edges never changes (a flip keeps its edge slot), so the mesh
- * needs no memory.
- *
  * Memory: 4 bytes per edge slot for the constraint numbers (12 per point),
  * 4 per site for vedge, the job's input map (4 per input point), and the
  * serial lists of crossed and new edges, which start small and double up to
@@ -101,599 +52,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "job.h"
-
-/* cons[] holds segment number + 1, so that the zeroed array means "none" */
-#define NO_SEG		0					/* edge is no constraint */
-#define CAV			UINT32_MAX			/* new edge of the current cavity */
-#define CAVQ		(UINT32_MAX - 1)	/* ... and on the Lawson stack */
-#define MAX_SEG		((size_t) UINT32_MAX - 3)
-#define POLL_STEPS	4096
-
-/*
- * The parallel pass: NPART vertical stripes of equal width over the sites'
- * x range, a number fixed so that the work, the mesh and the error reported
- * are the same for every thread count.  Below PART_MIN_SEG segments the
- * pass would cost more than it saves.
- */
-#define NPART		16
-#define PART_MIN_SEG 8192
-#define PART_CAP	4096			/* crossed edges a stripe's walk may list */
-#define LIST_MIN	4096			/* the serial lists' first size */
-#define SEG_SERIAL	0xfe			/* seg_part[]: ends in two stripes */
-#define SEG_NONE	0xff			/* ... both ends on one site */
-#define TDC_DEFER	1				/* insert_segment: leave it to the serial pass */
-
-/*
- * One inserter: the serial one (part < 0, any site), or the one of stripe
- * "part" in the parallel pass, which may only touch triangles whose three
- * corners lie in its stripe.  Each has its own lists, poll counter and
- * error, so inserters of different stripes share nothing they write.
- */
-typedef struct cdt_ctx
-{
-	struct tdc_cdt *c;
-	int			part;			/* stripe, or -1: serial */
-	uint32_t   *list;			/* crossed edges, used as a circular queue */
-	uint32_t   *fresh;			/* new edges, then the Lawson stack */
-	size_t		cap;
-	size_t		nconstraint;	/* constraint edges this inserter made */
-	size_t		ndone;			/* a stripe's: segments it inserted */
-	size_t		ndeferred;		/* ... and left to the serial pass */
-	size_t		cross[2];		/* the two segments of a TDC_ECROSS */
-	long		steps;
-	int			rc;
-	char		err[512];
-} cdt_ctx;
-
-struct tdc_cdt
-{
-	tdc_job    *job;
-	tdc_cache  *cache;			/* the job's, kept: the job may be freed first */
-	const uint32_t *seg;		/* caller's pairs of input indices */
-	size_t		nseg;
-	tdc_mesh	m;
-	uint32_t   *cons;			/* per edge slot: segment number + 1, or NO_SEG/CAV/CAVQ */
-	uint32_t   *vedge;			/* per site: a half-edge leaving it */
-	uint32_t   *list;			/* the serial inserter's lists (grow_lists) */
-	uint32_t   *fresh;
-	size_t		nslots;			/* edge slots: the most any list needs */
-	uint32_t   *part_lists;		/* the stripes' lists, PART_CAP each, 2 per stripe */
-	size_t		nconstraint;	/* constraint edges */
-	size_t		cross[2];		/* the two segments of a TDC_ECROSS */
-	size_t		npar_done;		/* segments the stripes inserted */
-	size_t		npar_deferred;	/* ... and left to the serial pass */
-	size_t		npar_serial;	/* segments with ends in two stripes */
-
-	/* the parallel pass (only for at least PART_MIN_SEG segments) */
-	uint8_t    *spart;			/* per site: its stripe (x_part) */
-	uint8_t    *seg_part;		/* per segment: its stripe, SEG_SERIAL or SEG_NONE */
-	uint8_t    *seg_done;		/* per segment: inserted by its stripe's inserter */
-	uint32_t   *order;			/* the segments of stripe 0, then of 1, ..., each in input order */
-	size_t		part_off[NPART + 2];	/* stripe k's: order[part_off[k] .. part_off[k + 1]);
-										 * k = NPART: those with ends in two stripes */
-	double		part_x0;		/* stripe of x: (x - part_x0) * part_scale */
-	double		part_scale;
-	cdt_ctx    *parts;			/* NPART inserters */
-	cdt_ctx		serial;
-
-	atomic_int	cancel;
-	bool		inline_run;
-	tdc_runner	run;			/* the job's lifecycle (runner.c) */
-	char		err[512];
-};
-
-static int	cdt_fail(cdt_ctx *x, int code, const char *fmt,...)
-			__attribute__((format(printf, 3, 4)));
-
-static int
-cdt_fail(cdt_ctx *x, int code, const char *fmt,...)
-{
-	va_list		ap;
-
-	va_start(ap, fmt);
-	vsnprintf(x->err, sizeof(x->err), fmt, ap);
-	va_end(ap);
-	return code;
-}
-
-static bool
-cdt_poll(cdt_ctx *x)
-{
-	if (++x->steps % POLL_STEPS != 0)
-		return false;
-	return atomic_load_explicit(&x->c->cancel, memory_order_relaxed) != 0;
-}
-
-static inline bool
-is_outer(const tdc_cdt *c, uint32_t h)
-{
-	return c->job->outer != NULL && ((c->job->outer[h >> 6] >> (h & 63)) & 1);
-}
-
-static inline double
-orient(const tdc_cdt *c, uint32_t a, uint32_t b, uint32_t p)
-{
-	return tdc_orient2d(tdc_pt(&c->m, a), tdc_pt(&c->m, b), tdc_pt(&c->m, p));
-}
-
-/*
- * In-circle with merge.c's tie rule: is d inside the circle through the
- * counter-clockwise a, b, c, exact zeros decided by perturbing the lift of
- * the lexicographically smallest of the four distinct sites.
- */
-static bool
-incircle_sos(const tdc_cdt *c, uint32_t a, uint32_t b, uint32_t cc, uint32_t d)
-{
-	const double *pa = tdc_pt(&c->m, a),
-			   *pb = tdc_pt(&c->m, b),
-			   *pc = tdc_pt(&c->m, cc),
-			   *pd = tdc_pt(&c->m, d),
-			   *low;
-	double		det = tdc_incircle(pa, pb, pc, pd);
-
-	if (det != 0)
-		return det > 0;
-	low = pa;
-	if (tdc_key_less(pb, low, 0))
-		low = pb;
-	if (tdc_key_less(pc, low, 0))
-		low = pc;
-	if (tdc_key_less(pd, low, 0))
-		low = pd;
-	if (low == pa)
-		return tdc_orient2d(pb, pc, pd) > 0;
-	if (low == pb)
-		return -tdc_orient2d(pa, pc, pd) > 0;
-	if (low == pc)
-		return tdc_orient2d(pa, pb, pd) > 0;
-	return -tdc_orient2d(pa, pb, pc) > 0;
-}
-
-/*
- * p lies exactly on the line of a-b: is it on the same side of a as b?
- * Coordinate comparisons only, so exact.
- */
-static bool
-same_dir(const tdc_cdt *c, uint32_t a, uint32_t p, uint32_t b)
-{
-	const double *pa = tdc_pt(&c->m, a),
-			   *pp = tdc_pt(&c->m, p),
-			   *pb = tdc_pt(&c->m, b);
-
-	if (pb[0] != pa[0])
-		return (pp[0] > pa[0]) == (pb[0] > pa[0]) && pp[0] != pa[0];
-	return (pp[1] > pa[1]) == (pb[1] > pa[1]) && pp[1] != pa[1];
-}
-
-/* The stripe of site v: a function of its x alone, never of the threads. */
-static inline int
-site_part(const tdc_cdt *c, uint32_t v)
-{
-	return c->spart[v];
-}
-
-/* The stripe of an x coordinate. */
-static inline uint8_t
-x_part(const tdc_cdt *c, double x)
-{
-	double		t = (x - c->part_x0) * c->part_scale;
-
-	if (!(t > 0))
-		return 0;
-	if (t >= NPART)
-		return NPART - 1;
-	return (uint8_t) t;
-}
-
-/* May inserter x touch site v?  The serial one any, a stripe's its own. */
-static inline bool
-owns(const cdt_ctx *x, uint32_t v)
-{
-	return x->part < 0 || site_part(x->c, v) == x->part;
-}
-
-/*
- * Flip edge h, the diagonal of the strictly convex quadrilateral of its two
- * triangles, to the other diagonal (Guibas & Stolfi's Swap).  The edge slot
- * stays; vedge[] of h's old ends moves to edges that still leave them.
- */
-static void
-flip(tdc_cdt *c, uint32_t h)
-{
-	tdc_mesh   *m = &c->m;
-	uint32_t	a = tdc_oprev(m, h),
-				b = tdc_oprev(m, SYM(h)),
-				u = tdc_org(m, h),
-				v = tdc_dest(m, h);
-
-	if (c->vedge[u] == h)
-		c->vedge[u] = a;
-	if (c->vedge[v] == SYM(h))
-		c->vedge[v] = b;
-	tdc_splice(m, h, a);
-	tdc_splice(m, SYM(h), b);
-	tdc_splice(m, h, tdc_lnext(m, a));
-	tdc_splice(m, SYM(h), tdc_lnext(m, b));
-	m->he[h].org = tdc_dest(m, a);
-	m->he[SYM(h)].org = tdc_dest(m, b);
-}
-
-static const double *
-input_xy(const tdc_cdt *c, size_t i)
-{
-	return c->job->input + 2 * i;
-}
-
-static int
-crossing_error(cdt_ctx *x, size_t s1, size_t s2)
-{
-	const tdc_cdt *c = x->c;
-	const double *a = input_xy(c, c->seg[2 * s2]),
-			   *b = input_xy(c, c->seg[2 * s2 + 1]),
-			   *p = input_xy(c, c->seg[2 * s1]),
-			   *q = input_xy(c, c->seg[2 * s1 + 1]);
-
-	x->cross[0] = s2;
-	x->cross[1] = s1;
-	return cdt_fail(x, TDC_ECROSS,
-					"constraint segments cross: segment %zu from (%.17g %.17g) to (%.17g %.17g) and segment %zu from (%.17g %.17g) to (%.17g %.17g)",
-					s2, a[0], a[1], b[0], b[1], s1, p[0], p[1], q[0], q[1]);
-}
-
-static int
-internal_error(cdt_ctx *x, size_t s, const char *what)
-{
-	return cdt_fail(x, TDC_EINVAL, "internal error inserting segment %zu: %s", s, what);
-}
-
-/*
- * Sloan's step 2 on the n crossed edges in x->list (a circular queue) for
- * the piece a-e: afterwards a-e is an edge, and x->fresh holds the *nfresh
- * other edges made here, all inside the region the piece crossed.
- */
-static int
-remove_crossings(cdt_ctx *x, size_t s, uint32_t a, uint32_t e, size_t n,
-				 size_t *nfresh)
-{
-	tdc_cdt    *c = x->c;
-	tdc_mesh   *m = &c->m;
-	size_t		head = 0,
-				count = n,
-				idle = 0;
-
-	*nfresh = 0;
-	while (count > 0)
-	{
-		uint32_t	h = 2 * x->list[head],
-					u = tdc_org(m, h),
-					v = tdc_dest(m, h),
-					p = tdc_dest(m, tdc_lnext(m, h)),
-					q = tdc_dest(m, tdc_lnext(m, SYM(h)));
-		double		ou = orient(c, p, q, u),
-					ov = orient(c, p, q, v);
-
-		head = (head + 1) % x->cap;
-		count--;
-		if (cdt_poll(x))
-			return TDC_ECANCELED;
-		if ((ou > 0 && ov < 0) || (ou < 0 && ov > 0))
-		{
-			double		op,
-						oq;
-
-			flip(c, h);
-			idle = 0;
-			op = orient(c, a, e, p);
-			oq = orient(c, a, e, q);
-			if ((op > 0 && oq < 0) || (op < 0 && oq > 0))
-			{
-				x->list[(head + count) % x->cap] = h >> 1;
-				count++;
-			}
-			else
-				x->fresh[(*nfresh)++] = h >> 1;
-		}
-		else
-		{
-			x->list[(head + count) % x->cap] = h >> 1;
-			count++;
-			/* Sloan: some quadrilateral is always convex; never loop */
-			if (++idle > count)
-				return internal_error(x, s, "no crossed edge can be flipped");
-		}
-	}
-	return TDC_OK;
-}
-
-/*
- * Lawson's flips among the n new edges of a cavity, marked CAV in cons[];
- * the constraint and the cavity's border are not listed, so never flipped.
- */
-static int
-restore_delaunay(cdt_ctx *x, size_t n)
-{
-	tdc_cdt    *c = x->c;
-	tdc_mesh   *m = &c->m;
-	size_t		top = n;
-
-	for (size_t i = 0; i < n; i++)
-		c->cons[x->fresh[i]] = CAVQ;
-	while (top > 0)
-	{
-		uint32_t	e = x->fresh[--top],
-					h = 2 * e,
-					u = tdc_org(m, h),
-					v = tdc_dest(m, h),
-					p = tdc_dest(m, tdc_lnext(m, h)),
-					q = tdc_dest(m, tdc_lnext(m, SYM(h)));
-
-		c->cons[e] = CAV;
-		if (cdt_poll(x))
-			return TDC_ECANCELED;
-		if (incircle_sos(c, u, v, p, q))
-		{
-			uint32_t	around[4];
-
-			flip(c, h);
-			around[0] = tdc_lnext(m, h);
-			around[1] = tdc_lnext(m, around[0]);
-			around[2] = tdc_lnext(m, SYM(h));
-			around[3] = tdc_lnext(m, around[2]);
-			for (int k = 0; k < 4; k++)
-			{
-				uint32_t	f = around[k] >> 1;
-
-				if (c->cons[f] == CAV)
-				{
-					c->cons[f] = CAVQ;
-					x->fresh[top++] = f;
-				}
-			}
-		}
-	}
-	return TDC_OK;
-}
-
-/*
- * Is there an edge a-b?  Returns a half-edge a->b or TDC_NIL.  Each step
- * around a is a cache miss (a's edges lie anywhere in the mesh), and this is
- * most of the insertion's time for contour lines, whose segments are mostly
- * edges already.  So it turns both ways at once, Onext from one side and
- * Oprev from the other: the two chains of loads do not depend on each other,
- * and the one that meets b is about half as long as a one-way turn (1M
- * contour segments: 3.6 half-edges looked at per segment one way, all in a
- * chain).  The half-edge a->b is unique, so the answer is the same.
- */
-static uint32_t
-find_edge(const tdc_cdt *c, uint32_t a, uint32_t b)
-{
-	const tdc_mesh *m = &c->m;
-	uint32_t	f = c->vedge[a],
-				r = f;
-
-	if (tdc_dest(m, f) == b)
-		return f;
-	for (;;)
-	{
-		f = tdc_onext(m, f);
-		if (f == r)
-			return TDC_NIL;		/* all of the ring seen */
-		if (tdc_dest(m, f) == b)
-			return f;
-		r = tdc_oprev(m, r);
-		if (r == f)
-			return TDC_NIL;
-		if (tdc_dest(m, r) == b)
-			return r;
-	}
-}
-
-/*
- * Edge h is (part of) segment s.  An edge covered by several segments keeps
- * the smallest number, so the numbers do not depend on which inserter came
- * first.
- */
-static void
-mark(cdt_ctx *x, uint32_t h, size_t s)
-{
-	uint32_t   *k = &x->c->cons[h >> 1];
-
-	if (*k == NO_SEG)
-	{
-		*k = (uint32_t) s + 1;
-		x->nconstraint++;
-	}
-	else if (*k > (uint32_t) s + 1)
-		*k = (uint32_t) s + 1;
-}
-
-/*
- * The serial inserter's lists start small (most segments cross few edges)
- * and double when a walk fills them, up to one entry per edge, so that a
- * million segments do not fault in 24 bytes a point they never use.  A
- * stripe's lists are fixed: a longer walk is left to the serial pass.
- */
-static int
-grow_lists(cdt_ctx *x, size_t s)
-{
-	tdc_cdt    *c = x->c;
-	size_t		cap = 2 * x->cap < c->nslots ? 2 * x->cap : c->nslots;
-	uint32_t   *l,
-			   *f;
-
-	if (x->part >= 0)
-		return TDC_DEFER;
-	if (cap <= x->cap)
-		return internal_error(x, s, "more crossed edges than edges");
-	l = realloc(c->list, cap * sizeof(uint32_t));
-	if (l != NULL)
-		c->list = x->list = l;
-	f = l ? realloc(c->fresh, cap * sizeof(uint32_t)) : NULL;
-	if (f == NULL)
-		return cdt_fail(x, TDC_ENOMEM, "out of memory for the crossed edges of segment %zu", s);
-	c->fresh = x->fresh = f;
-	x->cap = cap;
-	return TDC_OK;
-}
-
-/*
- * Insert segment s from site a to site b (a != b), piece by piece.  A
- * stripe's inserter returns TDC_DEFER, before it changes anything of the
- * piece at hand, when that piece would touch a triangle with a corner
- * outside its stripe (or needs more crossed edges than its lists hold); the
- * pieces already in place stay, and the serial pass finds them as edges.
- */
-static int
-insert_segment(cdt_ctx *x, size_t s, uint32_t a, uint32_t b)
-{
-	tdc_cdt    *c = x->c;
-	tdc_mesh   *m = &c->m;
-
-	while (a != b)
-	{
-		uint32_t	g = c->vedge[a],
-					start = g,
-					t = TDC_NIL,
-					e = TDC_NIL;
-		size_t		n = 0,
-					nfresh;
-		int			rc;
-
-		/*
-		 * Most segments of contour-like input are Delaunay edges already:
-		 * look for a-b without a predicate first.
-		 */
-		g = find_edge(c, a, b);
-		if (g != TDC_NIL)
-		{
-			mark(x, g, s);
-			break;
-		}
-		g = start;
-
-		/* the edge out of a along a-b, or the triangle a-b leaves a into */
-		do
-		{
-			uint32_t	p = tdc_dest(m, g),
-						gn = tdc_onext(m, g);
-			double		o;
-
-			if (p == b)
-			{
-				e = b;
-				break;
-			}
-			o = orient(c, a, b, p);
-			if (o == 0 && same_dir(c, a, p, b))
-			{
-				e = p;			/* a site on the segment: split there */
-				break;
-			}
-			if (o < 0 && gn != g && !is_outer(c, g) &&
-				orient(c, a, b, tdc_dest(m, gn)) > 0)
-			{
-				t = tdc_lnext(m, g);
-				break;
-			}
-			g = gn;
-		} while (g != start);
-
-		if (e != TDC_NIL)
-		{
-			if (!owns(x, e))
-				return TDC_DEFER;
-			mark(x, g, s);
-			a = e;
-			continue;
-		}
-		if (t == TDC_NIL)
-			return internal_error(x, s, "no triangle around its start");
-		if (!owns(x, tdc_dest(m, g)) || !owns(x, tdc_dest(m, tdc_onext(m, g))))
-			return TDC_DEFER;
-
-		/* walk; t is a crossed edge from the right of a-b to its left */
-		for (;;)
-		{
-			uint32_t	sym = SYM(t),
-						r;
-			double		o;
-
-			if (c->cons[t >> 1] != NO_SEG)
-				return crossing_error(x, s, c->cons[t >> 1] - 1);
-			if (n == x->cap && (rc = grow_lists(x, s)) != TDC_OK)
-				return rc;
-			x->list[n++] = t >> 1;
-			if (is_outer(c, sym))
-				return internal_error(x, s, "the walk left the convex hull");
-			r = tdc_dest(m, tdc_lnext(m, sym));
-			if (!owns(x, r))
-				return TDC_DEFER;
-			if (r == b)
-			{
-				e = b;
-				break;
-			}
-			o = orient(c, a, b, r);
-			if (o == 0)
-			{
-				e = r;			/* a site on the segment: split there */
-				break;
-			}
-			t = o > 0 ? tdc_lnext(m, sym) : tdc_lnext(m, tdc_lnext(m, sym));
-			if (cdt_poll(x))
-				return TDC_ECANCELED;
-		}
-
-		rc = remove_crossings(x, s, a, e, n, &nfresh);
-		if (rc != TDC_OK)
-			return rc;
-		g = find_edge(c, a, e);
-		if (g == TDC_NIL)
-			return internal_error(x, s, "the constraint is no edge after the flips");
-		/* the last flip may have made a-e itself: it is no new edge to flip */
-		for (size_t i = 0; i < nfresh; i++)
-			if (x->fresh[i] == g >> 1)
-				x->fresh[i--] = x->fresh[--nfresh];
-		/* the Lawson stack overwrites fresh[]: keep the set in list[] */
-		memcpy(x->list, x->fresh, nfresh * sizeof(uint32_t));
-		rc = restore_delaunay(x, nfresh);
-		for (size_t i = 0; i < nfresh; i++)
-			c->cons[x->list[i]] = NO_SEG;
-		if (rc != TDC_OK)
-			return rc;
-		mark(x, g, s);
-		a = e;
-	}
-	return TDC_OK;
-}
-
-/* The end sites of segment s, checked. */
-static int
-seg_sites(cdt_ctx *x, size_t s, uint32_t *a, uint32_t *b)
-{
-	const tdc_cdt *c = x->c;
-	const tdc_job *job = c->job;
-
-	if (c->seg[2 * s] >= job->n || c->seg[2 * s + 1] >= job->n)
-		return cdt_fail(x, TDC_EINVAL, "segment %zu has an end point index out of range (%u %u, %zu points)",
-						s, c->seg[2 * s], c->seg[2 * s + 1], job->n);
-	*a = tdc_input_site(job, c->seg[2 * s]);
-	*b = tdc_input_site(job, c->seg[2 * s + 1]);
-	if (*a == UINT32_MAX || *b == UINT32_MAX)
-		return cdt_fail(x, TDC_ENOMEM, "out of memory for the input map");
-	return TDC_OK;
-}
-
-/* The status of inserter x, its message and crossing moved to c. */
-static int
-take_error(tdc_cdt *c, const cdt_ctx *x, int rc)
-{
-	memcpy(c->err, x->err, sizeof(c->err));
-	c->cross[0] = x->cross[0];
-	c->cross[1] = x->cross[1];
-	return rc;
-}
+#include "cdt_int.h"
 
 /*
  * The preparation of the parallel pass, as tasks: task 0 sets vedge[],
@@ -823,7 +182,7 @@ prepare(tdc_cdt *c, tdc_pool *pool, cdt_ctx *ser)
 	{
 		free(pp.bad);
 		free(pp.pos);
-		return cdt_fail(ser, TDC_ENOMEM, "out of memory for the constraints");
+		return tdc_cdt_ctx_fail(ser, TDC_ENOMEM, "out of memory for the constraints");
 	}
 	for (size_t p = 0; p < job->nin; p++)
 	{
@@ -849,11 +208,11 @@ prepare(tdc_cdt *c, tdc_pool *pool, cdt_ctx *ser)
 		{
 			uint32_t	a,
 						b;
-			int			rc = seg_sites(ser, pp.bad[k], &a, &b);
+			int			rc = tdc_cdt_seg_sites(ser, pp.bad[k], &a, &b);
 
 			free(pp.bad);
 			free(pp.pos);
-			return rc != TDC_OK ? rc : internal_error(ser, pp.bad[k], "a segment was misread");
+			return rc != TDC_OK ? rc : tdc_cdt_internal_error(ser, pp.bad[k], "a segment was misread");
 		}
 	/* range by range, chunk by chunk: where each chunk's part of a range goes */
 	for (int p = 0; p <= NPART; p++)
@@ -902,7 +261,7 @@ part_task(void *arg, size_t k, int worker)
 		}
 
 		/*
-		 * Fetch ahead what insert_segment will need for the segments to
+		 * Fetch ahead what tdc_cdt_insert_segment will need for the segments to
 		 * come: they are mostly edges already (contour lines), found by
 		 * turning around their first end (find_edge), each step a cache miss
 		 * that the next depends on.  vedge[] of the segment 2 * PF_DIST ahead,
@@ -933,7 +292,7 @@ part_task(void *arg, size_t k, int worker)
 			__builtin_prefetch(&c->vedge[map[c->seg[2 * (size_t) c->order[i + 2 * PF_DIST]]]]);
 		a = map[c->seg[2 * s]];
 		b = map[c->seg[2 * s + 1]];
-		rc = insert_segment(x, s, a, b);
+		rc = tdc_cdt_insert_segment(x, s, a, b);
 		if (rc == TDC_OK)
 		{
 			c->seg_done[s] = 1;
@@ -991,7 +350,7 @@ run_parts(tdc_cdt *c, tdc_pool *pool)
 		c->npar_done += c->parts[k].ndone;
 		c->npar_deferred += c->parts[k].ndeferred;
 		if (c->parts[k].rc != TDC_OK)
-			return take_error(c, &c->parts[k], c->parts[k].rc);
+			return tdc_cdt_take_error(c, &c->parts[k], c->parts[k].rc);
 	}
 	return TDC_OK;
 }
@@ -1006,10 +365,10 @@ serial_insert(tdc_cdt *c, cdt_ctx *ser, size_t s)
 
 	if (atomic_load_explicit(&c->cancel, memory_order_relaxed))
 		return TDC_ECANCELED;
-	rc = seg_sites(ser, s, &a, &b);
+	rc = tdc_cdt_seg_sites(ser, s, &a, &b);
 	if (rc == TDC_OK && a != b)
-		rc = insert_segment(ser, s, a, b);
-	return rc == TDC_OK ? TDC_OK : take_error(c, ser, rc);
+		rc = tdc_cdt_insert_segment(ser, s, a, b);
+	return rc == TDC_OK ? TDC_OK : tdc_cdt_take_error(c, ser, rc);
 }
 
 /*
@@ -1047,7 +406,7 @@ cdt_run(tdc_cdt *c)
 	}
 	if (!c->cons || !c->vedge || !c->list || !c->fresh ||
 		(c->nseg >= PART_MIN_SEG && (!c->seg_part || !c->order || !c->parts || !c->part_lists)))
-		return take_error(c, ser, cdt_fail(ser, TDC_ENOMEM, "out of memory for the constraints of %zu points", job->nin));
+		return tdc_cdt_take_error(c, ser, tdc_cdt_ctx_fail(ser, TDC_ENOMEM, "out of memory for the constraints of %zu points", job->nin));
 	ser->list = c->list;
 	ser->fresh = c->fresh;
 
@@ -1060,12 +419,12 @@ cdt_run(tdc_cdt *c)
 		c->spart = c->seg_done + c->nseg;
 		if (threads > 1 &&
 			(rc = tdc_pool_create(&pool, threads < NPART ? threads : NPART)) != TDC_OK)
-			return take_error(c, ser, cdt_fail(ser, rc, "could not create the insertion's threads"));
+			return tdc_cdt_take_error(c, ser, tdc_cdt_ctx_fail(ser, rc, "could not create the insertion's threads"));
 		rc = prepare(c, pool, ser);
 		if (rc == TDC_OK)
 			rc = run_parts(c, pool);
 		else
-			rc = take_error(c, ser, rc);
+			rc = tdc_cdt_take_error(c, ser, rc);
 		tdc_pool_destroy(pool);
 		if (rc != TDC_OK)
 			return rc;

@@ -144,7 +144,7 @@ static inline bool
 tdc_key_less(const double *p, const double *q, int axis)
 {
 	if (axis == 0)
-		return p[0] < q[0] || (p[0] == q[0] && p[1] < q[1]);
+		return tdc_lex_less(p, q);
 	return p[1] < q[1] || (p[1] == q[1] && p[0] > q[0]);
 }
 

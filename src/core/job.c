@@ -63,125 +63,14 @@ phase_work(void *arg)
 	return settle_phase(job, job->phase(job));
 }
 
-/*
- * The arena.  A call on a handful of points used to spend a third of its
- * time in malloc and free: some twenty arrays, each a few dozen bytes, and
- * glibc consolidating its free lists whenever a chunk next to the top of
- * the heap came back.  So a job on at most ARENA_MAX_POINTS points gets its
- * arrays from one zeroed block allocated together with the job, a bump
- * allocator with nothing to free.  An array that does not fit (the sizing
- * below is generous, not exact) falls back to tdc_big_alloc, so the arena
- * is a speed-up only, never a limit.  The block stays within a few tens of
- * kB, below glibc's mapping threshold, and it is counted by
- * tdc_estimate_memory's per-point and fixed terms like the arrays it
- * replaces.  Only the thread that runs the phases allocates from it; the
- * input map, built on demand by any reader, never does.  The block is
- * zeroed an array at a time as it is handed out, not as a whole: the sizing
- * is generous, and clearing the unused rest cost more than the arrays.
- */
-#define ARENA_MAX_POINTS	256
-#define ARENA_ALIGN			16		/* one thread: no false sharing to avoid */
-#define ARENA_FIXED			1024	/* tree nodes, grid counts, rounding */
-#define ARENA_PER_POINT		(6 * sizeof(tdc_he) + 48)	/* mesh, xy, idx, site_of, cell */
-
-static size_t
-arena_bytes(size_t n)
-{
-	return n <= ARENA_MAX_POINTS ? ARENA_FIXED + n * ARENA_PER_POINT : 0;
-}
-
-/*
- * 16-aligned memory for one of the job's arrays, zeroed unless the caller
- * fills it before reading it; NULL if out of memory.
- */
-static void *
-job_alloc(tdc_job *job, size_t size, bool zero)
-{
-	size_t		rounded = (size + ARENA_ALIGN - 1) & ~(size_t) (ARENA_ALIGN - 1);
-
-	if (job->arena != NULL && rounded >= size &&
-		rounded <= job->arena_size - job->arena_used)
-	{
-		void	   *p = job->arena + job->arena_used;
-
-		job->arena_used += rounded;
-		return zero ? memset(p, 0, size) : p;
-	}
-	job->off_arena = true;
-	return zero ? tdc_big_alloc(job->opt.cache, size) :
-		tdc_big_alloc_uninit(job->opt.cache, size);
-}
-
-void *
-tdc_job_alloc(tdc_job *job, size_t size)
-{
-	return job_alloc(job, size, true);
-}
-
-void *
-tdc_job_alloc_uninit(tdc_job *job, size_t size)
-{
-	return job_alloc(job, size, false);
-}
-
-void
-tdc_job_release(tdc_job *job, void *ptr)
-{
-	char	   *p = ptr;
-
-	if (p != NULL && job->arena != NULL && p >= job->arena && p < job->arena + job->arena_size)
-		return;
-	tdc_big_free(job->opt.cache, ptr);
-}
-
-static void
-free_arrays(tdc_job *job)
-{
-	/* the input map never comes from the arena (see above) */
-	if (job->arena != NULL && !job->off_arena)
-	{
-		tdc_big_free(job->opt.cache, job->map);
-		return;
-	}
-	tdc_job_release(job, job->xy);
-	tdc_job_release(job, job->idx);
-	tdc_job_release(job, job->site_of);
-	tdc_job_release(job, job->map);
-	tdc_job_release(job, job->outer);
-	tdc_job_release(job, job->tol_to);
-	tdc_job_release(job, job->he);
-	tdc_job_release(job, job->prefix);
-	tdc_job_release(job, job->node_rect);
-	tdc_job_release(job, job->node_axis);
-	tdc_job_release(job, job->node_lo);
-	tdc_job_release(job, job->node_hi);
-	tdc_job_release(job, job->subs);
-}
-
 static void *
 reaper_main(void *arg)
 {
 	tdc_job    *job = arg;
 
-	free_arrays(job);
+	tdc_job_free_arrays(job);
 	free(job);
 	return NULL;
-}
-
-void
-tdc_job_fail(tdc_job *job, int code, const char *fmt,...)
-{
-	int			expected = 0;
-
-	if (atomic_compare_exchange_strong(&job->failed, &expected, code))
-	{
-		va_list		ap;
-
-		va_start(ap, fmt);
-		vsnprintf(job->task_err, sizeof(job->task_err), fmt, ap);
-		va_end(ap);
-	}
-	atomic_store(&job->cancel, 1);
 }
 
 int
@@ -219,8 +108,8 @@ tdc_job_start(const double *xy, size_t n, const tdc_options *opt, tdc_job **out,
 		FAIL(TDC_EMEMLIMIT, "triangulating %zu points needs about %zu MB, more than the limit of %zu MB",
 			 n, tdc_estimate_memory(n, &o) >> 20, o.max_memory >> 20);
 
-	arena = tdc_plan_inline(n) ? arena_bytes(n) : 0;
-	job = malloc(sizeof(tdc_job) + (arena > 0 ? arena + ARENA_ALIGN : 0));
+	arena = tdc_plan_inline(n) ? tdc_arena_bytes(n) : 0;
+	job = malloc(sizeof(tdc_job) + (arena > 0 ? arena + TDC_ARENA_ALIGN : 0));
 	if (job == NULL)
 		FAIL(TDC_ENOMEM, "out of memory");
 	/* all but the two message buffers, which only need to be empty */
@@ -228,8 +117,8 @@ tdc_job_start(const double *xy, size_t n, const tdc_options *opt, tdc_job **out,
 	job->task_err[0] = job->err[0] = '\0';
 	if (arena > 0)
 	{
-		job->arena = (char *) (((uintptr_t) (job + 1) + ARENA_ALIGN - 1) &
-							   ~(uintptr_t) (ARENA_ALIGN - 1));
+		job->arena = (char *) (((uintptr_t) (job + 1) + TDC_ARENA_ALIGN - 1) &
+							   ~(uintptr_t) (TDC_ARENA_ALIGN - 1));
 		job->arena_size = arena;
 	}
 	job->opt = o;
@@ -316,7 +205,7 @@ tdc_job_free(tdc_job *job)
 	if (job == NULL)
 		return;
 	tdc_runner_destroy(&job->run);
-	free_arrays(job);
+	tdc_job_free_arrays(job);
 	free(job);
 }
 

@@ -1,7 +1,7 @@
 /*
  * job.h
  *		The state of one triangulation, shared by the core's sources (the
- *		plan and first phase in driver.c, the lifecycle in job.c on the
+ *		plan and first phase in triangulate.c, the lifecycle in job.c on the
  *		runner of runner.c, the results in result.c).  Not installed.
  */
 #ifndef TDC_JOB_H
@@ -62,7 +62,7 @@ struct tdc_job
 	char	   *arena;
 	size_t		arena_size;
 	size_t		arena_used;
-	bool		off_arena;		/* some array did not fit: free_arrays looks */
+	bool		off_arena;		/* some array did not fit: tdc_job_free_arrays looks */
 
 	atomic_int	cancel;
 	atomic_int	failed;			/* first task error wins */
@@ -116,14 +116,14 @@ extern int	tdc_emit_phase(tdc_job *job);
 /* emit.c: the same for a small job, on the caller's thread. */
 extern int	tdc_emit_inline(tdc_job *job);
 
-/* driver.c: the plan of a job of n points (see tdc_estimate_memory). */
+/* triangulate.c: the plan of a job of n points (see tdc_estimate_memory). */
 extern bool tdc_plan_inline(size_t n);
 extern int	tdc_plan_threads(size_t n, const tdc_options *o);
 
-/* driver.c: the first phase, the triangulation itself. */
+/* triangulate.c: the first phase, the triangulation itself. */
 extern int	tdc_run_phase(tdc_job *job);
 
-/* job.c: record the first error of a task and stop the others. */
+/* job_arena.c: record the first error of a task and stop the others. */
 extern void tdc_job_fail(tdc_job *job, int code, const char *fmt,...)
 			__attribute__((format(printf, 3, 4)));
 
@@ -135,7 +135,7 @@ extern int	tdc_rect_split(const tdc_job *job, const tdc_rect *r, int axis,
 extern int	tdc_rect_split_inner(const tdc_job *job, const tdc_rect *r, int axis,
 								 tdc_rect *a, tdc_rect *b);
 
-/* sites.c */
+/* tolerance.c */
 extern int	tdc_tolerance_filter(tdc_job *job);
 extern size_t tdc_tolerance_memory(size_t n);
 
@@ -155,9 +155,42 @@ extern size_t tdc_emit_memory(size_t n, int threads);
  */
 extern void tdc_triangulate_leaf(tdc_job *job, size_t k, tdc_sub *out);
 
-/* job.c: a job's arrays, from its arena when they fit (driver thread only) */
+/*
+ * The arena.  A call on a handful of points used to spend a third of its
+ * time in malloc and free: some twenty arrays, each a few dozen bytes, and
+ * glibc consolidating its free lists whenever a chunk next to the top of
+ * the heap came back.  So a job on at most TDC_ARENA_MAX_POINTS points gets its
+ * arrays from one zeroed block allocated together with the job, a bump
+ * allocator with nothing to free.  An array that does not fit (the sizing
+ * below is generous, not exact) falls back to tdc_big_alloc, so the arena
+ * is a speed-up only, never a limit.  The block stays within a few tens of
+ * kB, below glibc's mapping threshold, and it is counted by
+ * tdc_estimate_memory's per-point and fixed terms like the arrays it
+ * replaces.  Only the thread that runs the phases allocates from it; the
+ * input map, built on demand by any reader, never does.  The block is
+ * zeroed an array at a time as it is handed out, not as a whole: the sizing
+ * is generous, and clearing the unused rest cost more than the arrays.
+ */
+#define TDC_ARENA_MAX_POINTS	256
+#define TDC_ARENA_ALIGN			16		/* one thread: no false sharing to avoid */
+#define TDC_ARENA_FIXED			1024	/* tree nodes, grid counts, rounding */
+#define TDC_ARENA_PER_POINT		(6 * sizeof(tdc_he) + 48)	/* mesh, xy, idx, site_of, cell */
+
+static inline size_t
+tdc_arena_bytes(size_t n)
+{
+	return n <= TDC_ARENA_MAX_POINTS ? TDC_ARENA_FIXED + n * TDC_ARENA_PER_POINT : 0;
+}
+
+/*
+ * job_arena.c: a job's arrays, from its arena when they fit (driver thread
+ * only): 16-aligned, zeroed (tdc_job_alloc) or for the caller to fill
+ * (tdc_job_alloc_uninit); NULL if out of memory.  tdc_job_release gives
+ * one back (nothing for an arena array); tdc_job_free_arrays all of them.
+ */
 extern void *tdc_job_alloc(tdc_job *job, size_t size);
 extern void *tdc_job_alloc_uninit(tdc_job *job, size_t size);
 extern void tdc_job_release(tdc_job *job, void *ptr);
+extern void tdc_job_free_arrays(tdc_job *job);
 
 #endif							/* TDC_JOB_H */

@@ -22,7 +22,8 @@
  * tangent, the last base edge of the merge).
  *
  * Ties.  Four or more cocircular sites admit several Delaunay
- * triangulations.  incircle_sos() decides exact zeros as if every site p were
+ * triangulations.  incircle_sos() decides exact zeros (with the kernel's
+ * tdc_incircle_tie, predicates.c) as if every site p were
  * lifted to the paraboloid at |p|^2 + eps_p, with eps infinitesimal and
  * larger for lexicographically smaller sites (simulation of simplicity,
  * Edelsbrunner & Muecke 1990, applied to the lifting coordinate only).  The
@@ -65,56 +66,14 @@ above(const tdc_mesh *m, uint32_t p, const double *bo, const double *bd)
 }
 
 /*
- * Exact in-circle of four distinct, exactly cocircular sites, decided by the
- * perturbation described above.  Perturbing the lift of a, b, c, d by
- * eps_a..eps_d adds
- *		eps_a O(b,c,d) - eps_b O(a,c,d) + eps_c O(a,b,d) - eps_d O(a,b,c)
- * to the in-circle determinant (expand along the lift column), where O is
- * orient2d.  The term of the lexicographically smallest site dominates; its
- * orientation is nonzero because no three distinct points of a circle are
- * collinear.
- */
-static bool
-incircle_tie(const tdc_mesh *m, uint32_t a, uint32_t b, uint32_t c, uint32_t d)
-{
-	const double *pa = tdc_pt(m, a),
-			   *pb = tdc_pt(m, b),
-			   *pc = tdc_pt(m, c),
-			   *pd = tdc_pt(m, d);
-	const double *lowest = pa;
-	double		s;
-
-	if (tdc_key_less(pb, lowest, 0))
-		lowest = pb;
-	if (tdc_key_less(pc, lowest, 0))
-		lowest = pc;
-	if (tdc_key_less(pd, lowest, 0))
-		lowest = pd;
-
-	if (lowest == pa)
-		s = tdc_orient2d(pb, pc, pd);
-	else if (lowest == pb)
-		s = -tdc_orient2d(pa, pc, pd);
-	else if (lowest == pc)
-		s = tdc_orient2d(pa, pb, pd);
-	else
-		s = -tdc_orient2d(pa, pb, pc);
-	return s > 0;
-}
-
-/*
- * Is d inside the circle through counter-clockwise a, b, c (ties broken)?
- * The four sites must be distinct; the callers make sure of it.
+ * Is d inside the circle through counter-clockwise a, b, c (ties broken by
+ * the kernel's rule, tdc_incircle_tie)?  The four sites must be distinct;
+ * the callers make sure of it.
  */
 static inline __attribute__((always_inline)) bool
 incircle_sos(const tdc_mesh *m, uint32_t a, uint32_t b, uint32_t c, uint32_t d)
 {
-	double		det;
-
-	det = tdc_incircle(tdc_pt(m, a), tdc_pt(m, b), tdc_pt(m, c), tdc_pt(m, d));
-	if (det != 0)
-		return det > 0;
-	return incircle_tie(m, a, b, c, d);
+	return tdc_incircle_sos(tdc_pt(m, a), tdc_pt(m, b), tdc_pt(m, c), tdc_pt(m, d));
 }
 
 /* Site of a subset that is extreme in direction k, and whether it beats q. */

@@ -62,13 +62,14 @@
  * multiplies a degree-4 quantity, far from overflow.  (Inputs outside that
  * range may be mishandled; the driver rejects them.)
 
- * Requirements on the floating-point environment: IEEE double with round to
- * nearest, ties to even (Fast-Expansion-Sum needs it), no extended precision
- * (FLT_EVAL_METHOD == 0, true with SSE2 on x86-64), and no contraction of
- * a*b+c into a fused multiply-add, which would break Two-Product and Two-Sum.
- * The build passes -ffp-contract=off; -ffast-math is rejected below.  We do
- * not use fma() on purpose: baseline x86-64 has no hardware FMA and the
- * library fallback is slow.
+ * The error-free transformations and the expansion arithmetic used here are
+ * the core's one exact kernel, exact.h, with the requirements they put on
+ * the floating-point environment (round to nearest even, no extended
+ * precision, no contraction into a fused multiply-add).
+ *
+ * The symbolic tie-break of the in-circle test (tdc_incircle_tie) is here
+ * too, so that the merge, the constrained insertion and the tiles decide
+ * cocircular sites by one rule.
  *
  * All working storage lives in fixed-size stack arrays whose sizes follow
  * from the expansion-length bounds of the theorems (noted at each use); the
@@ -78,254 +79,9 @@
 #include <stdint.h>
 #include <string.h>
 
+#include "exact.h"
 #include "predicates.h"
 
-#if defined(__FAST_MATH__)
-#error "predicates.c must not be compiled with -ffast-math: exactness depends on IEEE semantics"
-#endif
-#if !defined(FLT_EVAL_METHOD) || FLT_EVAL_METHOD != 0
-#error "predicates.c needs FLT_EVAL_METHOD == 0 (no extended precision intermediates)"
-#endif
-
-/*
- * Belt and braces for builds that forget -ffp-contract=off: clang honours
- * the standard pragma (GCC ignores it, but contracts only in GNU mode, and
- * the core is built with -std=c11).
- */
-#if defined(__clang__)
-#pragma STDC FP_CONTRACT OFF
-#endif
-
-/* 2^27 + 1: Veltkamp splitting of a 53-bit significand into two 26-bit halves */
-#define SPLITTER	134217729.0
-
-/* ------------------------------------------------------------------------
- * Error-free transformations
- * ------------------------------------------------------------------------
- */
-
-/*
- * Fast-Two-Sum (after Dekker): x + y == a + b exactly with
- * x = fl(a + b), provided |a| >= |b|.
- */
-static inline void
-fast_two_sum(double a, double b, double *x, double *y)
-{
-	double		s = a + b;
-	double		bvirt = s - a;
-
-	*x = s;
-	*y = b - bvirt;
-}
-
-/*
- * Two-Sum (after Knuth and Moller): same as above with no precondition on
- * the magnitudes, at the price of three extra operations.
- */
-static inline void
-two_sum(double a, double b, double *x, double *y)
-{
-	double		s = a + b;
-	double		bvirt = s - a;
-	double		avirt = s - bvirt;
-	double		bround = b - bvirt;
-	double		around = a - avirt;
-
-	*x = s;
-	*y = around + bround;
-}
-
-/* Two-Diff: Two-Sum of a and -b, written out so that no negation is needed. */
-static inline void
-two_diff(double a, double b, double *x, double *y)
-{
-	double		s = a - b;
-	double		bvirt = a - s;
-	double		avirt = s + bvirt;
-	double		bround = bvirt - b;
-	double		around = a - avirt;
-
-	*x = s;
-	*y = around + bround;
-}
-
-/*
- * Split (after Veltkamp): a == hi + lo where hi and lo each fit in 26
- * bits (one of them borrowing the sign bit), so that products of halves are
- * exact in double precision.
- */
-static inline void
-split(double a, double *hi, double *lo)
-{
-	double		c = SPLITTER * a;
-	double		abig = c - a;
-	double		h = c - abig;
-
-	*hi = h;
-	*lo = a - h;
-}
-
-/*
- * Two-Product (after Dekker): x + y == a * b exactly with x = fl(a*b).
- * b arrives already split because scale_expansion multiplies many components
- * by the same b.
- */
-static inline void
-two_product_presplit(double a, double b, double bhi, double blo,
-					 double *x, double *y)
-{
-	double		p = a * b;
-	double		ahi,
-				alo;
-	double		err1,
-				err2,
-				err3;
-
-	split(a, &ahi, &alo);
-	err1 = p - ahi * bhi;
-	err2 = err1 - alo * bhi;
-	err3 = err2 - ahi * blo;
-	*x = p;
-	*y = alo * blo - err3;
-}
-
-static inline void
-two_product(double a, double b, double *x, double *y)
-{
-	double		bhi,
-				blo;
-
-	split(b, &bhi, &blo);
-	two_product_presplit(a, b, bhi, blo, x, y);
-}
-
-/* ------------------------------------------------------------------------
- * Expansion arithmetic (all with zero elimination; length 0 means zero)
- * ------------------------------------------------------------------------
- */
-
-/*
- * Store the two-component expansion hi + lo (lo the smaller, as produced by
- * the transformations above) without its zero components.  Returns the
- * length, 0..2.
- */
-static inline int
-pack2(double hi, double lo, double *h)
-{
-	int			n = 0;
-
-	if (lo != 0.0)
-		h[n++] = lo;
-	if (hi != 0.0)
-		h[n++] = hi;
-	return n;
-}
-
-/*
- * Expansion sum by merging (Fast-Expansion-Sum): merge the
- * components of e and f by increasing magnitude, then run them through one
- * Fast-Two-Sum and a chain of Two-Sums, emitting each nonzero error term.  If
- * e and f are strongly non-overlapping (as all our expansions are), so is h,
- * under round-to-even.  h must have room for elen + flen components and must
- * not alias e or f.
- */
-static int
-expansion_sum(int elen, const double *e, int flen, const double *f, double *h)
-{
-	int			i = 0,
-				j = 0,
-				hlen = 0;
-	double		q,
-				g,
-				hh;
-
-	if (elen == 0 || flen == 0)
-	{
-		const double *src = (elen == 0) ? f : e;
-		int			n = (elen == 0) ? flen : elen;
-
-		for (i = 0; i < n; i++)
-			h[i] = src[i];
-		return n;
-	}
-
-	/* The two smallest components start the chain with a Fast-Two-Sum. */
-	if (__builtin_fabs(e[0]) <= __builtin_fabs(f[0]))
-		q = e[i++];
-	else
-		q = f[j++];
-	if (j >= flen || (i < elen && __builtin_fabs(e[i]) <= __builtin_fabs(f[j])))
-		g = e[i++];
-	else
-		g = f[j++];
-	fast_two_sum(g, q, &q, &hh);
-	if (hh != 0.0)
-		h[hlen++] = hh;
-
-	while (i < elen || j < flen)
-	{
-		if (j >= flen || (i < elen && __builtin_fabs(e[i]) <= __builtin_fabs(f[j])))
-			g = e[i++];
-		else
-			g = f[j++];
-		two_sum(q, g, &q, &hh);
-		if (hh != 0.0)
-			h[hlen++] = hh;
-	}
-	if (q != 0.0)
-		h[hlen++] = q;
-	return hlen;
-}
-
-/*
- * Scale-Expansion: h = b * e exactly.  Each component product
- * is split into two by Two-Product and folded into the running sum with a
- * Two-Sum and a Fast-Two-Sum.  h needs room for 2 * elen components and
- * must not alias e.
- */
-static int
-scale_expansion(int elen, const double *e, double b, double *h)
-{
-	double		bhi,
-				blo,
-				q,
-				sum,
-				hh,
-				p1,
-				p0;
-	int			i,
-				hlen = 0;
-
-	if (elen == 0 || b == 0.0)
-		return 0;
-
-	split(b, &bhi, &blo);
-	two_product_presplit(e[0], b, bhi, blo, &q, &hh);
-	if (hh != 0.0)
-		h[hlen++] = hh;
-	for (i = 1; i < elen; i++)
-	{
-		two_product_presplit(e[i], b, bhi, blo, &p1, &p0);
-		two_sum(q, p0, &sum, &hh);
-		if (hh != 0.0)
-			h[hlen++] = hh;
-		fast_two_sum(p1, sum, &q, &hh);
-		if (hh != 0.0)
-			h[hlen++] = hh;
-	}
-	if (q != 0.0)
-		h[hlen++] = q;
-	return hlen;
-}
-
-/* Sign of an expansion: that of its largest (last) component. */
-static inline double
-expansion_sign(int elen, const double *e)
-{
-	if (elen == 0)
-		return 0.0;
-	return (e[elen - 1] > 0.0) ? 1.0 : -1.0;
-}
 
 /* ------------------------------------------------------------------------
  * Small-lattice shortcut
@@ -423,8 +179,8 @@ product_diff(double p, double s, double q, double t, double *h)
 	int			elen,
 				flen;
 
-	two_product(p, s, &x1, &y1);
-	two_product(q, t, &x2, &y2);
+	two_prod(p, s, &x1, &y1);
+	two_prod(q, t, &x2, &y2);
 	elen = pack2(x1, y1, e);
 	flen = pack2(-x2, -y2, f);
 	return expansion_sum(elen, e, flen, f, h);
@@ -494,9 +250,9 @@ lift_product(int elen, const double *e, double u, double v, double *h)
 				s2len,
 				i;
 
-	two_product(u, u, &x, &y);
+	two_prod(u, u, &x, &y);
 	uulen = pack2(x, y, uu);
-	two_product(v, v, &x, &y);
+	two_prod(v, v, &x, &y);
 	vvlen = pack2(x, y, vv);
 	liftlen = expansion_sum(uulen, uu, vvlen, vv, lift);
 	for (i = 0; i < liftlen; i++)
@@ -579,11 +335,11 @@ incircle_small_integers(const double *v)
 				eflen,
 				detlen;
 
-	two_product(alift, bc, &x, &y);
+	two_prod(alift, bc, &x, &y);
 	elen = pack2(x, y, e);
-	two_product(blift, ca, &x, &y);
+	two_prod(blift, ca, &x, &y);
 	flen = pack2(x, y, f);
-	two_product(clift, ab, &x, &y);
+	two_prod(clift, ab, &x, &y);
 	glen = pack2(x, y, g);
 	eflen = expansion_sum(elen, e, flen, f, ef);
 	detlen = expansion_sum(eflen, ef, glen, g, det);
@@ -807,17 +563,17 @@ square_of_difference(double a, double b, double *h)
 				glen;
 
 	two_diff(a, b, &d, &dt);
-	two_product(d, d, &x, &y);
+	two_prod(d, d, &x, &y);
 	elen = pack2(x, y, e);
 	if (dt == 0.0)
 	{
 		memcpy(h, e, elen * sizeof(double));
 		return elen;
 	}
-	two_product(2.0 * d, dt, &x, &y);
+	two_prod(2.0 * d, dt, &x, &y);
 	flen = pack2(x, y, f);
 	glen = expansion_sum(elen, e, flen, f, g);
-	two_product(dt, dt, &x, &y);
+	two_prod(dt, dt, &x, &y);
 	elen = pack2(x, y, e);
 	return expansion_sum(glen, g, elen, e, h);
 }
@@ -860,4 +616,48 @@ tdc_sqdist_cmp_exact(const double *a, const double *b, const double *c,
 		t[i] = -t[i];
 	dlen = expansion_sum(slen, s, tlen, t, diff);
 	return (int) expansion_sign(dlen, diff);
+}
+
+/* ------------------------------------------------------------------------
+ * Symbolic tie-break of the in-circle test
+ * ------------------------------------------------------------------------
+ */
+
+/*
+ * Exact in-circle of four distinct, exactly cocircular sites, decided as if
+ * every site p were lifted to the paraboloid at |p|^2 + eps_p, with eps
+ * infinitesimal and larger for lexicographically smaller sites (simulation
+ * of simplicity, Edelsbrunner & Muecke 1990, applied to the lifting
+ * coordinate only).  Perturbing the lift of a, b, c, d by eps_a..eps_d adds
+ *		eps_a O(b,c,d) - eps_b O(a,c,d) + eps_c O(a,b,d) - eps_d O(a,b,c)
+ * to the in-circle determinant (expand along the lift column), where O is
+ * orient2d.  The term of the lexicographically smallest site dominates; its
+ * orientation is nonzero because no three distinct points of a circle are
+ * collinear.  The perturbed lift is in general position, so its lower hull,
+ * and hence the triangulation, depends on the site set alone: not on the
+ * input order, the thread count, the subdivision or the tiling.
+ */
+bool
+tdc_incircle_tie(const double *pa, const double *pb, const double *pc,
+				 const double *pd)
+{
+	const double *lowest = pa;
+	double		s;
+
+	if (tdc_lex_less(pb, lowest))
+		lowest = pb;
+	if (tdc_lex_less(pc, lowest))
+		lowest = pc;
+	if (tdc_lex_less(pd, lowest))
+		lowest = pd;
+
+	if (lowest == pa)
+		s = tdc_orient2d(pb, pc, pd);
+	else if (lowest == pb)
+		s = -tdc_orient2d(pa, pc, pd);
+	else if (lowest == pc)
+		s = tdc_orient2d(pa, pb, pd);
+	else
+		s = -tdc_orient2d(pa, pb, pc);
+	return s > 0;
 }

@@ -21,6 +21,8 @@
 #ifndef TDC_PREDICATES_H
 #define TDC_PREDICATES_H
 
+#include <stdbool.h>
+
 /* (3 + 16 eps) eps and (10 + 96 eps) eps with eps = 2^-53 */
 #define TDC_CCW_ERRBOUND	(3.3306690738754716e-16)
 #define TDC_ICC_ERRBOUND	(1.1102230246251577e-15)
@@ -34,7 +36,7 @@ extern double tdc_incircle_exact(const double *a, const double *b,
 
 /*
  * Exact sign (-1, 0 or +1) of |a - b|^2 - |c - d|^2, for the tolerance pass
- * (sites.c), which filters in double arithmetic first.  Exact when every
+ * (tolerance.c), which filters in double arithmetic first.  Exact when every
  * coordinate is 0 or of magnitude in [2^-252, 2^202]: a wider range than the
  * input's, so that a clamped tolerance can be passed as a point (t, 0).
  */
@@ -85,6 +87,41 @@ tdc_incircle(const double *a, const double *b, const double *c, const double *d)
 	if (det > bound || -det > bound)
 		return det;
 	return tdc_incircle_exact(a, b, c, d);
+}
+
+/*
+ * The lexicographic order of points, (x, y): the order of the tie rule
+ * below, of the merge's axis 0 and of the Voronoi diagram's ties.
+ */
+static inline bool
+tdc_lex_less(const double *p, const double *q)
+{
+	return p[0] < q[0] || (p[0] == q[0] && p[1] < q[1]);
+}
+
+/*
+ * The sign of the in-circle test of four distinct, exactly cocircular sites,
+ * by symbolic perturbation (predicates.c): true when d counts as inside the
+ * circle through counter-clockwise a, b, c.
+ */
+extern bool tdc_incircle_tie(const double *a, const double *b,
+							 const double *c, const double *d);
+
+/*
+ * Is d inside the circle through counter-clockwise a, b, c, exact zeros
+ * decided by tdc_incircle_tie?  The four sites must be distinct; the callers
+ * make sure of it.  Every in-circle decision that shapes a triangulation
+ * (merge.c, cdt.c) goes through here, so that they agree on every tie.
+ */
+static inline __attribute__((always_inline)) bool
+tdc_incircle_sos(const double *a, const double *b, const double *c,
+				 const double *d)
+{
+	double		det = tdc_incircle(a, b, c, d);
+
+	if (det != 0)
+		return det > 0;
+	return tdc_incircle_tie(a, b, c, d);
 }
 
 #endif							/* TDC_PREDICATES_H */

@@ -32,7 +32,7 @@
 #define TDC_ETOOBIG			(-4)	/* more points than the 32-bit index width allows */
 #define TDC_EMEMLIMIT		(-5)	/* would exceed options.max_memory */
 #define TDC_ETHREAD			(-6)	/* pthread_create failed */
-#define TDC_ECROSS			(-7)	/* two constraint segments cross (cdt.c) */
+#define TDC_ECROSS			(-7)	/* two constraint segments cross (cdt_insert.c) */
 
 /*
  * Largest input size: the mesh numbers half-edges with uint32_t and needs
@@ -319,15 +319,15 @@ extern void tdc_voronoi_default_env(const tdc_job *job, double env[4]);
 
 /*
  * Circumcenter of the counter-clockwise triangle a, b, c, computed in
- * double-double and rounded once (error bound in voronoi.c).
+ * double-double and rounded once (error bound in voronoi_geom.c).
  */
 extern void tdc_circumcenter(const double *a, const double *b, const double *c,
 							 double out[2]);
-/* --- Tiled triangulation (tile.c) ---
+/* --- Tiled triangulation (tile_final.c) ---
  *
  * The triangles of one tile of the global triangulation of a point set P,
  * computed from the points of a box K around the tile (its own points and a
- * halo), exactly as the one-shot run would give them.  See tile.c for the
+ * halo), exactly as the one-shot run would give them.  See tile_final.c for the
  * proof.  The caller's loop, per tile:
  *
  *	K = the tile's box, plus a margin
@@ -371,7 +371,7 @@ typedef struct tdc_tile_result
 	size_t		own_sites;		/* of them owned by this tile */
 	size_t		unfinal;		/* triangles and hull edges at own sites found not final */
 	size_t		deep;			/* triangles at own sites found final from block counts
-								 * alone (a deep vertex, see tile.c), without a disk */
+								 * alone (a deep vertex, see tile_final.c), without a disk */
 } tdc_tile_result;
 
 /*
@@ -394,7 +394,7 @@ extern int	tdc_tile_finish(const tdc_job *job, const tdc_tile_spec *spec,
 extern void tdc_tile_result_free(tdc_tile_result *res);
 
 /*
- * Convex hull of n points, counter-clockwise, exact, collinear vertices
+ * Convex hull of n points (convex_hull.c), counter-clockwise, exact, collinear vertices
  * dropped (1 or 2 vertices for degenerate input): a malloc'd array of
  * *nhull x,y pairs (free() it), NULL when n = 0.  The hull of a union is
  * the hull of the parts' hulls, so it can be computed in chunks.

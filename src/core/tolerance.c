@@ -1,5 +1,5 @@
 /*
- * sites.c
+ * tolerance.c
  *		The optional tolerance filter.  (Exact duplicates are removed inside
  *		the subsets, see leaf.c.)
  *
@@ -17,7 +17,7 @@
  * pipeline like any input.
  *
  * Clamping t.  Input coordinates are 0 or of magnitude in [1e-60, 1e60]
- * (driver.c), so they are multiples of 2^-252 below 2^200.  A nonzero squared
+ * (triangulate.c), so they are multiples of 2^-252 below 2^200.  A nonzero squared
  * distance D is then at least 2^-504 and always D < 2^404.  Hence for
  * t <= 2^-252, "D < t^2" means D = 0 whatever t is, and for t >= 2^202 it
  * always holds: replacing t by t' = min(max(t, 2^-252), 2^202) changes no

@@ -1,5 +1,5 @@
 /*
- * driver.c
+ * triangulate.c
  *		The plan of a job and its first phase: the three steps of Wu et al.
  *		2014 on the pool.
  *
@@ -12,7 +12,7 @@
  * the pool and runs the phases, each a parallel loop on the pool:
  *
  *	check		validate the input, bounding box (reported as sort time)
- *	tolerance	optional sequential filter (sites.c, also sort time)
+ *	tolerance	optional sequential filter (tolerance.c, also sort time)
  *	step 1		grid counts, the tree of 2^d subsets level by level, and one
  *				counting sort of the points into tree order (subdivide.c)
  *	step 2		Guibas-Stolfi in each subset, down to its grid cells,
@@ -362,7 +362,7 @@ tdc_plan_threads(size_t n, const tdc_options *o)
  *	all		xy 16, idx 4, site_of 4 bytes per point; tol_to 4 with a
  *			tolerance; the tree (2^(d+1) nodes, d <= log2 n); the prefix sums
  *			((s+1)^2 counters) from step 1 on
- *	tolerance	its sort records and hash table (sites.c)
+ *	tolerance	its sort records and hash table (tolerance.c)
  *	step 1	the survivors' copy (20 per point, with a tolerance), the cell of
  *			each point (4), one histogram of s^2 counters per slice (at most
  *			TDC_GRID_SLICES, whatever the thread count) and the cell starts
