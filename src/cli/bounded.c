@@ -121,18 +121,12 @@ void
 run_bounded(const char *xypath, const char *zpath, size_t n, const tdc_options *opt,
 			size_t budget, FILE *out, bounded_stats *st)
 {
-	bounded_run r = {0};
+	bounded_run r = {
+		.xypath = xypath, .zpath = zpath, .n = n, .opt = opt, .budget = budget,
+		.out = out, .st = st, .has_z = zpath != NULL, .w = zpath != NULL ? 3 : 2
+	};
 	double		t0;
 
-	r.xypath = xypath;
-	r.zpath = zpath;
-	r.n = n;
-	r.opt = opt;
-	r.budget = budget;
-	r.out = out;
-	r.st = st;
-	r.has_z = zpath != NULL;
-	r.w = r.has_z ? 3 : 2;
 	memset(st, 0, sizeof(*st));
 	st->n = n;
 #ifdef __GLIBC__
