@@ -142,16 +142,21 @@ run_bounded(const char *xypath, const char *zpath, size_t n, const tdc_options *
 #endif
 
 	t0 = now_s();
+	/* the points' box and hull; the cells counted when the grid is known */
 	scan_input(&r);
+	/* every cell in one tile, every tile at most tile_max points */
 	plan(&r);
+	/* every tile's first known region fixed: K and its bands */
 	bands(&r);
 	halo_index(&r);
 	st->scan = now_s() - t0;
 
+	/* every point in its tile's file, and in the halo files of the others' first regions */
 	t0 = now_s();
 	bin_points(&r);
 	st->bin = now_s() - t0;
 
+	/* every global triangle written once, by the tile that owns it */
 	for (int t = 0; t < r.nt; t++)
 		tile_run(&r, t);
 
