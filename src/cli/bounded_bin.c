@@ -26,41 +26,23 @@
 #include "bounded.h"
 
 /*
- * The halo index: r->kfirst, each tile's first K, and r->band_idx from
- * r->band_off[t], the hull bands of its first region; and per fine cell
- * (r->cell_off, r->cell_halo), the other tiles whose first region meets
- * the cell's box, each once: a point is tested only against those.  Only
- * when the tiles are few enough for two files each (r->use_halo).
+ * Each tile's first region: r->kfirst[t], its first K, and r->band_idx
+ * from r->band_off[t], its hull bands; and in *pairs (*npairs of them,
+ * *cap allocated) a (cell, tile) pair for every cell that a box of the
+ * region meets, but the tile's own cells.
  */
-void
-halo_index(bounded_run *r)
+static void
+first_regions(bounded_run *r, uint32_t **pairs, size_t *npairs, size_t *cap)
 {
-	size_t		npairs = 0,
-				cap = 1024;
-	uint32_t   *pairs;
-	int			nt = r->nt;
 	const double *grid = r->grid.box,
 			   *xcut = r->grid.xcut,
 			   *ycut = r->grid.ycut,
 			   *bb = r->bb;
 	double		sx = r->grid.sx,
 				sy = r->grid.sy;
-	uint32_t   *fill;
-	uint8_t    *seen;
-	uint32_t   *cell_off;
-	int16_t    *cell_halo;
 
-	r->use_halo = nt <= 400;
-	if (!r->use_halo)
-		return;
-	pairs = malloc(sizeof(uint32_t) * 2 * cap);
-	r->kfirst = malloc(32 * (size_t) (nt > 0 ? nt : 1));
-	r->band_off = malloc(sizeof(size_t) * (nt + 1));
-	r->cell_off = cell_off = calloc((size_t) BP_GRID * BP_GRID + 1, sizeof(uint32_t));
-	if (!pairs || !r->kfirst || !r->band_off || !cell_off)
-		die(1, "out of memory%s", "");
 	r->band_off[0] = 0;
-	for (int t = 0; t < nt; t++)
+	for (int t = 0; t < r->nt; t++)
 	{
 		double		h,
 				   *K = r->kfirst + 4 * t;
@@ -96,21 +78,32 @@ halo_index(bounded_run *r)
 				{
 					if (r->cell_tile[row * BP_GRID + c] == t)
 						continue;
-					if (npairs == cap)
+					if (*npairs == *cap)
 					{
-						pairs = realloc(pairs, sizeof(uint32_t) * 2 * (cap *= 2));
-						if (pairs == NULL)
+						*pairs = realloc(*pairs, sizeof(uint32_t) * 2 * (*cap *= 2));
+						if (*pairs == NULL)
 							die(1, "out of memory%s", "");
 					}
-					pairs[2 * npairs] = (uint32_t) (row * BP_GRID + c);
-					pairs[2 * npairs + 1] = (uint32_t) t;
-					npairs++;
+					(*pairs)[2 * *npairs] = (uint32_t) (row * BP_GRID + c);
+					(*pairs)[2 * *npairs + 1] = (uint32_t) t;
+					(*npairs)++;
 				}
 		}
 	}
+}
 
-	/* per cell, its tiles (once each), as a counting sort by cell */
-	seen = calloc((size_t) nt + 1, 1);
+/*
+ * Per cell, its tiles of the pairs, once each: r->cell_halo from
+ * r->cell_off[cell] (zeroed by the caller), as a counting sort by cell.
+ */
+static void
+index_cells(bounded_run *r, const uint32_t *pairs, size_t npairs)
+{
+	uint32_t   *fill,
+			   *cell_off = r->cell_off;
+	uint8_t    *seen = calloc((size_t) r->nt + 1, 1);
+	int16_t    *cell_halo;
+
 	for (size_t i = 0; i < npairs; i++)
 		cell_off[pairs[2 * i] + 1]++;
 	for (size_t c = 0; c < (size_t) BP_GRID * BP_GRID; c++)
@@ -142,6 +135,33 @@ halo_index(bounded_run *r)
 	}
 	free(fill);
 	free(seen);
+}
+
+/*
+ * The halo index, when the tiles are few enough for two files each
+ * (r->use_halo): each tile's first region (first_regions) and, per fine
+ * cell, the other tiles whose first region meets the cell's box, each
+ * once (index_cells): a point is tested only against those.
+ */
+void
+halo_index(bounded_run *r)
+{
+	size_t		npairs = 0,
+				cap = 1024;
+	uint32_t   *pairs;
+	int			nt = r->nt;
+
+	r->use_halo = nt <= 400;
+	if (!r->use_halo)
+		return;
+	pairs = malloc(sizeof(uint32_t) * 2 * cap);
+	r->kfirst = malloc(32 * (size_t) (nt > 0 ? nt : 1));
+	r->band_off = malloc(sizeof(size_t) * (nt + 1));
+	r->cell_off = calloc((size_t) BP_GRID * BP_GRID + 1, sizeof(uint32_t));
+	if (!pairs || !r->kfirst || !r->band_off || !r->cell_off)
+		die(1, "out of memory%s", "");
+	first_regions(r, &pairs, &npairs, &cap);
+	index_cells(r, pairs, npairs);
 	free(pairs);
 }
 
