@@ -25,6 +25,7 @@ DATA = $(EXTENSION)--0.1.0.sql $(EXTENSION)--0.1.0--1.0.0.sql
 
 CORE_SRCS = $(sort $(wildcard src/core/*.c))
 PG_SRCS = $(sort $(wildcard src/pg/*.c))
+CLI_SRCS = $(sort $(wildcard src/cli/*.c))
 OBJS = $(CORE_SRCS:.c=.o) $(PG_SRCS:.c=.o)
 
 REGRESS = $(basename $(notdir $(sort $(wildcard sql/*.sql))))
@@ -46,8 +47,8 @@ TEST_CFLAGS = -Itest -DTDC_SOURCE_DIR='"$(CURDIR)"'
 
 .PHONY: check-core check-core-asan check-core-tsan test demo bench
 
-tdc: src/cli/tdc.c src/cli/tiled.c src/cli/cli.h $(CORE_SRCS) $(wildcard src/core/*.h)
-	$(CC_CORE) $(CORE_CFLAGS) -o $@ src/cli/tdc.c src/cli/tiled.c $(CORE_SRCS) -lm
+tdc: $(CLI_SRCS) $(wildcard src/cli/*.h) $(CORE_SRCS) $(wildcard src/core/*.h)
+	$(CC_CORE) $(CORE_CFLAGS) -o $@ $(CLI_SRCS) $(CORE_SRCS) -lm
 
 build/test_core: $(TEST_SRCS) $(wildcard test/*.h) $(CORE_SRCS) $(wildcard src/core/*.h)
 	@mkdir -p build

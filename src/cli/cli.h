@@ -1,18 +1,85 @@
 /*
  * cli.h
- *		What the two files of ./tdc share: the front end (tdc.c) and the
- *		tiled run of --max-memory (tiled.c).  Not installed.
+ *		What the files of ./tdc share.  Not installed.
+ *
+ *	tdc.c		the front end: arguments, which run, the --max-memory sizing
+ *	input.c		reading INPUT and the segment file
+ *	oneshot.c	the run with the whole input in memory, and its output
+ *	bounded*.c	the run of --max-memory that does not fit: tile by tile
+ *				through files (bounded.h)
+ *	die.c		how ./tdc fails
+ * Layered without loops: die.c at the bottom, then bounded_files.c, then
+ * input.c and the bounded run's phases, then bounded.c, then tdc.c.
  */
 #ifndef TDC_CLI_H
 #define TDC_CLI_H
 
+#include <stdbool.h>
 #include <stdio.h>
 #include <stddef.h>
+#include <stdint.h>
 
 #include "tdc.h"
 
-/* Counts and wall times of a tiled run, for --stats. */
-typedef struct tiled_stats
+/* The command line, as parsed by tdc.c */
+typedef struct cli_args
+{
+	tdc_options opt;
+	const char *input,
+			   *outpath,		/* -o */
+			   *segpath,		/* --segments */
+			   *tmpdir;			/* --tmpdir */
+	int			stats,
+				validate,
+				voronoi;
+	long		max_mb;			/* --max-memory, 0 without it */
+} cli_args;
+
+/* The input points in memory */
+typedef struct cli_input
+{
+	size_t		n;
+	double	   *xy,
+			   *z;				/* NULL without z */
+} cli_input;
+
+/* die.c: "tdc: " and fmt with arg on stderr, then exit(code) */
+extern void die(int code, const char *fmt, const char *arg) __attribute__((noreturn));
+
+/* input.c */
+extern bool is_bin_path(const char *path);
+extern int	parse_line(char *line, size_t lineno, double v[3], int *dims);
+extern void read_input(const char *path, cli_input *in);
+extern double *read_bin(const char *path, size_t *n);
+extern uint32_t *read_segments(const char *path, size_t n, size_t *k);
+extern size_t text_to_bin(const char *path, int *has_z);
+
+/* oneshot.c: the run over the whole input, in memory */
+typedef struct oneshot
+{
+	tdc_job    *job;
+	tdc_cdt    *cdt;			/* with --segments */
+	uint32_t   *seg;
+	size_t		nseg;
+	double		constrain_s;
+	tdc_voronoi *vor;			/* with --voronoi */
+	char	   *cells;			/* the cells written without -o */
+	double		vor_seconds;
+} oneshot;
+
+extern void oneshot_run(const cli_args *a, const cli_input *in, oneshot *r);
+extern void oneshot_write(const cli_args *a, const cli_input *in, const oneshot *r);
+extern void oneshot_report(const cli_args *a, const oneshot *r);
+extern void oneshot_free(oneshot *r, cli_input *in);
+
+/* bounded_files.c: the temporary directory of the tiles */
+extern char tmp_dir[4096];
+extern void tmp_create(const char *base);
+extern void tmp_cleanup(void);
+extern FILE *tmp_open(const char *name, const char *mode);
+
+/* Counts and wall times of a bounded run, for --stats. */
+typedef struct bounded_stats
 {
 	size_t		n,
 				unique,
@@ -28,17 +95,10 @@ typedef struct tiled_stats
 				engine,			/* tdc_triangulate */
 				finish,			/* tdc_tile_finish */
 				write;			/* the triangles to -o, and the frees */
-} tiled_stats;
+} bounded_stats;
 
-/* tdc.c */
-extern void die(int code, const char *fmt, const char *arg) __attribute__((noreturn));
-extern int	parse_line(char *line, size_t lineno, double v[3], int *dims);
-
-/* tiled.c: the temporary directory of the tiles, removed by tmp_cleanup */
-extern char tmp_dir[4096];
-extern void tmp_cleanup(void);
-extern size_t text_to_bin(const char *path, int *has_z);
-extern void run_tiled(const char *xypath, const char *zpath, size_t n, const tdc_options *opt,
-					  size_t budget, FILE *out, tiled_stats *st);
+/* bounded.c */
+extern void run_bounded(const char *xypath, const char *zpath, size_t n, const tdc_options *opt,
+						size_t budget, FILE *out, bounded_stats *st);
 
 #endif							/* TDC_CLI_H */

@@ -1,0 +1,173 @@
+/*
+ * bounded.c
+ *		./tdc --max-memory MB [--tmpdir DIR]: the triangulation of an input
+ *		that does not fit, tile by tile through files.
+ *
+ * When the one-shot run (the input, the engine, the result) would not fit
+ * in MB, the input is cut into tiles on disk and triangulated tile by tile
+ * with the core's exact tiling (src/core/tile.c), and the triangles are
+ * written as each tile finishes.  Two sequential reads of the input (text
+ * input is first converted to a temporary .bin), in phases:
+ *	scan	bounding box, convex hull (in chunks: the hull of a union is the
+ *			hull of the parts' hulls, and a point inside a rectangle inside
+ *			the hull so far is skipped) and counts on a fine grid, whose box
+ *			comes from a sample of the file (counted again in a pass of its
+ *			own when the sample was far off) (bounded_scan.c);
+ *	plan	the grid cut into tiles of at most tile_max points by median
+ *			splits along the longer side (kd-tree of cells), so that
+ *			clustered data gets small tiles where it is dense
+ *			(bounded_policy.c);
+ *	bands	the bands along the hull edges, extra known boxes of the tiles
+ *			near them (bounded_policy.c);
+ *	bin		each point appended to its tile's file, and to the halo file of
+ *			every other tile whose first known region holds it; the two
+ *			halves of the input on two threads, each with its own files,
+ *			read back one after the other (bounded_bin.c);
+ *	tiles	each tile run until final, its triangles written
+ *			(bounded_tile.c).
+ * A point's cell is decided exactly against the doubles of the cell sides,
+ * so a tile's points lie in its cells' box, and its first known region is
+ * fixed before binning: K = that box plus a halo of 8 mean point spacings,
+ * and as extra known boxes the bands along the hull edges near it.
+ *
+ * Memory: the largest tile with its halo is bounded by tile_max times a
+ * growth allowance; a tile whose K would exceed the budget is an error,
+ * never a silent overrun.
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#ifdef __GLIBC__
+#include <malloc.h>
+#endif
+
+#include "bounded.h"
+
+/*
+ * The plan: after it, r->grid is the grid every point is placed on (its
+ * outer cells reaching the true box), r->tiles[0 .. r->nt) the tiles, each
+ * with its cells, its count and an empty box, and r->cell_tile each cell's
+ * tile.  Dies when the policy refuses the plan.
+ */
+static void
+plan(bounded_run *r)
+{
+	size_t	   *ps,
+				tile_max;
+	bp_plan_status rc;
+
+	/*
+	 * Fine counts (unless pass 1 made them on a grid near the box) and the
+	 * tiles.  The outer cells reach the true box: a point's cell still
+	 * holds it.
+	 */
+	if (r->counted && !bp_grid_near(&r->grid, r->bb))
+	{
+		r->counted = false;
+		memset(r->counts, 0, sizeof(uint32_t) * BP_GRID * BP_GRID);
+	}
+	if (!r->counted)
+		bp_grid_set(&r->grid, r->bb);
+	bp_grid_reach(&r->grid, r->bb);
+	ps = calloc((size_t) (BP_GRID + 1) * (BP_GRID + 1), sizeof(size_t));
+	r->tiles = calloc(BP_MAX_TILES, sizeof(bp_tile));
+	r->cell_tile = malloc((size_t) BP_GRID * BP_GRID * sizeof(int16_t));
+	if (!ps || !r->tiles || !r->cell_tile)
+		die(1, "out of memory%s", "");
+	if (!r->counted)
+		scan_count(r);
+	bp_prefix_sums(r->counts, ps);
+	free(r->counts);
+	r->counts = NULL;
+
+	tile_max = bp_tile_max(r->n, r->opt, r->has_z, r->budget);
+	rc = bp_plan(ps, &r->grid, tile_max, r->tiles, &r->nt);
+	if (rc == BP_PLAN_DENSE_CELL)
+		die(1, "the points are too clustered for --max-memory: one cell of the tiling grid holds %s points", "more than a tile's share of");
+	if (rc == BP_PLAN_TOO_MANY_TILES)
+		die(1, "--max-memory is too small for this input: more than %s tiles would be needed", "900");
+	free(ps);
+	for (int t = 0; t < r->nt; t++)
+	{
+		r->tiles[t].bb[0] = r->tiles[t].bb[1] = INFINITY;
+		r->tiles[t].bb[2] = r->tiles[t].bb[3] = -INFINITY;
+	}
+	bp_label_cells(r->tiles, r->nt, r->cell_tile);
+	r->st->tiles = r->nt;
+}
+
+/*
+ * The hull bands, r->bands, and the scratch arrays of a tile's extra known
+ * boxes, sized by the hull.
+ */
+static void
+bands(bounded_run *r)
+{
+	r->extra = malloc(32 * (r->nhull + 1));
+	r->bands = malloc(32 * (r->nhull + 1));
+	r->inband = calloc(r->nhull + 1, 1);
+	r->xs = malloc(sizeof(double *) * (r->nhull + 1));
+	if (r->extra == NULL || r->bands == NULL || r->inband == NULL || r->xs == NULL)
+		die(1, "out of memory%s", "");
+	bp_hull_bands(r->hull, r->nhull, r->bb, r->n, r->bands);
+}
+
+/*
+ * The bounded run.  xypath/zpath: the .bin source (z beside it for text
+ * input with z).  budget: bytes.  Writes the triangles to out (when not
+ * NULL) and the counts and times to st; dies on errors.
+ */
+void
+run_bounded(const char *xypath, const char *zpath, size_t n, const tdc_options *opt,
+			size_t budget, FILE *out, bounded_stats *st)
+{
+	bounded_run r = {
+		.xypath = xypath, .zpath = zpath, .n = n, .opt = opt, .budget = budget,
+		.out = out, .st = st, .has_z = zpath != NULL, .w = zpath != NULL ? 3 : 2
+	};
+	double		t0;
+
+	memset(st, 0, sizeof(*st));
+	st->n = n;
+#ifdef __GLIBC__
+
+	/*
+	 * Every tile allocates and frees the same large arrays.  Served by mmap
+	 * they go back to the kernel at each free and come back as fresh pages
+	 * to fault in and zero, a tenth of the run; kept in the heap they are
+	 * reused.  The peak stays that of the largest tile.
+	 */
+	mallopt(M_MMAP_MAX, 0);
+	mallopt(M_TRIM_THRESHOLD, INT32_MAX);
+#endif
+
+	t0 = now_s();
+	/* the points' box and hull; the cells counted when the grid is known */
+	scan_input(&r);
+	/* every cell in one tile, every tile at most tile_max points */
+	plan(&r);
+	/* every tile's first known region fixed: K and its bands */
+	bands(&r);
+	halo_index(&r);
+	st->scan = now_s() - t0;
+
+	/* every point in its tile's file, and in the halo files of the others' first regions */
+	t0 = now_s();
+	bin_points(&r);
+	st->bin = now_s() - t0;
+
+	/* every global triangle written once, by the tile that owns it */
+	for (int t = 0; t < r.nt; t++)
+		tile_run(&r, t);
+
+	free(r.extra);
+	free(r.bands);
+	free(r.inband);
+	free(r.xs);
+	free(r.tiles);
+	free(r.hull);
+	free(r.kfirst);
+	free(r.band_off);
+	free(r.band_idx);
+	free(r.halo_count);
+}

@@ -1,0 +1,144 @@
+/*
+ * bounded.h
+ *		The run of ./tdc --max-memory that does not fit in one piece: what
+ *		its files share (bounded.c explains the run).
+ *
+ *	bounded.c			the phases in order, and the plan
+ *	bounded_policy.c	the tiling policy, pure (bounded_policy.h)
+ *	bounded_files.c		the source in chunks, the tile and halo files
+ *	bounded_scan.c		pass 1: box, hull and cell counts
+ *	bounded_bin.c		pass 2: every point to its tile's file and halos
+ *	bounded_tile.c		a tile's runs until final, and its triangles out
+ */
+#ifndef TDC_BOUNDED_H
+#define TDC_BOUNDED_H
+
+#include <time.h>
+
+#include "cli.h"
+#include "bounded_policy.h"
+
+#define CHUNK		(1 << 16)	/* points per read of the source */
+
+/* Reads the .bin source (and z) in chunks: the caller's loop. */
+typedef struct source
+{
+	FILE	   *fxy,
+			   *fz;
+	double	   *xy,
+			   *z;
+	size_t		left;			/* points still to read */
+} source;
+
+/* Buffered appends of fixed-size records to one temporary file. */
+typedef struct recfile
+{
+	FILE	   *f;
+	double	   *buf;
+	size_t		len,			/* doubles in buf */
+				cap;
+	size_t		count;			/* records written */
+} recfile;
+
+/* Reads a tile's file of a kind across its parts, in order. */
+typedef struct mreader
+{
+	const char *kind;
+	int			t,
+				part,
+				nparts;
+	FILE	   *f;
+} mreader;
+
+/*
+ * The state of one run, filled phase by phase (bounded.c says which phase
+ * fills what).
+ */
+typedef struct bounded_run
+{
+	/* the call's */
+	const char *xypath,
+			   *zpath;			/* the .bin source, and z beside it or NULL */
+	size_t		n;
+	const tdc_options *opt;
+	size_t		budget;			/* bytes */
+	FILE	   *out;			/* NULL: the triangles are not written */
+	bounded_stats *st;
+	int			has_z,
+				w;				/* doubles per point record: 2, or 3 with z */
+
+	/* pass 1 */
+	double		bb[4];			/* the points' exact box */
+	double	   *hull;			/* their convex hull */
+	size_t		nhull;
+	uint32_t   *counts;			/* per cell of grid, freed by the plan */
+	bool		counted;		/* pass 1 counted the cells too */
+
+	/* the plan */
+	bp_grid		grid;
+	bp_tile    *tiles;
+	int			nt;
+	int16_t    *cell_tile;		/* the tile of each cell, freed by binning */
+
+	/* the first known regions */
+	double	   *bands;			/* every hull edge's band */
+	double	   *extra;			/* nhull + 1 boxes: a tile run's extra known boxes */
+	uint8_t    *inband;			/* nhull + 1: is it among this tile's extra boxes */
+	const double **xs;			/* nhull + 1: the bands a point is tested against */
+	bool		use_halo;		/* binning writes halo files */
+	double	   *kfirst;			/* each tile's first K */
+	size_t	   *band_off,		/* each tile's first bands: band_idx[band_off[t] ..] */
+			   *band_idx;
+	uint32_t   *cell_off;		/* per cell, its halo tiles: cell_halo[cell_off[c] ..] */
+	int16_t    *cell_halo;
+
+	/* pass 2 */
+	int			nparts;			/* binning parts: files per tile and kind */
+	size_t	   *halo_count;		/* each tile's halo file's points */
+} bounded_run;
+
+static inline double
+now_s(void)
+{
+	struct timespec t;
+
+	clock_gettime(CLOCK_MONOTONIC, &t);
+	return t.tv_sec + t.tv_nsec * 1e-9;
+}
+
+/* bounded_files.c */
+extern void source_open(source *s, const char *xypath, const char *zpath);
+extern void source_range(source *s, size_t from, size_t count);
+extern size_t source_read(source *s);
+extern void source_close(source *s);
+extern void rec_open(recfile *r, const char *kind, int t, int part, size_t cap);
+extern void rec_flush(recfile *r);
+extern void rec_close(recfile *r);
+extern void mr_open(mreader *m, const char *kind, int t, int nparts);
+extern size_t mr_read(mreader *m, void *buf, size_t size, size_t count);
+extern void mr_close(mreader *m);
+extern void read_all(const char *kind, int t, int nparts, double *buf, size_t k, int w);
+
+static inline void
+rec_put(recfile *r, const double *v, int w)
+{
+	if (r->len + w > r->cap)
+		rec_flush(r);
+	for (int k = 0; k < w; k++)
+		r->buf[r->len + k] = v[k];
+	r->len += w;
+	r->count++;
+}
+
+/* bounded_scan.c */
+extern void scan_input(bounded_run *r);
+extern void scan_count(bounded_run *r);
+
+/* bounded_bin.c */
+extern void halo_index(bounded_run *r);
+extern void bin_points(bounded_run *r);
+
+/* bounded_tile.c */
+extern void tile_run(bounded_run *r, int t);
+
+#endif							/* TDC_BOUNDED_H */

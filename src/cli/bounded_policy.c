@@ -1,0 +1,362 @@
+/*
+ * bounded_policy.c
+ *		The tiling policy of a bounded-memory run (see bounded_policy.h):
+ *		the plan of tiles, the first known region of each tile (its cell
+ *		box plus 8 mean spacings, and the bands of 16 mean spacings along
+ *		the hull edges near it) and the growth of that region on a rerun.
+ *
+ * Pure: every function reads its arguments and writes its outputs, nothing
+ * else.
+ */
+#include <math.h>
+#include <string.h>
+
+#include "bounded_policy.h"
+
+/*
+ * The counting grid's box from the box g of a sample of the points, grown
+ * by two cells a side, so that the scan can count as it finds the true box.
+ * The cells stay exact whatever the sample (bp_cell_of clamps, and
+ * bp_grid_reach widens the outer cells to the true box); a box far off the
+ * true one only makes a poor plan, which bp_grid_near detects.  False when
+ * the sample is flat or not finite: no grid before the true box.
+ */
+bool
+bp_grid_from_sample(double g[4])
+{
+	double		mx,
+				my;
+
+	if (!(g[2] > g[0]) || !(g[3] > g[1]) || !isfinite(g[2] - g[0]) || !isfinite(g[3] - g[1]))
+		return false;
+	mx = (g[2] - g[0]) * 2 / BP_GRID;
+	my = (g[3] - g[1]) * 2 / BP_GRID;
+	g[0] -= mx;
+	g[1] -= my;
+	g[2] += mx;
+	g[3] += my;
+	return isfinite(g[0]) && isfinite(g[1]) && isfinite(g[2]) && isfinite(g[3]);
+}
+
+/* The fine grid over box: scales, cell sizes and the cell sides. */
+void
+bp_grid_set(bp_grid *g, const double box[4])
+{
+	memcpy(g->box, box, sizeof(g->box));
+	g->sx = box[2] > box[0] ? BP_GRID / (box[2] - box[0]) : 0;
+	g->sy = box[3] > box[1] ? BP_GRID / (box[3] - box[1]) : 0;
+	g->cw = (box[2] - box[0]) / BP_GRID;
+	g->ch = (box[3] - box[1]) / BP_GRID;
+	for (int c = 0; c <= BP_GRID; c++)
+	{
+		g->xcut[c] = box[0] + c * g->cw;
+		g->ycut[c] = box[1] + c * g->ch;
+	}
+	g->xcut[BP_GRID] = fmax(g->xcut[BP_GRID], box[2]);
+	g->ycut[BP_GRID] = fmax(g->ycut[BP_GRID], box[3]);
+}
+
+/*
+ * Whether counts made on grid g are good for a plan of points whose true
+ * box is bb: it reaches at most one cell past g's box on every side.
+ */
+bool
+bp_grid_near(const bp_grid *g, const double bb[4])
+{
+	return !(bb[0] < g->box[0] - g->cw || bb[2] > g->box[2] + g->cw ||
+			 bb[1] < g->box[1] - g->ch || bb[3] > g->box[3] + g->ch);
+}
+
+/*
+ * The outer cells widened to the true box bb: a point's cell still holds
+ * it, and no point changes cell (bp_cell_of clamps to the outer cells).
+ */
+void
+bp_grid_reach(bp_grid *g, const double bb[4])
+{
+	g->xcut[0] = fmin(g->xcut[0], bb[0]);
+	g->ycut[0] = fmin(g->ycut[0], bb[1]);
+	g->xcut[BP_GRID] = fmax(g->xcut[BP_GRID], bb[2]);
+	g->ycut[BP_GRID] = fmax(g->ycut[BP_GRID], bb[3]);
+}
+
+/*
+ * Bytes one tile run of m points (with z or not) may hold at once: the
+ * gathered points and labels, the engine, tile.c's per-site arrays (the 4
+ * bytes once taken by the input map now hold its block grid for the deep
+ * sites, under a byte per point), and the triangle indices (at most 2m
+ * triangles of 3 size_t).
+ */
+size_t
+bp_tile_bytes(size_t m, const tdc_options *opt, int has_z)
+{
+	return tdc_estimate_memory(m, opt) + m * (16 + 8 + (has_z ? 8 : 0) + 4 + 8 + 1 + 48) + (1 << 20);
+}
+
+/*
+ * The most points a tile may own: its points with the halo and a growth
+ * allowance of 1.5 must fit in the budget.  (It was 2.2 while a sliver
+ * along a long hull edge made corner tiles grow; tile.c now bounds such a
+ * triangle's circle by its segment over the hull edge.  A tile that still
+ * outgrows the budget is first shrunk back, see bp_shrink_known.)
+ */
+size_t
+bp_tile_max(size_t n, const tdc_options *opt, int has_z, size_t budget)
+{
+	size_t		tile_max;
+
+	for (tile_max = n; tile_max > 1000 && bp_tile_bytes(tile_max * 3 / 2, opt, has_z) > budget;)
+		tile_max = tile_max * 9 / 10;
+	return tile_max;
+}
+
+/* ps: the (BP_GRID + 1)^2 prefix sums of the BP_GRID^2 cell counts. */
+void
+bp_prefix_sums(const uint32_t *counts, size_t *ps)
+{
+	const int	w = BP_GRID + 1;
+
+	for (int r = 0; r < BP_GRID; r++)
+		for (int c = 0; c < BP_GRID; c++)
+			ps[(r + 1) * w + c + 1] = counts[r * BP_GRID + c] +
+				ps[r * w + c + 1] + ps[(r + 1) * w + c] - ps[r * w + c];
+}
+
+/* Points in cells [c0, c1) x [r0, r1) from the prefix sums. */
+static size_t
+cells_count(const size_t *ps, int c0, int c1, int r0, int r1)
+{
+	const int	w = BP_GRID + 1;
+
+	return ps[r1 * w + c1] - ps[r0 * w + c1] - ps[r1 * w + c0] + ps[r0 * w + c0];
+}
+
+/* kd-split of the cell rectangle until every tile holds at most tile_max points. */
+static bp_plan_status
+plan_rect(const size_t *ps, int c0, int c1, int r0, int r1, double cw, double ch,
+		  size_t tile_max, bp_tile *tiles, int *nt)
+{
+	size_t		cnt = cells_count(ps, c0, c1, r0, r1),
+				k;
+	bool		by_x;
+	int			lo,
+				hi;
+	bp_plan_status rc;
+
+	if (cnt == 0)
+		return BP_PLAN_OK;
+	if (cnt <= tile_max || (c1 - c0 == 1 && r1 - r0 == 1))
+	{
+		if (cnt > tile_max)
+			return BP_PLAN_DENSE_CELL;
+		if (*nt >= BP_MAX_TILES)
+			return BP_PLAN_TOO_MANY_TILES;
+		tiles[*nt].c0 = c0;
+		tiles[*nt].c1 = c1;
+		tiles[*nt].r0 = r0;
+		tiles[*nt].r1 = r1;
+		tiles[*nt].count = cnt;
+		(*nt)++;
+		return BP_PLAN_OK;
+	}
+	by_x = (c1 - c0 > 1) && ((c1 - c0) * cw >= (r1 - r0) * ch || r1 - r0 == 1);
+
+	/*
+	 * The rectangle needs k = ceil(cnt / tile_max) tiles: cut it at the
+	 * fraction floor(k / 2) / k, so that each side needs a whole number of
+	 * tiles.  Halving instead would round the count up to a power of two:
+	 * 16 tiles where 9 do, each smaller, with more halo in all.  The cut is
+	 * the smallest cell line with at least that fraction below.
+	 */
+	k = (cnt + tile_max - 1) / tile_max;
+	lo = by_x ? c0 + 1 : r0 + 1;
+	hi = by_x ? c1 - 1 : r1 - 1;
+	while (lo < hi)
+	{
+		int			mid = (lo + hi) / 2;
+		size_t		below = by_x ? cells_count(ps, c0, mid, r0, r1) : cells_count(ps, c0, c1, r0, mid);
+
+		if (below * k >= cnt * (k / 2))
+			hi = mid;
+		else
+			lo = mid + 1;
+	}
+	if (by_x)
+	{
+		rc = plan_rect(ps, c0, lo, r0, r1, cw, ch, tile_max, tiles, nt);
+		return rc != BP_PLAN_OK ? rc : plan_rect(ps, lo, c1, r0, r1, cw, ch, tile_max, tiles, nt);
+	}
+	rc = plan_rect(ps, c0, c1, r0, lo, cw, ch, tile_max, tiles, nt);
+	return rc != BP_PLAN_OK ? rc : plan_rect(ps, c0, c1, lo, r1, cw, ch, tile_max, tiles, nt);
+}
+
+/*
+ * The plan: the grid's cells (counts in prefix sums ps) cut into tiles of
+ * at most tile_max points by median splits along the longer side (a
+ * kd-tree of cells), so that clustered data gets small tiles where it is
+ * dense.  Empty rectangles get no tile.  tiles[] has room for BP_MAX_TILES;
+ * *nt counts them.  On a refusal the tiles found so far stay in tiles[].
+ */
+bp_plan_status
+bp_plan(const size_t *ps, const bp_grid *g, size_t tile_max, bp_tile *tiles, int *nt)
+{
+	return plan_rect(ps, 0, BP_GRID, 0, BP_GRID, g->cw, g->ch, tile_max, tiles, nt);
+}
+
+/* The label of every cell: the index of the tile that owns it. */
+void
+bp_label_cells(const bp_tile *tiles, int nt, int16_t *cell_tile)
+{
+	for (int t = 0; t < nt; t++)
+		for (int r = tiles[t].r0; r < tiles[t].r1; r++)
+			for (int c = tiles[t].c0; c < tiles[t].c1; c++)
+				cell_tile[r * BP_GRID + c] = (int16_t) t;
+}
+
+/*
+ * The band of every edge of the hull (nhull vertices, counter-clockwise;
+ * none when nhull < 2) of n points whose box is bb: 4 doubles per edge in
+ * bands[], the edge's box grown by 16 mean spacings across it.
+ */
+void
+bp_hull_bands(const double *hull, size_t nhull, const double bb[4], size_t n, double *bands)
+{
+	double		band = 16 * sqrt((bb[2] - bb[0]) * (bb[3] - bb[1]) / (double) (n ? n : 1));
+
+	for (size_t i = 0; nhull > 1 && i < nhull; i++)
+	{
+		const double *a = hull + 2 * i,
+				   *b = hull + 2 * ((i + 1) % nhull);
+
+		/*
+		 * Longer than the edge by three bands at each end: a sliver whose
+		 * circle passes through the edge's end has the part of its disk
+		 * inside C reach past that vertex by the disk's error bound, which
+		 * for such a circle (radius 1e8) is a few spacings; with one band
+		 * the top left tile of 10M uniform points ran twice for 0.7 of a
+		 * spacing.
+		 */
+		bool		along_x = fabs(b[0] - a[0]) >= fabs(b[1] - a[1]);
+
+		bands[4 * i] = fmin(a[0], b[0]) - (along_x ? 3 : 1) * band;
+		bands[4 * i + 1] = fmin(a[1], b[1]) - (along_x ? 1 : 3) * band;
+		bands[4 * i + 2] = fmax(a[0], b[0]) + (along_x ? 3 : 1) * band;
+		bands[4 * i + 3] = fmax(a[1], b[1]) + (along_x ? 1 : 3) * band;
+	}
+}
+
+/*
+ * The first K of tile ti (its cell box plus a halo of 8 mean spacings), h,
+ * and in mark[] (nhull bytes, cleared by the caller) the hull bands it
+ * takes as extra boxes.
+ */
+void
+bp_first_known(const bp_tile *ti, const bp_grid *g, const double *bands, size_t nhull,
+			   double K[4], double *h, uint8_t *mark)
+{
+	double		near[4],
+				gr;
+
+	bp_least_known(ti, g, K);
+	*h = 8 * sqrt((K[2] - K[0]) * (K[3] - K[1]) / (double) ti->count);
+	K[0] -= *h;
+	K[1] -= *h;
+	K[2] += *h;
+	K[3] += *h;
+
+	/*
+	 * Extra known boxes: the boxes of the hull edges near K, grown by a
+	 * band of 16 mean spacings.  A long hull edge has one triangle whose
+	 * circle bulges far out of C: only its thin part inside C, along the
+	 * edge, must be known, and the band holds it, without widening K along
+	 * the whole edge.  The bands also bring in the hull's vertices, so
+	 * every own hull edge is certified at once.
+	 *
+	 * The bands of the hull edges near K, not only those meeting it:
+	 * slivers under a long hull edge have their circles' parts inside C
+	 * along the neighbouring edges too (border tiles of 100M uniform points
+	 * re-ran in 7 cases of 12 without this).  Within K's size of K, the
+	 * bands along a side hold about 96 / sqrt(count) of the tile's points
+	 * (a band is 32 spacings wide), against a whole tile for a re-run:
+	 * taken when that is under 5 %, else only the bands meeting K, and a
+	 * re-run adds what is missing.
+	 */
+	gr = ti->count >= 4000000 ? fmax(K[2] - K[0], K[3] - K[1]) : 0;
+	near[0] = K[0] - gr;
+	near[1] = K[1] - gr;
+	near[2] = K[2] + gr;
+	near[3] = K[3] + gr;
+	for (size_t i = 0; nhull > 1 && i < nhull; i++)
+		mark[i] = bp_box_meets(bands + 4 * i, near);
+}
+
+/* The least known region of tile ti: its cell box, which holds its points. */
+void
+bp_least_known(const bp_tile *ti, const bp_grid *g, double Kmin[4])
+{
+	Kmin[0] = g->xcut[ti->c0];
+	Kmin[1] = g->ycut[ti->r0];
+	Kmin[2] = g->xcut[ti->c1];
+	Kmin[3] = g->ycut[ti->r1];
+}
+
+/*
+ * The shrinks-th shrinking (0 to 3) of a K whose points do not fit: the
+ * halo (or the slack of a grown box) reaches into denser data than the
+ * tile's.  K goes three quarters of the way towards Kmin, the fourth time
+ * all the way; the finality test will ask for what is really needed.
+ */
+void
+bp_shrink_known(double K[4], const double Kmin[4], int shrinks)
+{
+	for (int c = 0; c < 4; c++)
+		K[c] = shrinks == 3 ? Kmin[c] : Kmin[c] + (K[c] - Kmin[c]) / 4;
+}
+
+/*
+ * The first growth after a run that was not final and asked for the box
+ * need: the bands of the hull edges that meet need and are not yet among
+ * the tile's extra boxes (inband[]) are added to extra[] (*nextra boxes).
+ * A request reaching along the border comes from slivers under a long hull
+ * edge, whose circles' parts inside C are thin lenses along the hull: the
+ * tile runs again with the same K and these bands, rather than widen K
+ * along the whole side.  Returns the number of bands added; with none, K
+ * must grow (bp_grow_known).
+ */
+size_t
+bp_grow_bands(const double *bands, size_t nhull, const double need[4], uint8_t *inband,
+			  double *extra, size_t *nextra)
+{
+	size_t		added = 0;
+
+	for (size_t i = 0; nhull > 1 && i < nhull; i++)
+		if (!inband[i] && bp_box_meets(bands + 4 * i, need))
+		{
+			inband[i] = 1;
+			memcpy(extra + 4 * (*nextra)++, bands + 4 * i, 32);
+			added++;
+		}
+	return added;
+}
+
+/*
+ * K grown to the box need the run asked for, and by half the tile's halo h
+ * beyond it: a little more than asked, since each run costs a whole tile.
+ * If need is too big for the budget, K may fall back (bp_shrink_known) to
+ * the new Kmin, a step of an eighth of the way from the old K: the needs
+ * of a thin halo overstate what the final stars need, and any growth is
+ * progress.
+ */
+void
+bp_grow_known(double K[4], double Kmin[4], const double need[4], double h)
+{
+	double		gx = 0.5 * h,
+				gy = 0.5 * h;
+
+	for (int c = 0; c < 4; c++)
+		Kmin[c] = K[c] + (need[c] - K[c]) / 8;
+	K[0] = need[0] - gx;
+	K[1] = need[1] - gy;
+	K[2] = need[2] + gx;
+	K[3] = need[3] + gy;
+}

@@ -1,0 +1,275 @@
+/*
+ * bounded_scan.c
+ *		Pass 1 of a bounded run over the .bin source: the points' exact
+ *		box, their convex hull, and the counts of the cells of the fine
+ *		grid that the plan cuts into tiles.
+ *
+ * The grid's box comes from a sample of the file, so that the pass can
+ * count as it finds the box and hull; when the sample was far off, or the
+ * input too small to sample, the plan has the cells counted again in a
+ * pass of their own (scan_count).
+ */
+#include <math.h>
+#include <pthread.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "bounded.h"
+
+/*
+ * The box of a sample of the .bin source (256 runs of 256 points spread
+ * over the file) in g, made a grid's box by bp_grid_from_sample.  False
+ * when n is small, the file unreadable or the sample flat.
+ */
+static bool
+sample_grid(const char *xypath, size_t n, double g[4])
+{
+	FILE	   *f;
+	double		buf[2 * 256];
+
+	if (n < ((size_t) 1 << 18) || (f = fopen(xypath, "rb")) == NULL)
+		return false;
+	g[0] = g[1] = INFINITY;
+	g[2] = g[3] = -INFINITY;
+	for (size_t j = 0; j < 256; j++)
+	{
+		size_t		got;
+
+		if (fseeko(f, (off_t) ((n - 256) / 255 * j) * 16, SEEK_SET) != 0)
+			break;
+		got = fread(buf, 16, 256, f);
+		for (size_t i = 0; i < got; i++)
+			if (isfinite(buf[2 * i]) && isfinite(buf[2 * i + 1]))
+				bp_box_add(g, buf[2 * i], buf[2 * i + 1]);
+	}
+	fclose(f);
+	return bp_grid_from_sample(g);
+}
+
+/*
+ * Pass 1 over the input points [from, from + count): their box, convex
+ * hull and, when the grid is known (grid not NULL), the counts of its
+ * cells.  The hull of a union is the hull of the parts' hulls; a point
+ * strictly inside a rectangle inside the hull so far (inner) cannot be a
+ * vertex of it, and for most data that rectangle holds almost every point:
+ * only the others go to the chunk's hull.  Runs as two parts on two
+ * threads when the grid is known.
+ */
+typedef struct scan_work
+{
+	const char *xypath;
+	size_t		from,
+				count;
+	const bp_grid *grid;
+	uint32_t   *counts;
+	/* results */
+	double		bb[4];
+	double	   *hull;
+	size_t		nhull;
+	bool		bad;			/* a coordinate not finite or out of range */
+} scan_work;
+
+/*
+ * The largest rectangle, of the hull's box shrunk towards its centre, whose
+ * open inside is inside the hull (nhull >= 3 vertices): into inner, left
+ * as it is when none is found.
+ */
+static void
+inner_rectangle(const double *hull, size_t nhull, double inner[4])
+{
+	double		hb[4] = {INFINITY, INFINITY, -INFINITY, -INFINITY},
+				cx,
+				cy;
+
+	for (size_t i = 0; i < nhull; i++)
+		bp_box_add(hb, hull[2 * i], hull[2 * i + 1]);
+	cx = 0.5 * (hb[0] + hb[2]);
+	cy = 0.5 * (hb[1] + hb[3]);
+	for (double f = 0.98; f > 0.2; f -= 0.16)
+	{
+		double		r[4] = {cx - f * (cx - hb[0]), cy - f * (cy - hb[1]),
+		cx + f * (hb[2] - cx), cy + f * (hb[3] - cy)};
+		bool		in = r[0] < r[2] && r[1] < r[3];
+		double	   *hb2 = malloc(16 * (nhull + 4)),
+				   *h3 = NULL;
+		size_t		n3 = 0;
+
+		/*
+		 * The closed rectangle is inside the closed hull when adding its
+		 * corners leaves the hull as it is; its open inside is then inside
+		 * the hull's, whose points are no vertices.
+		 */
+		if (hb2 == NULL)
+			die(1, "out of memory%s", "");
+		memcpy(hb2, hull, 16 * nhull);
+		memcpy(hb2 + 2 * nhull, (double[8]) {r[0], r[1], r[2], r[1], r[2], r[3], r[0], r[3]}, 64);
+		if (in && tdc_convex_hull(hb2, nhull + 4, &h3, &n3) != TDC_OK)
+			die(1, "out of memory%s", "");
+		in = in && n3 == nhull && memcmp(h3, hull, 16 * nhull) == 0;
+		free(hb2);
+		free(h3);
+		if (in)
+		{
+			memcpy(inner, r, sizeof(r));
+			return;
+		}
+	}
+}
+
+static void *
+scan_range(void *arg)
+{
+	scan_work  *sw = arg;
+	source		src;
+	size_t		k,
+				nhull = 0;
+	double	   *hull = NULL,
+				inner[4] = {INFINITY, INFINITY, -INFINITY, -INFINITY},
+			   *bb = sw->bb;
+	bool		counted = sw->grid != NULL;
+	const double *grid = counted ? sw->grid->box : NULL,
+			   *xcut = counted ? sw->grid->xcut : NULL,
+			   *ycut = counted ? sw->grid->ycut : NULL;
+	double		sx = counted ? sw->grid->sx : 0,
+				sy = counted ? sw->grid->sy : 0;
+	uint32_t   *counts = sw->counts;
+
+	bb[0] = bb[1] = INFINITY;
+	bb[2] = bb[3] = -INFINITY;
+	sw->bad = false;
+	source_open(&src, sw->xypath, NULL);
+	source_range(&src, sw->from, sw->count);
+	while ((k = source_read(&src)) > 0)
+	{
+		double	   *buf,
+				   *h2;
+		size_t		n2,
+					m = 0;
+
+		buf = malloc(16 * (k + nhull));
+		if (buf == NULL)
+			die(1, "out of memory%s", "");
+		for (size_t i = 0; i < k; i++)
+		{
+			double		x = src.xy[2 * i],
+						y = src.xy[2 * i + 1];
+
+			if (!isfinite(x) || !isfinite(y) ||
+				(x != 0 && (fabs(x) < TDC_COORD_MIN || fabs(x) > TDC_COORD_MAX)) ||
+				(y != 0 && (fabs(y) < TDC_COORD_MIN || fabs(y) > TDC_COORD_MAX)))
+			{
+				sw->bad = true;
+				continue;
+			}
+			if (x < bb[0])
+				bb[0] = x;
+			if (x > bb[2])
+				bb[2] = x;
+			if (y < bb[1])
+				bb[1] = y;
+			if (y > bb[3])
+				bb[3] = y;
+			if (counted)
+				counts[bp_cell_of(y, grid[1], sy, ycut) * BP_GRID + bp_cell_of(x, grid[0], sx, xcut)]++;
+			if (x > inner[0] && x < inner[2] && y > inner[1] && y < inner[3])
+				continue;
+			buf[2 * m] = x;
+			buf[2 * m + 1] = y;
+			m++;
+		}
+		if (nhull)
+			memcpy(buf + 2 * m, hull, 16 * nhull);
+		if (tdc_convex_hull(buf, m + nhull, &h2, &n2) != TDC_OK)
+			die(1, "out of memory%s", "");
+		free(buf);
+		free(hull);
+		hull = h2;
+		nhull = n2;
+		if (nhull >= 3)
+			inner_rectangle(hull, nhull, inner);
+	}
+	source_close(&src);
+	sw->hull = hull;
+	sw->nhull = nhull;
+	return NULL;
+}
+
+/*
+ * Pass 1: r->bb the exact box of the points, r->hull their convex hull,
+ * and, when a sample of the file gave a grid (r->counted), r->grid that
+ * grid and r->counts its cells' counts.  Dies on a coordinate that is not
+ * finite or out of the supported range.
+ */
+void
+scan_input(bounded_run *r)
+{
+	/* the two halves of the input on two threads when the grid is known */
+	int			np;
+	scan_work	sw[2];
+	pthread_t	th;
+	bool		started = false;
+	double		g[4];
+
+	r->counts = calloc((size_t) BP_GRID * BP_GRID, sizeof(uint32_t));
+	if (r->counts == NULL)
+		die(1, "out of memory%s", "");
+	r->counted = sample_grid(r->xypath, r->n, g);
+	if (r->counted)
+		bp_grid_set(&r->grid, g);
+	np = r->counted ? 2 : 1;
+	for (int p = 0; p < np; p++)
+	{
+		sw[p].xypath = r->xypath;
+		sw[p].from = r->n / np * p;
+		sw[p].count = p == np - 1 ? r->n - sw[p].from : r->n / np;
+		sw[p].grid = r->counted ? &r->grid : NULL;
+		sw[p].counts = p == 0 ? r->counts : calloc((size_t) BP_GRID * BP_GRID, sizeof(uint32_t));
+		if (sw[p].counts == NULL)
+			die(1, "out of memory%s", "");
+	}
+	if (np == 2)
+		started = pthread_create(&th, NULL, scan_range, &sw[1]) == 0;
+	scan_range(&sw[0]);
+	if (started)
+		pthread_join(th, NULL);
+	else if (np == 2)
+		scan_range(&sw[1]);
+	for (int p = 0; p < np; p++)
+		if (sw[p].bad)
+			die(1, "a point has a non-finite coordinate or one outside the supported magnitude range%s", "");
+	memcpy(r->bb, sw[0].bb, sizeof(r->bb));
+	r->hull = sw[0].hull;
+	r->nhull = sw[0].nhull;
+	if (np == 2)
+	{
+		double	   *buf = malloc(16 * (r->nhull + sw[1].nhull + 1));
+
+		if (buf == NULL)
+			die(1, "out of memory%s", "");
+		bp_box_union(r->bb, sw[1].bb);
+		memcpy(buf, r->hull, 16 * r->nhull);
+		memcpy(buf + 2 * r->nhull, sw[1].hull, 16 * sw[1].nhull);
+		free(r->hull);
+		if (tdc_convex_hull(buf, r->nhull + sw[1].nhull, &r->hull, &r->nhull) != TDC_OK)
+			die(1, "out of memory%s", "");
+		free(buf);
+		free(sw[1].hull);
+		for (size_t c = 0; c < (size_t) BP_GRID * BP_GRID; c++)
+			r->counts[c] += sw[1].counts[c];
+		free(sw[1].counts);
+	}
+}
+
+/* r->counts: the cells' counts on r->grid, in a pass of their own. */
+void
+scan_count(bounded_run *r)
+{
+	source		src;
+	size_t		k;
+
+	source_open(&src, r->xypath, NULL);
+	while ((k = source_read(&src)) > 0)
+		for (size_t i = 0; i < k; i++)
+			r->counts[bp_cell(&r->grid, src.xy[2 * i], src.xy[2 * i + 1])]++;
+	source_close(&src);
+}

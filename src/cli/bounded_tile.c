@@ -1,0 +1,391 @@
+/*
+ * bounded_tile.c
+ *		One tile of a bounded run, from its first run to its final one, and
+ *		its triangles out.
+ *
+ * The first run of a tile reads its own file and its halo file, and nothing
+ * else; it triangulates; tdc_tile_finish either hands over the tile's
+ * triangles or asks for a larger known region, and the tile runs again
+ * (first with the bands of the hull edges the request meets, then with a
+ * larger K), gathering every point inside the new region from the tile
+ * files whose boxes meet it.
+ *
+ * Memory: a tile whose region would exceed the budget is shrunk towards
+ * its least region first (a first region too big for the budget is
+ * gathered and shrunk as a rerun's is), and is an error when it still
+ * does not fit, never a silent overrun.
+ */
+#include <stdlib.h>
+#include <string.h>
+
+#include "bounded.h"
+
+/* A tile run's points: coordinates, z (or NULL) and each one's label. */
+typedef struct tile_points
+{
+	size_t		m;
+	double	   *q,
+			   *qz;
+	int64_t    *ql;
+} tile_points;
+
+static void
+points_alloc(tile_points *p, size_t m, int has_z)
+{
+	p->m = m;
+	p->q = malloc(16 * m + 16);
+	p->ql = malloc(8 * m + 8);
+	p->qz = has_z ? malloc(8 * m + 8) : NULL;
+	if (!p->q || !p->ql || (has_z && !p->qz))
+		die(1, "out of memory%s", "");
+}
+
+static void
+points_free(tile_points *p)
+{
+	free(p->q);
+	free(p->ql);
+	free(p->qz);
+}
+
+/*
+ * TDC_TILE_CHECK=1 (tests): the points inside K or an extra box, counted
+ * from every tile file, for checking a first run's tile and halo files.
+ */
+static size_t
+count_known(const bounded_run *r, const double *K, size_t nextra)
+{
+	size_t		m = 0,
+				got;
+	int			w = r->w;
+	const double *extra = r->extra;
+	double		rec[4 * 1024];
+
+	for (int s = 0; s < r->nt; s++)
+	{
+		mreader		f;
+
+		if (r->tiles[s].count == 0)
+			continue;
+		mr_open(&f, "tile", s, r->nparts);
+		while ((got = mr_read(&f, rec, 8 * (size_t) w, 1024)) > 0)
+			for (size_t i = 0; i < got; i++)
+			{
+				const double *p = rec + w * i;
+				bool		in = p[0] >= K[0] && p[0] <= K[2] && p[1] >= K[1] && p[1] <= K[3];
+
+				for (size_t e = 0; e < nextra && !in; e++)
+				{
+					const double *x = extra + 4 * e;
+
+					in = p[0] >= x[0] && p[0] <= x[2] && p[1] >= x[1] && p[1] <= x[3];
+				}
+				m += in;
+			}
+		mr_close(&f);
+	}
+	return m;
+}
+
+/*
+ * The points of tile t's first run: its own file, then its halo file, each
+ * in input order; those are exactly the points of its first region (K and
+ * the nextra boxes of r->extra), which TDC_TILE_CHECK=1 verifies.
+ */
+static void
+gather_first(const bounded_run *r, int t, const double *K, size_t nextra, tile_points *p)
+{
+	const bp_tile *ti = &r->tiles[t];
+	size_t		nh = r->halo_count[t],
+				at = 0,
+				got,
+				m = ti->count + nh;
+	int			w = r->w;
+	mreader		f;
+	double		rec[4 * 4096];
+
+	if (getenv("TDC_TILE_DEBUG"))
+		fprintf(stderr, "tile %d/%d: own %zu, K %g %g %g %g: %zu points\n", t, r->nt,
+				ti->count, K[0], K[1], K[2], K[3], m);
+	points_alloc(p, m, r->has_z);
+	if (!r->has_z)
+		read_all("tile", t, r->nparts, p->q, ti->count, 2);
+	else
+	{
+		mr_open(&f, "tile", t, r->nparts);
+		while ((got = mr_read(&f, rec, 24, 4096)) > 0)
+			for (size_t i = 0; i < got && at < ti->count; i++, at++)
+			{
+				p->q[2 * at] = rec[3 * i];
+				p->q[2 * at + 1] = rec[3 * i + 1];
+				p->qz[at] = rec[3 * i + 2];
+			}
+		mr_close(&f);
+		if (at != ti->count)
+			die(1, "short read on a temporary file in %s", tmp_dir);
+	}
+	for (size_t i = 0; i < ti->count; i++)
+		p->ql[i] = t;
+	at = ti->count;
+	mr_open(&f, "halo", t, r->nparts);
+	while ((got = mr_read(&f, rec, 8 * (size_t) (w + 1), 4096 * 4 / (w + 1))) > 0)
+		for (size_t i = 0; i < got && at < m; i++, at++)
+		{
+			const double *h = rec + (w + 1) * i;
+
+			p->q[2 * at] = h[0];
+			p->q[2 * at + 1] = h[1];
+			if (p->qz)
+				p->qz[at] = h[2];
+			p->ql[at] = (int64_t) h[w];
+		}
+	mr_close(&f);
+	if (at != m)
+		die(1, "short read on a temporary file in %s", tmp_dir);
+	if (getenv("TDC_TILE_CHECK") && count_known(r, K, nextra) != m)
+	{
+		char		msg[160];
+
+		snprintf(msg, sizeof(msg), "tile %d: %zu points in its files, %zu in its first region",
+				 t, m, count_known(r, K, nextra));
+		die(1, "TDC_TILE_CHECK: %s", msg);
+	}
+}
+
+/*
+ * The points inside K or one of the nextra boxes of r->extra, from the
+ * files of the tiles whose boxes meet them, tile t's own first and then
+ * the others in order, each file in input order: counted, or with p,
+ * copied into p with their tiles' labels.  Returns their number.
+ */
+static size_t
+region_points(const bounded_run *r, int t, const double *Kr, size_t nextra, tile_points *p)
+{
+	const double *extra = r->extra;
+	const double K[4] = {Kr[0], Kr[1], Kr[2], Kr[3]};
+	const bp_tile *tiles = r->tiles;
+	int			w = r->w;
+	size_t		m = 0;
+	double		rec[4 * 4096];
+
+	for (int u = -1; u < r->nt; u++)
+	{
+		int			s = u < 0 ? t : u;
+		mreader		f;
+		size_t		got,
+					nx;
+		bool		meets = bp_box_meets(tiles[s].bb, K);
+
+		for (size_t e = 0; e < nextra && !meets; e++)
+			meets = bp_box_meets(tiles[s].bb, extra + 4 * e);
+		if ((u >= 0 && u == t) || tiles[s].count == 0 || !meets)
+			continue;
+		/* only the bands that meet this file's box need testing */
+		nx = 0;
+		for (size_t e = 0; e < nextra; e++)
+			if (bp_box_meets(tiles[s].bb, extra + 4 * e))
+				r->xs[nx++] = extra + 4 * e;
+		mr_open(&f, "tile", s, r->nparts);
+		while ((got = mr_read(&f, rec, 8 * (size_t) w, 4096)) > 0)
+			for (size_t i = 0; i < got; i++)
+			{
+				double	   *q = rec + w * i;
+				bool		in = q[0] >= K[0] && q[0] <= K[2] &&
+					q[1] >= K[1] && q[1] <= K[3];
+
+				for (size_t e = 0; e < nx && !in; e++)
+				{
+					const double *x = r->xs[e];
+
+					in = q[0] >= x[0] && q[0] <= x[2] && q[1] >= x[1] && q[1] <= x[3];
+				}
+				if (!in)
+					continue;
+				if (p)
+				{
+					p->q[2 * m] = q[0];
+					p->q[2 * m + 1] = q[1];
+					if (p->qz)
+						p->qz[m] = q[2];
+					p->ql[m] = s;
+				}
+				m++;
+			}
+		mr_close(&f);
+	}
+	return m;
+}
+
+/*
+ * The points of a run of tile t that is not a first run from the halo
+ * files: those of region_points, counted and then copied, so that the
+ * buffers are allocated once, at their size.  While they do not fit in the
+ * budget, K is shrunk towards Kmin (at most four times); a region that
+ * still does not fit is an error.
+ */
+static void
+gather_region(const bounded_run *r, int t, double K[4], const double Kmin[4], size_t nextra,
+			  tile_points *p)
+{
+	size_t		m;
+
+	for (int shrinks = 0;; shrinks++)
+	{
+		m = region_points(r, t, K, nextra, NULL);
+		if (getenv("TDC_TILE_DEBUG"))
+			fprintf(stderr, "tile %d/%d: own %zu, K %g %g %g %g: %zu points\n", t, r->nt,
+					r->tiles[t].count, K[0], K[1], K[2], K[3], m);
+		if (bp_tile_bytes(m, r->opt, r->has_z) > r->budget && shrinks < 4 &&
+			memcmp(K, Kmin, 4 * sizeof(double)) != 0)
+			bp_shrink_known(K, Kmin, shrinks);
+		else
+			break;
+	}
+	if (bp_tile_bytes(m, r->opt, r->has_z) > r->budget)
+	{
+		char		msg[160];
+
+		snprintf(msg, sizeof(msg), "tile %d needs %zu points with its halo, about %zu MB",
+				 t, m, bp_tile_bytes(m, r->opt, r->has_z) >> 20);
+		die(1, "%s: more than --max-memory allows (the data is too clustered or the limit too small)", msg);
+	}
+	points_alloc(p, m, r->has_z);
+	region_points(r, t, K, nextra, p);
+}
+
+/*
+ * One run of the engine on a tile's points, then the finality check: res
+ * holds the tile's triangles (res->final) or the box it needs.  Returns
+ * the job, for tile_account.
+ */
+static tdc_job *
+tile_engine(bounded_run *r, const tile_points *p, const tdc_tile_spec *spec, tdc_tile_result *res)
+{
+	tdc_job    *job;
+	char		err[512];
+	double		t0 = now_s();
+
+	if (tdc_triangulate(p->q, p->m, r->opt, &job, err, sizeof(err)) != TDC_OK)
+		die(1, "%s", err);
+	r->st->engine += now_s() - t0;
+	t0 = now_s();
+	if (tdc_tile_finish(job, spec, res, err, sizeof(err)) != TDC_OK)
+		die(1, "%s", err);
+	r->st->finish += now_s() - t0;
+	return job;
+}
+
+/* The job's phase times into the run's, and the job freed. */
+static void
+tile_account(bounded_run *r, tdc_job *job)
+{
+	tdc_times	tt;
+
+	tdc_job_times(job, &tt);
+	r->st->t.sort += tt.sort;
+	r->st->t.subdivide += tt.subdivide;
+	r->st->t.leaves += tt.leaves;
+	r->st->t.merge += tt.merge;
+	r->st->threads = tdc_threads_used(job);
+	tdc_job_free(job);
+}
+
+/* The output: a final run's triangles to -o, one per line, and its counts. */
+static void
+tile_write(bounded_run *r, int t, const tile_points *p, const tdc_tile_result *res)
+{
+	for (size_t j = 0; r->out && j < res->ntri; j++)
+	{
+		const size_t *v = res->tri + 3 * j;
+
+		for (int k = 0; k < 3; k++)
+		{
+			const double *c = p->q + 2 * v[k];
+
+			if (p->qz)
+				fprintf(r->out, k ? " %.17g %.17g %.17g" : "%.17g %.17g %.17g", c[0], c[1], p->qz[v[k]]);
+			else
+				fprintf(r->out, k ? " %.17g %.17g" : "%.17g %.17g", c[0], c[1]);
+		}
+		fputc('\n', r->out);
+	}
+	r->st->ntri += res->ntri;
+	r->st->unique += res->own_sites;
+	r->st->halo += p->m - r->tiles[t].count;
+}
+
+/*
+ * Tile t, run until its run is final, its triangles then written: each
+ * global triangle it owns once, whatever the runs before.  Its known
+ * region starts as the policy's first region (bp_first_known) and only
+ * grows (bp_grow_bands, then bp_grow_known) between runs, except for the
+ * shrinking back of a region that does not fit.  A tile that owns no
+ * point has no triangle.
+ */
+void
+tile_run(bounded_run *r, int t)
+{
+	bp_tile    *ti = &r->tiles[t];
+	double		K[4],
+				Kmin[4],		/* the least K this round may shrink back to */
+				h;
+	size_t		nextra = 0;
+	tdc_tile_spec spec = {0};
+	bool		first = r->use_halo;	/* the first run reads the tile and halo files */
+
+	if (ti->count == 0)
+		return;					/* owns nothing */
+	memset(r->inband, 0, r->nhull + 1);
+	bp_first_known(ti, &r->grid, r->bands, r->nhull, K, &h, r->inband);
+	bp_least_known(ti, &r->grid, Kmin);
+	for (size_t i = 0; r->nhull > 1 && i < r->nhull; i++)
+		if (r->inband[i])
+			memcpy(r->extra + 4 * nextra++, r->bands + 4 * i, 32);
+	spec.extra = r->extra;
+	spec.nextra = nextra;
+	spec.self = t;
+	spec.hull = r->hull;
+	spec.nhull = r->nhull;
+	for (;;)
+	{
+		tile_points p = {0};
+		tdc_tile_result res;
+		tdc_job    *job;
+		double		t0 = now_s();
+
+		if (first && bp_tile_bytes(ti->count + r->halo_count[t], r->opt, r->has_z) > r->budget)
+			first = false;
+		if (first)
+		{
+			gather_first(r, t, K, nextra, &p);
+			first = false;
+		}
+		else
+			gather_region(r, t, K, Kmin, nextra, &p);
+		memcpy(spec.known, K, sizeof(K));
+		spec.tile = p.ql;
+		r->st->runs++;
+		r->st->gather += now_s() - t0;
+		job = tile_engine(r, &p, &spec, &res);
+		t0 = now_s();
+		tile_account(r, job);
+		if (res.final)
+			tile_write(r, t, &p, &res);
+		else if (bp_grow_bands(r->bands, r->nhull, res.need, r->inband, r->extra, &nextra) > 0)
+		{
+			/* the same K with more bands */
+			spec.nextra = nextra;
+			tdc_tile_result_free(&res);
+			points_free(&p);
+			continue;
+		}
+		else
+			bp_grow_known(K, Kmin, res.need, h);
+		tdc_tile_result_free(&res);
+		points_free(&p);
+		r->st->write += now_s() - t0;
+		if (spec.known[0] == K[0] && spec.known[1] == K[1] &&
+			spec.known[2] == K[2] && spec.known[3] == K[3])
+			break;				/* final: K was not changed */
+	}
+}
