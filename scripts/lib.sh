@@ -33,7 +33,7 @@ TDC_SUPPORTED_VERSIONS=/usr/share/postgresql-common/supported-versions
 # default.  Empty on a machine without postgresql-common: tdc_ensure_packages
 # installs it and asks again.
 tdc_pg_major() {
-	local v
+	local v=""
 	if [ -n "${PG_CONFIG:-}" ]; then
 		v=$("$PG_CONFIG" --version 2>/dev/null | sed -n 's/^PostgreSQL \([0-9][0-9]*\).*/\1/p')
 		[ -n "$v" ] || v=$(printf '%s\n' "$PG_CONFIG" | sed -n 's|^/usr/lib/postgresql/\([0-9][0-9]*\)/bin/pg_config$|\1|p')

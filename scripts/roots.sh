@@ -262,8 +262,7 @@ tdc_root_inside_check() {
 	trap tdc_cluster_stop EXIT
 	tdc_cluster_start
 	# pg_regress: its own count line, and each test in the total
-	make --no-print-directory PG_CONFIG="$PG_CONFIG" with_llvm=no installcheck >regress.log 2>&1 || true
-	cat regress.log
+	make --no-print-directory PG_CONFIG="$PG_CONFIG" with_llvm=no installcheck 2>&1 | tee regress.log || true
 	line=$(grep -Eo '(All [0-9]+ tests passed|[0-9]+ of [0-9]+ tests (failed|passed))' regress.log | tail -n 1 || true)
 	case "$line" in
 		All*) pass=$((pass + $(echo "$line" | awk '{print $2}'))) ;;
