@@ -1,12 +1,24 @@
 --
 -- tdc_constrained: ST_TDCConstrainedDelaunayTriangles against SFCGAL's
--- ST_ConstrainedDelaunayTriangles (postgis_sfcgal, shipped with Debian's
--- postgresql-15-postgis-3) on general-position input, where the constrained
+-- constrained Delaunay triangulation (postgis_sfcgal, shipped with Debian's
+-- postgresql-NN-postgis-3) on general-position input, where the constrained
 -- Delaunay triangulation is unique; then the rules, Z, SRID, errors, cancel.
 --
 SET client_min_messages = warning;
 CREATE EXTENSION IF NOT EXISTS postgis_sfcgal;
 RESET client_min_messages;
+
+-- SFCGAL's constrained triangulation under the name this PostGIS gives it:
+-- CG_ConstrainedDelaunayTriangles where it exists (PostGIS 3.5 on; 3.6
+-- warns that the ST_ name is deprecated), ST_ConstrainedDelaunayTriangles
+-- before.  The body names one of them, so it is chosen when it is created.
+DO $$
+BEGIN
+	EXECUTE format('CREATE FUNCTION tdc_sfcgal_cdt(g geometry) RETURNS geometry LANGUAGE sql AS %L',
+		format('SELECT %s(g)',
+			   CASE WHEN to_regprocedure('cg_constraineddelaunaytriangles(geometry)') IS NULL
+					THEN 'ST_ConstrainedDelaunayTriangles' ELSE 'CG_ConstrainedDelaunayTriangles' END));
+END $$;
 
 -- Triangles of a result as a set of normalized polygons (TIN members are
 -- TRIANGLEs: the same ring as a POLYGON).
@@ -20,7 +32,7 @@ CREATE FUNCTION tdc_cdt_tris(g geometry) RETURNS SETOF text LANGUAGE sql AS $$
 -- Same triangle set as SFCGAL?  Counts and both differences.
 CREATE FUNCTION tdc_cdt_vs_sfcgal(g geometry) RETURNS text LANGUAGE sql AS $$
 	WITH ours AS (SELECT tdc_cdt_tris(ST_TDCConstrainedDelaunayTriangles(g, 2)) t),
-		 theirs AS (SELECT tdc_cdt_tris(ST_ConstrainedDelaunayTriangles(g)) t)
+		 theirs AS (SELECT tdc_cdt_tris(tdc_sfcgal_cdt(g)) t)
 	SELECT format('%s triangles, SFCGAL %s, only ours %s, only SFCGAL %s',
 				  (SELECT count(*) FROM ours), (SELECT count(*) FROM theirs),
 				  (SELECT count(*) FROM (SELECT t FROM ours EXCEPT SELECT t FROM theirs) x),
@@ -156,9 +168,11 @@ SELECT ST_NumGeometries(ST_TDCConstrainedDelaunayTriangles(
 	AS overlap_triangles;
 
 -- Z kept (of the first duplicate), M dropped, SRID carried; TIN and empty.
-SELECT ST_AsEWKT(ST_Normalize(ST_TDCConstrainedDelaunayTriangles(
-	'SRID=3857;GEOMETRYCOLLECTION(LINESTRING Z (0 0 1,2 0 2),POINT Z (1 1 3),POINT Z (1 -1 4),POINT Z (1 -1 5))'::geometry, 2)))
-	AS z_srid;
+-- (The triangles through tdc_norm: ST_Normalize keeps a TIN from PostGIS
+-- 3.7 on, and made it a collection of polygons before.)
+SELECT GeometryType(g) AS type, ST_SRID(g) AS srid, tdc_norm(g) AS z_srid
+FROM (SELECT ST_TDCConstrainedDelaunayTriangles(
+	'SRID=3857;GEOMETRYCOLLECTION(LINESTRING Z (0 0 1,2 0 2),POINT Z (1 1 3),POINT Z (1 -1 4),POINT Z (1 -1 5))'::geometry, 2) AS g) s;
 SELECT ST_AsEWKT(ST_TDCConstrainedDelaunayTriangles('SRID=4326;LINESTRING M (0 0 7,1 0 8)'::geometry, 1))
 	AS m_dropped;
 SELECT ST_AsEWKT(ST_TDCConstrainedDelaunayTriangles('SRID=4326;POLYGON EMPTY'::geometry)) AS empty;

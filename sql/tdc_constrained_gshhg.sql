@@ -1,13 +1,16 @@
 --
 -- tdc_constrained_gshhg: the constrained triangulation of real polygons, the
 -- GSHHG shoreline of the Stockholm archipelago, against SFCGAL's
--- ST_ConstrainedDelaunayTriangles.  (A file of its own: its big values
+-- constrained Delaunay triangulation.  (A file of its own: its big values
 -- would change the memory state of tdc_constrained's session, whose cancel
 -- test is timed.)
 --
 SET client_min_messages = warning;
 CREATE EXTENSION IF NOT EXISTS postgis_sfcgal;
 RESET client_min_messages;
+
+-- SFCGAL's triangulation is tdc_sfcgal_cdt, under the name this PostGIS
+-- gives it (from tdc_constrained, which runs first).
 
 -- Triangles of a result as a set of normalized polygons (as in tdc_constrained).
 CREATE OR REPLACE FUNCTION tdc_cdt_tris(g geometry) RETURNS SETOF text LANGUAGE sql AS $$
@@ -62,10 +65,10 @@ CREATE FUNCTION tdc_cdt_same_but_ties(a geometry, b geometry) RETURNS text LANGU
 				  coalesce(ST_Equals((SELECT ST_Union(t) FROM only_a), (SELECT ST_Union(t) FROM only_b)), true),
 				  coalesce((SELECT bool_and(tdc_cocircular(r)) FROM regions), true)) $$;
 SELECT tdc_cdt_same_but_ties(ST_TDCConstrainedDelaunayTriangles(ST_Collect(g), 2),
-							 ST_ConstrainedDelaunayTriangles(ST_Collect(g))) AS gshhg_vs_sfcgal
+							 tdc_sfcgal_cdt(ST_Collect(g))) AS gshhg_vs_sfcgal
 FROM tdc_gshhg;
 SELECT tdc_cdt_same_but_ties(ST_TDCDelaunayTriangles(ST_Collect(g), 0, 2),
-							 ST_ConstrainedDelaunayTriangles(ST_Collect(g))) AS gshhg_unconstrained_vs_sfcgal
+							 tdc_sfcgal_cdt(ST_Collect(g))) AS gshhg_unconstrained_vs_sfcgal
 FROM tdc_gshhg;
 
 -- the aggregate over its rows: the same triangles as the function

@@ -80,7 +80,7 @@ SELECT ST_TDCDelaunay(geom) IS NOT NULL AS filled FROM tdc_random_points(30000, 
 SELECT tdc_norm(ST_TDCDelaunay(geom)) = (SELECT t FROM tdc_keep_ref) AS same_from_kept_arrays FROM tdc_random_points(30000, 5);
 SELECT tdc_norm(ST_TDCDelaunay(geom)) = (SELECT t FROM tdc_keep_ref) AS same_again FROM tdc_random_points(30000, 5);
 DROP TABLE tdc_keep_ref;
-SET tdc_delaunay.keep_memory = -1;
+-- (its range error, and those of the other settings with a unit: tdc_guc_units)
 
 -- stats: a NOTICE with the counts (timings and threads go to the DETAIL).
 \set VERBOSITY terse
