@@ -231,7 +231,7 @@ tdc_root_check() {	# SUITE
 	) 9>"$dir.lock"
 	tdc_root_run "$suite" -- env PG_CONFIG="/usr/lib/postgresql/$major/bin/pg_config" TDC_ROOT_SUITE="$suite" \
 		bash "$dest/scripts/roots.sh" inside-check || rc=$?
-	rm -rf "${dir:?}$dest"
+	rm -rf "${dir:?}$dest" "${dir:?}$dest-pg"
 	return "$rc"
 }
 
