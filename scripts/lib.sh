@@ -99,12 +99,13 @@ tdc_pkg_installed() {
 	[ "$(dpkg-query -W -f='${db:Status-Status}' "$1" 2>/dev/null)" = installed ]
 }
 
-# apt-get install PACKAGES..., after an apt-get update, as root; log in build/logs/apt.log.
+# apt-get install PACKAGES..., after an apt-get update (unless this process
+# made one: TDC_APT_UPDATED=1), as root; log in build/logs/apt.log.
 tdc_apt_install() {
 	mkdir -p "$TDC_LOGDIR"
 	local p log=$TDC_LOGDIR/apt.log
 	tdc_say "apt-get update && apt-get install $* (a few minutes on a fresh machine; log: $log)"
-	if ! tdc_as_root env DEBIAN_FRONTEND=noninteractive apt-get update -q </dev/null >>"$log" 2>&1 ||
+	if ! { ((${TDC_APT_UPDATED:-0})) || tdc_as_root env DEBIAN_FRONTEND=noninteractive apt-get update -q </dev/null >>"$log" 2>&1; } ||
 		! tdc_as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends \
 			-o Dpkg::Options::=--force-confdef -o Dpkg::Options::=--force-confold \
 			"$@" </dev/null >>"$log" 2>&1; then
@@ -127,6 +128,7 @@ tdc_ensure_packages() {
 		tdc_say "apt-get update, to learn this release's PostgreSQL major (log: $TDC_LOGDIR/apt.log)"
 		tdc_as_root env DEBIAN_FRONTEND=noninteractive apt-get update -q </dev/null >>"$TDC_LOGDIR/apt.log" 2>&1 ||
 			{ tail -n 30 "$TDC_LOGDIR/apt.log" >&2; tdc_die "apt-get update failed (log: $TDC_LOGDIR/apt.log)"; }
+		TDC_APT_UPDATED=1
 		tdc_set_major
 		[ -n "$TDC_PG_MAJOR" ] || tdc_die "apt knows no \"postgresql\" package to take the major from; set PG_CONFIG"
 	fi
