@@ -104,7 +104,7 @@ tdc_pkg_installed() {
 tdc_apt_install() {
 	mkdir -p "$TDC_LOGDIR"
 	local p log=$TDC_LOGDIR/apt.log
-	tdc_say "apt-get update && apt-get install $* (a few minutes on a fresh machine; log: $log)"
+	tdc_say "apt-get install $* (a few minutes on a fresh machine; log: $log)"
 	if ! { ((${TDC_APT_UPDATED:-0})) || tdc_as_root env DEBIAN_FRONTEND=noninteractive apt-get update -q </dev/null >>"$log" 2>&1; } ||
 		! tdc_as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends \
 			-o Dpkg::Options::=--force-confdef -o Dpkg::Options::=--force-confold \
