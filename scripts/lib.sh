@@ -20,26 +20,37 @@
 #   PG_CONFIG=PATH        pg_config to build against; its major picks the
 #                         packages.  Default: /usr/lib/postgresql/MAJOR/bin/pg_config,
 #                         MAJOR being the one this Debian release packages
-#                         (postgresql-common's supported-versions: 15 on Debian 12,
+#                         (postgresql-common's default: 15 on Debian 12,
 #                         17 on Debian 13, 18 on testing)
 
 TDC_ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd -P)
 TDC_LOGDIR=$TDC_ROOT/build/logs
-# postgresql-common's list of the release's majors; the last line is the default
+# postgresql-common's list of the release's majors, the default last (in
+# postgresql-client-common on Debian 12, postgresql-common-dev from 13 on)
 TDC_SUPPORTED_VERSIONS=/usr/share/postgresql-common/supported-versions
+
+# The major the release's "postgresql" metapackage depends on (postgresql-common
+# derives it from supported-versions), from apt's lists: known before anything
+# is installed.  A command prefix runs apt-cache elsewhere (in a root).
+tdc_apt_default_major() {	# [prefix command...]
+	"$@" apt-cache depends postgresql 2>/dev/null |
+		sed -n 's/^ *Depends: postgresql-\([0-9][0-9]*\)$/\1/p' | head -n 1
+}
 
 # The PostgreSQL major: PG_CONFIG's when given (from its --version, or from a
 # /usr/lib/postgresql/MAJOR/ path not installed yet), else the release's
-# default.  Empty on a machine without postgresql-common: tdc_ensure_packages
-# installs it and asks again.
+# default: postgresql-common's supported-versions, or apt's metapackage.
+# Empty when neither answers (no apt lists yet): tdc_ensure_packages updates
+# them and asks again.
 tdc_pg_major() {
-	local v
+	local v=""
 	if [ -n "${PG_CONFIG:-}" ]; then
 		v=$("$PG_CONFIG" --version 2>/dev/null | sed -n 's/^PostgreSQL \([0-9][0-9]*\).*/\1/p')
 		[ -n "$v" ] || v=$(printf '%s\n' "$PG_CONFIG" | sed -n 's|^/usr/lib/postgresql/\([0-9][0-9]*\)/bin/pg_config$|\1|p')
 	elif [ -x "$TDC_SUPPORTED_VERSIONS" ]; then
 		v=$("$TDC_SUPPORTED_VERSIONS" 2>/dev/null | grep -E '^[0-9]+$' | tail -n 1)
 	fi
+	[ -n "$v" ] || [ -n "${PG_CONFIG:-}" ] || ! command -v apt-cache >/dev/null 2>&1 || v=$(tdc_apt_default_major)
 	printf '%s' "$v"
 }
 
@@ -51,7 +62,7 @@ tdc_set_major() {
 	fi
 	# Debian packages: what each one is for is in README.md ("Dependencies").
 	TDC_PACKAGES=(
-		postgresql-common						# supported-versions: the release's major
+		postgresql-common						# the clusters' tools; supported-versions (Debian 12)
 		${TDC_PG_MAJOR:+postgresql-$TDC_PG_MAJOR}				# the server, initdb, pg_ctl, psql
 		${TDC_PG_MAJOR:+postgresql-server-dev-$TDC_PG_MAJOR}	# headers, pg_config, PGXS and pg_regress
 		${TDC_PG_MAJOR:+postgresql-$TDC_PG_MAJOR-postgis-3}	# PostGIS 3 (the geometry type, ST_DelaunayTriangles)
@@ -88,12 +99,13 @@ tdc_pkg_installed() {
 	[ "$(dpkg-query -W -f='${db:Status-Status}' "$1" 2>/dev/null)" = installed ]
 }
 
-# apt-get install PACKAGES..., after an apt-get update, as root; log in build/logs/apt.log.
+# apt-get install PACKAGES..., after an apt-get update (unless this process
+# made one: TDC_APT_UPDATED=1), as root; log in build/logs/apt.log.
 tdc_apt_install() {
 	mkdir -p "$TDC_LOGDIR"
 	local p log=$TDC_LOGDIR/apt.log
-	tdc_say "apt-get update && apt-get install $* (a few minutes on a fresh machine; log: $log)"
-	if ! tdc_as_root env DEBIAN_FRONTEND=noninteractive apt-get update -q </dev/null >>"$log" 2>&1 ||
+	tdc_say "apt-get install $* (a few minutes on a fresh machine; log: $log)"
+	if ! { ((${TDC_APT_UPDATED:-0})) || tdc_as_root env DEBIAN_FRONTEND=noninteractive apt-get update -q </dev/null >>"$log" 2>&1; } ||
 		! tdc_as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends \
 			-o Dpkg::Options::=--force-confdef -o Dpkg::Options::=--force-confold \
 			"$@" </dev/null >>"$log" 2>&1; then
@@ -111,11 +123,14 @@ tdc_ensure_packages() {
 	command -v dpkg-query >/dev/null 2>&1 ||
 		tdc_die "not a Debian system: install PostgreSQL (15, 17 or 18) with its server headers, PostGIS 3, gcc, make, GMP and clang yourself (see README.md), then run again with PG_CONFIG set"
 	if [ -z "$TDC_PG_MAJOR" ]; then
-		# a fresh machine: postgresql-common says which major this release packages
-		tdc_say "Debian packages: postgresql-common first, to learn this release's PostgreSQL major"
-		tdc_apt_install postgresql-common
+		# a fresh machine: apt's lists say which major this release packages
+		mkdir -p "$TDC_LOGDIR"
+		tdc_say "apt-get update, to learn this release's PostgreSQL major (log: $TDC_LOGDIR/apt.log)"
+		tdc_as_root env DEBIAN_FRONTEND=noninteractive apt-get update -q </dev/null >>"$TDC_LOGDIR/apt.log" 2>&1 ||
+			{ tail -n 30 "$TDC_LOGDIR/apt.log" >&2; tdc_die "apt-get update failed (log: $TDC_LOGDIR/apt.log)"; }
+		TDC_APT_UPDATED=1
 		tdc_set_major
-		[ -n "$TDC_PG_MAJOR" ] || tdc_die "postgresql-common names no PostgreSQL major ($TDC_SUPPORTED_VERSIONS); set PG_CONFIG"
+		[ -n "$TDC_PG_MAJOR" ] || tdc_die "apt knows no \"postgresql\" package to take the major from; set PG_CONFIG"
 	fi
 	local from="the major this Debian release packages"
 	[ -n "$TDC_PG_CONFIG_GIVEN" ] && from="from PG_CONFIG"

@@ -14,8 +14,8 @@
 #
 # SUITE: bookworm (Debian 12), trixie (Debian 13), forky (testing), or any
 # other suite the mirror has.  A root holds debootstrap's minbase plus, unless
-# --no-pg, the PostgreSQL major that postgresql-common names for the release
-# (its default: 15, 17, 18), its server headers, PostGIS, gcc and make.
+# --no-pg, the PostgreSQL major the release's "postgresql" package depends on
+# (15, 17, 18), its server headers, PostGIS, gcc and make.
 # TDC_ROOT_PACKAGES="p q" adds packages (to a --no-pg root too).
 #
 # The roots live in ${TDC_ROOTS_DIR:-$HOME/.cache/tdc-roots}/SUITE (SUITE-nopg),
@@ -148,8 +148,8 @@ tdc_root_prepare() {	# SUITE [--no-pg]
 				{ tail -n 20 "$dir.apt.log" >&2; tdc_die "apt-get install postgresql-common in $dir failed (log: $dir.apt.log)"; }
 			sed -i 's/^#* *create_main_cluster.*/create_main_cluster = false/' \
 				"$dir/etc/postgresql-common/createcluster.conf"
-			major=$(tdc_root_chroot "$dir" /usr/share/postgresql-common/supported-versions | grep -E '^[0-9]+$' | tail -n 1)
-			[ -n "$major" ] || tdc_die "postgresql-common in the $suite root names no PostgreSQL major"
+			major=$(tdc_apt_default_major tdc_root_chroot "$dir")
+			[ -n "$major" ] || tdc_die "apt in the $suite root knows no \"postgresql\" package to take the major from"
 			pkgs="$pkgs postgresql-$major postgresql-server-dev-$major postgresql-$major-postgis-3 make gcc"
 		fi
 		# shellcheck disable=SC2086  # a list of package names
@@ -231,7 +231,7 @@ tdc_root_check() {	# SUITE
 	) 9>"$dir.lock"
 	tdc_root_run "$suite" -- env PG_CONFIG="/usr/lib/postgresql/$major/bin/pg_config" TDC_ROOT_SUITE="$suite" \
 		bash "$dest/scripts/roots.sh" inside-check || rc=$?
-	rm -rf "${dir:?}$dest"
+	rm -rf "${dir:?}$dest" "${dir:?}$dest-pg"
 	return "$rc"
 }
 
@@ -262,8 +262,7 @@ tdc_root_inside_check() {
 	trap tdc_cluster_stop EXIT
 	tdc_cluster_start
 	# pg_regress: its own count line, and each test in the total
-	make --no-print-directory PG_CONFIG="$PG_CONFIG" with_llvm=no installcheck >regress.log 2>&1 || true
-	cat regress.log
+	make --no-print-directory PG_CONFIG="$PG_CONFIG" with_llvm=no installcheck 2>&1 | tee regress.log || true
 	line=$(grep -Eo '(All [0-9]+ tests passed|[0-9]+ of [0-9]+ tests (failed|passed))' regress.log | tail -n 1 || true)
 	case "$line" in
 		All*) pass=$((pass + $(echo "$line" | awk '{print $2}'))) ;;
