@@ -5,7 +5,7 @@
  *
  * When the one-shot run (the input, the engine, the result) would not fit
  * in MB, the input is cut into tiles on disk and triangulated tile by tile
- * with the core's exact tiling (src/core/tile.c), and the triangles are
+ * with the core's exact tiling (src/core/tile_final.c), and the triangles are
  * written as each tile finishes.  Two sequential reads of the input (text
  * input is first converted to a temporary .bin), in phases:
  *	scan	bounding box, convex hull (in chunks: the hull of a union is the

@@ -82,7 +82,7 @@ bp_grid_reach(bp_grid *g, const double bb[4])
 
 /*
  * Bytes one tile run of m points (with z or not) may hold at once: the
- * gathered points and labels, the engine, tile.c's per-site arrays (the 4
+ * gathered points and labels, the engine, tile_final.c's per-site arrays (the 4
  * bytes once taken by the input map now hold its block grid for the deep
  * sites, under a byte per point), and the triangle indices (at most 2m
  * triangles of 3 size_t).
@@ -96,7 +96,7 @@ bp_tile_bytes(size_t m, const tdc_options *opt, int has_z)
 /*
  * The most points a tile may own: its points with the halo and a growth
  * allowance of 1.5 must fit in the budget.  (It was 2.2 while a sliver
- * along a long hull edge made corner tiles grow; tile.c now bounds such a
+ * along a long hull edge made corner tiles grow; tile_final.c now bounds such a
  * triangle's circle by its segment over the hull edge.  A tile that still
  * outgrows the budget is first shrunk back, see bp_shrink_known.)
  */

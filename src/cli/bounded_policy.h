@@ -7,7 +7,7 @@
  * Pure functions of their arguments: no I/O, no exit, no state of the
  * command line.  They depend on the core's public header only, so that the
  * SQL procedure can share them once they sit in src/core next to the
- * finality check (tile.c) that they serve.
+ * finality check (src/core/tile_final.c) that they serve.
  *
  * The plan is made on a fine grid of BP_GRID x BP_GRID cells over the
  * points' box: a point's cell, hence its tile, is decided exactly against

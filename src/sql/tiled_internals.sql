@@ -2,7 +2,7 @@
 -- tdc_delaunay_tiled (src/sql/tiled.sql) runs
 
 -- tdc_delaunay_tiled: the triangulation of a whole table, tile by tile, into a new table
--- (src/pg/fn_tiled.c and src/core/tile.c explain the per-tile step)
+-- (src/pg/fn_tiled.c and src/core/tile_final.c explain the per-tile step)
 
 CREATE FUNCTION _tdc_tile_transfn(internal, geometry, int8, int8, float8[], float8[], float8[], int8, int8)
 RETURNS internal
