@@ -1,6 +1,6 @@
 /*
  * fn_tiled.c
- *		The per-tile step of tdc_delaunay_tiled (tdc_delaunay--0.1.0.sql):
+ *		The per-tile step of tdc_delaunay_tiled (src/sql/tiled.sql):
  *		an aggregate that triangulates one tile with its halo and keeps the
  *		tile's final triangles (src/core/tile_final.c), and a set-returning
  *		function that unnests its result into POLYGON rows.
