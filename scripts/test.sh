@@ -15,7 +15,7 @@
 #      throw-away cluster
 #   7. test/citus/run.sh: tdc_delaunay_tiled on a throw-away 3-node Citus
 #      cluster (Citus built from ../shared/citus, cached between runs)
-#   8. with TDC_MATRIX=1 (.ci/run sets it): on the PostgreSQL of other Debian
+#   8. with TDC_MATRIX=1 (off in .ci/run for now, see there): on the PostgreSQL of other Debian
 #      releases (TDC_MATRIX_SUITES, default "trixie forky": PostgreSQL 17 and
 #      18), in debootstrap roots (scripts/roots.sh, kept between runs in
 #      TDC_ROOTS_DIR), the build, pg_regress and a 100k-point smoke test.
