@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# test/layering.sh: no two files of src/ call each other in a loop.
+# test/layering.sh: no two files of src/ call each other in a loop, and only
+# the job's own layer reads struct tdc_job.
 #
 # Each file of src/core, src/cli and src/pg is compiled on its own to an
 # object; nm gives the symbols it defines and the ones it leaves undefined.
@@ -14,6 +15,14 @@
 # pg_config) when it is installed; without them src/core and src/cli alone
 # are checked, and the output says so.  No server is needed.
 #
+# A second rule: struct tdc_job (src/core/job.h) is read only by the job's
+# own layer, JOB_LAYER below: the files that build a triangulation and give
+# access to it.  Every other file, among them the consumers of a finished
+# job (Voronoi, constrained, tiles) and the front ends, reads a finished job
+# through the view of src/core/mesh_view.h or the public API of tdc.h; one
+# that includes job.h, directly or through another header (as the compiler's
+# -MM lists them), fails.
+#
 #   bash test/layering.sh        prints "N passed, N failed" (one per file)
 set -u
 cd "$(dirname "$0")/.."
@@ -23,6 +32,7 @@ CC=${CC:-cc}
 PG_CONFIG=${PG_CONFIG:-pg_config}
 pass=0
 fail=0
+JOB_LAYER="job.c job_arena.c triangulate.c subdivide.c tolerance.c leaf.c result.c emit.c"
 
 dirs="src/core src/cli"
 pg_inc=""
@@ -35,6 +45,7 @@ else
 fi
 
 : > "$tmp/defs"
+: > "$tmp/reads_job"
 : > "$tmp/uses"
 for d in $dirs; do
 	for f in "$d"/*.c; do
@@ -51,6 +62,17 @@ for d in $dirs; do
 			fail=$((fail + 1))
 			continue
 		fi
+		case " $JOB_LAYER " in
+			*" $(basename "$f") "*) [ "$d" = src/core ] || reads_job=check ;;
+			*) reads_job=check ;;
+		esac
+		# shellcheck disable=SC2086
+		if [ "${reads_job:-}" = check ] &&
+				$CC $flags -MM "$f" 2>/dev/null | tr ' \\' '\n\n' | grep -qx 'src/core/job.h'; then
+			echo "FAIL: $f includes src/core/job.h: outside the job's layer, read mesh_view.h or tdc.h"
+			echo "$f" >> "$tmp/reads_job"
+		fi
+		reads_job=
 		# defined: text, data, bss, read-only data (global or weak)
 		nm -P "$o" | awk -v f="$f" '$2 ~ /^[TDBRVWG]$/ { print $1, f }' >> "$tmp/defs"
 		nm -P "$o" | awk -v f="$f" '$2 == "U" { print f, $1 }' >> "$tmp/uses"
@@ -66,7 +88,8 @@ awk '{ print $2 }' "$tmp/defs" | sort -u > "$tmp/files"
 for d in $dirs; do ls "$d"/*.c; done | sort -u > "$tmp/all"
 
 # Tarjan's strongly connected components; for each component of two or more
-# files, one loop through it found by a breadth-first search inside it.
+# files, one loop through it found by a breadth-first search inside it.  A
+# file fails when it is in a loop or reads struct tdc_job outside its layer.
 awk '
 function strong(v,    i, w) {
 	index_of[v] = idx; low[v] = idx; idx++
@@ -107,6 +130,7 @@ function loop_of(s,    q, head, tail, u, i, w, prev, path, x) {
 	return s " -> " path
 }
 FILENAME == ARGV[1] { out[$1, ++nout[$1]] = $2; next }
+FILENAME == ARGV[2] { reads_job[$1] = 1; next }
 { files[++nf] = $1 }
 END {
 	idx = 0; sp = 0; ncomp = 0
@@ -123,11 +147,13 @@ END {
 				for (j = 1; j <= nf; j++) if (comp[files[j]] == comp[f]) m = m " " files[j]
 				print "      files in the loop:" m
 			}
-		} else
+		} else if (f in reads_job)
+			fail++
+		else
 			pass++
 	}
 	print pass, fail > "/dev/stderr"
-}' "$tmp/edges" "$tmp/all" 2> "$tmp/counts"
+}' "$tmp/edges" "$tmp/reads_job" "$tmp/all" 2> "$tmp/counts"
 read -r p f < "$tmp/counts"
 pass=$((pass + p))
 fail=$((fail + f))

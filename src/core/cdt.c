@@ -86,10 +86,10 @@ spart_task(void *arg, size_t k, int worker)
 {
 	tdc_cdt    *c = arg;
 	size_t		lo = k * PREP_CHUNK,
-				hi = lo + PREP_CHUNK < c->job->nin ? lo + PREP_CHUNK : c->job->nin;
+				hi = lo + PREP_CHUNK < c->mesh.nin ? lo + PREP_CHUNK : c->mesh.nin;
 
 	for (size_t p = lo; p < hi; p++)
-		c->spart[p] = x_part(c, c->job->xy[2 * p]);
+		c->spart[p] = x_part(c, c->mesh.xy[2 * p]);
 }
 
 static void
@@ -97,17 +97,17 @@ prep_task(void *arg, size_t k, int worker)
 {
 	cdt_prep   *pp = arg;
 	tdc_cdt    *c = pp->c;
-	const tdc_job *job = c->job;
+	const tdc_mesh_view *mesh = &c->mesh;
 	size_t		lo,
 				hi;
 	const uint32_t *map;
 
 	if (k == 0)
 	{
-		for (size_t h = 0; h < 6 * job->nin; h++)
+		for (size_t h = 0; h < 6 * mesh->nin; h++)
 		{
-			if (job->he[h].org != TDC_NIL)
-				c->vedge[job->he[h].org] = (uint32_t) h;
+			if (mesh->he[h].org != TDC_NIL)
+				c->vedge[mesh->he[h].org] = (uint32_t) h;
 			if ((h & ((1 << 20) - 1)) == 0 &&
 				atomic_load_explicit(&c->cancel, memory_order_relaxed))
 				return;
@@ -119,12 +119,12 @@ prep_task(void *arg, size_t k, int worker)
 	lo = (k - 1) * PREP_CHUNK;
 	hi = lo + PREP_CHUNK < c->nseg ? lo + PREP_CHUNK : c->nseg;
 	/* the first call builds the map, under the job's lock */
-	if (tdc_input_site(job, 0) == UINT32_MAX)
+	map = tdc_job_input_map(c->job);
+	if (map == NULL)
 	{
 		pp->bad[k - 1] = lo;
 		return;
 	}
-	map = atomic_load_explicit(&((tdc_job *) job)->map, memory_order_acquire);
 	for (size_t s = lo; s < hi; s++)
 	{
 		uint32_t	i = c->seg[2 * s],
@@ -133,7 +133,7 @@ prep_task(void *arg, size_t k, int worker)
 					b;
 		int			pa;
 
-		if (i >= job->n || j >= job->n)
+		if (i >= mesh->n || j >= mesh->n)
 		{
 			pp->bad[k - 1] = s;
 			return;
@@ -171,7 +171,7 @@ order_task(void *arg, size_t k, int worker)
 static int
 prepare(tdc_cdt *c, tdc_pool *pool, cdt_ctx *ser)
 {
-	const tdc_job *job = c->job;
+	const tdc_mesh_view *mesh = &c->mesh;
 	size_t		nchunks = (c->nseg + PREP_CHUNK - 1) / PREP_CHUNK;
 	cdt_prep	pp = {c, malloc(nchunks * sizeof(size_t)), calloc(nchunks * (NPART + 1), sizeof(size_t))};
 	double		lo = INFINITY,
@@ -184,16 +184,16 @@ prepare(tdc_cdt *c, tdc_pool *pool, cdt_ctx *ser)
 		free(pp.pos);
 		return tdc_cdt_ctx_fail(ser, TDC_ENOMEM, "out of memory for the constraints");
 	}
-	for (size_t p = 0; p < job->nin; p++)
+	for (size_t p = 0; p < mesh->nin; p++)
 	{
-		double		v = job->xy[2 * p];
+		double		v = mesh->xy[2 * p];
 
 		lo = v < lo ? v : lo;
 		hi = v > hi ? v : hi;
 	}
 	c->part_x0 = lo;
 	c->part_scale = hi > lo ? NPART / (hi - lo) : 0;
-	tdc_pool_for(pool, (job->nin + PREP_CHUNK - 1) / PREP_CHUNK, spart_task, c);
+	tdc_pool_for(pool, (mesh->nin + PREP_CHUNK - 1) / PREP_CHUNK, spart_task, c);
 	for (size_t k = 0; k < nchunks; k++)
 		pp.bad[k] = SIZE_MAX;
 	tdc_pool_for(pool, nchunks + 1, prep_task, &pp);
@@ -243,7 +243,7 @@ part_task(void *arg, size_t k, int worker)
 	tdc_cdt    *c = arg;
 	cdt_ctx    *x = &c->parts[k];
 	/* prepare() checked the ends and built the input map */
-	const uint32_t *map = atomic_load_explicit(&c->job->map, memory_order_acquire);
+	const uint32_t *map = tdc_job_input_map(c->job);
 	const tdc_he *he = c->m.he;
 	size_t		end = c->part_off[k + 1];
 
@@ -379,34 +379,35 @@ serial_insert(tdc_cdt *c, cdt_ctx *ser, size_t s)
 static int
 cdt_run(tdc_cdt *c)
 {
-	tdc_job    *job = c->job;
-	size_t		nslots = job->nin * 3;
+	const tdc_mesh_view *mesh = &c->mesh;
+	size_t		nslots = mesh->nin * 3;
 	cdt_ctx    *ser = &c->serial;
 	int			rc,
-				threads = tdc_threads_used(job);
+				threads = mesh->threads;
 
-	c->m.xy = job->xy;
-	c->m.he = job->he;
+	/* the one consumer that writes the mesh (mesh_view.h): its flips */
+	c->m.xy = mesh->xy;
+	c->m.he = tdc_job_edit_mesh(c->job);
 	c->m.cancel = &c->cancel;
 	c->nslots = nslots;
 	ser->c = c;
 	ser->part = -1;
 	ser->cross[0] = ser->cross[1] = SIZE_MAX;
 	c->cons = tdc_big_alloc(c->cache, nslots * sizeof(uint32_t) + 4);
-	c->vedge = tdc_big_alloc(c->cache, job->nin * sizeof(uint32_t) + 4);
+	c->vedge = tdc_big_alloc(c->cache, mesh->nin * sizeof(uint32_t) + 4);
 	ser->cap = nslots < LIST_MIN ? nslots : LIST_MIN;
 	c->list = malloc(ser->cap * sizeof(uint32_t) + 4);
 	c->fresh = malloc(ser->cap * sizeof(uint32_t) + 4);
 	if (c->nseg >= PART_MIN_SEG)
 	{
-		c->seg_part = tdc_big_alloc(c->cache, 2 * c->nseg + job->nin);
+		c->seg_part = tdc_big_alloc(c->cache, 2 * c->nseg + mesh->nin);
 		c->order = tdc_big_alloc(c->cache, c->nseg * sizeof(uint32_t));
 		c->parts = calloc(NPART, sizeof(cdt_ctx));
 		c->part_lists = malloc((size_t) 2 * NPART * PART_CAP * sizeof(uint32_t));
 	}
 	if (!c->cons || !c->vedge || !c->list || !c->fresh ||
 		(c->nseg >= PART_MIN_SEG && (!c->seg_part || !c->order || !c->parts || !c->part_lists)))
-		return tdc_cdt_take_error(c, ser, tdc_cdt_ctx_fail(ser, TDC_ENOMEM, "out of memory for the constraints of %zu points", job->nin));
+		return tdc_cdt_take_error(c, ser, tdc_cdt_ctx_fail(ser, TDC_ENOMEM, "out of memory for the constraints of %zu points", mesh->nin));
 	ser->list = c->list;
 	ser->fresh = c->fresh;
 
@@ -431,8 +432,8 @@ cdt_run(tdc_cdt *c)
 	}
 	else
 		for (size_t h = 0; h < 2 * nslots; h++)
-			if (job->he[h].org != TDC_NIL)
-				c->vedge[job->he[h].org] = (uint32_t) h;
+			if (mesh->he[h].org != TDC_NIL)
+				c->vedge[mesh->he[h].org] = (uint32_t) h;
 
 	/*
 	 * The serial pass, in input order.  After the parallel pass with no
@@ -506,6 +507,7 @@ int
 tdc_cdt_start(tdc_job *job, const uint32_t *seg, size_t nseg, tdc_cdt **out,
 			  char *err, size_t errlen)
 {
+	tdc_mesh_view mesh;
 	tdc_cdt    *c;
 	int			rc;
 
@@ -515,29 +517,31 @@ tdc_cdt_start(tdc_job *job, const uint32_t *seg, size_t nseg, tdc_cdt **out,
 		err[0] = '\0';
 	if (tdc_job_wait(job, 0) != TDC_OK)
 		FAIL(TDC_EINVAL, "the triangulation has not finished successfully");
+	tdc_job_view(job, &mesh);
 	if (nseg > MAX_SEG)
 		FAIL(TDC_ETOOBIG, "%zu constraint segments exceed the limit of %zu", nseg, MAX_SEG);
 	if (nseg > 0 && seg == NULL)
 		FAIL(TDC_EINVAL, "no end points given for %zu segments", nseg);
-	if (job->opt.max_memory > 0 &&
-		tdc_estimate_memory(job->n, &job->opt) + tdc_cdt_memory(job->n) +
-		cdt_seg_memory(nseg, job->n) > job->opt.max_memory)
+	if (mesh.opt->max_memory > 0 &&
+		tdc_estimate_memory(mesh.n, mesh.opt) + tdc_cdt_memory(mesh.n) +
+		cdt_seg_memory(nseg, mesh.n) > mesh.opt->max_memory)
 		FAIL(TDC_EMEMLIMIT, "constraining %zu points needs about %zu MB, more than the limit of %zu MB",
-			 job->n, (tdc_estimate_memory(job->n, &job->opt) + tdc_cdt_memory(job->n) +
-					  cdt_seg_memory(nseg, job->n)) >> 20,
-			 job->opt.max_memory >> 20);
+			 mesh.n, (tdc_estimate_memory(mesh.n, mesh.opt) + tdc_cdt_memory(mesh.n) +
+					  cdt_seg_memory(nseg, mesh.n)) >> 20,
+			 mesh.opt->max_memory >> 20);
 	c = calloc(1, sizeof(tdc_cdt));
 	if (c == NULL)
 		FAIL(TDC_ENOMEM, "out of memory");
 	c->job = job;
-	c->cache = job->opt.cache;
+	c->mesh = mesh;
+	c->cache = mesh.opt->cache;
 	c->seg = seg;
 	c->nseg = nseg;
 	c->cross[0] = c->cross[1] = SIZE_MAX;
 	tdc_runner_init(&c->run, &c->cancel);
 
 	/* like the triangulation: small work runs on the caller's thread */
-	c->inline_run = job->n < TDC_INLINE_MAX && nseg < TDC_INLINE_MAX;
+	c->inline_run = mesh.n < TDC_INLINE_MAX && nseg < TDC_INLINE_MAX;
 	rc = tdc_runner_start(&c->run, c->inline_run, cdt_work, c, err, errlen);
 	if (rc != TDC_OK)
 	{
@@ -627,8 +631,8 @@ tdc_cdt_run(tdc_job *job, const uint32_t *seg, size_t nseg, tdc_cdt **out,
 int
 tdc_next_constraint_edge(const tdc_cdt *c, tdc_iter *it, uint32_t v[2])
 {
-	const tdc_job *job = c->job;
-	size_t		nslots = job->nin * 3;
+	const tdc_mesh_view *mesh = &c->mesh;
+	size_t		nslots = mesh->nin * 3;
 
 	if (c->cons == NULL || c->run.status != TDC_OK)
 		return 0;
@@ -639,9 +643,9 @@ tdc_next_constraint_edge(const tdc_cdt *c, tdc_iter *it, uint32_t v[2])
 
 		if (c->cons[e] == NO_SEG || c->cons[e] >= CAVQ)
 			continue;
-		a = job->he[2 * e].org;
-		b = job->he[2 * e + 1].org;
-		if (tdc_key_less(job->xy + 2 * (size_t) b, job->xy + 2 * (size_t) a, 0))
+		a = mesh->he[2 * e].org;
+		b = mesh->he[2 * e + 1].org;
+		if (tdc_key_less(mesh->xy + 2 * (size_t) b, mesh->xy + 2 * (size_t) a, 0))
 			v[0] = b, v[1] = a;
 		else
 			v[0] = a, v[1] = b;

@@ -87,7 +87,7 @@ cdt_poll(cdt_ctx *x)
 static inline bool
 is_outer(const tdc_cdt *c, uint32_t h)
 {
-	return c->job->outer != NULL && ((c->job->outer[h >> 6] >> (h & 63)) & 1);
+	return c->mesh.outer != NULL && tdc_he_outer(c->mesh.outer, h);
 }
 
 static inline double
@@ -161,7 +161,7 @@ flip(tdc_cdt *c, uint32_t h)
 static const double *
 input_xy(const tdc_cdt *c, size_t i)
 {
-	return c->job->input + 2 * i;
+	return c->mesh.input + 2 * i;
 }
 
 static int
@@ -512,13 +512,13 @@ int
 tdc_cdt_seg_sites(cdt_ctx *x, size_t s, uint32_t *a, uint32_t *b)
 {
 	const tdc_cdt *c = x->c;
-	const tdc_job *job = c->job;
+	const tdc_mesh_view *mesh = &c->mesh;
 
-	if (c->seg[2 * s] >= job->n || c->seg[2 * s + 1] >= job->n)
+	if (c->seg[2 * s] >= mesh->n || c->seg[2 * s + 1] >= mesh->n)
 		return tdc_cdt_ctx_fail(x, TDC_EINVAL, "segment %zu has an end point index out of range (%u %u, %zu points)",
-						s, c->seg[2 * s], c->seg[2 * s + 1], job->n);
-	*a = tdc_input_site(job, c->seg[2 * s]);
-	*b = tdc_input_site(job, c->seg[2 * s + 1]);
+						s, c->seg[2 * s], c->seg[2 * s + 1], mesh->n);
+	*a = tdc_input_site(c->job, c->seg[2 * s]);
+	*b = tdc_input_site(c->job, c->seg[2 * s + 1]);
 	if (*a == UINT32_MAX || *b == UINT32_MAX)
 		return tdc_cdt_ctx_fail(x, TDC_ENOMEM, "out of memory for the input map");
 	return TDC_OK;

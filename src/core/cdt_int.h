@@ -7,7 +7,7 @@
 #ifndef TDC_CDT_INT_H
 #define TDC_CDT_INT_H
 
-#include "job.h"
+#include "mesh_view.h"
 
 /* cons[] holds segment number + 1, so that the zeroed array means "none" */
 #define NO_SEG		0					/* edge is no constraint */
@@ -54,11 +54,14 @@ typedef struct cdt_ctx
 
 struct tdc_cdt
 {
-	tdc_job    *job;
+	tdc_job    *job;			/* opaque (tdc.h): its accessors, the input map,
+								 * the writable mesh (mesh_view.h) */
+	tdc_mesh_view mesh;			/* what the insertion reads of it */
 	tdc_cache  *cache;			/* the job's, kept: the job may be freed first */
 	const uint32_t *seg;		/* caller's pairs of input indices */
 	size_t		nseg;
-	tdc_mesh	m;
+	tdc_mesh	m;				/* the same mesh, writable: the flips
+								 * (tdc_job_edit_mesh, mesh_view.h) */
 	uint32_t   *cons;			/* per edge slot: segment number + 1, or NO_SEG/CAV/CAVQ */
 	uint32_t   *vedge;			/* per site: a half-edge leaving it */
 	uint32_t   *list;			/* the serial inserter's lists (grow_lists) */

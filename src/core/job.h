@@ -3,11 +3,14 @@
  *		The state of one triangulation, shared by the core's sources (the
  *		plan and first phase in triangulate.c, the lifecycle in job.c on the
  *		runner of runner.c, the results in result.c).  Not installed.
+ *		The consumers of a finished job (Voronoi, constrained, tiles) do
+ *		not include it: they read the view of mesh_view.h.
  */
 #ifndef TDC_JOB_H
 #define TDC_JOB_H
 
 #include "internal.h"
+#include "mesh_view.h"
 
 /* A rectangle of grid cells: rows [r0, r1), columns [c0, c1). */
 typedef struct tdc_rect
@@ -92,22 +95,7 @@ struct tdc_job
 static inline bool
 tdc_tri_at(const tdc_job *job, size_t h, uint32_t v[3])
 {
-	const tdc_he *he = job->he;
-	uint32_t	h1,
-				h2;
-
-	if (he[h].org == TDC_NIL || (job->outer[h >> 6] >> (h & 63)) & 1)
-		return false;
-	h1 = he[SYM(h)].prev;		/* lnext */
-	if (h1 < h)
-		return false;
-	h2 = he[SYM(h1)].prev;
-	if (h2 < h)
-		return false;
-	v[0] = he[h].org;
-	v[1] = he[h1].org;
-	v[2] = he[h2].org;
-	return true;
+	return tdc_face_tri_at(job->he, job->outer, h, v);
 }
 
 /* emit.c: the driver phase of tdc_job_emit_start. */

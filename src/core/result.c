@@ -1,7 +1,8 @@
 /*
  * result.c
- *		Access to a finished job: counts, sites, the input->site map and
- *		the triangle and edge iterators.
+ *		Access to a finished job: counts, sites, the input->site map, the
+ *		triangle and edge iterators, and the view its consumers read
+ *		(mesh_view.h).
  *
  * Once a job has finished, its arrays are read-only and every accessor may
  * be called from any thread.  The one exception is the input->site map,
@@ -146,15 +147,49 @@ tdc_site_input(const tdc_job *job, uint32_t site)
 {
 	return job->idx[site];
 }
-uint32_t
-tdc_input_site(const tdc_job *job, size_t i)
+const uint32_t *
+tdc_job_input_map(const tdc_job *job)
 {
 	tdc_job    *j = (tdc_job *) job;
 	uint32_t   *map = atomic_load_explicit(&j->map, memory_order_acquire);
 
-	if (map == NULL && (map = build_input_map(j)) == NULL)
-		return UINT32_MAX;
-	return map[i];
+	return map != NULL ? map : build_input_map(j);
+}
+
+uint32_t
+tdc_input_site(const tdc_job *job, size_t i)
+{
+	const uint32_t *map = tdc_job_input_map(job);
+
+	return map == NULL ? UINT32_MAX : map[i];
+}
+
+void
+tdc_job_view(const tdc_job *job, tdc_mesh_view *out)
+{
+	out->n = job->n;
+	out->input = job->input;
+	out->opt = &job->opt;
+	out->bmin[0] = job->bmin[0];
+	out->bmin[1] = job->bmin[1];
+	out->bmax[0] = job->bmax[0];
+	out->bmax[1] = job->bmax[1];
+	out->threads = job->threads;
+	out->nin = job->nin;
+	out->nsites = job->nsites;
+	out->xy = job->xy;
+	out->site_of = job->site_of;
+	out->idx = job->idx;
+	out->he = job->he;
+	out->ntri = job->ntri;
+	out->outer = job->outer;
+}
+
+/* The constrained insertion's flips (mesh_view.h): the one writer. */
+tdc_he *
+tdc_job_edit_mesh(tdc_job *job)
+{
+	return job->he;
 }
 
 /*

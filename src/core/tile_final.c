@@ -118,7 +118,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "job.h"
+#include "mesh_view.h"
 
 #define EPS		0x1p-53
 
@@ -626,14 +626,14 @@ block_of(double v, double lo, double scale, int nb)
  * Returns false only when out of memory (then no site is deep).
  */
 static bool
-mark_deep(const tdc_job *job, const tile_ctx *cx, uint8_t *flag, bool weaken)
+mark_deep(const tdc_mesh_view *mesh, const tile_ctx *cx, uint8_t *flag, bool weaken)
 {
 	const double *K = cx->spec->known;
-	size_t		nin = job->nin,
+	size_t		nin = mesh->nin,
 				ng = 0;
 	/* the grid covers G, K clipped to Q's box: the bands' points lie outside */
-	double		lo[2] = {fmax(K[0], job->bmin[0]), fmax(K[1], job->bmin[1])},
-				hi[2] = {fmin(K[2], job->bmax[0]), fmin(K[3], job->bmax[1])},
+	double		lo[2] = {fmax(K[0], mesh->bmin[0]), fmax(K[1], mesh->bmin[1])},
+				hi[2] = {fmin(K[2], mesh->bmax[0]), fmin(K[3], mesh->bmax[1])},
 				W = hi[0] - lo[0],
 				H = hi[1] - lo[1],
 				side,
@@ -652,7 +652,7 @@ mark_deep(const tdc_job *job, const tile_ctx *cx, uint8_t *flag, bool weaken)
 	if (!(W > 0) || !(H > 0) || !isfinite(W) || !isfinite(H))
 		return true;
 	for (size_t p = 0; p < nin; p++)
-		ng += IN_G(job->xy + 2 * p);
+		ng += IN_G(mesh->xy + 2 * p);
 	if (ng < 64 * BLOCK_POINTS)
 		return true;
 	side = sqrt(W / ng * H * BLOCK_POINTS);
@@ -681,9 +681,9 @@ mark_deep(const tdc_job *job, const tile_ctx *cx, uint8_t *flag, bool weaken)
 	}
 	/* non-empty blocks, then their 2-D prefix sums */
 	for (size_t p = 0; p < nin; p++)
-		if (IN_G(job->xy + 2 * p))
-			ps[(size_t) (block_of(job->xy[2 * p + 1], lo[1], sy, by) + 1) * (bx + 1) +
-			   block_of(job->xy[2 * p], lo[0], sx, bx) + 1] = 1;
+		if (IN_G(mesh->xy + 2 * p))
+			ps[(size_t) (block_of(mesh->xy[2 * p + 1], lo[1], sy, by) + 1) * (bx + 1) +
+			   block_of(mesh->xy[2 * p], lo[0], sx, bx) + 1] = 1;
 	if (weaken)
 		for (long j = 0; j < by; j++)
 			for (long i = 0; i < bx; i++)
@@ -709,7 +709,7 @@ mark_deep(const tdc_job *job, const tile_ctx *cx, uint8_t *flag, bool weaken)
 	free(ps);
 	for (size_t p = 0; p < nin; p++)
 	{
-		const double *a = job->xy + 2 * p;
+		const double *a = mesh->xy + 2 * p;
 		double		r = rho2 + 4 * EPS * (fabs(a[0]) + fabs(a[1])),
 					box[4] = {a[0] - r, a[1] - r, a[0] + r, a[1] + r};
 
@@ -733,7 +733,7 @@ mark_deep(const tdc_job *job, const tile_ctx *cx, uint8_t *flag, bool weaken)
  */
 typedef struct tile_work
 {
-	const tdc_job *job;
+	const tdc_mesh_view *mesh;
 	tile_ctx	cx;
 	const uint8_t *flag;
 	size_t		lo,
@@ -752,12 +752,12 @@ typedef struct tile_work
 static void
 check_range(tile_work *w)
 {
-	const tdc_job *job = w->job;
-	const tdc_he *he = job->he;
+	const tdc_mesh_view *mesh = w->mesh;
+	const tdc_he *he = mesh->he;
 	const uint8_t *flag = w->flag;
 	const tdc_tile_spec *spec = w->cx.spec;
 #ifdef __GNUC__
-	const size_t nhe = w->job->nin * 6;
+	const size_t nhe = w->mesh->nin * 6;
 #endif
 
 	for (size_t h = w->lo; h < w->hi; h++)
@@ -790,18 +790,18 @@ check_range(tile_work *w)
 		if (he[h].org == TDC_NIL)
 			continue;
 		/* a hull edge: the outer face is on the left of h */
-		if (job->outer == NULL || ((job->outer[h >> 6] >> (h & 63)) & 1))
+		if (mesh->outer == NULL || ((mesh->outer[h >> 6] >> (h & 63)) & 1))
 		{
 			if (w->cx.skip_checks)
 				continue;
 			b = he[h].org;
 			a = he[SYM(h)].org;
 			if (((flag[a] | flag[b]) & SITE_OWN) &&
-				!hull_edge_final(&w->cx, job->xy + 2 * (size_t) a, job->xy + 2 * (size_t) b))
+				!hull_edge_final(&w->cx, mesh->xy + 2 * (size_t) a, mesh->xy + 2 * (size_t) b))
 				w->unfinal++;
 			continue;
 		}
-		if (job->ntri == 0)
+		if (mesh->ntri == 0)
 			continue;
 		/* the triangle on h's left, from its smallest half-edge (tdc_tri_at, one load less) */
 		hh[1] = he[SYM(h)].prev;
@@ -824,7 +824,7 @@ check_range(tile_work *w)
 			/* all three ours (most): no need to know which is smallest */
 			if (!(flag[v[0]] & flag[v[1]] & flag[v[2]] & SITE_OWN))
 				for (int k = 1; k < 3; k++)
-					if (tdc_key_less(job->xy + 2 * (size_t) v[k], job->xy + 2 * (size_t) v[lo], 0))
+					if (tdc_key_less(mesh->xy + 2 * (size_t) v[k], mesh->xy + 2 * (size_t) v[lo], 0))
 						lo = k;
 			if (flag[v[lo]] & SITE_OWN)
 			{
@@ -845,7 +845,7 @@ check_range(tile_work *w)
 				if (!w->failed)
 				{
 					for (int k = 0; k < 3; k++)
-						w->tri[3 * w->ntri + k] = job->idx[v[k]];
+						w->tri[3 * w->ntri + k] = mesh->idx[v[k]];
 					w->ntri++;
 				}
 			}
@@ -862,11 +862,11 @@ check_range(tile_work *w)
 		{
 			uint32_t	o = SYM(hh[k]);
 
-			p[k] = job->xy + 2 * (size_t) v[k];
+			p[k] = mesh->xy + 2 * (size_t) v[k];
 			glob[k] = false;
-			if ((job->outer[o >> 6] >> (o & 63)) & 1)
+			if ((mesh->outer[o >> 6] >> (o & 63)) & 1)
 			{
-				const double *q = job->xy + 2 * (size_t) v[(k + 1) % 3];
+				const double *q = mesh->xy + 2 * (size_t) v[(k + 1) % 3];
 
 				glob[k] = true;
 				for (size_t i = 0; i < spec->nhull && glob[k]; i++)
@@ -889,16 +889,16 @@ work_main(void *arg)
 
 /* Run fn over the half-edges in nthreads ranges; threads that cannot start run inline. */
 static void
-run_parallel(const tdc_job *job, const tile_ctx *cx, const uint8_t *flag,
+run_parallel(const tdc_mesh_view *mesh, const tile_ctx *cx, const uint8_t *flag,
 			 void (*fn) (tile_work *w), tile_work *tw, int nthreads)
 {
-	size_t		nhe = job->nin * 6;
+	size_t		nhe = mesh->nin * 6;
 	pthread_t  *th = malloc(sizeof(pthread_t) * nthreads);
 	bool	   *started = calloc(nthreads, sizeof(bool));
 
 	for (int i = 0; i < nthreads; i++)
 	{
-		tw[i].job = job;
+		tw[i].mesh = mesh;
 		tw[i].cx = *cx;
 		tw[i].flag = flag;
 		tw[i].lo = nhe / nthreads * i;
@@ -919,13 +919,13 @@ run_parallel(const tdc_job *job, const tile_ctx *cx, const uint8_t *flag,
 	free(started);
 }
 
-int
-tdc_tile_finish(const tdc_job *job, const tdc_tile_spec *spec, tdc_tile_result *res,
-				char *err, size_t errlen)
+static int
+tile_finish(const tdc_mesh_view *mesh, const tdc_tile_spec *spec, tdc_tile_result *res,
+			char *err, size_t errlen)
 {
 	tile_ctx	cx;
 	const double *K = spec->known;
-	size_t		nin = job->nin,
+	size_t		nin = mesh->nin,
 				nhe = nin * 6;
 	int64_t    *lab = NULL;
 	uint8_t    *flag = NULL;		/* per site: SITE_OWN, SITE_DEEP */
@@ -941,13 +941,13 @@ tdc_tile_finish(const tdc_job *job, const tdc_tile_spec *spec, tdc_tile_result *
 #define FAIL(code, ...) do { if (err && errlen) snprintf(err, errlen, __VA_ARGS__); \
 		free(lab); free(flag); free(known_list); free(tw); tdc_tile_result_free(res); return (code); } while (0)
 
-	if (job->opt.tolerance > 0)
+	if (mesh->opt->tolerance > 0)
 		FAIL(TDC_EINVAL, "a tiled triangulation cannot use a tolerance: which points it merges depends on all of them");
 	if (!(K[0] <= K[2] && K[1] <= K[3]))
 		FAIL(TDC_EINVAL, "the known box is empty or not a number");
-	if (job->n > 0 && (spec->hull == NULL || spec->nhull == 0))
+	if (mesh->n > 0 && (spec->hull == NULL || spec->nhull == 0))
 		FAIL(TDC_EINVAL, "no extent polygon given");
-	if (job->n > 0 && spec->tile == NULL)
+	if (mesh->n > 0 && spec->tile == NULL)
 		FAIL(TDC_EINVAL, "no tile labels given");
 
 	cx.spec = spec;
@@ -986,14 +986,14 @@ tdc_tile_finish(const tdc_job *job, const tdc_tile_spec *spec, tdc_tile_result *
 	 */
 	for (size_t at = 0; at < nin; at++)
 	{
-		const double *p = job->xy + 2 * at;
-		size_t		i = job->idx[at];
-		uint32_t	s = job->site_of[at];
+		const double *p = mesh->xy + 2 * at;
+		size_t		i = mesh->idx[at];
+		uint32_t	s = mesh->site_of[at];
 
 #ifdef __GNUC__
 		/* the label is the one random read: fetch it ahead */
 		if (at + 64 < nin)
-			__builtin_prefetch(&spec->tile[job->idx[at + 64]]);
+			__builtin_prefetch(&spec->tile[mesh->idx[at + 64]]);
 #endif
 
 		if (!(p[0] >= K[0] && p[0] <= K[2] && p[1] >= K[1] && p[1] <= K[3]))
@@ -1024,8 +1024,8 @@ tdc_tile_finish(const tdc_job *job, const tdc_tile_spec *spec, tdc_tile_result *
 	free(lab);
 	lab = NULL;
 	res->own_sites = nsites_own;
-	res->sites = job->nsites;
-	nthreads = job->threads > 0 ? job->threads : 1;
+	res->sites = mesh->nsites;
+	nthreads = mesh->threads > 0 ? mesh->threads : 1;
 	if (nhe < 65536)
 		nthreads = 1;
 	tw = calloc(nthreads, sizeof(tile_work));
@@ -1034,8 +1034,8 @@ tdc_tile_finish(const tdc_job *job, const tdc_tile_spec *spec, tdc_tile_result *
 
 	cx.skip_checks = covers;	/* Q = P: every star is final */
 	if (covers)
-		run_parallel(job, &cx, flag, check_range, tw, nthreads);
-	else if (job->nsites < 2)
+		run_parallel(mesh, &cx, flag, check_range, tw, nthreads);
+	else if (mesh->nsites < 2)
 	{
 		/* a lone site is final only when it is alone in P */
 		if (nsites_own > 0)
@@ -1046,9 +1046,9 @@ tdc_tile_finish(const tdc_job *job, const tdc_tile_spec *spec, tdc_tile_result *
 	}
 	else
 	{
-		if (!mark_deep(job, &cx, flag, spec->test_weaken == TDC_TILE_WEAKEN_BLOCKS))
+		if (!mark_deep(mesh, &cx, flag, spec->test_weaken == TDC_TILE_WEAKEN_BLOCKS))
 			FAIL(TDC_ENOMEM, "out of memory");
-		run_parallel(job, &cx, flag, check_range, tw, nthreads);
+		run_parallel(mesh, &cx, flag, check_range, tw, nthreads);
 	}
 
 	for (int w = 0; w < nthreads; w++)
@@ -1105,6 +1105,16 @@ tdc_tile_finish(const tdc_job *job, const tdc_tile_spec *spec, tdc_tile_result *
 	free(tw);
 	return TDC_OK;
 #undef FAIL
+}
+
+int
+tdc_tile_finish(const tdc_job *job, const tdc_tile_spec *spec, tdc_tile_result *res,
+				char *err, size_t errlen)
+{
+	tdc_mesh_view mesh;
+
+	tdc_job_view(job, &mesh);
+	return tile_finish(&mesh, spec, res, err, errlen);
 }
 
 int

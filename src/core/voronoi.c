@@ -183,7 +183,7 @@ join_cocircular(tdc_voronoi *v, const double base[4])
 static int
 vor_run(tdc_voronoi *v)
 {
-	const tdc_job *job = v->job;
+	const tdc_mesh_view *mesh = &v->mesh;
 	size_t		nr = 0,
 				nboxes = 0;
 	double		base[4] = {v->env[0], v->env[1], v->env[2], v->env[3]},
@@ -197,14 +197,14 @@ vor_run(tdc_voronoi *v)
 		vor_fail(v, rc, rc == TDC_ETHREAD ? "could not create worker threads" : "out of memory");
 		return rc;
 	}
-	v->nsites = job->nin;
-	v->nhe = job->nin * 6;
-	v->ntri = job->ntri;
+	v->nsites = mesh->nin;
+	v->nhe = mesh->nin * 6;
+	v->ntri = mesh->ntri;
 
 	/* B: around E, the sites and (below) every vertex, then widened */
-	if (job->nsites > 0)
+	if (mesh->nsites > 0)
 	{
-		tdc_site_extent(job, lo, hi);
+		tdc_site_extent(v->job, lo, hi);
 		grow_box(base, lo);
 		grow_box(base, hi);
 	}
@@ -217,7 +217,7 @@ vor_run(tdc_voronoi *v)
 		/* every range but one chunk per range fills its chunks */
 		v->nchunks = v->ntri / TRI_CHUNK + nr;
 		v->ntri_cap = v->nchunks * TRI_CHUNK;
-		v->site_he = tdc_big_alloc(v->cache, job->nin * sizeof(uint32_t));
+		v->site_he = tdc_big_alloc(v->cache, mesh->nin * sizeof(uint32_t));
 		v->range_ntri = calloc(nr + 1, sizeof(size_t));
 		v->chunk_fill = calloc(v->nchunks + 1, sizeof(uint32_t));
 		/* a half-edge outside every triangle keeps a number never read */
@@ -228,7 +228,7 @@ vor_run(tdc_voronoi *v)
 			!v->range_box)
 			FAIL_OOM("out of memory for the Voronoi vertices");
 		atomic_init(&v->chunks_claimed, 0);
-		for (size_t s = 0; s < job->nin; s++)
+		for (size_t s = 0; s < mesh->nin; s++)
 			atomic_init(&v->site_he[s], TDC_NIL);
 		tdc_pool_for(v->pool, nr, tdc_vor_number_task, v);
 		if (vor_cancelled(v))
@@ -242,16 +242,16 @@ vor_run(tdc_voronoi *v)
 		}
 		nboxes = nr;
 	}
-	else if (job->nsites >= 2)
+	else if (mesh->nsites >= 2)
 	{
 		size_t		k = 0;
 
-		v->line = malloc(job->nsites * sizeof(uint32_t));
-		v->line_pos = malloc(job->nin * sizeof(uint32_t));
+		v->line = malloc(mesh->nsites * sizeof(uint32_t));
+		v->line_pos = malloc(mesh->nin * sizeof(uint32_t));
 		if (v->line == NULL || v->line_pos == NULL)
 			FAIL_OOM("out of memory sorting collinear sites");
-		for (size_t s = 0; s < job->nin; s++)
-			if (job->site_of[s] == s)
+		for (size_t s = 0; s < mesh->nin; s++)
+			if (mesh->site_of[s] == s)
 				v->line[k++] = (uint32_t) s;
 		v->nline = k;
 		qsort_r(v->line, k, sizeof(uint32_t), cmp_site, v);
@@ -377,6 +377,7 @@ voronoi_start(const tdc_job *job, const double env[4], int threads,
 			  const tdc_cell_writer *writer, tdc_voronoi **out, char *err,
 			  size_t errlen)
 {
+	tdc_mesh_view mesh;
 	tdc_voronoi *v;
 	int			rc;
 
@@ -386,10 +387,11 @@ voronoi_start(const tdc_job *job, const double env[4], int threads,
 #define FAIL(code, ...) do { if (err && errlen) snprintf(err, errlen, __VA_ARGS__); return (code); } while (0)
 	if (tdc_job_wait((tdc_job *) job, 0) != TDC_OK)
 		FAIL(TDC_EINVAL, "the triangulation has not finished successfully");
+	tdc_job_view(job, &mesh);
 	if (!(env[0] <= env[2] && env[1] <= env[3]) || !isfinite(env[0]) ||
 		!isfinite(env[1]) || !isfinite(env[2]) || !isfinite(env[3]))
 		FAIL(TDC_EINVAL, "the clip envelope must be a finite rectangle");
-	if (job->nsites > 0)
+	if (mesh.nsites > 0)
 	{
 		double		lo[2],
 					hi[2];
@@ -404,22 +406,23 @@ voronoi_start(const tdc_job *job, const double env[4], int threads,
 	if (v == NULL)
 		FAIL(TDC_ENOMEM, "out of memory");
 	v->job = job;
-	v->cache = job->opt.cache;
+	v->mesh = mesh;
+	v->cache = mesh.opt->cache;
 	if (writer)
 	{
 		v->emit = true;
 		v->writer = *writer;
 	}
 	memcpy(v->env, env, sizeof(v->env));
-	v->threads = threads > 0 ? threads : tdc_threads_used(job);
+	v->threads = threads > 0 ? threads : mesh.threads;
 	if (v->threads < 1)
 		v->threads = 1;
 	atomic_init(&v->failed, 0);
 	tdc_runner_init(&v->run, &v->cancel);
 
-	if (job->nin <= TDC_INLINE_MAX)
+	if (mesh.nin <= TDC_INLINE_MAX)
 		v->threads = 1;
-	rc = tdc_runner_start(&v->run, job->nin <= TDC_INLINE_MAX, vor_work, v, err, errlen);
+	rc = tdc_runner_start(&v->run, mesh.nin <= TDC_INLINE_MAX, vor_work, v, err, errlen);
 	if (rc != TDC_OK)
 	{
 		tdc_runner_destroy(&v->run);
@@ -479,7 +482,7 @@ tdc_voronoi_emit(tdc_voronoi *v, char *dst, char *err, size_t errlen)
 	tdc_runner_rearm(&v->run);
 	v->dst = dst;
 	v->writing = true;
-	rc = tdc_runner_start(&v->run, v->job->nin <= TDC_INLINE_MAX, vor_work, v, err, errlen);
+	rc = tdc_runner_start(&v->run, v->mesh.nin <= TDC_INLINE_MAX, vor_work, v, err, errlen);
 	if (rc != TDC_OK)
 		tdc_runner_finish(&v->run, rc);
 	return rc;
@@ -589,9 +592,11 @@ tdc_voronoi_env(const tdc_voronoi *v, double env[4])
 void
 tdc_voronoi_default_env(const tdc_job *job, double env[4])
 {
+	tdc_mesh_view mesh;
 	double		w;
 
-	if (job->nsites == 0)
+	tdc_job_view(job, &mesh);
+	if (mesh.nsites == 0)
 	{
 		env[0] = env[1] = env[2] = env[3] = 0;
 		return;
@@ -601,10 +606,10 @@ tdc_voronoi_default_env(const tdc_job *job, double env[4])
 	 * The box of every input point, not only of the sites a tolerance kept:
 	 * GEOS merges only exact duplicates before taking the envelope.
 	 */
-	w = fmax(job->bmax[0] - job->bmin[0], job->bmax[1] - job->bmin[1]);
-	env[0] = job->bmin[0] - w;
-	env[1] = job->bmin[1] - w;
-	env[2] = job->bmax[0] + w;
-	env[3] = job->bmax[1] + w;
+	w = fmax(mesh.bmax[0] - mesh.bmin[0], mesh.bmax[1] - mesh.bmin[1]);
+	env[0] = mesh.bmin[0] - w;
+	env[1] = mesh.bmin[1] - w;
+	env[2] = mesh.bmax[0] + w;
+	env[3] = mesh.bmax[1] + w;
 }
 

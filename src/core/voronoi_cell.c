@@ -274,7 +274,7 @@ hull_ray(const tdc_voronoi *v, const double *p, uint32_t a, uint32_t b,
 size_t
 tdc_vor_site_degree(const tdc_voronoi *v, uint32_t s, uint32_t *ho)
 {
-	const tdc_job *job = v->job;
+	const tdc_mesh_view *mesh = &v->mesh;
 	uint32_t	h0 = atomic_load_explicit(&v->site_he[s], memory_order_relaxed),
 				h = h0;
 	size_t		deg = 0;
@@ -284,10 +284,10 @@ tdc_vor_site_degree(const tdc_voronoi *v, uint32_t s, uint32_t *ho)
 		return 0;
 	do
 	{
-		if (is_outer(job, h))
+		if (is_outer(mesh, h))
 			*ho = h;
 		deg++;
-		h = job->he[h].next;
+		h = mesh->he[h].next;
 	} while (h != h0);
 	return deg;
 }
@@ -300,19 +300,19 @@ tdc_vor_site_degree(const tdc_voronoi *v, uint32_t s, uint32_t *ho)
 void
 tdc_vor_cell_of_mesh(const tdc_voronoi *v, uint32_t s, size_t deg, uint32_t ho, ring *r)
 {
-	const tdc_job *job = v->job;
+	const tdc_mesh_view *mesh = &v->mesh;
 	uint32_t	h0 = atomic_load_explicit(&v->site_he[s], memory_order_relaxed),
 				h,
 				prev_t = TDC_NIL;
 
 	r->n = 0;
 	/* start right after the outer face, if any, so the chain is open there */
-	h = ho == TDC_NIL ? h0 : job->he[ho].next;
+	h = ho == TDC_NIL ? h0 : mesh->he[ho].next;
 	for (size_t i = 0; i < deg; i++)
 	{
 		uint32_t	t,
 					g = TDC_NIL,
-					hn = job->he[h].next;
+					hn = mesh->he[h].next;
 
 		if (h == ho)
 		{
@@ -321,7 +321,7 @@ tdc_vor_cell_of_mesh(const tdc_voronoi *v, uint32_t s, size_t deg, uint32_t ho, 
 		}
 		/* the edge to the next vertex is dual to onext(h) */
 		if (r->tagged)
-			g = job->he[SYM(hn)].org;
+			g = mesh->he[SYM(hn)].org;
 		t = class_of(v, h);
 		if (t != prev_t)
 		{
@@ -349,9 +349,9 @@ tdc_vor_cell_of_mesh(const tdc_voronoi *v, uint32_t s, size_t deg, uint32_t ho, 
 		 * the hull edge after it, whose reverse w -> s has the outer face on
 		 * its left.
 		 */
-		uint32_t	hin = job->he[ho].next;
+		uint32_t	hin = mesh->he[ho].next;
 		const double *first = vertex_of(v, hin),
-				   *last = vertex_of(v, job->he[ho].prev);
+				   *last = vertex_of(v, mesh->he[ho].prev);
 		double		pout[2],
 					pin[2];
 		int			sout,
@@ -362,18 +362,18 @@ tdc_vor_cell_of_mesh(const tdc_voronoi *v, uint32_t s, size_t deg, uint32_t ho, 
 		h = h0;
 		do
 		{
-			uint32_t	g = job->he[SYM(h)].org;
+			uint32_t	g = mesh->he[SYM(h)].org;
 
 			for (int k = 0; k < 4; k++)
 				if ((owned & (1u << k)) && !corner_closer(v, k, s, g))
 					owned &= ~(1u << k);
-			h = job->he[h].next;
+			h = mesh->he[h].next;
 		} while (h != h0);
-		hull_ray(v, last, s, job->he[SYM(ho)].org, pout, &sout);
-		hull_ray(v, first, job->he[SYM(hin)].org, s, pin, &sin);
+		hull_ray(v, last, s, mesh->he[SYM(ho)].org, pout, &sout);
+		hull_ray(v, first, mesh->he[SYM(hin)].org, s, pin, &sin);
 		ring_push(r, pout[0], pout[1], TDC_NIL);
 		push_arc(r, v->box, sout, sin, owned);
-		ring_push(r, pin[0], pin[1], job->he[SYM(hin)].org);
+		ring_push(r, pin[0], pin[1], mesh->he[SYM(hin)].org);
 	}
 	ring_close(r);
 }
@@ -450,7 +450,7 @@ void
 tdc_vor_cell_task(void *arg, size_t rg, int worker)
 {
 	tdc_voronoi *v = arg;
-	const tdc_job *job = v->job;
+	const tdc_mesh_view *mesh = &v->mesh;
 	size_t		lo = rg * SITES_PER_TASK,
 				hi = lo + SITES_PER_TASK < v->nsites ? lo + SITES_PER_TASK : v->nsites;
 	ring		a = {.tagged = true},
@@ -470,7 +470,7 @@ tdc_vor_cell_task(void *arg, size_t rg, int worker)
 
 		off[s - lo] = out.n;
 		v->cell_n[s] = 0;
-		if (job->site_of[s] != s)
+		if (mesh->site_of[s] != s)
 			continue;
 		if (v->nline > 1)
 			ok = cell_of_line(v, (uint32_t) s, &a);
@@ -550,7 +550,7 @@ void
 tdc_vor_mesh_cell_task(void *arg, size_t rg, int worker)
 {
 	tdc_voronoi *v = arg;
-	const tdc_job *job = v->job;
+	const tdc_mesh_view *mesh = &v->mesh;
 	size_t		lo = rg * v->cell_range,
 				hi = lo + v->cell_range < v->nhe ? lo + v->cell_range : v->nhe;
 	ring		a = {.tagged = true},
@@ -572,7 +572,7 @@ tdc_vor_mesh_cell_task(void *arg, size_t rg, int worker)
 		goto oom;
 	for (size_t h = lo; h < hi; h++)
 	{
-		uint32_t	s = job->he[h].org,
+		uint32_t	s = mesh->he[h].org,
 					ho;
 		size_t		deg,
 					start = out.n;

@@ -13,7 +13,7 @@
 #include <stdlib.h>
 
 #include "exact.h"
-#include "job.h"
+#include "mesh_view.h"
 
 #define SITES_PER_TASK	4096	/* cells built per task, and per cancel poll */
 #define ITEMS_PER_TASK	65536	/* half-edges or triangles per task */
@@ -23,7 +23,8 @@
 
 struct tdc_voronoi
 {
-	const tdc_job *job;
+	const tdc_job *job;			/* opaque (tdc.h): its accessors, the input map */
+	tdc_mesh_view mesh;			/* what the diagram reads of it */
 	tdc_cache  *cache;			/* the job's, kept: the job may be freed first */
 	double		env[4];			/* E: xmin, ymin, xmax, ymax */
 	double		box[4];			/* B, strictly around E, sites and vertices */
@@ -111,13 +112,13 @@ vor_fail(tdc_voronoi *v, int code, const char *msg)
 static inline const double *
 site_pt(const tdc_voronoi *v, uint32_t s)
 {
-	return v->job->xy + 2 * (size_t) s;
+	return v->mesh.xy + 2 * (size_t) s;
 }
 
 static inline bool
-is_outer(const tdc_job *job, size_t h)
+is_outer(const tdc_mesh_view *mesh, size_t h)
 {
-	return (job->outer[h >> 6] >> (h & 63)) & 1;
+	return tdc_he_outer(mesh->outer, h);
 }
 
 static inline void
@@ -142,10 +143,10 @@ prefetch_face(const tdc_voronoi *v, size_t h, size_t hi)
 {
 	if (h + PREFETCH < hi)
 	{
-		uint32_t	ahead = v->job->he[SYM(h + PREFETCH)].prev;
+		uint32_t	ahead = v->mesh.he[SYM(h + PREFETCH)].prev;
 
 		if (ahead < v->nhe)
-			__builtin_prefetch(&v->job->he[SYM(ahead)]);
+			__builtin_prefetch(&v->mesh.he[SYM(ahead)]);
 	}
 }
 
@@ -174,16 +175,16 @@ vertex_of(const tdc_voronoi *v, uint32_t h)
 static inline bool
 edge_cocircular(const tdc_voronoi *v, size_t h)
 {
-	const tdc_job *job = v->job;
-	uint32_t	a = job->he[h].org,
-				b = job->he[h + 1].org,
+	const tdc_mesh_view *mesh = &v->mesh;
+	uint32_t	a = mesh->he[h].org,
+				b = mesh->he[h + 1].org,
 				c,
 				d;
 
-	if (a == TDC_NIL || b == TDC_NIL || is_outer(job, h) || is_outer(job, h + 1))
+	if (a == TDC_NIL || b == TDC_NIL || is_outer(mesh, h) || is_outer(mesh, h + 1))
 		return false;
-	c = job->he[job->he[h + 1].prev ^ 1].org;	/* apex left of h */
-	d = job->he[job->he[h].prev ^ 1].org;	/* apex left of h + 1 */
+	c = mesh->he[mesh->he[h + 1].prev ^ 1].org;	/* apex left of h */
+	d = mesh->he[mesh->he[h].prev ^ 1].org;	/* apex left of h + 1 */
 	return tdc_incircle(site_pt(v, a), site_pt(v, b), site_pt(v, c), site_pt(v, d)) == 0;
 }
 

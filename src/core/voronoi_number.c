@@ -75,7 +75,7 @@ void
 tdc_vor_number_task(void *arg, size_t r, int worker)
 {
 	tdc_voronoi *v = arg;
-	const tdc_job *job = v->job;
+	const tdc_mesh_view *mesh = &v->mesh;
 	size_t		lo = r * ITEMS_PER_TASK,
 				hi = lo + ITEMS_PER_TASK < v->nhe ? lo + ITEMS_PER_TASK : v->nhe,
 				n = 0,
@@ -88,7 +88,7 @@ tdc_vor_number_task(void *arg, size_t r, int worker)
 		return;
 	for (size_t h = lo; h < hi; h++)
 	{
-		uint32_t	o = job->he[h].org;
+		uint32_t	o = mesh->he[h].org;
 
 		if (((h - lo) & 4095) == 4095 && vor_cancelled(v))
 			break;
@@ -105,10 +105,10 @@ tdc_vor_number_task(void *arg, size_t r, int worker)
 														  memory_order_relaxed))
 				;
 		}
-		if (tdc_tri_at(job, h, t))
+		if (tdc_mesh_tri_at(mesh, h, t))
 		{
-			uint32_t	h1 = job->he[SYM(h)].prev,
-						h2 = job->he[SYM(h1)].prev,
+			uint32_t	h1 = mesh->he[SYM(h)].prev,
+						h2 = mesh->he[SYM(h1)].prev,
 						id;
 			double	   *c;
 
@@ -161,7 +161,7 @@ tdc_vor_tri_he_task(void *arg, size_t r, int worker)
 	if (vor_cancelled(v))
 		return;
 	for (size_t h = lo; h < hi; h++)
-		if (tdc_tri_at(v->job, h, t))
+		if (tdc_mesh_tri_at(&v->mesh, h, t))
 			v->tri_he[v->tri_id[h]] = (uint32_t) h;
 }
 

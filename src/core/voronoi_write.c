@@ -62,7 +62,7 @@ build_mesh_cell(const tdc_voronoi *v, uint32_t s, ring *w, ring *a, ring *b,
 static inline size_t
 first_input(const tdc_voronoi *v, uint32_t s)
 {
-	return v->first_in ? v->first_in[s] : v->job->idx[s];
+	return v->first_in ? v->first_in[s] : v->mesh.idx[s];
 }
 
 /* Room for n more words in a range's record. */
@@ -153,7 +153,7 @@ void
 tdc_vor_mesh_size_task(void *arg, size_t rg, int worker)
 {
 	tdc_voronoi *v = arg;
-	const tdc_job *job = v->job;
+	const tdc_mesh_view *mesh = &v->mesh;
 	size_t		lo = rg * v->cell_range,
 				hi = lo + v->cell_range < v->nhe ? lo + v->cell_range : v->nhe,
 				len = 0,
@@ -176,7 +176,7 @@ tdc_vor_mesh_size_task(void *arg, size_t rg, int worker)
 		return;
 	for (size_t h = lo; h <= hi; h++)
 	{
-		uint32_t	s = h < hi ? job->he[h].org : TDC_NIL;
+		uint32_t	s = h < hi ? mesh->he[h].org : TDC_NIL;
 
 		if (((h - lo) & 4095) == 4095 && vor_cancelled(v))
 			goto done;
@@ -212,7 +212,7 @@ tdc_vor_mesh_size_task(void *arg, size_t rg, int worker)
 
 				if (!open[i])
 					continue;
-				hn = job->he[hs[i][deg[i] - 1]].next;
+				hn = mesh->he[hs[i][deg[i] - 1]].next;
 				if (hn == hs[i][0])
 					open[i] = false;
 				else if (deg[i] == RING_MAX)
@@ -231,7 +231,7 @@ tdc_vor_mesh_size_task(void *arg, size_t rg, int worker)
 		for (size_t i = 0; i < nb; i++)
 			for (size_t j = 0; j < deg[i] && inner[i]; j++)
 			{
-				if (is_outer(job, hs[i][j]))
+				if (is_outer(mesh, hs[i][j]))
 					inner[i] = false;
 				else
 				{
@@ -427,7 +427,7 @@ gather_task(void *arg, size_t r, int worker)
 int
 tdc_vor_emit_run(tdc_voronoi *v)
 {
-	const tdc_job *job = v->job;
+	const tdc_mesh_view *mesh = &v->mesh;
 	size_t		nb;
 	int			rc;
 
@@ -437,19 +437,21 @@ tdc_vor_emit_run(tdc_voronoi *v)
 		vor_fail(v, rc, rc == TDC_ETHREAD ? "could not create worker threads" : "out of memory");
 		return rc;
 	}
-	v->ninput = tdc_num_input(job);
-	if (job->opt.tolerance > 0)
+	v->ninput = mesh->n;
+	if (mesh->opt->tolerance > 0)
 	{
+		const uint32_t *map = tdc_job_input_map(v->job);
+
+		if (map == NULL)
+			FAIL_OOM("out of memory mapping the input to its sites");
 		v->first_in = malloc(v->nsites * sizeof(uint32_t) + 1);
 		if (v->first_in == NULL)
 			FAIL_OOM("out of memory ordering the Voronoi cells");
 		memset(v->first_in, 0xff, v->nsites * sizeof(uint32_t));
 		for (size_t i = 0; i < v->ninput; i++)
 		{
-			uint32_t	s = tdc_input_site(job, i);
+			uint32_t	s = map[i];
 
-			if (s == UINT32_MAX)
-				FAIL_OOM("out of memory mapping the input to its sites");
 			if (v->first_in[s] == TDC_NIL)
 				v->first_in[s] = (uint32_t) i;
 			if ((i & 65535) == 65535 && vor_cancelled(v))
