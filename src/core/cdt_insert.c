@@ -4,58 +4,27 @@
  *		inserted into the triangulation by flips, with exact predicates.
  *		How the segments are shared out and run is cdt.c's.
  *
- * Method.  Segments are inserted one at a time by the edge
- * flipping scheme of Sloan (1993, "A fast algorithm for generating
- * constrained Delaunay triangulations", Computers & Structures 47(3)):
+ * Method: the edge flipping scheme of Sloan (1993, "A fast algorithm for
+ * generating constrained Delaunay triangulations", Computers & Structures
+ * 47(3)): walk from a towards b listing the edges the open segment crosses
+ * (tdc_cdt_insert_segment), flip them until a-b is an edge (Sloan's step 2,
+ * remove_crossings), then restore the Delaunay property by Lawson flips
+ * among the new edges only (restore_delaunay): inserting a-b changes the
+ * CDT only inside the triangles it crosses (Anglada 1997).  Exact
+ * cocircularity is broken by the kernel's symbolic rule, as in merge.c, so
+ * the result depends on the sites and the segments only.  The ends are
+ * input indices mapped to sites; a zero-length segment is ignored, a site
+ * on the open segment splits it (no site is ever created), collinear
+ * overlaps are found as existing edges, and a proper crossing is
+ * TDC_ECROSS naming both segments.  Between segments the mesh triangulates
+ * the sites' hull (hull edges are never flipped, so the job's outer-face
+ * bitmap and triangle count stay right), every constraint edge carries the
+ * smallest number (+ 1) of the segments that made it and every other edge
+ * NO_SEG, vedge[s] leaves site s, and no edge slot is added or freed.  The
+ * mesh is written in place: the one writer of mesh_view.h.
  *
- *	1. walk from the segment's first end point a towards its other end b
- *	   through the triangles the open segment crosses, listing the edges it
- *	   crosses properly;
- *	2. take listed edges in turn: an edge whose two triangles form a strictly
- *	   convex quadrilateral is flipped, and if the new diagonal still crosses
- *	   the segment it goes back to the end of the list, otherwise it is kept
- *	   aside as a new edge; an edge whose quadrilateral is not convex goes back
- *	   to the end of the list.  Sloan shows some listed edge always has a
- *	   convex quadrilateral, so the list empties and a-b is an edge;
- *	3. restore the Delaunay property by Lawson flips (incircle) among the new
- *	   edges only; the constraint itself is never flipped.
- *
- * Why only the new edges: inserting a-b changes the constrained Delaunay
- * triangulation (CDT) only inside the union of the triangles a-b crosses
- * (Anglada 1997, "An improved incremental algorithm for constructing
- * restricted Delaunay triangulations"), whose two halves are then
- * triangulated Delaunay-wise relative to the constraint.  Every flip stays
- * inside that region, and a triangulation of a polygon whose inner edges are
- * all locally Delaunay is its CDT (the constrained Delaunay lemma), which is
- * what Lawson's flips reach.
- *
- * Ties.  The in-circle test breaks exact cocircularity with the same
- * symbolic perturbation of the lifting map as merge.c (simulation of
- * simplicity on the lift, smaller sites lifted more), so the perturbed sites
- * admit exactly one CDT for a given set of segments: the result depends on
- * the site set and the constraint set only, not on the insertion order or the
- * thread count of the unconstrained triangulation.
- *
- * Rules for the segments (the endpoints are input indices; the job already
- * merged exact duplicates, so they are mapped to sites first):
- *	- both ends on the same site: ignored (zero length);
- *	- a site lying exactly on the open segment splits it there: the walk
- *	  meets that site (as the far end of an edge out of the current end, or
- *	  as the apex of a crossed triangle) and continues from it; no site is
- *	  ever created;
- *	- collinear overlaps: the shared stretch is already a chain of
- *	  constraint edges, found as existing edges by the walk;
- *	- a proper crossing with an earlier segment is found when the walk
- *	  would cross one of its edges: TDC_ECROSS, naming both segments.
- *
- * Invariants between segments: the mesh is a triangulation of the convex
- * hull of the sites (hull edges are never crossed, so never flipped, so the
- * job's outer-face bitmap and triangle count stay right); every constraint
- * edge carries the smallest number (+ 1) of the segments that made it,
- * every other edge NO_SEG; vedge[s] is a half-edge leaving site s.  The
- * number of edges never changes (a flip keeps its edge slot), so the mesh
- * needs no memory.
- *
+ * The design note, with the reasons, the rules and the references, is
+ * docs/design/constrained.md.
  */
 #include <math.h>
 #include <stdarg.h>
@@ -247,7 +216,8 @@ remove_crossings(cdt_ctx *x, size_t s, uint32_t a, uint32_t e, size_t n,
 
 /*
  * Lawson's flips among the n new edges of a cavity, marked CAV in cons[];
- * the constraint and the cavity's border are not listed, so never flipped.
+ * the constraint and the cavity's border are not listed, so never flipped
+ * (only the new edges can fail: Anglada 1997, docs/design/constrained.md).
  */
 static int
 restore_delaunay(cdt_ctx *x, size_t n)
@@ -377,7 +347,9 @@ grow_lists(cdt_ctx *x, size_t s)
 }
 
 /*
- * Insert segment s from site a to site b (a != b), piece by piece.  A
+ * Insert segment s from site a to site b (a != b), piece by piece: Sloan's
+ * walk (step 1) to list the crossed edges, then remove_crossings and
+ * restore_delaunay (steps 2 and 3, docs/design/constrained.md).  A
  * stripe's inserter returns TDC_DEFER, before it changes anything of the
  * piece at hand, when that piece would touch a triangle with a corner
  * outside its stripe (or needs more crossed edges than its lists hold); the

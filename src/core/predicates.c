@@ -2,78 +2,28 @@
  * predicates.c
  *		Exact fallback of the orientation and in-circle predicates.
  *
- * The inline filters in predicates.h settle almost every call in plain double
- * arithmetic.  What reaches this file is the hard residue: determinants that
- * are zero or so close to zero that rounding could have flipped their sign.
- * Here we compute the sign exactly, using floating-point expansion arithmetic
- * as described by Priest (1991) and by J. R. Shewchuk, "Adaptive Precision
- * Floating-Point Arithmetic and Fast Robust Geometric Predicates", Discrete &
- * Computational Geometry 18:305-363, 1997.  The code below is an independent
- * implementation of the algorithms published in that paper, which are cited
- * by the names the paper gives them (Fast-Two-Sum, Two-Sum, Split,
- * Two-Product, Fast-Expansion-Sum, Scale-Expansion).
+ * The inline filters in predicates.h settle almost every call in plain
+ * double arithmetic; what reaches this file are determinants zero or so
+ * close to zero that rounding could have flipped their sign.  Their sign is
+ * computed exactly with floating-point expansion arithmetic (Priest 1991;
+ * J. R. Shewchuk, "Adaptive Precision Floating-Point Arithmetic and Fast
+ * Robust Geometric Predicates", Discrete & Computational Geometry
+ * 18:305-363, 1997), an independent implementation of the paper's
+ * algorithms, cited by its names (Two-Sum, Two-Product, Fast-Expansion-Sum,
+ * ...), from the core's one exact kernel, exact.h.  Route 1 evaluates the
+ * determinant on coordinate differences when they are exact (Two-Diff
+ * tells), with a plain-double shortcut for lattice data; route 2, rare,
+ * folds the translation into the algebra on raw coordinates.  Both are exact
+ * for every coordinate 0 or of magnitude in [1e-60, 1e60]: every value
+ * formed is then a multiple of 2^-1008 and below 2^830, so nothing
+ * underflows or overflows.  Zero components are eliminated as they appear,
+ * working storage is fixed-size stack arrays, and nothing is allocated or
+ * kept.  The symbolic tie-break of the in-circle test (tdc_incircle_tie) is
+ * here too, so that the merge, the constrained insertion and the tiles
+ * decide cocircular sites by one rule.
  *
- * An expansion is an array of doubles, ordered by increasing magnitude and
- * pairwise non-overlapping, whose exact (unrounded) sum is the value it
- * represents.  The largest component carries the sign of the whole sum, so
- * once a determinant is held as an expansion its sign is read off its last
- * component.  Every routine here eliminates zero components as it goes: the
- * hard inputs are dominated by integer-like coordinates (grids, snapped
- * survey data) whose products are exact, and with zero elimination their
- * expansions stay one or two components long, which is what makes the exact
- * path cheap.  By convention an expansion of length 0 represents zero.
- *
- * Two evaluation routes are used, both exact:
- *
- * 1. If every coordinate difference against the pivot point (c for orient2d,
- *    d for incircle) is computed without rounding (which Two-Diff tells us at
- *    the cost of a few additions), we evaluate the textbook determinant on
- *    those differences.  This is the common case: Sterbenz's lemma makes the
- *    difference of two doubles within a factor two of each other exact, so
- *    clustered near-degenerate points and lattice points take this route.
- *    The products involved have degree at most 4 and small expansions.
- *
- *    Before building expansions, route 1 tries a shortcut for lattice data
- *    (integer grids, or any grid far from the origin, whose differences are
- *    multiples of the coordinates' ulp): if the differences, scaled by a
- *    power of two, are small integers, all of orient2d and all or most of
- *    incircle can be evaluated exactly in plain doubles (lattice_scale,
- *    incircle_small_integers).  An integer-lattice incircle then costs a few
- *    tens of nanoseconds instead of several hundred.
- *
- * 2. Otherwise we evaluate the determinant on the raw coordinates, with the
- *    translation folded into the algebra (orient2d as a sum of three 2x2
- *    minors, incircle as the 4x4 lifted determinant expanded along its lift
- *    column), so that no rounded difference is ever formed.  This costs more
- *    (the final expansion may have a few hundred components) but is rare.
- *
- * Why this is exact for every coordinate that is 0 or has magnitude in
- * [1e-60, 1e60]: the proofs in the paper assume an exponent range without
- * limits.  Such a coordinate is an integer multiple of 2^-252 (1e-60 lies in
- * [2^-200, 2^-199) and a double carries 53 bits) and is below 2^200, and so
- * are the exact differences of route 1.  Every value the algorithms form
- * (products, sums, Two-Sum and Two-Product error terms, Veltkamp split
- * halves) is an exact or rounded piece of a polynomial of degree <= 4 in
- * those inputs, hence an integer multiple of 2^-1008 (rounding to 53 bits
- * only coarsens the grid a value lies on).  A nonzero value is therefore at
- * least 2^-1008 in magnitude, inside the normal range, where IEEE arithmetic
- * rounds exactly as the unbounded model does: underflow cannot occur.  On the
- * other side, magnitudes stay below about 2^830 even after the 2^27 splitter
- * multiplies a degree-4 quantity, far from overflow.  (Inputs outside that
- * range may be mishandled; the driver rejects them.)
-
- * The error-free transformations and the expansion arithmetic used here are
- * the core's one exact kernel, exact.h, with the requirements they put on
- * the floating-point environment (round to nearest even, no extended
- * precision, no contraction into a fused multiply-add).
- *
- * The symbolic tie-break of the in-circle test (tdc_incircle_tie) is here
- * too, so that the merge, the constrained insertion and the tiles decide
- * cocircular sites by one rule.
- *
- * All working storage lives in fixed-size stack arrays whose sizes follow
- * from the expansion-length bounds of the theorems (noted at each use); the
- * code never allocates and keeps no state.
+ * The design note, with both routes, the proof of exactness and the
+ * references, is docs/design/predicates.md.
  */
 #include <float.h>
 #include <stdint.h>
@@ -431,7 +381,8 @@ incircle_from_raw(const double *a, const double *b, const double *c,
  */
 
 /*
- * Exact sign of (ax-cx)(by-cy) - (ay-cy)(bx-cx).
+ * Exact sign of (ax-cx)(by-cy) - (ay-cy)(bx-cx): route 1 or 2 of
+ * docs/design/predicates.md, in Shewchuk's (1997) expansion arithmetic.
  */
 double
 tdc_orient2d_exact(const double *a, const double *b, const double *c)
@@ -485,7 +436,9 @@ tdc_orient2d_exact(const double *a, const double *b, const double *c)
 }
 
 /*
- * Exact sign of the in-circle determinant of predicates.h.
+ * Exact sign of the in-circle determinant of predicates.h: the lattice
+ * shortcut, route 1 or route 2 of docs/design/predicates.md, in Shewchuk's
+ * (1997) expansion arithmetic.
  */
 double
 tdc_incircle_exact(const double *a, const double *b, const double *c,
@@ -580,7 +533,8 @@ square_of_difference(double a, double b, double *h)
 
 /*
  * Why this is exact for coordinates that are 0 or of magnitude in
- * [2^-252, 2^202] (the argument of the file header, on other bounds): every
+ * [2^-252, 2^202] (the argument of docs/design/predicates.md, on other
+ * bounds): every
  * such coordinate is an integer multiple of 2^-304, and so are the
  * differences, their Two-Diff tails and the Veltkamp halves (|values| below
  * 2^231).  Every product and Two-Product error term is then a multiple of

@@ -3,115 +3,26 @@
  *		Exact tiled triangulation: the triangles of one tile of the global
  *		Delaunay triangulation, from the points of a box around the tile.
  *
- * Why.  One triangulation holds all its points and its mesh, about 100 bytes
- * per point.  To triangulate more points than fit, the plane is cut into
- * tiles; each tile is triangulated with a halo of neighbouring points and
- * keeps only the triangles it can prove are global ones.  The result must be
- * the one-shot triangle set, triangle for triangle, cocircular sites
- * included.  This is the finalization rule of streaming Delaunay (Isenburg,
- * Liu, Shewchuk, Snoeyink, "Streaming computation of Delaunay
- * triangulations", SIGGRAPH 2006: a triangle is final once its circumcircle
- * lies inside the region whose points are all known) applied to the
- * tile-and-star decomposition of distributed Delaunay (Caraffa, Memari,
- * Yirci, Brédif, "Tile & merge: distributed Delaunay triangulations for
- * cloud computing", 2019, and its 2021 follow-up): a tile is done when the
- * stars of all its own points are final.
+ * A tile is triangulated with Q, every point of P (the global set) inside
+ * a known box K (and optional extra boxes), and keeps the triangles it can
+ * prove global: the finalization rule of streaming Delaunay (Isenburg, Liu,
+ * Shewchuk, Snoeyink, SIGGRAPH 2006) applied to the stars of distributed
+ * Delaunay (Caraffa, Memari, Yirci, Brédif, "Tile & merge", 2019).
+ * Lemma 1: a triangle of T(Q) whose closed circumdisk is known (it meets
+ * C, the convex polygon around P, only inside K and the extra boxes) is in
+ * T(P), since the tie rule looks at four sites only.  Lemma 2: an outer
+ * edge of T(Q) whose outer half-plane meets C only inside K is a hull edge
+ * of P.  When the stars of all own sites pass them, the tile emits the
+ * triangles whose smallest vertex it owns (the smallest label among a
+ * site's copies): every triangle exactly once.  Otherwise it reports a
+ * larger box, which grows every round up to C's bounding box B.  Lemma 2
+ * is decided exactly; Lemma 1 from a disk's box with a forward error bound
+ * (disk_box), shrunk for slivers near the hull (clip_box, segment_box), and
+ * skipped for "deep" sites, whose stars a block count certifies
+ * (mark_deep).  The tile's mesh is read through mesh_view.h.
  *
- * Notation.  P is the global point set, its sites are its distinct
- * coordinates.  T(S) is the triangulation this engine builds for a set S:
- * the Delaunay triangulation of S under the lifted-paraboloid perturbation
- * of merge.c (a site's lift is raised by an infinitesimal that is larger for
- * lexicographically smaller sites).  The perturbed lift is in general
- * position, so T(S) is unique, and a triangle abc of S is in T(S) iff every
- * other site of S is strictly outside its circle or, exactly on it, loses
- * the perturbed in-circle test.  That test (tdc_incircle_tie, predicates.c) looks only at the
- * coordinates of the four sites involved, never at S: it is the same in
- * every subset of P.
- *
- * The caller gives, for one tile:
- *	- K, a closed box, optionally more closed "extra" boxes E1..Ek, and Q:
- *	  every point of P inside K or an extra box (own points and halo), each
- *	  with the label of the tile that owns it, and this tile's label.  The
- *	  own points lie in K.  (Extra boxes let a caller add thin bands along
- *	  long edges of the global hull without widening K; see the CLI.)
- *	- C, a convex polygon with P inside it (the convex hull of P, or just the
- *	  four corners of P's bounding box; the hull finishes border tiles sooner).
- *
- * Ownership.  A site belongs to the smallest label among its copies, so an
- * exact duplicate split across tiles still has one owner; every copy has the
- * site's coordinates, so if one copy is in K all are, and the tile sees them
- * all.  A global triangle is emitted by the owner of its lexicographically
- * smallest vertex only, so no two tiles emit it, and (below) that owner does
- * emit it: every triangle exactly once, for any assignment of points to
- * tiles.
- *
- * Known region.  No point of P lies outside C, and every point of P inside K
- * or an extra box is in Q.  So a region R is "known" (R n P = R n Q) when
- * R n C lies in the union U of K and the extra boxes.  We test it
- * conservatively with the bounding box B of C: R is known when its bounding
- * box, clipped to B, is covered by U (box_known).  Everything below holds for
- * any Q between P n U and P.
- *
- * Lemma 1 (final triangle).  If abc is in T(Q) and its closed circumdisk D
- * is known, abc is in T(P).  Proof: a site of P \ Q is outside U, hence
- * (known region) outside D, hence strictly outside the circle: it cannot
- * invalidate abc.  Sites of Q on or inside the circle are judged the same way
- * in T(P) as in T(Q), because the tie-break depends on the four sites only.
- *
- * Lemma 2 (final hull edge).  If ab is an edge of the outer face of T(Q),
- * with the open half-plane H to its outer side, and H n C lies in K, then ab
- * is a convex hull edge of P (and an edge of T(P)): a point of P in H would
- * be in C, hence in K, hence in Q, but no point of Q is in H.
- *
- * Star.  The star of an own site v is final when every triangle of T(Q) at v
- * passes Lemma 1 and every outer edge of T(Q) at v passes Lemma 2.  Then the
- * star of v in T(P) is exactly its star in T(Q): the triangles around v are
- * global triangles covering a neighbourhood of v (v inside the hull of Q),
- * or the wedge between two global hull edges (v on the hull of P), and the
- * global triangles at v tile exactly that neighbourhood or wedge, so there
- * is no room for another.  A collinear Q has only outer edges: they pass
- * Lemma 2 only if P is collinear too (no triangle anywhere).  A site without
- * edges (Q has one site) is final only if K covers B, i.e. Q = P.
- * When every own star is final, the tile emits the triangles of T(Q) whose
- * smallest vertex it owns: each is global (Lemma 1), and every global
- * triangle at an own site is among them.  Otherwise the tile reports a
- * larger box: K united with the bounding boxes of the failing disks and,
- * for each failing hull edge, a box around the edge that leaves K (and the
- * vertex of C beyond the edge nearest to it, when near), clipped to B; the
- * caller reruns.  The box
- * grows at every round (if the requests add nothing, the answer is K united
- * with B), and once K covers B, Q = P and every star is final: the loop
- * ends.
- *
- * Rounding.  Lemma 2 is decided with exact orientations of input
- * coordinates: C's vertices against the edge, or the corners of the strips
- * of B outside K (their coordinates are K's and B's, themselves inputs).
- * Lemma 1 needs the circumdisk's bounding box, computed in double with a
- * forward error bound (disk_box) doubled for slack; when the orientation
- * determinant is too small for the bound to mean anything, the disk is
- * "unknown" and the tile asks for B.  A flat triangle near the global hull
- * has a huge circle that bulges out of C, while only D n C must be known:
- * when D's box fails, it is shrunk to the box of the circular segment of D
- * on C's side of each edge of C (and of each certified hull edge of the
- * triangle), with the chord computed from a conservative centre and radius
- * (clip_box).  So border tiles do not read half the data for such slivers.
- * When the sliver stands on a certified hull edge ab of its own, D n C lies
- * in the segment over the chord ab; with an obtuse angle at the third
- * vertex that segment is bounded without the centre, from the angle
- * (segment_box): a computed centre 1e8 away carries more error than the
- * segment is high.
- *
- * Deep sites.  Computing every circumdisk was a fifth of a tiled run.  Most
- * stars are certified at once: where every block of a grid of about ten
- * points per block is non-empty around a site, no empty circle through it
- * can be large, so its star lies within a known distance of it (mark_deep
- * has the proof and its rounding); a triangle with such a vertex inside K
- * by that distance needs no disk.  Only the rim of K, holes in the data and
- * sparse regions go through the disk test.
- *
- * The halo is a thin ring in practice: for uniform points, circumdisks are a
- * few point spacings wide, so a margin of some ten spacings around a tile
- * almost always suffices on the first round.
+ * The design note, with the notation, both proofs, the rounding and the
+ * references, is docs/design/tiles.md.
  */
 #include <math.h>
 #include <stdio.h>
@@ -415,11 +326,12 @@ hull_edge_request(tile_ctx *cx, const double *a, const double *b, const double *
 }
 
 /*
- * Lemma 2 for the hull edge a -> b of T(Q) (interior on its left): is the
- * open half-plane right of it, intersected with C, inside K?  Either every
- * vertex of C is on the closed left (the edge is on the global hull), or
- * every strip of B outside K has its four corners on the closed left.
- * When it fails, requests the vertices of C strictly right of the edge.
+ * Lemma 2 (docs/design/tiles.md) for the hull edge a -> b of T(Q)
+ * (interior on its left): is the open half-plane right of it, intersected
+ * with C, inside K?  Either every vertex of C is on the closed left (the
+ * edge is on the global hull), or every strip of B outside K has its four
+ * corners on the closed left.  When it fails, requests the vertices of C
+ * strictly right of the edge.
  */
 static bool
 hull_edge_final(tile_ctx *cx, const double *a, const double *b)
@@ -533,8 +445,10 @@ segment_box(const double *a, const double *b, const double *c, double box[4])
 }
 
 /*
- * Lemma 1 for triangle v[0..2] (counter-clockwise) of T(Q); glob[k] says
- * whether edge v[k] -> v[k+1] is a hull edge of T(Q) certified global.
+ * Lemma 1 (docs/design/tiles.md; the finalization rule of Isenburg, Liu,
+ * Shewchuk, Snoeyink 2006) for triangle v[0..2] (counter-clockwise) of
+ * T(Q); glob[k] says whether edge v[k] -> v[k+1] is a hull edge of T(Q)
+ * certified global.
  * The disk's box is tried first; if it is not known, the box of the disk's
  * part inside C (clipped by C's edges and the certified hull edges, whose
  * lines support C) is tried.
@@ -970,7 +884,10 @@ tile_finish(const tdc_mesh_view *mesh, const tdc_tile_spec *spec, tdc_tile_resul
 		cx.known_list[i + 1] = spec->extra + 4 * i;
 	covers = K[0] <= cx.B[0] && K[1] <= cx.B[1] && K[2] >= cx.B[2] && K[3] >= cx.B[3];
 
-	/* ownership: the smallest label among a site's copies */
+	/*
+	 * ownership: the smallest label among a site's copies (the stars of
+	 * Caraffa et al. 2019, docs/design/tiles.md)
+	 */
 	lab = malloc(sizeof(int64_t) * (nin + 1));
 	flag = calloc(nin + 1, 1);
 	if (lab == NULL || flag == NULL)

@@ -5,74 +5,23 @@
  *
  * The rule (options.tolerance = t > 0): take the points in lexicographic
  * (x, y) order, ties by input index; keep a point unless some already kept
- * site q has (px - qx)^2 + (py - qy)^2 < t^2, evaluated exactly (in real
- * arithmetic); a dropped point maps to the nearest such q, the earliest kept
- * on exact ties of the distance.  So no two kept sites are closer than t and
- * every dropped point lies closer than t to its site, for every input.  A
- * rule evaluated in rounded arithmetic, or a search whose rounding can hide a
- * neighbour, keeps pairs closer than t or not depending on where the data
- * lies (how far from the corner of a hash grid, for one), and no simple rule
- * describes that.  The greedy rule is sequential, so it runs once
- * before the subdivision, and its survivors then go through the parallel
- * pipeline like any input.
+ * site q has (px - qx)^2 + (py - qy)^2 < t^2, evaluated exactly; a dropped
+ * point maps to the nearest such q, the earliest kept on exact ties.  So no
+ * two kept sites are closer than t and every dropped point lies closer than
+ * t to its site, for every input: a rounded rule would depend on where the
+ * data lies.  The rule is sequential, so it runs once before the
+ * subdivision.  t is clamped to [2^-252, 2^202], which changes no decision
+ * for the inputs the driver accepts; the distances are decided in doubles
+ * with proven bounds, and exactly (tdc_sqdist_cmp_exact) in between.  The
+ * candidates come from a sweep over x with the active kept sites in a bit
+ * set by y rank, never missing a site within t and examining at most 7
+ * candidates and one failing test per direction for a point: O(n log n)
+ * for every input.  The order comes from an LSD radix sort, by y then x,
+ * whose stable passes give the ties and the ranks for free; cancel is
+ * polled by work done, not by points.
  *
- * Clamping t.  Input coordinates are 0 or of magnitude in [1e-60, 1e60]
- * (triangulate.c), so they are multiples of 2^-252 below 2^200.  A nonzero squared
- * distance D is then at least 2^-504 and always D < 2^404.  Hence for
- * t <= 2^-252, "D < t^2" means D = 0 whatever t is, and for t >= 2^202 it
- * always holds: replacing t by t' = min(max(t, 2^-252), 2^202) changes no
- * decision, and t' * t' neither underflows nor overflows, which lets every
- * bound below be stated for plain normal numbers.
- *
- * Deciding "D < t'^2" and "D1 < D2".  The double evaluation
- * d = fl(fl(dx)^2 + fl(dy)^2) has no underflow (a nonzero fl(dx) is at least
- * 2^-252) and no overflow, so each of its five operations has relative error
- * at most u = 2^-53 and, all terms being nonnegative,
- * D (1 - u)^4 <= d <= D (1 + u)^4, i.e. |d - D| <= 4.01 u D.  Likewise
- * t2 = fl(t' t') = t'^2 (1 + e), |e| <= u.  With lo = fl(t2 (1 - 2^-49))
- * <= t'^2 (1 + u)^2 (1 - 16u) < t'^2 (1 - 13u), d < lo gives
- * D <= d / (1 - 4.01u) < t'^2; symmetrically hi = fl(t2 (1 + 2^-49))
- * > t'^2 (1 + 13u) and d > hi gives D > t'^2.  Two candidates compare the
- * same way: d1 < fl(d2 (1 - 2^-49)) proves D1 < D2 since
- * (1 - 16u)(1 + u)(1 + 4.01u) < 1 - 4.01u.  Anything in between (in practice
- * only near-ties) goes to tdc_sqdist_cmp_exact (predicates.c).
- *
- * Finding the candidates: a sweep, not a hash grid.  A grid of cell size h
- * >= t only finds every neighbour if the rounded cell index never puts two
- * points closer than t two cells apart, which forces h up to about the
- * extent times 2^-40 when t is tiny; and then a single cell can hold any
- * number of kept sites (many distinct doubles close together), so the pass
- * is quadratic on such input however the cells are chosen.  Instead the
- * points are swept in the rule's own order, which is increasing x: the
- * active kept sites, those with fl(px - qx) <= t', sit in a bit set indexed
- * by their rank in (y, input index) order, and the candidates of p are found
- * by walking that set from p's own rank upwards while fl(qy - py) <= t' and
- * downwards while fl(py - qy) <= t'.  Rounding is monotone and t' is a
- * double, so a true |dx| or |dy| below t' never rounds above it: no site
- * within t' is ever missed, and a site whose window test fails is farther
- * than t' (the exact test above decides the rest).  Kept sites are pairwise
- * at least t' apart, so disks of radius t'/2 around the walked candidates
- * are disjoint inside a rectangle of about 2t' by 3t': at most 7 candidates,
- * plus one failing test per direction.  Every point thus costs a bounded
- * number of bit-set steps, each O(log_64 n), and every kept site is
- * inserted and expired once: O(n log n) for every input, with no order or
- * placement that degrades it.
- *
- * Sorting: a least-significant-digit radix sort on order-preserving 64-bit
- * keys of the coordinates (-0 mapped to +0, since the rule compares values),
- * first by y, then by x.  Its passes are stable, so starting from input
- * order the ties fall by input index, as the rule wants; the order after the
- * y passes is exactly the rank order the sweep needs, so the ranks come for
- * free.  A radix sort does a fixed amount of work per pass whatever the input
- * order, so no input (sorted, organ-pipe, or one built against a particular
- * quicksort) can make it slow; passes in which every key has the same digit
- * are skipped.
- *
- * Cancellation is polled by work done (records moved, bit-set steps,
- * candidates examined), every TOL_POLL_WORK units, not by points: the cost
- * of a point varies (one point can expire many kept sites), and a poll per
- * fixed amount of work bounds the time to notice tdc_job_cancel wherever the
- * pass is.
+ * The design note, with the clamp, the error bounds, the sweep's proof and
+ * the sort, is docs/design/tolerance.md.
  */
 #include <stdlib.h>
 #include <string.h>
@@ -90,7 +39,7 @@
 /* Records mapped in per tdc_prefault call: a few ms, between cancel polls. */
 #define TOL_PREFAULT_RECS	((size_t) 1 << 18)
 
-/* The tolerance clamp of the header. */
+/* The tolerance clamp (docs/design/tolerance.md). */
 #define TOL_CLAMP_MIN	0x1p-252
 #define TOL_CLAMP_MAX	0x1p202
 
@@ -353,7 +302,7 @@ rankset_prev(const rankset *s, int64_t i)
 	return i;
 }
 
-/* --- exact distance decisions (the bounds are proved in the header) --- */
+/* --- exact distance decisions (the bounds: docs/design/tolerance.md) --- */
 
 typedef struct tol_ctx
 {

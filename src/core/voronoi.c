@@ -1,53 +1,25 @@
 /*
  * voronoi.c
  *		The Voronoi diagram of a finished triangulation, clipped to a
- *		rectangle: one convex cell per site.
+ *		rectangle: one convex cell per site.  This file runs it and holds its
+ *		lifecycle.
  *
- * Duality.  The Voronoi diagram of a point set is the planar dual of its
- * Delaunay triangulation (Delaunay 1934; see de Berg, Cheong, van Kreveld and
- * Overmars, "Computational Geometry", 3rd ed., section 9.2, theorem 9.6, or
- * Okabe, Boots, Sugihara and Chiu, "Spatial Tessellations", 2nd ed.,
- * section 2.4): every Delaunay triangle is a Voronoi vertex, its
- * circumcenter; every Delaunay edge st is the Voronoi edge between the cells
- * of s and t, joining the circumcenters of the two triangles beside it, or a
- * ray perpendicular to st when st is on the convex hull; every site is a
- * cell, whose vertices are the circumcenters of the triangles around the
- * site, in the same counter-clockwise order.  So the cells are read off the
- * mesh by walking the ring of half-edges around each site, and their
- * adjacency is exactly the Delaunay adjacency that the exact predicates
- * decided: only the vertex coordinates are rounded.
+ * The diagram is the dual of the Delaunay triangulation (Delaunay 1934; de
+ * Berg et al., "Computational Geometry", 3rd ed., theorem 9.6): a vertex per
+ * triangle, its circumcenter, and a cell per site read off the ring of
+ * half-edges around it, so only the vertices are rounded.  The triangles
+ * are numbered, cocircular ones joined and the cells built by parallel loops
+ * on a driver thread with every signal blocked, polling cancel; a host that
+ * wants one value gets the cells sized first, then written straight into it
+ * in input order (tdc_voronoi_start_emit), the same bytes for any thread
+ * count.  The mesh is read through mesh_view.h.
  *
- * Parallelism and cancel.  Numbering the triangles (with their vertices, in
- * one walk over the half-edges), joining cocircular ones and building the
- * cells are parallel loops on a pool of the job's thread count, run by a
- * driver thread with all signals blocked, like a triangulation, so the
- * host's thread stays free to cancel.  Every loop polls the cancel flag at
- * least once per 4096 items, or, for the loops of a few loads an item (the
- * offsets' prefix sums), once per task of 65536.  The cells of a mesh are built by ranges of
- * half-edges, each site in the range of its smallest half-edge, so the walks
- * follow the mesh's memory order; each range writes its cells into one
- * buffer of its own (tdc_voronoi_cell reads them there).
- *
- * Writing straight into the host's value (tdc_voronoi_start_emit).  A host
- * that wants all cells as one value in input order would otherwise copy a
- * million cells, some 130 MB, on its own thread, from buffers the kernel
- * first had to clear.  Instead the first phase only sizes the cells: one
- * walk around each site (the rings of 16 sites walked a step at a time
- * together, so that their random loads overlap) records an inner cell that
- * lies inside E (almost all of them) as its classes, a few words, and any
- * other cell, built and clipped as a ring, as its coordinates.  The host
- * allocates the total; the second phase computes every cell's offset by a
- * parallel prefix sum over the input points (a cell sits at its site's
- * first input point; the offsets reuse the triangle numbers' pages, which
- * writing no longer needs), maps the value in block by block on the
- * workers, and writes the cells from the records by the host's writer, a
- * pure function that copies bytes.  The bytes do not depend on the thread
- * count: the cells and the offsets do not.
- *
- * The other concerns have their own files, each with its part of this
- * essay: voronoi_geom.c (the error bound of the circumcenters),
- * voronoi_number.c (cocircular sites), voronoi_cell.c (unbounded cells,
- * clipping, collinear sites), voronoi_write.c (the writer).
+ * The design note, with the reasons and the references, is
+ * docs/design/voronoi.md; the other concerns have their own files, each
+ * with its part of it: voronoi_geom.c (the error bound of the
+ * circumcenters), voronoi_number.c (cocircular sites), voronoi_cell.c
+ * (unbounded cells, clipping, collinear sites), voronoi_write.c (the
+ * writer).
  */
 #include <errno.h>
 #include <math.h>
@@ -297,8 +269,8 @@ vor_run(tdc_voronoi *v)
 		return rc;
 
 	/*
-	 * Two cocircular triangles whose vertices came out different (see the
-	 * header comment): join the classes and build every cell again.
+	 * Two cocircular triangles whose vertices came out different (see
+	 * voronoi_number.c): join the classes and build every cell again.
 	 */
 	if (atomic_load(&v->need_join))
 	{

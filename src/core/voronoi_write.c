@@ -3,8 +3,8 @@
  *		The cells sized, then written straight into the host's value
  *		(tdc_voronoi_start_emit, tdc_voronoi_emit).
  *
- * The two phases, sizing then writing, are described in voronoi.c's
- * essay ("Parallelism and cancel").
+ * The two phases, sizing then writing, are described in
+ * docs/design/voronoi.md ("Writing straight into the host's value").
  */
 #include <errno.h>
 #include <math.h>
