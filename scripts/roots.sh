@@ -26,12 +26,40 @@
 # No server is started by the packages (policy-rc.d) and no "main" cluster
 # is created (createcluster.conf).
 #
-# CMD runs in a mount namespace of its own, with /proc, /dev and /dev/shm
-# and this source tree (read-only, at the same path as here) mounted in the
-# root: the mounts go away with the namespace however CMD ends, and
-# processes it leaves running in the root are killed.  `check` builds in a
-# copy of the tree inside the root (only files git tracks or would track,
-# without build products), so the tree is not written to.
+# Mounts.  Every command that mounts something in a root (debootstrap,
+# apt-get, the checks) runs in a mount namespace of its own and mounts only
+# there.  A namespace's mounts go away when its last process ends, however
+# it ends (SIGKILL included), so nothing a root needs is ever mounted in
+# this machine's namespace: an interrupted run leaves no mount behind, and
+# an `rm -rf` of a root, or of a chroot holding it, cannot reach through
+# into the host's /dev or /proc.  The namespace must also keep its mounts
+# from propagating back into ours:
+#
+#  - On a machine (/ is a mount point), `unshare -m --propagation private`
+#    makes every mount of the new namespace private, recursively from /.
+#  - Inside a chroot (/ is a directory of some mount, as in a fresh-machine
+#    check), that call fails ("cannot change root filesystem propagation":
+#    only a mount point can be made private), so the namespace keeps the
+#    propagation it was copied with (--propagation unchanged).  That is safe
+#    only when neither a mount we can see nor the mount that holds the root
+#    directory is shared (a mount made there would reappear in its peer
+#    group, e.g. in the host's namespace).  A chroot's mountinfo leaves out
+#    the mounts above its /, so the holding mount is looked up by its id
+#    (/proc/self/fdinfo) in any process's mountinfo (pid 1's, usually); mount
+#    ids are unique across namespaces.  If one is shared, or the holding
+#    mount cannot be found, nothing is mounted and the command says why.
+#
+# Inside the namespace a root gets fresh filesystems, never a bind of the
+# host's /dev: a proc, and a tmpfs on /dev holding the few device nodes
+# programs use (made with mknod), /dev/shm (POSIX shared memory: PostgreSQL's
+# parallel workers) as a directory on it, and a devpts of its own.  They
+# are unmounted explicitly once CMD ends (a process CMD left running would
+# otherwise keep them until the namespace ends); processes left running
+# in the root are killed.  Only `run` and `chroot` bind this source tree,
+# read-only, at its own path (the one bind; in the namespace like the rest);
+# `check` builds in a copy of the tree inside the root (only files git
+# tracks or would track, without build products), so the tree is not
+# written to.
 #
 # Needs root (debootstrap, chroot, mount), util-linux's unshare and flock, and
 # debootstrap (installed with apt-get when missing).  Sourced, it defines the
@@ -60,27 +88,103 @@ tdc_root_mirror() {
 	printf '%s' "$m"
 }
 
+# --- Mount namespaces (see "Mounts" in the header) -------------------------
+
+# Is / a mount point in this process's view (not so inside a chroot)?
+tdc_root_slash_is_mount() {
+	awk '$5 == "/" { found = 1 } END { exit !found }' /proc/self/mountinfo
+}
+
+# The id of the mount that holds the directory DIR (from fdinfo: it names
+# the mount even when mountinfo, inside a chroot, leaves it out).
+tdc_root_mnt_id() {	# DIR
+	local fd id
+	exec {fd}<"$1" || return 1
+	id=$(sed -n 's/^mnt_id:[[:space:]]*//p' "/proc/$BASHPID/fdinfo/$fd")
+	exec {fd}<&-
+	[ -n "$id" ] && printf '%s' "$id"
+}
+
+# The mountinfo line of mount ID: this process's view first, then any
+# process's (mount ids are unique across namespaces, so the line found is
+# that mount's).  Fails if no readable view shows it.
+tdc_root_mountinfo_line() {	# ID
+	local f
+	for f in /proc/self/mountinfo /proc/1/mountinfo /proc/[0-9]*/mountinfo; do
+		awk -v id="$1" '$1 == id { print; found = 1; exit } END { exit !found }' "$f" 2>/dev/null && return 0
+	done
+	return 1
+}
+
+# Print the mount points of the mountinfo lines on stdin that are shared
+# (an optional field "shared:N" before the "-").
+tdc_root_shared() {
+	awk '{ for (i = 7; i <= NF && $i != "-"; i++) if ($i ~ /^shared:/) { print $5; break } }'
+}
+
+# Run CMD in a mount namespace of its own whose mounts cannot propagate into
+# this one; DIR is where it will mount (the root, or the directory that will
+# hold it).  Refuses (exit 1, nothing mounted) when that cannot be ensured.
+tdc_root_ns() {	# DIR CMD...
+	local dir=$1 id line shared
+	shift
+	if tdc_root_slash_is_mount; then
+		unshare -m --propagation private "$@"
+		return
+	fi
+	shared=$(tdc_root_shared </proc/self/mountinfo | tr '\n' ' ')
+	[ -z "$shared" ] ||
+		tdc_die "inside a chroot with shared mounts ($shared): mounts made for $dir could propagate out of it, so none is made (make them private first: mount --make-rprivate)"
+	id=$(tdc_root_mnt_id "$dir") || tdc_die "no mount id for $dir in /proc/self/fdinfo"
+	line=$(tdc_root_mountinfo_line "$id") ||
+		tdc_die "inside a chroot, and mount $id, which holds $dir, is in no readable /proc/PID/mountinfo: cannot tell whether mounts made there would propagate out of the chroot, so none is made"
+	[ -z "$(tdc_root_shared <<<"$line")" ] ||
+		tdc_die "inside a chroot whose / lies in a shared mount ($line): mounts made in $dir would propagate out of it, so none is made (make it private first: mount --make-rprivate on that mount, outside the chroot)"
+	unshare -m --propagation unchanged "$@"
+}
+
 # Run CMD chrooted into DIR with a clean environment, in a mount namespace
-# of its own with /proc, /dev and /dev/shm (package scripts need /proc) and,
-# given SRC, the directory SRC read-only at the same path: the mounts vanish
-# with the namespace, whatever way CMD ends.
+# of its own (tdc_root_ns) with fresh /proc, /dev, /dev/shm and /dev/pts
+# and, given SRC, the directory SRC read-only at the same path.
 tdc_root_chroot() {	# DIR [--src SRC] CMD...
 	local dir=$1 src=""
 	shift
 	[ "${1:-}" = --src ] && { src=$2; shift 2; mkdir -p "$dir$src"; }
-	unshare -m --propagation private bash -c '
+	mkdir -p "$dir/proc" "$dir/dev"
+	# shellcheck disable=SC2016  # expanded by the inner bash
+	tdc_root_ns "$dir" bash -c '
 		set -e
 		dir=$1 src=$2
 		shift 2
-		mount -t proc proc "$dir/proc"
-		mount --bind /dev "$dir/dev"
-		mount --bind /dev/shm "$dir/dev/shm"
+		mount -t proc -o nosuid,nodev,noexec proc "$dir/proc"
+		mount -t tmpfs -o nosuid,mode=755 tdc-dev "$dir/dev"
+		for n in null:1:3 zero:1:5 full:1:7 random:1:8 urandom:1:9 tty:5:0; do
+			IFS=: read -r name major minor <<<"$n"
+			mknod -m 666 "$dir/dev/$name" c "$major" "$minor"
+		done
+		ln -s /proc/self/fd "$dir/dev/fd"
+		ln -s /proc/self/fd/0 "$dir/dev/stdin"
+		ln -s /proc/self/fd/1 "$dir/dev/stdout"
+		ln -s /proc/self/fd/2 "$dir/dev/stderr"
+		mkdir -m 1777 "$dir/dev/shm"
+		mkdir -m 755 "$dir/dev/pts"
+		# a pty for dpkg (apt-get logs through one); not needed otherwise
+		if mount -t devpts -o newinstance,ptmxmode=0666,mode=0620 devpts "$dir/dev/pts" 2>/dev/null; then
+			ln -s pts/ptmx "$dir/dev/ptmx"
+		fi
 		if [ -n "$src" ]; then
 			mount --bind "$src" "$dir$src"
 			mount -o remount,bind,ro "$dir$src"
 		fi
-		exec chroot "$dir" env -i HOME=/root PATH=/usr/sbin:/usr/bin:/sbin:/bin LANG=C.UTF-8 \
-			DEBIAN_FRONTEND=noninteractive "$@"
+		rc=0
+		chroot "$dir" env -i HOME=/root PATH=/usr/sbin:/usr/bin:/sbin:/bin LANG=C.UTF-8 \
+			DEBIAN_FRONTEND=noninteractive "$@" || rc=$?
+		# the namespace would drop them when its last process ends; a
+		# process CMD left running would keep them until then
+		[ -z "$src" ] || umount -l "$dir$src" || true
+		umount -l "$dir/dev/pts" 2>/dev/null || true
+		umount -l "$dir/dev" "$dir/proc" || true
+		exit "$rc"
 	' tdc-root "$dir" "$src" "$@"
 }
 
@@ -120,7 +224,7 @@ tdc_root_prepare() {	# SUITE [--no-pg]
 		mirror=$(tdc_root_mirror)
 		[ -f "/usr/share/debootstrap/scripts/$suite" ] || script=/usr/share/debootstrap/scripts/sid
 		tdc_say "debootstrap --variant=minbase $suite from $mirror into $dir"
-		unshare -m --propagation private \
+		tdc_root_ns "$TDC_ROOTS_DIR" \
 			debootstrap --variant=minbase "$suite" "$dir" "$mirror" $script >"$dir.debootstrap.log" 2>&1 ||
 			{ tail -n 20 "$dir.debootstrap.log" >&2; tdc_die "debootstrap $suite failed (log: $dir.debootstrap.log)"; }
 		local opt=""
@@ -165,20 +269,22 @@ tdc_root_prepare() {	# SUITE [--no-pg]
 	exec 8>&-
 }
 
-# Run CMD in the root, in a private mount namespace, with the source tree
-# read-only at its own path.  Holds the root's lock shared (several runs may
-# share a root; tdc_root_prepare waits for them).
-tdc_root_run() {	# SUITE [--no-pg] -- CMD...
-	local suite=$1 nopg="" dir rc=0
+# Run CMD in the root, in a mount namespace of its own (tdc_root_chroot),
+# with the source tree read-only at its own path unless --no-src.  Holds the
+# root's lock shared (several runs may share a root; tdc_root_prepare waits
+# for them).
+tdc_root_run() {	# SUITE [--no-pg] [--no-src] -- CMD...
+	local suite=$1 nopg="" dir rc=0 src=(--src "$TDC_ROOT")
 	shift
 	[ "${1:-}" = --no-pg ] && { nopg=1; shift; }
+	[ "${1:-}" = --no-src ] && { src=(); shift; }
 	[ "${1:-}" = -- ] && shift
 	dir=$(tdc_root_dir "$suite" "$nopg")
 	[ -f "$dir/.tdc-packages" ] || tdc_die "no $suite root in $dir: bash scripts/roots.sh prepare $suite${nopg:+ --no-pg}"
 	cp /etc/resolv.conf "$dir/etc/resolv.conf"
 	(
 		flock -s 9
-		tdc_root_chroot "$dir" --src "$TDC_ROOT" "$@"
+		tdc_root_chroot "$dir" ${src[@]+"${src[@]}"} "$@"
 	) 9>"$dir.lock" || rc=$?
 	tdc_root_kill_procs "$dir"
 	return "$rc"
@@ -229,7 +335,7 @@ tdc_root_check() {	# SUITE
 		flock -s 9
 		tdc_root_copy_tree "$dir" "$dest"
 	) 9>"$dir.lock"
-	tdc_root_run "$suite" -- env PG_CONFIG="/usr/lib/postgresql/$major/bin/pg_config" TDC_ROOT_SUITE="$suite" \
+	tdc_root_run "$suite" --no-src -- env PG_CONFIG="/usr/lib/postgresql/$major/bin/pg_config" TDC_ROOT_SUITE="$suite" \
 		bash "$dest/scripts/roots.sh" inside-check || rc=$?
 	rm -rf "${dir:?}$dest" "${dir:?}$dest-pg"
 	return "$rc"
