@@ -14,6 +14,8 @@
 #include "utils/memutils.h"
 
 #include "pg_shim.h"
+/* the shim's tdc_* stand-ins checked against the real declarations */
+#include "tdc_pg.h"
 
 sigjmp_buf *fuzz_pg_jmp = NULL;
 int			fuzz_pg_sqlstate = 0;
@@ -341,14 +343,32 @@ errfinish(const char *filename, int lineno, const char *funcname)
 	siglongjmp(*fuzz_pg_jmp, 1);
 }
 
-void
-ExceptionalCondition(const char *conditionName, const char *errorType,
-					 const char *fileName, int lineNumber)
+/* A failed Assert: abort(), which the fuzzer reports as a crash. */
+pg_noreturn static void
+assert_failed(const char *conditionName, const char *errorType,
+			  const char *fileName, int lineNumber)
 {
 	fprintf(stderr, "TRAP: %s(\"%s\", File: \"%s\", Line: %d)\n",
 			errorType, conditionName, fileName, lineNumber);
 	abort();
 }
+
+/* Its signature differs between majors: pg_version_compat.h. */
+#if TDC_ASSERT_HAS_ERRORTYPE
+void
+ExceptionalCondition(const char *conditionName, const char *errorType,
+					 const char *fileName, int lineNumber)
+{
+	assert_failed(conditionName, errorType, fileName, lineNumber);
+}
+#else
+void
+ExceptionalCondition(const char *conditionName, const char *fileName,
+					 int lineNumber)
+{
+	assert_failed(conditionName, "FailedAssertion", fileName, lineNumber);
+}
+#endif
 
 /* ----------------------------------------------------------------
  *		interrupts, stack
