@@ -391,12 +391,15 @@ fuzz_pg_stack_base(void *base)
 	stack_base = base;
 }
 
-/* Like the server with max_stack_depth = 2MB less its safety margin. */
+/*
+ * Like the server with max_stack_depth = 2MB less its safety margin.  Frame
+ * addresses on both ends, for the reason in pg_shim.h.
+ */
 void
 check_stack_depth(void)
 {
-	char		here;
-	long		depth = stack_base ? labs((long) (stack_base - &here)) : 0;
+	char	   *here = __builtin_frame_address(0);
+	long		depth = stack_base ? labs((long) (stack_base - here)) : 0;
 
 	if (depth > 1536L * 1024)
 		ereport(ERROR,
