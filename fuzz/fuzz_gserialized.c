@@ -82,8 +82,9 @@ rdbl(const uint8 *p)
 /*
  * The reader's check_stack_depth() (1.5 MB in the shim) stops it between
  * 2,000 and 5,000 levels of nesting (measured: 2,000 pass and 3,000 stop
- * with clang 14, 3,000 pass and 5,000 stop with clang 19).  An ERROR for stack depth at fewer levels than this
- * means the shim measures the stack wrongly (as it did under clang 15's fake
+ * with clang 14 and with clang 21; 3,000 pass and 5,000 stop with clang
+ * 19).  An ERROR for stack depth at fewer levels than this means the shim
+ * measures the stack wrongly (as it did under clang 15 and later's fake
  * stacks, where every input was "too deep") and is a finding.
  */
 #define MIN_TOO_DEEP	256
