@@ -232,7 +232,7 @@ LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 	bool		oka,
 				okb;
 
-	fuzz_pg_stack_base(&split);
+	FUZZ_PG_STACK_BASE();
 	fuzz_pg_max_memory_mb = 0;
 	if (size < 2)
 		return 0;

@@ -14,6 +14,8 @@
 #include "utils/memutils.h"
 
 #include "pg_shim.h"
+/* the shim's tdc_* stand-ins checked against the real declarations */
+#include "tdc_pg.h"
 
 sigjmp_buf *fuzz_pg_jmp = NULL;
 int			fuzz_pg_sqlstate = 0;
@@ -341,14 +343,32 @@ errfinish(const char *filename, int lineno, const char *funcname)
 	siglongjmp(*fuzz_pg_jmp, 1);
 }
 
-void
-ExceptionalCondition(const char *conditionName, const char *errorType,
-					 const char *fileName, int lineNumber)
+/* A failed Assert: abort(), which the fuzzer reports as a crash. */
+pg_noreturn static void
+assert_failed(const char *conditionName, const char *errorType,
+			  const char *fileName, int lineNumber)
 {
 	fprintf(stderr, "TRAP: %s(\"%s\", File: \"%s\", Line: %d)\n",
 			errorType, conditionName, fileName, lineNumber);
 	abort();
 }
+
+/* Its signature differs between majors: pg_version_compat.h. */
+#if TDC_ASSERT_HAS_ERRORTYPE
+void
+ExceptionalCondition(const char *conditionName, const char *errorType,
+					 const char *fileName, int lineNumber)
+{
+	assert_failed(conditionName, errorType, fileName, lineNumber);
+}
+#else
+void
+ExceptionalCondition(const char *conditionName, const char *fileName,
+					 int lineNumber)
+{
+	assert_failed(conditionName, "FailedAssertion", fileName, lineNumber);
+}
+#endif
 
 /* ----------------------------------------------------------------
  *		interrupts, stack
@@ -371,12 +391,15 @@ fuzz_pg_stack_base(void *base)
 	stack_base = base;
 }
 
-/* Like the server with max_stack_depth = 2MB less its safety margin. */
+/*
+ * Like the server with max_stack_depth = 2MB less its safety margin.  Frame
+ * addresses on both ends, for the reason in pg_shim.h.
+ */
 void
 check_stack_depth(void)
 {
-	char		here;
-	long		depth = stack_base ? labs((long) (stack_base - &here)) : 0;
+	char	   *here = __builtin_frame_address(0);
+	long		depth = stack_base ? labs((long) (stack_base - here)) : 0;
 
 	if (depth > 1536L * 1024)
 		ereport(ERROR,

@@ -34,7 +34,15 @@ extern void fuzz_pg_reset(void);
 /* Bytes currently allocated through the shim. */
 extern size_t fuzz_pg_allocated(void);
 
-/* Record the stack position of the harness entry (for check_stack_depth). */
+/*
+ * Record the stack position of the harness entry (for check_stack_depth):
+ * call FUZZ_PG_STACK_BASE() at the top of LLVMFuzzerTestOneInput.  It takes
+ * the frame address, not the address of a local: AddressSanitizer (by
+ * default from clang 15 on, detect_stack_use_after_return) puts locals in
+ * "fake" frames on the heap, so two locals' distance says nothing about the
+ * depth of the real stack, and every input would look too deep.
+ */
+#define FUZZ_PG_STACK_BASE() fuzz_pg_stack_base(__builtin_frame_address(0))
 extern void fuzz_pg_stack_base(void *base);
 
 #endif							/* PG_SHIM_H */

@@ -34,4 +34,16 @@
 #define InitMaterializedSRF(fcinfo, flags) SetSingleFuncCall(fcinfo, flags)
 #endif
 
+/*
+ * 16 dropped the errorType argument of ExceptionalCondition, the function a
+ * failed Assert calls (it was always "FailedAssertion" by then).  Nothing
+ * in src/pg calls it by name; only the fuzz harness's stand-in for the
+ * server (fuzz/pg_shim.c) defines it, and picks its signature by this.
+ */
+#if PG_VERSION_NUM >= 160000
+#define TDC_ASSERT_HAS_ERRORTYPE 0
+#else
+#define TDC_ASSERT_HAS_ERRORTYPE 1
+#endif
+
 #endif							/* PG_VERSION_COMPAT_H */
