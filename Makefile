@@ -62,7 +62,15 @@ build/cgal_cdt: test/cgal_cdt.cpp
 	@mkdir -p build
 	$(CXX) -O2 -DNDEBUG -DCGAL_NDEBUG -o $@ $< -lgmp -lmpfr
 
-check-core: build/test_core $(CGAL_CDT)
+# The natural neighbour tests compare with CGAL's natural_neighbor_coordinates_2
+# with exact constructions, the same way (test/cgal_nn.cpp).
+CGAL_NN = $(if $(wildcard /usr/include/CGAL/natural_neighbor_coordinates_2.h),build/cgal_nn)
+
+build/cgal_nn: test/cgal_nn.cpp
+	@mkdir -p build
+	$(CXX) -O2 -DNDEBUG -DCGAL_NDEBUG -o $@ $< -lgmp -lmpfr
+
+check-core: build/test_core $(CGAL_CDT) $(CGAL_NN)
 	build/test_core
 
 build/test_core_asan: $(TEST_SRCS) $(wildcard test/*.h) $(CORE_SRCS) $(wildcard src/core/*.h)
