@@ -397,6 +397,10 @@ collect(tdc_tin *tin, const double *qxy, size_t nq, const double *lxy, const siz
 		if (run_wait(tin, tdc_tin_drape_start(tin, &s, lxy, lend, nchain, err, sizeof(err)), err) == TDC_OK)
 		{
 			r->ndv = tdc_tin_drape_result(tin, &v, &off);
+			CHECK(nchain == 5 && off[0] == 0 && off[2] == off[3] && off[5] == r->ndv &&
+				  off[1] > off[0] && off[3] < off[4] && off[4] < off[5] &&
+				  v[off[4]].src == lend[3] && v[off[4]].t == 0 && v[off[3]].src == lend[2] && v[off[1]].src == lend[0],
+				  "drape: each chain starts at its first vertex, an empty one where the next does");
 			r->dv = malloc(r->ndv * sizeof(tdc_drape_vertex) + 1);
 			memcpy(r->dv, v, r->ndv * sizeof(tdc_drape_vertex));
 		}
@@ -422,12 +426,21 @@ test_threads(void)
 	uint64_t	seed = 99;
 	size_t		n = tdc_test_quick ? 25000 : 60000,
 				nq = 20000,
-				nl = 400;
+				nl = 400 + 10000;
 	double	   *xy = random_points(&seed, n, 0, 0, 1000),
 			   *z = malloc(n * sizeof(double)),
 			   *qxy = random_points(&seed, nq, -10, -10, 1020),
 			   *lxy = random_points(&seed, nl, 1, 1, 998);
-	size_t		lend[4] = {100, 200, 300, 400};
+	/* chain 2 empty; chain 4 a walk of 10000 short steps, over several tasks */
+	size_t		lend[5] = {100, 200, 200, 400, 10400};
+
+	for (size_t i = 401; i < nl; i++)
+	{
+		double		a = i * 0.37;
+
+		lxy[2 * i] = fmin(999, fmax(1, lxy[2 * i - 2] + 3 * cos(a)));
+		lxy[2 * i + 1] = fmin(999, fmax(1, lxy[2 * i - 1] + 3 * sin(a * 1.3)));
+	}
 	run_result	r[3];
 	const char *what[3] = {"linear", "nearest", "natural_neighbor"};
 
@@ -440,7 +453,7 @@ test_threads(void)
 
 		if (!mk(&tc, xy, z, n, t + 1))
 			break;
-		collect(tc.tin, qxy, nq, lxy, lend, 4, &r[t]);
+		collect(tc.tin, qxy, nq, lxy, lend, 5, &r[t]);
 		rm(&tc);
 	}
 	for (int t = 1; t < 3; t++)
@@ -1075,7 +1088,7 @@ test_drape(void)
 		CHECK(order_bad == 0, "drape: crossings in order along the segment (%zu not)", order_bad);
 		CHECK(crossings > 100, "drape: the lines cross many triangles (%zu)", crossings);
 		CHECK(off[3] - off[2] == 1 && v[off[2]].valid, "drape: a point is one vertex, with its value");
-		/* the input vertices keep their linear values */
+		/* the input vertices keep their linear values, and all are inside */
 		for (int c = 0; c < 4; c++)
 			for (size_t k = off[c]; k < off[c + 1]; k++)
 				if (v[k].t == 0)
@@ -1083,7 +1096,8 @@ test_drape(void)
 					int			ok;
 					double		want = value(tc.tin, "linear", v[k].x, v[k].y, &ok);
 
-					CHECK(ok == 1 && v[k].z == want && v[k].valid, "drape: input vertex %u's value", v[k].src);
+					CHECK(ok == 1 && v[k].z == want && v[k].valid && v[k].inside,
+						  "drape: input vertex %u's value", v[k].src);
 				}
 	}
 	/* outside the hull: the vertex has no value (radius 0), and no crossing */
@@ -1098,7 +1112,7 @@ test_drape(void)
 		{
 			size_t		nv = tdc_tin_drape_result(tc.tin, &v, &off);
 
-			CHECK(nv == 2 && v[0].valid == 1 && v[1].valid == 0,
+			CHECK(nv == 2 && v[0].valid == 1 && v[1].valid == 0 && v[0].inside && !v[1].inside,
 				  "drape: a vertex outside the hull has no value, its segment no crossing");
 		}
 	}
@@ -1446,6 +1460,40 @@ test_cancel_memory(void)
 			}
 		}
 		free(v);
+		rm(&tc);
+	}
+	/* a natural neighbour drape of one long line: cancelled inside the line */
+	if (mk(&tc, xy, z, n, 1))
+	{
+		size_t		nv = 3000000,
+					end[1] = {3000000};
+		double	   *lv = malloc(nv * 2 * sizeof(double)),
+					t0,
+					t1;
+		tdc_interp_spec s = spec_of("natural_neighbor");
+		int			rc;
+
+		for (size_t i = 0; i < nv; i++)
+		{
+			lv[2 * i] = 1 + (i % 998) + i * 1e-4;
+			lv[2 * i + 1] = 1 + (double) ((i / 998) % 998);
+		}
+		rc = tdc_tin_drape_start(tc.tin, &s, lv, end, 1, err, sizeof(err));
+		CHECK(rc == TDC_OK, "a long drape starts: %s", err);
+		if (rc == TDC_OK)
+		{
+			usleep(30000);
+			CHECK(tdc_tin_wait(tc.tin, 0) == TDC_RUNNING, "the drape of 3M vertices is still running");
+			t0 = tdc_test_now();
+			tdc_tin_cancel(tc.tin);
+			rc = tdc_tin_wait(tc.tin, -1);
+			t1 = tdc_test_now();
+			printf("tin: a natural neighbour drape of one 3M-vertex line cancelled in %.1f ms\n",
+				   (t1 - t0) * 1000);
+			CHECK(rc == TDC_ECANCELED && (t1 - t0) < 0.25,
+				  "a long line's drape cancelled within 250 ms (%d, %.1f ms)", rc, (t1 - t0) * 1000);
+		}
+		free(lv);
 		rm(&tc);
 	}
 	/* memory: the TIN's own limit, and an operation's */

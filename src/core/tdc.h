@@ -644,9 +644,9 @@ extern const double *tdc_tin_contour_line(const tdc_tin *tin, size_t i, double *
  * at a parameter computed from the edge's ends in (x, y) order, and its
  * height is the linear one along that edge, which both triangles' planes
  * share.  The result (tdc_tin_drape_result) lists, for each output vertex,
- * its x, y, z, whether it has a value, the input vertex its segment starts
- * at and its parameter t along that segment (0 at the input vertex; for
- * interpolating M), chain after chain.  Memory grows with the crossings
+ * its x, y, z, whether it has a value and whether it lies in the hull, the
+ * input vertex its segment starts at and its parameter t along that
+ * segment (0 at the input vertex; for interpolating M), chain after chain.  Memory grows with the crossings
  * and is counted against max_memory.
  */
 typedef struct tdc_drape_vertex
@@ -656,7 +656,9 @@ typedef struct tdc_drape_vertex
 				z;
 	double		t;				/* along the segment from input vertex src */
 	uint32_t	src;			/* input vertex (index into xy) */
-	uint32_t	valid;			/* 1: z is the method's value; 0: outside, z = nodata */
+	uint8_t		valid;			/* 1: z is the method's value; 0: z = nodata */
+	uint8_t		inside;			/* 1: in the closed convex hull of the sites */
+	uint16_t	pad;
 } tdc_drape_vertex;
 
 extern int	tdc_tin_drape_start(tdc_tin *tin, const tdc_interp_spec *spec,

@@ -347,6 +347,7 @@ out_point(tdc_tin *tin, level_out *o, const double *p)
 			tin_fail(tin, TDC_ENOMEM, "out of memory for the contour lines");
 			return false;
 		}
+		tdc_prefault(xy + 2 * o->cap, (cap - o->cap) * 2 * sizeof(double));
 		o->xy = xy;
 		o->cap = cap;
 	}
@@ -699,6 +700,7 @@ contour_run(tdc_tin *tin)
 		op->lines = malloc(nl * sizeof(contour_line) + 1);
 		if (op->xy == NULL || op->lines == NULL)
 			goto oom;
+		tdc_prefault(op->xy, np * 2 * sizeof(double));
 		for (size_t l = 0; l < op->nlevels; l++)
 		{
 			level_out  *o = &op->out[l];

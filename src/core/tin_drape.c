@@ -35,11 +35,12 @@
  * both inside the hull gets no crossing; its ends get what the method gives
  * them outside (the host decides whether that is an error).
  *
- * The chains are shared out among the pool's threads in ranges of about
- * 4096 input vertices; each range writes its own list, charged against
- * max_memory as it grows, and the lists are joined in order at the end: the
- * result does not depend on the thread count.  Cancel is polled every
- * chain and every 4096 steps of a walk.
+ * The input vertices are shared out among the pool's threads in ranges of
+ * 4096, whatever chains they belong to (a long line is cut into several
+ * ranges); each range writes its own list, charged against max_memory as
+ * it grows, and the lists are joined in order at the end: the result does
+ * not depend on the thread count.  Cancel is polled every 256 vertices and
+ * every 4096 steps of a walk.
  */
 #include <stdio.h>
 #include <string.h>
@@ -62,9 +63,8 @@ typedef struct drape_op
 	const size_t *chain_end;
 	size_t		nchains;
 	size_t		ntask;
-	size_t	   *task_chain;		/* task k: chains [task_chain[k], task_chain[k + 1]) */
 	drape_list *lists;			/* per task */
-	size_t	   *chain_off;		/* per chain: its first output vertex (in its task's list, then in all) */
+	size_t	   *chain_off;		/* per chain: its first output vertex */
 	tin_scratch *scratch;
 	int			nscratch;
 	size_t		charged;
@@ -90,7 +90,7 @@ chain_start(const drape_op *op, size_t c)
 }
 
 static bool
-push(walker *w, double x, double y, double z, double t, uint32_t valid)
+push(walker *w, double x, double y, double z, double t, int valid, bool inside)
 {
 	drape_list *o = w->out;
 
@@ -107,6 +107,8 @@ push(walker *w, double x, double y, double z, double t, uint32_t valid)
 			tin_fail(w->tin, TDC_ENOMEM, "out of memory for the draped vertices");
 			return false;
 		}
+		/* the new half in one call, not a page fault a page */
+		tdc_prefault(v + o->cap, (cap - o->cap) * sizeof(tdc_drape_vertex));
 		o->v = v;
 		o->cap = cap;
 	}
@@ -115,7 +117,9 @@ push(walker *w, double x, double y, double z, double t, uint32_t valid)
 	o->v[o->n].z = z;
 	o->v[o->n].t = t;
 	o->v[o->n].src = w->src;
-	o->v[o->n].valid = valid;
+	o->v[o->n].valid = (uint8_t) valid;
+	o->v[o->n].inside = inside;
+	o->v[o->n].pad = 0;
 	o->n++;
 	return true;
 }
@@ -144,7 +148,7 @@ push_site(walker *w, uint32_t v)
 				dy = q[1] - p[1],
 				t = ((pv[0] - p[0]) * dx + (pv[1] - p[1]) * dy) / (dx * dx + dy * dy);
 
-	return push(w, pv[0], pv[1], w->tin->sz[v], clamp01(t), 1);
+	return push(w, pv[0], pv[1], w->tin->sz[v], clamp01(t), 1, true);
 }
 
 /* The proper crossing of p -> q with edge x-y. */
@@ -177,7 +181,7 @@ push_crossing(walker *w, uint32_t x, uint32_t y)
 	sq = area(a, b, w->q);
 	t = clamp01(sp / (sp - sq));
 	return push(w, a[0] + u * (b[0] - a[0]), a[1] + u * (b[1] - a[1]),
-				tin->sz[x] + u * (tin->sz[y] - tin->sz[x]), t, 1);
+				tin->sz[x] + u * (tin->sz[y] - tin->sz[x]), t, 1, true);
 }
 
 /* Is w ahead of v on the line p -> q (both on it)? */
@@ -400,6 +404,12 @@ loc_inside(const tin_loc *l)
 	return l->kind == LOC_FACE || l->kind == LOC_EDGE || l->kind == LOC_VERTEX;
 }
 
+/*
+ * Task k: the input vertices [k V, (k + 1) V), V = VERTICES_PER_TASK, of
+ * whatever chains they belong to, and the segments that start at them (a
+ * segment's far end is valued again by the next task if it lies there:
+ * the same value, which depends on the point alone).
+ */
 static void
 drape_task(void *arg, size_t k, int worker)
 {
@@ -408,23 +418,38 @@ drape_task(void *arg, size_t k, int worker)
 	tin_scratch *sc = &op->scratch[worker];
 	walker		w = {tin, &op->lists[k], NULL, NULL, 0, 0};
 	uint32_t	hint = TDC_NIL;
+	size_t		nv = op->nchains > 0 ? op->chain_end[op->nchains - 1] : 0,
+				lo = k * VERTICES_PER_TASK,
+				hi = lo + VERTICES_PER_TASK < nv ? lo + VERTICES_PER_TASK : nv,
+				c,
+				a = 0,
+				b = op->nchains;
 
-	for (size_t c = op->task_chain[k]; c < op->task_chain[k + 1]; c++)
+	/* the chain of vertex lo: the first whose end is past it */
+	while (a < b)
 	{
-		size_t		lo = chain_start(op, c),
-					hi = op->chain_end[c];
+		size_t		m = a + (b - a) / 2;
+
+		if (op->chain_end[m] <= lo)
+			a = m + 1;
+		else
+			b = m;
+	}
+	for (c = a; c < op->nchains && chain_start(op, c) < hi; c++)
+	{
+		size_t		cs = chain_start(op, c),
+					ce = op->chain_end[c],
+					from = cs > lo ? cs : lo,
+					to = ce < hi ? ce : hi;
 		tin_loc		here,
 					there;
 		double		z;
 		int			rc;
 
-		if (tin_cancelled(tin))
-			return;
-		op->chain_off[c] = w.out->n;
-		if (lo >= hi)
+		if (from >= to)
 			continue;
-		rc = tin_value_at(tin, &op->spec, sc, op->xy + 2 * lo, &hint, &z, &here);
-		for (size_t i = lo; i < hi; i++)
+		rc = tin_value_at(tin, &op->spec, sc, op->xy + 2 * from, &hint, &z, &here);
+		for (size_t i = from; i < to; i++)
 		{
 			const double *p = op->xy + 2 * i;
 
@@ -433,12 +458,14 @@ drape_task(void *arg, size_t k, int worker)
 				tin_point_fail(tin, rc, p);
 				return;
 			}
+			if ((i & 255) == 0 && tin_cancelled(tin))
+				return;
 			if (!tin_scratch_charge(tin, sc))
 				return;
 			w.src = (uint32_t) i;
-			if (!push(&w, p[0], p[1], z, 0, (uint32_t) rc))
+			if (!push(&w, p[0], p[1], z, 0, rc, loc_inside(&here)))
 				return;
-			if (i + 1 == hi)
+			if (i + 1 == ce)
 				break;
 			/* the next vertex's value, and the crossings on the way there */
 			{
@@ -474,12 +501,7 @@ drape_run(tdc_tin *tin)
 	if (tin_cancelled(tin))
 		return TDC_ECANCELED;
 	for (size_t k = 0; k < op->ntask; k++)
-	{
-		for (; c < op->task_chain[k + 1]; c++)
-			op->chain_off[c] += total;
 		total += op->lists[k].n;
-	}
-	op->chain_off[op->nchains] = total;
 	if (!tin_charge(tin, total * sizeof(tdc_drape_vertex), "the draped vertices"))
 		return TDC_EMEMLIMIT;
 	op->charged += total * sizeof(tdc_drape_vertex);
@@ -489,6 +511,7 @@ drape_run(tdc_tin *tin)
 		tin_fail(tin, TDC_ENOMEM, "out of memory for the draped vertices");
 		return TDC_ENOMEM;
 	}
+	tdc_prefault(op->v, total * sizeof(tdc_drape_vertex));
 	for (size_t k = 0; k < op->ntask; k++)
 	{
 		drape_list *o = &op->lists[k];
@@ -500,6 +523,20 @@ drape_run(tdc_tin *tin)
 		free(o->v);
 		memset(o, 0, sizeof(*o));
 	}
+	/* each chain starts at its first input vertex; an empty one where the next starts */
+	for (size_t i = 0; i < op->nv; i++)
+	{
+		if (op->v[i].t != 0)
+			continue;
+		while (c < op->nchains && op->chain_end[c] <= op->v[i].src)
+			c++;
+		if (c < op->nchains && op->v[i].src == chain_start(op, c))
+			op->chain_off[c] = i;
+	}
+	op->chain_off[op->nchains] = op->nv;
+	for (size_t k = op->nchains; k-- > 0;)
+		if (op->chain_end[k] == chain_start(op, k))
+			op->chain_off[k] = op->chain_off[k + 1];
 	return TDC_OK;
 }
 
@@ -520,7 +557,6 @@ drape_free(tdc_tin *tin)
 		tin_scratch_release(tin, &op->scratch[i]);
 	free(op->scratch);
 	free(op->lists);
-	free(op->task_chain);
 	free(op->chain_off);
 	tdc_big_free(tin->cache, op->v);
 	tin_uncharge(tin, op->charged);
@@ -534,9 +570,7 @@ tdc_tin_drape_start(tdc_tin *tin, const tdc_interp_spec *spec, const double *xy,
 					const size_t *chain_end, size_t nchains, char *err, size_t errlen)
 {
 	drape_op   *op;
-	size_t		nv = nchains > 0 ? chain_end[nchains - 1] : 0,
-				k = 0,
-				acc = 0;
+	size_t		nv = nchains > 0 ? chain_end[nchains - 1] : 0;
 
 #define FAIL(code, ...) do { if (err && errlen) snprintf(err, errlen, __VA_ARGS__); return (code); } while (0)
 	if (spec == NULL || spec->method < TDC_INTERP_LINEAR || spec->method > TDC_INTERP_NATURAL)
@@ -555,41 +589,27 @@ tdc_tin_drape_start(tdc_tin *tin, const tdc_interp_spec *spec, const double *xy,
 	op->xy = xy;
 	op->chain_end = chain_end;
 	op->nchains = nchains;
-	op->task_chain = malloc((nchains + 2) * sizeof(size_t));
 	op->chain_off = malloc((nchains + 1) * sizeof(size_t));
 	op->nscratch = tin->threads + 1;
 	op->scratch = calloc(op->nscratch, sizeof(tin_scratch));
-	if (!op->task_chain || !op->chain_off || !op->scratch)
+	if (!op->chain_off || !op->scratch)
 	{
-		free(op->task_chain);
 		free(op->chain_off);
 		free(op->scratch);
 		free(op);
 		FAIL(TDC_ENOMEM, "out of memory");
 	}
-	/* ranges of whole chains of about VERTICES_PER_TASK vertices */
-	op->task_chain[0] = 0;
-	for (size_t c = 0; c < nchains; c++)
-	{
-		acc += chain_end[c] - chain_start(op, c);
-		if (acc >= VERTICES_PER_TASK || c + 1 == nchains)
-		{
-			op->task_chain[++k] = c + 1;
-			acc = 0;
-		}
-	}
-	op->ntask = k;
-	op->lists = calloc(k + 1, sizeof(drape_list));
+	/* ranges of VERTICES_PER_TASK input vertices, a long chain cut into several */
+	op->ntask = (nv + VERTICES_PER_TASK - 1) / VERTICES_PER_TASK;
+	op->lists = calloc(op->ntask + 1, sizeof(drape_list));
 	if (op->lists == NULL)
 	{
-		free(op->task_chain);
 		free(op->chain_off);
 		free(op->scratch);
 		free(op);
 		FAIL(TDC_ENOMEM, "out of memory");
 	}
-	if (nchains == 0)
-		op->chain_off[0] = 0;
+	op->chain_off[nchains] = 0;
 #undef FAIL
 	return tin_op_start(tin, drape_run, op, drape_free,
 						tin->nsite_ids <= TDC_INLINE_MAX && nv <= VERTICES_PER_TASK, err, errlen);
