@@ -277,7 +277,7 @@ incircle_small_integers(const double *v)
 	double		e[2],
 				f[2],
 				g[2],
-				ef[4],
+				ef[4] = {0},	/* gcc 14 cannot see that expansion_sum writes it */
 				det[6];
 	int			elen,
 				flen,
@@ -341,7 +341,7 @@ incircle_from_raw(const double *a, const double *b, const double *c,
 				clen,
 				dlen;
 	double		abterm[192],
-				cdterm[192],
+				cdterm[192] = {0},	/* as ef above; the exact route only */
 				det[384];
 	int			abtermlen,
 				cdtermlen,

@@ -4,7 +4,7 @@
  *		indexed for the operations on it (interpolation, contours, draping),
  *		and the lifecycle those operations share.
  *
- * What a TIN adds to the job.  The job's mesh (job.h) is a set of half-edges
+ * What a TIN adds to the job.  The job's mesh (mesh_view.h) is a set of half-edges
  * with no numbering of its faces and no way in from a coordinate.  The
  * operations need three things more:
  *
@@ -79,7 +79,7 @@ count_task(void *arg, size_t r, int worker)
 	for (size_t h = lo; h < hi; h++)
 	{
 		tin->he_tri[h] = TDC_NIL;
-		if (tdc_tri_at(tin->job, h, v))
+		if (tdc_mesh_tri_at(&tin->mesh, h, v))
 			n++;
 	}
 	c->count[r] = n;
@@ -107,7 +107,7 @@ assign_task(void *arg, size_t r, int worker)
 {
 	number_ctx *c = arg;
 	tdc_tin    *tin = c->tin;
-	const tdc_job *job = tin->job;
+	const tdc_mesh_view *mesh = &tin->mesh;
 	size_t		lo = r * HE_PER_TASK,
 				hi = lo + HE_PER_TASK < tin->nhe ? lo + HE_PER_TASK : tin->nhe,
 				t = c->count[r];
@@ -117,15 +117,15 @@ assign_task(void *arg, size_t r, int worker)
 		return;
 	for (size_t h = lo; h < hi; h++)
 	{
-		uint32_t	o = job->he[h].org;
+		uint32_t	o = mesh->he[h].org;
 
 		if (o == TDC_NIL)
 			continue;
 		atomic_min_u32(&tin->site_he[o], (uint32_t) h);
-		if (tdc_tri_at(job, h, v))
+		if (tdc_mesh_tri_at(mesh, h, v))
 		{
-			uint32_t	h1 = job->he[h ^ 1u].prev,
-						h2 = job->he[h1 ^ 1u].prev;
+			uint32_t	h1 = mesh->he[h ^ 1u].prev,
+						h2 = mesh->he[h1 ^ 1u].prev;
 
 			tin->tri_he[t] = (uint32_t) h;
 			tin->he_tri[h] = tin->he_tri[h1] = tin->he_tri[h2] = (uint32_t) t;
@@ -139,7 +139,7 @@ static void
 site_task(void *arg, size_t r, int worker)
 {
 	tdc_tin    *tin = arg;
-	const tdc_job *job = tin->job;
+	const tdc_mesh_view *mesh = &tin->mesh;
 	size_t		lo = r * SITES_PER_TASK,
 				hi = lo + SITES_PER_TASK < tin->nsite_ids ? lo + SITES_PER_TASK : tin->nsite_ids;
 
@@ -154,20 +154,20 @@ site_task(void *arg, size_t r, int worker)
 		uint32_t	cx,
 					cy;
 
-		if (job->site_of[s] != s)
+		if (mesh->site_of[s] != s)
 			continue;
-		z = tin->zin[job->idx[s]];
+		z = tin->zin[mesh->idx[s]];
 		if (!isfinite(z))
 		{
 			char		msg[128];
 
 			snprintf(msg, sizeof(msg), "the height of input point %u is not finite",
-					 job->idx[s]);
+					 mesh->idx[s]);
 			tin_fail(tin, TDC_EINVAL, msg);
 			return;
 		}
 		tin->sz[s] = z;
-		p = job->xy + 2 * s;
+		p = mesh->xy + 2 * s;
 		fx = (p[0] - tin->lo[0]) * tin->gscale[0];
 		fy = (p[1] - tin->lo[1]) * tin->gscale[1];
 		cx = fx >= tin->gw ? tin->gw - 1 : fx > 0 ? (uint32_t) fx : 0;
@@ -282,21 +282,21 @@ fill_cells(tdc_tin *tin)
 static int
 tin_build_run(tdc_tin *tin)
 {
-	const tdc_job *job = tin->job;
+	const tdc_mesh_view *mesh = &tin->mesh;
 	size_t		nr,
 				ns,
 				t = 0;
 	number_ctx	c = {tin, NULL};
 
-	tin->nsite_ids = job->nin;
-	tin->nsites = job->nsites;
-	tin->nhe = job->nin * 6;
-	tin->ntri = job->ntri;
+	tin->nsite_ids = mesh->nin;
+	tin->nsites = mesh->nsites;
+	tin->nhe = mesh->nin * 6;
+	tin->ntri = mesh->ntri;
 	tin->zmin = NAN;
 	tin->zmax = NAN;
 	if (tin->nsites == 0)
 		return TDC_OK;
-	tdc_site_extent(job, tin->lo, tin->hi);
+	tdc_site_extent(tin->job, tin->lo, tin->hi);
 	plan_grid(tin);
 
 	tin->sz = tdc_big_alloc_uninit(tin->cache, tin->nsite_ids * sizeof(double) + 8);
@@ -318,7 +318,7 @@ tin_build_run(tdc_tin *tin)
 	tin->zmin = INFINITY;
 	tin->zmax = -INFINITY;
 	for (size_t s = 0; s < tin->nsite_ids; s++)
-		if (job->site_of[s] == s)
+		if (mesh->site_of[s] == s)
 		{
 			tin->zmin = fmin(tin->zmin, tin->sz[s]);
 			tin->zmax = fmax(tin->zmax, tin->sz[s]);
@@ -331,7 +331,7 @@ tin_build_run(tdc_tin *tin)
 		if (tin->line == NULL)
 			goto oom;
 		for (size_t s = 0; s < tin->nsite_ids; s++)
-			if (job->site_of[s] == s)
+			if (mesh->site_of[s] == s)
 				tin->line[tin->nline++] = (uint32_t) s;
 		qsort_r(tin->line, tin->nline, sizeof(uint32_t), cmp_line, tin);
 		/* no face to number (and no outer-face marks to read) */
@@ -458,27 +458,28 @@ tdc_tin_start(const tdc_job *job, const double *z, int threads, size_t max_memor
 		err[0] = '\0';
 	if (tdc_job_wait((tdc_job *) job, 0) != TDC_OK)
 		FAIL(TDC_EINVAL, "the triangulation has not finished successfully");
-	if (job->n > 0 && z == NULL)
-		FAIL(TDC_EINVAL, "no heights given for %zu points", job->n);
+	if (tdc_num_input(job) > 0 && z == NULL)
+		FAIL(TDC_EINVAL, "no heights given for %zu points", tdc_num_input(job));
 	if (threads < 0 || threads > 1024)
 		FAIL(TDC_EINVAL, "threads must be between 0 and 1024, not %d", threads);
-	if (max_memory > 0 && tdc_tin_memory(job->n) > max_memory)
+	if (max_memory > 0 && tdc_tin_memory(tdc_num_input(job)) > max_memory)
 		FAIL(TDC_EMEMLIMIT, "a TIN of %zu points needs about %zu MB, more than the limit of %zu MB",
-			 job->n, tdc_tin_memory(job->n) >> 20, max_memory >> 20);
+			 tdc_num_input(job), tdc_tin_memory(tdc_num_input(job)) >> 20, max_memory >> 20);
 	tin = calloc(1, sizeof(tdc_tin));
 	if (tin == NULL)
 		FAIL(TDC_ENOMEM, "out of memory");
 	tin->job = job;
-	tin->cache = job->opt.cache;
+	tdc_job_view(job, &tin->mesh);
+	tin->cache = tin->mesh.opt->cache;
 	tin->zin = z;
 	tin->max_memory = max_memory;
 	tin->threads = threads > 0 ? threads : tdc_threads_used(job);
 	if (tin->threads < 1)
 		tin->threads = 1;
 	atomic_init(&tin->failed, 0);
-	atomic_init(&tin->used, tdc_tin_memory(job->n));
+	atomic_init(&tin->used, tdc_tin_memory(tdc_num_input(job)));
 	tdc_runner_init(&tin->run, &tin->cancel);
-	tin->inline_now = job->nin <= TDC_INLINE_MAX;
+	tin->inline_now = tin->mesh.nin <= TDC_INLINE_MAX;
 	rc = tdc_runner_start(&tin->run, tin->inline_now, tin_work, tin, err, errlen);
 	if (rc != TDC_OK)
 	{

@@ -22,7 +22,7 @@
 #include <stdlib.h>
 
 #include "exact.h"
-#include "job.h"
+#include "mesh_view.h"
 
 /* A located point (tin_locate.c). */
 typedef enum tin_loc_kind
@@ -49,14 +49,15 @@ typedef int (*tin_op_fn) (tdc_tin *tin);
 
 struct tdc_tin
 {
-	const tdc_job *job;
+	const tdc_job *job;		/* the opaque handle, for tdc.h calls */
+	tdc_mesh_view mesh;		/* what the TIN reads of it (mesh_view.h) */
 	tdc_cache  *cache;			/* the job's: its arrays go back there */
 	int			threads;
 	size_t		max_memory;		/* for the TIN and its operations; 0: none */
 	const double *zin;			/* the caller's heights per input point, until built */
 
 	/* the mesh, numbered */
-	size_t		nsite_ids;		/* site id limit (job->nin) */
+	size_t		nsite_ids;		/* site id limit (mesh.nin) */
 	size_t		nsites;			/* distinct sites */
 	size_t		nhe;			/* half-edge slots */
 	size_t		ntri;
@@ -119,38 +120,38 @@ tin_fail(tdc_tin *tin, int code, const char *msg)
 static inline const double *
 tin_pt(const tdc_tin *tin, uint32_t s)
 {
-	return tin->job->xy + 2 * (size_t) s;
+	return tin->mesh.xy + 2 * (size_t) s;
 }
 
 static inline uint32_t
 tin_org(const tdc_tin *tin, uint32_t h)
 {
-	return tin->job->he[h].org;
+	return tin->mesh.he[h].org;
 }
 
 static inline uint32_t
 tin_dest(const tdc_tin *tin, uint32_t h)
 {
-	return tin->job->he[h ^ 1u].org;
+	return tin->mesh.he[h ^ 1u].org;
 }
 
 static inline uint32_t
 tin_onext(const tdc_tin *tin, uint32_t h)
 {
-	return tin->job->he[h].next;
+	return tin->mesh.he[h].next;
 }
 
 static inline uint32_t
 tin_lnext(const tdc_tin *tin, uint32_t h)
 {
-	return tin->job->he[h ^ 1u].prev;
+	return tin->mesh.he[h ^ 1u].prev;
 }
 
 /* Is the face left of h the outer face (h a hull edge seen from outside)? */
 static inline bool
 tin_outer(const tdc_tin *tin, uint32_t h)
 {
-	return (tin->job->outer[h >> 6] >> (h & 63)) & 1;
+	return (tin->mesh.outer[h >> 6] >> (h & 63)) & 1;
 }
 
 /*
