@@ -130,15 +130,15 @@ endif
 # Fuzzing (fuzz/README.md): libFuzzer targets built with clang,
 # -fsanitize=fuzzer,address,undefined.
 #
-#   make fuzz                       build build/fuzz/fuzz_{core,gserialized,state,voronoi,cdt}
+#   make fuzz                       build build/fuzz/fuzz_{core,gserialized,state,voronoi,cdt,raster}
 #   make fuzz-run [FUZZ_SECONDS=60] run each from its seed corpus, summary line
 #
 # The PostgreSQL-side targets compile src/pg sources against the server
 # headers with the shims in fuzz/pg_shim.c (no server needed).
 FUZZ_SECONDS ?= 60
 FUZZ_CC ?= clang
-FUZZ_TARGETS = fuzz_core fuzz_gserialized fuzz_state fuzz_voronoi fuzz_cdt
-FUZZ_RUN_TARGETS = fuzz_core fuzz_gserialized fuzz_state fuzz_voronoi fuzz_cdt
+FUZZ_TARGETS = fuzz_core fuzz_gserialized fuzz_state fuzz_voronoi fuzz_cdt fuzz_raster
+FUZZ_RUN_TARGETS = fuzz_core fuzz_gserialized fuzz_state fuzz_voronoi fuzz_cdt fuzz_raster
 FUZZ_CFLAGS = -g -O1 -fno-omit-frame-pointer -D_GNU_SOURCE -ffp-contract=off \
 	-pthread -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined \
 	-Wall -Wno-unused-parameter -Wno-missing-field-initializers
@@ -173,6 +173,14 @@ build/fuzz/fuzz_gserialized: fuzz/fuzz_gserialized.c $(FUZZ_GSER_SRCS) $(FUZZ_PG
 	@mkdir -p build/fuzz
 	$(FUZZ_CC) $(FUZZ_CFLAGS) $(FUZZ_PG_CFLAGS) -Isrc/core -o $@ fuzz/fuzz_gserialized.c \
 		fuzz/pg_shim.c $(FUZZ_GSER_SRCS) $(CORE_SRCS) -lm
+
+# The raster reader and writer need nothing of the core.
+FUZZ_RASTER_SRCS = src/pg/raster_read.c src/pg/raster_write.c
+
+build/fuzz/fuzz_raster: fuzz/fuzz_raster.c $(FUZZ_RASTER_SRCS) $(FUZZ_PG_DEPS) src/pg/raster_format.h
+	@mkdir -p build/fuzz
+	$(FUZZ_CC) $(FUZZ_CFLAGS) $(FUZZ_PG_CFLAGS) -Isrc/core -o $@ fuzz/fuzz_raster.c \
+		fuzz/pg_shim.c $(FUZZ_RASTER_SRCS) -lm
 
 build/fuzz/fuzz_state: fuzz/fuzz_state.c $(FUZZ_STATE_SRCS) $(FUZZ_PG_DEPS) $(FUZZ_CORE_DEPS)
 	@mkdir -p build/fuzz
