@@ -29,7 +29,8 @@
  *	- the value has PostGIS's size for one in-database band (header, type
  *	  byte and padding, nodata, pixels, zeros to a multiple of 8);
  *	- its header holds the geometry bit for bit, the band byte the type,
- *	  HASNODATA, and ISNODATA exactly when no pixel has a value;
+ *	  HASNODATA, and ISNODATA exactly when no pixel holds a value that
+ *	  PostGIS does not take for nodata (rt_band_clamped_value_is_nodata);
  *	- the nodata value and every pixel are, byte for byte, what a second
  *	  model of PostGIS's rt_band_set_nodata and rt_band_set_pixel below
  *	  (ref_set_pixel: written after PostGIS's own code paths, C casts and
@@ -340,9 +341,12 @@ ref_set_nodata(int t, double nd)
 	return ref_nodata(b, t);
 }
 
-/* rt_band_set_pixel in a band with nodata value nodataval (as stored) */
+/*
+ * rt_band_set_pixel in a band with nodata value nodataval (as stored); the
+ * value after the nodata correction in *corr (may be NULL)
+ */
 static void
-ref_set_pixel(int t, double nodataval, double val, uint8 *p)
+ref_set_pixel(int t, double nodataval, double val, uint8 *p, double *corr)
 {
 	if (t != 11)
 	{
@@ -372,6 +376,8 @@ ref_set_pixel(int t, double nodataval, double val, uint8 *p)
 				val--;
 		}
 	}
+	if (corr)
+		*corr = val;
 	ref_store(t, val, p);
 }
 
@@ -431,7 +437,7 @@ check_known(void)
 		double		got = tdc_raster_pixel_value(k[i].pixtype, nd, k[i].in);
 		uint8		b[8];
 
-		ref_set_pixel(k[i].pixtype, ref_set_nodata(k[i].pixtype, k[i].nodata), k[i].in, b);
+		ref_set_pixel(k[i].pixtype, ref_set_nodata(k[i].pixtype, k[i].nodata), k[i].in, b, NULL);
 		if (!(got == k[i].out) || !(ref_nodata(b, k[i].pixtype) == k[i].out))
 		{
 			char		msg[200];
@@ -633,7 +639,6 @@ write_mode(const uint8 *data, size_t size)
 	{
 		vals[i] = next_value(&in);
 		valid[i] = (opt & 2) ? 1 : next_byte(&in) & 1;
-		any |= valid[i] != 0;
 	}
 
 	if (sigsetjmp(jb, 0) != 0)
@@ -666,6 +671,17 @@ write_mode(const uint8 *data, size_t size)
 		h.b = g.b;
 		same_info(&g, &h, "written header");
 	}
+	/* ISNODATA: rt_band_set_pixel clears it for a value not taken for nodata */
+	nd_stored = ref_set_nodata(pt, nd);
+	for (Size i = 0; i < n; i++)
+		if (valid[i] || (opt & 2))
+		{
+			double		v = vals[i];
+
+			ref_set_pixel(pt, nd_stored, v, expect, &v);
+			if (!(REF_FLT_EQ(v, nd_stored) || ref_clamped_equal(pt, v, nd_stored)))
+				any = true;
+		}
 	if (out[64] != (pt | 0x40 | (!any && n > 0 ? 0x20 : 0)))
 		fail("band byte", NULL);
 	for (int i = 1; i < pb; i++)
@@ -676,7 +692,6 @@ write_mode(const uint8 *data, size_t size)
 			fail("trailing padding not zero", NULL);
 
 	/* nodata and pixels against the second model */
-	nd_stored = ref_set_nodata(pt, nd);
 	ref_store(pt, nd_stored, expect);
 	if (memcmp(out + 64 + pb, expect, pb) != 0)
 		fail("nodata bytes", NULL);
@@ -687,7 +702,7 @@ write_mode(const uint8 *data, size_t size)
 		const uint8 *px = out + 64 + 2 * pb + i * pb;
 
 		if (valid[i] || (opt & 2))
-			ref_set_pixel(pt, nd_stored, vals[i], expect);
+			ref_set_pixel(pt, nd_stored, vals[i], expect, NULL);
 		else
 			ref_store(pt, nd_stored, expect);
 		if (memcmp(px, expect, pb) != 0)

@@ -38,8 +38,11 @@
  *	- a pixel whose mask is off gets the nodata value.
  * The nodata value itself is converted as rt_band_set_nodata converts it
  * (clamped and cast, a 16BF one through a half and back), and the band is
- * marked HASNODATA always; and ISNODATA when no pixel has a value, as
- * ST_AddBand marks a band whose initial value is its nodata value.  Which
+ * marked HASNODATA always; and ISNODATA when no pixel holds a value that
+ * PostGIS does not take for nodata (rt_band_clamped_value_is_nodata: within
+ * FLT_EPSILON of it, or converting to it; for 64BF too), as ST_AddBand
+ * marks a band whose initial value is its nodata value and
+ * rt_band_set_pixel leaves the mark until a pixel gets another value.  Which
  * nodata value a result band gets is its caller's choice (the template
  * band's, or another when the template has none; see fn_raster.c).
  *
@@ -204,6 +207,30 @@ tdc_raster_nodata_value(int pixtype, double nodata)
 	return convert(pixtype, nodata);
 }
 
+/* rt_pixtype_compare_clamped_values: do v and w convert alike? */
+static bool
+same_clamped(int pixtype, double v, double w)
+{
+	if (is_int_type(pixtype))
+		return to_int(pixtype, v) == to_int(pixtype, w);
+	if (pixtype == RT_PT_16BF)
+		return flt_eqf(to_f16_range(v), to_f16_range(w));
+	if (pixtype == RT_PT_32BF)
+		return flt_eqf(to_f32(v), to_f32(w));
+	return flt_eq(v, w);
+}
+
+/*
+ * rt_band_clamped_value_is_nodata: does PostGIS take v, put into the band,
+ * for its nodata value?  Such a pixel reads as nodata (ST_Value gives NULL),
+ * and a band whose pixels all are keeps its ISNODATA flag.
+ */
+static inline bool
+takes_nodata(int pixtype, double nodata, double v)
+{
+	return flt_eq(v, nodata) || same_clamped(pixtype, v, nodata);
+}
+
 /*
  * rt_band_corrected_clamped_value: v moved off the nodata value when the
  * conversion would turn it into it.  nodata is as stored.
@@ -211,17 +238,8 @@ tdc_raster_nodata_value(int pixtype, double nodata)
 static double
 corrected(int pixtype, double nodata, double v)
 {
-	bool		same;
-
-	if (pixtype == RT_PT_64BF || flt_eq(v, nodata))
-		return v;
-	if (is_int_type(pixtype))
-		same = to_int(pixtype, v) == to_int(pixtype, nodata);
-	else if (pixtype == RT_PT_16BF)
-		same = flt_eqf(to_f16_range(v), to_f16_range(nodata));
-	else
-		same = flt_eqf(to_f32(v), to_f32(nodata));
-	if (!same)
+	if (pixtype == RT_PT_64BF || flt_eq(v, nodata) ||
+		!same_clamped(pixtype, v, nodata))
 		return v;
 
 	if (pixtype == RT_PT_1BB)
@@ -395,16 +413,13 @@ tdc_raster_fill(TdcRasterWriter *w, const double *values, const uint8 *valid)
 			/* 64BF: no conversion, no correction; memmove allows in place */
 			if (values != px)
 				memmove(px + first, values + first, (last - first) * sizeof(double));
-			if (valid == NULL)
-				any = true;
-			else
-				for (Size i = first; i < last; i++)
-				{
-					if (valid[i])
-						any = true;
-					else
-						px[i] = nodata;
-				}
+			for (Size i = first; i < last; i++)
+			{
+				if (valid != NULL && !valid[i])
+					px[i] = nodata;
+				else if (!any && !takes_nodata(pt, nodata, px[i]))
+					any = true;
+			}
 			continue;
 		}
 		for (Size i = first; i < last; i++)
@@ -413,8 +428,11 @@ tdc_raster_fill(TdcRasterWriter *w, const double *values, const uint8 *valid)
 
 			if (valid == NULL || valid[i])
 			{
-				c = tdc_raster_pixel_value(pt, nodata, values[i]);
-				any = true;
+				double		v = corrected(pt, nodata, values[i]);
+
+				c = convert(pt, v);
+				if (!any && !takes_nodata(pt, nodata, v))
+					any = true;
 			}
 			store(w->pixels + i * pb, pt, c);
 		}
