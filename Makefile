@@ -12,16 +12,18 @@
 #   make bench                  benchmarks (bench/run.sh)
 
 EXTENSION = tdc_delaunay
-EXTVERSION = 1.0.0
+EXTVERSION = 1.1.0
 MODULE_big = tdc_delaunay
 # The install script of this version is made from one file per feature, in
-# this order (the rule is below); older base scripts and the upgrade scripts
-# ship as they were released, and test/release.sh checks that the library
-# still has every C function any of them names.
+# this order (the rule is below); older base scripts (0.1.0, and 1.0.0 as it
+# was built from src/sql before tin.sql) and the upgrade scripts ship as they
+# were released, and test/release.sh checks that the library still has every
+# C function any of them names.
 SQL_SRCS = $(addprefix src/sql/,header.sql delaunay.sql diagnostics.sql voronoi.sql \
-	tiled_internals.sql tiled.sql constrained.sql version.sql)
+	tiled_internals.sql tiled.sql constrained.sql tin.sql version.sql)
 DATA_built = $(EXTENSION)--$(EXTVERSION).sql
-DATA = $(EXTENSION)--0.1.0.sql $(EXTENSION)--0.1.0--1.0.0.sql
+DATA = $(EXTENSION)--0.1.0.sql $(EXTENSION)--0.1.0--1.0.0.sql $(EXTENSION)--1.0.0.sql \
+	$(EXTENSION)--1.0.0--1.1.0.sql
 
 CORE_SRCS = $(sort $(wildcard src/core/*.c))
 PG_SRCS = $(sort $(wildcard src/pg/*.c))
@@ -62,7 +64,15 @@ build/cgal_cdt: test/cgal_cdt.cpp
 	@mkdir -p build
 	$(CXX) -O2 -DNDEBUG -DCGAL_NDEBUG -o $@ $< -lgmp -lmpfr
 
-check-core: build/test_core $(CGAL_CDT)
+# The natural neighbour tests compare with CGAL's natural_neighbor_coordinates_2
+# with exact constructions, the same way (test/cgal_nn.cpp).
+CGAL_NN = $(if $(wildcard /usr/include/CGAL/natural_neighbor_coordinates_2.h),build/cgal_nn)
+
+build/cgal_nn: test/cgal_nn.cpp
+	@mkdir -p build
+	$(CXX) -O2 -DNDEBUG -DCGAL_NDEBUG -o $@ $< -lgmp -lmpfr
+
+check-core: build/test_core $(CGAL_CDT) $(CGAL_NN)
 	build/test_core
 
 build/test_core_asan: $(TEST_SRCS) $(wildcard test/*.h) $(CORE_SRCS) $(wildcard src/core/*.h)

@@ -187,5 +187,53 @@ check "segment index out of range: exit 1" "[ $? -eq 1 ]"
 expect_error "--max-memory with --segments" $TDC --max-memory 10 --segments "$tmp/rh.seg" "$tmp/big.bin"
 expect_error "--segments with --voronoi" $TDC --segments "$tmp/rh.seg" --voronoi "$tmp/rh.txt"
 
+# --contours: z = x on a 5 x 4 lattice, levels at 0.5 + k: one straight
+# open line per level (7 points: it crosses 3 horizontal edges and 4
+# diagonals), each vertex's x its level, higher ground (east) on the left,
+# so each line runs south
+perl -e 'for $x (0..4) { for $y (0..3) { print "$x $y $x\n" } }' > "$tmp/zx.txt"
+$TDC --contours 1 --base 0.5 -o "$tmp/zx.out" --stats "$tmp/zx.txt" 2> "$tmp/zx.err"
+check "contours: exit 0" "[ $? -eq 0 ]"
+check "contours: 4 lines, levels 0.5 .. 3.5" "[ \"\$(cut -d' ' -f1 $tmp/zx.out | tr '\n' ' ')\" = '0.5 1.5 2.5 3.5 ' ]"
+check "contours: every x is the level" "awk '{ for (i = 2; i < NF; i += 2) if (\$i != \$1) exit 1 }' $tmp/zx.out"
+check "contours: each line from y 3 to y 0" "awk '{ if (\$3 != 3 || \$NF != 0) exit 1 }' $tmp/zx.out"
+check "contours: stats line" "grep -qE '^tin=[0-9.]+ contours=[0-9.]+ lines=4 contour_points=28$' $tmp/zx.err"
+# a hill: closed rings, the first point repeated
+perl -e 'for $x (-10..10) { for $y (-10..10) { printf "%d %d %.17g\n", $x, $y, 100 * exp(-($x*$x + $y*$y) / 20) } }' > "$tmp/hill.txt"
+$TDC --contours 20 -o "$tmp/hill.out" "$tmp/hill.txt"
+check "contours: a hill gives 4 closed rings" "[ \$(wc -l < $tmp/hill.out) -eq 4 ] && awk '{ if (\$2 != \$(NF-1) || \$3 != \$NF) exit 1 }' $tmp/hill.out"
+$TDC -t 1 --contours 7 -o "$tmp/r1.cont" "$tmp/hill.txt"
+$TDC -t 3 --contours 7 -o "$tmp/r3.cont" "$tmp/hill.txt"
+check "contours: the same lines for 1 and 3 threads" "cmp -s $tmp/r1.cont $tmp/r3.cont"
+
+# --grid: an ESRI ASCII grid; on a plane every method but nearest gives the
+# plane at the pixel centres; outside the hull radius=0 gives nodata
+perl -e 'srand(3); for (1..400) { $x = rand(100); $y = rand(50); printf "%.17g %.17g %.17g\n", $x, $y, 2 * $x - $y + 7 }
+	for ([0,0],[100,0],[0,50],[100,50]) { printf "%d %d %d\n", $_->[0], $_->[1], 2 * $_->[0] - $_->[1] + 7 }' > "$tmp/pl.txt"
+for m in linear natural_neighbor; do
+	$TDC --grid 5 --method "$m" -o "$tmp/pl.$m.asc" --stats "$tmp/pl.txt" 2> "$tmp/pl.err"
+	check "grid $m: exit 0" "[ $? -eq 0 ]"
+	check "grid $m: header" "head -6 $tmp/pl.$m.asc | tr -s ' ' | tr '\n' ';' | grep -qx 'ncols 20;nrows 10;xllcorner 0;yllcorner 0;cellsize 5;NODATA_value 0;'"
+	check "grid $m: the plane at every pixel centre" "awk 'NR > 6 { for (c = 1; c <= NF; c++) { x = (c - 0.5) * 5; y = 50 - (NR - 6 - 0.5) * 5;
+		d = \$c - (2 * x - y + 7); if (d > 1e-9 || d < -1e-9) exit 1 } n++ } END { if (n != 10) exit 1 }' $tmp/pl.$m.asc"
+	check "grid $m: stats line" "grep -qE '^tin=[0-9.]+ grid=[0-9.]+ pixels=200 valid=200$' $tmp/pl.err"
+done
+$TDC --grid 5 --extent -50,0,100,50 --method linear:radius=0:nodata=-9999 -o "$tmp/out.asc" "$tmp/pl.txt"
+check "grid: outside the hull, radius=0 gives nodata" "awk 'NR > 6 { for (c = 1; c <= 10; c++) if (\$c != -9999) exit 1; if (\$11 == -9999) exit 1 }' $tmp/out.asc && grep -q '^NODATA_value -9999' $tmp/out.asc"
+$TDC --grid 5 --extent -50,0,100,50 --method nearest -o "$tmp/nn.asc" "$tmp/pl.txt"
+check "grid: nearest has a value everywhere" "awk 'NR > 6 { for (c = 1; c <= NF; c++) if (\$c == 0) exit 1 }' $tmp/nn.asc"
+$TDC -t 1 --grid 0.5 --method natural_neighbor -o "$tmp/g1.asc" "$tmp/hill.txt"
+$TDC -t 3 --grid 0.5 --method natural_neighbor -o "$tmp/g3.asc" "$tmp/hill.txt"
+check "grid: the same values for 1 and 3 threads" "cmp -s $tmp/g1.asc $tmp/g3.asc"
+expect_error "--contours of x y input (no z)" $TDC --contours 1 "$tmp/sq.txt"
+expect_error "--contours with --voronoi" $TDC --contours 1 --voronoi "$tmp/zx.txt"
+expect_error "--contours and --grid" $TDC --contours 1 --grid 1 "$tmp/zx.txt"
+expect_error "--grid with a bad method" $TDC --grid 1 --method cubic "$tmp/zx.txt"
+expect_error "--grid with an elliptic nearest" $TDC --grid 1 --method nearest:radius1=1:radius2=2 "$tmp/zx.txt"
+expect_error "--grid 0" $TDC --grid 0 "$tmp/zx.txt"
+expect_error "--extent without --grid" $TDC --extent 0,0,1,1 "$tmp/zx.txt"
+expect_error "--grid with a bad extent" $TDC --grid 1 --extent 1,0,0,1 "$tmp/zx.txt"
+expect_error "--max-memory with --contours" $TDC --max-memory 10 --contours 1 "$tmp/big.bin"
+
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ]

@@ -46,6 +46,7 @@ extern void test_tolerance(void);
 extern void test_voronoi(void);
 extern void test_tile(void);
 extern void test_cdt(void);
+extern void test_tin(void);
 
 /* Set by --quick (sanitizer runs): smaller sizes. */
 extern int	tdc_test_quick;

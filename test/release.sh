@@ -12,7 +12,9 @@
 #     META.json's versions agree, and the Makefile installs every script of
 #     the tree;
 #   - every shipped base script reaches default_version through shipped
-#     upgrade scripts.
+#     upgrade scripts (0.1.0 through 1.0.0, 1.0.0 through 1.1.0);
+#   - the scripts of released versions are tracked files, and only
+#     default_version's install script is built from src/sql.
 #   PG_CONFIG=... bash test/release.sh      (prints "N passed, N failed")
 set -u
 cd "$(dirname "$0")/.."
@@ -61,6 +63,21 @@ meta=$(tr -d '\n\t ' <META.json)
 for s in $(git ls-files "$EXT--*.sql" 2>/dev/null); do
 	[[ " ${SCRIPTS[*]} " == *" $s "* ]] && ok || bad "$s is in the tree but not in the Makefile's DATA"
 done
+
+# The scripts of released versions (DATA: the older base scripts, among them
+# 1.0.0's, and every upgrade script) ship as they were released: tracked
+# files, never rebuilt from src/sql, which only makes default_version's.
+if git rev-parse --git-dir >/dev/null 2>&1; then
+	read -r -a STATIC <<<"$(make_var DATA)"
+	for s in "${STATIC[@]}"; do
+		git ls-files --error-unmatch "$s" >/dev/null 2>&1 && ok ||
+			bad "$s ships as released but is not a tracked file of the tree"
+	done
+	for s in $(make_var DATA_built); do
+		git ls-files --error-unmatch "$s" >/dev/null 2>&1 &&
+			bad "$s is built from src/sql but also tracked" || ok
+	done
+fi
 
 # Symbols.
 exported=$(nm -D --defined-only "$SO" | awk '$2 == "T" { print $3 }' | sort -u)

@@ -18,8 +18,18 @@ int
 main(int argc, char **argv)
 {
 	for (int i = 1; i < argc; i++)
+	{
 		if (strcmp(argv[i], "--quick") == 0)
 			tdc_test_quick = 1;
+		/* one part alone, while working on it: --only tin */
+		else if (strcmp(argv[i], "--only") == 0 && i + 1 < argc && strcmp(argv[i + 1], "tin") == 0)
+		{
+			setvbuf(stdout, NULL, _IOLBF, 0);
+			test_tin();
+			printf("%ld passed, %ld failed\n", tdc_test_passed, tdc_test_failed);
+			return tdc_test_failed ? 1 : 0;
+		}
+	}
 	setvbuf(stdout, NULL, _IOLBF, 0);
 
 	test_predicates();
@@ -41,6 +51,8 @@ main(int argc, char **argv)
 	test_tile();
 	printf("tile: %ld passed, %ld failed so far\n", tdc_test_passed, tdc_test_failed);
 	test_cdt();
+	printf("cdt: %ld passed, %ld failed so far\n", tdc_test_passed, tdc_test_failed);
+	test_tin();
 	printf("%ld passed, %ld failed\n", tdc_test_passed, tdc_test_failed);
 	return tdc_test_failed ? 1 : 0;
 }

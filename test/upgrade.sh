@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
-# test/upgrade.sh: a database made with tdc_delaunay 0.1.0 goes on working
-# with the new library, and ALTER EXTENSION tdc_delaunay UPDATE brings it to
-# exactly what a fresh install of the default version makes.
+# test/upgrade.sh: a database made with an older tdc_delaunay (0.1.0, and
+# 1.0.0) goes on working with the new library, and ALTER EXTENSION
+# tdc_delaunay UPDATE brings it to exactly what a fresh install of the
+# default version makes.  For each older version:
 #
-#   1. CREATE EXTENSION tdc_delaunay VERSION '0.1.0' CASCADE in a new
+#   1. CREATE EXTENSION tdc_delaunay VERSION 'FROM' CASCADE in a new
 #      database, and on it a view, a table (CREATE TABLE AS) and a
 #      materialized view that use every function family; their results,
 #      with the new library and the old SQL objects, are kept as digests;
@@ -15,26 +16,45 @@
 #      every aggregate's support functions, state type and initial values;
 #      every other member object (compared as sorted text, diff on failure);
 #   4. the view, the table and the materialized view give the same rows as
-#      before the update, and so does the materialized view refreshed.
+#      before the update, and so does the materialized view refreshed;
+#   5. what the update added (1.1.0: ST_TDCContours and ST_TDCDrape) gives
+#      in the updated database what it gives in the fresh one.
 #
 #   PGHOST=... PGPORT=... PGUSER=... bash test/upgrade.sh
 # Needs a superuser (scripts/test.sh: its throw-away cluster); makes and
-# drops the databases tdc_upgrade_old and tdc_upgrade_new.
-# Prints "N passed, N failed".  About 10 s.
+# drops the databases tdc_upgrade_old_* and tdc_upgrade_new.
+# Prints "N passed, N failed".  About 20 s.
 set -euo pipefail
 HERE=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
 # shellcheck source=test/db_lib.sh
 source "$HERE/db_lib.sh"
 
-OLD=tdc_upgrade_old
 NEW=tdc_upgrade_new
-FROM=0.1.0
+# Every older version a database may be at: each is installed, used, updated.
+FROMS=(0.1.0 1.0.0)
 
-echo "== upgrade.sh: tdc_delaunay $FROM, then ALTER EXTENSION UPDATE"
 db_require_server
 TO=$(q postgres -c "SELECT default_version FROM pg_available_extensions WHERE name = 'tdc_delaunay'")
-fresh_db "$OLD"
 fresh_db "$NEW"
+q "$NEW" -c "CREATE EXTENSION tdc_delaunay CASCADE" >/dev/null
+
+# What 1.1.0 added, as text: the same in an updated and in a fresh database.
+TIN_PROBE="
+SELECT ST_AsText(ST_TDCContours(ST_MakePoint(x, y, x * y), 1.5, 0.25))
+  FROM generate_series(0, 4) x, generate_series(0, 3) y
+UNION ALL
+SELECT ST_AsText(ST_TDCDrape(ST_MakePoint(x, y, x * y), 'LINESTRING(0.5 0.5, 3.5 2.5)'))
+  FROM generate_series(0, 4) x, generate_series(0, 3) y
+UNION ALL
+SELECT ST_AsText(ST_TDCDrape(ST_MakePoint(x, y, x * y), 'POINT(1.5 1.25)', 'natural_neighbor'))
+  FROM generate_series(0, 4) x, generate_series(0, 3) y"
+
+upgrade_from() {
+local FROM=$1
+local OLD=tdc_upgrade_old_${1//./_}
+
+echo "== upgrade.sh: tdc_delaunay $FROM, then ALTER EXTENSION UPDATE"
+fresh_db "$OLD"
 
 q "$OLD" -c "CREATE EXTENSION tdc_delaunay VERSION '$FROM' CASCADE" -c "$TEST_DATA" >/dev/null
 same "the old database is at $FROM" "$FROM" \
@@ -80,7 +100,6 @@ check "... with a WARNING and its HINT" grep -q "HINT:  Run ALTER EXTENSION tdc_
 check "ALTER EXTENSION tdc_delaunay UPDATE" q "$OLD" -c "ALTER EXTENSION tdc_delaunay UPDATE"
 same "after ALTER EXTENSION UPDATE the old database is at $TO" "$TO" \
 	"$(q "$OLD" -c "SELECT extversion FROM pg_extension WHERE extname = 'tdc_delaunay'")"
-q "$NEW" -c "CREATE EXTENSION tdc_delaunay CASCADE" >/dev/null
 
 # The extension's catalogue as sorted text, one line per object.
 CATALOGUE="
@@ -137,4 +156,13 @@ out=$(q "$OLD" -c "SELECT tdc_delaunay_full_version()" 2>&1)
 echo "  (tdc_delaunay_full_version(): $out)"
 check "after the update the report says EXTENSION=\"$TO\"" grep -qF "EXTENSION=\"$TO\" PGSQL=" <<<"$out"
 check "... with no warning" test -z "$(grep -e WARNING -e 'needs ALTER' <<<"$out")"
+tin_old=$(q "$OLD" -c "$TIN_PROBE" 2>&1)
+tin_new=$(q "$NEW" -c "$TIN_PROBE" 2>&1)
+same "ST_TDCContours and ST_TDCDrape after the update from $FROM: as in a fresh install" "$tin_new" "$tin_old"
+check "... and they drew something" grep -q "MULTILINESTRING Z ((" <<<"$tin_new"
+}
+
+for from in "${FROMS[@]}"; do
+	upgrade_from "$from"
+done
 db_finish

@@ -7,9 +7,11 @@
  *	oneshot.c	the run with the whole input in memory, and its output
  *	bounded*.c	the run of --max-memory that does not fit: tile by tile
  *				through files (bounded.h)
+ *	tin_out.c	--contours and --grid: the TIN of x y z input, written as text
  *	die.c		how ./tdc fails
  * Layered without loops: die.c at the bottom, then bounded_files.c, then
- * input.c and the bounded run's phases, then bounded.c, then tdc.c.
+ * input.c and the bounded run's phases, then bounded.c, oneshot.c and
+ * tin_out.c, then tdc.c.
  */
 #ifndef TDC_CLI_H
 #define TDC_CLI_H
@@ -33,6 +35,14 @@ typedef struct cli_args
 				validate,
 				voronoi;
 	long		max_mb;			/* --max-memory, 0 without it */
+	int			contours;		/* --contours INTERVAL [--base B] */
+	double		contour_interval,
+				contour_base;
+	int			grid;			/* --grid CELLSIZE [--extent ...] [--method M] */
+	double		grid_cell;
+	int			has_extent;
+	double		extent[4];		/* xmin, ymin, xmax, ymax */
+	const char *method;			/* --method, GDAL's syntax; NULL: linear */
 } cli_args;
 
 /* The input points in memory */
@@ -71,6 +81,9 @@ extern void oneshot_run(const cli_args *a, const cli_input *in, oneshot *r);
 extern void oneshot_write(const cli_args *a, const cli_input *in, const oneshot *r);
 extern void oneshot_report(const cli_args *a, const oneshot *r);
 extern void oneshot_free(oneshot *r, cli_input *in);
+
+/* tin_out.c: --contours or --grid on the one-shot triangulation */
+extern void tin_output(const cli_args *a, const cli_input *in, const oneshot *r);
 
 /* bounded_files.c: the temporary directory of the tiles */
 extern char tmp_dir[4096];

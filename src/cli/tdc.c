@@ -27,11 +27,17 @@
  * fits; otherwise bounded.c triangulates the input tile by tile through
  * files.
  *
+ * --contours INTERVAL [--base B] and --grid CELLSIZE [--extent X0,Y0,X1,Y1]
+ * [--method M]: the TIN of 'x y z' input, its contour lines or a grid of
+ * its heights (tin_out.c, which says the formats), written to -o instead
+ * of the triangles.
+ *
  * main: the arguments (parse_args), the input (read_input, or for
  * --max-memory stage_input, then read_staged when the one-shot run fits),
  * the run and its output (oneshot.c, or run_in_tiles).
  */
 #include <errno.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -43,7 +49,8 @@
 
 static const char usage[] =
 "usage: ./tdc [-t THREADS] [-g GRID] [-l LEVELS] [--tolerance T] [-o OUT] [--stats] [--validate]\n"
-"             [--voronoi] [--segments FILE] [--max-memory MB [--tmpdir DIR]] INPUT\n"
+"             [--voronoi] [--segments FILE] [--max-memory MB [--tmpdir DIR]]\n"
+"             [--contours INTERVAL [--base B]] [--grid CELLSIZE [--extent X0,Y0,X1,Y1] [--method M]] INPUT\n"
 "  INPUT  .bin file of little-endian float64 x,y pairs, or a text file of\n"
 "         'x y' or 'x y z' lines ('-' reads stdin)\n"
 "  -t     worker threads (0 = all online CPUs, the default)\n"
@@ -59,7 +66,27 @@ static const char usage[] =
 "  --tmpdir DIR  where the tiles go (default $TMPDIR or /tmp)\n"
 "  --segments FILE  constraint segments, lines 'i j' of 0-based INPUT point\n"
 "         indices: the constrained Delaunay triangulation; crossing segments\n"
-"         are an error (exit 1)\n";
+"         are an error (exit 1)\n"
+"  --contours INTERVAL  contour lines of the TIN of 'x y z' input at levels\n"
+"         B + k INTERVAL (--base B, default 0); -o writes one per line:\n"
+"         the level, then 'x y' pairs (a closed ring repeats its first point)\n"
+"  --grid CELLSIZE  heights at the pixel centres of a grid of square cells\n"
+"         over the input's box (or --extent X0,Y0,X1,Y1); -o writes an ESRI\n"
+"         ASCII grid (.asc); --method linear|nearest|natural_neighbor with\n"
+"         GDAL's options (e.g. linear:radius=0:nodata=-9999; default linear)\n";
+
+static double
+parse_double(const char *s, const char *what)
+{
+	char	   *end;
+	double		v;
+
+	errno = 0;
+	v = strtod(s, &end);
+	if (errno || *s == '\0' || *end != '\0' || !isfinite(v))
+		die(2, "invalid value for %s", what);
+	return v;
+}
 
 static long
 parse_int(const char *s, const char *what)
@@ -118,6 +145,49 @@ parse_args(int argc, char **argv, cli_args *a)
 				die(2, "option %s needs a value", s);
 			a->segpath = argv[++i];
 		}
+		else if (strcmp(s, "--contours") == 0 || strcmp(s, "--base") == 0 ||
+				 strcmp(s, "--grid") == 0)
+		{
+			double		v;
+
+			if (i + 1 >= argc)
+				die(2, "option %s needs a value", s);
+			v = parse_double(argv[++i], s);
+			if (strcmp(s, "--base") == 0)
+				a->contour_base = v;
+			else if (!(v > 0) || isinf(v))
+				die(2, "%s must be a finite number > 0", s);
+			else if (s[2] == 'c')
+				a->contours = 1, a->contour_interval = v;
+			else
+				a->grid = 1, a->grid_cell = v;
+		}
+		else if (strcmp(s, "--extent") == 0)
+		{
+			char	   *p,
+					   *end;
+
+			if (i + 1 >= argc)
+				die(2, "option %s needs a value", s);
+			p = argv[++i];
+			for (int k = 0; k < 4; k++)
+			{
+				errno = 0;
+				a->extent[k] = strtod(p, &end);
+				if (end == p || errno || !isfinite(a->extent[k]) || (k < 3 ? *end != ',' : *end != '\0'))
+					die(2, "invalid value for %s (XMIN,YMIN,XMAX,YMAX)", "--extent");
+				p = end + 1;
+			}
+			if (!(a->extent[0] < a->extent[2] && a->extent[1] < a->extent[3]))
+				die(2, "--extent: XMIN < XMAX and YMIN < YMAX%s", "");
+			a->has_extent = 1;
+		}
+		else if (strcmp(s, "--method") == 0)
+		{
+			if (i + 1 >= argc)
+				die(2, "option %s needs a value", s);
+			a->method = argv[++i];
+		}
 		else if (strcmp(s, "-t") == 0 || strcmp(s, "-g") == 0 || strcmp(s, "-l") == 0 ||
 				 strcmp(s, "-o") == 0 || strcmp(s, "--tolerance") == 0)
 		{
@@ -149,6 +219,22 @@ parse_args(int argc, char **argv, cli_args *a)
 	}
 	if (a->input == NULL)
 		die(2, "no INPUT given (see ./tdc --help)%s", "");
+	if (a->contours && a->grid)
+		die(2, "--contours and --grid: one at a time%s", "");
+	if ((a->contours || a->grid) && (a->voronoi || a->segpath))
+		die(2, "--contours and --grid take the Delaunay TIN: not with --voronoi or --segments%s", "");
+	if ((a->has_extent || a->method) && !a->grid)
+		die(2, "--extent and --method go with --grid%s", "");
+	if (a->contour_base != 0 && !a->contours)
+		die(2, "--base goes with --contours%s", "");
+	if (a->method)
+	{
+		tdc_interp_spec spec;
+		char		err[256];
+
+		if (tdc_interp_parse(a->method, &spec, err, sizeof(err)) != TDC_OK)
+			die(2, "--method: %s", err);
+	}
 	return true;
 }
 
@@ -223,6 +309,8 @@ run_in_tiles(const cli_args *a, const staged *s)
 		die(1, "--voronoi needs the whole triangulation in memory; %s", "raise --max-memory");
 	if (a->segpath)
 		die(1, "--segments needs the whole triangulation in memory; %s", "raise --max-memory");
+	if (a->contours || a->grid)
+		die(1, "--contours and --grid need the whole TIN in memory; %s", "raise --max-memory");
 	if (a->outpath)
 	{
 		f = strcmp(a->outpath, "-") == 0 ? stdout : fopen(a->outpath, "w");
@@ -292,7 +380,10 @@ main(int argc, char **argv)
 	else
 		read_input(a.input, &in);
 	oneshot_run(&a, &in, &r);
-	oneshot_write(&a, &in, &r);
+	if (a.contours || a.grid)
+		tin_output(&a, &in, &r);
+	else
+		oneshot_write(&a, &in, &r);
 	oneshot_report(&a, &r);
 	oneshot_free(&r, &in);
 	return 0;

@@ -43,6 +43,34 @@ extern double tdc_incircle_exact(const double *a, const double *b,
 extern int	tdc_sqdist_cmp_exact(const double *a, const double *b,
 								 const double *c, const double *d);
 
+/*
+ * Exact sign of |a - b|^2 - |c - d|^2 for coordinates that are 0 or of
+ * magnitude within [TDC_COORD_MIN, TDC_COORD_MAX] (the TIN's nearest-site
+ * decisions, tin_locate.c).  Filter: each squared distance in double has a
+ * relative error below 5 * 2^-53 (two differences, two squares and a sum,
+ * each rounded once), since within that range a nonzero difference is at
+ * least 2^-251 and its square is a normal number, and no square overflows;
+ * so two values apart by more than 2^-49 relative are ordered as their
+ * exact counterparts.  The rest goes to tdc_sqdist_cmp_exact, whose range
+ * contains this one.
+ */
+static inline int
+tdc_sqdist_cmp(const double *a, const double *b, const double *c, const double *d)
+{
+	double		ax = a[0] - b[0],
+				ay = a[1] - b[1],
+				cx = c[0] - d[0],
+				cy = c[1] - d[1];
+	double		s = ax * ax + ay * ay,
+				t = cx * cx + cy * cy;
+
+	if (s < t * (1 - 0x1p-49))
+		return -1;
+	if (t < s * (1 - 0x1p-49))
+		return 1;
+	return tdc_sqdist_cmp_exact(a, b, c, d);
+}
+
 static inline double
 tdc_orient2d(const double *a, const double *b, const double *c)
 {

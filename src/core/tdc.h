@@ -468,4 +468,207 @@ extern int	tdc_cdt_validate(const tdc_cdt *cdt, char *err, size_t errlen);
 /* Stop (if running) and free; the job stays.  NULL is allowed. */
 extern void tdc_cdt_free(tdc_cdt *cdt);
 
+/*
+ * --- TIN analysis (tin*.c): heights on a finished triangulation ---
+ *
+ * A TIN is a finished job (tdc_job_wait returned TDC_OK) with a height per
+ * input point.  A site's height is that of its first input point (the
+ * lowest input index among the points with its x and y; with a tolerance,
+ * the kept point's), so samples with equal x, y and different heights keep
+ * the first.  On it, heights are interpolated at points and at the pixel
+ * centres of a grid, lines are draped, and contour lines are drawn.
+ *
+ * Exactness.  Which triangle, edge or vertex a point lies in, which side of
+ * an edge a line passes, and which triangles a natural neighbour query
+ * conflicts with are decided by the exact predicates; which site is nearest
+ * is decided by exact distance comparisons (ties: the site first in (x, y)
+ * order).  Heights are computed in double (natural neighbour areas in
+ * double-double), in a fixed order of a triangle's vertices (from its first
+ * in (x, y) order), so every value is the same for any thread count and
+ * any walk that reached it.  Query coordinates follow the input's rule: 0
+ * or of magnitude within [TDC_COORD_MIN, TDC_COORD_MAX].
+ *
+ * Lifecycle.  tdc_tin_start builds the TIN on worker threads, like a job:
+ * wait, cancel and free it the same way (tdc_tin_build is start plus wait
+ * forever).  Each operation below then starts on the same TIN and is waited
+ * for with tdc_tin_wait again; one operation at a time, and its results
+ * stay until the next one starts or the TIN is freed.  The job and the
+ * heights must stay alive and unchanged until tdc_tin_wait returned the
+ * build's final status; the job until the TIN is freed.  Small work runs on
+ * the caller's thread before the start returns, as a small job does.
+ */
+typedef struct tdc_tin tdc_tin;
+
+/* Interpolation methods */
+#define TDC_INTERP_LINEAR	1	/* barycentric in the triangle containing the point */
+#define TDC_INTERP_NEAREST	2	/* the nearest site's height */
+#define TDC_INTERP_NATURAL	3	/* Sibson's natural neighbour interpolation */
+
+/*
+ * A method and its options, in GDAL's gdal_grid syntax and with its
+ * defaults (tdc_interp_parse).  Outside the convex hull of the sites,
+ * linear and natural neighbour take the nearest site's height when it is
+ * within radius (< 0: at any distance; 0: never), as GDAL's linear does,
+ * and nodata otherwise; a point exactly on the hull's boundary is inside
+ * (linear along the hull edge, for both).  Nearest takes the nearest site
+ * within radius (radius1 = radius2 in GDAL's terms; 0: any distance).
+ */
+typedef struct tdc_interp_spec
+{
+	int			method;			/* TDC_INTERP_* */
+	double		radius;
+	double		nodata;			/* the value written where there is none */
+} tdc_interp_spec;
+
+/*
+ * Parse "linear[:radius=R][:nodata=V]", "nearest[:radius1=R][:radius2=R]
+ * [:angle=A][:nodata=V]" or "natural_neighbor[:radius=R][:nodata=V]"
+ * (GDAL's defaults: linear radius -1, nodata 0; nearest radius 0, nodata
+ * 0); "natural_neighbour" and "invdist"-style names are not accepted.
+ * Unknown methods and options, bad numbers, and an elliptic nearest search
+ * (radius1 != radius2) are TDC_EINVAL with a message.
+ */
+extern int	tdc_interp_parse(const char *text, tdc_interp_spec *spec, char *err,
+							 size_t errlen);
+
+/* Bytes a TIN over a job of n input points allocates at most, beyond the job. */
+extern size_t tdc_tin_memory(size_t n);
+
+/*
+ * Start building the TIN of a finished job, z holding one height per input
+ * point (finite), on "threads" worker threads (0: the job's count).
+ * max_memory bounds the TIN and its operations (0: no limit): an operation
+ * that would need more stops with TDC_EMEMLIMIT.
+ */
+extern int	tdc_tin_start(const tdc_job *job, const double *z, int threads,
+						  size_t max_memory, tdc_tin **tin, char *err, size_t errlen);
+extern int	tdc_tin_wait(tdc_tin *tin, int timeout_ms);
+extern void tdc_tin_cancel(tdc_tin *tin);
+extern const char *tdc_tin_error(const tdc_tin *tin);
+extern void tdc_tin_free(tdc_tin *tin);
+extern int	tdc_tin_build(const tdc_job *job, const double *z, int threads,
+						  size_t max_memory, tdc_tin **tin, char *err, size_t errlen);
+
+/* The range of the sites' heights (NaN without a site). */
+extern void tdc_tin_z_range(const tdc_tin *tin, double *zmin, double *zmax);
+
+/*
+ * The value at one point, on the caller's thread (tests, a few points):
+ * 1 with *z set, 0 where there is none (*z = spec->nodata), TDC_EINVAL for
+ * a coordinate out of range, TDC_ENOMEM.  The built TIN must not be running
+ * an operation.
+ */
+extern int	tdc_tin_value(const tdc_tin *tin, const tdc_interp_spec *spec,
+						  const double q[2], double *z);
+
+/*
+ * Is q inside the closed convex hull of the sites (1), outside (0)?  With
+ * fewer than three non-collinear sites, the hull is the segment or point
+ * they span.
+ */
+extern int	tdc_tin_inside(const tdc_tin *tin, const double q[2]);
+
+/*
+ * Values at n points xy (x,y interleaved), on the worker threads: z[i] and
+ * valid[i] (1, or 0 with z[i] = spec->nodata).  xy, z and valid must stay
+ * valid until tdc_tin_wait returned a final status.  A coordinate out of
+ * range stops it with TDC_EINVAL.
+ */
+extern int	tdc_tin_points_start(tdc_tin *tin, const tdc_interp_spec *spec,
+								 const double *xy, size_t n, double *z,
+								 uint8_t *valid, char *err, size_t errlen);
+
+/*
+ * Values at the pixel centres of a grid, the interface the raster
+ * functions (a template raster's extent and resolution) build on.  The
+ * grid has width x height pixels and GDAL's affine geotransform gt: pixel
+ * (col, row) covers the parallelogram whose corner (col, row) is
+ *		x = gt[0] + col * gt[1] + row * gt[2]
+ *		y = gt[3] + col * gt[4] + row * gt[5]
+ * and its value is taken at its centre (col + 0.5, row + 0.5), as
+ * gdal_grid does.  values[row * width + col] receives the value and
+ * valid[...] 1, or spec->nodata and 0 where there is none (outside the
+ * hull beyond the radius, or no site); valid may be NULL.  The rows are
+ * shared out among the worker threads, each row walking from its previous
+ * pixel's triangle; cancel with tdc_tin_cancel (polled every row).  values
+ * and valid must stay valid until tdc_tin_wait returned a final status.
+ * The values are the same for any thread count.  Pixel centres computed
+ * from gt must follow the coordinate rule (TDC_EINVAL otherwise).
+ */
+typedef struct tdc_grid_spec
+{
+	double		gt[6];
+	size_t		width,
+				height;
+} tdc_grid_spec;
+
+extern int	tdc_tin_grid_start(tdc_tin *tin, const tdc_interp_spec *spec,
+							   const tdc_grid_spec *grid, double *values,
+							   uint8_t *valid, char *err, size_t errlen);
+
+/*
+ * Contour lines at the levels base + k * interval (k any integer; each
+ * level computed as that one double expression), merged into maximal
+ * lines: a line ends only on the hull's boundary, and is otherwise a closed
+ * ring (its first point repeated at its end).  Heights equal to a level
+ * count as above it (the level lowered by an infinitesimal), so a line
+ * through a sample or along an edge at the level's height appears once,
+ * with no duplicate and no gap; a peak exactly at a level gives no line.
+ * Lines are oriented with the higher ground on their left (rings around
+ * hills counter-clockwise; a ring starts at its point first in (x, y)
+ * order), come level by level, increasing, and within a level sorted by
+ * their points: the same for any thread count.  A crossing lies
+ * on its triangle edge, at parameter (level - z0) / (z1 - z0) from the
+ * lower end, computed once per edge, so neighbouring triangles share it
+ * bit for bit; at a site whose height is the level, it is the site.
+ * TDC_EINVAL for an interval that is not finite and > 0, or too small for
+ * the heights' resolution (two levels would round to one double), or a
+ * base that is not finite.
+ */
+extern int	tdc_tin_contours_start(tdc_tin *tin, double interval, double base,
+								   char *err, size_t errlen);
+/* After the contours: their count and total points. */
+extern size_t tdc_tin_contour_count(const tdc_tin *tin, size_t *points);
+/* Line i: its level, its *n points (x,y interleaved), whether closed. */
+extern const double *tdc_tin_contour_line(const tdc_tin *tin, size_t i, double *level,
+										  size_t *n, bool *closed);
+
+/*
+ * Drape polylines: nchains chains of vertices, chain c being the vertices
+ * [chain_end[c - 1], chain_end[c]) of xy (chain_end[-1] = 0): a point is a
+ * chain of one vertex, a ring a chain whose last vertex repeats its first.
+ * Every vertex gets the method's value; with TDC_INTERP_LINEAR every
+ * segment whose ends are both inside the hull also gets a vertex where it
+ * crosses a triangle edge or passes through a site (in order along it),
+ * so the draped line follows the TIN exactly: a crossing lies on its edge
+ * at a parameter computed from the edge's ends in (x, y) order, and its
+ * height is the linear one along that edge, which both triangles' planes
+ * share.  The result (tdc_tin_drape_result) lists, for each output vertex,
+ * its x, y, z, whether it has a value and whether it lies in the hull, the
+ * input vertex its segment starts at and its parameter t along that
+ * segment (0 at the input vertex; for interpolating M), chain after chain.  Memory grows with the crossings
+ * and is counted against max_memory.
+ */
+typedef struct tdc_drape_vertex
+{
+	double		x,
+				y,
+				z;
+	double		t;				/* along the segment from input vertex src */
+	uint32_t	src;			/* input vertex (index into xy) */
+	uint8_t		valid;			/* 1: z is the method's value; 0: z = nodata */
+	uint8_t		inside;			/* 1: in the closed convex hull of the sites */
+	uint16_t	pad;
+} tdc_drape_vertex;
+
+extern int	tdc_tin_drape_start(tdc_tin *tin, const tdc_interp_spec *spec,
+								const double *xy, const size_t *chain_end,
+								size_t nchains, char *err, size_t errlen);
+/*
+ * After the drape: all output vertices (*v) and chain c's range
+ * [(*chain_off)[c], (*chain_off)[c + 1]); returns the vertex count.
+ */
+extern size_t tdc_tin_drape_result(const tdc_tin *tin, const tdc_drape_vertex **v,
+								   const size_t **chain_off);
+
 #endif							/* TDC_H */

@@ -23,6 +23,9 @@
  *	signals.c		keeps PostGIS's cancel handler from allocating inside a
  *					signal; every SQL entry point calls tdc_signal_guard()
  *	version.c		the versions and thread count a bug report needs
+ *	tin_run.c		a TIN of samples with Z, and the operations on it, waited on
+ *	gser_contour.c	contour lines written as a MULTILINESTRING Z
+ *	gser_drape.c	a target geometry read as chains and written again draped
  *	pg_version_compat.h  every difference between PostgreSQL majors
  *
  * The features, each a set of thin fmgr adapters over the runtime
@@ -30,7 +33,8 @@
  * ST_TDCDelaunayDump), fn_delaunay_agg (ST_TDCDelaunay), fn_constrained
  * (ST_TDCConstrainedDelaunayTriangles, its Dump and aggregate), fn_voronoi
  * (ST_TDCVoronoiPolygons/Lines; fn_voronoi.h for its aggregate and Dump),
- * fn_tiled (tdc_delaunay_tiled's per-tile step and curve helper).
+ * fn_tiled (tdc_delaunay_tiled's per-tile step and curve helper),
+ * fn_contours_agg (ST_TDCContours), fn_drape_agg (ST_TDCDrape).
  * docs/design/pg-runtime.md tells why.
  *
  * Only the backend's main thread ever calls PostgreSQL.  The core's worker
@@ -380,6 +384,45 @@ typedef void (*TdcDumpRowFn) (void *arg, uint64 first);
 extern void tdc_dump_collect(TdcPointBuf *buf, TdcIdBuf *ids, const char *query,
 							 Oid geomoid, const char *fname,
 							 TdcDumpRowFn row_fn, void *row_arg);
+
+/* tin_run.c: a TIN of the samples, and the operations on it */
+typedef struct TdcTinRun
+{
+	TdcRun	   *run;			/* the triangulation */
+	tdc_tin    *tin;			/* NULL once freed */
+	size_t		max_memory;		/* the TIN's and its operations' share (0: no limit) */
+} TdcTinRun;
+
+extern void tdc_tin_read_sample(TdcPointBuf *buf, Datum d, int64 row, const char *fname);
+extern TdcTinRun *tdc_tin_run_start(const TdcPointBuf *buf, uint64 extra,
+									const char *fname);
+extern void tdc_tin_run_wait(TdcTinRun *tr, int rc, const char *err, const char *fname);
+extern void tdc_tin_run_free(TdcTinRun *tr);
+
+/* gser_contour.c: the contour lines of a TIN as a MULTILINESTRING Z */
+extern struct varlena *tdc_gser_contours(const tdc_tin *tin, int32 srid, uint64 room,
+										 const char *fname);
+
+/* gser_drape.c: a target geometry's vertices, and the target draped */
+typedef struct TdcDrapeTarget
+{
+	const struct varlena *value;	/* detoasted */
+	int32		srid;
+	bool		hasm;
+	double	   *xy;				/* its vertices */
+	double	   *m;				/* their M, when hasm */
+	size_t	   *chain_end;		/* chains as tdc_tin_drape_start takes them */
+	size_t		nchains;
+	size_t		nvert;
+} TdcDrapeTarget;
+
+extern void tdc_drape_target_read(TdcDrapeTarget *t, const struct varlena *value,
+								  const char *fname);
+extern uint64 tdc_drape_target_bytes(const TdcDrapeTarget *t);
+extern struct varlena *tdc_drape_target_write(const TdcDrapeTarget *t,
+											  const tdc_drape_vertex *v,
+											  const size_t *chain_off, uint64 room,
+											  const char *fname);
 
 /* signals.c */
 extern bool tdc_signal_settled;

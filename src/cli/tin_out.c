@@ -1,0 +1,207 @@
+/*
+ * tin_out.c
+ *		./tdc --contours and --grid: the TIN of the input (x y z lines) and
+ *		what it is for, written as text GIS tools read.
+ *
+ * The triangulation is the one-shot run's (oneshot.c); the heights are the
+ * input's z, a site taking its first input point's (tdc.h).  Then:
+ *
+ *	--contours INTERVAL [--base B]	the contour lines at B + k INTERVAL
+ *		(tdc_tin_contours_start), one per line of -o: its level, then its
+ *		points "x y", %.17g, a closed ring ending with its first point.
+ *	--grid CELLSIZE [--extent XMIN,YMIN,XMAX,YMAX] [--method M]	values at
+ *		the pixel centres of a grid of square cells (tdc_tin_grid_start,
+ *		GDAL's method syntax: linear, nearest, natural_neighbor and their
+ *		options), written to -o as an ESRI ASCII grid (.asc), which GDAL
+ *		reads (AAIGrid): ncols, nrows, the lower left corner, cellsize and
+ *		NODATA_value (the method's nodata), then the rows from the top,
+ *		%.17g.  The extent defaults to the input's bounding box; the grid
+ *		covers it from its lower left corner with ceil(width / CELLSIZE)
+ *		columns and ceil(height / CELLSIZE) rows.
+ *
+ * Both run on the engine's threads (-t), like the triangulation.  --stats
+ * adds one line: "tin= contours= contour_points=" or "tin= grid= pixels=
+ * valid=" (seconds and counts).
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "cli.h"
+
+static double
+now_s(void)
+{
+	struct timespec t;
+
+	clock_gettime(CLOCK_MONOTONIC, &t);
+	return t.tv_sec + t.tv_nsec * 1e-9;
+}
+
+static FILE *
+open_out(const char *path)
+{
+	FILE	   *f = strcmp(path, "-") == 0 ? stdout : fopen(path, "w");
+
+	if (f == NULL)
+		die(1, "cannot write %s", path);
+	return f;
+}
+
+static void
+close_out(FILE *f, const char *path)
+{
+	if (f != stdout ? fclose(f) != 0 : fflush(f) != 0)
+		die(1, "error writing %s", path);
+}
+
+/* Wait for the operation just started (rc), or die with its message. */
+static void
+wait_op(tdc_tin *tin, int rc, const char *err)
+{
+	if (rc != TDC_OK)
+		die(1, "%s", err);
+	if (tdc_tin_wait(tin, -1) != TDC_OK)
+		die(1, "%s", tdc_tin_error(tin));
+}
+
+static void
+contours(const cli_args *a, tdc_tin *tin, double tin_s)
+{
+	char		err[512];
+	double		t0 = now_s(),
+				t1;
+	size_t		npoints,
+				nlines;
+
+	err[0] = '\0';
+	wait_op(tin, tdc_tin_contours_start(tin, a->contour_interval, a->contour_base, err,
+										sizeof(err)), err);
+	t1 = now_s();
+	nlines = tdc_tin_contour_count(tin, &npoints);
+	if (a->outpath)
+	{
+		FILE	   *f = open_out(a->outpath);
+
+		for (size_t i = 0; i < nlines; i++)
+		{
+			double		level;
+			size_t		n;
+			bool		closed;
+			const double *xy = tdc_tin_contour_line(tin, i, &level, &n, &closed);
+
+			fprintf(f, "%.17g", level);
+			for (size_t k = 0; k < n; k++)
+				fprintf(f, " %.17g %.17g", xy[2 * k], xy[2 * k + 1]);
+			fputc('\n', f);
+		}
+		close_out(f, a->outpath);
+	}
+	if (a->stats)
+		fprintf(stderr, "tin=%.6f contours=%.6f lines=%zu contour_points=%zu\n", tin_s, t1 - t0,
+				nlines, npoints);
+}
+
+static void
+grid(const cli_args *a, const tdc_job *job, tdc_tin *tin, double tin_s)
+{
+	tdc_interp_spec spec;
+	tdc_grid_spec g;
+	char		err[512];
+	double		box[4],
+				cs = a->grid_cell,
+				w,
+				h,
+				t0,
+				t1;
+	double	   *v;
+	uint8_t    *ok;
+	size_t		valid = 0;
+
+	if (tdc_interp_parse(a->method ? a->method : "linear", &spec, err, sizeof(err)) != TDC_OK)
+		die(2, "--method: %s", err);
+	if (a->has_extent)
+		memcpy(box, a->extent, sizeof(box));
+	else if (tdc_num_sites(job) > 0)
+	{
+		double		lo[2],
+					hi[2];
+
+		tdc_site_extent(job, lo, hi);
+		box[0] = lo[0];
+		box[1] = lo[1];
+		box[2] = hi[0];
+		box[3] = hi[1];
+	}
+	else
+		die(1, "--grid needs an --extent when the input has no point%s", "");
+	w = ceil((box[2] - box[0]) / cs);
+	h = ceil((box[3] - box[1]) / cs);
+	if (!(w >= 1))
+		w = 1;
+	if (!(h >= 1))
+		h = 1;
+	if (w * h > 4e9)
+		die(1, "--grid: %s pixels are too many", w * h > 1e18 ? "more than 1e18" : "over 4e9");
+	g.width = (size_t) w;
+	g.height = (size_t) h;
+	g.gt[0] = box[0];
+	g.gt[1] = cs;
+	g.gt[2] = 0;
+	g.gt[3] = box[1] + h * cs;
+	g.gt[4] = 0;
+	g.gt[5] = -cs;
+	v = malloc(g.width * g.height * sizeof(double) + 8);
+	ok = malloc(g.width * g.height + 1);
+	if (v == NULL || ok == NULL)
+		die(1, "out of memory for a grid of %s", "that size");
+	t0 = now_s();
+	err[0] = '\0';
+	wait_op(tin, tdc_tin_grid_start(tin, &spec, &g, v, ok, err, sizeof(err)), err);
+	t1 = now_s();
+	for (size_t i = 0; i < g.width * g.height; i++)
+		valid += ok[i];
+	if (a->outpath)
+	{
+		FILE	   *f = open_out(a->outpath);
+
+		fprintf(f, "ncols        %zu\nnrows        %zu\nxllcorner    %.17g\nyllcorner    %.17g\n"
+				"cellsize     %.17g\nNODATA_value %.17g\n", g.width, g.height, box[0], box[1], cs,
+				spec.nodata);
+		for (size_t r = 0; r < g.height; r++)
+		{
+			for (size_t c = 0; c < g.width; c++)
+				fprintf(f, c ? " %.17g" : "%.17g", v[r * g.width + c]);
+			fputc('\n', f);
+		}
+		close_out(f, a->outpath);
+	}
+	if (a->stats)
+		fprintf(stderr, "tin=%.6f grid=%.6f pixels=%zu valid=%zu\n", tin_s, t1 - t0,
+				g.width * g.height, valid);
+	free(v);
+	free(ok);
+}
+
+/* --contours or --grid on the one-shot run's triangulation of in. */
+void
+tin_output(const cli_args *a, const cli_input *in, const oneshot *r)
+{
+	tdc_tin    *tin;
+	char		err[512];
+	double		t0,
+				t1;
+
+	if (in->z == NULL && in->n > 0)
+		die(1, "--contours and --grid need heights: text input of 'x y z' lines%s", "");
+	t0 = now_s();
+	if (tdc_tin_build(r->job, in->z, a->opt.threads, 0, &tin, err, sizeof(err)) != TDC_OK)
+		die(1, "%s", err);
+	t1 = now_s();
+	if (a->contours)
+		contours(a, tin, t1 - t0);
+	else
+		grid(a, r->job, tin, t1 - t0);
+	tdc_tin_free(tin);
+}

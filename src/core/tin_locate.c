@@ -1,0 +1,456 @@
+/*
+ * tin_locate.c
+ *		Where a point lies in a TIN (a triangle, an edge, a site, or outside
+ *		the hull), the site nearest to it, and the linear height at it.
+ *
+ * Location is a walk: from a start triangle (the previous query's, or the
+ * one at the site the locate grid of tin.c names for the point's cell), cross
+ * an edge that has the point strictly on its far side, until no edge does.
+ * The sides are exact orientations (predicates.h), so the answer is exact:
+ * the point is strictly inside the last triangle, or strictly inside one of
+ * its edges (one zero), or at one of its corners (two zeros); crossing a
+ * hull edge means it is strictly outside the hull, which is convex.  In a
+ * Delaunay triangulation such a visibility walk always ends (Edelsbrunner,
+ * "An acyclicity theorem for cell complexes in d dimensions", 1990), with
+ * any choice of edge; the walk starts each step at a different edge all the
+ * same, as a remembering stochastic walk does (Devillers, Pion and
+ * Teillaud, "Walking in a triangulation", 2002), so that it ends on a
+ * constrained triangulation too, where the theorem does not hold.  A step
+ * bound guards the host all the same: past it the triangles are scanned,
+ * which gives the same exact answer slowly.
+ *
+ * Which triangle holds a point on an edge or at a site is not unique; the
+ * callers never depend on it: an edge is reported by its two sites and its
+ * height is linear along it from the end first in (x, y) order, a site by
+ * itself.  A triangle's height is computed from its first vertex in (x, y)
+ * order.  So a value depends on the point and the mesh only, never on where
+ * the walk started, and so not on the thread count.
+ *
+ * Nearest site: in a Delaunay triangulation, a site that is not nearest to
+ * q has a neighbour nearer to q (q lies beyond an edge of the site's
+ * Voronoi cell, on the side of the neighbour across it), so a greedy walk
+ * from any site ends at a nearest one; distances are compared exactly
+ * (tdc_sqdist_cmp).  Sites equally near to q lie on an empty circle around
+ * q, whose consecutive sites are joined by Delaunay edges, so they are all
+ * reached from one of them through equally near neighbours; the one first
+ * in (x, y) order wins.  Collinear sites (no triangle) are sorted along
+ * their line: the distance to q is unimodal along it, and a binary search
+ * on exact comparisons of neighbours finds the first nearest.
+ *
+ * Heights.  Linear inside a triangle (a, b, c), a the first in (x, y)
+ * order: z = za + s (zb - za) + t (zc - za), with s and t the barycentric
+ * coordinates from the doubles b - a, c - a and q - a (each rounded once)
+ * and their cross products; along an edge a-b: z = za + u (zb - za) with
+ * u = (q - a).(b - a) / |b - a|^2 clamped to [0, 1].  Both reproduce a
+ * plane to within a few rounding errors of its heights in a well-shaped
+ * triangle; a sliver loses what its area's rounding loses.
+ */
+#include <stdio.h>
+#include <string.h>
+
+#include "tin_int.h"
+
+static inline double
+orient(const double *a, const double *b, const double *c)
+{
+	return tdc_orient2d(a, b, c);
+}
+
+/* The start for a walk to q: a half-edge with a triangle on its left. */
+uint32_t
+tin_start_he(const tdc_tin *tin, const double *q)
+{
+	double		fx = (q[0] - tin->lo[0]) * tin->gscale[0],
+				fy = (q[1] - tin->lo[1]) * tin->gscale[1];
+	uint32_t	cx = !(fx > 0) ? 0 : fx >= tin->gw ? tin->gw - 1 : (uint32_t) fx,
+				cy = !(fy > 0) ? 0 : fy >= tin->gh ? tin->gh - 1 : (uint32_t) fy,
+				s = atomic_load_explicit(&tin->cell_site[(size_t) cy * tin->gw + cx],
+										 memory_order_relaxed),
+				h;
+
+	h = atomic_load_explicit(&tin->site_he[s], memory_order_relaxed);
+	return tin_outer(tin, h) ? h ^ 1u : h;
+}
+
+/* The triangles one by one: the exact answer when a walk would not end. */
+static void
+locate_scan(const tdc_tin *tin, const double *q, tin_loc *loc)
+{
+	uint32_t	hull = TDC_NIL;
+
+	for (size_t t = 0; t < tin->ntri; t++)
+	{
+		uint32_t	e[3];
+		double		o[3];
+		int			zeros = 0,
+					neg = 0;
+
+		e[0] = tin->tri_he[t];
+		e[1] = tin_lnext(tin, e[0]);
+		e[2] = tin_lnext(tin, e[1]);
+		for (int k = 0; k < 3; k++)
+		{
+			o[k] = orient(tin_pt(tin, tin_org(tin, e[k])), tin_pt(tin, tin_dest(tin, e[k])), q);
+			zeros += o[k] == 0;
+			neg += o[k] < 0;
+			if (o[k] < 0 && tin_outer(tin, e[k] ^ 1u))
+				hull = e[k];
+		}
+		if (neg > 0)
+			continue;
+		for (int k = 0; k < 3; k++)
+		{
+			if (zeros == 1 && o[k] == 0)
+			{
+				loc->kind = LOC_EDGE;
+				loc->h = e[k];
+				loc->a = tin_org(tin, e[k]);
+				loc->b = tin_dest(tin, e[k]);
+				return;
+			}
+			if (zeros == 2 && o[k] == 0 && o[(k + 2) % 3] == 0)
+			{
+				loc->kind = LOC_VERTEX;
+				loc->h = e[k];
+				loc->a = tin_org(tin, e[k]);
+				return;
+			}
+		}
+		loc->kind = LOC_FACE;
+		loc->h = e[0];
+		return;
+	}
+	/* in no triangle: outside, and some hull edge has q strictly beyond it */
+	loc->kind = LOC_OUTSIDE;
+	loc->h = hull;
+}
+
+/* Collinear sites: their segment, one site or outside. */
+static void
+locate_line(const tdc_tin *tin, const double *q, tin_loc *loc)
+{
+	const uint32_t *ln = tin->line;
+	size_t		m = tin->nline,
+				lo,
+				hi;
+	const double *first = tin_pt(tin, ln[0]),
+			   *last = tin_pt(tin, ln[m - 1]);
+
+	loc->h = TDC_NIL;
+	if (m == 1 || orient(first, last, q) != 0 ||
+		tdc_lex_less(q, first) || tdc_lex_less(last, q))
+	{
+		if (first[0] == q[0] && first[1] == q[1])
+		{
+			loc->kind = LOC_VERTEX;
+			loc->a = ln[0];
+			return;
+		}
+		loc->kind = LOC_OUTSIDE;
+		return;
+	}
+	/* the last site not after q along the line */
+	lo = 0;
+	hi = m - 1;
+	while (lo < hi)
+	{
+		size_t		mid = lo + (hi - lo + 1) / 2;
+
+		if (tdc_lex_less(q, tin_pt(tin, ln[mid])))
+			hi = mid - 1;
+		else
+			lo = mid;
+	}
+	if (!tdc_lex_less(tin_pt(tin, ln[lo]), q))
+	{
+		loc->kind = LOC_VERTEX;
+		loc->a = ln[lo];
+		return;
+	}
+	loc->kind = LOC_EDGE;
+	loc->a = ln[lo];
+	loc->b = ln[lo + 1];
+}
+
+/*
+ * Locate q, starting from hint (a half-edge with a triangle on its left, or
+ * TDC_NIL for the locate grid's start).
+ */
+void
+tin_locate(const tdc_tin *tin, const double *q, uint32_t hint, tin_loc *loc)
+{
+	uint32_t	h0;
+	size_t		steps = 0,
+				limit = 4 * tin->ntri + 64;
+
+	memset(loc, 0, sizeof(*loc));
+	loc->h = TDC_NIL;
+	if (tin->nsites == 0)
+	{
+		loc->kind = LOC_NONE;
+		return;
+	}
+	if (tin->ntri == 0)
+	{
+		locate_line(tin, q, loc);
+		return;
+	}
+	h0 = hint != TDC_NIL && !tin_outer(tin, hint) ? hint : tin_start_he(tin, q);
+
+	for (;;)
+	{
+		uint32_t	e[3];
+		double		o[3];
+		int			r = (int) (steps % 3),
+					zeros = 0;
+		bool		moved = false;
+
+		e[0] = h0;
+		e[1] = tin_lnext(tin, e[0]);
+		e[2] = tin_lnext(tin, e[1]);
+		for (int k = 0; k < 3; k++)
+		{
+			int			i = (r + k) % 3;
+			uint32_t	sym;
+
+			o[i] = orient(tin_pt(tin, tin_org(tin, e[i])), tin_pt(tin, tin_dest(tin, e[i])), q);
+			if (!(o[i] < 0))
+				continue;
+			sym = e[i] ^ 1u;
+			if (tin_outer(tin, sym))
+			{
+				loc->kind = LOC_OUTSIDE;
+				loc->h = e[i];
+				return;
+			}
+			h0 = sym;
+			moved = true;
+			break;
+		}
+		if (moved)
+		{
+			if (++steps > limit)
+			{
+				locate_scan(tin, q, loc);
+				return;
+			}
+			continue;
+		}
+		for (int k = 0; k < 3; k++)
+			zeros += o[k] == 0;
+		if (zeros == 0)
+		{
+			loc->kind = LOC_FACE;
+			loc->h = h0;
+			return;
+		}
+		for (int k = 0; k < 3; k++)
+		{
+			if (zeros == 1 && o[k] == 0)
+			{
+				loc->kind = LOC_EDGE;
+				loc->h = e[k];
+				loc->a = tin_org(tin, e[k]);
+				loc->b = tin_dest(tin, e[k]);
+				return;
+			}
+			/* two zeros: the corner the two zero edges share */
+			if (zeros == 2 && o[k] == 0 && o[(k + 2) % 3] == 0)
+			{
+				loc->kind = LOC_VERTEX;
+				loc->h = e[k];
+				loc->a = tin_org(tin, e[k]);
+				return;
+			}
+		}
+		/* three zeros cannot happen in a non-degenerate triangle */
+		locate_scan(tin, q, loc);
+		return;
+	}
+}
+
+/* ----------------------------------------------------------------
+ *		nearest site
+ * ----------------------------------------------------------------
+ */
+
+/* The nearest of collinear sites: the first i with d(i) <= d(i + 1). */
+static uint32_t
+nearest_line(const tdc_tin *tin, const double *q)
+{
+	const uint32_t *ln = tin->line;
+	size_t		lo = 0,
+				hi = tin->nline - 1;
+
+	while (lo < hi)
+	{
+		size_t		mid = lo + (hi - lo) / 2;
+
+		if (tdc_sqdist_cmp(q, tin_pt(tin, ln[mid]), q, tin_pt(tin, ln[mid + 1])) <= 0)
+			hi = mid;
+		else
+			lo = mid + 1;
+	}
+	return ln[lo];
+}
+
+/*
+ * The nearest site to q (the first in (x, y) order among equally near
+ * ones), from loc's triangle or edge.
+ */
+uint32_t
+tin_nearest(const tdc_tin *tin, const double *q, const tin_loc *loc)
+{
+	uint32_t	v,
+				best;
+	uint32_t	ties[64];
+	size_t		nties = 0;
+
+	if (tin->nsites == 0)
+		return TDC_NIL;
+	if (loc->kind == LOC_VERTEX)
+		return loc->a;
+	if (tin->ntri == 0)
+		return nearest_line(tin, q);
+	v = tin_org(tin, loc->h);
+
+	/* greedy: to the nearest neighbour while it is strictly nearer */
+	for (;;)
+	{
+		uint32_t	h = atomic_load_explicit(&tin->site_he[v], memory_order_relaxed),
+					start = h,
+					next = v;
+
+		do
+		{
+			uint32_t	w = tin_dest(tin, h);
+
+			if (tdc_sqdist_cmp(q, tin_pt(tin, w), q, tin_pt(tin, next)) < 0)
+				next = w;
+			h = tin_onext(tin, h);
+		} while (h != start);
+		if (next == v)
+			break;
+		v = next;
+	}
+
+	/*
+	 * Equally near sites, reached through equally near neighbours; the
+	 * first in (x, y) order.  There are rarely more than a few (a lattice
+	 * has four); past the list's room, the ones found so far decide.
+	 */
+	best = v;
+	ties[nties++] = v;
+	for (size_t i = 0; i < nties; i++)
+	{
+		uint32_t	u = ties[i],
+					h = atomic_load_explicit(&tin->site_he[u], memory_order_relaxed),
+					start = h;
+
+		do
+		{
+			uint32_t	w = tin_dest(tin, h);
+			bool		seen = false;
+
+			if (tdc_sqdist_cmp(q, tin_pt(tin, w), q, tin_pt(tin, v)) == 0)
+			{
+				for (size_t j = 0; j < nties && !seen; j++)
+					seen = ties[j] == w;
+				if (!seen && nties < sizeof(ties) / sizeof(ties[0]))
+				{
+					ties[nties++] = w;
+					if (tdc_lex_less(tin_pt(tin, w), tin_pt(tin, best)))
+						best = w;
+				}
+			}
+			h = tin_onext(tin, h);
+		} while (h != start);
+	}
+	return best;
+}
+
+/* ----------------------------------------------------------------
+ *		linear heights
+ * ----------------------------------------------------------------
+ */
+
+/* Linear along edge a-b at q (on it), from the end first in (x, y) order. */
+double
+tin_lerp_edge(const tdc_tin *tin, uint32_t a, uint32_t b, const double *q)
+{
+	const double *p0,
+			   *p1;
+	double		dx,
+				dy,
+				u,
+				z0,
+				z1;
+
+	if (tdc_lex_less(tin_pt(tin, b), tin_pt(tin, a)))
+	{
+		uint32_t	t = a;
+
+		a = b;
+		b = t;
+	}
+	p0 = tin_pt(tin, a);
+	p1 = tin_pt(tin, b);
+	z0 = tin->sz[a];
+	z1 = tin->sz[b];
+	dx = p1[0] - p0[0];
+	dy = p1[1] - p0[1];
+	u = ((q[0] - p0[0]) * dx + (q[1] - p0[1]) * dy) / (dx * dx + dy * dy);
+	if (!(u > 0))
+		u = 0;
+	if (u > 1)
+		u = 1;
+	return z0 + u * (z1 - z0);
+}
+
+/* Linear in the triangle left of h at q (inside it), from its first vertex. */
+double
+tin_linear_face(const tdc_tin *tin, uint32_t h, const double *q)
+{
+	uint32_t	v[3],
+				a,
+				b,
+				c;
+	const double *pa,
+			   *pb,
+			   *pc;
+	double		ux,
+				uy,
+				vx,
+				vy,
+				wx,
+				wy,
+				det,
+				s,
+				t;
+	int			k = 0;
+
+	v[0] = tin_org(tin, h);
+	h = tin_lnext(tin, h);
+	v[1] = tin_org(tin, h);
+	v[2] = tin_dest(tin, h);
+	if (tdc_lex_less(tin_pt(tin, v[1]), tin_pt(tin, v[k])))
+		k = 1;
+	if (tdc_lex_less(tin_pt(tin, v[2]), tin_pt(tin, v[k])))
+		k = 2;
+	a = v[k];
+	b = v[(k + 1) % 3];
+	c = v[(k + 2) % 3];
+	pa = tin_pt(tin, a);
+	pb = tin_pt(tin, b);
+	pc = tin_pt(tin, c);
+	ux = pb[0] - pa[0];
+	uy = pb[1] - pa[1];
+	vx = pc[0] - pa[0];
+	vy = pc[1] - pa[1];
+	wx = q[0] - pa[0];
+	wy = q[1] - pa[1];
+	det = ux * vy - uy * vx;
+	s = (wx * vy - wy * vx) / det;
+	t = (ux * wy - uy * wx) / det;
+	return tin->sz[a] + s * (tin->sz[b] - tin->sz[a]) + t * (tin->sz[c] - tin->sz[a]);
+}

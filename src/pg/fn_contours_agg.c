@@ -1,0 +1,238 @@
+/*
+ * fn_contours_agg.c
+ *		The ST_TDCContours aggregates: contour lines of the TIN of all rows'
+ *		vertices, at the levels base + k * interval, as one MULTILINESTRING Z.
+ *
+ * The state is the Delaunay aggregate's point buffer (agg_state.c) with the
+ * heights, plus the interval and the base, which must be the same in every
+ * row, and the count of rows read (which names a row without Z).  Rows
+ * whose geometry, interval or base is NULL are skipped; an EMPTY sample is
+ * skipped too.  Under a parallel plan a worker's state travels in the
+ * Delaunay state's serialized form under magic "TCN1", followed by
+ *
+ *		uint32 params_set (0 or 1), uint32 zero, float8 interval,
+ *		float8 base, int64 rows
+ *
+ * The lines are the core's (tin_contour.c: merged into maximal lines,
+ * closed where they do not end on the hull, a level at a sample's height
+ * counted once), written by gser_contour.c with the samples' SRID.
+ */
+#include "postgres.h"
+
+#include <math.h>
+
+#include "fmgr.h"
+#include "utils/memutils.h"
+
+#include "tdc_pg.h"
+
+#define CONTOUR_NAME		"ST_TDCContours"
+#define CONTOUR_EXTRA		32
+
+static const TdcStateFormat contour_format = {
+	0x314e4354,					/* "TCN1" little-endian */
+	1, CONTOUR_NAME,
+	"Disable parallel aggregation for this query (SET max_parallel_workers_per_gather = 0).",
+	-1
+};
+
+typedef struct ContourState
+{
+	TdcAggState *base;
+	int64		rows;			/* non-NULL rows read */
+	bool		params_set;
+	double		interval;
+	double		level0;			/* the base level */
+} ContourState;
+
+static ContourState *
+contour_state_new(MemoryContext cxt)
+{
+	ContourState *st = MemoryContextAllocZero(cxt, sizeof(ContourState));
+
+	st->base = tdc_agg_state_new(cxt);
+	st->base->pts.curves = TDC_CURVES_STROKE;
+	return st;
+}
+
+static void
+check_levels(double interval, double base)
+{
+	if (!(interval > 0) || isinf(interval))
+		ereport(ERROR,
+				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
+				 errmsg("%s: interval must be a finite number > 0, not %g", CONTOUR_NAME, interval)));
+	if (!isfinite(base))
+		ereport(ERROR,
+				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
+				 errmsg("%s: base must be a finite number, not %g", CONTOUR_NAME, base)));
+}
+
+static void
+contour_params(ContourState *st, double interval, double base)
+{
+	if (!st->params_set)
+	{
+		st->params_set = true;
+		st->interval = interval;
+		st->level0 = base;
+		return;
+	}
+	if (st->interval != interval || st->level0 != base)
+		ereport(ERROR,
+				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
+				 errmsg("%s: interval and base must be the same for all rows (%g, %g versus %g, %g)",
+						CONTOUR_NAME, st->interval, st->level0, interval, base)));
+}
+
+PG_FUNCTION_INFO_V1(st_tdccontours_transfn);
+
+/*
+ * st_tdccontours_transfn(internal, geometry, float8 [, float8])
+ */
+Datum
+st_tdccontours_transfn(PG_FUNCTION_ARGS)
+{
+	MemoryContext aggcxt = tdc_agg_context(fcinfo, "st_tdccontours_transfn");
+	ContourState *st = PG_ARGISNULL(0) ? NULL : (ContourState *) PG_GETARG_POINTER(0);
+	double		interval,
+				base = 0;
+
+	tdc_signal_guard();
+	if (PG_ARGISNULL(1) || PG_ARGISNULL(2) || (PG_NARGS() > 3 && PG_ARGISNULL(3)))
+	{
+		if (st == NULL)
+			PG_RETURN_NULL();
+		PG_RETURN_POINTER(st);
+	}
+	interval = PG_GETARG_FLOAT8(2);
+	if (PG_NARGS() > 3)
+		base = PG_GETARG_FLOAT8(3);
+	check_levels(interval, base);
+	if (st == NULL)
+		st = contour_state_new(aggcxt);
+	contour_params(st, interval, base);
+	st->rows++;
+	tdc_tin_read_sample(&st->base->pts, PG_GETARG_DATUM(1), st->rows, CONTOUR_NAME);
+	PG_RETURN_POINTER(st);
+}
+
+PG_FUNCTION_INFO_V1(st_tdccontours_combinefn);
+
+Datum
+st_tdccontours_combinefn(PG_FUNCTION_ARGS)
+{
+	MemoryContext aggcxt = tdc_agg_context(fcinfo, "st_tdccontours_combinefn");
+	ContourState *st1 = PG_ARGISNULL(0) ? NULL : (ContourState *) PG_GETARG_POINTER(0);
+	ContourState *st2 = PG_ARGISNULL(1) ? NULL : (ContourState *) PG_GETARG_POINTER(1);
+
+	tdc_signal_guard();
+	if (st2 == NULL || !st2->params_set)
+	{
+		if (st1 == NULL)
+			PG_RETURN_NULL();
+		PG_RETURN_POINTER(st1);
+	}
+	if (st1 == NULL)
+		st1 = contour_state_new(aggcxt);
+	contour_params(st1, st2->interval, st2->level0);
+	st1->rows += st2->rows;
+	tdc_agg_state_merge(st1->base, st2->base);
+	PG_RETURN_POINTER(st1);
+}
+
+PG_FUNCTION_INFO_V1(st_tdccontours_serialfn);
+
+Datum
+st_tdccontours_serialfn(PG_FUNCTION_ARGS)
+{
+	ContourState *st;
+	char		extra[CONTOUR_EXTRA];
+	uint32		u[2];
+
+	tdc_signal_guard();
+	(void) tdc_agg_context(fcinfo, "st_tdccontours_serialfn");
+	st = (ContourState *) PG_GETARG_POINTER(0);
+	u[0] = st->params_set ? 1 : 0;
+	u[1] = 0;
+	memcpy(extra, u, 8);
+	memcpy(extra + 8, &st->interval, 8);
+	memcpy(extra + 16, &st->level0, 8);
+	memcpy(extra + 24, &st->rows, 8);
+	PG_RETURN_BYTEA_P(tdc_agg_state_serialize_with(st->base, &contour_format,
+												   extra, CONTOUR_EXTRA, NULL));
+}
+
+PG_FUNCTION_INFO_V1(st_tdccontours_deserialfn);
+
+Datum
+st_tdccontours_deserialfn(PG_FUNCTION_ARGS)
+{
+	ContourState *st;
+	const char *extra;
+	Size		extra_len;
+	uint32		u[2];
+
+	tdc_signal_guard();
+	(void) tdc_agg_context(fcinfo, "st_tdccontours_deserialfn");
+	st = palloc0(sizeof(ContourState));
+	st->base = tdc_agg_state_deserialize_with(PG_GETARG_BYTEA_P(0), &contour_format,
+											  CurrentMemoryContext, &extra, &extra_len);
+	st->base->pts.curves = TDC_CURVES_STROKE;
+	if (extra_len != CONTOUR_EXTRA)
+		tdc_agg_state_corrupt(CONTOUR_NAME, psprintf("%zu bytes of parameters, not %d",
+													 extra_len, CONTOUR_EXTRA));
+	memcpy(u, extra, 8);
+	memcpy(&st->interval, extra + 8, 8);
+	memcpy(&st->level0, extra + 16, 8);
+	memcpy(&st->rows, extra + 24, 8);
+	if (u[0] > 1 || u[1] != 0 || st->rows < 0)
+		tdc_agg_state_corrupt(CONTOUR_NAME, "bad parameter flags");
+	st->params_set = u[0] == 1;
+	if (st->params_set && (!(st->interval > 0) || isinf(st->interval) || !isfinite(st->level0)))
+		tdc_agg_state_corrupt(CONTOUR_NAME, "bad interval or base");
+	if (st->base->pts.n > 0 && !st->base->pts.hasz)
+		tdc_agg_state_corrupt(CONTOUR_NAME, "samples without Z");
+	PG_RETURN_POINTER(st);
+}
+
+PG_FUNCTION_INFO_V1(st_tdccontours_finalfn);
+
+Datum
+st_tdccontours_finalfn(PG_FUNCTION_ARGS)
+{
+	ContourState *st;
+	TdcTinRun  *tr;
+	TdcPointBuf *pts;
+	struct varlena *out;
+	char		err[256];
+	int			rc;
+	uint64		limit = tdc_max_memory_bytes(),
+				room = PG_UINT64_MAX;
+
+	tdc_signal_guard();
+	(void) tdc_agg_context(fcinfo, "st_tdccontours_finalfn");
+	if (PG_ARGISNULL(0))
+		PG_RETURN_NULL();
+	st = (ContourState *) PG_GETARG_POINTER(0);
+	if (!st->params_set)
+		PG_RETURN_NULL();
+	pts = &st->base->pts;
+	tr = tdc_tin_run_start(pts, 0, CONTOUR_NAME);
+	err[0] = '\0';
+	rc = tdc_tin_contours_start(tr->tin, st->interval, st->level0, err, sizeof(err));
+	tdc_tin_run_wait(tr, rc, err, CONTOUR_NAME);
+	if (limit > 0)
+	{
+		size_t		npoints,
+					nlines = tdc_tin_contour_count(tr->tin, &npoints);
+		uint64		used = tdc_pointbuf_bytes(pts) + tr->run->engine_bytes +
+			tdc_tin_memory((size_t) pts->n) + (uint64) npoints * 2 * sizeof(double) +
+			(uint64) nlines * 32;
+
+		room = limit > used ? limit - used : 0;
+	}
+	out = tdc_gser_contours(tr->tin, pts->srid, room, CONTOUR_NAME);
+	tdc_tin_run_free(tr);
+	PG_RETURN_POINTER(out);
+}

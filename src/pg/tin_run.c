@@ -1,0 +1,160 @@
+/*
+ * tin_run.c
+ *		A TIN inside a backend: samples with heights collected, the
+ *		triangulation and its TIN built and waited for, an operation on the
+ *		TIN (contours, a drape) run and waited for, and all of it freed.
+ *
+ * Samples.  The TIN functions need a height per sample, so a sample value
+ * without Z is an error naming it: by its row (the aggregate's count of the
+ * non-NULL rows it read, per parallel worker) and its first vertex.  Its
+ * flags are read from the first bytes of the value (a slice of a TOASTed
+ * one), so no value is read twice; an EMPTY sample has no vertex to lack a
+ * height and is skipped, whatever its dimensions.  M is dropped.  Samples
+ * with equal x and y keep the height of the first (the site's first input
+ * point; under a parallel plan "first" follows the order in which partial
+ * states are combined).
+ *
+ * Running.  The triangulation is tdc_run's (run.c), with the TIN's own
+ * memory and the caller's extra bytes counted as its result, so one
+ * tdc_delaunay.max_memory check covers the vertices, the engine, the TIN
+ * and what the caller will hold; the TIN and its operations get what is
+ * left as their max_memory.  The TIN is started on the engine's threads and
+ * waited for with tdc_wait_work, the one interrupt-watching wait loop, as
+ * is every operation on it.  A reset callback on the point buffer's context
+ * frees the TIN on an error; it is registered after the job's, so it runs
+ * first (callbacks run newest first), and the TIN, which reads the job,
+ * goes before it.
+ */
+#include "postgres.h"
+
+#include "fmgr.h"
+#include "utils/memutils.h"
+
+#include "tdc_pg.h"
+#include "gser_format.h"
+
+TDC_WORK_OPS(tin_ops, tdc_tin, tdc_tin, "TIN operation");
+
+/* ----------------------------------------------------------------
+ *		samples
+ * ----------------------------------------------------------------
+ */
+void
+tdc_tin_read_sample(TdcPointBuf *buf, Datum d, int64 row, const char *fname)
+{
+	struct varlena *head = PG_DETOAST_DATUM_SLICE(d, 0, G_HEADER);
+	bool		hasz = VARSIZE_ANY_EXHDR(head) < G_HEADER ||
+		(((const unsigned char *) VARDATA_ANY(head))[3] & GF_Z) != 0;
+
+	if ((Pointer) head != DatumGetPointer(d))
+		pfree(head);
+	if (!hasz)
+	{
+		TdcPointBuf tmp;
+
+		/* its vertices, to tell EMPTY apart and to name the first */
+		tdc_pointbuf_init(&tmp, CurrentMemoryContext);
+		tmp.curves = TDC_CURVES_VERTICES;
+		(void) tdc_read_geometry(&tmp, d, fname);
+		if (tmp.n == 0)
+			return;
+		ereport(ERROR,
+				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
+				 errmsg("%s: sample row %lld has no Z coordinate", fname, (long long) row),
+				 errdetail("The row's first vertex is (%.17g %.17g); rows are counted from 1 among the "
+						   "non-NULL rows each aggregate (each parallel worker) reads.",
+						   tmp.xy[0], tmp.xy[1]),
+				 errhint("Every sample needs a height: make the samples XYZ, with ST_MakePoint(x, y, z) or "
+						 "ST_Force3DZ(geom, z).")));
+	}
+	(void) tdc_read_geometry(buf, d, fname);
+}
+
+/* ----------------------------------------------------------------
+ *		the TIN
+ * ----------------------------------------------------------------
+ */
+static void
+tin_reset_callback(void *arg)
+{
+	TdcTinRun  *tr = (TdcTinRun *) arg;
+
+	/* only errors and cancels get here: stop it before the job goes */
+	if (tr->tin != NULL)
+	{
+		tdc_tin_free(tr->tin);
+		tr->tin = NULL;
+	}
+}
+
+/*
+ * Triangulate buf's samples and build their TIN, waiting interruptibly;
+ * extra: bytes the caller holds beside them (its input and result), for the
+ * tdc_delaunay.max_memory check.  Any failure is an ERROR.
+ */
+TdcTinRun *
+tdc_tin_run_start(const TdcPointBuf *buf, uint64 extra, const char *fname)
+{
+	TdcTinRun  *tr;
+	MemoryContextCallback *cb;
+	uint64		limit = tdc_max_memory_bytes(),
+				tin_bytes = tdc_tin_memory((size_t) buf->n);
+	size_t		room = 0;
+	char		err[256];
+	int			rc;
+
+	if (buf->n > 0 && !buf->hasz)
+		ereport(ERROR,
+				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
+				 errmsg("%s: the samples have no Z coordinate", fname)));
+	tr = MemoryContextAllocZero(buf->cxt, sizeof(TdcTinRun));
+	tr->run = tdc_run(buf, 0.0, tin_bytes + extra, fname);
+	if (limit > 0)
+	{
+		uint64		used = tdc_pointbuf_bytes(buf) + tr->run->engine_bytes + extra;
+
+		/* tdc_run checked that the TIN's own arrays fit beside them */
+		room = (size_t) (limit > used ? limit - used : 1);
+	}
+	tr->max_memory = room;
+
+	cb = MemoryContextAllocZero(buf->cxt, sizeof(MemoryContextCallback));
+	cb->func = tin_reset_callback;
+	cb->arg = tr;
+	MemoryContextRegisterResetCallback(buf->cxt, cb);
+
+	err[0] = '\0';
+	rc = tdc_tin_start(tr->run->job, buf->z, tdc_effective_threads(), room, &tr->tin,
+					   err, sizeof(err));
+	if (rc != TDC_OK)
+	{
+		tr->tin = NULL;
+		tdc_report_status(rc, err, fname);
+	}
+	tdc_finish_work((void **) &tr->tin, &tin_ops, fname);
+	return tr;
+}
+
+/*
+ * Wait for the operation just started on the TIN (rc and err from its
+ * start), interruptibly; any failure is an ERROR.
+ */
+void
+tdc_tin_run_wait(TdcTinRun *tr, int rc, const char *err, const char *fname)
+{
+	if (rc != TDC_OK)
+		tdc_report_status(rc, err, fname);
+	tdc_finish_work((void **) &tr->tin, &tin_ops, fname);
+}
+
+/* Free the TIN, then the triangulation (see tdc_run_free). */
+void
+tdc_tin_run_free(TdcTinRun *tr)
+{
+	if (tr->tin != NULL)
+	{
+		tdc_tin_free(tr->tin);
+		tr->tin = NULL;
+	}
+	tdc_run_free(tr->run);
+}
