@@ -11,8 +11,13 @@
 #   make demo                   set-up + side-by-side demo (scripts/demo.sh)
 #   make bench                  benchmarks (bench/run.sh)
 
-EXTENSION = tdc_delaunay
+# Two extensions from one library: tdc_delaunay (needs postgis) and
+# tdc_delaunay_raster (needs tdc_delaunay and postgis_raster), so that
+# CREATE EXTENSION tdc_delaunay never needs postgis_raster.  The library
+# reads and writes rasters in their stored format without linking PostGIS.
+EXTENSION = tdc_delaunay tdc_delaunay_raster
 EXTVERSION = 1.1.0
+RASTER_EXTVERSION = 1.1.0
 MODULE_big = tdc_delaunay
 # The install script of this version is made from one file per feature, in
 # this order (the rule is below); older base scripts (0.1.0, and 1.0.0 as it
@@ -21,9 +26,10 @@ MODULE_big = tdc_delaunay
 # C function any of them names.
 SQL_SRCS = $(addprefix src/sql/,header.sql delaunay.sql diagnostics.sql voronoi.sql \
 	tiled_internals.sql tiled.sql constrained.sql tin.sql version.sql)
-DATA_built = $(EXTENSION)--$(EXTVERSION).sql
-DATA = $(EXTENSION)--0.1.0.sql $(EXTENSION)--0.1.0--1.0.0.sql $(EXTENSION)--1.0.0.sql \
-	$(EXTENSION)--1.0.0--1.1.0.sql
+RASTER_SQL_SRCS = $(addprefix src/sql/,raster_header.sql raster.sql)
+DATA_built = tdc_delaunay--$(EXTVERSION).sql tdc_delaunay_raster--$(RASTER_EXTVERSION).sql
+DATA = tdc_delaunay--0.1.0.sql tdc_delaunay--0.1.0--1.0.0.sql tdc_delaunay--1.0.0.sql \
+	tdc_delaunay--1.0.0--1.1.0.sql
 
 CORE_SRCS = $(sort $(wildcard src/core/*.c))
 PG_SRCS = $(sort $(wildcard src/pg/*.c))
@@ -96,7 +102,11 @@ test:
 	bash scripts/test.sh
 
 # A blank line between the files; written whole or not at all.
-$(EXTENSION)--$(EXTVERSION).sql: $(SQL_SRCS)
+tdc_delaunay--$(EXTVERSION).sql: $(SQL_SRCS)
+	awk 'FNR == 1 && NR > 1 { print "" } { print }' $^ > $@.tmp
+	mv $@.tmp $@
+
+tdc_delaunay_raster--$(RASTER_EXTVERSION).sql: $(RASTER_SQL_SRCS)
 	awk 'FNR == 1 && NR > 1 { print "" } { print }' $^ > $@.tmp
 	mv $@.tmp $@
 
@@ -122,7 +132,7 @@ src/core/%.o: src/core/%.c $(wildcard src/core/*.h)
 	$(CC) $(CFLAGS) -std=c11 -D_GNU_SOURCE -ffp-contract=off -pthread -Isrc/core -c -o $@ $<
 # PGXS does not track headers: a changed struct must rebuild every user.
 $(PG_SRCS:.c=.o): src/pg/tdc_pg.h src/pg/pg_version_compat.h src/pg/gser_format.h \
-	src/pg/fn_voronoi.h src/core/tdc.h
+	src/pg/fn_voronoi.h src/pg/raster_format.h src/pg/fn_raster.h src/core/tdc.h
 # tdc_delaunay_full_version() reports the PostGIS found here at build time:
 # the default_version of its control file (the library does not compile
 # against PostGIS, so nothing more precise exists), or "unknown".
@@ -140,15 +150,15 @@ endif
 # Fuzzing (fuzz/README.md): libFuzzer targets built with clang,
 # -fsanitize=fuzzer,address,undefined.
 #
-#   make fuzz                       build build/fuzz/fuzz_{core,gserialized,state,voronoi,cdt}
+#   make fuzz                       build build/fuzz/fuzz_{core,gserialized,state,voronoi,cdt,raster}
 #   make fuzz-run [FUZZ_SECONDS=60] run each from its seed corpus, summary line
 #
 # The PostgreSQL-side targets compile src/pg sources against the server
 # headers with the shims in fuzz/pg_shim.c (no server needed).
 FUZZ_SECONDS ?= 60
 FUZZ_CC ?= clang
-FUZZ_TARGETS = fuzz_core fuzz_gserialized fuzz_state fuzz_voronoi fuzz_cdt
-FUZZ_RUN_TARGETS = fuzz_core fuzz_gserialized fuzz_state fuzz_voronoi fuzz_cdt
+FUZZ_TARGETS = fuzz_core fuzz_gserialized fuzz_state fuzz_voronoi fuzz_cdt fuzz_raster
+FUZZ_RUN_TARGETS = fuzz_core fuzz_gserialized fuzz_state fuzz_voronoi fuzz_cdt fuzz_raster
 FUZZ_CFLAGS = -g -O1 -fno-omit-frame-pointer -D_GNU_SOURCE -ffp-contract=off \
 	-pthread -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined \
 	-Wall -Wno-unused-parameter -Wno-missing-field-initializers
@@ -183,6 +193,14 @@ build/fuzz/fuzz_gserialized: fuzz/fuzz_gserialized.c $(FUZZ_GSER_SRCS) $(FUZZ_PG
 	@mkdir -p build/fuzz
 	$(FUZZ_CC) $(FUZZ_CFLAGS) $(FUZZ_PG_CFLAGS) -Isrc/core -o $@ fuzz/fuzz_gserialized.c \
 		fuzz/pg_shim.c $(FUZZ_GSER_SRCS) $(CORE_SRCS) -lm
+
+# The raster reader and writer need nothing of the core.
+FUZZ_RASTER_SRCS = src/pg/raster_read.c src/pg/raster_write.c
+
+build/fuzz/fuzz_raster: fuzz/fuzz_raster.c $(FUZZ_RASTER_SRCS) $(FUZZ_PG_DEPS) src/pg/raster_format.h
+	@mkdir -p build/fuzz
+	$(FUZZ_CC) $(FUZZ_CFLAGS) $(FUZZ_PG_CFLAGS) -Isrc/core -o $@ fuzz/fuzz_raster.c \
+		fuzz/pg_shim.c $(FUZZ_RASTER_SRCS) -lm
 
 build/fuzz/fuzz_state: fuzz/fuzz_state.c $(FUZZ_STATE_SRCS) $(FUZZ_PG_DEPS) $(FUZZ_CORE_DEPS)
 	@mkdir -p build/fuzz

@@ -361,5 +361,79 @@ def main():
         put("fuzz_state", st2(state(pts=pts[:200])))
 
 
+
+# ---------------------------------------------------------------- rasters
+PIXBYTES = [1, 1, 1, 1, 1, 2, 2, 4, 4, 2, 4, 8]
+NODATA_FMT = ["B", "B", "B", "b", "B", "h", "H", "i", "I", "e", "f", "d"]
+
+
+def raster(bands, w=3, h=2, gt=(10.0, 2.0, 0.0, 20.0, 0.0, -2.0), srid=4326,
+           version=0, pad_last=True):
+    """A PostGIS raster value without its varlena header (the harness adds
+    it; alignment counts from the header).  bands: (pixtype, flags, nodata,
+    pixels or a path string for an out-of-database band)."""
+    out = bytearray(struct.pack("<HH6diHH", version, len(bands), gt[1], gt[5], gt[0],
+                                gt[3], gt[2], gt[4], srid, w, h))
+    for i, (pt, flags, nd, data) in enumerate(bands):
+        pb = PIXBYTES[pt] if pt < 12 else 1
+        out += bytes([pt | flags]) + bytes(pb - 1)
+        fmt = NODATA_FMT[pt] if pt < 12 else "B"
+        out += struct.pack("<" + fmt, nd)
+        if isinstance(data, str):
+            out += bytes([0]) + data.encode() + b"\0"
+        else:
+            out += bytes(data)
+        if pad_last or i < len(bands) - 1:
+            while (len(out) + 4) % 8:
+                out += b"\0"
+    return bytes(out)
+
+
+def raster_seeds():
+    def rd(band, value):
+        put("fuzz_raster", bytes([0, (band + 1) % 8]) + value)
+
+    one = raster([(4, 0x40, 7, range(6))])
+    rd(1, one)
+    rd(2, one)
+    rd(0, one)
+    rd(-1, one)
+    rd(1, raster([]))
+    rd(1, raster([], w=0, h=0))
+    rd(1, raster([(4, 0x40, 7, range(6))], version=1))
+    rd(1, one[:50])
+    rd(1, one[:62])
+    rd(1, one[:-3])
+    rd(1, raster([(4, 0x40, 7, range(6))], pad_last=False))
+    for pt in range(12):
+        nd = {9: 1.5, 10: -9999.5, 11: -1e300}.get(pt, 1)
+        rd(1, raster([(pt, 0x40 | 0x20, nd, bytes(6 * PIXBYTES[pt]))]))
+    rd(1, raster([(12, 0x40, 0, bytes(6))]))
+    rd(1, raster([(15, 0, 0, bytes(6))]))
+    rd(1, raster([(0, 0x40, 1, bytes(6))])[:64] + bytes([0x40, 0xFF]) + bytes(6) + bytes(4))
+    multi = raster([(5, 0x40, -32768, bytes(12)), (11, 0x80 | 0x40, -9999.0, "/data/dem.tif"),
+                    (10, 0, 0.0, bytes(24))], gt=(1e6, 0.5, 0.1, 5e6, -0.2, -0.5), srid=32633)
+    for b in (1, 2, 3, 4):
+        rd(b, multi)
+    rd(3, multi[:90])
+    rd(3, multi.replace(b"/data/dem.tif\0", b"/data/dem.tif!"))
+    big = raster([(11, 0x40, -1.0, bytes(8 * 64 * 64)), (4, 0x40, 0, bytes(64 * 64))], w=64, h=64)
+    rd(2, big)
+
+    def wr(pt, w, h, opt, rest):
+        put("fuzz_raster", bytes([1, pt, w, h, opt]) + bytes(rest))
+
+    for pt in range(12):
+        # nodata index, srid, then value index and mask byte per pixel
+        wr(pt, 4, 3, 0, [pt * 5, 0xE6, 0x10, 0, 0] + [b for i in range(12) for b in (i * 7 + pt, i % 3)])
+        wr(pt, 2, 2, 2, [17, 0, 0, 0, 0] + list(range(40, 44)))
+    wr(11, 5, 5, 1, [0, 1, 0, 0, 0] + [b for i in range(25) for b in (i, i & 1)])
+    wr(11, 3, 1, 3, [3, 0, 0, 0, 0, 1, 2, 3])
+    wr(4, 2, 2, 0, [0, 0, 0, 0, 0, 1, 0, 2, 0, 3, 0, 4, 0])
+    wr(10, 1, 1, 4, [0xFF] + list(struct.pack("<d", -9999.0)) + [0, 0, 0, 0] + [5, 9, 70, 3, 1, 2, 0, 1])
+    wr(4, 0, 7, 0, [0, 0, 0, 0, 0])
+
+
 if __name__ == "__main__":
     main()
+    raster_seeds()

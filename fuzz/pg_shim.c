@@ -9,10 +9,12 @@
 #include <stdio.h>
 #include <stdlib.h>
 
+#include "access/detoast.h"
 #include "fmgr.h"
 #include "miscadmin.h"
 #include "utils/memutils.h"
 
+#include "pg_version_compat.h"
 #include "pg_shim.h"
 /* the shim's tdc_* stand-ins checked against the real declarations */
 #include "tdc_pg.h"
@@ -430,6 +432,30 @@ struct varlena *
 pg_detoast_datum_packed(struct varlena *datum)
 {
 	return datum;
+}
+
+/*
+ * The harness's values are plain in-memory varlenas with a 4-byte header:
+ * a slice is a copy of their bytes [first, first + count), as the server
+ * returns for a value stored uncompressed.
+ */
+struct varlena *
+pg_detoast_datum_slice(struct varlena *datum, int32 first, int32 count)
+{
+	Size		size = VARSIZE(datum) - VARHDRSZ;
+	Size		from = Min((Size) first, size);
+	Size		n = count < 0 ? size - from : Min((Size) count, size - from);
+	struct varlena *out = palloc(VARHDRSZ + n);
+
+	SET_VARSIZE(out, VARHDRSZ + n);
+	memcpy(VARDATA(out), VARDATA(datum) + from, n);
+	return out;
+}
+
+Size
+toast_raw_datum_size(Datum value)
+{
+	return VARSIZE(DatumGetPointer(value));
 }
 
 /*

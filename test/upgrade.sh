@@ -18,7 +18,9 @@
 #   4. the view, the table and the materialized view give the same rows as
 #      before the update, and so does the materialized view refreshed;
 #   5. what the update added (1.1.0: ST_TDCContours and ST_TDCDrape) gives
-#      in the updated database what it gives in the fresh one.
+#      in the updated database what it gives in the fresh one;
+#   6. tdc_delaunay_raster installs on the updated database, and
+#      tdc_delaunay never created postgis_raster.
 #
 #   PGHOST=... PGPORT=... PGUSER=... bash test/upgrade.sh
 # Needs a superuser (scripts/test.sh: its throw-away cluster); makes and
@@ -160,6 +162,22 @@ tin_old=$(q "$OLD" -c "$TIN_PROBE" 2>&1)
 tin_new=$(q "$NEW" -c "$TIN_PROBE" 2>&1)
 same "ST_TDCContours and ST_TDCDrape after the update from $FROM: as in a fresh install" "$tin_new" "$tin_old"
 check "... and they drew something" grep -q "MULTILINESTRING Z ((" <<<"$tin_new"
+
+# The raster functions come as a second extension, which the update leaves
+# alone: tdc_delaunay never needed postgis_raster, and tdc_delaunay_raster
+# goes on top of the updated tdc_delaunay (CASCADE creates postgis_raster),
+# every object commented, and runs.
+same "tdc_delaunay did not create postgis_raster" 0 \
+	"$(q "$OLD" -c "SELECT count(*) FROM pg_extension WHERE extname = 'postgis_raster'")"
+check "CREATE EXTENSION tdc_delaunay_raster CASCADE on the database updated from $FROM" \
+	q "$OLD" -c "SET client_min_messages = warning" -c "CREATE EXTENSION tdc_delaunay_raster CASCADE"
+same "tdc_delaunay_raster's routines all have a COMMENT" 0 "$(q "$OLD" -c "
+	SELECT count(*) FROM pg_depend d JOIN pg_extension e ON e.oid = d.refobjid AND e.extname = 'tdc_delaunay_raster'
+	 WHERE d.deptype = 'e' AND d.classid = 'pg_proc'::regclass AND obj_description(d.objid, 'pg_proc') IS NULL")"
+same "ST_TDCInterpolateRaster on the database updated from $FROM" "32BF 2" "$(q "$OLD" -F ' ' -c "
+	SELECT ST_BandPixelType(r), ST_Value(r, 1, 1, 1) FROM ST_TDCInterpolateRaster(
+		'MULTIPOINT Z (0 0 2, 10 0 2, 0 10 2)', 'linear',
+		ST_AddBand(ST_MakeEmptyRaster(5, 5, 0, 10, 2, -2, 0, 0, 0), '32BF'::text, 0::float8, -1::float8)) r")"
 }
 
 for from in "${FROMS[@]}"; do

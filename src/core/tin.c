@@ -40,7 +40,7 @@
  * Memory.  tdc_tin_memory counts the TIN's own arrays: per input point 8
  * bytes of height, 24 of half-edge to triangle, 8 of triangle to half-edge
  * (two triangles per point at most), 4 of site to half-edge and 4 of cell
- * (a cell per two points), 48 in all, plus the collinear sort (4).  What an
+ * (a cell per two points), 48 in all, plus the collinear sort (4): 52.  What an
  * operation holds beyond it (contour lines, draped vertices, scratch) is
  * charged as it grows (tin_charge) against the rest of max_memory.
  */

@@ -1,0 +1,374 @@
+/*
+ * fn_raster_agg.c
+ *		The ST_TDCInterpolate aggregates: the TIN of all rows' vertices (the
+ *		samples) interpolated into a raster.
+ *
+ * ST_TDCInterpolate(geom, template [, method [, template_band_num]]) is
+ * ST_TDCInterpolateRaster(ST_Collect(geom), method, template, band) without
+ * the collection: the vertices are read row by row into the Delaunay
+ * aggregate's point buffer (agg_state.c), heights required (tin_run.c: a
+ * row without Z is an ERROR naming the row), and the final function runs
+ * fn_raster.c's interpolation.  method defaults to 'linear', the band to 1.
+ * Rows with a NULL argument are skipped; no row left gives NULL, as do
+ * EMPTY samples only.
+ *
+ * The template, the method and the band must be the same in every row.
+ * Of the template only its geometry (size, geotransform, SRID) and the
+ * band's pixel type and nodata value matter, so that is what the state
+ * keeps and compares: a template that is a constant of the statement (a
+ * literal or a parameter) is read once; any other is read again (its first
+ * bytes, raster_read.c) in every row, unless it is the same stored TOAST
+ * value as the row before's (a template joined to every row from a table),
+ * which would cost a fetch from the TOAST table each time.  A template that
+ * differs is an ERROR.
+ *
+ * Under a parallel plan a worker's state travels in the Delaunay state's
+ * serialized form under magic "TRI1", followed by
+ *
+ *		uint32 params_set (0 or 1), uint32 method length, int64 rows,
+ *		int32 band, int32 SRID, uint32 width, uint32 height,
+ *		float8 geotransform[6], int32 pixel type, uint32 hasnodata,
+ *		float8 nodata, then the method's bytes
+ *
+ * in the machine's byte order, every field checked when read.
+ */
+#include "postgres.h"
+
+#include <math.h>
+
+#include "access/detoast.h"
+#include "fmgr.h"
+#include "nodes/primnodes.h"
+#include "utils/builtins.h"
+#include "utils/memutils.h"
+
+#include "tdc_pg.h"
+#include "raster_format.h"
+#include "fn_raster.h"
+
+#define INTERP_NAME			"ST_TDCInterpolate"
+#define INTERP_FIXED		96	/* the fixed part after the vertices */
+#define METHOD_MAX			1024
+
+static const TdcStateFormat interp_format = {
+	0x31495254,					/* "TRI1" little-endian */
+	1, INTERP_NAME,
+	"Disable parallel aggregation for this query (SET max_parallel_workers_per_gather = 0).",
+	-1
+};
+
+typedef struct InterpState
+{
+	TdcAggState *base;
+	int64		rows;
+	bool		params_set;
+	char	   *method;			/* as given, checked */
+	int32		band;
+	TdcRasterInfo tmpl;			/* the template's geometry and band */
+	bool		tmpl_const;		/* the template is a constant: read once */
+	/* the stored template value of the last row read */
+	bool		last_ondisk;
+	struct varatt_external last_toast;
+} InterpState;
+
+static InterpState *
+interp_state_new(MemoryContext cxt)
+{
+	InterpState *st = MemoryContextAllocZero(cxt, sizeof(InterpState));
+
+	st->base = tdc_agg_state_new(cxt);
+	/* a curve's stored vertices, as ST_InterpolateRaster */
+	st->base->pts.curves = TDC_CURVES_VERTICES;
+	return st;
+}
+
+static bool
+same_double(double a, double b)
+{
+	return a == b || (isnan(a) && isnan(b));
+}
+
+/* Do two templates give the same result: geometry, pixel type, nodata? */
+static bool
+same_template(const TdcRasterInfo *a, const TdcRasterInfo *b)
+{
+	return a->srid == b->srid && a->width == b->width && a->height == b->height &&
+		memcmp(a->gt, b->gt, sizeof(a->gt)) == 0 &&
+		a->b.pixtype == b->b.pixtype && a->b.hasnodata == b->b.hasnodata &&
+		(!a->b.hasnodata || same_double(a->b.nodata, b->b.nodata));
+}
+
+static void
+interp_params(InterpState *st, MemoryContext cxt, const char *method, int32 band,
+			  const TdcRasterInfo *tmpl)
+{
+	if (!st->params_set)
+	{
+		st->params_set = true;
+		st->method = MemoryContextStrdup(cxt, method);
+		st->band = band;
+		st->tmpl = *tmpl;
+		return;
+	}
+	if (strcmp(st->method, method) != 0)
+		ereport(ERROR,
+				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
+				 errmsg("%s: method must be the same for all rows (\"%s\" versus \"%s\")",
+						INTERP_NAME, st->method, method)));
+	if (st->band != band)
+		ereport(ERROR,
+				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
+				 errmsg("%s: template_band_num must be the same for all rows (%d versus %d)",
+						INTERP_NAME, st->band, band)));
+	if (tmpl != NULL && !same_template(&st->tmpl, tmpl))
+		ereport(ERROR,
+				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
+				 errmsg("%s: template must be the same raster for all rows", INTERP_NAME),
+				 errdetail("Its size, geotransform, SRID, or band %d's pixel type or nodata value differ from the first row's.",
+						   band),
+				 errhint("Interpolate one template per aggregate, e.g. with GROUP BY the template.")));
+}
+
+/* Is the aggregate's template argument a constant of the statement? */
+static bool
+template_is_constant(FunctionCallInfo fcinfo)
+{
+	Aggref	   *ar = AggGetAggref(fcinfo);
+	TargetEntry *te;
+
+	if (ar == NULL || list_length(ar->args) < 2)
+		return false;
+	te = (TargetEntry *) list_nth(ar->args, 1);
+	return IsA(te->expr, Const) ||
+		(IsA(te->expr, Param) && ((Param *) te->expr)->paramkind == PARAM_EXTERN);
+}
+
+/*
+ * Is d the stored TOAST value the state read last?  Remembers it if not.
+ * (A TOAST value is named by its table and id; an in-line value has no
+ * name, and the same address may hold another row's value later, so it is
+ * read again, which costs a copy of its first bytes.)
+ */
+static bool
+same_value_as_last(InterpState *st, Datum d)
+{
+	struct varlena *v = (struct varlena *) DatumGetPointer(d);
+	struct varatt_external t;
+
+	if (!VARATT_IS_EXTERNAL_ONDISK(v))
+	{
+		st->last_ondisk = false;
+		return false;
+	}
+	VARATT_EXTERNAL_GET_POINTER(t, v);
+	if (st->last_ondisk && t.va_valueid == st->last_toast.va_valueid &&
+		t.va_toastrelid == st->last_toast.va_toastrelid)
+		return true;
+	st->last_ondisk = true;
+	st->last_toast = t;
+	return false;
+}
+
+PG_FUNCTION_INFO_V1(st_tdcinterpolate_transfn);
+
+/*
+ * st_tdcinterpolate_transfn(internal, geometry, raster [, text [, int4]])
+ */
+Datum
+st_tdcinterpolate_transfn(PG_FUNCTION_ARGS)
+{
+	MemoryContext aggcxt = tdc_agg_context(fcinfo, "st_tdcinterpolate_transfn");
+	InterpState *st = PG_ARGISNULL(0) ? NULL : (InterpState *) PG_GETARG_POINTER(0);
+	char	   *method = "linear";
+	int32		band = 1;
+
+	tdc_signal_guard();
+	for (int i = 1; i < PG_NARGS(); i++)
+		if (PG_ARGISNULL(i))
+		{
+			if (st == NULL)
+				PG_RETURN_NULL();
+			PG_RETURN_POINTER(st);
+		}
+	if (PG_NARGS() > 3)
+		method = text_to_cstring(PG_GETARG_TEXT_PP(3));
+	if (PG_NARGS() > 4)
+		band = PG_GETARG_INT32(4);
+	if (st == NULL)
+		st = interp_state_new(aggcxt);
+
+	if (!st->params_set)
+	{
+		TdcRasterInfo tmpl;
+		tdc_interp_spec spec;
+
+		if (strlen(method) > METHOD_MAX)
+			ereport(ERROR,
+					(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
+					 errmsg("%s: method of %zu bytes, more than %d", INTERP_NAME,
+							strlen(method), METHOD_MAX)));
+		tdc_raster_method(method, &spec, INTERP_NAME);
+		tdc_raster_read(PG_GETARG_DATUM(2), band, &tmpl, INTERP_NAME);
+		st->tmpl_const = template_is_constant(fcinfo);
+		(void) same_value_as_last(st, PG_GETARG_DATUM(2));
+		interp_params(st, aggcxt, method, band, &tmpl);
+	}
+	else if (!st->tmpl_const && !same_value_as_last(st, PG_GETARG_DATUM(2)))
+	{
+		TdcRasterInfo tmpl;
+
+		tdc_raster_read(PG_GETARG_DATUM(2), band, &tmpl, INTERP_NAME);
+		interp_params(st, aggcxt, method, band, &tmpl);
+	}
+	else
+		interp_params(st, aggcxt, method, band, NULL);
+
+	st->rows++;
+	tdc_tin_read_sample(&st->base->pts, PG_GETARG_DATUM(1), st->rows, INTERP_NAME);
+	PG_RETURN_POINTER(st);
+}
+
+PG_FUNCTION_INFO_V1(st_tdcinterpolate_combinefn);
+
+Datum
+st_tdcinterpolate_combinefn(PG_FUNCTION_ARGS)
+{
+	MemoryContext aggcxt = tdc_agg_context(fcinfo, "st_tdcinterpolate_combinefn");
+	InterpState *st1 = PG_ARGISNULL(0) ? NULL : (InterpState *) PG_GETARG_POINTER(0);
+	InterpState *st2 = PG_ARGISNULL(1) ? NULL : (InterpState *) PG_GETARG_POINTER(1);
+
+	tdc_signal_guard();
+	if (st2 == NULL || !st2->params_set)
+	{
+		if (st1 == NULL)
+			PG_RETURN_NULL();
+		PG_RETURN_POINTER(st1);
+	}
+	if (st1 == NULL)
+		st1 = interp_state_new(aggcxt);
+	interp_params(st1, aggcxt, st2->method, st2->band, &st2->tmpl);
+	st1->rows += st2->rows;
+	tdc_agg_state_merge(st1->base, st2->base);
+	PG_RETURN_POINTER(st1);
+}
+
+PG_FUNCTION_INFO_V1(st_tdcinterpolate_serialfn);
+
+Datum
+st_tdcinterpolate_serialfn(PG_FUNCTION_ARGS)
+{
+	InterpState *st;
+	char	   *extra;
+	Size		mlen,
+				len;
+	uint32		u[2];
+	int32		i4[2];
+	uint32		wh[2];
+	int32		pixtype;
+	uint32		hasnodata;
+
+	tdc_signal_guard();
+	(void) tdc_agg_context(fcinfo, "st_tdcinterpolate_serialfn");
+	st = (InterpState *) PG_GETARG_POINTER(0);
+	mlen = st->params_set ? strlen(st->method) : 0;
+	len = INTERP_FIXED + mlen;
+	extra = palloc0(len);
+	u[0] = st->params_set ? 1 : 0;
+	u[1] = (uint32) mlen;
+	i4[0] = st->band;
+	i4[1] = st->tmpl.srid;
+	wh[0] = st->tmpl.width;
+	wh[1] = st->tmpl.height;
+	pixtype = st->tmpl.b.pixtype;
+	hasnodata = st->tmpl.b.hasnodata ? 1 : 0;
+	memcpy(extra, u, 8);
+	memcpy(extra + 8, &st->rows, 8);
+	memcpy(extra + 16, i4, 8);
+	memcpy(extra + 24, wh, 8);
+	memcpy(extra + 32, st->tmpl.gt, 48);
+	memcpy(extra + 80, &pixtype, 4);
+	memcpy(extra + 84, &hasnodata, 4);
+	memcpy(extra + 88, &st->tmpl.b.nodata, 8);
+	if (mlen > 0)
+		memcpy(extra + INTERP_FIXED, st->method, mlen);
+	PG_RETURN_BYTEA_P(tdc_agg_state_serialize_with(st->base, &interp_format, extra, len,
+												   NULL));
+}
+
+PG_FUNCTION_INFO_V1(st_tdcinterpolate_deserialfn);
+
+Datum
+st_tdcinterpolate_deserialfn(PG_FUNCTION_ARGS)
+{
+	InterpState *st;
+	const char *extra;
+	Size		extra_len;
+	uint32		u[2];
+	int32		i4[2];
+	uint32		wh[2];
+	int32		pixtype;
+	uint32		hasnodata;
+
+	tdc_signal_guard();
+	(void) tdc_agg_context(fcinfo, "st_tdcinterpolate_deserialfn");
+	st = palloc0(sizeof(InterpState));
+	st->base = tdc_agg_state_deserialize_with(PG_GETARG_BYTEA_P(0), &interp_format,
+											  CurrentMemoryContext, &extra, &extra_len);
+	st->base->pts.curves = TDC_CURVES_VERTICES;
+	if (extra_len < INTERP_FIXED)
+		tdc_agg_state_corrupt(INTERP_NAME, "its parameters are truncated");
+	memcpy(u, extra, 8);
+	memcpy(&st->rows, extra + 8, 8);
+	memcpy(i4, extra + 16, 8);
+	memcpy(wh, extra + 24, 8);
+	memcpy(st->tmpl.gt, extra + 32, 48);
+	memcpy(&pixtype, extra + 80, 4);
+	memcpy(&hasnodata, extra + 84, 4);
+	memcpy(&st->tmpl.b.nodata, extra + 88, 8);
+	if (u[0] > 1 || st->rows < 0 || u[1] > METHOD_MAX ||
+		(uint64) extra_len != INTERP_FIXED + (uint64) u[1] ||
+		(u[0] == 0 && u[1] != 0) || (u[0] == 1 && u[1] == 0))
+		tdc_agg_state_corrupt(INTERP_NAME, "bad method length");
+	st->params_set = u[0] == 1;
+	if (st->params_set)
+	{
+		tdc_interp_spec spec;
+
+		if (i4[0] < 1 || wh[0] > PG_UINT16_MAX || wh[1] > PG_UINT16_MAX ||
+			tdc_raster_pixel_bytes(pixtype) == 0 || hasnodata > 1)
+			tdc_agg_state_corrupt(INTERP_NAME, "bad template");
+		st->band = i4[0];
+		st->tmpl.srid = i4[1];
+		st->tmpl.width = (uint16) wh[0];
+		st->tmpl.height = (uint16) wh[1];
+		st->tmpl.nbands = (uint16) Min(st->band, PG_UINT16_MAX);
+		st->tmpl.band = st->band;
+		st->tmpl.b.pixtype = pixtype;
+		st->tmpl.b.hasnodata = hasnodata == 1;
+		st->method = pnstrdup(extra + INTERP_FIXED, u[1]);
+		if (strlen(st->method) != u[1])
+			tdc_agg_state_corrupt(INTERP_NAME, "a NUL in the method");
+		tdc_raster_method(st->method, &spec, INTERP_NAME);
+	}
+	if (st->base->pts.n > 0 && !st->base->pts.hasz)
+		tdc_agg_state_corrupt(INTERP_NAME, "samples without Z");
+	PG_RETURN_POINTER(st);
+}
+
+PG_FUNCTION_INFO_V1(st_tdcinterpolate_finalfn);
+
+Datum
+st_tdcinterpolate_finalfn(PG_FUNCTION_ARGS)
+{
+	InterpState *st;
+
+	tdc_signal_guard();
+	(void) tdc_agg_context(fcinfo, "st_tdcinterpolate_finalfn");
+	if (PG_ARGISNULL(0))
+		PG_RETURN_NULL();
+	st = (InterpState *) PG_GETARG_POINTER(0);
+	if (!st->params_set || st->base->pts.n == 0)
+		PG_RETURN_NULL();
+	PG_RETURN_POINTER(tdc_raster_interpolate(&st->base->pts, &st->tmpl, st->method,
+											 INTERP_NAME));
+}
