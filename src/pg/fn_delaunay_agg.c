@@ -20,6 +20,7 @@
 #include "postgres.h"
 
 #include "fmgr.h"
+#include "nodes/primnodes.h"
 #include "utils/memutils.h"
 
 #include "tdc_pg.h"
@@ -33,6 +34,23 @@ tdc_agg_context(FunctionCallInfo fcinfo, const char *fn)
 	if (!AggCheckCallContext(fcinfo, &aggcxt))
 		elog(ERROR, "%s called in non-aggregate context", fn);
 	return aggcxt;
+}
+
+/*
+ * Is the aggregate's argument argno (0-based) a constant of the statement:
+ * a literal or a bound parameter?  Then a state may parse it once.
+ */
+bool
+tdc_agg_arg_is_constant(FunctionCallInfo fcinfo, int argno)
+{
+	Aggref	   *ar = AggGetAggref(fcinfo);
+	TargetEntry *te;
+
+	if (ar == NULL || list_length(ar->args) <= argno)
+		return false;
+	te = (TargetEntry *) list_nth(ar->args, argno);
+	return IsA(te->expr, Const) ||
+		(IsA(te->expr, Param) && ((Param *) te->expr)->paramkind == PARAM_EXTERN);
 }
 
 /* ----------------------------------------------------------------

@@ -112,20 +112,6 @@ drape_params(DrapeState *st, MemoryContext cxt, const char *method,
 				 errhint("Drape one target per aggregate, or collect the targets first with ST_Collect.")));
 }
 
-/* Is the aggregate's target argument a constant of the statement? */
-static bool
-target_is_constant(FunctionCallInfo fcinfo)
-{
-	Aggref	   *ar = AggGetAggref(fcinfo);
-	TargetEntry *te;
-
-	if (ar == NULL || list_length(ar->args) < 2)
-		return false;
-	te = (TargetEntry *) list_nth(ar->args, 1);
-	return IsA(te->expr, Const) ||
-		(IsA(te->expr, Param) && ((Param *) te->expr)->paramkind == PARAM_EXTERN);
-}
-
 PG_FUNCTION_INFO_V1(st_tdcdrape_transfn);
 
 /*
@@ -163,7 +149,7 @@ st_tdcdrape_transfn(PG_FUNCTION_ARGS)
 		if (!st->params_set)
 		{
 			check_method(method, &spec);
-			st->target_const = target_is_constant(fcinfo);
+			st->target_const = tdc_agg_arg_is_constant(fcinfo, 1);
 		}
 		drape_params(st, aggcxt, method, target, VARSIZE_ANY(target));
 	}

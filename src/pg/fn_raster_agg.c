@@ -129,20 +129,6 @@ interp_params(InterpState *st, MemoryContext cxt, const char *method, int32 band
 				 errhint("Interpolate one template per aggregate, e.g. with GROUP BY the template.")));
 }
 
-/* Is the aggregate's template argument a constant of the statement? */
-static bool
-template_is_constant(FunctionCallInfo fcinfo)
-{
-	Aggref	   *ar = AggGetAggref(fcinfo);
-	TargetEntry *te;
-
-	if (ar == NULL || list_length(ar->args) < 2)
-		return false;
-	te = (TargetEntry *) list_nth(ar->args, 1);
-	return IsA(te->expr, Const) ||
-		(IsA(te->expr, Param) && ((Param *) te->expr)->paramkind == PARAM_EXTERN);
-}
-
 /*
  * Is d the stored TOAST value the state read last?  Remembers it if not.
  * (A TOAST value is named by its table and id; an in-line value has no
@@ -209,7 +195,7 @@ st_tdcinterpolate_transfn(PG_FUNCTION_ARGS)
 							strlen(method), METHOD_MAX)));
 		tdc_raster_method(method, &spec, INTERP_NAME);
 		tdc_raster_read(PG_GETARG_DATUM(2), band, &tmpl, INTERP_NAME);
-		st->tmpl_const = template_is_constant(fcinfo);
+		st->tmpl_const = tdc_agg_arg_is_constant(fcinfo, 1);
 		(void) same_value_as_last(st, PG_GETARG_DATUM(2));
 		interp_params(st, aggcxt, method, band, &tmpl);
 	}

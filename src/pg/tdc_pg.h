@@ -285,6 +285,7 @@ extern pg_noreturn void tdc_agg_state_corrupt(const char *fname, const char *wha
 
 /* fn_delaunay_agg.c, for the support functions of every aggregate */
 extern MemoryContext tdc_agg_context(FunctionCallInfo fcinfo, const char *fn);
+extern bool tdc_agg_arg_is_constant(FunctionCallInfo fcinfo, int argno);
 
 /* run.c */
 typedef struct TdcRun
