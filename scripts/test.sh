@@ -15,7 +15,7 @@
 #      throw-away cluster
 #   7. test/citus/run.sh: tdc_delaunay_tiled on a throw-away 3-node Citus
 #      cluster (Citus built from ../shared/citus, cached between runs)
-#   8. with TDC_MATRIX=1 (off in .ci/run for now, see there): on the PostgreSQL of other Debian
+#   8. with TDC_MATRIX=1 (as .ci/run sets it): on the PostgreSQL of other Debian
 #      releases (TDC_MATRIX_SUITES, default "trixie forky": PostgreSQL 17 and
 #      18), in debootstrap roots (scripts/roots.sh, kept between runs in
 #      TDC_ROOTS_DIR), the build, pg_regress and a 100k-point smoke test.
@@ -149,8 +149,18 @@ CHILD=
 on_exit() {
 	local rc=$?
 	[ -z "$CHILD" ] || kill -TERM "$CHILD" 2>/dev/null || true
+	# A root still being made is stopped, and waited for: nothing this run
+	# started may outlive it (a process left in a chroot keeps its mounts busy).
+	local s n
 	for s in "${!MATRIX_PID[@]}"; do
-		[ -z "${MATRIX_PID[$s]}" ] || kill -TERM -- "-${MATRIX_PID[$s]}" 2>/dev/null || true
+		[ -n "${MATRIX_PID[$s]}" ] || continue
+		kill -TERM -- "-${MATRIX_PID[$s]}" 2>/dev/null || true
+		for ((n = 0; n < 30; n++)); do
+			kill -0 -- "-${MATRIX_PID[$s]}" 2>/dev/null || break
+			sleep 1
+		done
+		kill -KILL -- "-${MATRIX_PID[$s]}" 2>/dev/null || true
+		wait "${MATRIX_PID[$s]}" 2>/dev/null || true
 	done
 	tdc_server_down
 	if ((!FINISHED)); then
