@@ -538,7 +538,7 @@ echo "name,status,detail" > "$CHECKS"
 NFAIL=0
 # check NAME SQL: SQL returns one row: status (ok or FAIL), detail
 check() {
-	local name=$1 q=$2 out st detail
+	local name=$1 q=$2 out st detail t0=$SECONDS
 	if ! out=$({ echo "SET statement_timeout = '${TIMEOUT}s';"; printf '%s' "$SET_SQL"; echo "$q"; } |
 		psql -X -q -A -t -F '|' -v ON_ERROR_STOP=1 2>&1); then
 		st=FAIL detail="the check failed: $(tr '\n' ' ' <<< "$out" | cut -c1-300)"
@@ -548,9 +548,10 @@ check() {
 		[ -n "$out" ] || { st=FAIL; detail="no answer"; }
 	fi
 	[ "$st" = ok ] || { NFAIL=$((NFAIL + 1)); log "CHECK FAILED: $name: $detail"; }
-	echo "$name,$st,${detail//,/;}" >> "$CHECKS"
+	log "  $st ($((SECONDS - t0)) s): $name"
+	echo "${name//,/;},$st,${detail//,/;}" >> "$CHECKS"
 }
-skip_check() { echo "$1,skipped,$2" >> "$CHECKS"; }
+skip_check() { echo "${1//,/;},skipped,${2//,/;}" >> "$CHECKS"; }
 
 # ours against GDAL, pixel by pixel (CELL NAME INFO)
 check_vs_gdal() {
@@ -559,13 +560,13 @@ check_vs_gdal() {
 		check "$what: ST_TDCInterpolate linear = ST_InterpolateRaster linear" "
 SELECT CASE WHEN c.differ_inside = 0 THEN 'ok' ELSE 'FAIL' END,
 	   format('%s pixels; %s differ by more than 1e-9 relative, %s of them inside the hull; elsewhere at most %s relative',
-			  c.pixels, c.differ, c.differ_inside, to_char(c.max_rel, '9.9EEEE'))
+			  c.pixels, c.differ, c.differ_inside, btrim(to_char(c.max_rel, '9.9EEEE')))
 FROM $S.cmp($(kept "$c.lin"), $(kept "$c.gdal"), (SELECT hull FROM $S.info WHERE name = '$info')) c;"
 	else
 		skip_check "$what: ST_TDCInterpolate linear = ST_InterpolateRaster linear" "a statement failed"
 	fi
 	if is_ok "$c.lin" && is_ok "$c.dropin"; then
-		check "$what: ST_TDCInterpolateRaster = ST_TDCInterpolate, byte for byte" "
+		check "$what: ST_TDCInterpolateRaster = ST_TDCInterpolate byte for byte" "
 SELECT CASE WHEN ST_AsBinary(a) = ST_AsBinary(b) THEN 'ok' ELSE 'FAIL' END, md5(ST_AsBinary(a)) || ' and ' || md5(ST_AsBinary(b))
 FROM (SELECT $(kept "$c.dropin") a, $(kept "$c.lin") b) s;"
 	fi
@@ -579,7 +580,7 @@ if has main; then
 		check "main: $([ $m = lin ] && echo linear || echo 'natural neighbour') against the terrain" "
 SELECT CASE WHEN t.nodata = 0 AND t.rms < 0.01 * (i.zmax - i.zmin) THEN 'ok' ELSE 'FAIL' END,
 	   format('%s pixel centres in the hull, %s nodata; RMS error %s, largest %s (heights span %s)',
-			  t.pixels, t.nodata, to_char(t.rms, '9.99EEEE'), to_char(t.maxerr, '9.99EEEE'), round((i.zmax - i.zmin)::numeric, 1))
+			  t.pixels, t.nodata, btrim(to_char(t.rms, '9.99EEEE')), btrim(to_char(t.maxerr, '9.99EEEE')), round((i.zmax - i.zmin)::numeric, 1))
 FROM $S.info i, $S.truth($(kept "main.$m"), i.hull) t WHERE i.name = 's_$N';"
 	done
 	if is_ok main.drape; then
@@ -588,10 +589,10 @@ FROM $S.info i, $S.truth($(kept "main.$m"), i.hull) t WHERE i.name = 's_$N';"
 		check "main: the drape against the terrain" "
 SELECT 'check', (r).status, (r).ms FROM (SELECT $S.time_run('check.drape', 0, 'SELECT ST_TDCDrape(geom, \$2) FROM $S.s_$N', 'geometry', NULL, (SELECT g FROM $S.$TG)) r) s \\g /dev/null
 WITH d AS (SELECT (ST_DumpPoints(g)).geom AS p FROM $S.kept WHERE key = 'check.drape')
-SELECT CASE WHEN n = $DRAPE_COUNT AND nz = n AND rms < 0.01 * (i.zmax - i.zmin) THEN 'ok' ELSE 'FAIL' END,
-	   format('%s of %s points draped, %s with Z; RMS error %s, largest %s', n, $DRAPE_COUNT, nz,
-			  to_char(rms, '9.99EEEE'), to_char(maxerr, '9.99EEEE'))
-FROM (SELECT count(*) n, count(ST_Z(p)) nz, sqrt(avg((ST_Z(p) - $S.terrain(ST_X(p), ST_Y(p)))^2)) rms,
+SELECT CASE WHEN nd = $DRAPE_COUNT AND nz = nd AND rms < 0.01 * (i.zmax - i.zmin) THEN 'ok' ELSE 'FAIL' END,
+	   format('%s of %s points draped, %s with Z; RMS error %s, largest %s', nd, $DRAPE_COUNT, nz,
+			  btrim(to_char(rms, '9.99EEEE')), btrim(to_char(maxerr, '9.99EEEE')))
+FROM (SELECT count(*) nd, count(ST_Z(p)) nz, sqrt(avg((ST_Z(p) - $S.terrain(ST_X(p), ST_Y(p)))^2)) rms,
 			 max(abs(ST_Z(p) - $S.terrain(ST_X(p), ST_Y(p)))) maxerr FROM d) s, $S.info i WHERE i.name = 's_$N';"
 		ref=main.gdal
 		is_ok main.gdal || ref=main.lin
@@ -608,7 +609,7 @@ SELECT (r).status FROM (SELECT $S.time_run('check.drape_px', 0, 'SELECT ST_TDCDr
 WITH d AS (SELECT (dp).path[1] AS k, (dp).geom AS p FROM (SELECT ST_DumpPoints(g) dp FROM $S.kept WHERE key = 'check.drape_px') s)
 SELECT CASE WHEN count(*) = (SELECT count(*) FROM px) AND count(*) FILTER (WHERE bad) = 0 THEN 'ok' ELSE 'FAIL' END,
 	   format('%s pixel centres (every %s-th pixel in the hull), %s beyond 1e-9 relative, at most %s relative',
-			  count(*), $stride, count(*) FILTER (WHERE bad), to_char(max(rel), '9.9EEEE'))
+			  count(*), $stride, count(*) FILTER (WHERE bad), btrim(to_char(max(rel), '9.9EEEE')))
 FROM (SELECT NOT coalesce(ST_X(d.p) = px.x AND ST_Y(d.p) = px.y AND abs(ST_Z(d.p) - px.v) <= 1e-9 * abs(px.v), false) AS bad,
 			 abs(ST_Z(d.p) - px.v) / nullif(abs(px.v), 0) AS rel
 	  FROM d JOIN px USING (k)) s;"
@@ -639,20 +640,20 @@ for n in "${AGG_NS[@]}"; do
 done
 for k in "${ROW_KS[@]}"; do
 	t=$S.rows_${k}_${ROW_R[$k]}
-	check "per row, $k samples: ST_TDCInterpolateRaster = ST_InterpolateRaster, linear" "
+	check "per row of $k samples: ST_TDCInterpolateRaster = ST_InterpolateRaster (linear)" "
 SELECT CASE WHEN sum(c.differ_inside) = 0 AND count(*) = ${ROW_R[$k]} THEN 'ok' ELSE 'FAIL' END,
 	   format('%s rows, %s pixels; %s differ by more than 1e-9 relative, %s of them inside the hull; elsewhere at most %s relative',
-			  count(*), sum(c.pixels), sum(c.differ), sum(c.differ_inside), to_char(max(c.max_rel), '9.9EEEE'))
+			  count(*), sum(c.pixels), sum(c.differ), sum(c.differ_inside), btrim(to_char(max(c.max_rel), '9.9EEEE')))
 FROM $t, (SELECT r FROM $S.tmpl WHERE name = 'row') tm,
 	 LATERAL $S.cmp(ST_TDCInterpolateRaster(g, 'linear', tm.r), ST_InterpolateRaster(g, 'linear', tm.r), ST_ConvexHull(g)) c;"
 done
 for k in "${GRP_KS[@]}"; do
 	t=$S.grp_${k}_${GRP_G[$k]}
-	check "per group, $k samples: ST_TDCInterpolate = ST_InterpolateRaster, linear; = ST_TDCInterpolateRaster" "
+	check "per group of $k samples: ST_TDCInterpolate = ST_InterpolateRaster (linear) and = ST_TDCInterpolateRaster" "
 SELECT CASE WHEN sum(c.differ_inside) = 0 AND count(*) = ${GRP_G[$k]} AND count(*) FILTER (WHERE ST_AsBinary(a) <> ST_AsBinary(d)) = 0
 			THEN 'ok' ELSE 'FAIL' END,
 	   format('%s groups, %s pixels; %s differ by more than 1e-9 relative, %s of them inside the hull; elsewhere at most %s relative; %s aggregate rasters differ from the drop-in''s',
-			  count(*), sum(c.pixels), sum(c.differ), sum(c.differ_inside), to_char(max(c.max_rel), '9.9EEEE'),
+			  count(*), sum(c.pixels), sum(c.differ), sum(c.differ_inside), btrim(to_char(max(c.max_rel), '9.9EEEE')),
 			  count(*) FILTER (WHERE ST_AsBinary(a) <> ST_AsBinary(d)))
 FROM (SELECT grp, ST_TDCInterpolate(geom, (SELECT r FROM $S.tmpl WHERE name = 'row'), 'linear') a,
 			 ST_InterpolateRaster(ST_Collect(geom), 'linear', (SELECT r FROM $S.tmpl WHERE name = 'row')) b,
@@ -713,7 +714,7 @@ speedup() {
 	fi
 }
 
-THREADS=$(sql -c "SELECT current_setting('tdc_delaunay.threads', true)")
+THREADS=$(sql -c "SELECT ST_TDCDelaunayTriangles('MULTIPOINT(0 0,1 0,0 1)') IS NOT NULL" -c "SELECT current_setting('tdc_delaunay.threads', true)" | tail -1)
 setting() { sql -c "$SET_SQL" -c "SELECT current_setting('$1', true)" | tail -1; }
 {
 	echo "- server: $PG_VER, PostGIS $PGIS_VER ($GDAL_VER), tdc_delaunay $TDC_VER (git $(git -C "$ROOT" rev-parse --short HEAD 2>/dev/null || echo '?'); $SO: $SO_START)"
@@ -767,7 +768,7 @@ if has main; then
 		echo
 		echo "Acceptance (issue 29)$at_size:"
 		echo "- \`ST_TDCInterpolate(..., 'linear')\` against \`ST_InterpolateRaster(..., 'linear', ...)\`: ${sp} (at least 20x): $acc1"
-		echo "- \`ST_TDCContours\` at $LEVELS levels against the Delaunay aggregate on the same rows: ${cr:+${cr}x}${cr:--} (at most 2x): $acc2"
+		echo "- \`ST_TDCContours\` at $LEVELS levels against the Delaunay aggregate on the same rows: $([ -n "$cr" ] && echo "${cr}x" || echo -) (at most 2x): $acc2"
 	} >> "$TXT"
 fi
 
