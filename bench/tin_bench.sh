@@ -260,7 +260,7 @@ BEGIN
 	IF status <> 'ok' THEN
 		PERFORM set_config('$S.failed_' || p_key, '1', false);
 	ELSIF p_kind = 'raster' THEN
-		result := CASE WHEN vr IS NULL THEN 'NULL' ELSE ST_Width(vr) || 'x' || ST_Height(vr) END;
+		result := CASE WHEN vr IS NULL THEN 'NULL' ELSE ST_Width(vr) || 'x' || ST_Height(vr) || ' md5 ' || md5(ST_AsBinary(vr)) END;
 		INSERT INTO $S.kept(key, r) VALUES (p_key, vr) ON CONFLICT (key) DO NOTHING;
 	ELSIF p_kind = 'geometry' THEN
 		result := CASE WHEN vg IS NULL THEN 'NULL' ELSE ST_GeometryType(vg) || ' ' || ST_NPoints(vg) END;
@@ -577,6 +577,33 @@ FROM (SELECT $(kept "$c.dropin") a, $(kept "$c.lin") b) s;"
 }
 
 log "checks"
+# every run of a statement gave the same answer: the same raster (md5 of its
+# WKB), true for the IS NOT NULL forms, a raster per row or group
+same_answers() {
+	local k c bad=0 nk=0 nr=0 detail="" want res
+	for k in $(awk -F, 'NR > 1 && $6 == "ok" { print $2 }' "$RUNS" | sort -u); do
+		nk=$((nk + 1))
+		nr=$((nr + $(ok_runs "$k")))
+		case $k in
+			main.drape | main.contours | main.delaunay) want=true ;;
+			row*) c=${k#row} want=${ROW_R[${c%%.*}]:-} ;;
+			grp*) c=${k#grp} want=${GRP_G[${c%%.*}]:-} ;;
+			*) want="" ;;
+		esac
+		while read -r res; do
+			if [ -n "$want" ] && [ "$res" != "$want" ]; then
+				bad=$((bad + 1)) detail+=" $k gave '$res' (expected $want);"
+			fi
+		done < <(awk -F, -v k="$k" 'NR > 1 && $2 == k && $6 == "ok" { print $5 }' "$RUNS" | sort -u)
+		if [ "$(awk -F, -v k="$k" 'NR > 1 && $2 == k && $6 == "ok" { print $5 }' "$RUNS" | sort -u | grep -c .)" -gt 1 ]; then
+			bad=$((bad + 1)) detail+=" $k gave different answers in different runs;"
+		fi
+	done
+	local st=ok
+	[ "$bad" = 0 ] || { st=FAIL; NFAIL=$((NFAIL + 1)); log "CHECK FAILED: the same answer in every run:$detail"; }
+	echo "every run of a statement gives the same answer,$st,$nr runs of $nk statements: every raster the same (md5 of its WKB) in every run; the IS NOT NULL forms true; a raster for every row or group${detail//,/;}" >> "$CHECKS"
+}
+same_answers
 if has main; then
 	check_vs_gdal main "main" "s_$N"
 	for m in lin nn; do
