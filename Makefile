@@ -10,6 +10,7 @@
 #   make test                   everything, on a throw-away cluster (scripts/test.sh)
 #   make demo                   set-up + side-by-side demo (scripts/demo.sh)
 #   make bench                  benchmarks (bench/run.sh)
+#   make bench-tin              the TIN benchmark alone (bench/tin_bench.sh, issue 29)
 
 # Two extensions from one library: tdc_delaunay (needs postgis) and
 # tdc_delaunay_raster (needs tdc_delaunay and postgis_raster), so that
@@ -53,7 +54,7 @@ TEST_SRCS = $(sort $(wildcard test/test_*.c))
 # from any current directory.
 TEST_CFLAGS = -Itest -DTDC_SOURCE_DIR='"$(CURDIR)"'
 
-.PHONY: check-core check-core-asan check-core-tsan test demo bench
+.PHONY: check-core check-core-asan check-core-tsan test demo bench bench-tin
 
 tdc: $(CLI_SRCS) $(wildcard src/cli/*.h) $(CORE_SRCS) $(wildcard src/core/*.h)
 	$(CC_CORE) $(CORE_CFLAGS) -o $@ $(CLI_SRCS) $(CORE_SRCS) -lm
@@ -115,6 +116,10 @@ demo:
 
 bench:
 	bash bench/run.sh
+
+# bench/run.sh with its part G only: build, install, a throw-away cluster
+bench-tin:
+	BENCH_TIN=1 BENCH_SKIP_CORE=1 BENCH_SKIP_TILED=1 BENCH_SKIP_SQL=1 BENCH_SKIP_SWEEP=1 bash bench/run.sh
 
 # PGXS is optional: the core, ./tdc and its tests build without PostgreSQL.
 PG_CONFIG ?= pg_config
