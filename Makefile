@@ -169,7 +169,20 @@ FUZZ_CFLAGS = -g -O1 -fno-omit-frame-pointer -D_GNU_SOURCE -ffp-contract=off \
 	-Wall -Wno-unused-parameter -Wno-missing-field-initializers
 FUZZ_PG_CFLAGS = -DUSE_ASSERT_CHECKING -Wno-ignored-attributes \
 	-I$(shell $(PG_CONFIG) --includedir-server 2>/dev/null) -Isrc/pg -Ifuzz
-FUZZ_CORE_DEPS = $(CORE_SRCS) $(wildcard src/core/*.h)
+# The core is compiled once, instrumented, into build/fuzz/core.a, which every
+# target links: six targets compiling the whole core each cost a fresh CI
+# run minutes of CPU for nothing.
+FUZZ_CORE_OBJS = $(patsubst src/core/%.c,build/fuzz/core/%.o,$(CORE_SRCS))
+FUZZ_CORE_LIB = build/fuzz/core.a
+FUZZ_CORE_DEPS = $(FUZZ_CORE_LIB)
+
+build/fuzz/core/%.o: src/core/%.c $(wildcard src/core/*.h)
+	@mkdir -p build/fuzz/core
+	$(FUZZ_CC) $(FUZZ_CFLAGS) -std=c11 -Isrc/core -c -o $@ $<
+
+$(FUZZ_CORE_LIB): $(FUZZ_CORE_OBJS)
+	rm -f $@
+	ar rcs $@ $^
 
 .PHONY: fuzz fuzz-run
 
@@ -177,11 +190,11 @@ fuzz: $(addprefix build/fuzz/,$(FUZZ_TARGETS))
 
 build/fuzz/fuzz_core: fuzz/fuzz_core.c test/xy_oracle.h test/splitmix.h $(FUZZ_CORE_DEPS)
 	@mkdir -p build/fuzz
-	$(FUZZ_CC) $(FUZZ_CFLAGS) -std=c11 -Isrc/core -o $@ fuzz/fuzz_core.c $(CORE_SRCS) -lm
+	$(FUZZ_CC) $(FUZZ_CFLAGS) -std=c11 -Isrc/core -o $@ fuzz/fuzz_core.c $(FUZZ_CORE_LIB) -lm
 
 build/fuzz/fuzz_cdt: fuzz/fuzz_cdt.c $(FUZZ_CORE_DEPS)
 	@mkdir -p build/fuzz
-	$(FUZZ_CC) $(FUZZ_CFLAGS) -std=c11 -Isrc/core -o $@ fuzz/fuzz_cdt.c $(CORE_SRCS) -lm
+	$(FUZZ_CC) $(FUZZ_CFLAGS) -std=c11 -Isrc/core -o $@ fuzz/fuzz_cdt.c $(FUZZ_CORE_LIB) -lm
 
 # The reader and writers, and the aggregate state, each with the point buffer.
 FUZZ_GSER_SRCS = src/pg/gser_read.c src/pg/gser_write.c src/pg/pointbuf.c
@@ -191,13 +204,13 @@ FUZZ_PG_DEPS = fuzz/pg_shim.c fuzz/pg_shim.h src/pg/tdc_pg.h src/pg/pg_version_c
 
 build/fuzz/fuzz_voronoi: fuzz/fuzz_voronoi.c $(FUZZ_CORE_DEPS)
 	@mkdir -p build/fuzz
-	$(FUZZ_CC) $(FUZZ_CFLAGS) -std=c11 -Isrc/core -o $@ fuzz/fuzz_voronoi.c $(CORE_SRCS) -lm
+	$(FUZZ_CC) $(FUZZ_CFLAGS) -std=c11 -Isrc/core -o $@ fuzz/fuzz_voronoi.c $(FUZZ_CORE_LIB) -lm
 
 build/fuzz/fuzz_gserialized: fuzz/fuzz_gserialized.c $(FUZZ_GSER_SRCS) $(FUZZ_PG_DEPS) \
 		$(FUZZ_CORE_DEPS)
 	@mkdir -p build/fuzz
 	$(FUZZ_CC) $(FUZZ_CFLAGS) $(FUZZ_PG_CFLAGS) -Isrc/core -o $@ fuzz/fuzz_gserialized.c \
-		fuzz/pg_shim.c $(FUZZ_GSER_SRCS) $(CORE_SRCS) -lm
+		fuzz/pg_shim.c $(FUZZ_GSER_SRCS) $(FUZZ_CORE_LIB) -lm
 
 # The raster reader and writer need nothing of the core.
 FUZZ_RASTER_SRCS = src/pg/raster_read.c src/pg/raster_write.c
@@ -210,7 +223,7 @@ build/fuzz/fuzz_raster: fuzz/fuzz_raster.c $(FUZZ_RASTER_SRCS) $(FUZZ_PG_DEPS) s
 build/fuzz/fuzz_state: fuzz/fuzz_state.c $(FUZZ_STATE_SRCS) $(FUZZ_PG_DEPS) $(FUZZ_CORE_DEPS)
 	@mkdir -p build/fuzz
 	$(FUZZ_CC) $(FUZZ_CFLAGS) $(FUZZ_PG_CFLAGS) -Isrc/core -o $@ fuzz/fuzz_state.c \
-		fuzz/pg_shim.c $(FUZZ_STATE_SRCS) $(CORE_SRCS) -lm
+		fuzz/pg_shim.c $(FUZZ_STATE_SRCS) $(FUZZ_CORE_LIB) -lm
 
 fuzz-run: fuzz
 	FUZZ_SECONDS=$(FUZZ_SECONDS) bash fuzz/run.sh $(FUZZ_RUN_TARGETS)

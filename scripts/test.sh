@@ -51,6 +51,8 @@ cd "$TDC_ROOT"
 mkdir -p "$TDC_LOGDIR"
 
 PART_TIMEOUT=${TDC_PART_TIMEOUT:-900}
+# the test build leaves out the JIT bitcode (scripts/lib.sh, tdc_build_install)
+export TDC_WITH_LLVM=${TDC_WITH_LLVM:-no}
 # test/hardening/ scripts run here: without a server, and on the throw-away
 # cluster (their README's CI column must say the same; --self-test checks).
 HARDENING_CORE=(core_cancel)
@@ -162,22 +164,34 @@ declare -A LANE_PID=()
 on_exit() {
 	local rc=$? l n
 	[ -z "$CHILD" ] || kill -TERM "$CHILD" 2>/dev/null || true
-	# Stop the lanes still running, and wait for them: nothing this run
-	# started may outlive it (inside a chroot, a process left behind keeps
-	# the chroot's mounts busy, and whoever removes the chroot then walks
-	# through them).  TERM, up to 30 s, then KILL.
+	# Stop every part and lane still running, and wait for them: nothing
+	# this run started may outlive it (inside a chroot, a process left
+	# behind keeps the chroot's mounts busy, and whoever removes the chroot
+	# then walks through them).  TERM, up to 30 s, then KILL.  A part's
+	# command runs under `timeout`, in a process group of its own, whose id
+	# part_exec keeps in build/logs/NAME.log.pgid while it runs.
+	local groups=() g f
 	for l in "${!LANE_PID[@]}"; do
-		[ -z "${LANE_PID[$l]}" ] || kill -TERM -- "-${LANE_PID[$l]}" 2>/dev/null || true
+		[ -z "${LANE_PID[$l]}" ] || groups+=("${LANE_PID[$l]}")
 	done
-	for l in "${!LANE_PID[@]}"; do
-		[ -n "${LANE_PID[$l]}" ] || continue
-		for ((n = 0; n < 30; n++)); do
-			kill -0 -- "-${LANE_PID[$l]}" 2>/dev/null || break
-			sleep 1
+	for f in "$TDC_LOGDIR"/*.pgid; do
+		[ -f "$f" ] && read -r g <"$f" && [ -n "$g" ] && groups+=("$g")
+	done
+	for g in "${groups[@]}"; do
+		kill -TERM -- "-$g" 2>/dev/null || true
+	done
+	for ((n = 0; n < 30; n++)); do
+		l=0
+		for g in "${groups[@]}"; do
+			kill -0 -- "-$g" 2>/dev/null && l=1
 		done
-		kill -KILL -- "-${LANE_PID[$l]}" 2>/dev/null || true
-		wait "${LANE_PID[$l]}" 2>/dev/null || true
+		((l)) || break
+		sleep 1
 	done
+	for g in "${groups[@]}"; do
+		kill -KILL -- "-$g" 2>/dev/null || true
+	done
+	wait 2>/dev/null || true
 	tdc_server_down
 	if ((!FINISHED)); then
 		record "(aborted)" 0 1 "scripts/test.sh stopped early with status $rc"
@@ -201,6 +215,8 @@ part_exec() {	# log command...
 		shift 2
 		timeout -k 30 "$limit" "$@" >>"$log" 2>&1 </dev/null &
 		pid=$!
+		# timeout leads a process group of its own: on_exit stops it by that
+		echo "$pid" >"$log.pgid"
 		trap "kill -TERM $pid 2>/dev/null" TERM INT HUP
 		rc=0
 		wait "$pid" || rc=$?
@@ -208,7 +224,7 @@ part_exec() {	# log command...
 		while kill -0 "$pid" 2>/dev/null; do rc=0; wait "$pid" || rc=$?; done
 		times >"$log.times"
 		cpu=$(awk "NR == 2 { for (i = 1; i <= 2; i++) { split(\$i, a, /[ms]/); s += a[1] * 60 + a[2] } printf \"%.0f\", s }" "$log.times")
-		rm -f "$log.times"
+		rm -f "$log.times" "$log.pgid"
 		echo "$rc $cpu $SECONDS" >"$log.status"
 		exit "$rc"
 	' part "$1" "$PART_TIMEOUT" "${@:2}"
@@ -370,31 +386,27 @@ if ((CITUS)); then
 	fi
 fi
 
-# The core suites (no server, no build of the extension needed), one after
-# the other: the plain build, then the sanitizers.
+# The core suites (no server, no build of the extension needed), then the
+# fuzzers, one after the other in one lane: the plain build, the sanitizers,
+# then the libFuzzer targets (fuzz/), built with -j and each run from its
+# seed corpus.  libFuzzer first replays the whole corpus (the regression
+# test: every input that ever found a bug or new coverage; fuzz/run.sh fails
+# a target that did not get through it) and then mutates until the time is
+# up: TDC_FUZZ_SECONDS per target, counted from its start (default 20).  The
+# replay is what guards against regressions; finding new bugs takes hours of
+# mutation, which no CI run has: `make fuzz-run FUZZ_SECONDS=3600` by hand
+# (fuzz/README.md).  A lane's parts may wait for the CPU behind the other
+# lanes, so each gets twice a foreground part's time.
+FUZZ_SECONDS=${TDC_FUZZ_SECONDS:-20}
 core_lane() {
+	local PART_TIMEOUT=$((PART_TIMEOUT * 2))
 	lane_part check-core "${MAKE[@]}" check-core
 	lane_part check-core-asan "${MAKE[@]}" check-core-asan
 	lane_part check-core-tsan "${MAKE[@]}" check-core-tsan
+	((FUZZ_SECONDS <= 0)) ||
+		lane_part fuzz "${MAKE[@]}" -j"$(nproc)" fuzz-run FUZZ_SECONDS="$FUZZ_SECONDS"
 }
 start_lane core core_lane
-
-# libFuzzer targets (fuzz/): built with -j, then each run from its seed
-# corpus.  libFuzzer first replays the whole corpus (the regression test:
-# every input that ever found a bug or new coverage; fuzz/run.sh fails a
-# target that did not get through it) and then mutates until the time is
-# up: TDC_FUZZ_SECONDS per target, counted from its start (default 20: the
-# five targets busy a core for 100 s, where a minute each would be 300).
-# The replay is what guards against regressions; finding new bugs takes
-# hours of mutation, which no CI run has: `make fuzz-run FUZZ_SECONDS=3600`
-# by hand (fuzz/README.md).
-FUZZ_SECONDS=${TDC_FUZZ_SECONDS:-20}
-if ((FUZZ_SECONDS > 0)); then
-	fuzz_lane() {
-		lane_part fuzz "${MAKE[@]}" -j"$(nproc)" fuzz-run FUZZ_SECONDS="$FUZZ_SECONDS"
-	}
-	start_lane fuzz fuzz_lane
-fi
 
 # --- The foreground ---------------------------------------------------------
 
@@ -476,8 +488,11 @@ fi
 
 # --- The lanes' results, then what needs a quiet machine --------------------
 
-collect_lane core check-core check-core-asan check-core-tsan
-((FUZZ_SECONDS <= 0)) || collect_lane fuzz fuzz
+if ((FUZZ_SECONDS > 0)); then
+	collect_lane core check-core check-core-asan check-core-tsan fuzz
+else
+	collect_lane core check-core check-core-asan check-core-tsan
+fi
 # The matrix: a root not ready (prepare failed or timed out) counts as one failure.
 for s in "${MATRIX_SUITES[@]}"; do
 	((MATRIX)) || break
