@@ -175,10 +175,11 @@ FROM tdc_rt_outdb;
 -- linestrings and polygon rings as hard breaklines.  A ridge L(0 1)-R(4 1)
 -- at 10 between P(2 0) at 0 and Q(2 2) at 4: the Delaunay TIN crosses the
 -- ridge with P-Q, so the pixel centres along it (y = 1) sag to 8 4 4 8;
--- with the breakline they stay at 10.  Row 2 (y = 0.5) is inside only at
--- x = 1.5 and 2.5 (z = 10y = 5 with the breakline, 3 and 3 without).
+-- with the breakline they stay at 10.  The second row (y = 0.5) is inside
+-- the hull only at x = 1.5 and 2.5: 5 on the constrained triangle L, P, R
+-- (z = 10y), 3 on the Delaunay ones (z = 8 - 4x + 2y, z = -8 + 4x + 2y).
 CREATE TABLE tdc_rt_ridge AS SELECT 'GEOMETRYCOLLECTION Z (LINESTRING Z (0 1 10, 4 1 10), POINT Z (2 0 0), POINT Z (2 2 4))'::geometry AS g,
-	ST_AddBand(ST_MakeEmptyRaster(4, 2, 0, 1.5, 1, -1, 0, 0, 0), '64BF'::text, -1::float8, -1::float8) AS r;
+	ST_AddBand(ST_MakeEmptyRaster(4, 2, 0, 1.25, 1, -0.5, 0, 0, 0), '64BF'::text, -1::float8, -1::float8) AS r;
 SELECT m, (ST_DumpValues(ST_TDCInterpolateRaster(g, m, r), 1)) AS vals
 FROM tdc_rt_ridge, unnest(ARRAY['linear:radius=0', 'linear:radius=0:breaklines=true']) m;
 -- the aggregate: the same, from rows

@@ -257,7 +257,6 @@ FROM tdc_tin_ridge;
 -- nearest sample does not depend on lines), as do GDAL's options here
 SELECT ST_AsText(ST_TDCDrape(geom, 'POINT(2 1)', 'linear:breaklines=true'))
 FROM (VALUES ('POLYGON Z ((0 1 10, 2 0 0, 4 1 10, 0 1 10))'::geometry), ('POINT Z (2 2 4)')) v(geom);
-\set VERBOSITY terse
 SELECT ST_TDCDrape(geom, 'POINT(2 1)', 'natural_neighbor:breaklines=true') FROM tdc_tin_ridge;
 SELECT ST_TDCDrape(geom, 'POINT(2 1)', 'nearest:breaklines=true') FROM tdc_tin_ridge;
 SELECT ST_TDCDrape(geom, 'POINT(2 1)', 'linear:breaklines=maybe') FROM tdc_tin_ridge;
@@ -268,7 +267,6 @@ SELECT ST_TDCDrape(geom, 'POINT(2 1)', 'linear:breaklines=true')
 FROM (SELECT geom FROM tdc_tin_ridge UNION ALL SELECT 'LINESTRING Z (1 0.5 0, 1 1.5 0)') s;
 SELECT ST_TDCDrape(geom, 'POINT(2 1)', 'linear:breaklines=true')
 FROM (SELECT geom FROM tdc_tin_ridge UNION ALL SELECT 'CIRCULARSTRING Z (0 0 1, 1 -1 1, 2 0 1)') s;
-\set VERBOSITY default
 
 -- Breaklines in a parallel plan: the segments travel with the vertices in
 -- the state (version 2); the same draped line as serially, and not the
