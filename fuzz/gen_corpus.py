@@ -418,7 +418,7 @@ def main():
         put("fuzz_state", st2(samples(magic) + ext(rows=-1)))
     put("fuzz_state", st2(samples(TCN) + contour(), samples(TCN, pts=far, zs=farz) + contour(interval=5.0)))
     put("fuzz_state", st2(samples(TCN) + contour(), samples(TCN, pts=far, zs=farz) + contour(base=-0.0)))
-    put("fuzz_state", st2(samples(TCN) + contour(ps=0, interval=float("nan"), rows=0)))
+    put("fuzz_state", st2(samples(TCN, have_first=False) + contour(ps=0, interval=float("nan"), rows=0)))
     put("fuzz_state", st2(samples(TCN) + contour(interval=0.0)))
     put("fuzz_state", st2(samples(TCN) + contour(interval=float("inf"))))
     put("fuzz_state", st2(samples(TCN) + contour(base=float("nan"))))
@@ -444,7 +444,7 @@ def main():
     put("fuzz_state", st2(samples(TRI) + interp(hasnodata=0, nodata=1.0),
                           samples(TRI, pts=far, zs=farz) + interp(hasnodata=0, nodata=2.0)))
     put("fuzz_state", st2(samples(TRI) + interp(), samples(TRI, pts=far, zs=farz) + interp(band=2)))
-    put("fuzz_state", st2(samples(TRI) + interp(ps=0, rows=0, gt=(1.0,) * 6, nodata=5.0)))
+    put("fuzz_state", st2(samples(TRI, have_first=False) + interp(ps=0, rows=0, gt=(1.0,) * 6, nodata=5.0)))
     put("fuzz_state", st2(samples(TRI) + interp(method=b"nearest:radius1=1:radius2=2")))
     put("fuzz_state", st2(samples(TRI) + interp(method=b"natural_neighbor:radius=2")))
     put("fuzz_state", st2(samples(TRI) + interp(method=b"invdist")))

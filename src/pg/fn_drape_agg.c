@@ -177,7 +177,7 @@ st_tdcdrape_combinefn(PG_FUNCTION_ARGS)
 	if (st1 == NULL)
 		st1 = drape_state_new(aggcxt);
 	drape_params(st1, aggcxt, st2->method, st2->target, VARSIZE_ANY(st2->target));
-	st1->rows += st2->rows;
+	tdc_agg_rows_add(&st1->rows, st2->rows, DRAPE_NAME);
 	tdc_agg_state_merge(st1->base, st2->base);
 	PG_RETURN_POINTER(st1);
 }
@@ -244,6 +244,7 @@ st_tdcdrape_deserialfn(PG_FUNCTION_ARGS)
 		(u[0] == 1 && (u[1] == 0 || tl < VARHDRSZ)))
 		tdc_agg_state_corrupt(DRAPE_NAME, "bad method or target lengths");
 	st->params_set = u[0] == 1;
+	tdc_agg_state_check_unset(st->base, st->params_set, st->rows, DRAPE_NAME);
 	if (st->params_set)
 	{
 		tdc_interp_spec spec;
