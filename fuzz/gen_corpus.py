@@ -436,6 +436,8 @@ def main():
     put("fuzz_state", st2(samples(TDR) + drape(target=struct.pack("<I", 99 << 2) + line[4:])))
     put("fuzz_state", st2(samples(TDR) + drape(tl=(1 << 64) - 1)))
     put("fuzz_state", st2(samples(TDR) + drape(ml=(1 << 32) - 1)))
+    # lengths whose sum wraps: 24 + 6 + (2^64 - 6) = 24 bytes
+    put("fuzz_state", st2(samples(TDR) + drape(method=b"", target=b"", ml=6, tl=(1 << 64) - 6)))
     put("fuzz_state", st2(samples(TRI) + interp(method=b"linear:radius=0:nodata=-1"),
                           samples(TRI, pts=far, zs=farz) + interp(method=b"linear:radius=0:nodata=-1")))
     put("fuzz_state", st2(samples(TRI) + interp(), samples(TRI, pts=far, zs=farz) + interp(w=11)))

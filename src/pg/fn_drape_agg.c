@@ -238,7 +238,7 @@ st_tdcdrape_deserialfn(PG_FUNCTION_ARGS)
 	memcpy(u, extra, 8);
 	memcpy(&tl, extra + 8, 8);
 	memcpy(&st->rows, extra + 16, 8);
-	if (u[0] > 1 || st->rows < 0 || u[1] > METHOD_MAX ||
+	if (u[0] > 1 || st->rows < 0 || u[1] > METHOD_MAX || tl > extra_len ||
 		(uint64) extra_len != DRAPE_FIXED + (uint64) u[1] + tl ||
 		(u[0] == 0 && (u[1] != 0 || tl != 0)) ||
 		(u[0] == 1 && (u[1] == 0 || tl < VARHDRSZ)))
