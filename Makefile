@@ -10,6 +10,7 @@
 #   make test                   everything, on a throw-away cluster (scripts/test.sh)
 #   make demo                   set-up + side-by-side demo (scripts/demo.sh)
 #   make bench                  benchmarks (bench/run.sh)
+#   make bench-tin              the TIN benchmark alone (bench/tin_bench.sh, issue 29)
 
 # Two extensions from one library: tdc_delaunay (needs postgis) and
 # tdc_delaunay_raster (needs tdc_delaunay and postgis_raster), so that
@@ -53,7 +54,7 @@ TEST_SRCS = $(sort $(wildcard test/test_*.c))
 # from any current directory.
 TEST_CFLAGS = -Itest -DTDC_SOURCE_DIR='"$(CURDIR)"'
 
-.PHONY: check-core check-core-asan check-core-tsan test demo bench
+.PHONY: check-core check-core-asan check-core-tsan test demo bench bench-tin
 
 tdc: $(CLI_SRCS) $(wildcard src/cli/*.h) $(CORE_SRCS) $(wildcard src/core/*.h)
 	$(CC_CORE) $(CORE_CFLAGS) -o $@ $(CLI_SRCS) $(CORE_SRCS) -lm
@@ -116,6 +117,10 @@ demo:
 bench:
 	bash bench/run.sh
 
+# bench/run.sh with its part G only: build, install, a throw-away cluster
+bench-tin:
+	BENCH_TIN=1 BENCH_SKIP_CORE=1 BENCH_SKIP_TILED=1 BENCH_SKIP_SQL=1 BENCH_SKIP_SWEEP=1 bash bench/run.sh
+
 # PGXS is optional: the core, ./tdc and its tests build without PostgreSQL.
 PG_CONFIG ?= pg_config
 PGXS := $(shell $(PG_CONFIG) --pgxs 2>/dev/null)
@@ -164,7 +169,20 @@ FUZZ_CFLAGS = -g -O1 -fno-omit-frame-pointer -D_GNU_SOURCE -ffp-contract=off \
 	-Wall -Wno-unused-parameter -Wno-missing-field-initializers
 FUZZ_PG_CFLAGS = -DUSE_ASSERT_CHECKING -Wno-ignored-attributes \
 	-I$(shell $(PG_CONFIG) --includedir-server 2>/dev/null) -Isrc/pg -Ifuzz
-FUZZ_CORE_DEPS = $(CORE_SRCS) $(wildcard src/core/*.h)
+# The core is compiled once, instrumented, into build/fuzz/core.a, which every
+# target links: six targets compiling the whole core each cost a fresh CI
+# run minutes of CPU for nothing.
+FUZZ_CORE_OBJS = $(patsubst src/core/%.c,build/fuzz/core/%.o,$(CORE_SRCS))
+FUZZ_CORE_LIB = build/fuzz/core.a
+FUZZ_CORE_DEPS = $(FUZZ_CORE_LIB)
+
+build/fuzz/core/%.o: src/core/%.c $(wildcard src/core/*.h)
+	@mkdir -p build/fuzz/core
+	$(FUZZ_CC) $(FUZZ_CFLAGS) -std=c11 -Isrc/core -c -o $@ $<
+
+$(FUZZ_CORE_LIB): $(FUZZ_CORE_OBJS)
+	rm -f $@
+	ar rcs $@ $^
 
 .PHONY: fuzz fuzz-run
 
@@ -172,19 +190,20 @@ fuzz: $(addprefix build/fuzz/,$(FUZZ_TARGETS))
 
 build/fuzz/fuzz_core: fuzz/fuzz_core.c test/xy_oracle.h test/splitmix.h $(FUZZ_CORE_DEPS)
 	@mkdir -p build/fuzz
-	$(FUZZ_CC) $(FUZZ_CFLAGS) -std=c11 -Isrc/core -o $@ fuzz/fuzz_core.c $(CORE_SRCS) -lm
+	$(FUZZ_CC) $(FUZZ_CFLAGS) -std=c11 -Isrc/core -o $@ fuzz/fuzz_core.c $(FUZZ_CORE_LIB) -lm
 
 build/fuzz/fuzz_cdt: fuzz/fuzz_cdt.c $(FUZZ_CORE_DEPS)
 	@mkdir -p build/fuzz
-	$(FUZZ_CC) $(FUZZ_CFLAGS) -std=c11 -Isrc/core -o $@ fuzz/fuzz_cdt.c $(CORE_SRCS) -lm
+	$(FUZZ_CC) $(FUZZ_CFLAGS) -std=c11 -Isrc/core -o $@ fuzz/fuzz_cdt.c $(FUZZ_CORE_LIB) -lm
 
 # The reader and writers, and the aggregate state, each with the point buffer.
 FUZZ_GSER_SRCS = src/pg/gser_read.c src/pg/gser_write.c src/pg/pointbuf.c
 # fuzz_state also takes the TIN aggregates' states (fuzz_state_tin.c): their
 # entry points, and what their serial, deserial and combine functions call
 # (the method parser in fn_raster.c, which brings the raster and geometry
-# readers and writers); pg_shim_agg.c stands in for tin_run.c and the rest.
-FUZZ_STATE_SRCS = src/pg/agg_state.c src/pg/fn_contours_agg.c \
+# readers and writers, and the breaklines' segment list in seglist.c);
+# pg_shim_agg.c stands in for tin_run.c, run.c's wait loop and the rest.
+FUZZ_STATE_SRCS = src/pg/agg_state.c src/pg/fn_contours_agg.c src/pg/seglist.c \
 	src/pg/fn_drape_agg.c src/pg/fn_raster_agg.c src/pg/fn_raster.c src/pg/raster_read.c \
 	src/pg/raster_write.c src/pg/gser_contour.c src/pg/gser_drape.c $(FUZZ_GSER_SRCS)
 FUZZ_PG_DEPS = fuzz/pg_shim.c fuzz/pg_shim.h src/pg/tdc_pg.h src/pg/pg_version_compat.h \
@@ -192,13 +211,13 @@ FUZZ_PG_DEPS = fuzz/pg_shim.c fuzz/pg_shim.h src/pg/tdc_pg.h src/pg/pg_version_c
 
 build/fuzz/fuzz_voronoi: fuzz/fuzz_voronoi.c $(FUZZ_CORE_DEPS)
 	@mkdir -p build/fuzz
-	$(FUZZ_CC) $(FUZZ_CFLAGS) -std=c11 -Isrc/core -o $@ fuzz/fuzz_voronoi.c $(CORE_SRCS) -lm
+	$(FUZZ_CC) $(FUZZ_CFLAGS) -std=c11 -Isrc/core -o $@ fuzz/fuzz_voronoi.c $(FUZZ_CORE_LIB) -lm
 
 build/fuzz/fuzz_gserialized: fuzz/fuzz_gserialized.c $(FUZZ_GSER_SRCS) $(FUZZ_PG_DEPS) \
 		$(FUZZ_CORE_DEPS)
 	@mkdir -p build/fuzz
 	$(FUZZ_CC) $(FUZZ_CFLAGS) $(FUZZ_PG_CFLAGS) -Isrc/core -o $@ fuzz/fuzz_gserialized.c \
-		fuzz/pg_shim.c $(FUZZ_GSER_SRCS) $(CORE_SRCS) -lm
+		fuzz/pg_shim.c $(FUZZ_GSER_SRCS) $(FUZZ_CORE_LIB) -lm
 
 # The raster reader and writer need nothing of the core.
 FUZZ_RASTER_SRCS = src/pg/raster_read.c src/pg/raster_write.c
@@ -214,7 +233,7 @@ build/fuzz/fuzz_state: fuzz/fuzz_state.c fuzz/fuzz_state_tin.c fuzz/fuzz_state.h
 	@mkdir -p build/fuzz
 	$(FUZZ_CC) $(FUZZ_CFLAGS) $(FUZZ_PG_CFLAGS) -Isrc/core -o $@ fuzz/fuzz_state.c \
 		fuzz/fuzz_state_tin.c fuzz/pg_shim.c fuzz/pg_shim_agg.c $(FUZZ_STATE_SRCS) \
-		$(CORE_SRCS) -lm
+		$(FUZZ_CORE_LIB) -lm
 
 fuzz-run: fuzz
 	FUZZ_SECONDS=$(FUZZ_SECONDS) bash fuzz/run.sh $(FUZZ_RUN_TARGETS)

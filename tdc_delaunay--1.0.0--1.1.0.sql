@@ -170,5 +170,6 @@ CREATE AGGREGATE ST_TDCDrape(geometry, geometry, text) (
 );
 
 COMMENT ON AGGREGATE ST_TDCDrape(geometry, geometry, text) IS
-'The target with Z at every vertex from the samples by method ''linear'' (lines split at the triangle edges), '
+'The target with Z at every vertex from the samples by method ''linear'' (lines split at the triangle edges; '
+'''linear:breaklines=true'' takes the samples'' linestrings and polygon rings as hard breaklines), '
 '''nearest'' or ''natural_neighbor'' (Sibson); a target vertex outside the samples'' convex hull is an error.';

@@ -12,12 +12,16 @@
 #      vertices and GSHHG coastline polygons          -> constrained.md
 #   F  bench/voronoi_bench.sh  (optional, BENCH_VORONOI=1) Voronoi: ours vs
 #      ST_VoronoiPolygons, 10^5 and 10^6 points        -> voronoi.md
+#   G  bench/tin_bench.sh  (optional, BENCH_TIN=1; alone: make bench-tin) the TIN:
+#      interpolation into rasters against ST_InterpolateRaster (GDAL), draping,
+#      contours and the Delaunay aggregate on 10^6 terrain samples, and a size
+#      sweep of the interpolation                      -> tin.md
 #
 # Each script writes its own report, docs/benchmarks/NAME.md (BENCH_DOCS),
 # with the header of bench_publish in bench/lib.sh: date, commit, machine,
 # software and load.  Every run is kept in build/bench/*.csv (BENCH_OUT).
 #
-# B and C run against the server the PG* variables point at when one answers;
+# B, C, E, F and G run against the server the PG* variables point at when one answers;
 # otherwise a throw-away cluster is started with scripts/lib.sh and stopped
 # afterwards.  Either way the extension is built and installed first.
 #
@@ -26,6 +30,7 @@
 #   BENCH_SKIP_TILED=1  skip D (about a minute; its 100M case only with BENCH_TILED_100M=1)
 #   BENCH_CONSTRAINED=1 run E too (some 10 minutes: SFCGAL takes 5-20 s a statement, 12 times)
 #   BENCH_VORONOI=1     run F too (BENCH_VOR_* knobs: see bench/voronoi_bench.sh)
+#   BENCH_TIN=1         run G too (some 10 minutes; BENCH_TIN_* knobs: see bench/tin_bench.sh)
 # The knobs of the scripts (BENCH_SIZES, BENCH_SQL_SIZES, BENCH_SWEEP_*, BENCH_TILED_*, BENCH_CDT_*,
 # ...) pass through.
 set -euo pipefail
@@ -47,7 +52,7 @@ if [ "${BENCH_SKIP_TILED:-0}" != 1 ]; then
 	bash "$ROOT/bench/tiled_cli_bench.sh" || log "the tiled benchmark failed"
 fi
 
-# sql_parts: B, C, E and F, against the server the PG* variables now point at
+# sql_parts: B, C, E, F and G, against the server the PG* variables now point at
 sql_parts() {
 	if [ "${BENCH_SKIP_SQL:-0}" != 1 ]; then
 		log "=== B: SQL benchmark"
@@ -65,10 +70,14 @@ sql_parts() {
 		log "=== F: Voronoi diagrams in SQL"
 		bash "$ROOT/bench/voronoi_bench.sh"
 	fi
+	if [ "${BENCH_TIN:-0}" = 1 ]; then
+		log "=== G: the TIN in SQL: interpolation, draping, contours"
+		bash "$ROOT/bench/tin_bench.sh"
+	fi
 }
 
 if [ "${BENCH_SKIP_SQL:-0}" != 1 ] || [ "${BENCH_SKIP_SWEEP:-0}" != 1 ] || [ "${BENCH_CONSTRAINED:-0}" = 1 ] ||
-	[ "${BENCH_VORONOI:-0}" = 1 ]; then
+	[ "${BENCH_VORONOI:-0}" = 1 ] || [ "${BENCH_TIN:-0}" = 1 ]; then
 	# shellcheck source=scripts/lib.sh
 	. "$ROOT/scripts/lib.sh"
 	if [ "${BENCH_NO_INSTALL:-0}" != 1 ]; then

@@ -10,7 +10,8 @@
  * or final functions: those read geometries and run the engine on threads
  * through run.c's wait loop (latches, signals), which has no stand-in here.
  * So the pieces only the transition and final functions use (tin_run.c,
- * and the geometry reader of toast_stream.c)
+ * the geometry reader of toast_stream.c, and run.c's wait loop for the
+ * breaklines' insertion)
  * raise an ERROR that the harness counts as a finding, and the helpers of
  * fn_delaunay_agg.c and signals.c that every entry point calls do what the
  * server's do in a backend that is not being signalled.
@@ -81,7 +82,8 @@ tdc_tin_read_sample(TdcPointBuf *buf, Datum d, int64 row, const char *fname)
 }
 
 TdcTinRun *
-tdc_tin_run_start(const TdcPointBuf *buf, uint64 extra, const char *fname)
+tdc_tin_run_start(const TdcPointBuf *buf, const TdcSegList *breaklines, uint64 extra,
+				  const char *fname)
 {
 	not_here("tdc_tin_run_start");
 }
@@ -96,6 +98,25 @@ void
 tdc_tin_run_free(TdcTinRun *tr)
 {
 	not_here("tdc_tin_run_free");
+}
+
+/*
+ * run.c and settings.c, for the insertion of breaklines (seglist.c's
+ * tdc_constrain, final functions only): its segment list's reading,
+ * appending and growth, which the harness does reach, need none of them.
+ */
+bool		tdc_guc_stats = false;
+
+int
+tdc_wait_work(void *work, const TdcWorkOps *ops, const char *fname)
+{
+	not_here("tdc_wait_work");
+}
+
+void
+tdc_report_status(int rc, const char *msg, const char *fname)
+{
+	not_here("tdc_report_status");
 }
 
 /* ----------------------------------------------------------------

@@ -9,9 +9,12 @@
 #
 # Each target starts from its seed corpus fuzz/corpus/TARGET (read-only) and
 # a working corpus build/fuzz/work/TARGET (grows between runs).  Crashes go
-# to build/fuzz/artifacts/TARGET-*.  A target passes when libFuzzer ends
-# without a finding.  Prints executions per target and "N passed, N failed";
-# exits non-zero if any target failed.  Build first with `make fuzz`.
+# to build/fuzz/artifacts/TARGET-*.  libFuzzer first runs every input of
+# both corpora, whatever FUZZ_SECONDS (which counts from its start), and
+# says "INITED"; then it mutates them until the time is up.  A target passes
+# when its corpus ran through (INITED) and libFuzzer ended without a
+# finding.  Prints executions per target and "N passed, N failed"; exits
+# non-zero if any target failed.  Build first with `make fuzz`.
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 
@@ -46,12 +49,14 @@ for t in "$@"; do
 		"build/fuzz/work/$t" "fuzz/corpus/$t" >"$log" 2>&1 || rc=$?
 	execs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1)
 	cov=$(grep -o 'cov: [0-9]*' "$log" | tail -1 | cut -d' ' -f2)
-	if ((rc == 0)) && ! grep -q '^==[0-9]*==ERROR\|^SUMMARY: \(libFuzzer\|AddressSanitizer\|UndefinedBehaviorSanitizer\)' "$log"; then
+	if ((rc == 0)) && grep -q 'INITED' "$log" &&
+		! grep -q '^==[0-9]*==ERROR\|^SUMMARY: \(libFuzzer\|AddressSanitizer\|UndefinedBehaviorSanitizer\)' "$log"; then
 		passed=$((passed + 1))
 		status=ok
 	else
 		failed=$((failed + 1))
 		status="FAILED (exit $rc; see $log and build/fuzz/artifacts/)"
+		grep -q 'INITED' "$log" || status="FAILED (the corpus was not run through: no INITED; see $log)"
 		grep -m3 'ERROR\|SUMMARY\|fuzz_[a-z]*: ' "$log" | sed 's/^/    /' || true
 	fi
 	lines+=("$(printf '  %-18s %10s executions  cov %5s  %s' "$t" "${execs:-?}" "${cov:-?}" "$status")")

@@ -149,18 +149,22 @@ tdc_ensure_packages() {
 }
 
 # Build the extension and install it into $PG_CONFIG's directories.
+# TDC_WITH_LLVM=no (make test sets it) leaves out the JIT bitcode, which
+# compiles every file a second time, with clang.
 tdc_build_install() {
 	[ -x "$PG_CONFIG" ] ||
 		tdc_die "no pg_config at ${PG_CONFIG:-<unknown>} (package postgresql-server-dev-${TDC_PG_MAJOR:-MAJOR}; or set PG_CONFIG)"
 	local jobs
 	jobs=$(nproc 2>/dev/null || echo 2)
-	tdc_say "building the extension (make -j$jobs PG_CONFIG=$PG_CONFIG all)"
-	make -C "$TDC_ROOT" --no-print-directory -j"$jobs" PG_CONFIG="$PG_CONFIG" all || return 1
+	local llvm=()
+	[ "${TDC_WITH_LLVM:-}" != no ] || llvm=(with_llvm=no)
+	tdc_say "building the extension (make -j$jobs PG_CONFIG=$PG_CONFIG ${llvm[*]} all)"
+	make -C "$TDC_ROOT" --no-print-directory -j"$jobs" PG_CONFIG="$PG_CONFIG" "${llvm[@]}" all || return 1
 	tdc_say "installing into $("$PG_CONFIG" --pkglibdir) and $("$PG_CONFIG" --sharedir)/extension"
 	local as=()
 	[ -w "$("$PG_CONFIG" --pkglibdir)" ] || as=(tdc_as_root)
 	mkdir -p "$TDC_LOGDIR"
-	if ! "${as[@]}" make -C "$TDC_ROOT" --no-print-directory PG_CONFIG="$PG_CONFIG" install \
+	if ! "${as[@]}" make -C "$TDC_ROOT" --no-print-directory PG_CONFIG="$PG_CONFIG" "${llvm[@]}" install \
 		>"$TDC_LOGDIR/install.log" 2>&1; then
 		cat "$TDC_LOGDIR/install.log" >&2
 		tdc_warn "make install failed"

@@ -171,6 +171,33 @@ SELECT ST_TDCInterpolateRaster('POINT EMPTY', 'linear', r) IS NULL AS empty_is_n
 	   ST_TDCInterpolateRaster('POINT Z (1 1 1)', 'linear', NULL) IS NULL AS null_template
 FROM tdc_rt_outdb;
 
+-- Breaklines ('linear:breaklines=true', not GDAL's): the samples'
+-- linestrings and polygon rings as hard breaklines.  A ridge L(0 1)-R(4 1)
+-- at 10 between P(2 0) at 0 and Q(2 2) at 4: the Delaunay TIN crosses the
+-- ridge with P-Q, so the pixel centres along it (y = 1) sag to 8 4 4 8;
+-- with the breakline they stay at 10.  The second row (y = 0.5) is inside
+-- the hull only at x = 1.5 and 2.5: 5 on the constrained triangle L, P, R
+-- (z = 10y), 3 on the Delaunay ones (z = 8 - 4x + 2y, z = -8 + 4x + 2y).
+CREATE TABLE tdc_rt_ridge AS SELECT 'GEOMETRYCOLLECTION Z (LINESTRING Z (0 1 10, 4 1 10), POINT Z (2 0 0), POINT Z (2 2 4))'::geometry AS g,
+	ST_AddBand(ST_MakeEmptyRaster(4, 2, 0, 1.25, 1, -0.5, 0, 0, 0), '64BF'::text, -1::float8, -1::float8) AS r;
+SELECT m, (ST_DumpValues(ST_TDCInterpolateRaster(g, m, r), 1)) AS vals
+FROM tdc_rt_ridge, unnest(ARRAY['linear:radius=0', 'linear:radius=0:breaklines=true']) m;
+-- the aggregate: the same, from rows
+SELECT (ST_DumpValues(ST_TDCInterpolate(d.geom, r, 'linear:radius=0:breaklines=yes'), 1)) AS vals
+FROM tdc_rt_ridge, ST_Dump(g) d GROUP BY r;
+-- The option's values and methods (an error names the option).
+SELECT m, tdc_rt_try(m) FROM unnest(ARRAY['linear:breaklines=true', 'linear:breaklines=0', 'linear:breaklines=maybe',
+	'linear:breaklines', 'nearest:breaklines=true', 'natural_neighbor:breaklines=false']) m;
+-- crossing breaklines are an error naming both; curves are refused
+\set VERBOSITY terse
+SELECT ST_TDCInterpolateRaster(ST_Collect(g, 'LINESTRING Z (1 0.5 0, 1 1.5 0)'), 'linear:breaklines=true', r) FROM tdc_rt_ridge;
+SELECT ST_TDCInterpolateRaster(ST_Collect(g, 'CIRCULARSTRING Z (0 0 1, 1 -1 1, 2 0 1)'), 'linear:breaklines=true', r)
+FROM tdc_rt_ridge;
+SELECT ST_TDCInterpolateRaster(ST_Collect(g, 'CIRCULARSTRING Z (0 0 1, 1 -1 1, 2 0 1)'), 'linear', r) IS NOT NULL AS curves_without
+FROM tdc_rt_ridge;
+\set VERBOSITY default
+DROP TABLE tdc_rt_ridge;
+
 DROP TABLE tdc_rt, tdc_rt_types, tdc_rt_vals, tdc_rt_big, tdc_rt_outdb;
 DROP FUNCTION tdc_rt_pair(raster, text);
 DROP FUNCTION tdc_rt_try(text);

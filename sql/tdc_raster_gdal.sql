@@ -136,6 +136,42 @@ RESET parallel_leader_participation;
 ALTER FUNCTION st_tdcinterpolate_serialfn(internal) COST 10000000;
 ALTER FUNCTION st_tdcinterpolate_deserialfn(bytea, internal) COST 10000000;
 
+-- Breaklines under a parallel plan: eight horizontal polylines (heights
+-- from the same surface) among the samples; their segments travel with
+-- the vertices in the state (version 2).  The aggregate gives the function's
+-- raster serially and in parallel, and not the raster without breaklines.
+CREATE TABLE tdc_ip_brk AS SELECT id, geom FROM tdc_ip_pts
+	UNION ALL SELECT 4000 + k, ST_MakeLine(ARRAY(
+		SELECT ST_MakePoint(x, 11 * k + 0.5, 100 + 30 * sin(x / 7) * cos((11 * k + 0.5) / 5) + 0.5 * x - 0.2 * (11 * k + 0.5))
+		FROM generate_series(2, 98, 6) x))
+	FROM generate_series(1, 8) k;
+ANALYZE tdc_ip_brk;
+CREATE TABLE tdc_ip_brk_fn AS
+SELECT ST_AsBinary(ST_TDCInterpolateRaster(ST_Collect(geom), 'linear:radius=0:breaklines=true', r)) AS brk,
+	   ST_AsBinary(ST_TDCInterpolateRaster(ST_Collect(geom), 'linear:radius=0', r)) AS plain
+FROM tdc_ip_brk, tdc_ip_tmpl GROUP BY r;
+SELECT ST_AsBinary(ST_TDCInterpolate(geom, r, 'linear:radius=0:breaklines=true')) = (SELECT brk FROM tdc_ip_brk_fn) AS same_serial,
+	   (SELECT brk <> plain FROM tdc_ip_brk_fn) AS breaklines_differ
+FROM tdc_ip_brk, tdc_ip_tmpl;
+ALTER FUNCTION st_tdcinterpolate_serialfn(internal) COST 1;
+ALTER FUNCTION st_tdcinterpolate_deserialfn(bytea, internal) COST 1;
+SET parallel_setup_cost = 0;
+SET parallel_tuple_cost = 0;
+SET min_parallel_table_scan_size = 0;
+SET max_parallel_workers_per_gather = 2;
+SET parallel_leader_participation = off;
+SELECT workers_launched > 0 AS workers_launched
+FROM tdc_ip_par_run('tdc_ip_brk_par', 'SELECT ST_TDCInterpolate(geom, (SELECT r FROM tdc_ip_tmpl), ''linear:radius=0:breaklines=true'') AS o FROM tdc_ip_brk');
+SELECT ST_AsBinary(o) = (SELECT brk FROM tdc_ip_brk_fn) AS same_as_serial FROM tdc_ip_brk_par;
+RESET parallel_setup_cost;
+RESET parallel_tuple_cost;
+RESET min_parallel_table_scan_size;
+RESET max_parallel_workers_per_gather;
+RESET parallel_leader_participation;
+ALTER FUNCTION st_tdcinterpolate_serialfn(internal) COST 10000000;
+ALTER FUNCTION st_tdcinterpolate_deserialfn(bytea, internal) COST 10000000;
+DROP TABLE tdc_ip_brk, tdc_ip_brk_fn, tdc_ip_brk_par;
+
 -- A statement_timeout inside the grid operation: 3000 x 3000 natural
 -- neighbour values from the 3000 samples, seconds of work on the engine's
 -- threads.  The template is stored beforehand (a value read by its first

@@ -236,6 +236,79 @@ CREATE TABLE tdc_tin_t1 AS SELECT ST_AsBinary(ST_TDCContours(geom, 10)) AS c FRO
 RESET tdc_delaunay.threads;
 SELECT t.c = s.c AS one_thread_same FROM tdc_tin_t1 t, tdc_tin_serial s;
 
+-- Breaklines ('linear:breaklines=true'): the samples' linestrings and
+-- polygon rings as hard breaklines.  A ridge L(0 1)-R(4 1) at 10 between
+-- P(2 0) at 0 and Q(2 2) at 4: Q lies in the circle through L, P and R, so
+-- the Delaunay TIN takes the diagonal P-Q across the ridge and the ridge
+-- sags (8 at x = 0.5, 2 where it crosses P-Q); with the breakline it stays
+-- at 10, and beside it the constrained triangle L, P, R (z = 10y) gives 5
+-- at (2 0.5), where P-Q gives 1.
+CREATE TABLE tdc_tin_ridge (id int, geom geometry);
+INSERT INTO tdc_tin_ridge VALUES (1, 'LINESTRING Z (0 1 10, 4 1 10)'), (2, 'POINT Z (2 0 0)'), (3, 'POINT Z (2 2 4)');
+SELECT ST_AsText(ST_TDCDrape(geom, 'LINESTRING(0.5 1, 3.5 1)')) AS plain,
+	   ST_AsText(ST_TDCDrape(geom, 'LINESTRING(0.5 1, 3.5 1)', 'linear:breaklines=true')) AS breaklines,
+	   ST_AsText(ST_TDCDrape(geom, 'LINESTRING(0.5 1, 3.5 1)', 'Linear:BreakLines=FALSE')) AS off
+FROM tdc_tin_ridge;
+SELECT ST_AsText(ST_TDCDrape(geom, 'POINT(2 0.5)')) AS plain,
+	   ST_AsText(ST_TDCDrape(geom, 'POINT(2 0.5)', 'linear:breaklines=true')) AS breaklines
+FROM tdc_tin_ridge;
+-- a polygon ring is a breakline too; nearest and natural neighbour refuse
+-- the option (natural neighbour coordinates need the Delaunay TIN; the
+-- nearest sample does not depend on lines), as do GDAL's options here
+SELECT ST_AsText(ST_TDCDrape(geom, 'POINT(2 1)', 'linear:breaklines=true'))
+FROM (VALUES ('POLYGON Z ((0 1 10, 2 0 0, 4 1 10, 0 1 10))'::geometry), ('POINT Z (2 2 4)')) v(geom);
+SELECT ST_TDCDrape(geom, 'POINT(2 1)', 'natural_neighbor:breaklines=true') FROM tdc_tin_ridge;
+SELECT ST_TDCDrape(geom, 'POINT(2 1)', 'nearest:breaklines=true') FROM tdc_tin_ridge;
+SELECT ST_TDCDrape(geom, 'POINT(2 1)', 'linear:breaklines=maybe') FROM tdc_tin_ridge;
+SELECT ST_TDCDrape(geom, 'POINT(2 1)', 'linear:breaklines=true:radius=0') FROM tdc_tin_ridge;
+-- crossing breaklines are an error naming both (node them first), as in
+-- ST_TDCConstrainedDelaunay; curves are refused, as there
+SELECT ST_TDCDrape(geom, 'POINT(2 1)', 'linear:breaklines=true')
+FROM (SELECT geom FROM tdc_tin_ridge UNION ALL SELECT 'LINESTRING Z (1 0.5 0, 1 1.5 0)') s;
+SELECT ST_TDCDrape(geom, 'POINT(2 1)', 'linear:breaklines=true')
+FROM (SELECT geom FROM tdc_tin_ridge UNION ALL SELECT 'CIRCULARSTRING Z (0 0 1, 1 -1 1, 2 0 1)') s;
+
+-- Breaklines in a parallel plan: the segments travel with the vertices in
+-- the state (version 2); the same draped line as serially, and not the
+-- same as without the breaklines.
+CREATE TABLE tdc_tin_brk AS SELECT id, geom FROM tdc_tin_terrain
+	UNION ALL SELECT 5000 + k, ST_SetSRID(ST_MakeLine(ARRAY(
+		SELECT ST_MakePoint(x, 100 * k + 37.5, 100 + k) FROM generate_series(20, 980, 40) x)), 2056)
+	FROM generate_series(1, 9) k;
+ANALYZE tdc_tin_brk;
+SET max_parallel_workers_per_gather = 0;
+CREATE TABLE tdc_tin_brk_serial AS
+	SELECT ST_AsBinary(ST_TDCDrape(geom, 'SRID=2056;LINESTRING(100 100, 900 800)', 'linear:breaklines=true')) AS d,
+		   ST_AsBinary(ST_TDCDrape(geom, 'SRID=2056;LINESTRING(100 100, 900 800)')) AS plain
+	FROM tdc_tin_brk;
+ALTER FUNCTION st_tdcdrape_serialfn(internal) COST 1;
+ALTER FUNCTION st_tdcdrape_deserialfn(bytea, internal) COST 1;
+SET parallel_setup_cost = 0;
+SET parallel_tuple_cost = 0;
+SET min_parallel_table_scan_size = 0;
+SET max_parallel_workers_per_gather = 2;
+SET parallel_leader_participation = off;
+SELECT workers_launched > 0 AS workers_ran, worker_states > 0 AS states_crossed
+FROM tdc_tin_par_run('tdc_tin_brk_parallel', $q$SELECT
+	ST_AsBinary(ST_TDCDrape(geom, 'SRID=2056;LINESTRING(100 100, 900 800)', 'linear:breaklines=true')) AS d
+	FROM tdc_tin_brk$q$);
+SELECT s.d = p.d AS breaklines_same, s.d <> s.plain AS breaklines_differ
+FROM tdc_tin_brk_serial s, tdc_tin_brk_parallel p;
+RESET parallel_leader_participation;
+RESET max_parallel_workers_per_gather;
+RESET min_parallel_table_scan_size;
+RESET parallel_tuple_cost;
+RESET parallel_setup_cost;
+ALTER FUNCTION st_tdcdrape_serialfn(internal) COST 10000000;
+ALTER FUNCTION st_tdcdrape_deserialfn(bytea, internal) COST 10000000;
+-- the draped line on a breakline's own vertical: at every crossing of the
+-- line y = 137.5 the height is the breakline's, 101
+SELECT bool_and(abs(ST_Z(p.geom) - 101) < 1e-9) AS on_breakline, count(*) > 0 AS crossings
+FROM (SELECT ST_TDCDrape(geom, 'SRID=2056;LINESTRING(520 50, 520 950)', 'linear:breaklines=true') AS d
+	  FROM tdc_tin_brk) s, ST_DumpPoints(d) p
+WHERE ST_Y(p.geom) = 137.5;
+DROP TABLE tdc_tin_ridge, tdc_tin_brk, tdc_tin_brk_serial, tdc_tin_brk_parallel;
+
 DROP TABLE tdc_tin_t1, tdc_tin_parallel, tdc_tin_serial, tdc_tin_par, tdc_tin_target, tdc_tin_draped, tdc_tin_plane,
 	tdc_tin_steps, tdc_tin_hill, tdc_tin_contours, tdc_tin_terrain;
 DROP FUNCTION tdc_tin_par_run(text, text);

@@ -225,6 +225,19 @@ check "grid: nearest has a value everywhere" "awk 'NR > 6 { for (c = 1; c <= NF;
 $TDC -t 1 --grid 0.5 --method natural_neighbor -o "$tmp/g1.asc" "$tmp/hill.txt"
 $TDC -t 3 --grid 0.5 --method natural_neighbor -o "$tmp/g3.asc" "$tmp/hill.txt"
 check "grid: the same values for 1 and 3 threads" "cmp -s $tmp/g1.asc $tmp/g3.asc"
+# --grid with breaklines: a ridge (0 1)-(4 1) at 10 between (2 0) at 0 and
+# (2 2) at 4; the Delaunay TIN crosses it with (2 0)-(2 2), so the pixel
+# centres on it (y = 1) sag to 8 4 4 8; as a breakline (--segments) they stay 10
+printf '0 1 10\n4 1 10\n2 0 0\n2 2 4\n' > "$tmp/ridge.txt"
+printf '0 1\n' > "$tmp/ridge.seg"
+$TDC --grid 1 --extent 0,0.5,4,1.5 --method linear -o "$tmp/ridge0.asc" "$tmp/ridge.txt"
+check "grid without breaklines: the ridge sags" "[ \"\$(sed -n 7p $tmp/ridge0.asc | tr -s ' ' | sed 's/ *\$//')\" = '8 4 4 8' ]"
+$TDC --grid 1 --extent 0,0.5,4,1.5 --method linear:breaklines=true --segments "$tmp/ridge.seg" -o "$tmp/ridge1.asc" "$tmp/ridge.txt"
+check "grid with breaklines: the ridge stays at 10" "[ \"\$(sed -n 7p $tmp/ridge1.asc | tr -s ' ' | sed 's/ *\$//')\" = '10 10 10 10' ]"
+expect_error "--grid breaklines=true without --segments" $TDC --grid 1 --method linear:breaklines=true "$tmp/ridge.txt"
+expect_error "--grid with --segments without breaklines" $TDC --grid 1 --segments "$tmp/ridge.seg" "$tmp/ridge.txt"
+expect_error "--grid natural_neighbor:breaklines=true" $TDC --grid 1 --method natural_neighbor:breaklines=true --segments "$tmp/ridge.seg" "$tmp/ridge.txt"
+expect_error "--contours with --segments" $TDC --contours 1 --segments "$tmp/ridge.seg" "$tmp/ridge.txt"
 expect_error "--contours of x y input (no z)" $TDC --contours 1 "$tmp/sq.txt"
 expect_error "--contours with --voronoi" $TDC --contours 1 --voronoi "$tmp/zx.txt"
 expect_error "--contours and --grid" $TDC --contours 1 --grid 1 "$tmp/zx.txt"

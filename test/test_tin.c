@@ -24,7 +24,12 @@
  *	  counter-clockwise; levels through sample heights give each piece once
  *	  (a plane z = x on a lattice, levels at the lattice's columns: one
  *	  straight line per level); open lines end on the hull;
- *	- cancel of a long grid, and the memory limit.
+ *	- cancel of a long grid, and the memory limit;
+ *	- breaklines: the option's parsing; a ridge whose Delaunay diagonal
+ *	  crosses it, with exact values on and beside it with and without the
+ *	  constraint (points, a grid, a drape); natural neighbour refused on a
+ *	  constrained TIN; nearest sites on a constrained TIN (the k-d tree)
+ *	  against brute force, inside and outside the hull, 1 and 3 threads.
  */
 #include <math.h>
 #include <stdio.h>
@@ -1527,6 +1532,304 @@ test_cancel_memory(void)
 	free(z);
 }
 
+
+/* ----------------------------------------------------------------
+ *		breaklines: a TIN on a constrained triangulation
+ * ----------------------------------------------------------------
+ */
+
+/* A TIN of xy, z with the segments seg (pairs of input indices) inserted. */
+static bool
+mk_cdt(tin_case *c, const double *xy, const double *z, size_t n, const uint32_t *seg,
+	   size_t nseg, int threads)
+{
+	tdc_options o;
+	tdc_cdt    *cdt = NULL;
+	char		err[256];
+
+	tdc_options_init(&o);
+	o.threads = threads;
+	c->job = NULL;
+	c->tin = NULL;
+	if (tdc_triangulate(xy, n, &o, &c->job, err, sizeof(err)) != TDC_OK)
+	{
+		CHECK(0, "triangulate: %s", err);
+		return false;
+	}
+	if (tdc_cdt_run(c->job, seg, nseg, &cdt, err, sizeof(err)) != TDC_OK)
+	{
+		CHECK(0, "constraints: %s", err);
+		tdc_cdt_free(cdt);
+		return false;
+	}
+	tdc_cdt_free(cdt);
+	if (tdc_tin_build(c->job, z, threads, 0, &c->tin, err, sizeof(err)) != TDC_OK)
+	{
+		CHECK(0, "tin build: %s", err);
+		return false;
+	}
+	return true;
+}
+
+/* The nearest of n points to q by brute force: exact, ties to the first in (x, y). */
+static size_t
+brute_nearest(const double *xy, size_t n, const double *q)
+{
+	size_t		best = 0;
+
+	for (size_t i = 1; i < n; i++)
+	{
+		int			c = tdc_sqdist_cmp(q, xy + 2 * i, q, xy + 2 * best);
+
+		if (c < 0 || (c == 0 && tdc_lex_less(xy + 2 * i, xy + 2 * best)))
+			best = i;
+	}
+	return best;
+}
+
+/*
+ * A ridge L(0,1)-R(4,1) at height 10 between P(2,0) at 0 and Q(2,2) at 4.
+ * Q lies inside the circle through L, P and R (centre (2, 2.5), radius
+ * 2.5), so the Delaunay triangulation takes the diagonal P-Q across the
+ * ridge, and on the ridge the surface sags to z = 10 - 4x (x < 2, plane of
+ * L, P, Q: z = 8 - 4x + 2y) and z = 4x - 6 (x > 2: z = -8 + 4x + 2y).
+ * With L-R as a breakline the triangles are L, P, R (z = 10y) and L, R, Q
+ * (z = 10 - 3y + ... : through (0,1,10), (4,1,10), (2,2,4): z = 16 - 6y),
+ * and the ridge stays at 10.
+ */
+static void
+test_breaklines_ridge(void)
+{
+	static const double xy[] = {0, 1, 4, 1, 2, 0, 2, 2};
+	static const double z[] = {10, 10, 0, 4};
+	static const uint32_t seg[] = {0, 1};
+	tin_case	plain,
+				brk;
+	tdc_grid_spec g = {{0, 1, 0, 1.5, 0, -1}, 4, 2};
+	double		vp[8],
+				vb[8],
+				zq;
+	uint8_t		ok[8];
+	int			valid;
+	char		err[256];
+	tdc_interp_spec nn = spec_of("natural_neighbor");
+
+	if (!mk(&plain, xy, z, 4, 1))
+		return;
+	if (!mk_cdt(&brk, xy, z, 4, seg, 1, 1))
+	{
+		rm(&plain);
+		return;
+	}
+	/* on the ridge */
+	CHECK(value(plain.tin, "linear", 1, 1, NULL) == 6, "no breakline: (1 1) on plane L,P,Q is 6, got %.17g",
+		  value(plain.tin, "linear", 1, 1, NULL));
+	CHECK(value(brk.tin, "linear", 1, 1, NULL) == 10, "breakline: (1 1) on the ridge is 10, got %.17g",
+		  value(brk.tin, "linear", 1, 1, NULL));
+	CHECK(value(plain.tin, "linear", 2, 1, NULL) == 2, "no breakline: (2 1) on P-Q is 2, got %.17g",
+		  value(plain.tin, "linear", 2, 1, NULL));
+	CHECK(value(brk.tin, "linear", 2, 1, NULL) == 10, "breakline: (2 1) is 10, got %.17g",
+		  value(brk.tin, "linear", 2, 1, NULL));
+	/* off the ridge: the constrained triangles' planes */
+	CHECK(value(brk.tin, "linear", 2, 0.5, NULL) == 5, "breakline: (2 0.5) on z = 10y is 5, got %.17g",
+		  value(brk.tin, "linear", 2, 0.5, NULL));
+	CHECK(value(plain.tin, "linear", 2, 0.5, NULL) == 1, "no breakline: (2 0.5) on P-Q is 1, got %.17g",
+		  value(plain.tin, "linear", 2, 0.5, NULL));
+	zq = value(brk.tin, "linear", 3, 1.5, NULL);
+	CHECK(fabs(zq - 7) < 1e-12, "breakline: (3 1.5) on z = 16 - 6y is 7, got %.17g", zq);
+	/* samples stay exact; nearest is the same with and without */
+	CHECK(value(brk.tin, "linear", 2, 2, NULL) == 4 && value(brk.tin, "linear", 4, 1, NULL) == 10,
+		  "breakline: exact at the samples");
+	CHECK(value(brk.tin, "nearest", 2, 1.4, NULL) == 4 && value(plain.tin, "nearest", 2, 1.4, NULL) == 4,
+		  "nearest is Q's with and without the breakline");
+	/* outside the hull: the nearest site, found by the k-d tree */
+	CHECK(value(brk.tin, "linear", 5, 1.2, &valid) == 10 && valid == 1,
+		  "breakline: outside, the nearest site R");
+	CHECK(value(brk.tin, "linear", 2, -3, &valid) == 0 && valid == 1,
+		  "breakline: outside, the nearest site P");
+
+	/* a grid: row 0 along the ridge (y = 1), row 1 at y = 0 is P's corner... */
+	if (grid(plain.tin, "linear:radius=0:nodata=-1", &g, vp, ok) == TDC_OK &&
+		grid(brk.tin, "linear:radius=0:nodata=-1", &g, vb, ok) == TDC_OK)
+	{
+		CHECK(vb[0] == 10 && vb[1] == 10 && vb[2] == 10 && vb[3] == 10,
+			  "breakline grid: the ridge row is 10: %g %g %g %g", vb[0], vb[1], vb[2], vb[3]);
+		CHECK(fabs(vp[0] - 8) < 1e-12 && fabs(vp[1] - 4) < 1e-12 &&
+			  fabs(vp[2] - 4) < 1e-12 && fabs(vp[3] - 8) < 1e-12,
+			  "plain grid: the ridge row sags to 8 4 4 8: %g %g %g %g", vp[0], vp[1], vp[2], vp[3]);
+		/* row 1 (y = 0): outside but for P's corner region; (1.5 0) is outside */
+		CHECK(vb[4] == -1 && vp[4] == -1, "outside with radius 0: nodata");
+	}
+
+	/* draping along the ridge: on the constraint no edge is crossed */
+	{
+		double		line[] = {0.5, 1, 3.5, 1};
+		size_t		lend[] = {2};
+		tdc_interp_spec s = spec_of("linear:breaklines=true");
+		const tdc_drape_vertex *v;
+		const size_t *off;
+		size_t		nv;
+		bool		flat = true,
+					mid = false;
+
+		if (run_wait(brk.tin, tdc_tin_drape_start(brk.tin, &s, line, lend, 1, err, sizeof(err)), err) == TDC_OK)
+		{
+			nv = tdc_tin_drape_result(brk.tin, &v, &off);
+			for (size_t i = 0; i < nv; i++)
+				flat &= v[i].z == 10 && v[i].valid;
+			CHECK(nv >= 2 && flat, "breakline drape: %zu vertices, all at 10", nv);
+		}
+		s = spec_of("linear");
+		if (run_wait(plain.tin, tdc_tin_drape_start(plain.tin, &s, line, lend, 1, err, sizeof(err)), err) == TDC_OK)
+		{
+			nv = tdc_tin_drape_result(plain.tin, &v, &off);
+			for (size_t i = 0; i < nv; i++)
+				mid |= v[i].x == 2 && v[i].y == 1 && v[i].z == 2;
+			CHECK(nv == 3 && mid, "plain drape: a vertex where P-Q is crossed, at 2 (%zu vertices)", nv);
+		}
+	}
+
+	/* natural neighbour: refused on the constrained TIN, for every entry */
+	{
+		double		q[2] = {1, 1},
+					zz;
+
+		CHECK(tdc_tin_value(brk.tin, &nn, q, &zz) == TDC_EINVAL, "natural neighbour value refused");
+		CHECK(tdc_tin_grid_start(brk.tin, &nn, &g, vb, ok, err, sizeof(err)) == TDC_EINVAL &&
+			  strstr(err, "constrained") != NULL, "natural neighbour grid refused: %s", err);
+		CHECK(tdc_tin_value(plain.tin, &nn, q, &zz) == 1, "natural neighbour without constraints");
+	}
+	rm(&plain);
+	rm(&brk);
+}
+
+/*
+ * On a constrained TIN the nearest site comes from the k-d tree: the same
+ * as brute force, inside and outside the hull, with a long monotone
+ * breakline across random sites and for 1 and 3 threads; and the
+ * triangulation is the constrained one (every constraint an edge).
+ */
+static void
+test_breaklines_nearest(void)
+{
+	uint64_t	seed = 2029;
+	size_t		ns = 3000,
+				nl = 60,
+				n = ns + nl,
+				nq = 4000,
+				bad = 0,
+				badlin = 0;
+	double	   *xy = random_points(&seed, n, 0, 0, 100),
+			   *z = malloc(n * sizeof(double)),
+			   *q = random_points(&seed, nq, -30, -30, 160),
+			   *v1 = malloc(nq * sizeof(double)),
+			   *v3 = malloc(nq * sizeof(double)),
+			   *lin = malloc(nq * sizeof(double));
+	uint8_t    *ok = malloc(nq);
+	uint32_t   *seg = malloc(2 * (nl - 1) * sizeof(uint32_t));
+	tin_case	c1,
+				c3;
+
+	/* the line: x increasing, y zigzagging, so it never crosses itself */
+	for (size_t i = 0; i < nl; i++)
+	{
+		xy[2 * (ns + i)] = 1 + 98.0 * (double) i / (double) (nl - 1);
+		xy[2 * (ns + i) + 1] = i % 2 ? 70 : 30;
+		if (i + 1 < nl)
+		{
+			seg[2 * i] = (uint32_t) (ns + i);
+			seg[2 * i + 1] = (uint32_t) (ns + i + 1);
+		}
+	}
+	for (size_t i = 0; i < n; i++)
+		z[i] = (double) i;
+	/* some queries exactly at sites and exactly between two */
+	for (size_t i = 0; i < 40; i++)
+	{
+		q[2 * i] = xy[2 * (i * 7)];
+		q[2 * i + 1] = xy[2 * (i * 7) + 1];
+	}
+	if (!mk_cdt(&c1, xy, z, n, seg, nl - 1, 1))
+		goto out;
+	if (!mk_cdt(&c3, xy, z, n, seg, nl - 1, 3))
+	{
+		rm(&c1);
+		goto out;
+	}
+	if (points(c1.tin, "nearest", q, nq, v1, ok) == TDC_OK &&
+		points(c3.tin, "nearest", q, nq, v3, ok) == TDC_OK &&
+		points(c3.tin, "linear", q, nq, lin, ok) == TDC_OK)
+	{
+		for (size_t i = 0; i < nq; i++)
+		{
+			size_t		b = brute_nearest(xy, n, q + 2 * i);
+
+			bad += v1[i] != z[b] || v3[i] != z[b];
+			if (!tdc_tin_inside(c3.tin, q + 2 * i))
+				badlin += lin[i] != z[b];
+		}
+		CHECK(bad == 0, "constrained nearest = brute force at %zu points (%zu differ)", nq, bad);
+		CHECK(badlin == 0, "constrained linear outside the hull = the nearest site (%zu differ)", badlin);
+	}
+	/* the constraints are edges of the TIN's triangulation */
+	{
+		tdc_iter	it = {0};
+		uint32_t	e[2];
+		size_t		found = 0;
+
+		while (tdc_next_edge(c3.job, &it, e))
+			for (size_t i = 0; i + 1 < nl; i++)
+			{
+				const double *a = tdc_site_xy(c3.job, e[0]),
+						   *b = tdc_site_xy(c3.job, e[1]),
+						   *p = xy + 2 * (ns + i),
+						   *r = p + 2;
+
+				if ((a[0] == p[0] && a[1] == p[1] && b[0] == r[0] && b[1] == r[1]) ||
+					(a[0] == r[0] && a[1] == r[1] && b[0] == p[0] && b[1] == p[1]))
+					found++;
+			}
+		CHECK(found == nl - 1, "all %zu breakline segments are TIN edges (%zu)", nl - 1, found);
+	}
+	rm(&c1);
+	rm(&c3);
+out:
+	free(xy);
+	free(z);
+	free(q);
+	free(v1);
+	free(v3);
+	free(lin);
+	free(ok);
+	free(seg);
+}
+
+static void
+test_breaklines_parse(void)
+{
+	tdc_interp_spec s;
+	char		err[256];
+
+	CHECK(tdc_interp_parse("linear", &s, err, sizeof(err)) == TDC_OK && !s.breaklines,
+		  "breaklines: false by default");
+	CHECK(tdc_interp_parse("linear:breaklines=true:radius=0", &s, err, sizeof(err)) == TDC_OK &&
+		  s.breaklines && s.radius == 0, "linear:breaklines=true:radius=0");
+	CHECK(tdc_interp_parse("LINEAR:BreakLines=YES", &s, err, sizeof(err)) == TDC_OK && s.breaklines,
+		  "breaklines=YES, any case");
+	CHECK(tdc_interp_parse("linear:breaklines=off", &s, err, sizeof(err)) == TDC_OK && !s.breaklines,
+		  "breaklines=off");
+	CHECK(tdc_interp_parse("linear:breaklines=maybe", &s, err, sizeof(err)) == TDC_EINVAL &&
+		  strstr(err, "not a boolean"), "breaklines=maybe: %s", err);
+	CHECK(tdc_interp_parse("linear:breaklines=", &s, err, sizeof(err)) == TDC_EINVAL,
+		  "breaklines without a value: %s", err);
+	CHECK(tdc_interp_parse("natural_neighbor:breaklines=true", &s, err, sizeof(err)) == TDC_EINVAL &&
+		  strstr(err, "linear only") && strstr(err, "natural"), "natural neighbour: %s", err);
+	CHECK(tdc_interp_parse("nearest:breaklines=false", &s, err, sizeof(err)) == TDC_EINVAL &&
+		  strstr(err, "linear only"), "nearest: %s", err);
+	CHECK(tdc_interp_parse("linear:breaklines", &s, err, sizeof(err)) == TDC_EINVAL,
+		  "breaklines with no value: %s", err);
+}
+
 void
 test_tin(void)
 {
@@ -1540,4 +1843,7 @@ test_tin(void)
 	test_contours();
 	test_threads();
 	test_cancel_memory();
+	test_breaklines_parse();
+	test_breaklines_ridge();
+	test_breaklines_nearest();
 }

@@ -30,7 +30,9 @@
  * --contours INTERVAL [--base B] and --grid CELLSIZE [--extent X0,Y0,X1,Y1]
  * [--method M]: the TIN of 'x y z' input, its contour lines or a grid of
  * its heights (tin_out.c, which says the formats), written to -o instead
- * of the triangles.
+ * of the triangles.  --grid with --segments FILE and --method
+ * linear:breaklines=true grids the TIN of the constrained triangulation
+ * (the segments are breaklines); either without the other is an error.
  *
  * main: the arguments (parse_args), the input (read_input, or for
  * --max-memory stage_input, then read_staged when the one-shot run fits),
@@ -73,7 +75,9 @@ static const char usage[] =
 "  --grid CELLSIZE  heights at the pixel centres of a grid of square cells\n"
 "         over the input's box (or --extent X0,Y0,X1,Y1); -o writes an ESRI\n"
 "         ASCII grid (.asc); --method linear|nearest|natural_neighbor with\n"
-"         GDAL's options (e.g. linear:radius=0:nodata=-9999; default linear)\n";
+"         GDAL's options (e.g. linear:radius=0:nodata=-9999; default linear);\n"
+"         with --segments FILE and --method linear:breaklines=true the\n"
+"         segments are breaklines: the TIN is the constrained triangulation\n";
 
 static double
 parse_double(const char *s, const char *what)
@@ -221,19 +225,26 @@ parse_args(int argc, char **argv, cli_args *a)
 		die(2, "no INPUT given (see ./tdc --help)%s", "");
 	if (a->contours && a->grid)
 		die(2, "--contours and --grid: one at a time%s", "");
-	if ((a->contours || a->grid) && (a->voronoi || a->segpath))
-		die(2, "--contours and --grid take the Delaunay TIN: not with --voronoi or --segments%s", "");
+	if ((a->contours || a->grid) && a->voronoi)
+		die(2, "--contours and --grid take the Delaunay TIN: not with --voronoi%s", "");
+	if (a->contours && a->segpath)
+		die(2, "--contours takes the Delaunay TIN: not with --segments%s", "");
 	if ((a->has_extent || a->method) && !a->grid)
 		die(2, "--extent and --method go with --grid%s", "");
 	if (a->contour_base != 0 && !a->contours)
 		die(2, "--base goes with --contours%s", "");
-	if (a->method)
+	if (a->grid)
 	{
 		tdc_interp_spec spec;
 		char		err[256];
 
-		if (tdc_interp_parse(a->method, &spec, err, sizeof(err)) != TDC_OK)
+		if (tdc_interp_parse(a->method ? a->method : "linear", &spec, err, sizeof(err)) != TDC_OK)
 			die(2, "--method: %s", err);
+		/* the breaklines are the segments: one without the other is a mistake */
+		if (spec.breaklines && !a->segpath)
+			die(2, "--method with breaklines=true needs the breaklines: --segments FILE%s", "");
+		if (a->segpath && !spec.breaklines)
+			die(2, "--grid with --segments takes them as breaklines: --method linear:breaklines=true%s", "");
 	}
 	return true;
 }

@@ -40,6 +40,7 @@ struct tdc_job
 	uint32_t   *tol_to;			/* tolerance: dropped input -> absorbing input */
 
 	tdc_he	   *he;				/* 6 half-edges per entering point */
+	bool		constrained;	/* tdc_job_edit_mesh was called: maybe no longer Delaunay */
 	int			d;				/* levels: 2^d subsets */
 	int			s;				/* grid size */
 	int			threads;

@@ -53,6 +53,8 @@ typedef struct tdc_mesh_view
 	size_t		ntri;			/* triangles */
 	const uint64_t *outer;		/* bitmap of the outer face's half-edges;
 								 * NULL when there is no triangle */
+	bool		constrained;	/* constraints were inserted (tdc_job_edit_mesh):
+								 * the mesh need not be Delaunay */
 } tdc_mesh_view;
 
 /* result.c: the view of a finished job (the caller saw tdc_job_wait succeed). */

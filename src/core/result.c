@@ -183,12 +183,18 @@ tdc_job_view(const tdc_job *job, tdc_mesh_view *out)
 	out->he = job->he;
 	out->ntri = job->ntri;
 	out->outer = job->outer;
+	out->constrained = job->constrained;
 }
 
-/* The constrained insertion's flips (mesh_view.h): the one writer. */
+/*
+ * The constrained insertion's flips (mesh_view.h): the one writer.  The job
+ * remembers it, so that consumers which need the Delaunay property (a TIN's
+ * nearest site walk, natural neighbours) know they cannot count on it.
+ */
 tdc_he *
 tdc_job_edit_mesh(tdc_job *job)
 {
+	job->constrained = true;
 	return job->he;
 }
 

@@ -518,23 +518,44 @@ typedef struct tdc_interp_spec
 	int			method;			/* TDC_INTERP_* */
 	double		radius;
 	double		nodata;			/* the value written where there is none */
+	bool		breaklines;		/* linear: the host inserts the samples' lines
+								 * as constraints (tdc_cdt_start) before the TIN */
 } tdc_interp_spec;
 
 /*
- * Parse "linear[:radius=R][:nodata=V]", "nearest[:radius1=R][:radius2=R]
- * [:angle=A][:nodata=V]" or "natural_neighbor[:radius=R][:nodata=V]"
- * (GDAL's defaults: linear radius -1, nodata 0; nearest radius 0, nodata
- * 0); "natural_neighbour" and "invdist"-style names are not accepted.
- * Unknown methods and options, bad numbers, and an elliptic nearest search
- * (radius1 != radius2) are TDC_EINVAL with a message.
+ * Parse "linear[:radius=R][:nodata=V][:breaklines=B]",
+ * "nearest[:radius1=R][:radius2=R][:angle=A][:nodata=V]" or
+ * "natural_neighbor[:radius=R][:nodata=V]" (GDAL's defaults: linear radius
+ * -1, nodata 0; nearest radius 0, nodata 0); "natural_neighbour" and
+ * "invdist"-style names are not accepted.  B is true, false, yes, no, on,
+ * off, 1 or 0 (any case; default false); the parser only records it, the
+ * host acts on it by building the TIN on a constrained triangulation.
+ * breaklines is an option of linear only: natural neighbour coordinates
+ * are defined by the Delaunay triangulation (a constrained one has no
+ * empty-circle property to take them from), and the nearest sample does
+ * not depend on any triangulation, so for those two it is an error rather
+ * than silently ignored.  Unknown methods and options, bad numbers and
+ * values, and an elliptic nearest search (radius1 != radius2) are
+ * TDC_EINVAL with a message.
  */
 extern int	tdc_interp_parse(const char *text, tdc_interp_spec *spec, char *err,
 							 size_t errlen);
 
-/* Bytes a TIN over a job of n input points allocates at most, beyond the job. */
+/*
+ * Bytes a TIN over a job of n input points allocates at most, beyond the
+ * job (a constrained one's nearest-site tree included).
+ */
 extern size_t tdc_tin_memory(size_t n);
 
 /*
+ * A TIN may be built on a job whose constraints were inserted (tdc_cdt_run:
+ * "breaklines"): its triangles are then the constrained triangulation's,
+ * and linear interpolation, draping and contours follow them, so the
+ * surface does not cut across a constraint.  Nearest sites are then found
+ * by a tree of the sites (4 bytes a site) instead of a walk on the mesh,
+ * which is only right on a Delaunay one; natural neighbour interpolation on
+ * such a TIN is TDC_EINVAL.
+ *
  * Start building the TIN of a finished job, z holding one height per input
  * point (finite), on "threads" worker threads (0: the job's count).
  * max_memory bounds the TIN and its operations (0: no limit): an operation

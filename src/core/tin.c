@@ -40,7 +40,8 @@
  * Memory.  tdc_tin_memory counts the TIN's own arrays: per input point 8
  * bytes of height, 24 of half-edge to triangle, 8 of triangle to half-edge
  * (two triangles per point at most), 4 of site to half-edge and 4 of cell
- * (a cell per two points), 48 in all, plus the collinear sort (4): 52.  What an
+ * (a cell per two points), 48 in all, plus the collinear sort or a
+ * constrained TIN's nearest-site tree (4 each, never both): 56.  What an
  * operation holds beyond it (contour lines, draped vertices, scratch) is
  * charged as it grows (tin_charge) against the rest of max_memory.
  */
@@ -278,6 +279,115 @@ fill_cells(tdc_tin *tin)
 			c[yy * gw + x] = c[(size_t) last_row * gw + x];
 }
 
+/* ----------------------------------------------------------------
+ *		the nearest-site tree of a constrained TIN
+ * ----------------------------------------------------------------
+ *
+ * The greedy walk of tin_locate.c finds the nearest site only on a Delaunay
+ * mesh: on a constrained one a site may have a nearer Delaunay neighbour
+ * that a constraint cut it off from.  So a TIN on a constrained job keeps
+ * its sites as an implicit k-d tree (tin_int.h), 4 bytes a site.  Sites are
+ * distinct, so the keys never tie and the tree is the same whatever
+ * selection built it: the values it gives do not depend on the thread
+ * count.  The median is found by quickselect (median of three); past 64
+ * rounds on one range, which only an adversarial order reaches, the range
+ * is sorted instead, so the build stays O(n log n).
+ */
+typedef struct kd_order
+{
+	const tdc_tin *tin;
+	int			axis;
+} kd_order;
+
+static inline bool
+kd_less(const tdc_tin *tin, int axis, uint32_t a, uint32_t b)
+{
+	const double *p = tin_pt(tin, a),
+			   *q = tin_pt(tin, b);
+
+	if (p[axis] != q[axis])
+		return p[axis] < q[axis];
+	return p[1 - axis] < q[1 - axis];
+}
+
+static int
+cmp_kd(const void *x, const void *y, void *arg)
+{
+	const kd_order *o = arg;
+	uint32_t	a = *(const uint32_t *) x,
+				b = *(const uint32_t *) y;
+
+	return kd_less(o->tin, o->axis, a, b) ? -1 : kd_less(o->tin, o->axis, b, a) ? 1 : 0;
+}
+
+static inline void
+kd_swap(uint32_t *a, size_t i, size_t j)
+{
+	uint32_t	t = a[i];
+
+	a[i] = a[j];
+	a[j] = t;
+}
+
+/* Put the k-th of a[0 .. n) in the axis's order at k, smaller ones before it. */
+static void
+kd_select(const tdc_tin *tin, uint32_t *a, size_t n, size_t k, int axis)
+{
+	size_t		lo = 0,
+				hi = n - 1;
+	int			rounds = 0;
+
+	while (hi > lo)
+	{
+		size_t		mid = lo + (hi - lo) / 2,
+					store = lo;
+		uint32_t	pivot;
+
+		if (++rounds > 64)
+		{
+			kd_order	o = {tin, axis};
+
+			qsort_r(a + lo, hi - lo + 1, sizeof(uint32_t), cmp_kd, &o);
+			return;
+		}
+		/* the median of a[lo], a[mid], a[hi] to a[hi], the pivot */
+		if (kd_less(tin, axis, a[mid], a[lo]))
+			kd_swap(a, lo, mid);
+		if (kd_less(tin, axis, a[hi], a[lo]))
+			kd_swap(a, lo, hi);
+		if (kd_less(tin, axis, a[mid], a[hi]))
+			kd_swap(a, mid, hi);
+		pivot = a[hi];
+		for (size_t i = lo; i < hi; i++)
+			if (kd_less(tin, axis, a[i], pivot))
+				kd_swap(a, i, store++);
+		kd_swap(a, store, hi);
+		if (store == k)
+			return;
+		if (k < store)
+			hi = store - 1;
+		else
+			lo = store + 1;
+	}
+}
+
+static void
+kd_build(tdc_tin *tin, uint32_t *a, size_t n, int depth)
+{
+	while (n > TIN_KD_LEAF)
+	{
+		size_t		m = n / 2;
+
+		if (n > SITES_PER_TASK && tin_cancelled(tin))
+			return;
+		kd_select(tin, a, n, m, depth & 1);
+		kd_build(tin, a, m, depth + 1);
+		a += m + 1;
+		n -= m + 1;
+		depth++;
+	}
+}
+
 /* The build, on the driver thread (or the caller's for small TINs). */
 static int
 tin_build_run(tdc_tin *tin)
@@ -336,6 +446,19 @@ tin_build_run(tdc_tin *tin)
 		qsort_r(tin->line, tin->nline, sizeof(uint32_t), cmp_line, tin);
 		/* no face to number (and no outer-face marks to read) */
 		return TDC_OK;
+	}
+
+	if (mesh->constrained)
+	{
+		tin->kd = tdc_big_alloc_uninit(tin->cache, tin->nsites * sizeof(uint32_t) + 4);
+		if (tin->kd == NULL)
+			goto oom;
+		for (size_t s = 0; s < tin->nsite_ids; s++)
+			if (mesh->site_of[s] == s)
+				tin->kd[tin->nkd++] = (uint32_t) s;
+		kd_build(tin, tin->kd, tin->nkd, 0);
+		if (tin_cancelled(tin))
+			return TDC_ECANCELED;
 	}
 
 	nr = (tin->nhe + HE_PER_TASK - 1) / HE_PER_TASK;
@@ -419,7 +542,7 @@ size_t
 tdc_tin_memory(size_t n)
 {
 	/* see the top of the file */
-	return n * (8 + 24 + 8 + 4 + 4 + 4) + 4096;
+	return n * (8 + 24 + 8 + 4 + 4 + 4 + 4) + 4096;
 }
 
 bool
@@ -563,6 +686,7 @@ tdc_tin_free(tdc_tin *tin)
 	tdc_big_free(tin->cache, (void *) tin->cell_site);
 	tdc_big_free(tin->cache, tin->he_tri);
 	tdc_big_free(tin->cache, tin->tri_he);
+	tdc_big_free(tin->cache, tin->kd);
 	free(tin->line);
 	free(tin);
 }

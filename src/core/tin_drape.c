@@ -573,8 +573,8 @@ tdc_tin_drape_start(tdc_tin *tin, const tdc_interp_spec *spec, const double *xy,
 	size_t		nv = nchains > 0 ? chain_end[nchains - 1] : 0;
 
 #define FAIL(code, ...) do { if (err && errlen) snprintf(err, errlen, __VA_ARGS__); return (code); } while (0)
-	if (spec == NULL || spec->method < TDC_INTERP_LINEAR || spec->method > TDC_INTERP_NATURAL)
-		FAIL(TDC_EINVAL, "bad interpolation method");
+	if (!tin_spec_ok(tin, spec, err, errlen))
+		return TDC_EINVAL;
 	if (nv > UINT32_MAX)
 		FAIL(TDC_ETOOBIG, "%zu vertices to drape exceed the limit of %u", nv, UINT32_MAX);
 	for (size_t c = 1; c < nchains; c++)

@@ -24,6 +24,8 @@
 #include "exact.h"
 #include "mesh_view.h"
 
+#define TIN_KD_LEAF		8		/* k-d ranges of at most this many sites are scanned */
+
 /* A located point (tin_locate.c). */
 typedef enum tin_loc_kind
 {
@@ -79,6 +81,18 @@ struct tdc_tin
 	/* collinear sites (no triangle): sorted by (x, y) */
 	uint32_t   *line;
 	size_t		nline;
+
+	/*
+	 * A constrained mesh (mesh.constrained): its sites as an implicit k-d
+	 * tree for the nearest site (tin.c builds it, tin_locate.c reads it).
+	 * The range [lo, hi) of more than TIN_KD_LEAF sites has its median at
+	 * lo + (hi - lo) / 2 in the order of its axis, the ones before it, the
+	 * ones after; the axis is x at even depths, y at odd ones, and a site's
+	 * key along x is (x, y), along y (y, x), so that distinct sites never
+	 * tie.  NULL otherwise.
+	 */
+	uint32_t   *kd;
+	size_t		nkd;
 
 	/* the current operation and its results (see each op's file) */
 	tin_op_fn	op;
@@ -229,6 +243,9 @@ extern int	tin_natural(const tdc_tin *tin, tin_scratch *sc, const double *q,
 extern int	tin_value_at(const tdc_tin *tin, const tdc_interp_spec *spec,
 						 tin_scratch *sc, const double *q, uint32_t *hint,
 						 double *z, tin_loc *where);
+/* tin_interp.c: can spec run on tin (false with err)? */
+extern bool tin_spec_ok(const tdc_tin *tin, const tdc_interp_spec *spec, char *err,
+						size_t errlen);
 /* tin_interp.c: fail the operation for a value's error, naming the point */
 extern void tin_point_fail(tdc_tin *tin, int rc, const double *q);
 

@@ -18,6 +18,16 @@
  * for every method.  GDAL's "radius" of linear compares the distance with
  * <=, and so do we, exactly.
  *
+ * Breaklines.  "linear:breaklines=true" is not GDAL's: it asks the host to
+ * insert the samples' lines as constraints before building the TIN (the
+ * parser only records it), so that the surface follows ridges and streams
+ * instead of cutting across them.  Only linear takes it: Sibson's
+ * coordinates are made of the Delaunay triangulation's circumcircles,
+ * which a constrained triangulation does not keep, and the nearest sample
+ * is the same whatever lines lie between; an explicit error there beats an
+ * option silently ignored.  On a constrained TIN natural neighbour is
+ * refused at the operation's start (tin_spec_ok).
+ *
  * Many points.  A list of points is cut into chunks, a grid into rows,
  * shared out among the pool's threads; each walks from the triangle of its
  * previous point, which for a grid is the neighbouring pixel's, so the walk
@@ -57,6 +67,29 @@ parse_number(const char *s, size_t len, double *v)
 	errno = 0;
 	*v = strtod(buf, &end);
 	return *end == '\0' && !isnan(*v) && errno != ERANGE;
+}
+
+/* GDAL's boolean words (CPLTestBool), but an unknown word is an error. */
+static bool
+parse_bool(const char *s, size_t len, bool *v)
+{
+	static const char *const yes[] = {"true", "yes", "on", "1"};
+	static const char *const no[] = {"false", "no", "off", "0"};
+
+	for (int i = 0; i < 4; i++)
+	{
+		if (len == strlen(yes[i]) && strncasecmp(s, yes[i], len) == 0)
+		{
+			*v = true;
+			return true;
+		}
+		if (len == strlen(no[i]) && strncasecmp(s, no[i], len) == 0)
+		{
+			*v = false;
+			return true;
+		}
+	}
+	return false;
 }
 
 int
@@ -104,6 +137,19 @@ tdc_interp_parse(const char *text, tdc_interp_spec *spec, char *err, size_t errl
 			FAIL("option \"%.*s\" of %s has no value (name=value)",
 				 (int) (olen < 64 ? olen : 64), opt, nearest ? "nearest" :
 				 spec->method == TDC_INTERP_LINEAR ? "linear" : "natural_neighbor");
+		if ((size_t) (eq - opt) == 10 && strncasecmp(opt, "breaklines", 10) == 0)
+		{
+			size_t		vlen = olen - (size_t) (eq + 1 - opt);
+
+			if (spec->method != TDC_INTERP_LINEAR)
+				FAIL("option \"breaklines\" is an option of linear only: %s",
+					 nearest ? "nearest takes the nearest sample, which no line changes" :
+					 "natural neighbour coordinates need the unconstrained Delaunay triangulation");
+			if (!parse_bool(eq + 1, vlen, &spec->breaklines))
+				FAIL("option \"breaklines\": \"%.*s\" is not a boolean (true or false)",
+					 (int) (vlen < 64 ? vlen : 64), eq + 1);
+			continue;
+		}
 		if (!parse_number(eq + 1, olen - (size_t) (eq + 1 - opt), &v))
 			FAIL("option \"%.*s\": \"%.*s\" is not a number",
 				 (int) (eq - opt), opt, (int) (olen - (size_t) (eq + 1 - opt) < 64 ?
@@ -124,7 +170,8 @@ tdc_interp_parse(const char *text, tdc_interp_spec *spec, char *err, size_t errl
 		else
 			FAIL("unknown option \"%.*s\" of %s (%s)", (int) (eq - opt), opt,
 				 nearest ? "nearest" : spec->method == TDC_INTERP_LINEAR ? "linear" : "natural_neighbor",
-				 nearest ? "radius1, radius2, radius, angle, nodata" : "radius, nodata");
+				 nearest ? "radius1, radius2, radius, angle, nodata" :
+				 spec->method == TDC_INTERP_LINEAR ? "radius, nodata, breaklines" : "radius, nodata");
 #undef IS
 	}
 	if (nearest)
@@ -245,7 +292,7 @@ tdc_tin_value(const tdc_tin *tin, const tdc_interp_spec *spec, const double q[2]
 	int			rc;
 
 	memset(&sc, 0, sizeof(sc));
-	if (!tin->built)
+	if (!tin->built || !tin_spec_ok(tin, spec, NULL, 0))
 		return TDC_EINVAL;
 	rc = tin_value_at(tin, spec, &sc, q, &hint, z, NULL);
 	tin_scratch_free(&sc);
@@ -403,14 +450,24 @@ interp_start(tdc_tin *tin, interp_op *op, size_t work, char *err, size_t errlen)
 						tin->nsite_ids <= TDC_INLINE_MAX && work <= INLINE_WORK, err, errlen);
 }
 
-static bool
-spec_ok(const tdc_interp_spec *spec, char *err, size_t errlen)
+/*
+ * Can spec run on tin?  Not natural neighbour on a constrained TIN, whose
+ * triangles are not the Delaunay ones the coordinates are made of.
+ */
+bool
+tin_spec_ok(const tdc_tin *tin, const tdc_interp_spec *spec, char *err, size_t errlen)
 {
 	if (spec == NULL || spec->method < TDC_INTERP_LINEAR || spec->method > TDC_INTERP_NATURAL ||
 		isnan(spec->radius))
 	{
 		if (err && errlen)
 			snprintf(err, errlen, "bad interpolation method");
+		return false;
+	}
+	if (spec->method == TDC_INTERP_NATURAL && tin->mesh.constrained)
+	{
+		if (err && errlen)
+			snprintf(err, errlen, "natural neighbour interpolation is not defined on a constrained triangulation");
 		return false;
 	}
 	return true;
@@ -422,7 +479,7 @@ tdc_tin_points_start(tdc_tin *tin, const tdc_interp_spec *spec, const double *xy
 {
 	interp_op  *op;
 
-	if (!spec_ok(spec, err, errlen))
+	if (!tin_spec_ok(tin, spec, err, errlen))
 		return TDC_EINVAL;
 	if (n > 0 && (xy == NULL || z == NULL))
 	{
@@ -451,7 +508,7 @@ tdc_tin_grid_start(tdc_tin *tin, const tdc_interp_spec *spec, const tdc_grid_spe
 {
 	interp_op  *op;
 
-	if (!spec_ok(spec, err, errlen))
+	if (!tin_spec_ok(tin, spec, err, errlen))
 		return TDC_EINVAL;
 	if (grid == NULL || (grid->width > 0 && grid->height > 0 && values == NULL) ||
 		(grid->height > 0 && grid->width > SIZE_MAX / grid->height))

@@ -35,7 +35,11 @@
  * reached from one of them through equally near neighbours; the one first
  * in (x, y) order wins.  Collinear sites (no triangle) are sorted along
  * their line: the distance to q is unimodal along it, and a binary search
- * on exact comparisons of neighbours finds the first nearest.
+ * on exact comparisons of neighbours finds the first nearest.  A
+ * constrained mesh is not Delaunay, and the greedy walk may stop at a site
+ * whose nearer neighbour a constraint cut off: there a k-d tree of the
+ * sites (tin.c) is searched instead, with the same exact comparisons and
+ * the same tie rule, so it gives the same site.
  *
  * Heights.  Linear inside a triangle (a, b, c), a the first in (x, y)
  * order: z = za + s (zb - za) + t (zc - za), with s and t the barycentric
@@ -294,9 +298,73 @@ nearest_line(const tdc_tin *tin, const double *q)
 	return ln[lo];
 }
 
+/* Is s nearer to q than *best, or as near and first in (x, y) order? */
+static inline void
+kd_consider(const tdc_tin *tin, const double *q, uint32_t s, uint32_t *best)
+{
+	int			c;
+
+	if (*best == TDC_NIL)
+	{
+		*best = s;
+		return;
+	}
+	c = tdc_sqdist_cmp(q, tin_pt(tin, s), q, tin_pt(tin, *best));
+	if (c < 0 || (c == 0 && tdc_lex_less(tin_pt(tin, s), tin_pt(tin, *best))))
+		*best = s;
+}
+
+/*
+ * The nearest site in the k-d range a[0 .. n) at depth (tin_int.h), into
+ * *best.  The sites after a range's median have its coordinate along the
+ * axis or more, those before it or less, so none on the far side is nearer
+ * than the median's line; the far side is skipped only when that line is
+ * strictly farther than *best (exactly: the foot of q on it is a point of
+ * doubles), so that equally near sites are all seen.
+ */
+static void
+kd_nearest(const tdc_tin *tin, const double *q, const uint32_t *a, size_t n, int depth,
+		   uint32_t *best)
+{
+	while (n > TIN_KD_LEAF)
+	{
+		size_t		m = n / 2;
+		int			axis = depth & 1;
+		const double *p = tin_pt(tin, a[m]);
+		double		foot[2];
+		const uint32_t *near_a,
+				   *far_a;
+		size_t		near_n,
+					far_n;
+
+		kd_consider(tin, q, a[m], best);
+		if (q[axis] < p[axis])
+		{
+			near_a = a, near_n = m;
+			far_a = a + m + 1, far_n = n - m - 1;
+		}
+		else
+		{
+			near_a = a + m + 1, near_n = n - m - 1;
+			far_a = a, far_n = m;
+		}
+		kd_nearest(tin, q, near_a, near_n, depth + 1, best);
+		foot[axis] = p[axis];
+		foot[1 - axis] = q[1 - axis];
+		if (tdc_sqdist_cmp(q, foot, q, tin_pt(tin, *best)) > 0)
+			return;
+		a = far_a;
+		n = far_n;
+		depth++;
+	}
+	for (size_t i = 0; i < n; i++)
+		kd_consider(tin, q, a[i], best);
+}
+
 /*
  * The nearest site to q (the first in (x, y) order among equally near
- * ones), from loc's triangle or edge.
+ * ones), from loc's triangle or edge; on a constrained TIN from its k-d
+ * tree.
  */
 uint32_t
 tin_nearest(const tdc_tin *tin, const double *q, const tin_loc *loc)
@@ -312,6 +380,12 @@ tin_nearest(const tdc_tin *tin, const double *q, const tin_loc *loc)
 		return loc->a;
 	if (tin->ntri == 0)
 		return nearest_line(tin, q);
+	if (tin->kd != NULL)
+	{
+		best = TDC_NIL;
+		kd_nearest(tin, q, tin->kd, tin->nkd, 0, &best);
+		return best;
+	}
 	v = tin_org(tin, loc->h);
 
 	/* greedy: to the nearest neighbour while it is strictly nearer */

@@ -9,19 +9,15 @@
  * The vertices are read by the runtime's reader (tdc_read_geometry: a big
  * TOASTed value a slice at a time, NaN and infinities rejected, Z kept, M
  * dropped, SRID carried), in the order they are stored.  The segments come
- * from the same read: the reader reports every chain of vertices it
- * stores (every linestring and every polygon ring, triangles and the faces
- * of TINs and polyhedral surfaces included; points are no chain), and each
- * chain contributes the segments between its consecutive vertices, as
- * indices into that vertex order.  They are made once the value's vertices
- * are all in (seg_flush), so the memory limit counts a value's vertices
- * before its segments.
+ * from the same read (seglist.c): every linestring and polygon ring gives
+ * the segments between its consecutive vertices, as indices into that
+ * vertex order.
  *
  * The triangulation runs as usual (tdc_run), then the segments are inserted
- * by the core (cdt.c) on a thread of its own, while this backend waits and
- * watches for interrupts (tdc_wait_work).  A proper crossing is an ERROR
- * that names both segments by their end points: an exact triangulation
- * cannot invent the crossing point, so the lines must be noded first.
+ * (tdc_constrain, seglist.c) while this backend waits and watches for
+ * interrupts.  A proper crossing is an ERROR that names both segments by
+ * their end points: an exact triangulation cannot invent the crossing
+ * point, so the lines must be noded first.
  *
  * ST_TDCConstrainedDelaunayDump(query) reads its query with the Dump
  * functions' collector (dump_query.c), taking each row's segments as its
@@ -39,202 +35,6 @@
 #include "utils/memutils.h"
 
 #include "tdc_pg.h"
-
-/*
- * Segments as pairs of vertex indices, in a memory context of their own
- * choosing; they count with the vertices of buf against
- * tdc_delaunay.max_memory (tdc_pointbuf_side_grow).  While a value is read,
- * the reader reports its chains (TdcChainFn) and they are only noted:
- * seg_flush makes them segments once the value's vertices are all in buf,
- * so that the vertices of a value are counted before its segments.
- */
-typedef struct SegList
-{
-	MemoryContext cxt;
-	TdcPointBuf *buf;
-	const char *fname;
-	uint32	   *seg;
-	uint64		nseg;
-	uint64		cap;
-	uint64	   *chain;			/* (first, k) pairs noted, not yet segments */
-	Size		nchain;
-	Size		chaincap;
-} SegList;
-
-/* Room for "more" segments. */
-static void
-seg_reserve(SegList *l, uint64 more)
-{
-	if (l->nseg + more > l->cap)
-	{
-		uint64		cap = Max(l->cap * 2, l->nseg + more);
-
-		tdc_pointbuf_side_grow(l->buf, l->cap * 2 * sizeof(uint32),
-							   cap * 2 * sizeof(uint32), "their segments", l->fname);
-		l->seg = l->seg ? repalloc_huge(l->seg, cap * 2 * sizeof(uint32))
-			: MemoryContextAllocHuge(l->cxt, cap * 2 * sizeof(uint32));
-		l->cap = cap;
-	}
-}
-
-/* TdcChainFn: a chain of k vertices from index first, noted for seg_flush. */
-static void
-seg_note_chain(void *arg, uint64 first, uint32 k)
-{
-	SegList    *l = (SegList *) arg;
-
-	if (l->nchain == l->chaincap)
-	{
-		Size		cap = Max(l->chaincap * 2, 64);
-
-		l->chain = l->chain ? repalloc_huge(l->chain, cap * 2 * sizeof(uint64))
-			: MemoryContextAllocHuge(l->cxt, cap * 2 * sizeof(uint64));
-		l->chaincap = cap;
-	}
-	l->chain[2 * l->nchain] = first;
-	l->chain[2 * l->nchain + 1] = k;
-	l->nchain++;
-}
-
-/* The noted chains as segments: each chain of k vertices gives k - 1. */
-static void
-seg_flush(SegList *l)
-{
-	for (Size c = 0; c < l->nchain; c++)
-	{
-		uint64		first = l->chain[2 * c];
-		uint32		k = (uint32) l->chain[2 * c + 1];
-
-		if (first + k > TDC_MAX_POINTS)
-			ereport(ERROR,
-					(errcode(ERRCODE_PROGRAM_LIMIT_EXCEEDED),
-					 errmsg("%s: more than %zu vertices", l->fname, TDC_MAX_POINTS)));
-		seg_reserve(l, k - 1);
-		for (uint32 i = 0; i + 1 < k; i++)
-		{
-			l->seg[2 * l->nseg] = (uint32) (first + i);
-			l->seg[2 * l->nseg + 1] = (uint32) (first + i + 1);
-			l->nseg++;
-		}
-	}
-	l->nchain = 0;
-}
-
-/* An empty list for the vertices of buf, which from now on reports its chains. */
-static void
-seg_init(SegList *l, MemoryContext cxt, TdcPointBuf *buf, const char *fname)
-{
-	memset(l, 0, sizeof(*l));
-	l->cxt = cxt;
-	l->buf = buf;
-	l->fname = fname;
-	buf->chain = seg_note_chain;
-	buf->chain_arg = l;
-}
-
-/* ----------------------------------------------------------------
- *		running the insertion
- * ----------------------------------------------------------------
- */
-
-typedef struct CdtHold
-{
-	tdc_cdt    *cdt;
-} CdtHold;
-
-/* On error or cancel: stop and free the insertion before the job goes. */
-static void
-cdt_reset_callback(void *arg)
-{
-	CdtHold    *hold = (CdtHold *) arg;
-
-	if (hold->cdt != NULL)
-	{
-		tdc_cdt_free(hold->cdt);
-		hold->cdt = NULL;
-	}
-}
-
-static void
-report_crossing(const CdtHold *hold, const TdcPointBuf *buf, const SegList *w,
-				const char *fname)
-{
-	size_t		s1,
-				s2;
-
-	if (tdc_cdt_crossing(hold->cdt, &s1, &s2))
-	{
-		const double *a = buf->xy + 2 * (size_t) w->seg[2 * s1],
-				   *b = buf->xy + 2 * (size_t) w->seg[2 * s1 + 1],
-				   *c = buf->xy + 2 * (size_t) w->seg[2 * s2],
-				   *d = buf->xy + 2 * (size_t) w->seg[2 * s2 + 1];
-
-		ereport(ERROR,
-				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
-				 errmsg("%s: segments LINESTRING(%.17g %.17g,%.17g %.17g) and LINESTRING(%.17g %.17g,%.17g %.17g) cross",
-						fname, a[0], a[1], b[0], b[1], c[0], c[1], d[0], d[1]),
-				 errdetail("An exact constrained triangulation cannot create their crossing point."),
-				 errhint("Node the lines first, with ST_Node or ST_UnaryUnion.")));
-	}
-}
-
-TDC_WORK_OPS(cdt_ops, tdc_cdt, tdc_cdt, "triangulation");
-
-/*
- * Insert the segments into the finished job of run, waiting interruptibly.
- * Any failure is an ERROR.  The caller frees the insertion with cdt_release
- * once it no longer needs the constraint edges; on error it goes with buf's
- * context.
- */
-static CdtHold *
-constrain(TdcRun *run, const TdcPointBuf *buf, const SegList *w,
-		  const char *fname)
-{
-	CdtHold    *hold;
-	MemoryContextCallback *cb;
-	char		err[512];
-	int			rc;
-	instr_time	start,
-				stop;
-
-	INSTR_TIME_SET_CURRENT(start);
-	hold = MemoryContextAllocZero(buf->cxt, sizeof(CdtHold));
-	cb = MemoryContextAllocZero(buf->cxt, sizeof(MemoryContextCallback));
-	cb->func = cdt_reset_callback;
-	cb->arg = hold;
-	/* registered after the job's: runs before it, so the job outlives it */
-	MemoryContextRegisterResetCallback(buf->cxt, cb);
-
-	err[0] = '\0';
-	rc = tdc_cdt_start(run->job, w->seg, (size_t) w->nseg, &hold->cdt, err,
-					   sizeof(err));
-	if (rc != TDC_OK)
-		tdc_report_status(rc, err, fname);
-	rc = tdc_wait_work(hold->cdt, &cdt_ops, fname);
-	if (rc == TDC_ECROSS)
-		report_crossing(hold, buf, w, fname);
-	if (rc != TDC_OK)
-		tdc_report_status(rc, tdc_cdt_error(hold->cdt), fname);
-	if (tdc_guc_stats)
-	{
-		INSTR_TIME_SET_CURRENT(stop);
-		INSTR_TIME_SUBTRACT(stop, start);
-		ereport(NOTICE,
-				(errmsg("%s: %llu segments, %zu constraint edges, insertion %.3f ms",
-						fname, (unsigned long long) w->nseg,
-						tdc_cdt_num_constraint_edges(hold->cdt),
-						INSTR_TIME_GET_MILLISEC(stop))));
-	}
-	return hold;
-}
-
-/* Free the insertion now (its memory is big); the job stays. */
-static void
-cdt_release(CdtHold *hold)
-{
-	tdc_cdt_free(hold->cdt);
-	hold->cdt = NULL;
-}
 
 /* tdc_gser_edge_list's next() over the constraint edges. */
 typedef struct CdtEdgeWalk
@@ -256,11 +56,11 @@ next_constraint_edge(void *arg, uint32 v[2])
  * geometry value of the given kind.
  */
 static Datum
-constrained_to_datum(const TdcPointBuf *buf, const SegList *segs, int flags,
+constrained_to_datum(const TdcPointBuf *buf, const TdcSegList *segs, int flags,
 					 const char *fname)
 {
 	TdcRun	   *run;
-	CdtHold    *hold;
+	TdcCdtHold *hold;
 	TdcGserWriter wr;
 	struct varlena *result;
 	uint64		extra;
@@ -276,7 +76,7 @@ constrained_to_datum(const TdcPointBuf *buf, const SegList *segs, int flags,
 	extra = tdc_gser_result_bound(buf->n, flags == TDC_OUT_CONSTRAINTS ?
 								  TDC_OUT_EDGES : flags, buf->hasz);
 	run = tdc_run(buf, 0.0, extra, fname);
-	hold = constrain(run, buf, segs, fname);
+	hold = tdc_constrain(run, buf, segs, fname);
 	if (flags == TDC_OUT_CONSTRAINTS)
 	{
 		CdtEdgeWalk walk = {hold->cdt, {0}};
@@ -284,11 +84,11 @@ constrained_to_datum(const TdcPointBuf *buf, const SegList *segs, int flags,
 		result = tdc_gser_edge_list(run->job, buf,
 									tdc_cdt_num_constraint_edges(hold->cdt),
 									next_constraint_edge, &walk, fname);
-		cdt_release(hold);
+		tdc_constrain_release(hold);
 		tdc_run_free(run);
 		return PointerGetDatum(result);
 	}
-	cdt_release(hold);
+	tdc_constrain_release(hold);
 
 	result = tdc_gser_result_alloc(run->job, flags, buf, fname, &wr);
 	if (flags == TDC_OUT_EDGES || wr.count == 0 ||
@@ -311,14 +111,14 @@ st_tdcconstraineddelaunaytriangles(PG_FUNCTION_ARGS)
 	const char *fname = "ST_TDCConstrainedDelaunayTriangles";
 	int32		flags = PG_NARGS() > 1 ? PG_GETARG_INT32(1) : 0;
 	TdcPointBuf buf;
-	SegList		segs;
+	TdcSegList	segs;
 
 	tdc_signal_guard();
 	tdc_check_flags(flags, true, fname);
 	tdc_pointbuf_init(&buf, CurrentMemoryContext);
-	seg_init(&segs, CurrentMemoryContext, &buf, fname);
+	tdc_seg_init(&segs, CurrentMemoryContext, &buf, fname);
 	(void) tdc_read_geometry(&buf, PG_GETARG_DATUM(0), fname);
-	seg_flush(&segs);
+	tdc_seg_flush(&segs);
 	PG_RETURN_DATUM(constrained_to_datum(&buf, &segs, flags, fname));
 }
 
@@ -347,7 +147,7 @@ static const TdcStateFormat cdt_format = {
 typedef struct CdtAggState
 {
 	TdcAggState *base;			/* the vertices and the flags */
-	SegList		segs;
+	TdcSegList	segs;
 } CdtAggState;
 
 /* A state in cxt around base, or around a new empty one when base is NULL. */
@@ -357,7 +157,7 @@ cdt_state_new(MemoryContext cxt, TdcAggState *base)
 	CdtAggState *st = MemoryContextAllocZero(cxt, sizeof(CdtAggState));
 
 	st->base = base ? base : tdc_agg_state_new(cxt);
-	seg_init(&st->segs, cxt, &st->base->pts, CDT_AGG_NAME);
+	tdc_seg_init(&st->segs, cxt, &st->base->pts, CDT_AGG_NAME);
 	return st;
 }
 
@@ -399,7 +199,7 @@ st_tdcconstraineddelaunay_transfn(PG_FUNCTION_ARGS)
 	cdt_state_set_flags(st, flags);
 
 	(void) tdc_read_geometry(&st->base->pts, PG_GETARG_DATUM(1), CDT_AGG_NAME);
-	seg_flush(&st->segs);
+	tdc_seg_flush(&st->segs);
 	PG_RETURN_POINTER(st);
 }
 
@@ -426,10 +226,7 @@ st_tdcconstraineddelaunay_combinefn(PG_FUNCTION_ARGS)
 		cdt_state_set_flags(st1, st2->base->flags);
 	base = st1->base->pts.n;
 	tdc_pointbuf_append_buf(&st1->base->pts, &st2->base->pts, CDT_AGG_NAME);
-	seg_reserve(&st1->segs, st2->segs.nseg);
-	for (uint64 i = 0; i < 2 * st2->segs.nseg; i++)
-		st1->segs.seg[2 * st1->segs.nseg + i] = (uint32) (st2->segs.seg[i] + base);
-	st1->segs.nseg += st2->segs.nseg;
+	tdc_seg_append(&st1->segs, &st2->segs, base);
 	PG_RETURN_POINTER(st1);
 }
 
@@ -463,7 +260,6 @@ st_tdcconstraineddelaunay_deserialfn(PG_FUNCTION_ARGS)
 	CdtAggState *st;
 	const char *extra;
 	Size		extra_len;
-	uint64		k;
 
 	tdc_signal_guard();
 	(void) tdc_agg_context(fcinfo, "st_tdcconstraineddelaunay_deserialfn");
@@ -471,20 +267,7 @@ st_tdcconstraineddelaunay_deserialfn(PG_FUNCTION_ARGS)
 										  CurrentMemoryContext,
 										  &extra, &extra_len);
 	st = cdt_state_new(CurrentMemoryContext, base);
-	if (extra_len % (2 * sizeof(uint32)) != 0)
-		tdc_agg_state_corrupt(CDT_AGG_NAME,
-							  psprintf("%zu bytes after %llu vertices are not whole segments",
-									   extra_len, (unsigned long long) base->pts.n));
-	k = extra_len / (2 * sizeof(uint32));
-	if (k > 0)
-	{
-		seg_reserve(&st->segs, k);
-		memcpy(st->segs.seg, extra, extra_len);
-		for (uint64 i = 0; i < 2 * k; i++)
-			if (st->segs.seg[i] >= base->pts.n)
-				tdc_agg_state_corrupt(CDT_AGG_NAME, "segment end beyond the vertices");
-		st->segs.nseg = k;
-	}
+	tdc_seg_read(&st->segs, extra, extra_len, base->pts.n);
 	PG_RETURN_POINTER(st);
 }
 
@@ -514,7 +297,7 @@ st_tdcconstraineddelaunay_finalfn(PG_FUNCTION_ARGS)
 static void
 cdt_dump_row(void *arg, uint64 first)
 {
-	seg_flush((SegList *) arg);
+	tdc_seg_flush((TdcSegList *) arg);
 }
 
 PG_FUNCTION_INFO_V1(st_tdcconstraineddelaunaydump);
@@ -531,7 +314,7 @@ st_tdcconstraineddelaunaydump(PG_FUNCTION_ARGS)
 	char	   *query;
 	Oid			geomoid;
 	TdcPointBuf buf;
-	SegList		segs;
+	TdcSegList	segs;
 	TdcRun	   *run;
 
 	tdc_signal_guard();
@@ -540,13 +323,13 @@ st_tdcconstraineddelaunaydump(PG_FUNCTION_ARGS)
 	geomoid = TupleDescAttr(rsinfo->setDesc, 1)->atttypid;
 
 	tdc_pointbuf_init(&buf, CurrentMemoryContext);
-	seg_init(&segs, CurrentMemoryContext, &buf, fname);
+	tdc_seg_init(&segs, CurrentMemoryContext, &buf, fname);
 	tdc_dump_collect(&buf, NULL, query, geomoid, fname, cdt_dump_row, &segs);
 	if (buf.n == 0)
 		return (Datum) 0;
 
 	run = tdc_run(&buf, 0.0, 0, fname);
-	cdt_release(constrain(run, &buf, &segs, fname));
+	tdc_constrain_release(tdc_constrain(run, &buf, &segs, fname));
 	tdc_dump_triangles(rsinfo, run, &buf);
 	tdc_run_free(run);
 	return (Datum) 0;

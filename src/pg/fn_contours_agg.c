@@ -219,7 +219,7 @@ st_tdccontours_finalfn(PG_FUNCTION_ARGS)
 	if (!st->params_set)
 		PG_RETURN_NULL();
 	pts = &st->base->pts;
-	tr = tdc_tin_run_start(pts, 0, CONTOUR_NAME);
+	tr = tdc_tin_run_start(pts, NULL, 0, CONTOUR_NAME);
 	err[0] = '\0';
 	rc = tdc_tin_contours_start(tr->tin, st->interval, st->level0, err, sizeof(err));
 	tdc_tin_run_wait(tr, rc, err, CONTOUR_NAME);

@@ -13,7 +13,10 @@
  * first.  (GDAL's radius would make the result depend on an option for
  * vertices the surface does not reach; a draped road that silently leaves
  * the survey is a worse surprise than an error.)  So the method takes no
- * GDAL options.
+ * GDAL options; it takes 'linear:breaklines=true', which makes the
+ * samples' linestrings and polygon rings hard breaklines of the TIN
+ * (tin_run.c), kept from the first row on beside the vertices and
+ * combined with them.
  *
  * The state is the Delaunay aggregate's point buffer (agg_state.c) with the
  * heights, plus the method and the target, which must be the same in every
@@ -24,7 +27,11 @@
  * followed by
  *
  *		uint32 params_set (0 or 1), uint32 method length, uint64 target
- *		length, int64 rows, the method's bytes, the target's bytes
+ *		length, int64 rows, the method's bytes, the target's bytes, then
+ *		with breaklines (version 2) k * 2 uint32 segment ends
+ *
+ * (k from the length; both ends among the state's vertices, and no
+ * segment without breaklines).
  *
  * The result keeps the target's SRID, which must be the samples'.
  */
@@ -45,7 +52,7 @@
 
 static const TdcStateFormat drape_format = {
 	0x31524454,					/* "TDR1" little-endian */
-	1, DRAPE_NAME,
+	2, DRAPE_NAME,
 	"Disable parallel aggregation for this query (SET max_parallel_workers_per_gather = 0).",
 	-1
 };
@@ -56,6 +63,8 @@ typedef struct DrapeState
 	int64		rows;
 	bool		params_set;
 	char	   *method;			/* as given, checked */
+	bool		breaklines;		/* the method's: segs holds the samples' linework */
+	TdcSegList	segs;
 	struct varlena *target;		/* detoasted, in the aggregate context */
 	bool		target_const;	/* the target is a constant: no need to compare */
 } DrapeState;
@@ -70,22 +79,56 @@ drape_state_new(MemoryContext cxt)
 	return st;
 }
 
-/* The method, checked: a name of tdc_interp_parse's, with no option. */
+/* Does the method have an option other than breaklines (GDAL's radius, nodata)? */
+static bool
+has_gdal_option(const char *method)
+{
+	for (const char *p = strchr(method, ':'); p != NULL; p = strchr(p + 1, ':'))
+		if (pg_strncasecmp(p + 1, "breaklines=", 11) != 0)
+			return true;
+	return false;
+}
+
+/*
+ * The method, checked: a name of tdc_interp_parse's, with no option but
+ * linear's breaklines.
+ */
 static void
 check_method(const char *method, tdc_interp_spec *spec)
 {
 	char		err[256];
+	bool		gdal_option = strlen(method) <= METHOD_MAX && has_gdal_option(method);
 
-	if (strlen(method) > METHOD_MAX || tdc_interp_parse(method, spec, err, sizeof(err)) != TDC_OK ||
-		strchr(method, ':') != NULL)
+	err[0] = '\0';
+	if (strlen(method) > METHOD_MAX || gdal_option ||
+		tdc_interp_parse(method, spec, err, sizeof(err)) != TDC_OK)
 		ereport(ERROR,
 				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
 				 errmsg("%s: invalid method \"%s\"", DRAPE_NAME, method),
-				 strchr(method, ':') ? errdetail("%s takes no options: every vertex of the target must lie in the samples' convex hull.",
-												 DRAPE_NAME) : (err[0] ? errdetail("%s.", err) : 0),
-				 errhint("Use 'linear', 'nearest' or 'natural_neighbor'.")));
+				 gdal_option ? errdetail("%s takes no options but linear's breaklines: every vertex of the target must lie in the samples' convex hull.",
+										 DRAPE_NAME) : (err[0] ? errdetail("%s.", err) : 0),
+				 errhint("Use 'linear', 'linear:breaklines=true', 'nearest' or 'natural_neighbor'.")));
 	/* outside the hull there is no value: an error, raised by the final function */
 	spec->radius = 0;
+}
+
+/*
+ * From the first row, whose method fixes every row's: keep the samples'
+ * linework as segments if the method asks for breaklines, and refuse
+ * curves then, as the constrained functions do.
+ */
+static void
+drape_breaklines(DrapeState *st, MemoryContext cxt)
+{
+	tdc_interp_spec spec;
+
+	check_method(st->method, &spec);
+	st->breaklines = spec.breaklines;
+	if (st->breaklines)
+	{
+		tdc_seg_init(&st->segs, cxt, &st->base->pts, DRAPE_NAME);
+		st->base->pts.curves = TDC_CURVES_REFUSE;
+	}
 }
 
 static void
@@ -98,6 +141,7 @@ drape_params(DrapeState *st, MemoryContext cxt, const char *method,
 		st->method = MemoryContextStrdup(cxt, method);
 		st->target = MemoryContextAlloc(cxt, target_len);
 		memcpy(st->target, target, target_len);
+		drape_breaklines(st, cxt);
 		return;
 	}
 	if (strcmp(st->method, method) != 0)
@@ -155,6 +199,8 @@ st_tdcdrape_transfn(PG_FUNCTION_ARGS)
 	}
 	st->rows++;
 	tdc_tin_read_sample(&st->base->pts, PG_GETARG_DATUM(1), st->rows, DRAPE_NAME);
+	if (st->breaklines)
+		tdc_seg_flush(&st->segs);
 	PG_RETURN_POINTER(st);
 }
 
@@ -166,6 +212,7 @@ st_tdcdrape_combinefn(PG_FUNCTION_ARGS)
 	MemoryContext aggcxt = tdc_agg_context(fcinfo, "st_tdcdrape_combinefn");
 	DrapeState *st1 = PG_ARGISNULL(0) ? NULL : (DrapeState *) PG_GETARG_POINTER(0);
 	DrapeState *st2 = PG_ARGISNULL(1) ? NULL : (DrapeState *) PG_GETARG_POINTER(1);
+	uint64		base;
 
 	tdc_signal_guard();
 	if (st2 == NULL || !st2->params_set)
@@ -178,7 +225,10 @@ st_tdcdrape_combinefn(PG_FUNCTION_ARGS)
 		st1 = drape_state_new(aggcxt);
 	drape_params(st1, aggcxt, st2->method, st2->target, VARSIZE_ANY(st2->target));
 	tdc_agg_rows_add(&st1->rows, st2->rows, DRAPE_NAME);
+	base = st1->base->pts.n;
 	tdc_agg_state_merge(st1->base, st2->base);
+	if (st1->breaklines)
+		tdc_seg_append(&st1->segs, &st2->segs, base);
 	PG_RETURN_POINTER(st1);
 }
 
@@ -191,6 +241,7 @@ st_tdcdrape_serialfn(PG_FUNCTION_ARGS)
 	char	   *extra;
 	Size		mlen,
 				tlen,
+				slen,
 				len;
 	uint32		u[2];
 	uint64		tl;
@@ -200,8 +251,9 @@ st_tdcdrape_serialfn(PG_FUNCTION_ARGS)
 	st = (DrapeState *) PG_GETARG_POINTER(0);
 	mlen = st->params_set ? strlen(st->method) : 0;
 	tlen = st->params_set ? VARSIZE_ANY(st->target) : 0;
-	len = DRAPE_FIXED + mlen + tlen;
-	extra = palloc(len);
+	slen = st->breaklines ? (Size) st->segs.nseg * 2 * sizeof(uint32) : 0;
+	len = DRAPE_FIXED + mlen + tlen + slen;
+	extra = palloc_extended(len, MCXT_ALLOC_HUGE);
 	u[0] = st->params_set ? 1 : 0;
 	u[1] = (uint32) mlen;
 	tl = tlen;
@@ -212,8 +264,13 @@ st_tdcdrape_serialfn(PG_FUNCTION_ARGS)
 		memcpy(extra + DRAPE_FIXED, st->method, mlen);
 	if (tlen > 0)
 		memcpy(extra + DRAPE_FIXED + mlen, st->target, tlen);
+	if (slen > 0)
+		memcpy(extra + DRAPE_FIXED + mlen + tlen, st->segs.seg, slen);
 	PG_RETURN_BYTEA_P(tdc_agg_state_serialize_with(st->base, &drape_format, extra, len,
-												   NULL));
+												   slen == 0 ? NULL :
+												   psprintf("%llu vertices and %llu breakline segments",
+															(unsigned long long) st->base->pts.n,
+															(unsigned long long) st->segs.nseg)));
 }
 
 PG_FUNCTION_INFO_V1(st_tdcdrape_deserialfn);
@@ -223,7 +280,8 @@ st_tdcdrape_deserialfn(PG_FUNCTION_ARGS)
 {
 	DrapeState *st;
 	const char *extra;
-	Size		extra_len;
+	Size		extra_len,
+				rest;
 	uint32		u[2];
 	uint64		tl;
 
@@ -239,7 +297,7 @@ st_tdcdrape_deserialfn(PG_FUNCTION_ARGS)
 	memcpy(&tl, extra + 8, 8);
 	memcpy(&st->rows, extra + 16, 8);
 	if (u[0] > 1 || st->rows < 0 || u[1] > METHOD_MAX || tl > extra_len ||
-		(uint64) extra_len != DRAPE_FIXED + (uint64) u[1] + tl ||
+		(uint64) extra_len < DRAPE_FIXED + (uint64) u[1] + tl ||
 		(u[0] == 0 && (u[1] != 0 || tl != 0)) ||
 		(u[0] == 1 && (u[1] == 0 || tl < VARHDRSZ)))
 		tdc_agg_state_corrupt(DRAPE_NAME, "bad method or target lengths");
@@ -257,7 +315,13 @@ st_tdcdrape_deserialfn(PG_FUNCTION_ARGS)
 		memcpy(st->target, extra + DRAPE_FIXED + u[1], (Size) tl);
 		if (VARATT_IS_EXTENDED(st->target) || VARSIZE(st->target) != tl)
 			tdc_agg_state_corrupt(DRAPE_NAME, "the target's length");
+		drape_breaklines(st, CurrentMemoryContext);
 	}
+	rest = extra_len - DRAPE_FIXED - u[1] - (Size) tl;
+	if (!st->breaklines && rest != 0)
+		tdc_agg_state_corrupt(DRAPE_NAME, "segments without breaklines");
+	if (st->breaklines)
+		tdc_seg_read(&st->segs, extra + DRAPE_FIXED + u[1] + tl, rest, st->base->pts.n);
 	if (st->base->pts.n > 0 && !st->base->pts.hasz)
 		tdc_agg_state_corrupt(DRAPE_NAME, "samples without Z");
 	PG_RETURN_POINTER(st);
@@ -299,7 +363,8 @@ st_tdcdrape_finalfn(PG_FUNCTION_ARGS)
 						t.srid, pts->srid),
 				 errhint("Transform one of them with ST_Transform, or set the SRID with ST_SetSRID.")));
 
-	tr = tdc_tin_run_start(pts, VARSIZE_ANY(st->target) + tdc_drape_target_bytes(&t), DRAPE_NAME);
+	tr = tdc_tin_run_start(pts, st->breaklines ? &st->segs : NULL,
+						   VARSIZE_ANY(st->target) + tdc_drape_target_bytes(&t), DRAPE_NAME);
 	err[0] = '\0';
 	rc = tdc_tin_drape_start(tr->tin, &spec, t.xy, t.chain_end, t.nchains, err, sizeof(err));
 	tdc_tin_run_wait(tr, rc, err, DRAPE_NAME);

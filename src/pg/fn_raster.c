@@ -16,7 +16,11 @@
  * is GDAL's text ('linear', 'nearest', 'natural_neighbor', with options
  * such as ':radius=0:nodata=-9999', parsed by tdc_interp_parse); unknown
  * methods and options are ERRORs (PostGIS passes GDAL's other algorithms
- * on).
+ * on).  One option is not GDAL's: 'linear:breaklines=true' takes the
+ * input's linestrings and polygon rings as hard breaklines, inserted into
+ * the triangulation as ST_TDCConstrainedDelaunay inserts its lines, so the
+ * surface follows ridges and streams (crossing lines are an ERROR, curves
+ * refused); nearest and natural_neighbor refuse it (tdc_interp_parse).
  *
  * The result band.  Its pixel type is the template band's; values are
  * stored as PostGIS's own raster functions store them (raster_write.c:
@@ -86,11 +90,13 @@ tdc_raster_method(const char *method, tdc_interp_spec *spec, const char *fname)
 /*
  * The samples in pts interpolated by method at the pixel centres of the
  * template's grid, as a one-band raster of the template band's pixel type
- * (see the top of the file).  pts holds at least one sample, with Z.
+ * (see the top of the file).  pts holds at least one sample, with Z;
+ * breaklines their linework's segments, inserted when the method asks for
+ * them (tdc_raster_breaklines).
  */
 struct varlena *
-tdc_raster_interpolate(const TdcPointBuf *pts, const TdcRasterInfo *tmpl,
-					   const char *method, const char *fname)
+tdc_raster_interpolate(const TdcPointBuf *pts, const TdcSegList *breaklines,
+					   const TdcRasterInfo *tmpl, const char *method, const char *fname)
 {
 	tdc_interp_spec spec;
 	tdc_grid_spec grid;
@@ -120,7 +126,8 @@ tdc_raster_interpolate(const TdcPointBuf *pts, const TdcRasterInfo *tmpl,
 				 errhint("Interpolate into tiles of the raster, e.g. the tiles of ST_Tile(template, 1, 1000, 1000).")));
 
 	/* the result, its values and their mask: counted with the TIN */
-	tr = tdc_tin_run_start(pts, out_bytes + values_bytes + n, fname);
+	tr = tdc_tin_run_start(pts, spec.breaklines ? breaklines : NULL,
+						   out_bytes + values_bytes + n, fname);
 	tdc_raster_alloc(tmpl, pt, nodata, fname, &w);
 	/* the empty pixels get the band's nodata value as stored */
 	spec.nodata = w.nodata;
@@ -144,6 +151,23 @@ tdc_raster_interpolate(const TdcPointBuf *pts, const TdcRasterInfo *tmpl,
 	return w.value;
 }
 
+/*
+ * Does the method ask for breaklines?  Then the samples' linework is
+ * reported into l as they are read into pts, and curves are refused, as by
+ * the constrained functions (a curve's stored vertices are control points,
+ * whose segments are no line of the surface).
+ */
+bool
+tdc_raster_breaklines(const tdc_interp_spec *spec, TdcSegList *l, MemoryContext cxt,
+					  TdcPointBuf *pts, const char *fname)
+{
+	if (!spec->breaklines)
+		return false;
+	tdc_seg_init(l, cxt, pts, fname);
+	pts->curves = TDC_CURVES_REFUSE;
+	return true;
+}
+
 PG_FUNCTION_INFO_V1(st_tdcinterpolateraster);
 
 /*
@@ -156,6 +180,7 @@ st_tdcinterpolateraster(PG_FUNCTION_ARGS)
 	char	   *method;
 	TdcRasterInfo tmpl;
 	TdcPointBuf pts;
+	TdcSegList	segs;
 	tdc_interp_spec spec;
 
 	tdc_signal_guard();
@@ -166,7 +191,10 @@ st_tdcinterpolateraster(PG_FUNCTION_ARGS)
 
 	tdc_pointbuf_init(&pts, CurrentMemoryContext);
 	pts.curves = TDC_CURVES_VERTICES;
+	(void) tdc_raster_breaklines(&spec, &segs, CurrentMemoryContext, &pts, INTERPOLATE_RASTER_NAME);
 	(void) tdc_read_geometry(&pts, PG_GETARG_DATUM(0), INTERPOLATE_RASTER_NAME);
+	if (spec.breaklines)
+		tdc_seg_flush(&segs);
 	if (pts.n == 0)
 		PG_RETURN_NULL();
 	if (!pts.hasz)
@@ -175,5 +203,5 @@ st_tdcinterpolateraster(PG_FUNCTION_ARGS)
 				 errmsg("%s: input_points has no Z coordinate", INTERPOLATE_RASTER_NAME),
 				 errhint("Every sample needs a height: make the samples XYZ, with ST_MakePoint(x, y, z) or "
 						 "ST_Force3DZ(geom, z).")));
-	PG_RETURN_POINTER(tdc_raster_interpolate(&pts, &tmpl, method, INTERPOLATE_RASTER_NAME));
+	PG_RETURN_POINTER(tdc_raster_interpolate(&pts, &segs, &tmpl, method, INTERPOLATE_RASTER_NAME));
 }

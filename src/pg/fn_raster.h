@@ -11,7 +11,11 @@
 
 extern void tdc_raster_method(const char *method, tdc_interp_spec *spec,
 							  const char *fname);
+extern bool tdc_raster_breaklines(const tdc_interp_spec *spec, TdcSegList *l,
+								  MemoryContext cxt, TdcPointBuf *pts,
+								  const char *fname);
 extern struct varlena *tdc_raster_interpolate(const TdcPointBuf *pts,
+											  const TdcSegList *breaklines,
 											  const TdcRasterInfo *tmpl,
 											  const char *method,
 											  const char *fname);

@@ -28,9 +28,17 @@
  *		uint32 params_set (0 or 1), uint32 method length, int64 rows,
  *		int32 band, int32 SRID, uint32 width, uint32 height,
  *		float8 geotransform[6], int32 pixel type, uint32 hasnodata,
- *		float8 nodata, then the method's bytes
+ *		float8 nodata, then the method's bytes, then with breaklines
+ *		(version 2) k * 2 uint32 segment ends (k from the length)
  *
- * in the machine's byte order, every field checked when read.
+ * in the machine's byte order, every field checked when read: a segment
+ * must have both ends among the state's vertices, and a method without
+ * breaklines no segment.
+ *
+ * Breaklines ('linear:breaklines=true', fn_raster.c): from the first row,
+ * whose method fixes every row's, the samples' linework is kept as
+ * segments beside the vertices (seglist.c), combined with them (shifted by
+ * the vertices before), and inserted before the TIN is built.
  */
 #include "postgres.h"
 
@@ -52,7 +60,7 @@
 
 static const TdcStateFormat interp_format = {
 	0x31495254,					/* "TRI1" little-endian */
-	1, INTERP_NAME,
+	2, INTERP_NAME,
 	"Disable parallel aggregation for this query (SET max_parallel_workers_per_gather = 0).",
 	-1
 };
@@ -63,6 +71,8 @@ typedef struct InterpState
 	int64		rows;
 	bool		params_set;
 	char	   *method;			/* as given, checked */
+	bool		breaklines;		/* the method's: segs holds the samples' linework */
+	TdcSegList	segs;
 	int32		band;
 	TdcRasterInfo tmpl;			/* the template's geometry and band */
 	bool		tmpl_const;		/* the template is a constant: read once */
@@ -104,10 +114,16 @@ interp_params(InterpState *st, MemoryContext cxt, const char *method, int32 band
 {
 	if (!st->params_set)
 	{
+		tdc_interp_spec spec;
+
 		st->params_set = true;
 		st->method = MemoryContextStrdup(cxt, method);
 		st->band = band;
 		st->tmpl = *tmpl;
+		/* from the first row on, the samples' lines are kept if asked for */
+		tdc_raster_method(method, &spec, INTERP_NAME);
+		st->breaklines = tdc_raster_breaklines(&spec, &st->segs, cxt, &st->base->pts,
+											   INTERP_NAME);
 		return;
 	}
 	if (strcmp(st->method, method) != 0)
@@ -211,6 +227,8 @@ st_tdcinterpolate_transfn(PG_FUNCTION_ARGS)
 
 	st->rows++;
 	tdc_tin_read_sample(&st->base->pts, PG_GETARG_DATUM(1), st->rows, INTERP_NAME);
+	if (st->breaklines)
+		tdc_seg_flush(&st->segs);
 	PG_RETURN_POINTER(st);
 }
 
@@ -222,6 +240,7 @@ st_tdcinterpolate_combinefn(PG_FUNCTION_ARGS)
 	MemoryContext aggcxt = tdc_agg_context(fcinfo, "st_tdcinterpolate_combinefn");
 	InterpState *st1 = PG_ARGISNULL(0) ? NULL : (InterpState *) PG_GETARG_POINTER(0);
 	InterpState *st2 = PG_ARGISNULL(1) ? NULL : (InterpState *) PG_GETARG_POINTER(1);
+	uint64		base;
 
 	tdc_signal_guard();
 	if (st2 == NULL || !st2->params_set)
@@ -234,7 +253,10 @@ st_tdcinterpolate_combinefn(PG_FUNCTION_ARGS)
 		st1 = interp_state_new(aggcxt);
 	interp_params(st1, aggcxt, st2->method, st2->band, &st2->tmpl);
 	tdc_agg_rows_add(&st1->rows, st2->rows, INTERP_NAME);
+	base = st1->base->pts.n;
 	tdc_agg_state_merge(st1->base, st2->base);
+	if (st1->breaklines)
+		tdc_seg_append(&st1->segs, &st2->segs, base);
 	PG_RETURN_POINTER(st1);
 }
 
@@ -246,6 +268,7 @@ st_tdcinterpolate_serialfn(PG_FUNCTION_ARGS)
 	InterpState *st;
 	char	   *extra;
 	Size		mlen,
+				slen,
 				len;
 	uint32		u[2];
 	int32		i4[2];
@@ -257,8 +280,9 @@ st_tdcinterpolate_serialfn(PG_FUNCTION_ARGS)
 	(void) tdc_agg_context(fcinfo, "st_tdcinterpolate_serialfn");
 	st = (InterpState *) PG_GETARG_POINTER(0);
 	mlen = st->params_set ? strlen(st->method) : 0;
-	len = INTERP_FIXED + mlen;
-	extra = palloc0(len);
+	slen = st->breaklines ? (Size) st->segs.nseg * 2 * sizeof(uint32) : 0;
+	len = INTERP_FIXED + mlen + slen;
+	extra = palloc_extended(len, MCXT_ALLOC_HUGE | MCXT_ALLOC_ZERO);
 	u[0] = st->params_set ? 1 : 0;
 	u[1] = (uint32) mlen;
 	i4[0] = st->band;
@@ -277,8 +301,13 @@ st_tdcinterpolate_serialfn(PG_FUNCTION_ARGS)
 	memcpy(extra + 88, &st->tmpl.b.nodata, 8);
 	if (mlen > 0)
 		memcpy(extra + INTERP_FIXED, st->method, mlen);
+	if (slen > 0)
+		memcpy(extra + INTERP_FIXED + mlen, st->segs.seg, slen);
 	PG_RETURN_BYTEA_P(tdc_agg_state_serialize_with(st->base, &interp_format, extra, len,
-												   NULL));
+												   slen == 0 ? NULL :
+												   psprintf("%llu vertices and %llu breakline segments",
+															(unsigned long long) st->base->pts.n,
+															(unsigned long long) st->segs.nseg)));
 }
 
 PG_FUNCTION_INFO_V1(st_tdcinterpolate_deserialfn);
@@ -312,8 +341,8 @@ st_tdcinterpolate_deserialfn(PG_FUNCTION_ARGS)
 	memcpy(&hasnodata, extra + 84, 4);
 	memcpy(&st->tmpl.b.nodata, extra + 88, 8);
 	if (u[0] > 1 || st->rows < 0 || u[1] > METHOD_MAX ||
-		(uint64) extra_len != INTERP_FIXED + (uint64) u[1] ||
-		(u[0] == 0 && u[1] != 0) || (u[0] == 1 && u[1] == 0))
+		(uint64) extra_len < INTERP_FIXED + (uint64) u[1] ||
+		(u[0] == 0 && (u[1] != 0 || extra_len != INTERP_FIXED)) || (u[0] == 1 && u[1] == 0))
 		tdc_agg_state_corrupt(INTERP_NAME, "bad method length");
 	st->params_set = u[0] == 1;
 	tdc_agg_state_check_unset(st->base, st->params_set, st->rows, INTERP_NAME);
@@ -336,6 +365,13 @@ st_tdcinterpolate_deserialfn(PG_FUNCTION_ARGS)
 		if (strlen(st->method) != u[1])
 			tdc_agg_state_corrupt(INTERP_NAME, "a NUL in the method");
 		tdc_raster_method(st->method, &spec, INTERP_NAME);
+		st->breaklines = tdc_raster_breaklines(&spec, &st->segs, CurrentMemoryContext,
+											   &st->base->pts, INTERP_NAME);
+		if (!st->breaklines && extra_len != INTERP_FIXED + (Size) u[1])
+			tdc_agg_state_corrupt(INTERP_NAME, "segments without breaklines");
+		if (st->breaklines)
+			tdc_seg_read(&st->segs, extra + INTERP_FIXED + u[1],
+						 extra_len - INTERP_FIXED - u[1], st->base->pts.n);
 	}
 	if (st->base->pts.n > 0 && !st->base->pts.hasz)
 		tdc_agg_state_corrupt(INTERP_NAME, "samples without Z");
@@ -356,6 +392,6 @@ st_tdcinterpolate_finalfn(PG_FUNCTION_ARGS)
 	st = (InterpState *) PG_GETARG_POINTER(0);
 	if (!st->params_set || st->base->pts.n == 0)
 		PG_RETURN_NULL();
-	PG_RETURN_POINTER(tdc_raster_interpolate(&st->base->pts, &st->tmpl, st->method,
-											 INTERP_NAME));
+	PG_RETURN_POINTER(tdc_raster_interpolate(&st->base->pts, st->breaklines ? &st->segs : NULL,
+											 &st->tmpl, st->method, INTERP_NAME));
 }

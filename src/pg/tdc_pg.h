@@ -23,6 +23,8 @@
  *	signals.c		keeps PostGIS's cancel handler from allocating inside a
  *					signal; every SQL entry point calls tdc_signal_guard()
  *	version.c		the versions and thread count a bug report needs
+ *	seglist.c		constraint segments from linework, and their insertion
+ *					(the constrained functions and the TIN's breaklines)
  *	tin_run.c		a TIN of samples with Z, and the operations on it, waited on
  *	gser_contour.c	contour lines written as a MULTILINESTRING Z
  *	gser_drape.c	a target geometry read as chains and written again draped
@@ -390,6 +392,40 @@ extern void tdc_dump_collect(TdcPointBuf *buf, TdcIdBuf *ids, const char *query,
 							 Oid geomoid, const char *fname,
 							 TdcDumpRowFn row_fn, void *row_arg);
 
+/*
+ * seglist.c: segments as pairs of vertex indices into buf, taken from the
+ * chains the reader reports (every linestring and polygon ring) once
+ * tdc_seg_init has made buf report them to the list.
+ */
+typedef struct TdcSegList
+{
+	MemoryContext cxt;
+	TdcPointBuf *buf;
+	const char *fname;
+	uint32	   *seg;
+	uint64		nseg;
+	uint64		cap;
+	uint64	   *chain;			/* (first, k) pairs noted, not yet segments */
+	Size		nchain;
+	Size		chaincap;
+} TdcSegList;
+
+/* An insertion of segments into a job, freed before the job on an error. */
+typedef struct TdcCdtHold
+{
+	tdc_cdt    *cdt;
+} TdcCdtHold;
+
+extern void tdc_seg_init(TdcSegList *l, MemoryContext cxt, TdcPointBuf *buf,
+						 const char *fname);
+extern void tdc_seg_reserve(TdcSegList *l, uint64 more);
+extern void tdc_seg_flush(TdcSegList *l);
+extern void tdc_seg_append(TdcSegList *dst, const TdcSegList *src, uint64 base);
+extern void tdc_seg_read(TdcSegList *l, const char *data, Size len, uint64 n);
+extern TdcCdtHold *tdc_constrain(TdcRun *run, const TdcPointBuf *buf,
+								 const TdcSegList *w, const char *fname);
+extern void tdc_constrain_release(TdcCdtHold *hold);
+
 /* tin_run.c: a TIN of the samples, and the operations on it */
 typedef struct TdcTinRun
 {
@@ -399,8 +435,8 @@ typedef struct TdcTinRun
 } TdcTinRun;
 
 extern void tdc_tin_read_sample(TdcPointBuf *buf, Datum d, int64 row, const char *fname);
-extern TdcTinRun *tdc_tin_run_start(const TdcPointBuf *buf, uint64 extra,
-									const char *fname);
+extern TdcTinRun *tdc_tin_run_start(const TdcPointBuf *buf, const TdcSegList *breaklines,
+									uint64 extra, const char *fname);
 extern void tdc_tin_run_wait(TdcTinRun *tr, int rc, const char *err, const char *fname);
 extern void tdc_tin_run_free(TdcTinRun *tr);
 

@@ -14,6 +14,12 @@
  * point; under a parallel plan "first" follows the order in which partial
  * states are combined).
  *
+ * Breaklines.  With "linear:breaklines=true" the owner has the samples'
+ * linework reported as segments (seglist.c), and they are inserted into
+ * the triangulation before the TIN is built on it, as the constrained
+ * functions insert theirs: crossing segments are an ERROR naming them, and
+ * curves are refused, as there (the owner sets the buffer so).
+ *
  * Running.  The triangulation is tdc_run's (run.c), with the TIN's own
  * memory and the caller's extra bytes counted as its result, so one
  * tdc_delaunay.max_memory check covers the vertices, the engine, the TIN
@@ -89,11 +95,14 @@ tin_reset_callback(void *arg)
 
 /*
  * Triangulate buf's samples and build their TIN, waiting interruptibly;
- * extra: bytes the caller holds beside them (its input and result), for the
- * tdc_delaunay.max_memory check.  Any failure is an ERROR.
+ * breaklines (or NULL): segments inserted into the triangulation first, so
+ * that the TIN is the constrained one; extra: bytes the caller holds beside
+ * them (its input and result), for the tdc_delaunay.max_memory check.  Any
+ * failure is an ERROR.
  */
 TdcTinRun *
-tdc_tin_run_start(const TdcPointBuf *buf, uint64 extra, const char *fname)
+tdc_tin_run_start(const TdcPointBuf *buf, const TdcSegList *breaklines, uint64 extra,
+				  const char *fname)
 {
 	TdcTinRun  *tr;
 	MemoryContextCallback *cb;
@@ -117,6 +126,14 @@ tdc_tin_run_start(const TdcPointBuf *buf, uint64 extra, const char *fname)
 		room = (size_t) (limit > used ? limit - used : 1);
 	}
 	tr->max_memory = room;
+
+	/*
+	 * The breaklines: inserted (tdc_cdt_start checks its own arrays against
+	 * the limit beside the job's) and the insertion freed before the TIN is
+	 * built, so the two never hold memory at once.
+	 */
+	if (breaklines != NULL && breaklines->nseg > 0)
+		tdc_constrain_release(tdc_constrain(tr->run, buf, breaklines, fname));
 
 	cb = MemoryContextAllocZero(buf->cxt, sizeof(MemoryContextCallback));
 	cb->func = tin_reset_callback;

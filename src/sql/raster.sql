@@ -19,7 +19,8 @@ COST 10000;
 COMMENT ON FUNCTION ST_TDCInterpolateRaster(geometry, text, raster, int4) IS
 'Interpolates the Z of the vertices of input_points at the pixel centres of the template raster, drop-in for '
 'ST_InterpolateRaster: method ''linear'', ''nearest'' or ''natural_neighbor'' with GDAL''s options '
-'(''linear:radius=0:nodata=-9999''). Returns a one-band raster with the template''s extent, resolution, SRID '
+'(''linear:radius=0:nodata=-9999''), and ''linear:breaklines=true'' to take the linestrings and polygon rings as '
+'hard breaklines. Returns a one-band raster with the template''s extent, resolution, SRID '
 'and the pixel type of band template_band_num; pixels without a value are nodata.';
 
 -- Aggregates: ST_TDCInterpolate(geom, template [, method [, template_band_num]])
@@ -112,7 +113,7 @@ CREATE AGGREGATE ST_TDCInterpolate(geometry, raster, text) (
 
 COMMENT ON AGGREGATE ST_TDCInterpolate(geometry, raster, text) IS
 'Interpolation of the Z of the vertices of all input geometries at the pixel centres of the template raster '
-'(band 1) with a method (''linear'', ''nearest'', ''natural_neighbor'', GDAL''s options); '
+'(band 1) with a method (''linear'', ''nearest'', ''natural_neighbor'', GDAL''s options, ''linear:breaklines=true''); '
 'same as ST_TDCInterpolateRaster(ST_Collect(geom), method, template).';
 
 CREATE AGGREGATE ST_TDCInterpolate(geometry, raster, text, int4) (
@@ -127,5 +128,5 @@ CREATE AGGREGATE ST_TDCInterpolate(geometry, raster, text, int4) (
 
 COMMENT ON AGGREGATE ST_TDCInterpolate(geometry, raster, text, int4) IS
 'Interpolation of the Z of the vertices of all input geometries at the pixel centres of band template_band_num '
-'of the template raster with a method (''linear'', ''nearest'', ''natural_neighbor'', GDAL''s options); '
+'of the template raster with a method (''linear'', ''nearest'', ''natural_neighbor'', GDAL''s options, ''linear:breaklines=true''); '
 'same as ST_TDCInterpolateRaster(ST_Collect(geom), method, template, template_band_num).';

@@ -7,6 +7,10 @@
 #   bash test/citus/build.sh              build (or take from the cache) and install
 #   bash test/citus/build.sh --supported  exit 0 if Citus 13.2.2 supports this
 #                                         major, else say why and exit 3
+#   bash test/citus/build.sh --deps       the Debian packages the build needs
+#                                         (scripts/test.sh installs them with
+#                                         its own, before building in the
+#                                         background)
 #
 # Citus 13.2.2 supports PostgreSQL 15, 16 and 17 (its configure refuses 18).
 # The patch is for 15 only: 15.15 and later export have_createdb_privilege(),
@@ -23,6 +27,11 @@
 # Debian does not package Citus: the build needs a few -dev packages,
 # installed with apt-get when missing (as root).
 set -euo pipefail
+CITUS_DEPS=(libkrb5-dev libzstd-dev liblz4-dev libcurl4-openssl-dev libssl-dev libicu-dev)
+if [ "${1:-}" = --deps ]; then
+	echo "${CITUS_DEPS[*]}"
+	exit 0
+fi
 HERE=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
 ROOT=$(cd "$HERE/../.." && pwd)
 # shellcheck source=scripts/lib.sh
@@ -58,7 +67,7 @@ STAGE=$CACHE/stage
 
 if [ ! -f "$CACHE/done" ]; then
 	need=()
-	for p in libkrb5-dev libzstd-dev liblz4-dev libcurl4-openssl-dev libssl-dev libicu-dev; do
+	for p in "${CITUS_DEPS[@]}"; do
 		dpkg -s "$p" >/dev/null 2>&1 || need+=("$p")
 	done
 	if ((${#need[@]})); then
@@ -79,8 +88,11 @@ if [ ! -f "$CACHE/done" ]; then
 		[ -z "$PATCH" ] || patch -p1 -s <"$PATCH"
 		./configure PG_CONFIG="$PG_CONFIG" >"$CACHE/configure.log" 2>&1 ||
 			{ tail -30 "$CACHE/configure.log"; exit 1; }
-		make -j2 >"$CACHE/make.log" 2>&1 || { tail -30 "$CACHE/make.log"; exit 1; }
-		make install DESTDIR="$STAGE" >"$CACHE/install.log" 2>&1 || { tail -30 "$CACHE/install.log"; exit 1; }
+		# with_llvm=no: no JIT bitcode, which would compile every file a
+		# second time (with clang) for a test cluster that never inlines it
+		make -j2 with_llvm=no >"$CACHE/make.log" 2>&1 || { tail -30 "$CACHE/make.log"; exit 1; }
+		make install with_llvm=no DESTDIR="$STAGE" >"$CACHE/install.log" 2>&1 ||
+			{ tail -30 "$CACHE/install.log"; exit 1; }
 	)
 	# the object files are not needed again
 	rm -rf "$CACHE/citus-13.2.2"
