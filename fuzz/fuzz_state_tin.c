@@ -17,7 +17,11 @@
  * Each state is checked against a model of its documented format written
  * here from the comments at the top of the three files, independently of
  * their code: the Delaunay vertex part (agg_state.c), then the aggregate's
- * own part.  The checks:
+ * own part, which for ST_TDCDrape and ST_TDCInterpolate (version 2) ends
+ * with the breaklines' segments when the method asks for breaklines
+ * ('linear:breaklines=true'): pairs of uint32 vertex indices, whole pairs
+ * only, both ends below the state's vertex count, and none at all for a
+ * method without breaklines.  The checks:
  *
  *	- the deserial function raises an ERROR exactly when the model rejects
  *	  the bytes; the ERROR is "corrupt serialized aggregate state"
@@ -31,8 +35,9 @@
  *	  VALUE where the model sees a conflict (SRID, dimensions, the
  *	  Delaunay part's parameters, the aggregate's parameters), or gives
  *	  A's vertices then B's, the row counts added, the parameters of
- *	  whichever state had them; the result serializes to exactly that and
- *	  deserializes again;
+ *	  whichever state had them, and with breaklines A's segments then B's
+ *	  with their ends shifted by A's vertex count; the result serializes to
+ *	  exactly that and deserializes again;
  *	- a state without parameters holds nothing (no vertices, no
  *	  dimensions, no rows): combine skips such a state, so anything in it
  *	  would be lost (the model rejects one that does);
@@ -45,6 +50,7 @@
 
 #include <math.h>
 #include <stdlib.h>
+#include <strings.h>
 
 #include "common/int.h"
 #include "fmgr.h"
@@ -86,13 +92,18 @@ typedef struct Model
 	/* the aggregate's part */
 	const uint8 *extra;
 	size_t		extra_len;
+	size_t		params_len;		/* of extra, before the segments */
 	bool		params_set;
 	int64		rows;
+	bool		breaklines;		/* the method's; only then segments may follow */
+	const uint8 *seg;			/* nseg pairs of uint32 vertex indices */
+	uint64		nseg;
 } Model;
 
 typedef struct TinFormat
 {
 	uint32		magic;
+	uint32		version;
 	const char *name;
 	PGFunction	serial;
 	PGFunction	deserial;
@@ -133,21 +144,56 @@ f64_at(const uint8 *p)
 	return v;
 }
 
-/* A method the transition functions take: tdc_interp_parse's names. */
+/*
+ * A method the transition functions take: tdc_interp_parse's names, with
+ * any of its options, or (ST_TDCDrape, !gdal_options) none but breaklines.
+ * *breaklines: whether it asks for them.
+ */
 static bool
-method_ok(const uint8 *p, size_t len, bool options)
+method_ok(const uint8 *p, size_t len, bool gdal_options, bool *breaklines)
 {
 	char		buf[1100];
 	char		err[256];
 	tdc_interp_spec spec;
 
+	*breaklines = false;
 	if (len >= sizeof(buf) || memchr(p, '\0', len) != NULL)
 		return false;
 	memcpy(buf, p, len);
 	buf[len] = '\0';
-	if (!options && strchr(buf, ':') != NULL)
+	if (!gdal_options)
+		for (const char *c = strchr(buf, ':'); c != NULL; c = strchr(c + 1, ':'))
+			if (strncasecmp(c + 1, "breaklines=", 11) != 0)
+				return false;
+	if (tdc_interp_parse(buf, &spec, err, sizeof(err)) != TDC_OK)
 		return false;
-	return tdc_interp_parse(buf, &spec, err, sizeof(err)) == TDC_OK;
+	*breaklines = spec.breaklines;
+	return true;
+}
+
+/*
+ * The rest bytes at p (after the parameters) as segments: none unless the
+ * method asks for breaklines, else whole pairs of ends below the vertex
+ * count.
+ */
+static void
+read_segments(Model *m, const uint8 *p, size_t rest)
+{
+	if (rest == 0)
+		return;
+	if (!m->breaklines || rest % 8 != 0)
+	{
+		m->reject |= R_CORRUPT;
+		return;
+	}
+	m->seg = p;
+	m->nseg = rest / 8;
+	for (uint64 i = 0; i < 2 * m->nseg; i++)
+		if (u32_at(p + 4 * i) >= m->n)
+		{
+			m->reject |= R_CORRUPT;
+			return;
+		}
 }
 
 /* ----------------------------------------------------------------
@@ -167,6 +213,7 @@ contour_extra(Model *m)
 		m->reject |= R_CORRUPT;
 		return;
 	}
+	m->params_len = 32;
 	m->rows = (int64) u64_at(e + 24);
 	if (u32_at(e) > 1 || u32_at(e + 4) != 0 || m->rows < 0)
 	{
@@ -196,7 +243,7 @@ contour_same(const Model *a, const Model *b)
 /* ----------------------------------------------------------------
  *		ST_TDCDrape: uint32 params_set, uint32 method length, uint64 target
  *		length, int64 rows, the method, the target (a varlena, 4-byte
- *		header)
+ *		header), then with breaklines the segments
  * ----------------------------------------------------------------
  */
 static void
@@ -218,26 +265,33 @@ drape_extra(Model *m)
 	tl = u64_at(e + 8);
 	m->rows = (int64) u64_at(e + 16);
 	if (ps > 1 || m->rows < 0 || ml > 64 || tl > m->extra_len ||
-		m->extra_len != 24 + (uint64) ml + tl ||
+		m->extra_len < 24 + (uint64) ml + tl ||
 		(ps == 0 && (ml != 0 || tl != 0)) || (ps == 1 && (ml == 0 || tl < 4)))
 	{
 		m->reject |= R_CORRUPT;
 		return;
 	}
 	m->params_set = ps == 1;
-	if (!m->params_set)
-		return;
-	if (memchr(e + 24, '\0', ml) != NULL)
+	m->params_len = 24 + ml + tl;
+	if (m->params_set)
 	{
-		m->reject |= R_CORRUPT;
-		return;
+		if (memchr(e + 24, '\0', ml) != NULL)
+		{
+			m->reject |= R_CORRUPT;
+			return;
+		}
+		if (!method_ok(e + 24, ml, false, &m->breaklines))
+		{
+			/* whether segments may follow is unknown: the method decides */
+			m->reject |= R_METHOD;
+			return;
+		}
+		/* a plain 4-byte header (low two bits 00, little-endian) saying tl */
+		hdr = u32_at(e + 24 + ml);
+		if ((hdr & 3) != 0 || (hdr >> 2) != tl)
+			m->reject |= R_CORRUPT;
 	}
-	if (!method_ok(e + 24, ml, false))
-		m->reject |= R_METHOD;
-	/* a plain 4-byte header (low two bits 00, little-endian) saying tl */
-	hdr = u32_at(e + 24 + ml);
-	if ((hdr & 3) != 0 || (hdr >> 2) != tl)
-		m->reject |= R_CORRUPT;
+	read_segments(m, e + m->params_len, m->extra_len - m->params_len);
 }
 
 static void
@@ -259,7 +313,7 @@ drape_same(const Model *a, const Model *b)
  *		ST_TDCInterpolate: uint32 params_set, uint32 method length, int64
  *		rows, int32 band, int32 SRID, uint32 width, uint32 height, float8
  *		geotransform[6], int32 pixel type, uint32 hasnodata, float8
- *		nodata, the method
+ *		nodata, the method, then with breaklines the segments
  * ----------------------------------------------------------------
  */
 static void
@@ -279,13 +333,14 @@ interp_extra(Model *m)
 	ps = u32_at(e);
 	ml = u32_at(e + 4);
 	m->rows = (int64) u64_at(e + 8);
-	if (ps > 1 || m->rows < 0 || ml > 1024 || m->extra_len != 96 + (uint64) ml ||
-		(ps == 0 && ml != 0) || (ps == 1 && ml == 0))
+	if (ps > 1 || m->rows < 0 || ml > 1024 || m->extra_len < 96 + (uint64) ml ||
+		(ps == 0 && (ml != 0 || m->extra_len != 96)) || (ps == 1 && ml == 0))
 	{
 		m->reject |= R_CORRUPT;
 		return;
 	}
 	m->params_set = ps == 1;
+	m->params_len = 96 + ml;
 	if (!m->params_set)
 		return;
 	band = (int32) u32_at(e + 16);
@@ -298,8 +353,12 @@ interp_extra(Model *m)
 		m->reject |= R_CORRUPT;
 		return;
 	}
-	if (!method_ok(e + 96, ml, true))
+	if (!method_ok(e + 96, ml, true, &m->breaklines))
+	{
 		m->reject |= R_METHOD;
+		return;
+	}
+	read_segments(m, e + m->params_len, m->extra_len - m->params_len);
 }
 
 /* Without parameters only the geotransform and nodata are kept. */
@@ -332,11 +391,11 @@ interp_same(const Model *a, const Model *b)
 }
 
 static const TinFormat formats[] = {
-	{0x314e4354, "ST_TDCContours", st_tdccontours_serialfn, st_tdccontours_deserialfn,
+	{0x314e4354, 1, "ST_TDCContours", st_tdccontours_serialfn, st_tdccontours_deserialfn,
 	st_tdccontours_combinefn, 24, contour_extra, contour_normalize, contour_same},
-	{0x31524454, "ST_TDCDrape", st_tdcdrape_serialfn, st_tdcdrape_deserialfn,
+	{0x31524454, 2, "ST_TDCDrape", st_tdcdrape_serialfn, st_tdcdrape_deserialfn,
 	st_tdcdrape_combinefn, 16, drape_extra, drape_normalize, drape_same},
-	{0x31495254, "ST_TDCInterpolate", st_tdcinterpolate_serialfn,
+	{0x31495254, 2, "ST_TDCInterpolate", st_tdcinterpolate_serialfn,
 		st_tdcinterpolate_deserialfn, st_tdcinterpolate_combinefn, 8, interp_extra,
 	interp_normalize, interp_same},
 };
@@ -352,7 +411,7 @@ model_read(const TinFormat *f, const uint8 *d, size_t len)
 	uint64		per;
 
 	memset(&m, 0, sizeof(m));
-	if (len < HDR || u32_at(d) != f->magic || u32_at(d + 4) != 1)
+	if (len < HDR || u32_at(d) != f->magic || u32_at(d + 4) != f->version)
 	{
 		m.reject = R_CORRUPT;
 		return m;
@@ -525,7 +584,9 @@ conflict(const TinFormat *f, const Model *a, const Model *b)
 /*
  * The serialized combine(A, B) of two accepted states with B's parameters
  * set: the Delaunay part merged, the aggregate's part of whichever has
- * parameters (A's first) with the rows added.
+ * parameters (A's first) with the rows added, then with breaklines A's
+ * segments and B's shifted by A's vertex count (a state without
+ * parameters has none).
  */
 static uint8 *
 model_combined(const TinFormat *f, const Model *a, const Model *b, size_t *len)
@@ -541,14 +602,14 @@ model_combined(const TinFormat *f, const Model *a, const Model *b, size_t *len)
 	uint64		n = a->n + b->n;
 	uint32		zero = 0;
 	int64		rows = a->rows + b->rows;	/* no overflow: checked by the caller */
+	uint64		nseg = p->breaklines ? a->nseg + b->nseg : 0;
 	uint8	   *out,
 			   *w;
 
-	*len = HDR + n * (hasz ? 24 : 16) + p->extra_len;
+	*len = HDR + n * (hasz ? 24 : 16) + p->params_len + 8 * nseg;
 	out = w = malloc(*len);
 	memcpy(w, &f->magic, 4);
-	w[4] = 1;
-	w[5] = w[6] = w[7] = 0;
+	memcpy(w + 4, &f->version, 4);
 	memcpy(w + 8, &bits, 4);
 	memcpy(w + 12, &srid, 4);
 	memcpy(w + 16, &flags, 4);
@@ -565,9 +626,22 @@ model_combined(const TinFormat *f, const Model *a, const Model *b, size_t *len)
 		memcpy(w + 8 * a->n, b->z, 8 * b->n);
 		w += 8 * n;
 	}
-	memcpy(w, p->extra, p->extra_len);
+	memcpy(w, p->extra, p->params_len);
 	f->normalize_extra(p, w);
 	memcpy(w + f->rows_at, &rows, 8);
+	w += p->params_len;
+	if (nseg > 0)
+	{
+		if (a->nseg > 0)
+			memcpy(w, a->seg, 8 * a->nseg);
+		w += 8 * a->nseg;
+		for (uint64 i = 0; i < 2 * b->nseg; i++)
+		{
+			uint32		end = u32_at(b->seg + 4 * i) + (uint32) a->n;
+
+			memcpy(w + 4 * i, &end, 4);
+		}
+	}
 	return out;
 }
 
