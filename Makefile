@@ -198,7 +198,14 @@ build/fuzz/fuzz_cdt: fuzz/fuzz_cdt.c $(FUZZ_CORE_DEPS)
 
 # The reader and writers, and the aggregate state, each with the point buffer.
 FUZZ_GSER_SRCS = src/pg/gser_read.c src/pg/gser_write.c src/pg/pointbuf.c
-FUZZ_STATE_SRCS = src/pg/agg_state.c src/pg/pointbuf.c
+# fuzz_state also takes the TIN aggregates' states (fuzz_state_tin.c): their
+# entry points, and what their serial, deserial and combine functions call
+# (the method parser in fn_raster.c, which brings the raster and geometry
+# readers and writers, and the breaklines' segment list in seglist.c);
+# pg_shim_agg.c stands in for tin_run.c, run.c's wait loop and the rest.
+FUZZ_STATE_SRCS = src/pg/agg_state.c src/pg/fn_contours_agg.c src/pg/seglist.c \
+	src/pg/fn_drape_agg.c src/pg/fn_raster_agg.c src/pg/fn_raster.c src/pg/raster_read.c \
+	src/pg/raster_write.c src/pg/gser_contour.c src/pg/gser_drape.c $(FUZZ_GSER_SRCS)
 FUZZ_PG_DEPS = fuzz/pg_shim.c fuzz/pg_shim.h src/pg/tdc_pg.h src/pg/pg_version_compat.h \
 	src/pg/gser_format.h
 
@@ -220,10 +227,13 @@ build/fuzz/fuzz_raster: fuzz/fuzz_raster.c $(FUZZ_RASTER_SRCS) $(FUZZ_PG_DEPS) s
 	$(FUZZ_CC) $(FUZZ_CFLAGS) $(FUZZ_PG_CFLAGS) -Isrc/core -o $@ fuzz/fuzz_raster.c \
 		fuzz/pg_shim.c $(FUZZ_RASTER_SRCS) -lm
 
-build/fuzz/fuzz_state: fuzz/fuzz_state.c $(FUZZ_STATE_SRCS) $(FUZZ_PG_DEPS) $(FUZZ_CORE_DEPS)
+build/fuzz/fuzz_state: fuzz/fuzz_state.c fuzz/fuzz_state_tin.c fuzz/fuzz_state.h \
+		fuzz/pg_shim_agg.c $(FUZZ_STATE_SRCS) $(FUZZ_PG_DEPS) $(FUZZ_CORE_DEPS) \
+		src/pg/raster_format.h src/pg/fn_raster.h
 	@mkdir -p build/fuzz
 	$(FUZZ_CC) $(FUZZ_CFLAGS) $(FUZZ_PG_CFLAGS) -Isrc/core -o $@ fuzz/fuzz_state.c \
-		fuzz/pg_shim.c $(FUZZ_STATE_SRCS) $(FUZZ_CORE_LIB) -lm
+		fuzz/fuzz_state_tin.c fuzz/pg_shim.c fuzz/pg_shim_agg.c $(FUZZ_STATE_SRCS) \
+		$(FUZZ_CORE_LIB) -lm
 
 fuzz-run: fuzz
 	FUZZ_SECONDS=$(FUZZ_SECONDS) bash fuzz/run.sh $(FUZZ_RUN_TARGETS)

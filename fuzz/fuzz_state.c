@@ -4,8 +4,9 @@
  *		(src/pg/agg_state.c: tdc_agg_state_deserialize, _serialize,
  *		_merge), the bytes that travel between parallel workers.
  *
- * Linked with agg_state.c and pointbuf.c, compiled against the real
- * server headers, and with the shims of pg_shim.c.
+ * Linked with agg_state.c and pointbuf.c (and, for fuzz_state_tin.c, the
+ * TIN aggregates' entry points and what they call), compiled against the
+ * real server headers, and with the shims of pg_shim.c and pg_shim_agg.c.
  *
  * Input: uint16 little-endian length L, then L bytes of a first serialized
  * state (without the varlena header), then the rest as a second state.
@@ -24,6 +25,10 @@
  *	  Voronoi aggregates do) reads back with the same vertices and exactly
  *	  that extra part, and is refused by ST_TDCDelaunay's deserializer and,
  *	  when the extra part is not empty, by one that expects none.
+ *
+ * A first state with the magic number of ST_TDCContours, ST_TDCDrape or
+ * ST_TDCInterpolate goes to fuzz_state_tin.c instead, which fuzzes those
+ * aggregates' own serial, deserial and combine functions.
  */
 #include "postgres.h"
 
@@ -35,17 +40,18 @@
 
 #include "tdc_pg.h"
 #include "pg_shim.h"
+#include "fuzz_state.h"
 
-static void
-fail(const char *what, const char *detail)
+void
+fuzz_state_fail(const char *what, const char *detail)
 {
 	fprintf(stderr, "fuzz_state: %s%s%s\n", what, detail ? ": " : "",
 			detail ? detail : "");
 	abort();
 }
 
-static bytea *
-make_bytea(const uint8 *data, size_t size)
+bytea *
+fuzz_state_bytea(const uint8 *data, size_t size)
 {
 	bytea	   *v = malloc(VARHDRSZ + size);
 
@@ -115,7 +121,7 @@ normalize(uint8 *d)
 static TdcAggState *
 try_deserialize(const uint8 *data, size_t size, bool *ok)
 {
-	bytea	   *v = make_bytea(data, size);
+	bytea	   *v = fuzz_state_bytea(data, size);
 	sigjmp_buf	jb;
 	TdcAggState *volatile st = NULL;
 
@@ -129,7 +135,7 @@ try_deserialize(const uint8 *data, size_t size, bool *ok)
 	fuzz_pg_jmp = NULL;
 	free(v);
 	if (*ok != ref_valid(data, size))
-		fail(*ok ? "accepted a state the format check rejects" :
+		fuzz_state_fail(*ok ? "accepted a state the format check rejects" :
 			 "rejected a state the format check accepts", fuzz_pg_message);
 	if (*ok)
 	{
@@ -140,7 +146,7 @@ try_deserialize(const uint8 *data, size_t size, bool *ok)
 		normalize(norm);
 		if (VARSIZE(out) != VARHDRSZ + size ||
 			memcmp(VARDATA(out), norm, size) != 0)
-			fail("serialize(deserialize(x)) differs from x", NULL);
+			fuzz_state_fail("serialize(deserialize(x)) differs from x", NULL);
 		free(norm);
 	}
 	return st;
@@ -170,7 +176,7 @@ refuses(const bytea *v, const TdcStateFormat *fmt)
 	}
 	fuzz_pg_jmp = NULL;
 	if (!ok && fuzz_pg_sqlstate != ERRCODE_DATA_CORRUPTED)
-		fail("refused a state with an unexpected error", fuzz_pg_message);
+		fuzz_state_fail("refused a state with an unexpected error", fuzz_pg_message);
 	return !ok;
 }
 
@@ -200,21 +206,21 @@ check_extra(const TdcAggState *st, const uint8 *extra, size_t extra_len)
 	}
 	fuzz_pg_jmp = NULL;
 	if (back == NULL)
-		fail("a state with an extra part does not read back", fuzz_pg_message);
+		fuzz_state_fail("a state with an extra part does not read back", fuzz_pg_message);
 	if (back->pts.n != st->pts.n || back->pts.hasz != st->pts.hasz ||
 		(st->pts.n > 0 &&
 		 (memcmp(back->pts.xy, st->pts.xy, 16 * st->pts.n) != 0 ||
 		  (st->pts.hasz && memcmp(back->pts.z, st->pts.z, 8 * st->pts.n) != 0))))
-		fail("a state with an extra part reads back other vertices", NULL);
+		fuzz_state_fail("a state with an extra part reads back other vertices", NULL);
 	if (got_len != extra_len ||
 		(extra_len > 0 && memcmp(got, extra, extra_len) != 0))
-		fail("the extra part reads back different", NULL);
+		fuzz_state_fail("the extra part reads back different", NULL);
 	if (got != (const char *) VARDATA(ser) + 40 + 8 * per * st->pts.n)
-		fail("the extra part is not right after the vertices", NULL);
+		fuzz_state_fail("the extra part is not right after the vertices", NULL);
 	if (!refuses(ser, NULL))
-		fail("ST_TDCDelaunay's deserializer accepted another format", NULL);
+		fuzz_state_fail("ST_TDCDelaunay's deserializer accepted another format", NULL);
 	if (extra_len > 0 && !refuses(ser, &other_format))
-		fail("a deserializer that expects no extra part accepted one", NULL);
+		fuzz_state_fail("a deserializer that expects no extra part accepted one", NULL);
 }
 
 int			LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
@@ -242,6 +248,13 @@ LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 	b = a + alen;
 	blen = size - 2 - alen;
 
+	/* the TIN aggregates' states: fuzz_state_tin.c */
+	if (fuzz_state_tin(a, alen, b, blen))
+	{
+		fuzz_pg_reset();
+		return 0;
+	}
+
 	sa = try_deserialize(a, alen, &oka);
 	sb = blen > 0 ? try_deserialize(b, blen, &okb) : NULL;
 	if (sa != NULL)
@@ -264,26 +277,26 @@ LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 		}
 		fuzz_pg_jmp = NULL;
 		if (!merged && fuzz_pg_sqlstate != ERRCODE_INVALID_PARAMETER_VALUE)
-			fail("combine failed with an unexpected error", fuzz_pg_message);
+			fuzz_state_fail("combine failed with an unexpected error", fuzz_pg_message);
 		if (merged)
 		{
 			bytea	   *ser;
 			bool		ok2;
 
 			if (sa->pts.n != na + nb)
-				fail("combined state has the wrong vertex count", NULL);
+				fuzz_state_fail("combined state has the wrong vertex count", NULL);
 			if (na > 0 && memcmp(sa->pts.xy, axy, 16 * na) != 0)
-				fail("combine changed the first state's vertices", NULL);
+				fuzz_state_fail("combine changed the first state's vertices", NULL);
 			if (nb > 0 && memcmp(sa->pts.xy + 2 * na, sb->pts.xy, 16 * nb) != 0)
-				fail("combine did not append the second state's vertices", NULL);
+				fuzz_state_fail("combine did not append the second state's vertices", NULL);
 			if (nb > 0 && sa->pts.hasz &&
 				memcmp(sa->pts.z + na, sb->pts.z, 8 * nb) != 0)
-				fail("combine did not append the second state's Z values", NULL);
+				fuzz_state_fail("combine did not append the second state's Z values", NULL);
 			ser = tdc_agg_state_serialize(sa);
 			(void) try_deserialize((const uint8 *) VARDATA(ser),
 								   VARSIZE(ser) - VARHDRSZ, &ok2);
 			if (!ok2)
-				fail("combined state does not deserialize", NULL);
+				fuzz_state_fail("combined state does not deserialize", NULL);
 		}
 		free(axy);
 	}

@@ -10,7 +10,9 @@ and from hand-made edge cases.  Formats:
   fuzz_gserialized  a PostGIS GSERIALIZED value without its 4-byte varlena
                     header (the harness adds it), written by gser() below
   fuzz_state        fuzz/fuzz_state.c: uint16 split, then one or two serialized
-                    ST_TDCDelaunay states (without varlena headers)
+                    ST_TDCDelaunay states (without varlena headers), or of
+                    ST_TDCContours, ST_TDCDrape or ST_TDCInterpolate (their
+                    magic numbers pick fuzz/fuzz_state_tin.c)
 
 The output is deterministic; files are named by content hash.
 """
@@ -32,6 +34,13 @@ def put(target, data):
     os.makedirs(d, exist_ok=True)
     name = hashlib.sha1(data).hexdigest()[:16]
     with open(os.path.join(d, name), "wb") as f:
+        f.write(data)
+
+
+def known(name, target, data):
+    """A fixture of fuzz/known/ (see its README), also a seed of target."""
+    put(target, data)
+    with open(os.path.join(HERE, "known", name), "wb") as f:
         f.write(data)
 
 
@@ -359,6 +368,165 @@ def main():
     put("fuzz_state", st2(state(pts=sq)[:30]))
     for fn, pts in dl[:3]:
         put("fuzz_state", st2(state(pts=pts[:200])))
+
+    # ---- fuzz_state: the TIN aggregates (fuzz/fuzz_state_tin.c), the
+    # first state's magic picking the aggregate.  The vertex part as above,
+    # with heights, then the aggregate's own part (ST_TDCDrape's and
+    # ST_TDCInterpolate's at version 2: the breaklines' segments last).
+    TCN, TDR, TRI = 0x314E4354, 0x31524454, 0x31495254
+    VERSION = {TCN: 1, TDR: 2, TRI: 2}
+    sqz = [1.0, 2.0, 3.0, 4.5]
+
+    def samples(magic, pts=sq, zs=sqz, srid=4326, have_first=True, hasz=True, params=False, n=None,
+                version=None):
+        # no first value: no dimensions either (else the state is corrupt)
+        return state(magic=magic, have_first=have_first, hasz=hasz and have_first, params=params,
+                     srid=srid,
+                     pts=pts if have_first else [], zs=zs, n=n,
+                     version=VERSION[magic] if version is None else version)
+
+    def contour(ps=1, interval=10.0, base=0.0, rows=4, zero=0):
+        return struct.pack("<IIddq", ps, zero, interval, base, rows)
+
+    def varlena(b):
+        return struct.pack("<I", (len(b) + 4) << 2) + b
+
+    line = varlena(gser(parse_wkt("LINESTRING(0.25 0.25,0.75 0.5,0.5 0.9)"), srid=4326))
+
+    def segs(pairs):
+        return b"".join(struct.pack("<II", a, b) for a, b in pairs)
+
+    def drape(ps=1, method=b"linear", target=line, rows=4, ml=None, tl=None, seg=b""):
+        if not ps:
+            method, target = b"", b""
+        return struct.pack("<IIQq", ps, len(method) if ml is None else ml,
+                           len(target) if tl is None else tl, rows) + method + target + seg
+
+    def interp(ps=1, method=b"linear", rows=4, band=1, srid=4326, w=10, h=8,
+               gt=(0.0, 0.125, 0.0, 1.0, 0.0, -0.125), pixtype=11, hasnodata=1, nodata=-9999.0,
+               seg=b""):
+        if not ps:
+            method = b""
+        return struct.pack("<IIqiiII6diId", ps, len(method), rows, band, srid, w, h,
+                           *gt, pixtype, hasnodata, nodata) + method + seg
+
+    far = [(5, 5), (6, 5)]
+    farz = [7.0, 8.0]
+    for magic, ext, kname in ((TCN, contour, "contours"), (TDR, drape, "drape"),
+                              (TRI, interp, "interpolate")):
+        a = samples(magic) + ext()
+        put("fuzz_state", st2(a))
+        put("fuzz_state", st2(a, samples(magic, pts=far, zs=farz) + ext(rows=2)))
+        # no parameters: nothing in the state
+        put("fuzz_state", st2(samples(magic, have_first=False) + ext(ps=0, rows=0), a))
+        put("fuzz_state", st2(a, samples(magic, have_first=False) + ext(ps=0, rows=0)))
+        # no parameters but samples: combine would drop them
+        known("state_unset_with_samples_" + kname, "fuzz_state",
+              st2(a, samples(magic, pts=far, zs=farz) + ext(ps=0, rows=2)))
+        put("fuzz_state", st2(samples(magic) + ext(ps=0, rows=4), a))
+        # mixed SRIDs, dimensions; samples without Z; truncated; the
+        # Delaunay part's parameters (which the TIN aggregates never set)
+        put("fuzz_state", st2(a, samples(magic, pts=far, zs=farz, srid=3857) + ext(rows=2)))
+        put("fuzz_state", st2(a, samples(magic, pts=[], zs=[], hasz=False) + ext(rows=1)))
+        put("fuzz_state", st2(samples(magic, hasz=False) + ext()))
+        put("fuzz_state", st2(a[:-3]))
+        put("fuzz_state", st2(samples(magic, params=True) + ext(), a))
+        # rows at the limits: the sum overflows int64
+        big = samples(magic) + ext(rows=(1 << 63) - 1)
+        known("state_rows_overflow_" + kname, "fuzz_state",
+              st2(big, samples(magic, pts=far, zs=farz) + ext(rows=2)))
+        put("fuzz_state", st2(samples(magic) + ext(rows=-1)))
+        # another version of the format
+        put("fuzz_state", st2(samples(magic, version=VERSION[magic] % 2 + 1) + ext()))
+    put("fuzz_state", st2(samples(TCN) + contour(), samples(TCN, pts=far, zs=farz) + contour(interval=5.0)))
+    put("fuzz_state", st2(samples(TCN) + contour(), samples(TCN, pts=far, zs=farz) + contour(base=-0.0)))
+    put("fuzz_state", st2(samples(TCN, have_first=False) + contour(ps=0, interval=float("nan"), rows=0)))
+    put("fuzz_state", st2(samples(TCN) + contour(interval=0.0)))
+    put("fuzz_state", st2(samples(TCN) + contour(interval=float("inf"))))
+    put("fuzz_state", st2(samples(TCN) + contour(base=float("nan"))))
+    put("fuzz_state", st2(samples(TCN) + contour(zero=1)))
+    put("fuzz_state", st2(samples(TCN) + contour() + b"\0"))
+    put("fuzz_state", st2(samples(TDR) + drape(method=b"nearest"),
+                          samples(TDR, pts=far, zs=farz) + drape(method=b"natural_neighbor")))
+    put("fuzz_state", st2(samples(TDR) + drape(), samples(TDR, pts=far, zs=farz) + drape(
+        target=varlena(gser(parse_wkt("POINT(0.5 0.5)"), srid=4326)))))
+    put("fuzz_state", st2(samples(TDR) + drape(method=b"linear:radius=0")))
+    put("fuzz_state", st2(samples(TDR) + drape(method=b"cubic")))
+    put("fuzz_state", st2(samples(TDR) + drape(method=b"lin\0ar")))
+    put("fuzz_state", st2(samples(TDR) + drape(method=b"x" * 65)))
+    put("fuzz_state", st2(samples(TDR) + drape(target=b"\x01\0\0\0")))
+    put("fuzz_state", st2(samples(TDR) + drape(target=struct.pack("<I", 99 << 2) + line[4:])))
+    put("fuzz_state", st2(samples(TDR) + drape(tl=(1 << 64) - 1)))
+    put("fuzz_state", st2(samples(TDR) + drape(ml=(1 << 32) - 1)))
+    # lengths whose sum wraps: 24 + 6 + (2^64 - 6) = 24 bytes
+    known("state_drape_target_length_wraps", "fuzz_state",
+          st2(samples(TDR) + drape(method=b"", target=b"", ml=6, tl=(1 << 64) - 6)))
+    put("fuzz_state", st2(samples(TRI) + interp(method=b"linear:radius=0:nodata=-1"),
+                          samples(TRI, pts=far, zs=farz) + interp(method=b"linear:radius=0:nodata=-1")))
+    put("fuzz_state", st2(samples(TRI) + interp(), samples(TRI, pts=far, zs=farz) + interp(w=11)))
+    put("fuzz_state", st2(samples(TRI) + interp(nodata=float("nan")),
+                          samples(TRI, pts=far, zs=farz) + interp(nodata=float("nan"))))
+    put("fuzz_state", st2(samples(TRI) + interp(hasnodata=0, nodata=1.0),
+                          samples(TRI, pts=far, zs=farz) + interp(hasnodata=0, nodata=2.0)))
+    put("fuzz_state", st2(samples(TRI) + interp(), samples(TRI, pts=far, zs=farz) + interp(band=2)))
+    put("fuzz_state", st2(samples(TRI, have_first=False) + interp(ps=0, rows=0, gt=(1.0,) * 6, nodata=5.0)))
+    put("fuzz_state", st2(samples(TRI) + interp(method=b"nearest:radius1=1:radius2=2")))
+    put("fuzz_state", st2(samples(TRI) + interp(method=b"natural_neighbor:radius=2")))
+    put("fuzz_state", st2(samples(TRI) + interp(method=b"invdist")))
+    for bad in (dict(band=0), dict(w=65536), dict(h=1 << 31), dict(pixtype=12), dict(pixtype=-1),
+                dict(hasnodata=2), dict(w=0, h=0)):
+        put("fuzz_state", st2(samples(TRI) + interp(**bad)))
+
+    # breaklines (version 2): the segments after the parameters, ends among
+    # the state's vertices (4 here, 2 in the far state)
+    BRK = b"linear:breaklines=true"
+    for ext, brk2 in ((drape, b"linear:BreakLines=TRUE"),
+                      (interp, b"linear:radius=0:breaklines=true:nodata=-1")):
+        magic = TDR if ext is drape else TRI
+        a = samples(magic) + ext(method=BRK, seg=segs([(0, 1), (1, 3), (3, 2)]))
+        put("fuzz_state", st2(a))
+        # A's segments, then B's shifted by A's 4 vertices
+        put("fuzz_state", st2(a, samples(magic, pts=far, zs=farz) + ext(method=BRK, rows=2,
+                                                                          seg=segs([(0, 1)]))))
+        put("fuzz_state", st2(a, samples(magic, pts=far, zs=farz) + ext(method=BRK, rows=2)))
+        put("fuzz_state", st2(samples(magic) + ext(method=BRK),
+                              samples(magic, pts=far, zs=farz) + ext(method=BRK, rows=2,
+                                                                     seg=segs([(1, 0)]))))
+        # a state without parameters first, then one with segments
+        put("fuzz_state", st2(samples(magic, have_first=False) + ext(ps=0, rows=0), a))
+        put("fuzz_state", st2(a, samples(magic, have_first=False) + ext(ps=0, rows=0)))
+        # breaklines against none: the methods differ
+        put("fuzz_state", st2(a, samples(magic, pts=far, zs=farz) + ext(rows=2)))
+        put("fuzz_state", st2(samples(magic) + ext(method=brk2, seg=segs([(2, 2), (0, 3)]))))
+        put("fuzz_state", st2(samples(magic) + ext(method=b"linear:breaklines=false")))
+        # a degenerate segment, accepted as the transition function could
+        # not write it but the insertion skips it
+        put("fuzz_state", st2(samples(magic) + ext(method=BRK, seg=segs([(1, 1)]))))
+        # corrupt: an odd number of ends, a part of one, ends beyond the
+        # vertices, segments without breaklines, segments and no vertices,
+        # segments without parameters
+        put("fuzz_state", st2(samples(magic) + ext(method=BRK, seg=segs([(0, 1)]) + struct.pack("<I", 2))))
+        put("fuzz_state", st2(samples(magic) + ext(method=BRK, seg=b"\x01\x00")))
+        put("fuzz_state", st2(samples(magic) + ext(method=BRK, seg=segs([(0, 4)]))))
+        put("fuzz_state", st2(samples(magic) + ext(method=BRK, seg=segs([(0xFFFFFFFF, 0)]))))
+        put("fuzz_state", st2(samples(magic) + ext(seg=segs([(0, 1)]))))
+        put("fuzz_state", st2(samples(magic) + ext(method=b"linear:breaklines=false",
+                                                   seg=segs([(0, 1)]))))
+        put("fuzz_state", st2(samples(magic) + ext(method=b"nearest", seg=segs([(0, 1)]))))
+        put("fuzz_state", st2(samples(magic, have_first=False) + ext(method=BRK, rows=0,
+                                                                     seg=segs([(0, 0)]))))
+        put("fuzz_state", st2(samples(magic, have_first=False) + ext(ps=0, rows=0, seg=segs([(0, 0)]))))
+        # breaklines are linear's only
+        put("fuzz_state", st2(samples(magic) + ext(method=b"nearest:breaklines=true", seg=segs([(0, 1)]))))
+        # row counts that overflow, with segments on both sides
+        put("fuzz_state", st2(samples(magic) + ext(method=BRK, rows=(1 << 63) - 1, seg=segs([(0, 1)])),
+                              samples(magic, pts=far, zs=farz) + ext(method=BRK, rows=2,
+                                                                     seg=segs([(0, 1)]))))
+    # ST_TDCDrape takes no option but breaklines
+    put("fuzz_state", st2(samples(TDR) + drape(method=b"linear:breaklines=true:radius=0",
+                                               seg=segs([(0, 1)]))))
+    put("fuzz_state", st2(samples(TDR) + drape(method=BRK, target=b"\x01\0\0\0",
+                                               seg=segs([(0, 1)]))))
 
 
 

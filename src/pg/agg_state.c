@@ -37,6 +37,7 @@
 
 #include <math.h>
 
+#include "common/int.h"
 #include "utils/memutils.h"
 
 #include "tdc_pg.h"
@@ -247,6 +248,31 @@ tdc_agg_state_deserialize_with(const bytea *in, const TdcStateFormat *fmt,
 		*extra_len = (Size) (len - n * per);
 	}
 	return st;
+}
+
+/*
+ * The aggregates whose state adds parameters and a row count to the
+ * vertices (ST_TDCContours, ST_TDCDrape, ST_TDCInterpolate) check two more
+ * things of a state from another process.  A state without parameters
+ * holds nothing: their transition functions set the parameters before
+ * reading a row, and their combine functions skip such a state, so
+ * vertices or rows in one would be lost without a word.  And the row
+ * counts of two states add up without overflow (int64: only corrupt counts
+ * get there).
+ */
+void
+tdc_agg_state_check_unset(const TdcAggState *st, bool params_set, int64 rows,
+						  const char *fname)
+{
+	if (!params_set && (st->pts.have_first || st->params_set || rows != 0))
+		tdc_agg_state_corrupt(fname, "samples or rows without parameters");
+}
+
+void
+tdc_agg_rows_add(int64 *rows, int64 more, const char *fname)
+{
+	if (pg_add_s64_overflow(*rows, more, rows))
+		tdc_agg_state_corrupt(fname, "the row counts overflow");
 }
 
 TdcAggState *

@@ -136,7 +136,7 @@ st_tdccontours_combinefn(PG_FUNCTION_ARGS)
 	if (st1 == NULL)
 		st1 = contour_state_new(aggcxt);
 	contour_params(st1, st2->interval, st2->level0);
-	st1->rows += st2->rows;
+	tdc_agg_rows_add(&st1->rows, st2->rows, CONTOUR_NAME);
 	tdc_agg_state_merge(st1->base, st2->base);
 	PG_RETURN_POINTER(st1);
 }
@@ -189,6 +189,7 @@ st_tdccontours_deserialfn(PG_FUNCTION_ARGS)
 	if (u[0] > 1 || u[1] != 0 || st->rows < 0)
 		tdc_agg_state_corrupt(CONTOUR_NAME, "bad parameter flags");
 	st->params_set = u[0] == 1;
+	tdc_agg_state_check_unset(st->base, st->params_set, st->rows, CONTOUR_NAME);
 	if (st->params_set && (!(st->interval > 0) || isinf(st->interval) || !isfinite(st->level0)))
 		tdc_agg_state_corrupt(CONTOUR_NAME, "bad interval or base");
 	if (st->base->pts.n > 0 && !st->base->pts.hasz)

@@ -224,7 +224,7 @@ st_tdcdrape_combinefn(PG_FUNCTION_ARGS)
 	if (st1 == NULL)
 		st1 = drape_state_new(aggcxt);
 	drape_params(st1, aggcxt, st2->method, st2->target, VARSIZE_ANY(st2->target));
-	st1->rows += st2->rows;
+	tdc_agg_rows_add(&st1->rows, st2->rows, DRAPE_NAME);
 	base = st1->base->pts.n;
 	tdc_agg_state_merge(st1->base, st2->base);
 	if (st1->breaklines)
@@ -296,12 +296,13 @@ st_tdcdrape_deserialfn(PG_FUNCTION_ARGS)
 	memcpy(u, extra, 8);
 	memcpy(&tl, extra + 8, 8);
 	memcpy(&st->rows, extra + 16, 8);
-	if (u[0] > 1 || st->rows < 0 || u[1] > METHOD_MAX || tl > MaxAllocHugeSize ||
+	if (u[0] > 1 || st->rows < 0 || u[1] > METHOD_MAX || tl > extra_len ||
 		(uint64) extra_len < DRAPE_FIXED + (uint64) u[1] + tl ||
 		(u[0] == 0 && (u[1] != 0 || tl != 0)) ||
 		(u[0] == 1 && (u[1] == 0 || tl < VARHDRSZ)))
 		tdc_agg_state_corrupt(DRAPE_NAME, "bad method or target lengths");
 	st->params_set = u[0] == 1;
+	tdc_agg_state_check_unset(st->base, st->params_set, st->rows, DRAPE_NAME);
 	if (st->params_set)
 	{
 		tdc_interp_spec spec;

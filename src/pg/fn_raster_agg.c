@@ -252,7 +252,7 @@ st_tdcinterpolate_combinefn(PG_FUNCTION_ARGS)
 	if (st1 == NULL)
 		st1 = interp_state_new(aggcxt);
 	interp_params(st1, aggcxt, st2->method, st2->band, &st2->tmpl);
-	st1->rows += st2->rows;
+	tdc_agg_rows_add(&st1->rows, st2->rows, INTERP_NAME);
 	base = st1->base->pts.n;
 	tdc_agg_state_merge(st1->base, st2->base);
 	if (st1->breaklines)
@@ -345,6 +345,7 @@ st_tdcinterpolate_deserialfn(PG_FUNCTION_ARGS)
 		(u[0] == 0 && (u[1] != 0 || extra_len != INTERP_FIXED)) || (u[0] == 1 && u[1] == 0))
 		tdc_agg_state_corrupt(INTERP_NAME, "bad method length");
 	st->params_set = u[0] == 1;
+	tdc_agg_state_check_unset(st->base, st->params_set, st->rows, INTERP_NAME);
 	if (st->params_set)
 	{
 		tdc_interp_spec spec;

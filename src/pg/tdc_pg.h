@@ -284,6 +284,10 @@ extern TdcAggState *tdc_agg_state_deserialize_with(const bytea *in,
 												   Size *extra_len);
 /* ERROR: "fname: corrupt serialized aggregate state: what" */
 extern pg_noreturn void tdc_agg_state_corrupt(const char *fname, const char *what);
+/* states with parameters and a row count (the TIN aggregates') */
+extern void tdc_agg_state_check_unset(const TdcAggState *st, bool params_set, int64 rows,
+									  const char *fname);
+extern void tdc_agg_rows_add(int64 *rows, int64 more, const char *fname);
 
 /* fn_delaunay_agg.c, for the support functions of every aggregate */
 extern MemoryContext tdc_agg_context(FunctionCallInfo fcinfo, const char *fn);

@@ -6,10 +6,13 @@
 #
 # which pulls PostgreSQL and PostGIS from the mirror; then, in that root:
 # pg_createcluster NN test --start, CREATE EXTENSION tdc_delaunay CASCADE, a
-# triangulation whose triangle count and area are known exactly, the installed
+# triangulation whose triangle count and area are known exactly, CREATE
+# EXTENSION tdc_delaunay_raster CASCADE (postgis_raster with it) and an
+# interpolation whose every pixel is known exactly, the installed
 # tdc-delaunay (--help, and debian/tests/tdc-smoke), and the pg_regress suite against
 # the installed files as autopkgtest's installcheck runs it (debian/tests/
-# installcheck: pg_buildext installcheck, in a pg_virtualenv cluster).
+# installcheck: pg_buildext installcheck, in a pg_virtualenv cluster; every
+# test of sql/, tdc_raster and tdc_raster_gdal included).
 # Prints "package: N passed, N failed" last, with the time of each phase.
 #
 # SUITE defaults to this machine's own (/etc/os-release); the packages must
@@ -85,6 +88,37 @@ inside() {
 		ok "300 x 300 grid: ST_TDCDelaunayTriangles and ST_TDCDelaunay give 178802 triangles, area 89401"
 	else
 		bad "300 x 300 grid: expected 178802 triangles of area 89401 from both, got: $out"
+	fi
+	# The second extension the package ships, with postgis_raster (which
+	# the package's Depends on postgresql-NN-postgis-3 brings, GDAL with it).
+	if out=$(sql -d pkgtest -c 'SET client_min_messages = warning' -c 'CREATE EXTENSION tdc_delaunay_raster CASCADE' \
+		-c "SELECT string_agg(extname || ' ' || extversion, ', ' ORDER BY extname) FROM pg_extension WHERE extname <> 'plpgsql'" 2>&1); then
+		ok "CREATE EXTENSION tdc_delaunay_raster CASCADE: $out"
+	else
+		bad "CREATE EXTENSION tdc_delaunay_raster CASCADE: $out"
+	fi
+	# The samples z = 2x + 3y + 1 on the 11 x 11 integer grid of [0, 10]^2,
+	# interpolated linearly into a 10 x 10 template of 1 x 1 pixels over the
+	# same square: a plane comes back exactly, so the pixel centres
+	# (i + 0.5, j + 0.5) hold 2i + 3j + 3.5, from 3.5 to 48.5, adding up to
+	# 2 * 500 + 3 * 500 + 100 * 1 = 2600; the aggregate gives the same raster.
+	out=$(sql -d pkgtest -F ' ' <<-'SQL' 2>&1
+		CREATE TABLE plane AS SELECT ST_MakePoint(i, j, 2 * i + 3 * j + 1) AS geom
+			FROM generate_series(0, 10) i, generate_series(0, 10) j;
+		CREATE TABLE tmpl AS
+			SELECT ST_AddBand(ST_MakeEmptyRaster(10, 10, 0, 10, 1, -1, 0, 0, 0), '64BF'::text, 0, -9999) AS r;
+		SELECT ST_Width(t.r), ST_Height(t.r), ST_BandPixelType(t.r), s.count,
+			round(s.sum::numeric, 9)::float8, round(s.min::numeric, 9)::float8,
+			round(s.max::numeric, 9)::float8,
+			ST_AsBinary(t.r) = (SELECT ST_AsBinary(ST_TDCInterpolate(geom, r)) FROM plane, tmpl)
+		FROM (SELECT ST_TDCInterpolateRaster((SELECT ST_Collect(geom) FROM plane), 'linear', r) AS r
+				FROM tmpl) t, ST_SummaryStats(t.r) s;
+	SQL
+	) || true
+	if [ "$out" = "10 10 64BF 100 2600 3.5 48.5 t" ]; then
+		ok "ST_TDCInterpolateRaster of the plane z = 2x + 3y + 1: 10 x 10 64BF pixels from 3.5 to 48.5, sum 2600; ST_TDCInterpolate the same"
+	else
+		bad "ST_TDCInterpolateRaster of the plane z = 2x + 3y + 1: expected \"10 10 64BF 100 2600 3.5 48.5 t\", got: $out"
 	fi
 	as_pg pg_dropcluster --stop "$major" test
 
