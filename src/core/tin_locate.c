@@ -50,6 +50,7 @@
  * triangle; a sliver loses what its area's rounding loses.
  */
 #include <stdio.h>
+#include <math.h>
 #include <string.h>
 
 #include "tin_int.h"
@@ -177,8 +178,24 @@ locate_line(const tdc_tin *tin, const double *q, tin_loc *loc)
 }
 
 /*
+ * Is the walk from hint to q short?  Within two cells of the locate grid of
+ * hint's origin: a walk costs about one step per triangle it crosses, so a
+ * hint from a far point (targets in random order) would cost O(sqrt n)
+ * steps, where the grid's start costs O(1).  The answer does not depend on
+ * the start (the walk is exact), only the time does.
+ */
+static bool
+hint_is_near(const tdc_tin *tin, uint32_t hint, const double *q)
+{
+	const double *p = tin_pt(tin, tin_org(tin, hint));
+
+	return fabs(q[0] - p[0]) * tin->gscale[0] + fabs(q[1] - p[1]) * tin->gscale[1] <= 2.0;
+}
+
+/*
  * Locate q, starting from hint (a half-edge with a triangle on its left, or
- * TDC_NIL for the locate grid's start).
+ * TDC_NIL for the locate grid's start) when hint is near q, and from the
+ * locate grid's start otherwise.
  */
 void
 tin_locate(const tdc_tin *tin, const double *q, uint32_t hint, tin_loc *loc)
@@ -199,7 +216,8 @@ tin_locate(const tdc_tin *tin, const double *q, uint32_t hint, tin_loc *loc)
 		locate_line(tin, q, loc);
 		return;
 	}
-	h0 = hint != TDC_NIL && !tin_outer(tin, hint) ? hint : tin_start_he(tin, q);
+	h0 = hint != TDC_NIL && !tin_outer(tin, hint) && hint_is_near(tin, hint, q) ?
+		hint : tin_start_he(tin, q);
 
 	for (;;)
 	{

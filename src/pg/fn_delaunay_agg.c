@@ -37,8 +37,14 @@ tdc_agg_context(FunctionCallInfo fcinfo, const char *fn)
 }
 
 /*
- * Is the aggregate's argument argno (0-based) a constant of the statement:
- * a literal or a bound parameter?  Then a state may parse it once.
+ * Is the aggregate's argument argno (0-based) constant while the aggregate
+ * runs: a literal, a bound parameter, or an executor parameter (the value
+ * of an uncorrelated scalar subquery, "(SELECT g FROM targets)", or of the
+ * outer query's row in a correlated one)?  An executor parameter changes
+ * only when the plan node that reads it is rescanned, and a rescan of an
+ * Agg node starts new states.  Then a state may parse it once; otherwise
+ * it must detoast and compare it on every row, which for a target of 30,000
+ * points over 100,000 rows took 133 s against 0.5 s.
  */
 bool
 tdc_agg_arg_is_constant(FunctionCallInfo fcinfo, int argno)
@@ -50,7 +56,8 @@ tdc_agg_arg_is_constant(FunctionCallInfo fcinfo, int argno)
 		return false;
 	te = (TargetEntry *) list_nth(ar->args, argno);
 	return IsA(te->expr, Const) ||
-		(IsA(te->expr, Param) && ((Param *) te->expr)->paramkind == PARAM_EXTERN);
+		(IsA(te->expr, Param) && (((Param *) te->expr)->paramkind == PARAM_EXTERN ||
+								  ((Param *) te->expr)->paramkind == PARAM_EXEC));
 }
 
 /* ----------------------------------------------------------------
