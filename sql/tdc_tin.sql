@@ -163,6 +163,20 @@ CREATE TABLE tdc_tin_target AS SELECT 'SRID=2056;LINESTRING(10 10, 990 980)'::ge
 SELECT ST_AsBinary(ST_TDCDrape(p.geom, t.g)) = (SELECT ST_AsBinary(ST_TDCDrape(geom, 'SRID=2056;LINESTRING(10 10, 990 980)'))
 												FROM tdc_tin_plane) AS column_target_same
 FROM tdc_tin_plane p, tdc_tin_target t;
+-- a target from a subquery is an executor parameter, read once per
+-- aggregation; a correlated one changes with the outer row, and each outer
+-- row's aggregate must drape its own target
+SELECT ST_AsBinary(ST_TDCDrape(geom, (SELECT g FROM tdc_tin_target))) =
+	   (SELECT ST_AsBinary(ST_TDCDrape(geom, 'SRID=2056;LINESTRING(10 10, 990 980)')) FROM tdc_tin_plane)
+	   AS subquery_target_same
+FROM tdc_tin_plane;
+SELECT v.k, ST_X(s.d), ST_Y(s.d), abs(ST_Z(s.d) - (2 * ST_X(s.d) - 3 * ST_Y(s.d) + 7)) < 1e-9 AS on_plane
+FROM (VALUES (1, 'SRID=2056;POINT(100 200)'::geometry), (2, 'SRID=2056;POINT(300 100)')) v(k, g),
+	 LATERAL (SELECT ST_TDCDrape(p.geom, v.g) AS d FROM tdc_tin_plane p) s
+ORDER BY v.k;
+SELECT v.k, ST_AsText(ST_Force2D((SELECT ST_TDCDrape(p.geom, v.g) FROM tdc_tin_plane p))) AS correlated
+FROM (VALUES (1, 'SRID=2056;POINT(100 200)'::geometry), (2, 'SRID=2056;POINT(300 100)')) v(k, g)
+ORDER BY v.k;
 
 -- Errors
 \set VERBOSITY default
