@@ -200,10 +200,11 @@ build/fuzz/fuzz_cdt: fuzz/fuzz_cdt.c $(FUZZ_CORE_DEPS)
 FUZZ_GSER_SRCS = src/pg/gser_read.c src/pg/gser_write.c src/pg/pointbuf.c
 # fuzz_state also takes the TIN aggregates' states (fuzz_state_tin.c): their
 # entry points, and what their serial, deserial and combine functions call
-# (the method parser in fn_raster.c, which brings the raster and geometry
-# readers and writers, and the breaklines' segment list in seglist.c);
+# (their shared samples in tin_agg.c, the method parser in fn_raster.c,
+# which brings the raster and geometry readers and writers, and the
+# breaklines' segment list in seglist.c);
 # pg_shim_agg.c stands in for tin_run.c, run.c's wait loop and the rest.
-FUZZ_STATE_SRCS = src/pg/agg_state.c src/pg/fn_contours_agg.c src/pg/seglist.c \
+FUZZ_STATE_SRCS = src/pg/agg_state.c src/pg/tin_agg.c src/pg/fn_contours_agg.c src/pg/seglist.c \
 	src/pg/fn_drape_agg.c src/pg/fn_raster_agg.c src/pg/fn_raster.c src/pg/raster_read.c \
 	src/pg/raster_write.c src/pg/gser_contour.c src/pg/gser_drape.c $(FUZZ_GSER_SRCS)
 FUZZ_PG_DEPS = fuzz/pg_shim.c fuzz/pg_shim.h src/pg/tdc_pg.h src/pg/pg_version_compat.h \

@@ -3,9 +3,8 @@
  *		The ST_TDCContours aggregates: contour lines of the TIN of all rows'
  *		vertices, at the levels base + k * interval, as one MULTILINESTRING Z.
  *
- * The state is the Delaunay aggregate's point buffer (agg_state.c) with the
- * heights, plus the interval and the base, which must be the same in every
- * row, and the count of rows read (which names a row without Z).  Rows
+ * The state is the samples every TIN aggregate keeps (tin_agg.c), plus the
+ * interval and the base, which must be the same in every row.  Rows
  * whose geometry, interval or base is NULL are skipped; an EMPTY sample is
  * skipped too.  Under a parallel plan a worker's state travels in the
  * Delaunay state's serialized form under magic "TCN1", followed by
@@ -38,9 +37,7 @@ static const TdcStateFormat contour_format = {
 
 typedef struct ContourState
 {
-	TdcAggState *base;
-	int64		rows;			/* non-NULL rows read */
-	bool		params_set;
+	TdcTinAgg	s;				/* the samples (tin_agg.c) */
 	double		interval;
 	double		level0;			/* the base level */
 } ContourState;
@@ -48,11 +45,7 @@ typedef struct ContourState
 static ContourState *
 contour_state_new(MemoryContext cxt)
 {
-	ContourState *st = MemoryContextAllocZero(cxt, sizeof(ContourState));
-
-	st->base = tdc_agg_state_new(cxt);
-	st->base->pts.curves = TDC_CURVES_STROKE;
-	return st;
+	return (ContourState *) tdc_tin_agg_new(cxt, sizeof(ContourState), TDC_CURVES_STROKE);
 }
 
 static void
@@ -71,9 +64,9 @@ check_levels(double interval, double base)
 static void
 contour_params(ContourState *st, double interval, double base)
 {
-	if (!st->params_set)
+	if (!st->s.params_set)
 	{
-		st->params_set = true;
+		st->s.params_set = true;
 		st->interval = interval;
 		st->level0 = base;
 		return;
@@ -112,9 +105,16 @@ st_tdccontours_transfn(PG_FUNCTION_ARGS)
 	if (st == NULL)
 		st = contour_state_new(aggcxt);
 	contour_params(st, interval, base);
-	st->rows++;
-	tdc_tin_read_sample(&st->base->pts, PG_GETARG_DATUM(1), st->rows, CONTOUR_NAME);
+	tdc_tin_agg_add(&st->s, PG_GETARG_DATUM(1), CONTOUR_NAME);
 	PG_RETURN_POINTER(st);
+}
+
+static void
+contour_combine_params(TdcTinAgg *dst, const TdcTinAgg *src, MemoryContext cxt)
+{
+	const ContourState *b = (const ContourState *) src;
+
+	contour_params((ContourState *) dst, b->interval, b->level0);
 }
 
 PG_FUNCTION_INFO_V1(st_tdccontours_combinefn);
@@ -122,23 +122,14 @@ PG_FUNCTION_INFO_V1(st_tdccontours_combinefn);
 Datum
 st_tdccontours_combinefn(PG_FUNCTION_ARGS)
 {
-	MemoryContext aggcxt = tdc_agg_context(fcinfo, "st_tdccontours_combinefn");
-	ContourState *st1 = PG_ARGISNULL(0) ? NULL : (ContourState *) PG_GETARG_POINTER(0);
-	ContourState *st2 = PG_ARGISNULL(1) ? NULL : (ContourState *) PG_GETARG_POINTER(1);
+	TdcTinAgg  *st;
 
 	tdc_signal_guard();
-	if (st2 == NULL || !st2->params_set)
-	{
-		if (st1 == NULL)
-			PG_RETURN_NULL();
-		PG_RETURN_POINTER(st1);
-	}
-	if (st1 == NULL)
-		st1 = contour_state_new(aggcxt);
-	contour_params(st1, st2->interval, st2->level0);
-	tdc_agg_rows_add(&st1->rows, st2->rows, CONTOUR_NAME);
-	tdc_agg_state_merge(st1->base, st2->base);
-	PG_RETURN_POINTER(st1);
+	st = tdc_tin_agg_combine(fcinfo, "st_tdccontours_combinefn", CONTOUR_NAME,
+							 sizeof(ContourState), TDC_CURVES_STROKE, contour_combine_params);
+	if (st == NULL)
+		PG_RETURN_NULL();
+	PG_RETURN_POINTER(st);
 }
 
 PG_FUNCTION_INFO_V1(st_tdccontours_serialfn);
@@ -147,20 +138,21 @@ Datum
 st_tdccontours_serialfn(PG_FUNCTION_ARGS)
 {
 	ContourState *st;
-	char		extra[CONTOUR_EXTRA];
+	char	   *extra;
+	Size		len;
 	uint32		u[2];
 
 	tdc_signal_guard();
 	(void) tdc_agg_context(fcinfo, "st_tdccontours_serialfn");
 	st = (ContourState *) PG_GETARG_POINTER(0);
-	u[0] = st->params_set ? 1 : 0;
+	extra = tdc_tin_agg_extra(&st->s, CONTOUR_EXTRA, &len);
+	u[0] = st->s.params_set ? 1 : 0;
 	u[1] = 0;
 	memcpy(extra, u, 8);
 	memcpy(extra + 8, &st->interval, 8);
 	memcpy(extra + 16, &st->level0, 8);
-	memcpy(extra + 24, &st->rows, 8);
-	PG_RETURN_BYTEA_P(tdc_agg_state_serialize_with(st->base, &contour_format,
-												   extra, CONTOUR_EXTRA, NULL));
+	memcpy(extra + 24, &st->s.rows, 8);
+	PG_RETURN_BYTEA_P(tdc_tin_agg_serialize(&st->s, &contour_format, extra, CONTOUR_EXTRA));
 }
 
 PG_FUNCTION_INFO_V1(st_tdccontours_deserialfn);
@@ -176,24 +168,22 @@ st_tdccontours_deserialfn(PG_FUNCTION_ARGS)
 	tdc_signal_guard();
 	(void) tdc_agg_context(fcinfo, "st_tdccontours_deserialfn");
 	st = palloc0(sizeof(ContourState));
-	st->base = tdc_agg_state_deserialize_with(PG_GETARG_BYTEA_P(0), &contour_format,
-											  CurrentMemoryContext, &extra, &extra_len);
-	st->base->pts.curves = TDC_CURVES_STROKE;
+	extra = tdc_tin_agg_deserialize(&st->s, PG_GETARG_BYTEA_P(0), &contour_format,
+									TDC_CURVES_STROKE, &extra_len);
 	if (extra_len != CONTOUR_EXTRA)
 		tdc_agg_state_corrupt(CONTOUR_NAME, psprintf("%zu bytes of parameters, not %d",
 													 extra_len, CONTOUR_EXTRA));
 	memcpy(u, extra, 8);
 	memcpy(&st->interval, extra + 8, 8);
 	memcpy(&st->level0, extra + 16, 8);
-	memcpy(&st->rows, extra + 24, 8);
-	if (u[0] > 1 || u[1] != 0 || st->rows < 0)
+	memcpy(&st->s.rows, extra + 24, 8);
+	if (u[0] > 1 || u[1] != 0 || st->s.rows < 0)
 		tdc_agg_state_corrupt(CONTOUR_NAME, "bad parameter flags");
-	st->params_set = u[0] == 1;
-	tdc_agg_state_check_unset(st->base, st->params_set, st->rows, CONTOUR_NAME);
-	if (st->params_set && (!(st->interval > 0) || isinf(st->interval) || !isfinite(st->level0)))
+	st->s.params_set = u[0] == 1;
+	tdc_agg_state_check_unset(st->s.base, st->s.params_set, st->s.rows, CONTOUR_NAME);
+	if (st->s.params_set && (!(st->interval > 0) || isinf(st->interval) || !isfinite(st->level0)))
 		tdc_agg_state_corrupt(CONTOUR_NAME, "bad interval or base");
-	if (st->base->pts.n > 0 && !st->base->pts.hasz)
-		tdc_agg_state_corrupt(CONTOUR_NAME, "samples without Z");
+	tdc_tin_agg_read_segments(&st->s, NULL, 0, CONTOUR_NAME);
 	PG_RETURN_POINTER(st);
 }
 
@@ -216,9 +206,9 @@ st_tdccontours_finalfn(PG_FUNCTION_ARGS)
 	if (PG_ARGISNULL(0))
 		PG_RETURN_NULL();
 	st = (ContourState *) PG_GETARG_POINTER(0);
-	if (!st->params_set)
+	if (!st->s.params_set)
 		PG_RETURN_NULL();
-	pts = &st->base->pts;
+	pts = &st->s.base->pts;
 	tr = tdc_tin_run_start(pts, NULL, 0, CONTOUR_NAME);
 	err[0] = '\0';
 	rc = tdc_tin_contours_start(tr->tin, st->interval, st->level0, err, sizeof(err));

@@ -18,10 +18,10 @@
  * (tin_run.c), kept from the first row on beside the vertices and
  * combined with them.
  *
- * The state is the Delaunay aggregate's point buffer (agg_state.c) with the
- * heights, plus the method and the target, which must be the same in every
- * row (a target that is not a constant of the statement is compared with
- * the first row's byte for byte), and the count of rows read.
+ * The state is the samples every TIN aggregate keeps (tin_agg.c), plus the
+ * method and the target, which must be the same in every row (a target
+ * that is not a constant of the statement is compared with the first
+ * row's byte for byte).
  * Rows with a NULL argument are skipped.  Under a parallel plan a worker's
  * state travels in the Delaunay state's serialized form under magic "TDR1",
  * followed by
@@ -59,12 +59,8 @@ static const TdcStateFormat drape_format = {
 
 typedef struct DrapeState
 {
-	TdcAggState *base;
-	int64		rows;
-	bool		params_set;
+	TdcTinAgg	s;				/* the samples (tin_agg.c) */
 	char	   *method;			/* as given, checked */
-	bool		breaklines;		/* the method's: segs holds the samples' linework */
-	TdcSegList	segs;
 	struct varlena *target;		/* detoasted, in the aggregate context */
 	bool		target_const;	/* the target is a constant: no need to compare */
 } DrapeState;
@@ -72,11 +68,7 @@ typedef struct DrapeState
 static DrapeState *
 drape_state_new(MemoryContext cxt)
 {
-	DrapeState *st = MemoryContextAllocZero(cxt, sizeof(DrapeState));
-
-	st->base = tdc_agg_state_new(cxt);
-	st->base->pts.curves = TDC_CURVES_STROKE;
-	return st;
+	return (DrapeState *) tdc_tin_agg_new(cxt, sizeof(DrapeState), TDC_CURVES_STROKE);
 }
 
 /* Does the method have an option other than breaklines (GDAL's radius, nodata)? */
@@ -112,32 +104,23 @@ check_method(const char *method, tdc_interp_spec *spec)
 	spec->radius = 0;
 }
 
-/*
- * From the first row, whose method fixes every row's: keep the samples'
- * linework as segments if the method asks for breaklines, and refuse
- * curves then, as the constrained functions do.
- */
+/* From the first row, whose method fixes every row's: breaklines or not. */
 static void
 drape_breaklines(DrapeState *st, MemoryContext cxt)
 {
 	tdc_interp_spec spec;
 
 	check_method(st->method, &spec);
-	st->breaklines = spec.breaklines;
-	if (st->breaklines)
-	{
-		tdc_seg_init(&st->segs, cxt, &st->base->pts, DRAPE_NAME);
-		st->base->pts.curves = TDC_CURVES_REFUSE;
-	}
+	tdc_tin_agg_breaklines(&st->s, spec.breaklines, cxt, DRAPE_NAME);
 }
 
 static void
 drape_params(DrapeState *st, MemoryContext cxt, const char *method,
 			 const struct varlena *target, Size target_len)
 {
-	if (!st->params_set)
+	if (!st->s.params_set)
 	{
-		st->params_set = true;
+		st->s.params_set = true;
 		st->method = MemoryContextStrdup(cxt, method);
 		st->target = MemoryContextAlloc(cxt, target_len);
 		memcpy(st->target, target, target_len);
@@ -186,22 +169,27 @@ st_tdcdrape_transfn(PG_FUNCTION_ARGS)
 	 * the same in every row; any other is compared with the first row's,
 	 * byte for byte.
 	 */
-	if (!st->params_set || !st->target_const || strcmp(st->method, method) != 0)
+	if (!st->s.params_set || !st->target_const || strcmp(st->method, method) != 0)
 	{
 		struct varlena *target = PG_DETOAST_DATUM(PG_GETARG_DATUM(2));
 
-		if (!st->params_set)
+		if (!st->s.params_set)
 		{
 			check_method(method, &spec);
 			st->target_const = tdc_agg_arg_is_constant(fcinfo, 1);
 		}
 		drape_params(st, aggcxt, method, target, VARSIZE_ANY(target));
 	}
-	st->rows++;
-	tdc_tin_read_sample(&st->base->pts, PG_GETARG_DATUM(1), st->rows, DRAPE_NAME);
-	if (st->breaklines)
-		tdc_seg_flush(&st->segs);
+	tdc_tin_agg_add(&st->s, PG_GETARG_DATUM(1), DRAPE_NAME);
 	PG_RETURN_POINTER(st);
+}
+
+static void
+drape_combine_params(TdcTinAgg *dst, const TdcTinAgg *src, MemoryContext cxt)
+{
+	const DrapeState *b = (const DrapeState *) src;
+
+	drape_params((DrapeState *) dst, cxt, b->method, b->target, VARSIZE_ANY(b->target));
 }
 
 PG_FUNCTION_INFO_V1(st_tdcdrape_combinefn);
@@ -209,27 +197,14 @@ PG_FUNCTION_INFO_V1(st_tdcdrape_combinefn);
 Datum
 st_tdcdrape_combinefn(PG_FUNCTION_ARGS)
 {
-	MemoryContext aggcxt = tdc_agg_context(fcinfo, "st_tdcdrape_combinefn");
-	DrapeState *st1 = PG_ARGISNULL(0) ? NULL : (DrapeState *) PG_GETARG_POINTER(0);
-	DrapeState *st2 = PG_ARGISNULL(1) ? NULL : (DrapeState *) PG_GETARG_POINTER(1);
-	uint64		base;
+	TdcTinAgg  *st;
 
 	tdc_signal_guard();
-	if (st2 == NULL || !st2->params_set)
-	{
-		if (st1 == NULL)
-			PG_RETURN_NULL();
-		PG_RETURN_POINTER(st1);
-	}
-	if (st1 == NULL)
-		st1 = drape_state_new(aggcxt);
-	drape_params(st1, aggcxt, st2->method, st2->target, VARSIZE_ANY(st2->target));
-	tdc_agg_rows_add(&st1->rows, st2->rows, DRAPE_NAME);
-	base = st1->base->pts.n;
-	tdc_agg_state_merge(st1->base, st2->base);
-	if (st1->breaklines)
-		tdc_seg_append(&st1->segs, &st2->segs, base);
-	PG_RETURN_POINTER(st1);
+	st = tdc_tin_agg_combine(fcinfo, "st_tdcdrape_combinefn", DRAPE_NAME, sizeof(DrapeState),
+							 TDC_CURVES_STROKE, drape_combine_params);
+	if (st == NULL)
+		PG_RETURN_NULL();
+	PG_RETURN_POINTER(st);
 }
 
 PG_FUNCTION_INFO_V1(st_tdcdrape_serialfn);
@@ -241,7 +216,6 @@ st_tdcdrape_serialfn(PG_FUNCTION_ARGS)
 	char	   *extra;
 	Size		mlen,
 				tlen,
-				slen,
 				len;
 	uint32		u[2];
 	uint64		tl;
@@ -249,28 +223,21 @@ st_tdcdrape_serialfn(PG_FUNCTION_ARGS)
 	tdc_signal_guard();
 	(void) tdc_agg_context(fcinfo, "st_tdcdrape_serialfn");
 	st = (DrapeState *) PG_GETARG_POINTER(0);
-	mlen = st->params_set ? strlen(st->method) : 0;
-	tlen = st->params_set ? VARSIZE_ANY(st->target) : 0;
-	slen = st->breaklines ? (Size) st->segs.nseg * 2 * sizeof(uint32) : 0;
-	len = DRAPE_FIXED + mlen + tlen + slen;
-	extra = palloc_extended(len, MCXT_ALLOC_HUGE);
-	u[0] = st->params_set ? 1 : 0;
+	mlen = st->s.params_set ? strlen(st->method) : 0;
+	tlen = st->s.params_set ? VARSIZE_ANY(st->target) : 0;
+	extra = tdc_tin_agg_extra(&st->s, DRAPE_FIXED + mlen + tlen, &len);
+	u[0] = st->s.params_set ? 1 : 0;
 	u[1] = (uint32) mlen;
 	tl = tlen;
 	memcpy(extra, u, 8);
 	memcpy(extra + 8, &tl, 8);
-	memcpy(extra + 16, &st->rows, 8);
+	memcpy(extra + 16, &st->s.rows, 8);
 	if (mlen > 0)
 		memcpy(extra + DRAPE_FIXED, st->method, mlen);
 	if (tlen > 0)
 		memcpy(extra + DRAPE_FIXED + mlen, st->target, tlen);
-	if (slen > 0)
-		memcpy(extra + DRAPE_FIXED + mlen + tlen, st->segs.seg, slen);
-	PG_RETURN_BYTEA_P(tdc_agg_state_serialize_with(st->base, &drape_format, extra, len,
-												   slen == 0 ? NULL :
-												   psprintf("%llu vertices and %llu breakline segments",
-															(unsigned long long) st->base->pts.n,
-															(unsigned long long) st->segs.nseg)));
+	PG_RETURN_BYTEA_P(tdc_tin_agg_serialize(&st->s, &drape_format, extra,
+											DRAPE_FIXED + mlen + tlen));
 }
 
 PG_FUNCTION_INFO_V1(st_tdcdrape_deserialfn);
@@ -281,29 +248,28 @@ st_tdcdrape_deserialfn(PG_FUNCTION_ARGS)
 	DrapeState *st;
 	const char *extra;
 	Size		extra_len,
-				rest;
+				p;
 	uint32		u[2];
 	uint64		tl;
 
 	tdc_signal_guard();
 	(void) tdc_agg_context(fcinfo, "st_tdcdrape_deserialfn");
 	st = palloc0(sizeof(DrapeState));
-	st->base = tdc_agg_state_deserialize_with(PG_GETARG_BYTEA_P(0), &drape_format,
-											  CurrentMemoryContext, &extra, &extra_len);
-	st->base->pts.curves = TDC_CURVES_STROKE;
+	extra = tdc_tin_agg_deserialize(&st->s, PG_GETARG_BYTEA_P(0), &drape_format,
+									TDC_CURVES_STROKE, &extra_len);
 	if (extra_len < DRAPE_FIXED)
 		tdc_agg_state_corrupt(DRAPE_NAME, "its parameters are truncated");
 	memcpy(u, extra, 8);
 	memcpy(&tl, extra + 8, 8);
-	memcpy(&st->rows, extra + 16, 8);
-	if (u[0] > 1 || st->rows < 0 || u[1] > METHOD_MAX || tl > extra_len ||
+	memcpy(&st->s.rows, extra + 16, 8);
+	if (u[0] > 1 || st->s.rows < 0 || u[1] > METHOD_MAX || tl > extra_len ||
 		(uint64) extra_len < DRAPE_FIXED + (uint64) u[1] + tl ||
 		(u[0] == 0 && (u[1] != 0 || tl != 0)) ||
 		(u[0] == 1 && (u[1] == 0 || tl < VARHDRSZ)))
 		tdc_agg_state_corrupt(DRAPE_NAME, "bad method or target lengths");
-	st->params_set = u[0] == 1;
-	tdc_agg_state_check_unset(st->base, st->params_set, st->rows, DRAPE_NAME);
-	if (st->params_set)
+	st->s.params_set = u[0] == 1;
+	tdc_agg_state_check_unset(st->s.base, st->s.params_set, st->s.rows, DRAPE_NAME);
+	if (st->s.params_set)
 	{
 		tdc_interp_spec spec;
 
@@ -317,13 +283,8 @@ st_tdcdrape_deserialfn(PG_FUNCTION_ARGS)
 			tdc_agg_state_corrupt(DRAPE_NAME, "the target's length");
 		drape_breaklines(st, CurrentMemoryContext);
 	}
-	rest = extra_len - DRAPE_FIXED - u[1] - (Size) tl;
-	if (!st->breaklines && rest != 0)
-		tdc_agg_state_corrupt(DRAPE_NAME, "segments without breaklines");
-	if (st->breaklines)
-		tdc_seg_read(&st->segs, extra + DRAPE_FIXED + u[1] + tl, rest, st->base->pts.n);
-	if (st->base->pts.n > 0 && !st->base->pts.hasz)
-		tdc_agg_state_corrupt(DRAPE_NAME, "samples without Z");
+	p = DRAPE_FIXED + u[1] + (Size) tl;
+	tdc_tin_agg_read_segments(&st->s, extra + p, extra_len - p, DRAPE_NAME);
 	PG_RETURN_POINTER(st);
 }
 
@@ -351,9 +312,9 @@ st_tdcdrape_finalfn(PG_FUNCTION_ARGS)
 	if (PG_ARGISNULL(0))
 		PG_RETURN_NULL();
 	st = (DrapeState *) PG_GETARG_POINTER(0);
-	if (!st->params_set)
+	if (!st->s.params_set)
 		PG_RETURN_NULL();
-	pts = &st->base->pts;
+	pts = &st->s.base->pts;
 	check_method(st->method, &spec);
 	tdc_drape_target_read(&t, st->target, DRAPE_NAME);
 	if (pts->have_first && pts->srid != t.srid)
@@ -363,7 +324,7 @@ st_tdcdrape_finalfn(PG_FUNCTION_ARGS)
 						t.srid, pts->srid),
 				 errhint("Transform one of them with ST_Transform, or set the SRID with ST_SetSRID.")));
 
-	tr = tdc_tin_run_start(pts, st->breaklines ? &st->segs : NULL,
+	tr = tdc_tin_run_start(pts, st->s.breaklines ? &st->s.segs : NULL,
 						   VARSIZE_ANY(st->target) + tdc_drape_target_bytes(&t), DRAPE_NAME);
 	err[0] = '\0';
 	rc = tdc_tin_drape_start(tr->tin, &spec, t.xy, t.chain_end, t.nchains, err, sizeof(err));

@@ -67,12 +67,8 @@ static const TdcStateFormat interp_format = {
 
 typedef struct InterpState
 {
-	TdcAggState *base;
-	int64		rows;
-	bool		params_set;
+	TdcTinAgg	s;				/* the samples (tin_agg.c) */
 	char	   *method;			/* as given, checked */
-	bool		breaklines;		/* the method's: segs holds the samples' linework */
-	TdcSegList	segs;
 	int32		band;
 	TdcRasterInfo tmpl;			/* the template's geometry and band */
 	bool		tmpl_const;		/* the template is a constant: read once */
@@ -81,15 +77,11 @@ typedef struct InterpState
 	struct varatt_external last_toast;
 } InterpState;
 
+/* a curve's stored vertices, as ST_InterpolateRaster */
 static InterpState *
 interp_state_new(MemoryContext cxt)
 {
-	InterpState *st = MemoryContextAllocZero(cxt, sizeof(InterpState));
-
-	st->base = tdc_agg_state_new(cxt);
-	/* a curve's stored vertices, as ST_InterpolateRaster */
-	st->base->pts.curves = TDC_CURVES_VERTICES;
-	return st;
+	return (InterpState *) tdc_tin_agg_new(cxt, sizeof(InterpState), TDC_CURVES_VERTICES);
 }
 
 static bool
@@ -112,18 +104,17 @@ static void
 interp_params(InterpState *st, MemoryContext cxt, const char *method, int32 band,
 			  const TdcRasterInfo *tmpl)
 {
-	if (!st->params_set)
+	if (!st->s.params_set)
 	{
 		tdc_interp_spec spec;
 
-		st->params_set = true;
+		st->s.params_set = true;
 		st->method = MemoryContextStrdup(cxt, method);
 		st->band = band;
 		st->tmpl = *tmpl;
 		/* from the first row on, the samples' lines are kept if asked for */
 		tdc_raster_method(method, &spec, INTERP_NAME);
-		st->breaklines = tdc_raster_breaklines(&spec, &st->segs, cxt, &st->base->pts,
-											   INTERP_NAME);
+		tdc_tin_agg_breaklines(&st->s, spec.breaklines, cxt, INTERP_NAME);
 		return;
 	}
 	if (strcmp(st->method, method) != 0)
@@ -199,7 +190,7 @@ st_tdcinterpolate_transfn(PG_FUNCTION_ARGS)
 	if (st == NULL)
 		st = interp_state_new(aggcxt);
 
-	if (!st->params_set)
+	if (!st->s.params_set)
 	{
 		TdcRasterInfo tmpl;
 		tdc_interp_spec spec;
@@ -225,11 +216,16 @@ st_tdcinterpolate_transfn(PG_FUNCTION_ARGS)
 	else
 		interp_params(st, aggcxt, method, band, NULL);
 
-	st->rows++;
-	tdc_tin_read_sample(&st->base->pts, PG_GETARG_DATUM(1), st->rows, INTERP_NAME);
-	if (st->breaklines)
-		tdc_seg_flush(&st->segs);
+	tdc_tin_agg_add(&st->s, PG_GETARG_DATUM(1), INTERP_NAME);
 	PG_RETURN_POINTER(st);
+}
+
+static void
+interp_combine_params(TdcTinAgg *dst, const TdcTinAgg *src, MemoryContext cxt)
+{
+	const InterpState *b = (const InterpState *) src;
+
+	interp_params((InterpState *) dst, cxt, b->method, b->band, &b->tmpl);
 }
 
 PG_FUNCTION_INFO_V1(st_tdcinterpolate_combinefn);
@@ -237,27 +233,14 @@ PG_FUNCTION_INFO_V1(st_tdcinterpolate_combinefn);
 Datum
 st_tdcinterpolate_combinefn(PG_FUNCTION_ARGS)
 {
-	MemoryContext aggcxt = tdc_agg_context(fcinfo, "st_tdcinterpolate_combinefn");
-	InterpState *st1 = PG_ARGISNULL(0) ? NULL : (InterpState *) PG_GETARG_POINTER(0);
-	InterpState *st2 = PG_ARGISNULL(1) ? NULL : (InterpState *) PG_GETARG_POINTER(1);
-	uint64		base;
+	TdcTinAgg  *st;
 
 	tdc_signal_guard();
-	if (st2 == NULL || !st2->params_set)
-	{
-		if (st1 == NULL)
-			PG_RETURN_NULL();
-		PG_RETURN_POINTER(st1);
-	}
-	if (st1 == NULL)
-		st1 = interp_state_new(aggcxt);
-	interp_params(st1, aggcxt, st2->method, st2->band, &st2->tmpl);
-	tdc_agg_rows_add(&st1->rows, st2->rows, INTERP_NAME);
-	base = st1->base->pts.n;
-	tdc_agg_state_merge(st1->base, st2->base);
-	if (st1->breaklines)
-		tdc_seg_append(&st1->segs, &st2->segs, base);
-	PG_RETURN_POINTER(st1);
+	st = tdc_tin_agg_combine(fcinfo, "st_tdcinterpolate_combinefn", INTERP_NAME,
+							 sizeof(InterpState), TDC_CURVES_VERTICES, interp_combine_params);
+	if (st == NULL)
+		PG_RETURN_NULL();
+	PG_RETURN_POINTER(st);
 }
 
 PG_FUNCTION_INFO_V1(st_tdcinterpolate_serialfn);
@@ -268,7 +251,6 @@ st_tdcinterpolate_serialfn(PG_FUNCTION_ARGS)
 	InterpState *st;
 	char	   *extra;
 	Size		mlen,
-				slen,
 				len;
 	uint32		u[2];
 	int32		i4[2];
@@ -279,11 +261,9 @@ st_tdcinterpolate_serialfn(PG_FUNCTION_ARGS)
 	tdc_signal_guard();
 	(void) tdc_agg_context(fcinfo, "st_tdcinterpolate_serialfn");
 	st = (InterpState *) PG_GETARG_POINTER(0);
-	mlen = st->params_set ? strlen(st->method) : 0;
-	slen = st->breaklines ? (Size) st->segs.nseg * 2 * sizeof(uint32) : 0;
-	len = INTERP_FIXED + mlen + slen;
-	extra = palloc_extended(len, MCXT_ALLOC_HUGE | MCXT_ALLOC_ZERO);
-	u[0] = st->params_set ? 1 : 0;
+	mlen = st->s.params_set ? strlen(st->method) : 0;
+	extra = tdc_tin_agg_extra(&st->s, INTERP_FIXED + mlen, &len);
+	u[0] = st->s.params_set ? 1 : 0;
 	u[1] = (uint32) mlen;
 	i4[0] = st->band;
 	i4[1] = st->tmpl.srid;
@@ -292,7 +272,7 @@ st_tdcinterpolate_serialfn(PG_FUNCTION_ARGS)
 	pixtype = st->tmpl.b.pixtype;
 	hasnodata = st->tmpl.b.hasnodata ? 1 : 0;
 	memcpy(extra, u, 8);
-	memcpy(extra + 8, &st->rows, 8);
+	memcpy(extra + 8, &st->s.rows, 8);
 	memcpy(extra + 16, i4, 8);
 	memcpy(extra + 24, wh, 8);
 	memcpy(extra + 32, st->tmpl.gt, 48);
@@ -301,13 +281,7 @@ st_tdcinterpolate_serialfn(PG_FUNCTION_ARGS)
 	memcpy(extra + 88, &st->tmpl.b.nodata, 8);
 	if (mlen > 0)
 		memcpy(extra + INTERP_FIXED, st->method, mlen);
-	if (slen > 0)
-		memcpy(extra + INTERP_FIXED + mlen, st->segs.seg, slen);
-	PG_RETURN_BYTEA_P(tdc_agg_state_serialize_with(st->base, &interp_format, extra, len,
-												   slen == 0 ? NULL :
-												   psprintf("%llu vertices and %llu breakline segments",
-															(unsigned long long) st->base->pts.n,
-															(unsigned long long) st->segs.nseg)));
+	PG_RETURN_BYTEA_P(tdc_tin_agg_serialize(&st->s, &interp_format, extra, INTERP_FIXED + mlen));
 }
 
 PG_FUNCTION_INFO_V1(st_tdcinterpolate_deserialfn);
@@ -327,26 +301,25 @@ st_tdcinterpolate_deserialfn(PG_FUNCTION_ARGS)
 	tdc_signal_guard();
 	(void) tdc_agg_context(fcinfo, "st_tdcinterpolate_deserialfn");
 	st = palloc0(sizeof(InterpState));
-	st->base = tdc_agg_state_deserialize_with(PG_GETARG_BYTEA_P(0), &interp_format,
-											  CurrentMemoryContext, &extra, &extra_len);
-	st->base->pts.curves = TDC_CURVES_VERTICES;
+	extra = tdc_tin_agg_deserialize(&st->s, PG_GETARG_BYTEA_P(0), &interp_format,
+									TDC_CURVES_VERTICES, &extra_len);
 	if (extra_len < INTERP_FIXED)
 		tdc_agg_state_corrupt(INTERP_NAME, "its parameters are truncated");
 	memcpy(u, extra, 8);
-	memcpy(&st->rows, extra + 8, 8);
+	memcpy(&st->s.rows, extra + 8, 8);
 	memcpy(i4, extra + 16, 8);
 	memcpy(wh, extra + 24, 8);
 	memcpy(st->tmpl.gt, extra + 32, 48);
 	memcpy(&pixtype, extra + 80, 4);
 	memcpy(&hasnodata, extra + 84, 4);
 	memcpy(&st->tmpl.b.nodata, extra + 88, 8);
-	if (u[0] > 1 || st->rows < 0 || u[1] > METHOD_MAX ||
+	if (u[0] > 1 || st->s.rows < 0 || u[1] > METHOD_MAX ||
 		(uint64) extra_len < INTERP_FIXED + (uint64) u[1] ||
 		(u[0] == 0 && (u[1] != 0 || extra_len != INTERP_FIXED)) || (u[0] == 1 && u[1] == 0))
 		tdc_agg_state_corrupt(INTERP_NAME, "bad method length");
-	st->params_set = u[0] == 1;
-	tdc_agg_state_check_unset(st->base, st->params_set, st->rows, INTERP_NAME);
-	if (st->params_set)
+	st->s.params_set = u[0] == 1;
+	tdc_agg_state_check_unset(st->s.base, st->s.params_set, st->s.rows, INTERP_NAME);
+	if (st->s.params_set)
 	{
 		tdc_interp_spec spec;
 
@@ -365,16 +338,10 @@ st_tdcinterpolate_deserialfn(PG_FUNCTION_ARGS)
 		if (strlen(st->method) != u[1])
 			tdc_agg_state_corrupt(INTERP_NAME, "a NUL in the method");
 		tdc_raster_method(st->method, &spec, INTERP_NAME);
-		st->breaklines = tdc_raster_breaklines(&spec, &st->segs, CurrentMemoryContext,
-											   &st->base->pts, INTERP_NAME);
-		if (!st->breaklines && extra_len != INTERP_FIXED + (Size) u[1])
-			tdc_agg_state_corrupt(INTERP_NAME, "segments without breaklines");
-		if (st->breaklines)
-			tdc_seg_read(&st->segs, extra + INTERP_FIXED + u[1],
-						 extra_len - INTERP_FIXED - u[1], st->base->pts.n);
+		tdc_tin_agg_breaklines(&st->s, spec.breaklines, CurrentMemoryContext, INTERP_NAME);
 	}
-	if (st->base->pts.n > 0 && !st->base->pts.hasz)
-		tdc_agg_state_corrupt(INTERP_NAME, "samples without Z");
+	tdc_tin_agg_read_segments(&st->s, extra + INTERP_FIXED + u[1],
+							  extra_len - INTERP_FIXED - u[1], INTERP_NAME);
 	PG_RETURN_POINTER(st);
 }
 
@@ -390,8 +357,8 @@ st_tdcinterpolate_finalfn(PG_FUNCTION_ARGS)
 	if (PG_ARGISNULL(0))
 		PG_RETURN_NULL();
 	st = (InterpState *) PG_GETARG_POINTER(0);
-	if (!st->params_set || st->base->pts.n == 0)
+	if (!st->s.params_set || st->s.base->pts.n == 0)
 		PG_RETURN_NULL();
-	PG_RETURN_POINTER(tdc_raster_interpolate(&st->base->pts, st->breaklines ? &st->segs : NULL,
+	PG_RETURN_POINTER(tdc_raster_interpolate(&st->s.base->pts, st->s.breaklines ? &st->s.segs : NULL,
 											 &st->tmpl, st->method, INTERP_NAME));
 }

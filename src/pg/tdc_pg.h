@@ -440,6 +440,36 @@ extern TdcTinRun *tdc_tin_run_start(const TdcPointBuf *buf, const TdcSegList *br
 extern void tdc_tin_run_wait(TdcTinRun *tr, int rc, const char *err, const char *fname);
 extern void tdc_tin_run_free(TdcTinRun *tr);
 
+/* tin_agg.c: the samples every TIN aggregate's state begins with */
+typedef struct TdcTinAgg
+{
+	TdcAggState *base;			/* the vertices, with heights */
+	int64		rows;			/* non-NULL rows read */
+	bool		params_set;		/* the first row's parameters are kept */
+	bool		breaklines;		/* segs holds the samples' linework */
+	TdcSegList	segs;
+} TdcTinAgg;
+
+/* copies src's parameters into dst, or checks that they are dst's */
+typedef void (*TdcTinAggParams) (TdcTinAgg *dst, const TdcTinAgg *src, MemoryContext cxt);
+
+extern TdcTinAgg *tdc_tin_agg_new(MemoryContext cxt, Size size, TdcCurves curves);
+extern TdcTinAgg *tdc_tin_agg_combine(FunctionCallInfo fcinfo, const char *fn,
+									  const char *fname, Size size, TdcCurves curves,
+									  TdcTinAggParams params);
+extern void tdc_tin_agg_breaklines(TdcTinAgg *a, bool breaklines, MemoryContext cxt,
+								   const char *fname);
+extern void tdc_tin_agg_add(TdcTinAgg *a, Datum geom, const char *fname);
+extern void tdc_tin_agg_merge(TdcTinAgg *dst, const TdcTinAgg *src, const char *fname);
+extern char *tdc_tin_agg_extra(const TdcTinAgg *a, Size plen, Size *len);
+extern bytea *tdc_tin_agg_serialize(const TdcTinAgg *a, const TdcStateFormat *fmt,
+									char *extra, Size plen);
+extern const char *tdc_tin_agg_deserialize(TdcTinAgg *a, const bytea *in,
+										   const TdcStateFormat *fmt, TdcCurves curves,
+										   Size *extra_len);
+extern void tdc_tin_agg_read_segments(TdcTinAgg *a, const char *rest, Size len,
+									  const char *fname);
+
 /* gser_contour.c: the contour lines of a TIN as a MULTILINESTRING Z */
 extern struct varlena *tdc_gser_contours(const tdc_tin *tin, int32 srid, uint64 room,
 										 const char *fname);
