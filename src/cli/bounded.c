@@ -16,9 +16,9 @@
  *	plan	the grid cut into tiles of at most tile_max points by median
  *			splits along the longer side (kd-tree of cells), so that
  *			clustered data gets small tiles where it is dense
- *			(bounded_policy.c);
+ *			(tile_plan.c);
  *	bands	the bands along the hull edges, extra known boxes of the tiles
- *			near them (bounded_policy.c);
+ *			near them (tile_plan.c);
  *	bin		each point appended to its tile's file, and to the halo file of
  *			every other tile whose first known region holds it; the two
  *			halves of the input on two threads, each with its own files,
@@ -54,37 +54,37 @@ plan(bounded_run *r)
 {
 	size_t	   *ps,
 				tile_max;
-	bp_plan_status rc;
+	tdc_tp_plan_status rc;
 
 	/*
 	 * Fine counts (unless pass 1 made them on a grid near the box) and the
 	 * tiles.  The outer cells reach the true box: a point's cell still
 	 * holds it.
 	 */
-	if (r->counted && !bp_grid_near(&r->grid, r->bb))
+	if (r->counted && !tdc_tp_grid_near(&r->grid, r->bb))
 	{
 		r->counted = false;
-		memset(r->counts, 0, sizeof(uint32_t) * BP_GRID * BP_GRID);
+		memset(r->counts, 0, sizeof(uint32_t) * TDC_TP_GRID * TDC_TP_GRID);
 	}
 	if (!r->counted)
-		bp_grid_set(&r->grid, r->bb);
-	bp_grid_reach(&r->grid, r->bb);
-	ps = calloc((size_t) (BP_GRID + 1) * (BP_GRID + 1), sizeof(size_t));
-	r->tiles = calloc(BP_MAX_TILES, sizeof(bp_tile));
-	r->cell_tile = malloc((size_t) BP_GRID * BP_GRID * sizeof(int16_t));
+		tdc_tp_grid_set(&r->grid, r->bb);
+	tdc_tp_grid_reach(&r->grid, r->bb);
+	ps = calloc((size_t) (TDC_TP_GRID + 1) * (TDC_TP_GRID + 1), sizeof(size_t));
+	r->tiles = calloc(TDC_TP_MAX_TILES, sizeof(tdc_tp_tile));
+	r->cell_tile = malloc((size_t) TDC_TP_GRID * TDC_TP_GRID * sizeof(int16_t));
 	if (!ps || !r->tiles || !r->cell_tile)
 		die(1, "out of memory%s", "");
 	if (!r->counted)
 		scan_count(r);
-	bp_prefix_sums(r->counts, ps);
+	tdc_tp_prefix_sums(r->counts, ps);
 	free(r->counts);
 	r->counts = NULL;
 
-	tile_max = bp_tile_max(r->n, r->opt, r->has_z, r->budget);
-	rc = bp_plan(ps, &r->grid, tile_max, r->tiles, &r->nt);
-	if (rc == BP_PLAN_DENSE_CELL)
+	tile_max = tdc_tp_tile_max(r->n, r->opt, POINT_BYTES(r), r->budget);
+	rc = tdc_tp_plan(ps, &r->grid, tile_max, r->tiles, &r->nt);
+	if (rc == TDC_TP_PLAN_DENSE_CELL)
 		die(1, "the points are too clustered for --max-memory: one cell of the tiling grid holds %s points", "more than a tile's share of");
-	if (rc == BP_PLAN_TOO_MANY_TILES)
+	if (rc == TDC_TP_PLAN_TOO_MANY_TILES)
 		die(1, "--max-memory is too small for this input: more than %s tiles would be needed", "900");
 	free(ps);
 	for (int t = 0; t < r->nt; t++)
@@ -92,7 +92,7 @@ plan(bounded_run *r)
 		r->tiles[t].bb[0] = r->tiles[t].bb[1] = INFINITY;
 		r->tiles[t].bb[2] = r->tiles[t].bb[3] = -INFINITY;
 	}
-	bp_label_cells(r->tiles, r->nt, r->cell_tile);
+	tdc_tp_label_cells(r->tiles, r->nt, r->cell_tile);
 	r->st->tiles = r->nt;
 }
 
@@ -109,7 +109,7 @@ bands(bounded_run *r)
 	r->xs = malloc(sizeof(double *) * (r->nhull + 1));
 	if (r->extra == NULL || r->bands == NULL || r->inband == NULL || r->xs == NULL)
 		die(1, "out of memory%s", "");
-	bp_hull_bands(r->hull, r->nhull, r->bb, r->n, r->bands);
+	tdc_tp_hull_bands(r->hull, r->nhull, tdc_tp_spacing(r->bb, r->n), r->bands);
 }
 
 /*

@@ -4,7 +4,7 @@
  *		its files share (bounded.c explains the run).
  *
  *	bounded.c			the phases in order, and the plan
- *	bounded_policy.c	the tiling policy, pure (bounded_policy.h)
+ *	tile_plan.c	the tiling policy, pure (tile_plan.h)
  *	bounded_files.c		the source in chunks, the tile and halo files
  *	bounded_scan.c		pass 1: box, hull and cell counts
  *	bounded_bin.c		pass 2: every point to its tile's file and halos
@@ -13,10 +13,17 @@
 #ifndef TDC_BOUNDED_H
 #define TDC_BOUNDED_H
 
+#include <string.h>
 #include <time.h>
 
 #include "cli.h"
-#include "bounded_policy.h"
+#include "tile_plan.h"
+
+/*
+ * Bytes a point costs a tile run beside the engine and the finality check
+ * (tdc_tp_tile_bytes): its coordinates, its label, its z.
+ */
+#define POINT_BYTES(r)	((size_t) (16 + 8 + ((r)->has_z ? 8 : 0)))
 
 #define CHUNK		(1 << 16)	/* points per read of the source */
 
@@ -75,8 +82,8 @@ typedef struct bounded_run
 	bool		counted;		/* pass 1 counted the cells too */
 
 	/* the plan */
-	bp_grid		grid;
-	bp_tile    *tiles;
+	tdc_tp_grid		grid;
+	tdc_tp_tile    *tiles;
 	int			nt;
 	int16_t    *cell_tile;		/* the tile of each cell, freed by binning */
 
@@ -96,6 +103,21 @@ typedef struct bounded_run
 	int			nparts;			/* binning parts: files per tile and kind */
 	size_t	   *halo_count;		/* each tile's halo file's points */
 } bounded_run;
+
+/*
+ * Tile t's first known region, as the policy makes it from its cell box:
+ * K and the halo h, and in r->inband (cleared here) its hull bands.
+ */
+static inline void
+first_region(const struct bounded_run *r, int t, double K[4], double *h)
+{
+	double		box[4];
+
+	tdc_tp_least_known(&r->tiles[t], &r->grid, box);
+	tdc_tp_first_known(box, r->tiles[t].count, tdc_tp_spacing(r->bb, r->n), K, h);
+	memset(r->inband, 0, r->nhull + 1);
+	tdc_tp_first_bands(K, r->tiles[t].count, r->bands, r->nhull, r->inband);
+}
 
 static inline double
 now_s(void)

@@ -18,7 +18,7 @@
 
 /*
  * The box of a sample of the .bin source (256 runs of 256 points spread
- * over the file) in g, made a grid's box by bp_grid_from_sample.  False
+ * over the file) in g, made a grid's box by tdc_tp_grid_from_sample.  False
  * when n is small, the file unreadable or the sample flat.
  */
 static bool
@@ -40,10 +40,10 @@ sample_grid(const char *xypath, size_t n, double g[4])
 		got = fread(buf, 16, 256, f);
 		for (size_t i = 0; i < got; i++)
 			if (isfinite(buf[2 * i]) && isfinite(buf[2 * i + 1]))
-				bp_box_add(g, buf[2 * i], buf[2 * i + 1]);
+				tdc_tp_box_add(g, buf[2 * i], buf[2 * i + 1]);
 	}
 	fclose(f);
-	return bp_grid_from_sample(g);
+	return tdc_tp_grid_from_sample(g);
 }
 
 /*
@@ -60,7 +60,7 @@ typedef struct scan_work
 	const char *xypath;
 	size_t		from,
 				count;
-	const bp_grid *grid;
+	const tdc_tp_grid *grid;
 	uint32_t   *counts;
 	/* results */
 	double		bb[4];
@@ -82,7 +82,7 @@ inner_rectangle(const double *hull, size_t nhull, double inner[4])
 				cy;
 
 	for (size_t i = 0; i < nhull; i++)
-		bp_box_add(hb, hull[2 * i], hull[2 * i + 1]);
+		tdc_tp_box_add(hb, hull[2 * i], hull[2 * i + 1]);
 	cx = 0.5 * (hb[0] + hb[2]);
 	cy = 0.5 * (hb[1] + hb[3]);
 	for (double f = 0.98; f > 0.2; f -= 0.16)
@@ -170,7 +170,7 @@ scan_range(void *arg)
 			if (y > bb[3])
 				bb[3] = y;
 			if (counted)
-				counts[bp_cell_of(y, grid[1], sy, ycut) * BP_GRID + bp_cell_of(x, grid[0], sx, xcut)]++;
+				counts[tdc_tp_cell_of(y, grid[1], sy, ycut) * TDC_TP_GRID + tdc_tp_cell_of(x, grid[0], sx, xcut)]++;
 			if (x > inner[0] && x < inner[2] && y > inner[1] && y < inner[3])
 				continue;
 			buf[2 * m] = x;
@@ -210,12 +210,12 @@ scan_input(bounded_run *r)
 	bool		started = false;
 	double		g[4];
 
-	r->counts = calloc((size_t) BP_GRID * BP_GRID, sizeof(uint32_t));
+	r->counts = calloc((size_t) TDC_TP_GRID * TDC_TP_GRID, sizeof(uint32_t));
 	if (r->counts == NULL)
 		die(1, "out of memory%s", "");
 	r->counted = sample_grid(r->xypath, r->n, g);
 	if (r->counted)
-		bp_grid_set(&r->grid, g);
+		tdc_tp_grid_set(&r->grid, g);
 	np = r->counted ? 2 : 1;
 	for (int p = 0; p < np; p++)
 	{
@@ -223,7 +223,7 @@ scan_input(bounded_run *r)
 		sw[p].from = r->n / np * p;
 		sw[p].count = p == np - 1 ? r->n - sw[p].from : r->n / np;
 		sw[p].grid = r->counted ? &r->grid : NULL;
-		sw[p].counts = p == 0 ? r->counts : calloc((size_t) BP_GRID * BP_GRID, sizeof(uint32_t));
+		sw[p].counts = p == 0 ? r->counts : calloc((size_t) TDC_TP_GRID * TDC_TP_GRID, sizeof(uint32_t));
 		if (sw[p].counts == NULL)
 			die(1, "out of memory%s", "");
 	}
@@ -246,7 +246,7 @@ scan_input(bounded_run *r)
 
 		if (buf == NULL)
 			die(1, "out of memory%s", "");
-		bp_box_union(r->bb, sw[1].bb);
+		tdc_tp_box_union(r->bb, sw[1].bb);
 		memcpy(buf, r->hull, 16 * r->nhull);
 		memcpy(buf + 2 * r->nhull, sw[1].hull, 16 * sw[1].nhull);
 		free(r->hull);
@@ -254,7 +254,7 @@ scan_input(bounded_run *r)
 			die(1, "out of memory%s", "");
 		free(buf);
 		free(sw[1].hull);
-		for (size_t c = 0; c < (size_t) BP_GRID * BP_GRID; c++)
+		for (size_t c = 0; c < (size_t) TDC_TP_GRID * TDC_TP_GRID; c++)
 			r->counts[c] += sw[1].counts[c];
 		free(sw[1].counts);
 	}
@@ -270,6 +270,6 @@ scan_count(bounded_run *r)
 	source_open(&src, r->xypath, NULL);
 	while ((k = source_read(&src)) > 0)
 		for (size_t i = 0; i < k; i++)
-			r->counts[bp_cell(&r->grid, src.xy[2 * i], src.xy[2 * i + 1])]++;
+			r->counts[tdc_tp_cell(&r->grid, src.xy[2 * i], src.xy[2 * i + 1])]++;
 	source_close(&src);
 }

@@ -95,7 +95,7 @@ count_known(const bounded_run *r, const double *K, size_t nextra)
 static void
 gather_first(const bounded_run *r, int t, const double *K, size_t nextra, tile_points *p)
 {
-	const bp_tile *ti = &r->tiles[t];
+	const tdc_tp_tile *ti = &r->tiles[t];
 	size_t		nh = r->halo_count[t],
 				at = 0,
 				got,
@@ -163,7 +163,7 @@ region_points(const bounded_run *r, int t, const double *Kr, size_t nextra, tile
 {
 	const double *extra = r->extra;
 	const double K[4] = {Kr[0], Kr[1], Kr[2], Kr[3]};
-	const bp_tile *tiles = r->tiles;
+	const tdc_tp_tile *tiles = r->tiles;
 	int			w = r->w;
 	size_t		m = 0;
 	double		rec[4 * 4096];
@@ -174,16 +174,16 @@ region_points(const bounded_run *r, int t, const double *Kr, size_t nextra, tile
 		mreader		f;
 		size_t		got,
 					nx;
-		bool		meets = bp_box_meets(tiles[s].bb, K);
+		bool		meets = tdc_tp_box_meets(tiles[s].bb, K);
 
 		for (size_t e = 0; e < nextra && !meets; e++)
-			meets = bp_box_meets(tiles[s].bb, extra + 4 * e);
+			meets = tdc_tp_box_meets(tiles[s].bb, extra + 4 * e);
 		if ((u >= 0 && u == t) || tiles[s].count == 0 || !meets)
 			continue;
 		/* only the bands that meet this file's box need testing */
 		nx = 0;
 		for (size_t e = 0; e < nextra; e++)
-			if (bp_box_meets(tiles[s].bb, extra + 4 * e))
+			if (tdc_tp_box_meets(tiles[s].bb, extra + 4 * e))
 				r->xs[nx++] = extra + 4 * e;
 		mr_open(&f, "tile", s, r->nparts);
 		while ((got = mr_read(&f, rec, 8 * (size_t) w, 4096)) > 0)
@@ -235,18 +235,18 @@ gather_region(const bounded_run *r, int t, double K[4], const double Kmin[4], si
 		if (getenv("TDC_TILE_DEBUG"))
 			fprintf(stderr, "tile %d/%d: own %zu, K %g %g %g %g: %zu points\n", t, r->nt,
 					r->tiles[t].count, K[0], K[1], K[2], K[3], m);
-		if (bp_tile_bytes(m, r->opt, r->has_z) > r->budget && shrinks < 4 &&
+		if (tdc_tp_tile_bytes(m, r->opt, POINT_BYTES(r)) > r->budget && shrinks < 4 &&
 			memcmp(K, Kmin, 4 * sizeof(double)) != 0)
-			bp_shrink_known(K, Kmin, shrinks);
+			tdc_tp_shrink_known(K, Kmin, shrinks);
 		else
 			break;
 	}
-	if (bp_tile_bytes(m, r->opt, r->has_z) > r->budget)
+	if (tdc_tp_tile_bytes(m, r->opt, POINT_BYTES(r)) > r->budget)
 	{
 		char		msg[160];
 
 		snprintf(msg, sizeof(msg), "tile %d needs %zu points with its halo, about %zu MB",
-				 t, m, bp_tile_bytes(m, r->opt, r->has_z) >> 20);
+				 t, m, tdc_tp_tile_bytes(m, r->opt, POINT_BYTES(r)) >> 20);
 		die(1, "%s: more than --max-memory allows (the data is too clustered or the limit too small)", msg);
 	}
 	points_alloc(p, m, r->has_z);
@@ -317,15 +317,15 @@ tile_write(bounded_run *r, int t, const tile_points *p, const tdc_tile_result *r
 /*
  * Tile t, run until its run is final, its triangles then written: each
  * global triangle it owns once, whatever the runs before.  Its known
- * region starts as the policy's first region (bp_first_known) and only
- * grows (bp_grow_bands, then bp_grow_known) between runs, except for the
+ * region starts as the policy's first region (first_region) and only
+ * grows (tdc_tp_grow_bands, then tdc_tp_grow_known) between runs, except for the
  * shrinking back of a region that does not fit.  A tile that owns no
  * point has no triangle.
  */
 void
 tile_run(bounded_run *r, int t)
 {
-	bp_tile    *ti = &r->tiles[t];
+	tdc_tp_tile    *ti = &r->tiles[t];
 	double		K[4],
 				Kmin[4],		/* the least K this round may shrink back to */
 				h;
@@ -335,9 +335,8 @@ tile_run(bounded_run *r, int t)
 
 	if (ti->count == 0)
 		return;					/* owns nothing */
-	memset(r->inband, 0, r->nhull + 1);
-	bp_first_known(ti, &r->grid, r->bands, r->nhull, K, &h, r->inband);
-	bp_least_known(ti, &r->grid, Kmin);
+	first_region(r, t, K, &h);
+	tdc_tp_least_known(ti, &r->grid, Kmin);
 	for (size_t i = 0; r->nhull > 1 && i < r->nhull; i++)
 		if (r->inband[i])
 			memcpy(r->extra + 4 * nextra++, r->bands + 4 * i, 32);
@@ -353,7 +352,7 @@ tile_run(bounded_run *r, int t)
 		tdc_job    *job;
 		double		t0 = now_s();
 
-		if (first && bp_tile_bytes(ti->count + r->halo_count[t], r->opt, r->has_z) > r->budget)
+		if (first && tdc_tp_tile_bytes(ti->count + r->halo_count[t], r->opt, POINT_BYTES(r)) > r->budget)
 			first = false;
 		if (first)
 		{
@@ -371,7 +370,7 @@ tile_run(bounded_run *r, int t)
 		tile_account(r, job);
 		if (res.final)
 			tile_write(r, t, &p, &res);
-		else if (bp_grow_bands(r->bands, r->nhull, res.need, r->inband, r->extra, &nextra) > 0)
+		else if (tdc_tp_grow_bands(r->bands, r->nhull, res.need, r->inband, r->extra, &nextra) > 0)
 		{
 			/* the same K with more bands */
 			spec.nextra = nextra;
@@ -380,7 +379,7 @@ tile_run(bounded_run *r, int t)
 			continue;
 		}
 		else
-			bp_grow_known(K, Kmin, res.need, h);
+			tdc_tp_grow_known(K, Kmin, res.need, h);
 		tdc_tile_result_free(&res);
 		points_free(&p);
 		r->st->write += now_s() - t0;

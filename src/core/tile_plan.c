@@ -1,6 +1,6 @@
 /*
- * bounded_policy.c
- *		The tiling policy of a bounded-memory run (see bounded_policy.h):
+ * tile_plan.c
+ *		The tiling policy of a bounded-memory run (see tile_plan.h):
  *		the plan of tiles, the first known region of each tile (its cell
  *		box plus 8 mean spacings, and the bands of 16 mean spacings along
  *		the hull edges near it) and the growth of that region on a rerun.
@@ -11,26 +11,26 @@
 #include <math.h>
 #include <string.h>
 
-#include "bounded_policy.h"
+#include "tile_plan.h"
 
 /*
  * The counting grid's box from the box g of a sample of the points, grown
  * by two cells a side, so that the scan can count as it finds the true box.
- * The cells stay exact whatever the sample (bp_cell_of clamps, and
- * bp_grid_reach widens the outer cells to the true box); a box far off the
- * true one only makes a poor plan, which bp_grid_near detects.  False when
+ * The cells stay exact whatever the sample (tdc_tp_cell_of clamps, and
+ * tdc_tp_grid_reach widens the outer cells to the true box); a box far off the
+ * true one only makes a poor plan, which tdc_tp_grid_near detects.  False when
  * the sample is flat or not finite: no grid before the true box.
  */
 bool
-bp_grid_from_sample(double g[4])
+tdc_tp_grid_from_sample(double g[4])
 {
 	double		mx,
 				my;
 
 	if (!(g[2] > g[0]) || !(g[3] > g[1]) || !isfinite(g[2] - g[0]) || !isfinite(g[3] - g[1]))
 		return false;
-	mx = (g[2] - g[0]) * 2 / BP_GRID;
-	my = (g[3] - g[1]) * 2 / BP_GRID;
+	mx = (g[2] - g[0]) * 2 / TDC_TP_GRID;
+	my = (g[3] - g[1]) * 2 / TDC_TP_GRID;
 	g[0] -= mx;
 	g[1] -= my;
 	g[2] += mx;
@@ -40,20 +40,20 @@ bp_grid_from_sample(double g[4])
 
 /* The fine grid over box: scales, cell sizes and the cell sides. */
 void
-bp_grid_set(bp_grid *g, const double box[4])
+tdc_tp_grid_set(tdc_tp_grid *g, const double box[4])
 {
 	memcpy(g->box, box, sizeof(g->box));
-	g->sx = box[2] > box[0] ? BP_GRID / (box[2] - box[0]) : 0;
-	g->sy = box[3] > box[1] ? BP_GRID / (box[3] - box[1]) : 0;
-	g->cw = (box[2] - box[0]) / BP_GRID;
-	g->ch = (box[3] - box[1]) / BP_GRID;
-	for (int c = 0; c <= BP_GRID; c++)
+	g->sx = box[2] > box[0] ? TDC_TP_GRID / (box[2] - box[0]) : 0;
+	g->sy = box[3] > box[1] ? TDC_TP_GRID / (box[3] - box[1]) : 0;
+	g->cw = (box[2] - box[0]) / TDC_TP_GRID;
+	g->ch = (box[3] - box[1]) / TDC_TP_GRID;
+	for (int c = 0; c <= TDC_TP_GRID; c++)
 	{
 		g->xcut[c] = box[0] + c * g->cw;
 		g->ycut[c] = box[1] + c * g->ch;
 	}
-	g->xcut[BP_GRID] = fmax(g->xcut[BP_GRID], box[2]);
-	g->ycut[BP_GRID] = fmax(g->ycut[BP_GRID], box[3]);
+	g->xcut[TDC_TP_GRID] = fmax(g->xcut[TDC_TP_GRID], box[2]);
+	g->ycut[TDC_TP_GRID] = fmax(g->ycut[TDC_TP_GRID], box[3]);
 }
 
 /*
@@ -61,7 +61,7 @@ bp_grid_set(bp_grid *g, const double box[4])
  * box is bb: it reaches at most one cell past g's box on every side.
  */
 bool
-bp_grid_near(const bp_grid *g, const double bb[4])
+tdc_tp_grid_near(const tdc_tp_grid *g, const double bb[4])
 {
 	return !(bb[0] < g->box[0] - g->cw || bb[2] > g->box[2] + g->cw ||
 			 bb[1] < g->box[1] - g->ch || bb[3] > g->box[3] + g->ch);
@@ -69,28 +69,30 @@ bp_grid_near(const bp_grid *g, const double bb[4])
 
 /*
  * The outer cells widened to the true box bb: a point's cell still holds
- * it, and no point changes cell (bp_cell_of clamps to the outer cells).
+ * it, and no point changes cell (tdc_tp_cell_of clamps to the outer cells).
  */
 void
-bp_grid_reach(bp_grid *g, const double bb[4])
+tdc_tp_grid_reach(tdc_tp_grid *g, const double bb[4])
 {
 	g->xcut[0] = fmin(g->xcut[0], bb[0]);
 	g->ycut[0] = fmin(g->ycut[0], bb[1]);
-	g->xcut[BP_GRID] = fmax(g->xcut[BP_GRID], bb[2]);
-	g->ycut[BP_GRID] = fmax(g->ycut[BP_GRID], bb[3]);
+	g->xcut[TDC_TP_GRID] = fmax(g->xcut[TDC_TP_GRID], bb[2]);
+	g->ycut[TDC_TP_GRID] = fmax(g->ycut[TDC_TP_GRID], bb[3]);
 }
 
 /*
- * Bytes one tile run of m points (with z or not) may hold at once: the
- * gathered points and labels, the engine, tile_final.c's per-site arrays (the 4
- * bytes once taken by the input map now hold its block grid for the deep
- * sites, under a byte per point), and the triangle indices (at most 2m
- * triangles of 3 size_t).
+ * Bytes one tile run of m points may hold at once: the engine
+ * (tdc_estimate_memory), tile_final.c's per-site arrays and the triangle
+ * indices (TDC_TP_FINISH_BYTES a point: 4 + 8 + 1 bytes of per-site
+ * arrays, the 4 once taken by the input map now holding its block grid
+ * for the deep sites, and at most 2m triangles of 3 size_t), a
+ * megabyte, and per_point bytes of the caller's own (its copy of the
+ * points, labels, source positions, result).
  */
 size_t
-bp_tile_bytes(size_t m, const tdc_options *opt, int has_z)
+tdc_tp_tile_bytes(size_t m, const tdc_options *opt, size_t per_point)
 {
-	return tdc_estimate_memory(m, opt) + m * (16 + 8 + (has_z ? 8 : 0) + 4 + 8 + 1 + 48) + (1 << 20);
+	return tdc_estimate_memory(m, opt) + m * (TDC_TP_FINISH_BYTES + per_point) + (1 << 20);
 }
 
 /*
@@ -98,27 +100,27 @@ bp_tile_bytes(size_t m, const tdc_options *opt, int has_z)
  * allowance of 1.5 must fit in the budget.  (It was 2.2 while a sliver
  * along a long hull edge made corner tiles grow; tile_final.c now bounds such a
  * triangle's circle by its segment over the hull edge.  A tile that still
- * outgrows the budget is first shrunk back, see bp_shrink_known.)
+ * outgrows the budget is first shrunk back, see tdc_tp_shrink_known.)
  */
 size_t
-bp_tile_max(size_t n, const tdc_options *opt, int has_z, size_t budget)
+tdc_tp_tile_max(size_t n, const tdc_options *opt, size_t per_point, size_t budget)
 {
 	size_t		tile_max;
 
-	for (tile_max = n; tile_max > 1000 && bp_tile_bytes(tile_max * 3 / 2, opt, has_z) > budget;)
+	for (tile_max = n; tile_max > 1000 && tdc_tp_tile_bytes(tile_max * 3 / 2, opt, per_point) > budget;)
 		tile_max = tile_max * 9 / 10;
 	return tile_max;
 }
 
-/* ps: the (BP_GRID + 1)^2 prefix sums of the BP_GRID^2 cell counts. */
+/* ps: the (TDC_TP_GRID + 1)^2 prefix sums of the TDC_TP_GRID^2 cell counts. */
 void
-bp_prefix_sums(const uint32_t *counts, size_t *ps)
+tdc_tp_prefix_sums(const uint32_t *counts, size_t *ps)
 {
-	const int	w = BP_GRID + 1;
+	const int	w = TDC_TP_GRID + 1;
 
-	for (int r = 0; r < BP_GRID; r++)
-		for (int c = 0; c < BP_GRID; c++)
-			ps[(r + 1) * w + c + 1] = counts[r * BP_GRID + c] +
+	for (int r = 0; r < TDC_TP_GRID; r++)
+		for (int c = 0; c < TDC_TP_GRID; c++)
+			ps[(r + 1) * w + c + 1] = counts[r * TDC_TP_GRID + c] +
 				ps[r * w + c + 1] + ps[(r + 1) * w + c] - ps[r * w + c];
 }
 
@@ -126,38 +128,38 @@ bp_prefix_sums(const uint32_t *counts, size_t *ps)
 static size_t
 cells_count(const size_t *ps, int c0, int c1, int r0, int r1)
 {
-	const int	w = BP_GRID + 1;
+	const int	w = TDC_TP_GRID + 1;
 
 	return ps[r1 * w + c1] - ps[r0 * w + c1] - ps[r1 * w + c0] + ps[r0 * w + c0];
 }
 
 /* kd-split of the cell rectangle until every tile holds at most tile_max points. */
-static bp_plan_status
+static tdc_tp_plan_status
 plan_rect(const size_t *ps, int c0, int c1, int r0, int r1, double cw, double ch,
-		  size_t tile_max, bp_tile *tiles, int *nt)
+		  size_t tile_max, tdc_tp_tile *tiles, int *nt)
 {
 	size_t		cnt = cells_count(ps, c0, c1, r0, r1),
 				k;
 	bool		by_x;
 	int			lo,
 				hi;
-	bp_plan_status rc;
+	tdc_tp_plan_status rc;
 
 	if (cnt == 0)
-		return BP_PLAN_OK;
+		return TDC_TP_PLAN_OK;
 	if (cnt <= tile_max || (c1 - c0 == 1 && r1 - r0 == 1))
 	{
 		if (cnt > tile_max)
-			return BP_PLAN_DENSE_CELL;
-		if (*nt >= BP_MAX_TILES)
-			return BP_PLAN_TOO_MANY_TILES;
+			return TDC_TP_PLAN_DENSE_CELL;
+		if (*nt >= TDC_TP_MAX_TILES)
+			return TDC_TP_PLAN_TOO_MANY_TILES;
 		tiles[*nt].c0 = c0;
 		tiles[*nt].c1 = c1;
 		tiles[*nt].r0 = r0;
 		tiles[*nt].r1 = r1;
 		tiles[*nt].count = cnt;
 		(*nt)++;
-		return BP_PLAN_OK;
+		return TDC_TP_PLAN_OK;
 	}
 	by_x = (c1 - c0 > 1) && ((c1 - c0) * cw >= (r1 - r0) * ch || r1 - r0 == 1);
 
@@ -184,44 +186,63 @@ plan_rect(const size_t *ps, int c0, int c1, int r0, int r1, double cw, double ch
 	if (by_x)
 	{
 		rc = plan_rect(ps, c0, lo, r0, r1, cw, ch, tile_max, tiles, nt);
-		return rc != BP_PLAN_OK ? rc : plan_rect(ps, lo, c1, r0, r1, cw, ch, tile_max, tiles, nt);
+		return rc != TDC_TP_PLAN_OK ? rc : plan_rect(ps, lo, c1, r0, r1, cw, ch, tile_max, tiles, nt);
 	}
 	rc = plan_rect(ps, c0, c1, r0, lo, cw, ch, tile_max, tiles, nt);
-	return rc != BP_PLAN_OK ? rc : plan_rect(ps, c0, c1, lo, r1, cw, ch, tile_max, tiles, nt);
+	return rc != TDC_TP_PLAN_OK ? rc : plan_rect(ps, c0, c1, lo, r1, cw, ch, tile_max, tiles, nt);
 }
 
 /*
  * The plan: the grid's cells (counts in prefix sums ps) cut into tiles of
  * at most tile_max points by median splits along the longer side (a
  * kd-tree of cells), so that clustered data gets small tiles where it is
- * dense.  Empty rectangles get no tile.  tiles[] has room for BP_MAX_TILES;
+ * dense.  Empty rectangles get no tile.  tiles[] has room for TDC_TP_MAX_TILES;
  * *nt counts them.  On a refusal the tiles found so far stay in tiles[].
  */
-bp_plan_status
-bp_plan(const size_t *ps, const bp_grid *g, size_t tile_max, bp_tile *tiles, int *nt)
+tdc_tp_plan_status
+tdc_tp_plan(const size_t *ps, const tdc_tp_grid *g, size_t tile_max, tdc_tp_tile *tiles, int *nt)
 {
-	return plan_rect(ps, 0, BP_GRID, 0, BP_GRID, g->cw, g->ch, tile_max, tiles, nt);
+	return plan_rect(ps, 0, TDC_TP_GRID, 0, TDC_TP_GRID, g->cw, g->ch, tile_max, tiles, nt);
 }
 
 /* The label of every cell: the index of the tile that owns it. */
 void
-bp_label_cells(const bp_tile *tiles, int nt, int16_t *cell_tile)
+tdc_tp_label_cells(const tdc_tp_tile *tiles, int nt, int16_t *cell_tile)
 {
 	for (int t = 0; t < nt; t++)
 		for (int r = tiles[t].r0; r < tiles[t].r1; r++)
 			for (int c = tiles[t].c0; c < tiles[t].c1; c++)
-				cell_tile[r * BP_GRID + c] = (int16_t) t;
+				cell_tile[r * TDC_TP_GRID + c] = (int16_t) t;
+}
+
+/*
+ * The mean spacing of n points whose box is bb: the side of the square
+ * that each would have alone, or along a flat box its length over n, or 1
+ * when the box is a point.
+ */
+double
+tdc_tp_spacing(const double bb[4], size_t n)
+{
+	double		w = bb[2] - bb[0],
+				h = bb[3] - bb[1],
+				k = (double) (n ? n : 1);
+
+	if (w * h > 0 && isfinite(w * h))
+		return sqrt(w * h / k);
+	if (w + h > 0 && isfinite(w + h))
+		return (w + h) / k;
+	return 1;
 }
 
 /*
  * The band of every edge of the hull (nhull vertices, counter-clockwise;
- * none when nhull < 2) of n points whose box is bb: 4 doubles per edge in
- * bands[], the edge's box grown by 16 mean spacings across it.
+ * none when nhull < 2) of points of mean spacing spacing: 4 doubles per
+ * edge in bands[], the edge's box grown by 16 spacings across it.
  */
 void
-bp_hull_bands(const double *hull, size_t nhull, const double bb[4], size_t n, double *bands)
+tdc_tp_hull_bands(const double *hull, size_t nhull, double spacing, double *bands)
 {
-	double		band = 16 * sqrt((bb[2] - bb[0]) * (bb[3] - bb[1]) / (double) (n ? n : 1));
+	double		band = 16 * spacing;
 
 	for (size_t i = 0; nhull > 1 && i < nhull; i++)
 	{
@@ -246,23 +267,33 @@ bp_hull_bands(const double *hull, size_t nhull, const double bb[4], size_t n, do
 }
 
 /*
- * The first K of tile ti (its cell box plus a halo of 8 mean spacings), h,
- * and in mark[] (nhull bytes, cleared by the caller) the hull bands it
- * takes as extra boxes.
+ * The first K of a tile of count points inside box (its cell box, or the
+ * box of its points): box plus a halo h of 8 of the tile's mean spacings
+ * (spacing, the global one, where the box is flat or a point).
  */
 void
-bp_first_known(const bp_tile *ti, const bp_grid *g, const double *bands, size_t nhull,
-			   double K[4], double *h, uint8_t *mark)
+tdc_tp_first_known(const double box[4], size_t count, double spacing, double K[4], double *h)
+{
+	double		w = box[2] - box[0],
+				ht = box[3] - box[1];
+
+	*h = 8 * (w * ht > 0 ? sqrt(w * ht / (double) (count ? count : 1)) : spacing);
+	K[0] = box[0] - *h;
+	K[1] = box[1] - *h;
+	K[2] = box[2] + *h;
+	K[3] = box[3] + *h;
+}
+
+/*
+ * In mark[] (nhull bytes, cleared by the caller) the hull bands that a
+ * tile of count points with first known box K takes as extra boxes.
+ */
+void
+tdc_tp_first_bands(const double K[4], size_t count, const double *bands, size_t nhull,
+				   uint8_t *mark)
 {
 	double		near[4],
 				gr;
-
-	bp_least_known(ti, g, K);
-	*h = 8 * sqrt((K[2] - K[0]) * (K[3] - K[1]) / (double) ti->count);
-	K[0] -= *h;
-	K[1] -= *h;
-	K[2] += *h;
-	K[3] += *h;
 
 	/*
 	 * Extra known boxes: the boxes of the hull edges near K, grown by a
@@ -281,18 +312,18 @@ bp_first_known(const bp_tile *ti, const bp_grid *g, const double *bands, size_t 
 	 * taken when that is under 5 %, else only the bands meeting K, and a
 	 * re-run adds what is missing.
 	 */
-	gr = ti->count >= 4000000 ? fmax(K[2] - K[0], K[3] - K[1]) : 0;
+	gr = count >= 4000000 ? fmax(K[2] - K[0], K[3] - K[1]) : 0;
 	near[0] = K[0] - gr;
 	near[1] = K[1] - gr;
 	near[2] = K[2] + gr;
 	near[3] = K[3] + gr;
 	for (size_t i = 0; nhull > 1 && i < nhull; i++)
-		mark[i] = bp_box_meets(bands + 4 * i, near);
+		mark[i] = tdc_tp_box_meets(bands + 4 * i, near);
 }
 
 /* The least known region of tile ti: its cell box, which holds its points. */
 void
-bp_least_known(const bp_tile *ti, const bp_grid *g, double Kmin[4])
+tdc_tp_least_known(const tdc_tp_tile *ti, const tdc_tp_grid *g, double Kmin[4])
 {
 	Kmin[0] = g->xcut[ti->c0];
 	Kmin[1] = g->ycut[ti->r0];
@@ -307,7 +338,7 @@ bp_least_known(const bp_tile *ti, const bp_grid *g, double Kmin[4])
  * all the way; the finality test will ask for what is really needed.
  */
 void
-bp_shrink_known(double K[4], const double Kmin[4], int shrinks)
+tdc_tp_shrink_known(double K[4], const double Kmin[4], int shrinks)
 {
 	for (int c = 0; c < 4; c++)
 		K[c] = shrinks == 3 ? Kmin[c] : Kmin[c] + (K[c] - Kmin[c]) / 4;
@@ -321,16 +352,16 @@ bp_shrink_known(double K[4], const double Kmin[4], int shrinks)
  * edge, whose circles' parts inside C are thin lenses along the hull: the
  * tile runs again with the same K and these bands, rather than widen K
  * along the whole side.  Returns the number of bands added; with none, K
- * must grow (bp_grow_known).
+ * must grow (tdc_tp_grow_known).
  */
 size_t
-bp_grow_bands(const double *bands, size_t nhull, const double need[4], uint8_t *inband,
+tdc_tp_grow_bands(const double *bands, size_t nhull, const double need[4], uint8_t *inband,
 			  double *extra, size_t *nextra)
 {
 	size_t		added = 0;
 
 	for (size_t i = 0; nhull > 1 && i < nhull; i++)
-		if (!inband[i] && bp_box_meets(bands + 4 * i, need))
+		if (!inband[i] && tdc_tp_box_meets(bands + 4 * i, need))
 		{
 			inband[i] = 1;
 			memcpy(extra + 4 * (*nextra)++, bands + 4 * i, 32);
@@ -342,13 +373,13 @@ bp_grow_bands(const double *bands, size_t nhull, const double need[4], uint8_t *
 /*
  * K grown to the box need the run asked for, and by half the tile's halo h
  * beyond it: a little more than asked, since each run costs a whole tile.
- * If need is too big for the budget, K may fall back (bp_shrink_known) to
+ * If need is too big for the budget, K may fall back (tdc_tp_shrink_known) to
  * the new Kmin, a step of an eighth of the way from the old K: the needs
  * of a thin halo overstate what the final stars need, and any growth is
  * progress.
  */
 void
-bp_grow_known(double K[4], double Kmin[4], const double need[4], double h)
+tdc_tp_grow_known(double K[4], double Kmin[4], const double need[4], double h)
 {
 	double		gx = 0.5 * h,
 				gy = 0.5 * h;
@@ -359,4 +390,25 @@ bp_grow_known(double K[4], double Kmin[4], const double need[4], double h)
 	K[1] = need[1] - gy;
 	K[2] = need[2] + gx;
 	K[3] = need[3] + gy;
+}
+
+/*
+ * The label of the square of side size that holds (x, y), counted from
+ * origin: column * 2^32 + row, both from 0 at the origin, so that a label
+ * does not depend on how far from (0, 0) the data lies (floor(x / size)
+ * passes 2^31 at x = 5e6 with squares of 0.002).  Each step rounds
+ * monotonically, so a column (row) holds an interval of x (y).  False when
+ * a point lies below the origin, is not finite, or its column or row
+ * passes 2^31 - 1: squares that small for data that wide are refused.
+ */
+bool
+tdc_tp_square_label(double x, double y, const double origin[2], double size, int64_t *label)
+{
+	double		c = floor((x - origin[0]) / size),
+				r = floor((y - origin[1]) / size);
+
+	if (!(c >= 0 && c < 2147483648.0 && r >= 0 && r < 2147483648.0))
+		return false;
+	*label = (int64_t) c * 4294967296 + (int64_t) r;
+	return true;
 }
