@@ -44,6 +44,60 @@
 #include "bounded.h"
 
 /*
+ * The refusal of a plan: the limit is below this input's floor, the least
+ * budget whose tiles hold its densest cell (the plan's smallest tile) with
+ * the growth allowance, and at least TILE_FLOOR points; the message gives
+ * the numbers, and the exact copies of one spot when they are what makes
+ * the cell dense.  Before any tile is binned or run.
+ */
+#define TILE_FLOOR	1000
+
+static void
+refuse_plan(bounded_run *r, size_t tile_max, tdc_tp_plan_status rc)
+{
+	size_t		dmax = 0,
+				floor_bytes,
+				copies = 0;
+	int			dcell = 0;
+	double		spot[2];
+	char		msg[640],
+				dup[200] = "";
+
+	for (int c = 0; c < TDC_TP_GRID * TDC_TP_GRID; c++)
+		if (r->counts[c] > dmax)
+		{
+			dmax = r->counts[c];
+			dcell = c;
+		}
+	floor_bytes = tdc_tp_tile_bytes((dmax > TILE_FLOOR ? dmax : TILE_FLOOR) * 3 / 2, r->opt,
+									POINT_BYTES(r));
+	if (rc == TDC_TP_PLAN_TOO_MANY_TILES)
+	{
+		snprintf(msg, sizeof(msg), "--max-memory %zu is too small for this input: tiles of at most %zu points "
+				 "(the most that fit with their halos) would be more than %d; with %zu points allow about %zu MB",
+				 r->budget >> 20, tile_max, TDC_TP_MAX_TILES, r->n,
+				 (tdc_tp_tile_bytes(r->n / (TDC_TP_MAX_TILES / 2) * 3 / 2, r->opt, POINT_BYTES(r)) >> 20) + 1);
+		die(1, "%s", msg);
+	}
+	if (dmax > tile_max && dmax >= 2)
+	{
+		dense_spot(r, dcell, tile_max, spot, &copies);
+		if (copies * 2 >= dmax)
+			snprintf(dup, sizeof(dup), "; %zu of them are exact copies of (%.17g %.17g)",
+					 copies, spot[0], spot[1]);
+	}
+	snprintf(msg, sizeof(msg), "--max-memory %zu is below this input's floor of %zu MB: the densest cell of the "
+			 "tiling grid, %.6g x %.6g at (%.17g %.17g), holds %zu points (a tile may hold %zu within the limit), "
+			 "and a tile of them with its halo needs about %zu MB%s",
+			 r->budget >> 20, (floor_bytes >> 20) + 1,
+			 r->grid.xcut[dcell % TDC_TP_GRID + 1] - r->grid.xcut[dcell % TDC_TP_GRID],
+			 r->grid.ycut[dcell / TDC_TP_GRID + 1] - r->grid.ycut[dcell / TDC_TP_GRID],
+			 r->grid.xcut[dcell % TDC_TP_GRID], r->grid.ycut[dcell / TDC_TP_GRID],
+			 dmax, tile_max, (floor_bytes >> 20) + 1, dup);
+	die(1, "%s", msg);
+}
+
+/*
  * The plan: after it, r->grid is the grid every point is placed on (its
  * outer cells reaching the true box), r->tiles[0 .. r->nt) the tiles, each
  * with its cells, its count and an empty box, and r->cell_tile each cell's
@@ -77,15 +131,13 @@ plan(bounded_run *r)
 	if (!r->counted)
 		scan_count(r);
 	tdc_tp_prefix_sums(r->counts, ps);
-	free(r->counts);
-	r->counts = NULL;
 
 	tile_max = tdc_tp_tile_max(r->n, r->opt, POINT_BYTES(r), r->budget);
+	if (tdc_tp_tile_bytes(tile_max * 3 / 2, r->opt, POINT_BYTES(r)) > r->budget)
+		refuse_plan(r, 0, TDC_TP_PLAN_DENSE_CELL);
 	rc = tdc_tp_plan(ps, &r->grid, tile_max, r->tiles, &r->nt);
-	if (rc == TDC_TP_PLAN_DENSE_CELL)
-		die(1, "the points are too clustered for --max-memory: one cell of the tiling grid holds %s points", "more than a tile's share of");
-	if (rc == TDC_TP_PLAN_TOO_MANY_TILES)
-		die(1, "--max-memory is too small for this input: more than %s tiles would be needed", "900");
+	if (rc != TDC_TP_PLAN_OK)
+		refuse_plan(r, tile_max, rc);
 	free(ps);
 	for (int t = 0; t < r->nt; t++)
 	{
@@ -108,6 +160,12 @@ bands(bounded_run *r)
 	r->inband = calloc(r->nhull + 1, 1);
 	r->xs = malloc(sizeof(double *) * (r->nhull + 1));
 	if (r->extra == NULL || r->bands == NULL || r->inband == NULL || r->xs == NULL)
+		die(1, "out of memory%s", "");
+	/* the cells, when they have a size (a flat input has no use for them) */
+	r->use_cells = r->grid.xcut[TDC_TP_GRID] > r->grid.xcut[0] && r->grid.ycut[TDC_TP_GRID] > r->grid.ycut[0];
+	r->cellst = malloc((size_t) TDC_TP_GRID * TDC_TP_GRID);
+	r->added = calloc((size_t) TDC_TP_GRID * TDC_TP_GRID, 1);
+	if (r->cellst == NULL || r->added == NULL)
 		die(1, "out of memory%s", "");
 	tdc_tp_hull_bands(r->hull, r->nhull, tdc_tp_spacing(r->bb, r->n), r->bands);
 }
@@ -160,6 +218,10 @@ run_bounded(const char *xypath, const char *zpath, size_t n, const tdc_options *
 	for (int t = 0; t < r.nt; t++)
 		tile_run(&r, t);
 
+	free(r.counts);
+	free(r.cellst);
+	free(r.added);
+	free(r.added_list);
 	free(r.extra);
 	free(r.bands);
 	free(r.inband);

@@ -78,7 +78,7 @@ typedef struct bounded_run
 	double		bb[4];			/* the points' exact box */
 	double	   *hull;			/* their convex hull */
 	size_t		nhull;
-	uint32_t   *counts;			/* per cell of grid, freed by the plan */
+	uint32_t   *counts;			/* per cell of grid (EMPTY cells for the finality check) */
 	bool		counted;		/* pass 1 counted the cells too */
 
 	/* the plan */
@@ -98,6 +98,14 @@ typedef struct bounded_run
 			   *band_idx;
 	uint32_t   *cell_off;		/* per cell, its halo tiles: cell_halo[cell_off[c] ..] */
 	int16_t    *cell_halo;
+
+	/* the cells a tile run knows whole (tdc_tile_grid, bounded_tile.c) */
+	bool		use_cells;		/* the grid has cells of non-zero size */
+	uint8_t    *cellst;			/* per cell: TDC_TILE_CELL_EMPTY, _KNOWN or _OTHER */
+	uint8_t    *added;			/* per cell: added to this tile's region by a rerun */
+	uint32_t   *added_list;		/* those cells */
+	size_t		nadded,
+				added_cap;
 
 	/* pass 2 */
 	int			nparts;			/* binning parts: files per tile and kind */
@@ -155,6 +163,7 @@ rec_put(recfile *r, const double *v, int w)
 /* bounded_scan.c */
 extern void scan_input(bounded_run *r);
 extern void scan_count(bounded_run *r);
+extern void dense_spot(bounded_run *r, int cell, size_t limit, double spot[2], size_t *copies);
 
 /* bounded_bin.c */
 extern void halo_index(bounded_run *r);

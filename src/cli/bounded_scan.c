@@ -273,3 +273,63 @@ scan_count(bounded_run *r)
 			r->counts[tdc_tp_cell(&r->grid, src.xy[2 * i], src.xy[2 * i + 1])]++;
 	source_close(&src);
 }
+
+static int
+cmp_xy(const void *a, const void *b)
+{
+	const double *p = a,
+			   *q = b;
+
+	return p[0] < q[0] ? -1 : p[0] > q[0] ? 1 : p[1] < q[1] ? -1 : p[1] > q[1];
+}
+
+/*
+ * For the refusal of a cell too dense to be a tile (bounded.c): the point
+ * with the most exact copies among the first limit points of cell (a
+ * sample), in spot, and its copies in the whole input, counted exactly in
+ * a second pass.  A read of the input, only on the way to an error.
+ */
+void
+dense_spot(bounded_run *r, int cell, size_t limit, double spot[2], size_t *copies)
+{
+	source		src;
+	size_t		k,
+				m = 0,
+				best = 0;
+	double	   *pts = malloc(16 * (limit + 1));
+
+	spot[0] = spot[1] = NAN;
+	*copies = 0;
+	if (pts == NULL)
+		die(1, "out of memory%s", "");
+	source_open(&src, r->xypath, NULL);
+	while (m < limit && (k = source_read(&src)) > 0)
+		for (size_t i = 0; i < k && m < limit; i++)
+			if (tdc_tp_cell(&r->grid, src.xy[2 * i], src.xy[2 * i + 1]) == cell)
+			{
+				pts[2 * m] = src.xy[2 * i];
+				pts[2 * m + 1] = src.xy[2 * i + 1];
+				m++;
+			}
+	source_close(&src);
+	qsort(pts, m, 16, cmp_xy);
+	for (size_t i = 0, j; i < m; i = j)
+	{
+		for (j = i + 1; j < m && cmp_xy(pts + 2 * i, pts + 2 * j) == 0; j++)
+			;
+		if (j - i > best)
+		{
+			best = j - i;
+			spot[0] = pts[2 * i];
+			spot[1] = pts[2 * i + 1];
+		}
+	}
+	free(pts);
+	if (best < 2)
+		return;
+	source_open(&src, r->xypath, NULL);
+	while ((k = source_read(&src)) > 0)
+		for (size_t i = 0; i < k; i++)
+			*copies += src.xy[2 * i] == spot[0] && src.xy[2 * i + 1] == spot[1];
+	source_close(&src);
+}

@@ -152,9 +152,27 @@ gather_first(const bounded_run *r, int t, const double *K, size_t nextra, tile_p
 	}
 }
 
+/* Does tile s own one of the cells added to this tile's region? */
+static bool
+owns_added(const bounded_run *r, int s)
+{
+	const tdc_tp_tile *ti = &r->tiles[s];
+
+	for (size_t k = 0; k < r->nadded; k++)
+	{
+		int			i = (int) (r->added_list[k] % TDC_TP_GRID),
+					j = (int) (r->added_list[k] / TDC_TP_GRID);
+
+		if (i >= ti->c0 && i < ti->c1 && j >= ti->r0 && j < ti->r1)
+			return true;
+	}
+	return false;
+}
+
 /*
- * The points inside K or one of the nextra boxes of r->extra, from the
- * files of the tiles whose boxes meet them, tile t's own first and then
+ * The points inside K, one of the nextra boxes of r->extra or one of the
+ * cells a rerun added (r->added), from the files of the tiles whose boxes
+ * meet them (or that own an added cell), tile t's own first and then
  * the others in order, each file in input order: counted, or with p,
  * copied into p with their tiles' labels.  Returns their number.
  */
@@ -178,6 +196,8 @@ region_points(const bounded_run *r, int t, const double *Kr, size_t nextra, tile
 
 		for (size_t e = 0; e < nextra && !meets; e++)
 			meets = tdc_tp_box_meets(tiles[s].bb, extra + 4 * e);
+		if (!meets && r->nadded > 0)
+			meets = owns_added(r, s);
 		if ((u >= 0 && u == t) || tiles[s].count == 0 || !meets)
 			continue;
 		/* only the bands that meet this file's box need testing */
@@ -199,6 +219,8 @@ region_points(const bounded_run *r, int t, const double *Kr, size_t nextra, tile
 
 					in = q[0] >= x[0] && q[0] <= x[2] && q[1] >= x[1] && q[1] <= x[3];
 				}
+				if (!in && r->nadded > 0)
+					in = r->added[tdc_tp_cell(&r->grid, q[0], q[1])];
 				if (!in)
 					continue;
 				if (p)
@@ -233,8 +255,8 @@ gather_region(const bounded_run *r, int t, double K[4], const double Kmin[4], si
 	{
 		m = region_points(r, t, K, nextra, NULL);
 		if (getenv("TDC_TILE_DEBUG"))
-			fprintf(stderr, "tile %d/%d: own %zu, K %g %g %g %g: %zu points\n", t, r->nt,
-					r->tiles[t].count, K[0], K[1], K[2], K[3], m);
+			fprintf(stderr, "tile %d/%d: own %zu, K %g %g %g %g, %zu cells added: %zu points\n", t, r->nt,
+					r->tiles[t].count, K[0], K[1], K[2], K[3], r->nadded, m);
 		if (tdc_tp_tile_bytes(m, r->opt, POINT_BYTES(r)) > r->budget && shrinks < 4 &&
 			memcmp(K, Kmin, 4 * sizeof(double)) != 0)
 			tdc_tp_shrink_known(K, Kmin, shrinks);
@@ -245,12 +267,64 @@ gather_region(const bounded_run *r, int t, double K[4], const double Kmin[4], si
 	{
 		char		msg[160];
 
-		snprintf(msg, sizeof(msg), "tile %d needs %zu points with its halo, about %zu MB",
-				 t, m, tdc_tp_tile_bytes(m, r->opt, POINT_BYTES(r)) >> 20);
-		die(1, "%s: more than --max-memory allows (the data is too clustered or the limit too small)", msg);
+		snprintf(msg, sizeof(msg), "tile %d of %d (%zu own points) needs %zu points with the region it must know, "
+				 "about %zu MB, more than --max-memory %zu", t, r->nt, r->tiles[t].count, m,
+				 (tdc_tp_tile_bytes(m, r->opt, POINT_BYTES(r)) >> 20) + 1, r->budget >> 20);
+		die(1, "%s: the data is too clustered around this tile for the limit", msg);
 	}
 	points_alloc(p, m, r->has_z);
 	region_points(r, t, K, nextra, p);
+}
+
+/*
+ * The states of the grid's cells for a run that knows K, the extra boxes
+ * and the added cells: EMPTY where the input has no point, KNOWN for the
+ * added cells and the cells whose closed box lies inside K (every point
+ * there is in K, hence passed), OTHER elsewhere.  The finality check then
+ * takes a disk over empty cells as known, and names the OTHER cells it
+ * needs (tdc_tile_grid in tdc.h).
+ */
+static void
+cell_states(bounded_run *r, const double K[4])
+{
+	const double *xc = r->grid.xcut,
+			   *yc = r->grid.ycut;
+
+	for (int j = 0; j < TDC_TP_GRID; j++)
+	{
+		bool		row_in = yc[j] >= K[1] && yc[j + 1] <= K[3];
+
+		for (int i = 0; i < TDC_TP_GRID; i++)
+		{
+			size_t		c = (size_t) j * TDC_TP_GRID + i;
+
+			r->cellst[c] = r->counts[c] == 0 ? TDC_TILE_CELL_EMPTY :
+				r->added[c] || (row_in && xc[i] >= K[0] && xc[i + 1] <= K[2]) ?
+				TDC_TILE_CELL_KNOWN : TDC_TILE_CELL_OTHER;
+		}
+	}
+}
+
+/* The cells a run asked for, added to the tile's region. */
+static void
+add_cells(bounded_run *r, const uint32_t *cells, size_t ncells)
+{
+	if (r->nadded + ncells > r->added_cap)
+	{
+		size_t		cap = (r->nadded + ncells) * 2;
+		uint32_t   *a = realloc(r->added_list, cap * sizeof(uint32_t));
+
+		if (a == NULL)
+			die(1, "out of memory%s", "");
+		r->added_list = a;
+		r->added_cap = cap;
+	}
+	for (size_t k = 0; k < ncells; k++)
+		if (!r->added[cells[k]])
+		{
+			r->added[cells[k]] = 1;
+			r->added_list[r->nadded++] = cells[k];
+		}
 }
 
 /*
@@ -333,8 +407,14 @@ tile_run(bounded_run *r, int t)
 	tdc_tile_spec spec = {0};
 	bool		first = r->use_halo;	/* the first run reads the tile and halo files */
 
+	tdc_tile_grid tg = {TDC_TP_GRID, TDC_TP_GRID, r->grid.xcut, r->grid.ycut, r->cellst};
+
 	if (ti->count == 0)
 		return;					/* owns nothing */
+	/* no cells added yet */
+	for (size_t k = 0; k < r->nadded; k++)
+		r->added[r->added_list[k]] = 0;
+	r->nadded = 0;
 	first_region(r, t, K, &h);
 	tdc_tp_least_known(ti, &r->grid, Kmin);
 	for (size_t i = 0; r->nhull > 1 && i < r->nhull; i++)
@@ -345,6 +425,7 @@ tile_run(bounded_run *r, int t)
 	spec.self = t;
 	spec.hull = r->hull;
 	spec.nhull = r->nhull;
+	spec.grid = r->use_cells ? &tg : NULL;
 	for (;;)
 	{
 		tile_points p = {0};
@@ -362,6 +443,8 @@ tile_run(bounded_run *r, int t)
 		else
 			gather_region(r, t, K, Kmin, nextra, &p);
 		memcpy(spec.known, K, sizeof(K));
+		if (r->use_cells)
+			cell_states(r, K);
 		spec.tile = p.ql;
 		r->st->runs++;
 		r->st->gather += now_s() - t0;
@@ -370,6 +453,14 @@ tile_run(bounded_run *r, int t)
 		tile_account(r, job);
 		if (res.final)
 			tile_write(r, t, &p, &res);
+		else if (res.nneed_cells > 0)
+		{
+			/* the same K with the cells the check named */
+			add_cells(r, res.need_cells, res.nneed_cells);
+			tdc_tile_result_free(&res);
+			points_free(&p);
+			continue;
+		}
 		else if (tdc_tp_grow_bands(r->bands, r->nhull, res.need, r->inband, r->extra, &nextra) > 0)
 		{
 			/* the same K with more bands */

@@ -85,14 +85,15 @@ tdc_tp_grid_reach(tdc_tp_grid *g, const double bb[4])
  * (tdc_estimate_memory), tile_final.c's per-site arrays and the triangle
  * indices (TDC_TP_FINISH_BYTES a point: 4 + 8 + 1 bytes of per-site
  * arrays, the 4 once taken by the input map now holding its block grid
- * for the deep sites, and at most 2m triangles of 3 size_t), a
- * megabyte, and per_point bytes of the caller's own (its copy of the
+ * for the deep sites, and at most 2m triangles of 3 size_t), the cells'
+ * arrays (TDC_TP_CELLS_BYTES), a megabyte, and per_point bytes of the caller's own (its copy of the
  * points, labels, source positions, result).
  */
 size_t
 tdc_tp_tile_bytes(size_t m, const tdc_options *opt, size_t per_point)
 {
-	return tdc_estimate_memory(m, opt) + m * (TDC_TP_FINISH_BYTES + per_point) + (1 << 20);
+	return tdc_estimate_memory(m, opt) + m * (TDC_TP_FINISH_BYTES + per_point) + TDC_TP_CELLS_BYTES +
+		(1 << 20);
 }
 
 /*

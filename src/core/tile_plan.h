@@ -29,6 +29,13 @@
 #define TDC_TP_GRID			512		/* cells per side of the counting grid */
 #define TDC_TP_MAX_TILES	900		/* the most tiles a plan may have */
 #define TDC_TP_FINISH_BYTES	61		/* tile_final.c's bytes a point, triangles included */
+/*
+ * The cells' bytes in a tile run: the caller's counts, states and added
+ * marks (4 + 1 + 1 a cell), tile_final.c's prefix sums of the OTHER cells
+ * and its merge marks (tile_cells.c)
+ */
+#define TDC_TP_CELLS_BYTES	((size_t) 7 * TDC_TP_GRID * TDC_TP_GRID + \
+							 (size_t) 4 * (TDC_TP_GRID + 1) * (TDC_TP_GRID + 1))
 
 /* The fine grid: its box, scales, cell sizes and the doubles of its cell sides. */
 typedef struct tdc_tp_grid
