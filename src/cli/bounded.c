@@ -107,7 +107,8 @@ static void
 plan(bounded_run *r)
 {
 	size_t	   *ps,
-				tile_max;
+				tile_max,
+				fit_max;
 	tdc_tp_plan_status rc;
 
 	/*
@@ -115,7 +116,16 @@ plan(bounded_run *r)
 	 * tiles.  The outer cells reach the true box: a point's cell still
 	 * holds it.
 	 */
-	if (r->counted && !tdc_tp_grid_near(&r->grid, r->bb))
+	/*
+	 * Counts made on the sample's grid stay exact whatever the true box:
+	 * a point beyond the grid is counted in an outer cell, which
+	 * tdc_tp_grid_reach widens to hold it.  Only when the sample missed
+	 * much of the data are the cells counted again, on a uniform grid
+	 * over the true box: the sample's quantiles then say little.
+	 */
+	if (r->counted && !tdc_tp_grid_near(&r->grid, r->bb) &&
+		!(r->bb[2] - r->bb[0] <= 2 * (r->grid.box[2] - r->grid.box[0]) &&
+		  r->bb[3] - r->bb[1] <= 2 * (r->grid.box[3] - r->grid.box[1])))
 	{
 		r->counted = false;
 		memset(r->counts, 0, sizeof(uint32_t) * TDC_TP_GRID * TDC_TP_GRID);
@@ -135,9 +145,10 @@ plan(bounded_run *r)
 	tile_max = tdc_tp_tile_max(r->n, r->opt, POINT_BYTES(r), r->budget);
 	if (tdc_tp_tile_bytes(tile_max * 3 / 2, r->opt, POINT_BYTES(r)) > r->budget)
 		refuse_plan(r, 0, TDC_TP_PLAN_DENSE_CELL);
-	rc = tdc_tp_plan(ps, &r->grid, tile_max, r->tiles, &r->nt);
+	rc = tdc_tp_plan_fit(ps, &r->grid, tile_max, TILE_FLOOR, tdc_tp_spacing(r->bb, r->n),
+						 r->tiles, &r->nt, &fit_max);
 	if (rc != TDC_TP_PLAN_OK)
-		refuse_plan(r, tile_max, rc);
+		refuse_plan(r, fit_max, rc);
 	free(ps);
 	for (int t = 0; t < r->nt; t++)
 	{

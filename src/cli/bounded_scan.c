@@ -17,33 +17,56 @@
 #include "bounded.h"
 
 /*
- * The box of a sample of the .bin source (256 runs of 256 points spread
- * over the file) in g, made a grid's box by tdc_tp_grid_from_sample.  False
- * when n is small, the file unreadable or the sample flat.
+ * A sample of the .bin source (256 runs of 256 points spread over the
+ * file): its box in g, made a grid's box by tdc_tp_grid_from_sample, and
+ * the grid r->grid over it with its cell sides at the sample's quantiles
+ * (tdc_tp_grid_quantiles).  False when n is small, the file unreadable or
+ * the sample flat.
  */
 static bool
-sample_grid(const char *xypath, size_t n, double g[4])
+sample_grid(bounded_run *r)
 {
 	FILE	   *f;
-	double		buf[2 * 256];
+	double		buf[2 * 256],
+				g[4],
+			   *xs,
+			   *ys;
+	size_t		ns = 0;
 
-	if (n < ((size_t) 1 << 18) || (f = fopen(xypath, "rb")) == NULL)
+	if (r->n < ((size_t) 1 << 18) || (f = fopen(r->xypath, "rb")) == NULL)
 		return false;
+	xs = malloc(sizeof(double) * 256 * 256);
+	ys = malloc(sizeof(double) * 256 * 256);
+	if (xs == NULL || ys == NULL)
+		die(1, "out of memory%s", "");
 	g[0] = g[1] = INFINITY;
 	g[2] = g[3] = -INFINITY;
 	for (size_t j = 0; j < 256; j++)
 	{
 		size_t		got;
 
-		if (fseeko(f, (off_t) ((n - 256) / 255 * j) * 16, SEEK_SET) != 0)
+		if (fseeko(f, (off_t) ((r->n - 256) / 255 * j) * 16, SEEK_SET) != 0)
 			break;
 		got = fread(buf, 16, 256, f);
 		for (size_t i = 0; i < got; i++)
 			if (isfinite(buf[2 * i]) && isfinite(buf[2 * i + 1]))
+			{
 				tdc_tp_box_add(g, buf[2 * i], buf[2 * i + 1]);
+				xs[ns] = buf[2 * i];
+				ys[ns++] = buf[2 * i + 1];
+			}
 	}
 	fclose(f);
-	return tdc_tp_grid_from_sample(g);
+	if (tdc_tp_grid_from_sample(g))
+	{
+		tdc_tp_grid_quantiles(&r->grid, g, xs, ys, ns);
+		free(xs);
+		free(ys);
+		return true;
+	}
+	free(xs);
+	free(ys);
+	return false;
 }
 
 /*
@@ -208,14 +231,11 @@ scan_input(bounded_run *r)
 	scan_work	sw[2];
 	pthread_t	th;
 	bool		started = false;
-	double		g[4];
 
 	r->counts = calloc((size_t) TDC_TP_GRID * TDC_TP_GRID, sizeof(uint32_t));
 	if (r->counts == NULL)
 		die(1, "out of memory%s", "");
-	r->counted = sample_grid(r->xypath, r->n, g);
-	if (r->counted)
-		tdc_tp_grid_set(&r->grid, g);
+	r->counted = sample_grid(r);
 	np = r->counted ? 2 : 1;
 	for (int p = 0; p < np; p++)
 	{

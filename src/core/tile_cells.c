@@ -140,11 +140,22 @@ box_gap(const double *a, const double *b)
 	return fmax(fmax(fmax(a[0] - b[2], b[0] - a[2]), fmax(a[1] - b[3], b[1] - a[3])), 0);
 }
 
-/* A mean cell side: how far past the nearest cell a request reaches. */
-static double
-cell_side(const tdc_tile_grid *g)
+/*
+ * Keeps in *dmin the least distance of a cell box to ref, and in *side the
+ * larger side of that nearest cell: a request takes the cells within
+ * the least distance plus that side, a ring of about one cell where
+ * the cells are (small cells inside a cluster, large ones in sparse land).
+ */
+static void
+nearest(const double *box, const double *ref, double *dmin, double *side)
 {
-	return fmax((g->xcut[g->nx] - g->xcut[0]) / g->nx, (g->ycut[g->ny] - g->ycut[0]) / g->ny);
+	double		d = box_gap(box, ref);
+
+	if (d < *dmin)
+	{
+		*dmin = d;
+		*side = fmax(box[2] - box[0], box[3] - box[1]);
+	}
 }
 
 /* The cell of v along one axis of n cells: the last c with cut[c] <= v, 0 when none. */
@@ -170,7 +181,7 @@ tdc_cells_point_known(const tdc_cells *c, const double *p)
  * Does the closed disk (centre disk[0..1], radius disk[2]) meet no OTHER
  * cell that covered() does not vouch for?  Of the cells it does meet, the
  * nearest to the box near (the triangle's) are appended to out: those
- * within 1.5 times the least distance plus a mean cell side.  A disk of a triangle
+ * within the least distance plus the nearest cell's side.  A disk of a triangle
  * at the edge of what the tile knows can reach far into the unknown (a
  * triangle on a coast whose disk spans a sea, with the far coast not yet
  * read); the points nearest to it, once known, usually cut it into small
@@ -191,7 +202,7 @@ tdc_cells_disk(const tdc_cells *c, const double disk[3], const double near[4],
 				i1;
 	bool		none = true;
 	double		dmin = INFINITY,
-				margin = cell_side(g);
+				margin = 0;
 
 	if (!isfinite(R) || !isfinite(cx) || !isfinite(cy))
 		return false;
@@ -228,8 +239,8 @@ tdc_cells_disk(const tdc_cells *c, const double disk[3], const double near[4],
 				continue;
 			none = false;
 			if (pass == 0)
-				dmin = fmin(dmin, box_gap(box, near));
-			else if (box_gap(box, near) <= 1.5 * dmin + margin)
+				nearest(box, near, &dmin, &margin);
+			else if (box_gap(box, near) <= dmin + margin)
 				list_add(out, (uint32_t) j * (uint32_t) g->nx + (uint32_t) i);
 		}
 	}
@@ -242,8 +253,8 @@ tdc_cells_disk(const tdc_cells *c, const double disk[3], const double near[4],
  * for by covered()?  Then no point of P lies beyond the edge that Q lacks,
  * and Q has none: the edge is a hull edge of P (Lemma 2).  Otherwise the
  * OTHER cells beyond it nearest to the edge (in the smallest of boxes
- * doubling around it that holds any, within 1.5 times the least distance
- * plus a mean cell side) are appended to out.
+ * doubling around it that holds any, within the least distance
+ * plus the nearest cell's side) are appended to out.
  */
 bool
 tdc_cells_beyond(const tdc_cells *c, const double *a, const double *b,
@@ -258,7 +269,8 @@ tdc_cells_beyond(const tdc_cells *c, const double *a, const double *b,
 				grow = fmax(len, fmax(gx1 - gx0, gy1 - gy0) * 1e-4);
 	uint32_t	seen = 0;
 	double		eb[4] = {fmin(a[0], b[0]), fmin(a[1], b[1]), fmax(a[0], b[0]), fmax(a[1], b[1])},
-				dmin = INFINITY;
+				dmin = INFINITY,
+				margin = 0;
 
 	if (!(grow > 0) || !isfinite(grow))
 		grow = 0x1p-1000;
@@ -298,8 +310,8 @@ tdc_cells_beyond(const tdc_cells *c, const double *a, const double *b,
 					if (!beyond || (covered && covered(arg, cb)))
 						continue;
 					if (pass == 0)
-						dmin = fmin(dmin, box_gap(cb, eb));
-					else if (box_gap(cb, eb) <= 1.5 * dmin + cell_side(g))
+						nearest(cb, eb, &dmin, &margin);
+					else if (box_gap(cb, eb) <= dmin + margin)
 						list_add(out, (uint32_t) j * (uint32_t) g->nx + (uint32_t) i);
 					found = true;
 				}

@@ -9,6 +9,7 @@
  * else.
  */
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "tile_plan.h"
@@ -54,6 +55,43 @@ tdc_tp_grid_set(tdc_tp_grid *g, const double box[4])
 	}
 	g->xcut[TDC_TP_GRID] = fmax(g->xcut[TDC_TP_GRID], box[2]);
 	g->ycut[TDC_TP_GRID] = fmax(g->ycut[TDC_TP_GRID], box[3]);
+}
+
+static int
+cmp_double(const void *a, const void *b)
+{
+	double		u = *(const double *) a,
+				v = *(const double *) b;
+
+	return u < v ? -1 : u > v;
+}
+
+/*
+ * The grid over box with its inner cell sides at the quantiles of a sample
+ * of ns points (xs, ys: their coordinates, sorted here): each column and
+ * each row holds about 1/TDC_TP_GRID of the points whatever their
+ * clustering, so a cell inside a tight cluster holds a small share of it,
+ * where a uniform grid's cell would hold the whole cluster.  The plan
+ * splits by counts on these cells, and the finality check names cells
+ * whose points are few where the data is dense (tile_cells.c).  sx, sy,
+ * cw and ch are those of a uniform grid over box (mean sizes).  With
+ * ns < TDC_TP_GRID the grid is uniform.
+ */
+void
+tdc_tp_grid_quantiles(tdc_tp_grid *g, const double box[4], double *xs, double *ys, size_t ns)
+{
+	tdc_tp_grid_set(g, box);
+	if (ns < TDC_TP_GRID)
+		return;
+	qsort(xs, ns, sizeof(double), cmp_double);
+	qsort(ys, ns, sizeof(double), cmp_double);
+	for (int c = 1; c < TDC_TP_GRID; c++)
+	{
+		size_t		k = (size_t) c * ns / TDC_TP_GRID;
+
+		g->xcut[c] = fmin(fmax(xs[k], box[0]), box[2]);
+		g->ycut[c] = fmin(fmax(ys[k], box[1]), box[3]);
+	}
 }
 
 /*
@@ -136,7 +174,7 @@ cells_count(const size_t *ps, int c0, int c1, int r0, int r1)
 
 /* kd-split of the cell rectangle until every tile holds at most tile_max points. */
 static tdc_tp_plan_status
-plan_rect(const size_t *ps, int c0, int c1, int r0, int r1, double cw, double ch,
+plan_rect(const size_t *ps, int c0, int c1, int r0, int r1, const tdc_tp_grid *g,
 		  size_t tile_max, tdc_tp_tile *tiles, int *nt)
 {
 	size_t		cnt = cells_count(ps, c0, c1, r0, r1),
@@ -162,7 +200,8 @@ plan_rect(const size_t *ps, int c0, int c1, int r0, int r1, double cw, double ch
 		(*nt)++;
 		return TDC_TP_PLAN_OK;
 	}
-	by_x = (c1 - c0 > 1) && ((c1 - c0) * cw >= (r1 - r0) * ch || r1 - r0 == 1);
+	by_x = (c1 - c0 > 1) &&
+		(g->xcut[c1] - g->xcut[c0] >= g->ycut[r1] - g->ycut[r0] || r1 - r0 == 1);
 
 	/*
 	 * The rectangle needs k = ceil(cnt / tile_max) tiles: cut it at the
@@ -186,11 +225,11 @@ plan_rect(const size_t *ps, int c0, int c1, int r0, int r1, double cw, double ch
 	}
 	if (by_x)
 	{
-		rc = plan_rect(ps, c0, lo, r0, r1, cw, ch, tile_max, tiles, nt);
-		return rc != TDC_TP_PLAN_OK ? rc : plan_rect(ps, lo, c1, r0, r1, cw, ch, tile_max, tiles, nt);
+		rc = plan_rect(ps, c0, lo, r0, r1, g, tile_max, tiles, nt);
+		return rc != TDC_TP_PLAN_OK ? rc : plan_rect(ps, lo, c1, r0, r1, g, tile_max, tiles, nt);
 	}
-	rc = plan_rect(ps, c0, c1, r0, lo, cw, ch, tile_max, tiles, nt);
-	return rc != TDC_TP_PLAN_OK ? rc : plan_rect(ps, c0, c1, lo, r1, cw, ch, tile_max, tiles, nt);
+	rc = plan_rect(ps, c0, c1, r0, lo, g, tile_max, tiles, nt);
+	return rc != TDC_TP_PLAN_OK ? rc : plan_rect(ps, c0, c1, lo, r1, g, tile_max, tiles, nt);
 }
 
 /*
@@ -203,7 +242,78 @@ plan_rect(const size_t *ps, int c0, int c1, int r0, int r1, double cw, double ch
 tdc_tp_plan_status
 tdc_tp_plan(const size_t *ps, const tdc_tp_grid *g, size_t tile_max, tdc_tp_tile *tiles, int *nt)
 {
-	return plan_rect(ps, 0, TDC_TP_GRID, 0, TDC_TP_GRID, g->cw, g->ch, tile_max, tiles, nt);
+	return plan_rect(ps, 0, TDC_TP_GRID, 0, TDC_TP_GRID, g, tile_max, tiles, nt);
+}
+
+/*
+ * At most the points inside box: those of the cells whose closed boxes
+ * meet it, from the prefix sums ps of the cell counts.
+ */
+size_t
+tdc_tp_box_count(const size_t *ps, const tdc_tp_grid *g, const double box[4])
+{
+	int			c0,
+				c1,
+				r0,
+				r1;
+
+	if (box[2] < g->xcut[0] || box[0] > g->xcut[TDC_TP_GRID] ||
+		box[3] < g->ycut[0] || box[1] > g->ycut[TDC_TP_GRID])
+		return 0;
+	c0 = tdc_tp_cell_of(box[0], 0, 0, g->xcut);
+	c1 = tdc_tp_cell_of(box[2], 0, 0, g->xcut) + 1;
+	r0 = tdc_tp_cell_of(box[1], 0, 0, g->ycut);
+	r1 = tdc_tp_cell_of(box[3], 0, 0, g->ycut) + 1;
+	/* a cell whose side is the box's own side meets it too */
+	while (c0 > 0 && g->xcut[c0] >= box[0])
+		c0--;
+	while (r0 > 0 && g->ycut[r0] >= box[1])
+		r0--;
+	return cells_count(ps, c0, c1, r0, r1);
+}
+
+/*
+ * The plan that fits: tiles of at most tile_max points (tdc_tp_plan) whose
+ * first known regions (tdc_tp_first_known over the cell box, spacing the
+ * data's mean spacing) hold at most tile_max points too, so that a tile
+ * with its halo, and the growth a rerun may add, stays in the budget that
+ * tile_max was made for (tdc_tp_tile_max: 1.5 tile_max points).  Where the
+ * data is clustered a cut through a cluster puts much of it in the halo:
+ * the tiles are then made smaller, a fifth at a time, down to floor points.
+ * *fit_max: the tile size used.  Counts are of whole cells (an upper bound).
+ */
+tdc_tp_plan_status
+tdc_tp_plan_fit(const size_t *ps, const tdc_tp_grid *g, size_t tile_max, size_t floor,
+				double spacing, tdc_tp_tile *tiles, int *nt, size_t *fit_max)
+{
+	size_t		tmax = tile_max;
+
+	for (;;)
+	{
+		tdc_tp_plan_status rc;
+		size_t		worst = 0;
+
+		*nt = 0;
+		*fit_max = tmax;
+		rc = tdc_tp_plan(ps, g, tmax, tiles, nt);
+		if (rc != TDC_TP_PLAN_OK)
+			return rc;
+		for (int t = 0; t < *nt; t++)
+		{
+			double		box[4],
+						K[4],
+						h;
+			size_t		k;
+
+			tdc_tp_least_known(&tiles[t], g, box);
+			tdc_tp_first_known(box, tiles[t].count, spacing, K, &h);
+			k = tdc_tp_box_count(ps, g, K);
+			worst = k > worst ? k : worst;
+		}
+		if (worst <= tile_max || tmax * 4 / 5 < floor)
+			return TDC_TP_PLAN_OK;
+		tmax = tmax * 4 / 5;
+	}
 }
 
 /* The label of every cell: the index of the tile that owns it. */

@@ -68,30 +68,34 @@ typedef enum tdc_tp_plan_status
 	TDC_TP_PLAN_TOO_MANY_TILES		/* more than TDC_TP_MAX_TILES tiles needed */
 } tdc_tp_plan_status;
 
-static inline int
-tdc_tp_fine_cell(double v, double lo, double scale)
-{
-	int			c = (int) ((v - lo) * scale);
-
-	return c < 0 ? 0 : c >= TDC_TP_GRID ? TDC_TP_GRID - 1 : c;
-}
-
 /*
- * The fine grid's cell of v along one axis: the c with cut[c] <= v <
- * cut[c + 1] (the last cell closed), cut[] the doubles of the cell sides,
- * non-decreasing.  Exact: a tile's cell box holds every point binned to
- * it, so its K and its halo are known before the points are binned.
+ * The grid's cell of v along one axis: the last c with cut[c] <= v (0 when
+ * none), so cut[c] <= v < cut[c + 1] but in the last cell, which is closed
+ * (and in the first, for v below cut[0]); cut[] the doubles of the cell
+ * sides, non-decreasing (equal cuts make empty cells).  Exact: a tile's
+ * cell box holds every point binned to it, so its K and its halo are known
+ * before the points are binned.  Neither cut[0] nor cut[TDC_TP_GRID] is
+ * read, so widening the outer cells moves no point.  (lo and scale are
+ * unused: the cuts are quantiles, not a uniform grid.)
  */
 static inline int
 tdc_tp_cell_of(double v, double lo, double scale, const double *cut)
 {
-	int			c = tdc_tp_fine_cell(v, lo, scale);
+	int			a = 0,
+				b = TDC_TP_GRID - 1;
 
-	while (c > 0 && v < cut[c])
-		c--;
-	while (c < TDC_TP_GRID - 1 && v >= cut[c + 1])
-		c++;
-	return c;
+	(void) lo;
+	(void) scale;
+	while (a < b)
+	{
+		int			mid = (a + b + 1) / 2;
+
+		if (cut[mid] <= v)
+			a = mid;
+		else
+			b = mid - 1;
+	}
+	return a;
 }
 
 /* The index of (x, y)'s cell in a row-major TDC_TP_GRID x TDC_TP_GRID array. */
@@ -129,6 +133,8 @@ tdc_tp_box_union(double *b, const double *a)
 /* The grid */
 extern bool tdc_tp_grid_from_sample(double g[4]);
 extern void tdc_tp_grid_set(tdc_tp_grid *g, const double box[4]);
+extern void tdc_tp_grid_quantiles(tdc_tp_grid *g, const double box[4], double *xs, double *ys,
+								  size_t ns);
 extern bool tdc_tp_grid_near(const tdc_tp_grid *g, const double bb[4]);
 extern void tdc_tp_grid_reach(tdc_tp_grid *g, const double bb[4]);
 
@@ -138,6 +144,10 @@ extern size_t tdc_tp_tile_max(size_t n, const tdc_options *opt, size_t per_point
 extern void tdc_tp_prefix_sums(const uint32_t *counts, size_t *ps);
 extern tdc_tp_plan_status tdc_tp_plan(const size_t *ps, const tdc_tp_grid *g, size_t tile_max,
 							  tdc_tp_tile *tiles, int *nt);
+extern size_t tdc_tp_box_count(const size_t *ps, const tdc_tp_grid *g, const double box[4]);
+extern tdc_tp_plan_status tdc_tp_plan_fit(const size_t *ps, const tdc_tp_grid *g, size_t tile_max,
+										  size_t floor, double spacing, tdc_tp_tile *tiles,
+										  int *nt, size_t *fit_max);
 extern void tdc_tp_label_cells(const tdc_tp_tile *tiles, int nt, int16_t *cell_tile);
 
 /* The labels of squares of a given size, counted from the grid's origin */
