@@ -13,10 +13,12 @@
  *			the hull so far is skipped) and counts on a fine grid, whose box
  *			comes from a sample of the file (counted again in a pass of its
  *			own when the sample was far off) (bounded_scan.c);
- *	plan	the grid cut into tiles of at most tile_max points by median
- *			splits along the longer side (kd-tree of cells), so that
- *			clustered data gets small tiles where it is dense
- *			(tile_plan.c);
+ *	plan	the grid (its sides at the quantiles of a sample) cut into
+ *			tiles of at most tile_max points by median splits along the
+ *			longer side (kd-tree of cells), so that clustered data gets
+ *			small tiles where it is dense, made smaller while a first
+ *			region does not fit; refused before any work, with the floor
+ *			in MB, when the densest cell does not fit (tile_plan.c);
  *	bands	the bands along the hull edges, extra known boxes of the tiles
  *			near them (tile_plan.c);
  *	bin		each point appended to its tile's file, and to the halo file of
@@ -32,7 +34,10 @@
  *
  * Memory: the largest tile with its halo is bounded by tile_max times a
  * growth allowance; a tile whose K would exceed the budget is an error,
- * never a silent overrun.
+ * never a silent overrun.  A rerun adds the cells of the grid that the
+ * finality check names (tdc_tile_grid), not a box around them: on a
+ * coastline or between clusters a box would take whole stretches of
+ * dense data that the disks only graze.
  */
 #include <math.h>
 #include <stdlib.h>
@@ -149,7 +154,8 @@ plan(bounded_run *r)
 						 r->tiles, &r->nt, &fit_max);
 	if (rc != TDC_TP_PLAN_OK)
 		refuse_plan(r, fit_max, rc);
-	free(ps);
+	r->ps = ps;
+	r->tile_max = fit_max;
 	for (int t = 0; t < r->nt; t++)
 	{
 		r->tiles[t].bb[0] = r->tiles[t].bb[1] = INFINITY;
@@ -230,6 +236,7 @@ run_bounded(const char *xypath, const char *zpath, size_t n, const tdc_options *
 		tile_run(&r, t);
 
 	free(r.counts);
+	free(r.ps);
 	free(r.cellst);
 	free(r.added);
 	free(r.added_list);

@@ -83,6 +83,8 @@ typedef struct bounded_run
 
 	/* the plan */
 	tdc_tp_grid		grid;
+	size_t	   *ps;				/* prefix sums of counts, for the first regions */
+	size_t		tile_max;		/* the plan's tile size */
 	tdc_tp_tile    *tiles;
 	int			nt;
 	int16_t    *cell_tile;		/* the tile of each cell, freed by binning */
@@ -122,9 +124,12 @@ first_region(const struct bounded_run *r, int t, double K[4], double *h)
 	double		box[4];
 
 	tdc_tp_least_known(&r->tiles[t], &r->grid, box);
-	tdc_tp_first_known(box, r->tiles[t].count, tdc_tp_spacing(r->bb, r->n), K, h);
+	tdc_tp_fit_known(r->ps, &r->grid, box, r->tiles[t].count, tdc_tp_spacing(r->bb, r->n),
+					 tdc_tp_known_limit(r->tiles[t].count, r->tile_max), K, h);
 	memset(r->inband, 0, r->nhull + 1);
 	tdc_tp_first_bands(K, r->tiles[t].count, r->bands, r->nhull, r->inband);
+	tdc_tp_fit_bands(r->ps, &r->grid, r->bands, r->nhull,
+					 r->tiles[t].count / 8 > 1000 ? r->tiles[t].count / 8 : 1000, r->inband);
 }
 
 static inline double

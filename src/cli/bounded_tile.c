@@ -461,7 +461,8 @@ tile_run(bounded_run *r, int t)
 			points_free(&p);
 			continue;
 		}
-		else if (tdc_tp_grow_bands(r->bands, r->nhull, res.need, r->inband, r->extra, &nextra) > 0)
+		else if (!r->use_cells &&
+				 tdc_tp_grow_bands(r->bands, r->nhull, res.need, r->inband, r->extra, &nextra) > 0)
 		{
 			/* the same K with more bands */
 			spec.nextra = nextra;

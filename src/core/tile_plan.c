@@ -273,6 +273,54 @@ tdc_tp_box_count(const size_t *ps, const tdc_tp_grid *g, const double box[4])
 }
 
 /*
+ * The first K of a tile of count points in its cell box, as
+ * tdc_tp_first_known makes it, with its halo h halved until K holds at
+ * most limit points by the cell counts (ps), down to no halo: a sparse
+ * tile beside a dense cluster would otherwise take much of the cluster as
+ * its halo, 8 of its own wide spacings.  The halo only saves reruns; the
+ * finality check names the cells a tile still needs.
+ */
+void
+tdc_tp_fit_known(const size_t *ps, const tdc_tp_grid *g, const double box[4], size_t count,
+				 double spacing, size_t limit, double K[4], double *h)
+{
+	tdc_tp_first_known(box, count, spacing, K, h);
+	for (int i = 0; i < 24 && *h > 0 && tdc_tp_box_count(ps, g, K) > limit; i++)
+	{
+		*h = i == 23 ? 0 : *h / 2;
+		K[0] = box[0] - *h;
+		K[1] = box[1] - *h;
+		K[2] = box[2] + *h;
+		K[3] = box[3] + *h;
+	}
+}
+
+/*
+ * Of the hull bands marked in mark[], unmark those holding more than limit
+ * points by the cell counts: a band of 16 mean spacings is a thin strip on
+ * uniform data, but where the hull runs from cluster to cluster it holds
+ * the clusters at its ends.  The cells cover what such a band was for (a
+ * sliver's disk outside C meets only empty cells).
+ */
+void
+tdc_tp_fit_bands(const size_t *ps, const tdc_tp_grid *g, const double *bands, size_t nhull,
+				 size_t limit, uint8_t *mark)
+{
+	for (size_t i = 0; nhull > 1 && i < nhull; i++)
+		if (mark[i] && tdc_tp_box_count(ps, g, bands + 4 * i) > limit)
+			mark[i] = 0;
+}
+
+/* The most points a tile's first K may hold: twice its own, within tile_max. */
+size_t
+tdc_tp_known_limit(size_t count, size_t tile_max)
+{
+	size_t		l = count * 2 > count + 1000 ? count * 2 : count + 1000;
+
+	return l < tile_max ? l : tile_max;
+}
+
+/*
  * The plan that fits: tiles of at most tile_max points (tdc_tp_plan) whose
  * first known regions (tdc_tp_first_known over the cell box, spacing the
  * data's mean spacing) hold at most tile_max points too, so that a tile
@@ -306,7 +354,8 @@ tdc_tp_plan_fit(const size_t *ps, const tdc_tp_grid *g, size_t tile_max, size_t 
 			size_t		k;
 
 			tdc_tp_least_known(&tiles[t], g, box);
-			tdc_tp_first_known(box, tiles[t].count, spacing, K, &h);
+			tdc_tp_fit_known(ps, g, box, tiles[t].count, spacing,
+							 tdc_tp_known_limit(tiles[t].count, tile_max), K, &h);
 			k = tdc_tp_box_count(ps, g, K);
 			worst = k > worst ? k : worst;
 		}

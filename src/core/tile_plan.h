@@ -144,6 +144,11 @@ extern size_t tdc_tp_tile_max(size_t n, const tdc_options *opt, size_t per_point
 extern void tdc_tp_prefix_sums(const uint32_t *counts, size_t *ps);
 extern tdc_tp_plan_status tdc_tp_plan(const size_t *ps, const tdc_tp_grid *g, size_t tile_max,
 							  tdc_tp_tile *tiles, int *nt);
+extern void tdc_tp_fit_known(const size_t *ps, const tdc_tp_grid *g, const double box[4],
+							 size_t count, double spacing, size_t limit, double K[4], double *h);
+extern void tdc_tp_fit_bands(const size_t *ps, const tdc_tp_grid *g, const double *bands,
+							 size_t nhull, size_t limit, uint8_t *mark);
+extern size_t tdc_tp_known_limit(size_t count, size_t tile_max);
 extern size_t tdc_tp_box_count(const size_t *ps, const tdc_tp_grid *g, const double box[4]);
 extern tdc_tp_plan_status tdc_tp_plan_fit(const size_t *ps, const tdc_tp_grid *g, size_t tile_max,
 										  size_t floor, double spacing, tdc_tp_tile *tiles,
