@@ -74,14 +74,14 @@ refuse_plan(bounded_run *r, size_t tile_max, tdc_tp_plan_status rc)
 			dmax = r->counts[c];
 			dcell = c;
 		}
-	floor_bytes = tdc_tp_tile_bytes((dmax > TILE_FLOOR ? dmax : TILE_FLOOR) * 3 / 2, r->opt,
+	floor_bytes = tdc_tp_tile_bytes(TDC_TP_ALLOW(dmax > TILE_FLOOR ? dmax : TILE_FLOOR), r->opt,
 									POINT_BYTES(r));
 	if (rc == TDC_TP_PLAN_TOO_MANY_TILES)
 	{
 		snprintf(msg, sizeof(msg), "--max-memory %zu is too small for this input: tiles of at most %zu points "
 				 "(the most that fit with their halos) would be more than %d; with %zu points allow about %zu MB",
 				 r->budget >> 20, tile_max, TDC_TP_MAX_TILES, r->n,
-				 (tdc_tp_tile_bytes(r->n / (TDC_TP_MAX_TILES / 2) * 3 / 2, r->opt, POINT_BYTES(r)) >> 20) + 1);
+				 (tdc_tp_tile_bytes(TDC_TP_ALLOW(r->n / (TDC_TP_MAX_TILES / 2)), r->opt, POINT_BYTES(r)) >> 20) + 1);
 		die(1, "%s", msg);
 	}
 	if (dmax > tile_max && dmax >= 2)
@@ -148,7 +148,7 @@ plan(bounded_run *r)
 	tdc_tp_prefix_sums(r->counts, ps);
 
 	tile_max = tdc_tp_tile_max(r->n, r->opt, POINT_BYTES(r), r->budget);
-	if (tdc_tp_tile_bytes(tile_max * 3 / 2, r->opt, POINT_BYTES(r)) > r->budget)
+	if (tdc_tp_tile_bytes(TDC_TP_ALLOW(tile_max), r->opt, POINT_BYTES(r)) > r->budget)
 		refuse_plan(r, 0, TDC_TP_PLAN_DENSE_CELL);
 	rc = tdc_tp_plan_fit(ps, &r->grid, tile_max, TILE_FLOOR, tdc_tp_spacing(r->bb, r->n),
 						 r->tiles, &r->nt, &fit_max);

@@ -135,18 +135,20 @@ tdc_tp_tile_bytes(size_t m, const tdc_options *opt, size_t per_point)
 }
 
 /*
- * The most points a tile may own: its points with the halo and a growth
- * allowance of 1.5 must fit in the budget.  (It was 2.2 while a sliver
- * along a long hull edge made corner tiles grow; tile_final.c now bounds such a
- * triangle's circle by its segment over the hull edge.  A tile that still
- * outgrows the budget is first shrunk back, see tdc_tp_shrink_known.)
+ * The most points a tile may own: its points with the halo and the growth
+ * allowance TDC_TP_ALLOW (2.5) must fit in the budget.  (It was 2.2 while
+ * a sliver along a long hull edge made corner tiles grow, then 1.5 once
+ * tile_final.c bounded such a triangle's circle by its segment over the
+ * hull edge; the cells a clustered tile's reruns add need 2.5.  A tile
+ * that still outgrows the budget is first shrunk back, see
+ * tdc_tp_shrink_known.)
  */
 size_t
 tdc_tp_tile_max(size_t n, const tdc_options *opt, size_t per_point, size_t budget)
 {
 	size_t		tile_max;
 
-	for (tile_max = n; tile_max > 1000 && tdc_tp_tile_bytes(tile_max * 3 / 2, opt, per_point) > budget;)
+	for (tile_max = n; tile_max > 1000 && tdc_tp_tile_bytes(TDC_TP_ALLOW(tile_max), opt, per_point) > budget;)
 		tile_max = tile_max * 9 / 10;
 	return tile_max;
 }
@@ -325,7 +327,7 @@ tdc_tp_known_limit(size_t count, size_t tile_max)
  * first known regions (tdc_tp_first_known over the cell box, spacing the
  * data's mean spacing) hold at most tile_max points too, so that a tile
  * with its halo, and the growth a rerun may add, stays in the budget that
- * tile_max was made for (tdc_tp_tile_max: 1.5 tile_max points).  Where the
+ * tile_max was made for (tdc_tp_tile_max: TDC_TP_ALLOW(tile_max) points).  Where the
  * data is clustered a cut through a cluster puts much of it in the halo:
  * the tiles are then made smaller, a fifth at a time, down to floor points.
  * *fit_max: the tile size used.  Counts are of whole cells (an upper bound).
