@@ -124,7 +124,7 @@ plan(bounded_run *r)
 	/*
 	 * Counts made on the sample's grid stay exact whatever the true box:
 	 * a point beyond the grid is counted in an outer cell, which
-	 * tdc_tp_grid_reach widens to hold it.  Only when the sample missed
+	 * tdc_tp_grid_reach moves the outer sides to.  Only when the sample missed
 	 * much of the data are the cells counted again, on a uniform grid
 	 * over the true box: the sample's quantiles then say little.
 	 */
@@ -182,7 +182,8 @@ bands(bounded_run *r)
 	r->use_cells = r->grid.xcut[TDC_TP_GRID] > r->grid.xcut[0] && r->grid.ycut[TDC_TP_GRID] > r->grid.ycut[0];
 	r->cellst = malloc((size_t) TDC_TP_GRID * TDC_TP_GRID);
 	r->added = calloc((size_t) TDC_TP_GRID * TDC_TP_GRID, 1);
-	if (r->cellst == NULL || r->added == NULL)
+	r->hcells = malloc(sizeof(uint32_t) * TDC_TP_HULL_CELLS);
+	if (r->cellst == NULL || r->added == NULL || r->hcells == NULL)
 		die(1, "out of memory%s", "");
 	tdc_tp_hull_bands(r->hull, r->nhull, tdc_tp_spacing(r->bb, r->n), r->bands);
 }
@@ -240,6 +241,7 @@ run_bounded(const char *xypath, const char *zpath, size_t n, const tdc_options *
 	free(r.cellst);
 	free(r.added);
 	free(r.added_list);
+	free(r.hcells);
 	free(r.extra);
 	free(r.bands);
 	free(r.inband);

@@ -93,6 +93,8 @@ typedef struct bounded_run
 	double	   *bands;			/* every hull edge's band */
 	double	   *extra;			/* nhull + 1 boxes: a tile run's extra known boxes */
 	uint8_t    *inband;			/* nhull + 1: is it among this tile's extra boxes */
+	uint32_t   *hcells;			/* the hull cells of the tile's first region */
+	size_t		nhcells;
 	const double **xs;			/* nhull + 1: the bands a point is tested against */
 	bool		use_halo;		/* binning writes halo files */
 	double	   *kfirst;			/* each tile's first K */
@@ -116,10 +118,12 @@ typedef struct bounded_run
 
 /*
  * Tile t's first known region, as the policy makes it from its cell box:
- * K and the halo h, and in r->inband (cleared here) its hull bands.
+ * K and the halo h, in r->inband (cleared here) its hull bands, and in
+ * r->hcells the cells along the hull edges near it, whole (at most half
+ * the tile's points, tdc_tp_hull_cells).
  */
 static inline void
-first_region(const struct bounded_run *r, int t, double K[4], double *h)
+first_region(struct bounded_run *r, int t, double K[4], double *h)
 {
 	double		box[4];
 
@@ -128,6 +132,9 @@ first_region(const struct bounded_run *r, int t, double K[4], double *h)
 					 tdc_tp_known_limit(r->tiles[t].count, r->tile_max), K, h);
 	memset(r->inband, 0, r->nhull + 1);
 	tdc_tp_first_bands(K, r->tiles[t].count, r->bands, r->nhull, r->inband);
+	r->nhcells = r->use_cells ?
+		tdc_tp_hull_cells(&r->grid, r->counts, &r->tiles[t], r->hull, r->nhull, r->inband,
+						  r->tiles[t].count / 2 > 1000 ? r->tiles[t].count / 2 : 1000, r->hcells) : 0;
 	tdc_tp_fit_bands(r->ps, &r->grid, r->bands, r->nhull,
 					 r->tiles[t].count / 8 > 1000 ? r->tiles[t].count / 8 : 1000, r->inband);
 }

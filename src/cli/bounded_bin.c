@@ -29,8 +29,25 @@
  * Each tile's first region: r->kfirst[t], its first K, and r->band_idx
  * from r->band_off[t], its hull bands; and in *pairs (*npairs of them,
  * *cap allocated) a (cell, tile) pair for every cell that a box of the
- * region meets, but the tile's own cells.
+ * region meets, but the tile's own cells, and (cell, tile | WHOLE) for its
+ * hull cells, whose points all belong to the region.
  */
+#define WHOLE	0x8000
+
+static void
+add_pair(uint32_t **pairs, size_t *npairs, size_t *cap, uint32_t cell, uint32_t t)
+{
+	if (*npairs == *cap)
+	{
+		*pairs = realloc(*pairs, sizeof(uint32_t) * 2 * (*cap *= 2));
+		if (*pairs == NULL)
+			die(1, "out of memory%s", "");
+	}
+	(*pairs)[2 * *npairs] = cell;
+	(*pairs)[2 * *npairs + 1] = t;
+	(*npairs)++;
+}
+
 static void
 first_regions(bounded_run *r, uint32_t **pairs, size_t *npairs, size_t *cap)
 {
@@ -77,23 +94,18 @@ first_regions(bounded_run *r, uint32_t **pairs, size_t *npairs, size_t *cap)
 				{
 					if (r->cell_tile[row * TDC_TP_GRID + c] == t)
 						continue;
-					if (*npairs == *cap)
-					{
-						*pairs = realloc(*pairs, sizeof(uint32_t) * 2 * (*cap *= 2));
-						if (*pairs == NULL)
-							die(1, "out of memory%s", "");
-					}
-					(*pairs)[2 * *npairs] = (uint32_t) (row * TDC_TP_GRID + c);
-					(*pairs)[2 * *npairs + 1] = (uint32_t) t;
-					(*npairs)++;
+					add_pair(pairs, npairs, cap, (uint32_t) (row * TDC_TP_GRID + c), (uint32_t) t);
 				}
 		}
+		for (size_t k = 0; k < r->nhcells; k++)
+			add_pair(pairs, npairs, cap, r->hcells[k], (uint32_t) t | WHOLE);
 	}
 }
 
 /*
  * Per cell, its tiles of the pairs, once each: r->cell_halo from
- * r->cell_off[cell] (zeroed by the caller), as a counting sort by cell.
+ * r->cell_off[cell] (zeroed by the caller), as a counting sort by cell; a
+ * tile that has the cell whole as -1 - tile.
  */
 static void
 index_cells(bounded_run *r, const uint32_t *pairs, size_t npairs)
@@ -114,7 +126,7 @@ index_cells(bounded_run *r, const uint32_t *pairs, size_t npairs)
 	memcpy(fill, cell_off, sizeof(uint32_t) * ((size_t) TDC_TP_GRID * TDC_TP_GRID + 1));
 	for (size_t i = 0; i < npairs; i++)
 		cell_halo[fill[pairs[2 * i]]++] = (int16_t) pairs[2 * i + 1];
-	/* drop repeats within a cell (a tile whose K and bands meet it) */
+	/* drop repeats within a cell (a tile whose K and bands meet it), whole first */
 	for (size_t c = 0, at = 0; c < (size_t) TDC_TP_GRID * TDC_TP_GRID; c++)
 	{
 		uint32_t	a = cell_off[c],
@@ -122,13 +134,15 @@ index_cells(bounded_run *r, const uint32_t *pairs, size_t npairs)
 
 		cell_off[c] = (uint32_t) at;
 		for (uint32_t j = a; j < b; j++)
-			if (!seen[cell_halo[j]])
-			{
-				seen[cell_halo[j]] = 1;
-				cell_halo[at++] = cell_halo[j];
-			}
-		for (uint32_t j = cell_off[c]; j < at; j++)
-			seen[cell_halo[j]] = 0;
+			seen[(uint16_t) cell_halo[j] & ~WHOLE] |= ((uint16_t) cell_halo[j] & WHOLE) ? 2 : 1;
+		for (uint32_t j = a; j < b; j++)
+		{
+			int			u = (uint16_t) cell_halo[j] & ~WHOLE;
+
+			if (seen[u])
+				cell_halo[at++] = (int16_t) ((seen[u] & 2) ? -1 - u : u);
+			seen[u] = 0;
+		}
 		if (c + 1 == (size_t) TDC_TP_GRID * TDC_TP_GRID)
 			cell_off[c + 1] = (uint32_t) at;
 	}
@@ -228,9 +242,10 @@ bin_range(void *arg)
 				continue;
 			for (uint32_t j = cell_off[cell]; j < cell_off[cell + 1]; j++)
 			{
-				int			u = cell_halo[j];
+				int			u = cell_halo[j] < 0 ? -1 - cell_halo[j] : cell_halo[j];
 				const double *K = kfirst + 4 * u;
-				bool		in = rec[0] >= K[0] && rec[0] <= K[2] && rec[1] >= K[1] && rec[1] <= K[3];
+				bool		in = cell_halo[j] < 0 ||
+					(rec[0] >= K[0] && rec[0] <= K[2] && rec[1] >= K[1] && rec[1] <= K[3]);
 
 				for (size_t e = band_off[u]; e < band_off[u + 1] && !in; e++)
 				{

@@ -49,8 +49,9 @@ points_free(tile_points *p)
 }
 
 /*
- * TDC_TILE_CHECK=1 (tests): the points inside K or an extra box, counted
- * from every tile file, for checking a first run's tile and halo files.
+ * TDC_TILE_CHECK=1 (tests): the points inside K, an extra box or an added
+ * cell (the hull cells), counted from every tile file, for checking a
+ * first run's tile and halo files.
  */
 static size_t
 count_known(const bounded_run *r, const double *K, size_t nextra)
@@ -80,6 +81,8 @@ count_known(const bounded_run *r, const double *K, size_t nextra)
 
 					in = p[0] >= x[0] && p[0] <= x[2] && p[1] >= x[1] && p[1] <= x[3];
 				}
+				if (!in && r->nadded > 0)
+					in = r->added[tdc_tp_cell(&r->grid, p[0], p[1])];
 				m += in;
 			}
 		mr_close(&f);
@@ -305,7 +308,7 @@ cell_states(bounded_run *r, const double K[4])
 	}
 }
 
-/* The cells a run asked for, added to the tile's region. */
+/* The cells a run asked for (or the first region's hull cells), added to the tile's region. */
 static void
 add_cells(bounded_run *r, const uint32_t *cells, size_t ncells)
 {
@@ -416,6 +419,7 @@ tile_run(bounded_run *r, int t)
 		r->added[r->added_list[k]] = 0;
 	r->nadded = 0;
 	first_region(r, t, K, &h);
+	add_cells(r, r->hcells, r->nhcells);
 	tdc_tp_least_known(ti, &r->grid, Kmin);
 	for (size_t i = 0; r->nhull > 1 && i < r->nhull; i++)
 		if (r->inband[i])

@@ -133,29 +133,140 @@ cell_box(const tdc_tile_grid *g, int i, int j, double box[4])
 	box[3] = g->ycut[j + 1];
 }
 
-/* The Chebyshev distance between closed boxes a and b (0 when they meet). */
+/* The distance from point p to the closed box b (0 inside it); no libm calls, it is hot. */
 static double
-box_gap(const double *a, const double *b)
+point_gap(const double *b, const double *p)
 {
-	return fmax(fmax(fmax(a[0] - b[2], b[0] - a[2]), fmax(a[1] - b[3], b[1] - a[3])), 0);
+	double		dx = b[0] - p[0] > 0 ? b[0] - p[0] : p[0] - b[2] > 0 ? p[0] - b[2] : 0,
+				dy = b[1] - p[1] > 0 ? b[1] - p[1] : p[1] - b[3] > 0 ? p[1] - b[3] : 0;
+
+	return dx == 0 ? dy : dy == 0 ? dx : sqrt(dx * dx + dy * dy);
+}
+
+/* The distance from point p to the segment a-b. */
+static double
+point_segment(const double *p, const double *a, const double *b)
+{
+	double		dx = b[0] - a[0],
+				dy = b[1] - a[1],
+				l2 = dx * dx + dy * dy,
+				t = l2 > 0 ? ((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / l2 : 0,
+				ex,
+				ey;
+
+	t = t < 0 ? 0 : t > 1 ? 1 : t;
+	ex = p[0] - (a[0] + t * dx);
+	ey = p[1] - (a[1] + t * dy);
+	return sqrt(ex * ex + ey * ey);
 }
 
 /*
- * Keeps in *dmin the least distance of a cell box to ref, and in *side the
- * larger side of that nearest cell: a request takes the cells within
- * the least distance plus that side, a ring of about one cell where
- * the cells are (small cells inside a cluster, large ones in sparse land).
+ * The distance from the closed box b to the segment a-b (seg[0..3]): 0
+ * when the segment meets the box (clipped as Liang and Barsky do), else
+ * the least of the ends' distances to the box and the corners' to the
+ * segment.  Rounded: it only orders the cells a request names.
+ */
+static double
+segment_gap(const double *b, const double *seg)
+{
+	double		t0 = 0,
+				t1 = 1,
+				d[2] = {seg[2] - seg[0], seg[3] - seg[1]},
+				m;
+	bool		meets = true;
+
+	for (int k = 0; k < 2 && meets; k++)
+	{
+		if (d[k] == 0)
+			meets = seg[k] >= b[k] && seg[k] <= b[k + 2];
+		else
+		{
+			double		u = (b[k] - seg[k]) / d[k],
+						v = (b[k + 2] - seg[k]) / d[k];
+
+			if (u > v)
+			{
+				double		w = u;
+
+				u = v;
+				v = w;
+			}
+			t0 = u > t0 ? u : t0;
+			t1 = v < t1 ? v : t1;
+			meets = t0 <= t1;
+		}
+	}
+	if (meets)
+		return 0;
+	m = point_gap(b, seg);
+	for (int q = 0; q < 5; q++)
+	{
+		double		c[2] = {b[(q & 1) ? 2 : 0], b[(q & 2) ? 3 : 1]},
+					e = q == 4 ? point_gap(b, seg + 2) : point_segment(c, seg, seg + 2);
+
+		m = e < m ? e : m;
+	}
+	return m;
+}
+
+/*
+ * The distance that orders a request's cells: from the cell box to the
+ * nearest of the nref points ref (a triangle's own vertices), or with
+ * nref < 0 to the segment ref[0..3] (a hull edge).  A long diagonal edge
+ * or a triangle with far-apart own vertices has a bounding box holding
+ * much that is far from both: measured from that box, a hull edge of a
+ * tile cut through a dense town named every town cell in the edge's box
+ * (337,350 of them in one run).
+ */
+static double
+ref_gap(const double *box, const double *ref, int nref)
+{
+	double		d = INFINITY;
+
+	if (nref < 0)
+		return segment_gap(box, ref);
+	for (int k = 0; k < nref; k++)
+	{
+		double		e = point_gap(box, ref + 2 * k);
+
+		d = e < d ? e : d;
+	}
+	return d;
+}
+
+/*
+ * Keeps in *dmin the least distance of a cell box to ref (ref_gap), and
+ * in *side the smaller side of that nearest cell (within_reach).  The
+ * smaller side: the counting grid's cells are quantiles, so a cell in a
+ * dense town's column but a sparse row is 0.02 wide and 56 tall, and its
+ * larger side took the whole town into a request from beside it.
  */
 static void
-nearest(const double *box, const double *ref, double *dmin, double *side)
+nearest(const double *box, const double *ref, int nref, double *dmin, double *side)
 {
-	double		d = box_gap(box, ref);
+	double		d = ref_gap(box, ref, nref);
 
 	if (d < *dmin)
 	{
 		*dmin = d;
-		*side = fmax(box[2] - box[0], box[3] - box[1]);
+		*side = fmin(box[2] - box[0], box[3] - box[1]);
 	}
+}
+
+/*
+ * Whether a request takes the cell box at distance d from ref, dmin and
+ * side being those of the nearest cell (nearest()): within the least
+ * distance and half again, plus a cell's smaller side, the nearest cell's
+ * or its own if smaller, so that the ring is a cell thick where the cells
+ * are small and covers the points about as near as the nearest one where
+ * they are far.  Its own side too: along a hull edge from sparse country
+ * to a dense town, the nearest cell is a large one at the sparse end, and
+ * its side took the whole town beyond the edge's other end.
+ */
+static bool
+within_reach(const double *box, double d, double dmin, double side)
+{
+	return d <= dmin * 1.5 + fmin(side, fmin(box[2] - box[0], box[3] - box[1]));
 }
 
 /* The cell of v along one axis of n cells: the last c with cut[c] <= v, 0 when none. */
@@ -180,15 +291,16 @@ tdc_cells_point_known(const tdc_cells *c, const double *p)
 /*
  * Does the closed disk (centre disk[0..1], radius disk[2]) meet no OTHER
  * cell that covered() does not vouch for?  Of the cells it does meet, the
- * nearest to the box near (the triangle's) are appended to out: those
- * within the least distance plus the nearest cell's side.  A disk of a triangle
+ * nearest to the nnear points near (the triangle's own vertices) are
+ * appended to out: those within_reach() of them (about the least
+ * distance and a cell).  A disk of a triangle
  * at the edge of what the tile knows can reach far into the unknown (a
  * triangle on a coast whose disk spans a sea, with the far coast not yet
  * read); the points nearest to it, once known, usually cut it into small
  * triangles, so the far cells are asked for only if the disk survives.
  */
 bool
-tdc_cells_disk(const tdc_cells *c, const double disk[3], const double near[4],
+tdc_cells_disk(const tdc_cells *c, const double disk[3], const double *near, int nnear,
 			   tdc_cells_covered_fn covered, const void *arg, tdc_cell_list *out)
 {
 	const tdc_tile_grid *g = c->g;
@@ -239,8 +351,8 @@ tdc_cells_disk(const tdc_cells *c, const double disk[3], const double near[4],
 				continue;
 			none = false;
 			if (pass == 0)
-				nearest(box, near, &dmin, &margin);
-			else if (box_gap(box, near) <= dmin + margin)
+				nearest(box, near, nnear, &dmin, &margin);
+			else if (within_reach(box, ref_gap(box, near, nnear), dmin, margin))
 				list_add(out, (uint32_t) j * (uint32_t) g->nx + (uint32_t) i);
 		}
 	}
@@ -252,9 +364,9 @@ tdc_cells_disk(const tdc_cells *c, const double disk[3], const double near[4],
  * side of a hull edge of Q, interior on the left) EMPTY, KNOWN or vouched
  * for by covered()?  Then no point of P lies beyond the edge that Q lacks,
  * and Q has none: the edge is a hull edge of P (Lemma 2).  Otherwise the
- * OTHER cells beyond it nearest to the edge (in the smallest of boxes
- * doubling around it that holds any, within the least distance
- * plus the nearest cell's side) are appended to out.
+ * OTHER cells beyond it nearest to the segment a-b (in the smallest of
+ * boxes doubling around it that holds any, within_reach() of the segment)
+ * are appended to out.
  */
 bool
 tdc_cells_beyond(const tdc_cells *c, const double *a, const double *b,
@@ -268,7 +380,7 @@ tdc_cells_beyond(const tdc_cells *c, const double *a, const double *b,
 				len = fmax(fabs(b[0] - a[0]), fabs(b[1] - a[1])),
 				grow = fmax(len, fmax(gx1 - gx0, gy1 - gy0) * 1e-4);
 	uint32_t	seen = 0;
-	double		eb[4] = {fmin(a[0], b[0]), fmin(a[1], b[1]), fmax(a[0], b[0]), fmax(a[1], b[1])},
+	double		seg[4] = {a[0], a[1], b[0], b[1]},
 				dmin = INFINITY,
 				margin = 0;
 
@@ -310,8 +422,8 @@ tdc_cells_beyond(const tdc_cells *c, const double *a, const double *b,
 					if (!beyond || (covered && covered(arg, cb)))
 						continue;
 					if (pass == 0)
-						nearest(cb, eb, &dmin, &margin);
-					else if (box_gap(cb, eb) <= dmin + margin)
+						nearest(cb, seg, -1, &dmin, &margin);
+					else if (within_reach(cb, ref_gap(cb, seg, -1), dmin, margin))
 						list_add(out, (uint32_t) j * (uint32_t) g->nx + (uint32_t) i);
 					found = true;
 				}

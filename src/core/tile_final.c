@@ -495,14 +495,17 @@ triangle_final(tile_ctx *cx, const double *p[3], const bool glob[3], const bool 
 	/* with a grid: known if every cell the disk meets is empty or passed whole */
 	if (cx->cells)
 	{
-		/* the box of its own vertices: their stars need the points near them first */
-		double		near[4] = {INFINITY, INFINITY, -INFINITY, -INFINITY};
+		/* its own vertices: their stars need the points near them first */
+		double		near[6];
+		int			nnear = 0;
 
 		for (int k = 0; k < 3; k++)
 			if (own[k])
-				box_union(near, (double[4]) {p[k][0], p[k][1], p[k][0], p[k][1]});
-
-		if (tdc_cells_disk(cx->cells, disk, near, cell_covered, cx, &cx->cl))
+			{
+				near[2 * nnear] = p[k][0];
+				near[2 * nnear++ + 1] = p[k][1];
+			}
+		if (tdc_cells_disk(cx->cells, disk, near, nnear, cell_covered, cx, &cx->cl))
 			return true;
 	}
 	request(cx, box);

@@ -18,7 +18,7 @@
  * The counting grid's box from the box g of a sample of the points, grown
  * by two cells a side, so that the scan can count as it finds the true box.
  * The cells stay exact whatever the sample (tdc_tp_cell_of clamps, and
- * tdc_tp_grid_reach widens the outer cells to the true box); a box far off the
+ * tdc_tp_grid_reach moves the outer cell sides to the true box); a box far off the
  * true one only makes a poor plan, which tdc_tp_grid_near detects.  False when
  * the sample is flat or not finite: no grid before the true box.
  */
@@ -106,16 +106,23 @@ tdc_tp_grid_near(const tdc_tp_grid *g, const double bb[4])
 }
 
 /*
- * The outer cells widened to the true box bb: a point's cell still holds
- * it, and no point changes cell (tdc_tp_cell_of clamps to the outer cells).
+ * The outer cell sides moved to the true box bb (within the next inner
+ * side): a point's cell still holds it, and no point changes cell
+ * (tdc_tp_cell_of reads neither outer side).  Widened where the sample
+ * missed points; narrowed where the sample's box, grown by two cells,
+ * passed the points: the outer cells' boxes then end where the points do.
+ * The finality check takes a cell's box for where its points may be, and
+ * the bottom row of 600,000 uniform points, reaching 4 below them, met
+ * the circles of the slivers along the bottom of the hull all along it:
+ * each rerun of a tile there named the next few cells along the hull.
  */
 void
 tdc_tp_grid_reach(tdc_tp_grid *g, const double bb[4])
 {
-	g->xcut[0] = fmin(g->xcut[0], bb[0]);
-	g->ycut[0] = fmin(g->ycut[0], bb[1]);
-	g->xcut[TDC_TP_GRID] = fmax(g->xcut[TDC_TP_GRID], bb[2]);
-	g->ycut[TDC_TP_GRID] = fmax(g->ycut[TDC_TP_GRID], bb[3]);
+	g->xcut[0] = fmin(bb[0], g->xcut[1]);
+	g->ycut[0] = fmin(bb[1], g->ycut[1]);
+	g->xcut[TDC_TP_GRID] = fmax(bb[2], g->xcut[TDC_TP_GRID - 1]);
+	g->ycut[TDC_TP_GRID] = fmax(bb[3], g->ycut[TDC_TP_GRID - 1]);
 }
 
 /*
@@ -313,19 +320,25 @@ tdc_tp_fit_bands(const size_t *ps, const tdc_tp_grid *g, const double *bands, si
 			mark[i] = 0;
 }
 
-/* The most points a tile's first K may hold: twice its own, within tile_max. */
+/*
+ * The most points a tile's first K may hold: twice its own, within
+ * TDC_TP_KNOWN_MAX(tile_max), so that the hull cells (half its own at
+ * most) and a rerun's cells stay within the allowance.  (Within tile_max,
+ * as it was, a full tile of uniform points had no halo at all, and every
+ * interior tile of 600,000 uniform points ran three times.)
+ */
 size_t
 tdc_tp_known_limit(size_t count, size_t tile_max)
 {
 	size_t		l = count * 2 > count + 1000 ? count * 2 : count + 1000;
 
-	return l < tile_max ? l : tile_max;
+	return l < TDC_TP_KNOWN_MAX(tile_max) ? l : TDC_TP_KNOWN_MAX(tile_max);
 }
 
 /*
  * The plan that fits: tiles of at most tile_max points (tdc_tp_plan) whose
  * first known regions (tdc_tp_first_known over the cell box, spacing the
- * data's mean spacing) hold at most tile_max points too, so that a tile
+ * data's mean spacing) hold at most TDC_TP_KNOWN_MAX(tile_max), so that a tile
  * with its halo, and the growth a rerun may add, stays in the budget that
  * tile_max was made for (tdc_tp_tile_max: TDC_TP_ALLOW(tile_max) points).  Where the
  * data is clustered a cut through a cluster puts much of it in the halo:
@@ -361,7 +374,7 @@ tdc_tp_plan_fit(const size_t *ps, const tdc_tp_grid *g, size_t tile_max, size_t 
 			k = tdc_tp_box_count(ps, g, K);
 			worst = k > worst ? k : worst;
 		}
-		if (worst <= tile_max || tmax * 4 / 5 < floor)
+		if (worst <= TDC_TP_KNOWN_MAX(tile_max) || tmax * 4 / 5 < floor)
 			return TDC_TP_PLAN_OK;
 		tmax = tmax * 4 / 5;
 	}
@@ -481,6 +494,103 @@ tdc_tp_first_bands(const double K[4], size_t count, const double *bands, size_t 
 	near[3] = K[3] + gr;
 	for (size_t i = 0; nhull > 1 && i < nhull; i++)
 		mark[i] = tdc_tp_box_meets(bands + 4 * i, near);
+}
+
+/*
+ * The cells that a segment a-b passes through and that hold points (by
+ * counts) outside tile ti's own cells, appended to cells[*n ..]; their
+ * points in *pts.  Row by row: the segment's x-range over the row's part
+ * of its y-range, and the columns that range meets.  In doubles: a cell
+ * missed by a rounding is one the finality check names if it must.
+ */
+static void
+segment_cells(const tdc_tp_grid *g, const uint32_t *counts, const tdc_tp_tile *ti,
+			  const double *a, const double *b, uint32_t *cells, size_t *n, size_t *pts)
+{
+	double		ylo = fmin(a[1], b[1]),
+				yhi = fmax(a[1], b[1]),
+				dy = b[1] - a[1];
+	int			j0 = tdc_tp_cell_of(ylo, 0, 0, g->ycut),
+				j1 = tdc_tp_cell_of(yhi, 0, 0, g->ycut);
+
+	for (int j = j0; j <= j1; j++)
+	{
+		double		y0 = fmax(ylo, g->ycut[j]),
+					y1 = fmin(yhi, g->ycut[j + 1]),
+					x0,
+					x1;
+		int			i0,
+					i1;
+
+		if (dy == 0)
+		{
+			x0 = fmin(a[0], b[0]);
+			x1 = fmax(a[0], b[0]);
+		}
+		else
+		{
+			double		u = a[0] + (b[0] - a[0]) * ((y0 - a[1]) / dy),
+						v = a[0] + (b[0] - a[0]) * ((y1 - a[1]) / dy);
+
+			x0 = fmax(fmin(u, v), fmin(a[0], b[0]));
+			x1 = fmin(fmax(u, v), fmax(a[0], b[0]));
+		}
+		i0 = tdc_tp_cell_of(x0, 0, 0, g->xcut);
+		i1 = tdc_tp_cell_of(x1, 0, 0, g->xcut);
+		for (int i = i0; i <= i1; i++)
+		{
+			size_t		c = (size_t) j * TDC_TP_GRID + i;
+
+			if (counts[c] == 0 || (i >= ti->c0 && i < ti->c1 && j >= ti->r0 && j < ti->r1))
+				continue;
+			cells[(*n)++] = (uint32_t) c;
+			*pts += counts[c];
+		}
+	}
+}
+
+/*
+ * The hull cells of tile ti's first region: the cells that the hull edges
+ * marked in mark[] (tdc_tp_first_bands) pass through, outside the tile,
+ * into cells[] (room for TDC_TP_HULL_CELLS; a cell may come twice, from
+ * two edges); returns their number.  An edge's cells are taken while the
+ * points taken stay within limit, by the counts, and there is room.
+ *
+ * A tile along the hull of P must know the points along the hull beyond
+ * its own part of it: a hull edge of the tile's points is one of P only
+ * once the hull vertices of P beyond it are known, and the slivers along
+ * a long hull edge have circles whose parts inside C are thin lenses along
+ * the edge.  The bands of 16 spacings hold both, but on clustered data a
+ * band from cluster to cluster holds the clusters at its ends, and
+ * without them each rerun named the next few cells along the hull: the
+ * corner tile of 600,000 uniform points ran 106 times, walking along the
+ * bottom edge.  The cells the edge passes through hold the hull's points
+ * and little else (a row of cells on uniform data, the rims of the
+ * clusters at an edge's ends).
+ */
+size_t
+tdc_tp_hull_cells(const tdc_tp_grid *g, const uint32_t *counts, const tdc_tp_tile *ti,
+				  const double *hull, size_t nhull, const uint8_t *mark, size_t limit,
+				  uint32_t *cells)
+{
+	size_t		n = 0,
+				pts = 0;
+
+	for (size_t e = 0; nhull > 1 && e < nhull; e++)
+	{
+		size_t		n0 = n,
+					p0 = pts;
+
+		if (!mark[e] || n + TDC_TP_EDGE_CELLS > TDC_TP_HULL_CELLS)
+			continue;
+		segment_cells(g, counts, ti, hull + 2 * e, hull + 2 * ((e + 1) % nhull), cells, &n, &pts);
+		if (pts > limit)
+		{
+			n = n0;
+			pts = p0;
+		}
+	}
+	return n;
 }
 
 /* The least known region of tile ti: its cell box, which holds its points. */

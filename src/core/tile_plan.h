@@ -35,6 +35,14 @@
  * its rim, and 10M points in 64 clusters needed 1.8 times a tile's own.
  */
 #define TDC_TP_ALLOW(m)		((m) * 5 / 2)
+/*
+ * The most cells tdc_tp_hull_cells names (an edge takes at most
+ * TDC_TP_EDGE_CELLS, a row's columns and the rows)
+ */
+#define TDC_TP_EDGE_CELLS	(3 * TDC_TP_GRID)
+#define TDC_TP_HULL_CELLS	(8 * TDC_TP_EDGE_CELLS)
+/* The most points a tile's first K may hold (tdc_tp_known_limit) */
+#define TDC_TP_KNOWN_MAX(tile_max)	((tile_max) * 3 / 2)
 #define TDC_TP_FINISH_BYTES	61		/* tile_final.c's bytes a point, triangles included */
 /*
  * The cells' bytes in a tile run: the caller's counts, states and added
@@ -173,6 +181,9 @@ extern void tdc_tp_first_known(const double box[4], size_t count, double spacing
 							   double K[4], double *h);
 extern void tdc_tp_first_bands(const double K[4], size_t count, const double *bands,
 							   size_t nhull, uint8_t *mark);
+extern size_t tdc_tp_hull_cells(const tdc_tp_grid *g, const uint32_t *counts, const tdc_tp_tile *ti,
+								const double *hull, size_t nhull, const uint8_t *mark,
+								size_t limit, uint32_t *cells);
 
 /* Its growth and shrinking from run to run */
 extern void tdc_tp_least_known(const tdc_tp_tile *ti, const tdc_tp_grid *g, double Kmin[4]);
