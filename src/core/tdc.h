@@ -354,6 +354,11 @@ extern void tdc_circumcenter(const double *a, const double *b, const double *c,
  * cells it meets are EMPTY or KNOWN, and a tile that is not final names the
  * OTHER cells it needs (need_cells): the next run adds their points, so the
  * known region grows by the cells that matter, not by a box around them.
+ * A request names, for each disk or edge, the OTHER cells within the
+ * least distance to them (from the own vertices, from the edge) plus
+ * rings of the nearest cell's smaller side (0 counts as 1): a caller whose
+ * tile keeps asking doubles it from run to run, so that a walk along a
+ * rim of cells takes a few runs, not one run a cell.
  */
 typedef struct tdc_tile_grid
 {
@@ -362,6 +367,7 @@ typedef struct tdc_tile_grid
 	const double *xcut;			/* nx + 1 cell sides in x, non-decreasing */
 	const double *ycut;			/* ny + 1 in y */
 	const uint8_t *cell;		/* nx * ny states, row by row (row j: ycut[j] .. ycut[j + 1]) */
+	double		rings;			/* how far a request reaches past the nearest cell, in its sides */
 } tdc_tile_grid;
 
 #define TDC_TILE_CELL_EMPTY		0

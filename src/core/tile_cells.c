@@ -256,17 +256,20 @@ nearest(const double *box, const double *ref, int nref, double *dmin, double *si
 /*
  * Whether a request takes the cell box at distance d from ref, dmin and
  * side being those of the nearest cell (nearest()): within the least
- * distance and half again, plus a cell's smaller side, the nearest cell's
- * or its own if smaller, so that the ring is a cell thick where the cells
- * are small and covers the points about as near as the nearest one where
- * they are far.  Its own side too: along a hull edge from sparse country
- * to a dense town, the nearest cell is a large one at the sparse end, and
- * its side took the whole town beyond the edge's other end.
+ * distance plus the grid's rings (at least 1) of a cell's smaller side,
+ * the nearest cell's or its own if smaller.  Its own too: along a hull
+ * edge from sparse country to a dense town, the nearest cell is a large
+ * one at the sparse end, and its side took the whole town beyond the
+ * edge's other end.  Not a multiple of the distance: between tight
+ * clusters the least distance is a hundred times a cluster's width, and
+ * half again of it took whole clusters where their rims were needed.
  */
 static bool
-within_reach(const double *box, double d, double dmin, double side)
+within_reach(const tdc_tile_grid *g, const double *box, double d, double dmin, double side)
 {
-	return d <= dmin * 1.5 + fmin(side, fmin(box[2] - box[0], box[3] - box[1]));
+	double		rings = g->rings > 1 ? g->rings : 1;
+
+	return d <= dmin + rings * fmin(side, fmin(box[2] - box[0], box[3] - box[1]));
 }
 
 /* The cell of v along one axis of n cells: the last c with cut[c] <= v, 0 when none. */
@@ -292,8 +295,8 @@ tdc_cells_point_known(const tdc_cells *c, const double *p)
  * Does the closed disk (centre disk[0..1], radius disk[2]) meet no OTHER
  * cell that covered() does not vouch for?  Of the cells it does meet, the
  * nearest to the nnear points near (the triangle's own vertices) are
- * appended to out: those within_reach() of them (about the least
- * distance and a cell).  A disk of a triangle
+ * appended to out: those within_reach() of them (the least distance and
+ * a ring of cells).  A disk of a triangle
  * at the edge of what the tile knows can reach far into the unknown (a
  * triangle on a coast whose disk spans a sea, with the far coast not yet
  * read); the points nearest to it, once known, usually cut it into small
@@ -352,7 +355,7 @@ tdc_cells_disk(const tdc_cells *c, const double disk[3], const double *near, int
 			none = false;
 			if (pass == 0)
 				nearest(box, near, nnear, &dmin, &margin);
-			else if (within_reach(box, ref_gap(box, near, nnear), dmin, margin))
+			else if (within_reach(g, box, ref_gap(box, near, nnear), dmin, margin))
 				list_add(out, (uint32_t) j * (uint32_t) g->nx + (uint32_t) i);
 		}
 	}
@@ -423,7 +426,7 @@ tdc_cells_beyond(const tdc_cells *c, const double *a, const double *b,
 						continue;
 					if (pass == 0)
 						nearest(cb, seg, -1, &dmin, &margin);
-					else if (within_reach(cb, ref_gap(cb, seg, -1), dmin, margin))
+					else if (within_reach(g, cb, ref_gap(cb, seg, -1), dmin, margin))
 						list_add(out, (uint32_t) j * (uint32_t) g->nx + (uint32_t) i);
 					found = true;
 				}
