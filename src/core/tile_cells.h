@@ -44,7 +44,8 @@ typedef bool (*tdc_cells_covered_fn) (const void *arg, const double box[4]);
 extern bool tdc_cells_init(tdc_cells *c, const tdc_tile_grid *g);
 extern void tdc_cells_free(tdc_cells *c);
 extern bool tdc_cells_point_known(const tdc_cells *c, const double *p);
-extern bool tdc_cells_disk(const tdc_cells *c, const double disk[3], const double *near, int nnear,
+extern bool tdc_cells_disk(const tdc_cells *c, const double disk[3], const double clip[4],
+						   const double *near, int nnear,
 						   tdc_cells_covered_fn covered, const void *arg, tdc_cell_list *out);
 extern bool tdc_cells_beyond(const tdc_cells *c, const double *a, const double *b,
 							 tdc_cells_covered_fn covered, const void *arg, tdc_cell_list *out);

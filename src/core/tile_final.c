@@ -505,7 +505,7 @@ triangle_final(tile_ctx *cx, const double *p[3], const bool glob[3], const bool 
 				near[2 * nnear] = p[k][0];
 				near[2 * nnear++ + 1] = p[k][1];
 			}
-		if (tdc_cells_disk(cx->cells, disk, near, nnear, cell_covered, cx, &cx->cl))
+		if (tdc_cells_disk(cx->cells, disk, box, near, nnear, cell_covered, cx, &cx->cl))
 			return true;
 	}
 	request(cx, box);
