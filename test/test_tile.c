@@ -1298,10 +1298,61 @@ test_square_labels(void)
 	CHECK(!tdc_tp_square_label(5e6 - 1, 5e6, origin, 1, &l), "a point below the origin must be refused");
 }
 
+/*
+ * The policy's hull cells and outer cell sides (tile_plan.c): on a uniform
+ * grid of 512 x 512 unit cells, one point each, a corner tile of 64 x 64
+ * cells takes the cells along the bottom and left hull edges outside it,
+ * an edge at a time within the limit; the outer sides move to the true box
+ * without moving a point.
+ */
+static void
+test_hull_cells(void)
+{
+	tdc_tp_grid *g = malloc(sizeof(tdc_tp_grid));
+	uint32_t   *counts = malloc(sizeof(uint32_t) * TDC_TP_GRID * TDC_TP_GRID),
+			   *cells = malloc(sizeof(uint32_t) * TDC_TP_HULL_CELLS);
+	double		box[4] = {0, 0, 512, 512},
+				bb[4] = {0.25, 0.5, 511.5, 511.75},
+				hull[8] = {0, 0, 512, 0, 512, 512, 0, 512};
+	uint8_t		mark[4] = {1, 0, 0, 1};
+	tdc_tp_tile ti = {0, 64, 0, 64, 4096, {0}};
+	size_t		n;
+	bool		ok = true;
+
+	for (size_t c = 0; c < (size_t) TDC_TP_GRID * TDC_TP_GRID; c++)
+		counts[c] = 1;
+	tdc_tp_grid_set(g, box);
+	n = tdc_tp_hull_cells(g, counts, &ti, hull, 4, mark, 100000, cells);
+	for (size_t k = 0; k < n; k++)
+		ok &= (cells[k] < TDC_TP_GRID && cells[k] >= 64) ||
+			(cells[k] % TDC_TP_GRID == 0 && cells[k] / TDC_TP_GRID >= 64);
+	CHECK(n == 2 * (TDC_TP_GRID - 64) && ok,
+		  "hull cells of a corner tile: %zu, want the %d of the bottom row and left column outside it",
+		  n, 2 * (TDC_TP_GRID - 64));
+	n = tdc_tp_hull_cells(g, counts, &ti, hull, 4, mark, 500, cells);
+	CHECK(n == TDC_TP_GRID - 64, "hull cells within 500 points: %zu, want one edge's %d", n,
+		  TDC_TP_GRID - 64);
+	mark[0] = mark[3] = 0;
+	CHECK(tdc_tp_hull_cells(g, counts, &ti, hull, 4, mark, 100000, cells) == 0,
+		  "no marked edge, yet hull cells");
+
+	tdc_tp_grid_reach(g, bb);
+	CHECK(g->xcut[0] == 0.25 && g->ycut[0] == 0.5 && g->xcut[TDC_TP_GRID] == 511.5 &&
+		  g->ycut[TDC_TP_GRID] == 511.75 && g->xcut[1] == 1 && g->ycut[TDC_TP_GRID - 1] == 511,
+		  "outer cell sides %g %g %g %g, want the true box", g->xcut[0], g->ycut[0],
+		  g->xcut[TDC_TP_GRID], g->ycut[TDC_TP_GRID]);
+	CHECK(tdc_tp_cell(g, 0.25, 0.5) == 0 && tdc_tp_cell(g, 511.5, 511.75) == TDC_TP_GRID * TDC_TP_GRID - 1,
+		  "the true box's corners changed cell");
+	free(g);
+	free(counts);
+	free(cells);
+}
+
 void
 test_tile(void)
 {
 	test_cells();
+	test_hull_cells();
 	test_square_labels();
 	test_tile_errors();
 	test_hull_sliver();

@@ -29,15 +29,21 @@
  *			(bounded_tile.c).
  * A point's cell is decided exactly against the doubles of the cell sides,
  * so a tile's points lie in its cells' box, and its first known region is
- * fixed before binning: K = that box plus a halo of 8 mean point spacings,
- * and as extra known boxes the bands along the hull edges near it.
+ * fixed before binning: K = that box plus a halo of 8 mean point spacings
+ * (halved while K would hold more than twice the tile), as extra known
+ * boxes the bands along the hull edges near it (those that hold few
+ * points), and whole the cells those hull edges pass through (the hull
+ * cells, at most half the tile's points).
  *
  * Memory: the largest tile with its halo is bounded by tile_max times a
  * growth allowance; a tile whose K would exceed the budget is an error,
  * never a silent overrun.  A rerun adds the cells of the grid that the
  * finality check names (tdc_tile_grid), not a box around them: on a
  * coastline or between clusters a box would take whole stretches of
- * dense data that the disks only graze.
+ * dense data that the disks only graze.  The named cells reach a few
+ * rings of cells past the nearest one needed, twice as far on every
+ * rerun, and are added as far as the budget holds them, nearest first
+ * (bounded_tile.c).
  */
 #include <math.h>
 #include <stdlib.h>
