@@ -12,6 +12,10 @@
  *	clustered	Gaussian clusters: ~sqrt(N)/4 centres uniform in [0,1000)^2,
  *				each with its own sigma in [0.5, 15]; points pick a centre
  *				with a skewed (quadratic) distribution, so cluster sizes vary
+ *	clusters64	64 Gaussian clusters, centres uniform in [0,1000)^2, widths
+ *				(sigma) log-uniform from 0.1 to 20, each point in a cluster
+ *				picked uniformly: tight clusters beside wide ones, the case of
+ *				the bounded-memory runs (./tdc --max-memory)
  *	grid		exact integer lattice 0..s-1 x 0..s-1 with s = ceil(sqrt(N)),
  *				the first N lattice points in row-major order, then shuffled
  *				(maximally degenerate: every lattice square is cocircular)
@@ -101,7 +105,7 @@ main(int argc, char **argv)
 
 	if (argc != 5)
 	{
-		fprintf(stderr, "usage: %s uniform|clustered|grid|gridjitter N SEED OUT.bin\n", argv[0]);
+		fprintf(stderr, "usage: %s uniform|clustered|clusters64|grid|gridjitter N SEED OUT.bin\n", argv[0]);
 		return 2;
 	}
 	if (!host_is_little_endian())
@@ -179,6 +183,27 @@ main(int argc, char **argv)
 			}
 		}
 		free(c);
+	}
+	else if (strcmp(kind, "clusters64") == 0)
+	{
+		double		c[64][3];
+
+		for (int j = 0; j < 64; j++)
+		{
+			c[j][0] = 1000.0 * rng_unit();
+			c[j][1] = 1000.0 * rng_unit();
+			c[j][2] = 0.1 * pow(200.0, rng_unit());
+		}
+		for (size_t i = 0; i < n; i++)
+		{
+			size_t		j = (size_t) rng_below(64);
+			double		a,
+						b;
+
+			rng_normal2(&a, &b);
+			xy[2 * i] = c[j][0] + c[j][2] * a;
+			xy[2 * i + 1] = c[j][1] + c[j][2] * b;
+		}
 	}
 	else if (strcmp(kind, "grid") == 0 || strcmp(kind, "gridjitter") == 0)
 	{

@@ -157,6 +157,50 @@ TDC_TILE_CHECK=1 $TDC --max-memory 10 --tmpdir "$tmp/tiles" -o "$tmp/z32.out" --
 check "--max-memory, text with z: tiled" "grep -qE ' tiles=([2-9]|[1-9][0-9]+) ' $tmp/z32.err"
 check "--max-memory, text with z: same triangles and z" "cmp -s <(canon_d $tmp/z31.out 3) <(canon_d $tmp/z32.out 3)"
 
+# adaptive tiles on clustered data (issue 28): under half of what the
+# one-shot run needs, the same triangle set, the peak under the limit, in
+# seconds: the Stockholm shoreline fixture with 19 jittered copies of each
+# vertex, 9 tight clusters, a dense town in sparse country, a strip with
+# gaps (about 300,000 points each).  TDC_TILE_CHECK: each first run's files
+# hold exactly its first region (K, bands and hull cells).
+perl -e 'srand(21); local $/; open(F, "<", $ARGV[0]) or die; $t = <F>; @v = ($t =~ /(-?[0-9.]+(?:e-?[0-9]+)?) (-?[0-9.]+(?:e-?[0-9]+)?)/g);
+  for ($i = 0; $i < @v; $i += 2) { for $k (0..19) { print pack("d<d<", $v[$i] + ($k ? (rand() - 0.5) * 2e-4 : 0), $v[$i+1] + ($k ? (rand() - 0.5) * 2e-4 : 0)) } }' \
+  "$(dirname "$0")/fixtures/gshhg-stockholm.wkt" > "$tmp/c_coast.bin"
+perl -e 'srand(22); for $c (1..9) { $cx = 50 + rand(900); $cy = 50 + rand(900); for (1..35000) {
+  print pack("d<d<", $cx + (rand() + rand() + rand() - 1.5) * 0.6, $cy + (rand() + rand() + rand() - 1.5) * 0.6) } }' > "$tmp/c_clusters.bin"
+perl -e 'srand(23); for $i (1..310000) { print pack("d<d<", $i <= 10000 ? (rand(1000), rand(1000)) : (400 + rand(10), 600 + rand(10))) }' > "$tmp/c_town.bin"
+perl -e 'srand(24); for (1..300000) { $x = rand(650); print pack("d<d<", $x < 200 ? $x : $x < 350 ? $x + 100 : $x + 350, rand(20)) }' > "$tmp/c_strip.bin"
+for d in coast clusters town strip; do
+	$TDC -o "$tmp/c1.out" --stats "$tmp/c_$d.bin" 2> "$tmp/c1.err"
+	one_rss=$(sed -n 's/.*peak_rss_mb=\([0-9.]*\).*/\1/p' "$tmp/c1.err")
+	lim=$(awk -v r="$one_rss" 'BEGIN { printf "%d", r * 0.5 }')
+	t0=$(date +%s)
+	TDC_TILE_CHECK=1 $TDC --max-memory "$lim" --tmpdir "$tmp/tiles" -o "$tmp/c2.out" --stats "$tmp/c_$d.bin" 2> "$tmp/c2.err"
+	rc=$?
+	secs=$(( $(date +%s) - t0 ))
+	til_rss=$(sed -n 's/.*peak_rss_mb=\([0-9.]*\).*/\1/p' "$tmp/c2.err")
+	check "--max-memory $lim (0.5 of one-shot $one_rss MB), $d: exit 0, tiled" "[ $rc -eq 0 ] && grep -qE ' tiles=([2-9]|[1-9][0-9]+) ' $tmp/c2.err"
+	check "--max-memory $lim, $d: peak RSS ${til_rss:-?} MB under the limit" "awk 'BEGIN { exit !(\"${til_rss:-999999}\" + 0 < $lim) }'"
+	check "--max-memory $lim, $d: same triangle set as one-shot" "cmp -s <(canon_d $tmp/c1.out 2) <(canon_d $tmp/c2.out 2)"
+	check "--max-memory $lim, $d: $secs s, under 120 s" "[ $secs -lt 120 ]"
+	[ -n "${TDC_CLI_VERBOSE:-}" ] && echo "$d: limit $lim MB, $secs s, $(grep -oE 'peak_rss_mb=[0-9.]+ tiles=[0-9]+ halo_points=[0-9]+ tile_runs=[0-9]+' $tmp/c2.err)" >&2
+done
+
+# labels far from the origin at tiny tile sizes: 5e6 + [0, 1e-3)^2
+perl -e 'srand(25); for (1..300000) { print pack("d<d<", 5e6 + rand(1e-3), 5e6 + rand(1e-3)) }' > "$tmp/far.bin"
+$TDC -o "$tmp/far1.out" "$tmp/far.bin"
+$TDC --max-memory 16 --tmpdir "$tmp/tiles" -o "$tmp/far2.out" --stats "$tmp/far.bin" 2> "$tmp/far2.err"
+check "--max-memory, 5e6 + sub-millimetre: tiled" "grep -qE ' tiles=([2-9]|[1-9][0-9]+) ' $tmp/far2.err"
+check "--max-memory, 5e6 + sub-millimetre: same triangle set" "cmp -s <(canon_d $tmp/far1.out 2) <(canon_d $tmp/far2.out 2)"
+
+# the floor: 300,000 exact copies of one point cannot be split; the refusal
+# comes before any tile, with the floor in MB and the number of copies
+perl -e 'srand(26); for $i (1..301000) { print pack("d<d<", $i <= 300000 ? (5, 5) : (rand(10), rand(10))) }' > "$tmp/dup.bin"
+expect_error "--max-memory below the floor (copies of one point)" $TDC --max-memory 16 --tmpdir "$tmp/tiles" "$tmp/dup.bin"
+check "floor message: the floor in MB, the cell's count" "grep -qE 'below this input.s floor of [0-9]+ MB: .* holds [0-9]+ points' $tmp/e.err"
+check "floor message: 300000 exact copies of (5 5)" "grep -q '300000 of them are exact copies of (5 5)' $tmp/e.err"
+check "floor: temporary files removed" "[ -z \"\$(ls -A $tmp/tiles)\" ]"
+
 # when it fits, it runs as without the option
 $TDC --max-memory 500 -o "$tmp/r4.out" --stats "$tmp/r.txt" 2> "$tmp/r4.err"
 check "--max-memory, input fits: one tile, same output" "grep -q ' tiles=1 halo_points=0' $tmp/r4.err && cmp -s <(canon $tmp/r1.out) <(canon $tmp/r4.out)"

@@ -20,6 +20,7 @@
 
 #include "harness.h"
 #include "tdc.h"
+#include "tile_plan.h"
 
 typedef struct tset
 {
@@ -45,6 +46,40 @@ static uint64_t rs;
  * widen K along long hull edges.
  */
 static double band;
+
+/*
+ * > 0: tiled() also passes a grid of cells_grid x cells_grid cells over the
+ * data's box (tdc_tile_grid): empty cells, cells inside K and the cells a
+ * run asked for are known, and a run that names cells gets their points
+ * added with K unchanged, as ./tdc --max-memory does.  cells_stats counts
+ * the runs that named cells and the most points a run held.
+ */
+static int	cells_grid;
+static struct
+{
+	size_t		cell_reruns;
+	size_t		max_points;
+} cells_stats;
+
+static int
+cmp_dbl(const void *a, const void *b)
+{
+	double		u = *(const double *) a,
+				v = *(const double *) b;
+
+	return u < v ? -1 : u > v;
+}
+
+/* The cell of v along one axis of n cells: the last c with cut[c] <= v, 0 when none. */
+static int
+cell_index(const double *cut, int n, double v)
+{
+	int			c = 0;
+
+	while (c + 1 < n && cut[c + 1] <= v)
+		c++;
+	return c;
+}
 
 static uint64_t
 rng(void)
@@ -124,12 +159,13 @@ oneshot(const double *xy, size_t n, tset *s)
 
 /*
  * The points a tile is run with: those in its known box K or in one of the
- * nextra extra boxes (closed), with their owners' labels, into q and ql.
- * Returns how many.
+ * nextra extra boxes (closed), or whose cell (pcell) is marked in added,
+ * with their owners' labels, into q and ql.  Returns how many.
  */
 static size_t
 gather_known(const double *xy, const int64_t *lab, size_t n, const double *K,
-			 const double *extra, size_t nextra, double *q, int64_t *ql)
+			 const double *extra, size_t nextra, const int *pcell, const uint8_t *added,
+			 double *q, int64_t *ql)
 {
 	size_t		m = 0;
 
@@ -141,6 +177,8 @@ gather_known(const double *xy, const int64_t *lab, size_t n, const double *K,
 		for (size_t e = 0; e < nextra && !in; e++)
 			in = xy[2 * i] >= extra[4 * e] && xy[2 * i] <= extra[4 * e + 2] &&
 				xy[2 * i + 1] >= extra[4 * e + 1] && xy[2 * i + 1] <= extra[4 * e + 3];
+		if (!in && added)
+			in = added[pcell[i]];
 		if (in)
 		{
 			q[2 * m] = xy[2 * i];
@@ -167,6 +205,15 @@ tiled(const double *xy, size_t n, const int64_t *lab, int64_t ntiles, double hal
 				cap = 0;
 	double	   *q = malloc(16 * n + 16);
 	int64_t    *ql = malloc(8 * n + 8);
+	/* the cells (cells_grid > 0): cuts, each point's cell, counts, states, added marks */
+	int			G = cells_grid;
+	double	   *xcut = NULL,
+			   *ycut = NULL;
+	int		   *pcell = NULL;
+	uint32_t   *ccount = NULL;
+	uint8_t    *cst = NULL,
+			   *added = NULL;
+	tdc_tile_grid tg = {0};
 
 	memset(st, 0, sizeof(*st));
 	s->ntri = 0;
@@ -177,6 +224,44 @@ tiled(const double *xy, size_t n, const int64_t *lab, int64_t ntiles, double hal
 		bb[1] = fmin(bb[1], xy[2 * i + 1]);
 		bb[2] = fmax(bb[2], xy[2 * i]);
 		bb[3] = fmax(bb[3], xy[2 * i + 1]);
+	}
+	if (G > 0)
+	{
+		xcut = malloc(sizeof(double) * (G + 1));
+		ycut = malloc(sizeof(double) * (G + 1));
+		pcell = malloc(sizeof(int) * (n + 1));
+		ccount = calloc((size_t) G * G, sizeof(uint32_t));
+		cst = malloc((size_t) G * G);
+		added = calloc((size_t) G * G, 1);
+		/* the cell sides at the quantiles of the points, as ./tdc takes them from a sample */
+		{
+			double	   *sx = malloc(8 * n + 8),
+					   *sy = malloc(8 * n + 8);
+
+			for (size_t i = 0; i < n; i++)
+			{
+				sx[i] = xy[2 * i];
+				sy[i] = xy[2 * i + 1];
+			}
+			qsort(sx, n, 8, cmp_dbl);
+			qsort(sy, n, 8, cmp_dbl);
+			for (int c = 0; c <= G; c++)
+			{
+				xcut[c] = c == 0 ? bb[0] : c == G ? bb[2] : sx[(size_t) c * n / G];
+				ycut[c] = c == 0 ? bb[1] : c == G ? bb[3] : sy[(size_t) c * n / G];
+			}
+			free(sx);
+			free(sy);
+		}
+		for (size_t i = 0; i < n; i++)
+		{
+			pcell[i] = cell_index(ycut, G, xy[2 * i + 1]) * G + cell_index(xcut, G, xy[2 * i]);
+			ccount[pcell[i]]++;
+		}
+		tg.nx = tg.ny = G;
+		tg.xcut = xcut;
+		tg.ycut = ycut;
+		tg.cell = cst;
 	}
 	if (box_extent)
 	{
@@ -238,13 +323,25 @@ tiled(const double *xy, size_t n, const int64_t *lab, int64_t ntiles, double hal
 		sp.test_weaken = weaken;
 		sp.extra = extra;
 		sp.nextra = nextra;
+		sp.grid = G > 0 ? &tg : NULL;
+		if (added)
+			memset(added, 0, (size_t) G * G);
 		st->tiles++;
 		for (;;)
 		{
 			tdc_tile_result res;
 			char		err[256];
 			const double *K = sp.known;
-			size_t		m = gather_known(xy, lab, n, K, extra, nextra, q, ql);
+			size_t		m = gather_known(xy, lab, n, K, extra, nextra, pcell, added, q, ql);
+
+			for (int j = 0; j < G; j++)
+				for (int i = 0; i < G; i++)
+					cst[j * G + i] = ccount[j * G + i] == 0 ? TDC_TILE_CELL_EMPTY :
+						added[j * G + i] || (xcut[i] >= K[0] && xcut[i + 1] <= K[2] &&
+											 ycut[j] >= K[1] && ycut[j + 1] <= K[3]) ?
+						TDC_TILE_CELL_KNOWN : TDC_TILE_CELL_OTHER;
+			if (m > cells_stats.max_points)
+				cells_stats.max_points = m;
 			sp.tile = ql;
 			st->rounds++;
 			st->rc = tdc_tile_triangulate(q, m, &sp, NULL, &res, err, sizeof(err));
@@ -262,6 +359,27 @@ tiled(const double *xy, size_t n, const int64_t *lab, int64_t ntiles, double hal
 							 q + 2 * res.tri[3 * k + 2]);
 				tdc_tile_result_free(&res);
 				break;
+			}
+			if (res.nneed_cells > 0)
+			{
+				bool		fresh = true;
+
+				/* only cells not known yet, or the loop would not end */
+				for (size_t k = 0; k < res.nneed_cells; k++)
+				{
+					fresh &= res.need_cells[k] < (uint32_t) (G * G) && cst[res.need_cells[k]] == TDC_TILE_CELL_OTHER;
+					added[res.need_cells[k] % ((uint32_t) G * G)] = 1;
+				}
+				CHECK(G > 0 && fresh, "tile %lld: named cells that are not OTHER", (long long) t);
+				if (getenv("TDC_TILE_VERBOSE") && getenv("TDC_TILE_VERBOSE")[0] == '2')
+					printf("    tile %lld: %zu points, %zu items not final, %zu cells named\n",
+						   (long long) t, m, res.unfinal, res.nneed_cells);
+				cells_stats.cell_reruns++;
+				st->retries++;
+				tdc_tile_result_free(&res);
+				if (!fresh)
+					goto out;
+				continue;
 			}
 			/* the box must grow, or the loop would not end */
 			if (!(res.need[0] <= K[0] && res.need[1] <= K[1] && res.need[2] >= K[2] &&
@@ -285,6 +403,12 @@ tiled(const double *xy, size_t n, const int64_t *lab, int64_t ntiles, double hal
 out:
 	if (s->ntri > 0)
 		qsort(s->t, s->ntri, 48, cmp_tri);
+	free(xcut);
+	free(ycut);
+	free(pcell);
+	free(ccount);
+	free(cst);
+	free(added);
 	free(extra);
 	free(hull);
 	free(q);
@@ -986,7 +1110,7 @@ test_hull_sliver(void)
 		if (e[0] <= K[2] && K[0] <= e[2] && e[1] <= K[3] && K[1] <= e[3])
 			nextra++;
 	}
-	m = gather_known(xy, lab, n, K, extra, nextra, q, ql);
+	m = gather_known(xy, lab, n, K, extra, nextra, NULL, NULL, q, ql);
 	memcpy(sp.known, K, sizeof(K));
 	sp.hull = hull;
 	sp.nhull = nhull;
@@ -1010,9 +1134,226 @@ test_hull_sliver(void)
 	free(extra);
 }
 
+/* k-d labels: alternate x and y cuts at the median until a tile holds at most cap points. */
+static const double *kd_xy;
+static int	kd_axis;
+
+static int
+cmp_kd(const void *a, const void *b)
+{
+	double		u = kd_xy[2 * *(const size_t *) a + kd_axis],
+				v = kd_xy[2 * *(const size_t *) b + kd_axis];
+
+	return u < v ? -1 : u > v;
+}
+
+static void
+kd_split(const double *xy, size_t *idx, size_t n, size_t cap, int axis, int64_t *lab, int64_t *nt)
+{
+	if (n <= cap)
+	{
+		for (size_t i = 0; i < n; i++)
+			lab[idx[i]] = *nt;
+		(*nt)++;
+		return;
+	}
+	kd_xy = xy;
+	kd_axis = axis;
+	qsort(idx, n, sizeof(size_t), cmp_kd);
+	kd_split(xy, idx, n / 2, cap, 1 - axis, lab, nt);
+	kd_split(xy, idx + n / 2, n - n / 2, cap, 1 - axis, lab, nt);
+}
+
+static int64_t *
+kd_labels(const double *xy, size_t n, size_t cap, int64_t *nt)
+{
+	int64_t    *lab = malloc(8 * n + 8);
+	size_t	   *idx = malloc(sizeof(size_t) * (n + 1));
+
+	for (size_t i = 0; i < n; i++)
+		idx[i] = i;
+	*nt = 0;
+	kd_split(xy, idx, n, cap, 0, lab, nt);
+	free(idx);
+	return lab;
+}
+
+/*
+ * Tiles with cells (tdc_tile_grid) on clustered data: the tiled set is the
+ * one-shot set.  No halo: the first run knows the tile's own points only,
+ * and the cells the check names bring in what the stars need, around the
+ * tile rather than a box.  (The most points a run held is printed with
+ * TDC_TILE_VERBOSE; the memory bound itself is checked through ./tdc
+ * --max-memory in test/cli.sh, on the same kinds of data.)
+ */
+static void
+check_cells(const char *name, const double *xy, size_t n, size_t cap)
+{
+	int64_t		nt;
+	int64_t    *lab = kd_labels(xy, n, cap, &nt);
+	tile_stats	st;
+
+	cells_grid = 64;
+	memset(&cells_stats, 0, sizeof(cells_stats));
+	st = check_labels(name, xy, n, lab, nt, 0, false);
+	if (getenv("TDC_TILE_VERBOSE"))
+		printf("  %s (cells): %lld tiles, %zu rounds, %zu named cells, at most %zu points of %zu\n",
+			   name, (long long) nt, st.rounds, cells_stats.cell_reruns, cells_stats.max_points, n);
+	cells_grid = 0;
+	free(lab);
+}
+
+static void
+test_cells(void)
+{
+	size_t		n,
+				total = 0;
+	double	   *xy;
+	char		path[512];
+
+	rs = 28;
+	/* the Stockholm archipelago's shoreline: islands in water */
+	snprintf(path, sizeof(path), "%s/test/fixtures/gshhg-stockholm.wkt", TDC_SOURCE_DIR);
+	xy = read_number_pairs(path, &n);
+	CHECK(xy != NULL && n == 17548, "%s: %zu vertices, want 17548", path, n);
+	if (xy && n == 17548)
+	{
+		check_cells("gshhg-stockholm", xy, n, n / 8);
+		total += cells_stats.cell_reruns;
+	}
+	free(xy);
+
+	/* 9 tight clusters (sigma 0.3) in a 1000 square */
+	n = 9000;
+	xy = malloc(16 * n);
+	for (size_t c = 0; c < 9; c++)
+	{
+		double		cx = 50 + urand() * 900,
+					cy = 50 + urand() * 900;
+
+		for (size_t i = c * 1000; i < (c + 1) * 1000; i++)
+		{
+			xy[2 * i] = cx + (urand() + urand() + urand() - 1.5) * 0.6;
+			xy[2 * i + 1] = cy + (urand() + urand() + urand() - 1.5) * 0.6;
+		}
+	}
+	check_cells("9 tight clusters", xy, n, n / 12);
+	total += cells_stats.cell_reruns;
+	free(xy);
+
+	/* a dense town (6000 points in a 10 square) in sparse country (2000 in 1000) */
+	n = 8000;
+	xy = malloc(16 * n);
+	for (size_t i = 0; i < n; i++)
+	{
+		xy[2 * i] = i < 2000 ? urand() * 1000 : 400 + urand() * 10;
+		xy[2 * i + 1] = i < 2000 ? urand() * 1000 : 600 + urand() * 10;
+	}
+	check_cells("dense town in sparse country", xy, n, n / 10);
+	total += cells_stats.cell_reruns;
+	free(xy);
+
+	/* a strip 1000 x 20 with gaps of 100 and 250 (LiDAR with missing passes) */
+	n = 8000;
+	xy = malloc(16 * n);
+	for (size_t i = 0; i < n; i++)
+	{
+		double		x = urand() * 650;
+
+		xy[2 * i] = x < 200 ? x : x < 350 ? x + 100 : x + 350;
+		xy[2 * i + 1] = urand() * 20;
+	}
+	check_cells("strip with gaps", xy, n, n / 10);
+	total += cells_stats.cell_reruns;
+	free(xy);
+	CHECK(total > 0, "no run named cells on any clustered set");
+}
+
+/*
+ * Square labels count from the origin, so that points far from (0, 0) in
+ * tiny squares get small labels, and squares too small to number are
+ * refused rather than wrapped.
+ */
+static void
+test_square_labels(void)
+{
+	double		origin[2] = {5e6, 5e6};
+	int64_t		l,
+				prev = -1;
+	bool		ok = true;
+
+	/* 5e6 + [0, 1e-3) in squares of 6e-4: columns and rows 0 and 1 */
+	CHECK(tdc_tp_square_label(5e6, 5e6, origin, 6e-4, &l) && l == 0, "origin's label %lld", (long long) l);
+	CHECK(tdc_tp_square_label(5e6 + 9.9e-4, 5e6 + 7e-4, origin, 6e-4, &l) && l == 4294967297LL,
+		  "far corner's label %lld, want column 1 row 1", (long long) l);
+	/* monotone along x at 1e-9 squares */
+	for (int i = 0; i < 1000 && ok; i++)
+	{
+		ok = tdc_tp_square_label(5e6 + i * 1e-7, 5e6, origin, 1e-9, &l) && l >= prev;
+		prev = l;
+	}
+	CHECK(ok, "labels at 1e-9 squares are not monotone in x");
+	CHECK(!tdc_tp_square_label(5e6 + 10, 5e6, origin, 1e-9, &l),
+		  "a column past 2^31 must be refused");
+	CHECK(!tdc_tp_square_label(5e6 - 1, 5e6, origin, 1, &l), "a point below the origin must be refused");
+}
+
+/*
+ * The policy's hull cells and outer cell sides (tile_plan.c): on a uniform
+ * grid of 512 x 512 unit cells, one point each, a corner tile of 64 x 64
+ * cells takes the cells along the bottom and left hull edges outside it,
+ * an edge at a time within the limit; the outer sides move to the true box
+ * without moving a point.
+ */
+static void
+test_hull_cells(void)
+{
+	tdc_tp_grid *g = malloc(sizeof(tdc_tp_grid));
+	uint32_t   *counts = malloc(sizeof(uint32_t) * TDC_TP_GRID * TDC_TP_GRID),
+			   *cells = malloc(sizeof(uint32_t) * TDC_TP_HULL_CELLS);
+	double		box[4] = {0, 0, 512, 512},
+				bb[4] = {0.25, 0.5, 511.5, 511.75},
+				hull[8] = {0, 0, 512, 0, 512, 512, 0, 512};
+	uint8_t		mark[4] = {1, 0, 0, 1};
+	tdc_tp_tile ti = {0, 64, 0, 64, 4096, {0}};
+	size_t		n;
+	bool		ok = true;
+
+	for (size_t c = 0; c < (size_t) TDC_TP_GRID * TDC_TP_GRID; c++)
+		counts[c] = 1;
+	tdc_tp_grid_set(g, box);
+	n = tdc_tp_hull_cells(g, counts, &ti, hull, 4, mark, 100000, cells);
+	for (size_t k = 0; k < n; k++)
+		ok &= (cells[k] < TDC_TP_GRID && cells[k] >= 64) ||
+			(cells[k] % TDC_TP_GRID == 0 && cells[k] / TDC_TP_GRID >= 64);
+	CHECK(n == 2 * (TDC_TP_GRID - 64) && ok,
+		  "hull cells of a corner tile: %zu, want the %d of the bottom row and left column outside it",
+		  n, 2 * (TDC_TP_GRID - 64));
+	n = tdc_tp_hull_cells(g, counts, &ti, hull, 4, mark, 500, cells);
+	CHECK(n == TDC_TP_GRID - 64, "hull cells within 500 points: %zu, want one edge's %d", n,
+		  TDC_TP_GRID - 64);
+	mark[0] = mark[3] = 0;
+	CHECK(tdc_tp_hull_cells(g, counts, &ti, hull, 4, mark, 100000, cells) == 0,
+		  "no marked edge, yet hull cells");
+
+	tdc_tp_grid_reach(g, bb);
+	CHECK(g->xcut[0] == 0.25 && g->ycut[0] == 0.5 && g->xcut[TDC_TP_GRID] == 511.5 &&
+		  g->ycut[TDC_TP_GRID] == 511.75 && g->xcut[1] == 1 && g->ycut[TDC_TP_GRID - 1] == 511,
+		  "outer cell sides %g %g %g %g, want the true box", g->xcut[0], g->ycut[0],
+		  g->xcut[TDC_TP_GRID], g->ycut[TDC_TP_GRID]);
+	CHECK(tdc_tp_cell(g, 0.25, 0.5) == 0 && tdc_tp_cell(g, 511.5, 511.75) == TDC_TP_GRID * TDC_TP_GRID - 1,
+		  "the true box's corners changed cell");
+	free(g);
+	free(counts);
+	free(cells);
+}
+
 void
 test_tile(void)
 {
+	test_cells();
+	test_hull_cells();
+	test_square_labels();
 	test_tile_errors();
 	test_hull_sliver();
 	test_distributions();

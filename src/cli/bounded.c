@@ -13,12 +13,14 @@
  *			the hull so far is skipped) and counts on a fine grid, whose box
  *			comes from a sample of the file (counted again in a pass of its
  *			own when the sample was far off) (bounded_scan.c);
- *	plan	the grid cut into tiles of at most tile_max points by median
- *			splits along the longer side (kd-tree of cells), so that
- *			clustered data gets small tiles where it is dense
- *			(bounded_policy.c);
+ *	plan	the grid (its sides at the quantiles of a sample) cut into
+ *			tiles of at most tile_max points by median splits along the
+ *			longer side (kd-tree of cells), so that clustered data gets
+ *			small tiles where it is dense, made smaller while a first
+ *			region does not fit; refused before any work, with the floor
+ *			in MB, when the densest cell does not fit (tile_plan.c);
  *	bands	the bands along the hull edges, extra known boxes of the tiles
- *			near them (bounded_policy.c);
+ *			near them (tile_plan.c);
  *	bin		each point appended to its tile's file, and to the halo file of
  *			every other tile whose first known region holds it; the two
  *			halves of the input on two threads, each with its own files,
@@ -27,12 +29,21 @@
  *			(bounded_tile.c).
  * A point's cell is decided exactly against the doubles of the cell sides,
  * so a tile's points lie in its cells' box, and its first known region is
- * fixed before binning: K = that box plus a halo of 8 mean point spacings,
- * and as extra known boxes the bands along the hull edges near it.
+ * fixed before binning: K = that box plus a halo of 8 mean point spacings
+ * (halved while K would hold more than twice the tile), as extra known
+ * boxes the bands along the hull edges near it (those that hold few
+ * points), and whole the cells those hull edges pass through (the hull
+ * cells, at most half the tile's points).
  *
  * Memory: the largest tile with its halo is bounded by tile_max times a
  * growth allowance; a tile whose K would exceed the budget is an error,
- * never a silent overrun.
+ * never a silent overrun.  A rerun adds the cells of the grid that the
+ * finality check names (tdc_tile_grid), not a box around them: on a
+ * coastline or between clusters a box would take whole stretches of
+ * dense data that the disks only graze.  The named cells reach a few
+ * rings of cells past the nearest one needed, twice as far on every
+ * rerun, and are added as far as the budget holds them, nearest first
+ * (bounded_tile.c).
  */
 #include <math.h>
 #include <stdlib.h>
@@ -44,6 +55,60 @@
 #include "bounded.h"
 
 /*
+ * The refusal of a plan: the limit is below this input's floor, the least
+ * budget whose tiles hold its densest cell (the plan's smallest tile) with
+ * the growth allowance, and at least TILE_FLOOR points; the message gives
+ * the numbers, and the exact copies of one spot when they are what makes
+ * the cell dense.  Before any tile is binned or run.
+ */
+#define TILE_FLOOR	1000
+
+static void
+refuse_plan(bounded_run *r, size_t tile_max, tdc_tp_plan_status rc)
+{
+	size_t		dmax = 0,
+				floor_bytes,
+				copies = 0;
+	int			dcell = 0;
+	double		spot[2];
+	char		msg[640],
+				dup[200] = "";
+
+	for (int c = 0; c < TDC_TP_GRID * TDC_TP_GRID; c++)
+		if (r->counts[c] > dmax)
+		{
+			dmax = r->counts[c];
+			dcell = c;
+		}
+	floor_bytes = tdc_tp_tile_bytes(TDC_TP_ALLOW(dmax > TILE_FLOOR ? dmax : TILE_FLOOR), r->opt,
+									POINT_BYTES(r));
+	if (rc == TDC_TP_PLAN_TOO_MANY_TILES)
+	{
+		snprintf(msg, sizeof(msg), "--max-memory %zu is too small for this input: tiles of at most %zu points "
+				 "(the most that fit with their halos) would be more than %d; with %zu points allow about %zu MB",
+				 r->budget >> 20, tile_max, TDC_TP_MAX_TILES, r->n,
+				 (tdc_tp_tile_bytes(TDC_TP_ALLOW(r->n / (TDC_TP_MAX_TILES / 2)), r->opt, POINT_BYTES(r)) >> 20) + 1);
+		die(1, "%s", msg);
+	}
+	if (dmax > tile_max && dmax >= 2)
+	{
+		dense_spot(r, dcell, tile_max, spot, &copies);
+		if (copies * 2 >= dmax)
+			snprintf(dup, sizeof(dup), "; %zu of them are exact copies of (%.17g %.17g)",
+					 copies, spot[0], spot[1]);
+	}
+	snprintf(msg, sizeof(msg), "--max-memory %zu is below this input's floor of %zu MB: the densest cell of the "
+			 "tiling grid, %.6g x %.6g at (%.17g %.17g), holds %zu points (a tile may hold %zu within the limit), "
+			 "and a tile of them with its halo needs about %zu MB%s",
+			 r->budget >> 20, (floor_bytes >> 20) + 1,
+			 r->grid.xcut[dcell % TDC_TP_GRID + 1] - r->grid.xcut[dcell % TDC_TP_GRID],
+			 r->grid.ycut[dcell / TDC_TP_GRID + 1] - r->grid.ycut[dcell / TDC_TP_GRID],
+			 r->grid.xcut[dcell % TDC_TP_GRID], r->grid.ycut[dcell / TDC_TP_GRID],
+			 dmax, tile_max, (floor_bytes >> 20) + 1, dup);
+	die(1, "%s", msg);
+}
+
+/*
  * The plan: after it, r->grid is the grid every point is placed on (its
  * outer cells reaching the true box), r->tiles[0 .. r->nt) the tiles, each
  * with its cells, its count and an empty box, and r->cell_tile each cell's
@@ -53,46 +118,56 @@ static void
 plan(bounded_run *r)
 {
 	size_t	   *ps,
-				tile_max;
-	bp_plan_status rc;
+				tile_max,
+				fit_max;
+	tdc_tp_plan_status rc;
 
 	/*
 	 * Fine counts (unless pass 1 made them on a grid near the box) and the
 	 * tiles.  The outer cells reach the true box: a point's cell still
 	 * holds it.
 	 */
-	if (r->counted && !bp_grid_near(&r->grid, r->bb))
+	/*
+	 * Counts made on the sample's grid stay exact whatever the true box:
+	 * a point beyond the grid is counted in an outer cell, which
+	 * tdc_tp_grid_reach moves the outer sides to.  Only when the sample missed
+	 * much of the data are the cells counted again, on a uniform grid
+	 * over the true box: the sample's quantiles then say little.
+	 */
+	if (r->counted && !tdc_tp_grid_near(&r->grid, r->bb) &&
+		!(r->bb[2] - r->bb[0] <= 2 * (r->grid.box[2] - r->grid.box[0]) &&
+		  r->bb[3] - r->bb[1] <= 2 * (r->grid.box[3] - r->grid.box[1])))
 	{
 		r->counted = false;
-		memset(r->counts, 0, sizeof(uint32_t) * BP_GRID * BP_GRID);
+		memset(r->counts, 0, sizeof(uint32_t) * TDC_TP_GRID * TDC_TP_GRID);
 	}
 	if (!r->counted)
-		bp_grid_set(&r->grid, r->bb);
-	bp_grid_reach(&r->grid, r->bb);
-	ps = calloc((size_t) (BP_GRID + 1) * (BP_GRID + 1), sizeof(size_t));
-	r->tiles = calloc(BP_MAX_TILES, sizeof(bp_tile));
-	r->cell_tile = malloc((size_t) BP_GRID * BP_GRID * sizeof(int16_t));
+		tdc_tp_grid_set(&r->grid, r->bb);
+	tdc_tp_grid_reach(&r->grid, r->bb);
+	ps = calloc((size_t) (TDC_TP_GRID + 1) * (TDC_TP_GRID + 1), sizeof(size_t));
+	r->tiles = calloc(TDC_TP_MAX_TILES, sizeof(tdc_tp_tile));
+	r->cell_tile = malloc((size_t) TDC_TP_GRID * TDC_TP_GRID * sizeof(int16_t));
 	if (!ps || !r->tiles || !r->cell_tile)
 		die(1, "out of memory%s", "");
 	if (!r->counted)
 		scan_count(r);
-	bp_prefix_sums(r->counts, ps);
-	free(r->counts);
-	r->counts = NULL;
+	tdc_tp_prefix_sums(r->counts, ps);
 
-	tile_max = bp_tile_max(r->n, r->opt, r->has_z, r->budget);
-	rc = bp_plan(ps, &r->grid, tile_max, r->tiles, &r->nt);
-	if (rc == BP_PLAN_DENSE_CELL)
-		die(1, "the points are too clustered for --max-memory: one cell of the tiling grid holds %s points", "more than a tile's share of");
-	if (rc == BP_PLAN_TOO_MANY_TILES)
-		die(1, "--max-memory is too small for this input: more than %s tiles would be needed", "900");
-	free(ps);
+	tile_max = tdc_tp_tile_max(r->n, r->opt, POINT_BYTES(r), r->budget);
+	if (tdc_tp_tile_bytes(TDC_TP_ALLOW(tile_max), r->opt, POINT_BYTES(r)) > r->budget)
+		refuse_plan(r, 0, TDC_TP_PLAN_DENSE_CELL);
+	rc = tdc_tp_plan_fit(ps, &r->grid, tile_max, TILE_FLOOR, tdc_tp_spacing(r->bb, r->n),
+						 r->tiles, &r->nt, &fit_max);
+	if (rc != TDC_TP_PLAN_OK)
+		refuse_plan(r, fit_max, rc);
+	r->ps = ps;
+	r->tile_max = fit_max;
 	for (int t = 0; t < r->nt; t++)
 	{
 		r->tiles[t].bb[0] = r->tiles[t].bb[1] = INFINITY;
 		r->tiles[t].bb[2] = r->tiles[t].bb[3] = -INFINITY;
 	}
-	bp_label_cells(r->tiles, r->nt, r->cell_tile);
+	tdc_tp_label_cells(r->tiles, r->nt, r->cell_tile);
 	r->st->tiles = r->nt;
 }
 
@@ -109,7 +184,14 @@ bands(bounded_run *r)
 	r->xs = malloc(sizeof(double *) * (r->nhull + 1));
 	if (r->extra == NULL || r->bands == NULL || r->inband == NULL || r->xs == NULL)
 		die(1, "out of memory%s", "");
-	bp_hull_bands(r->hull, r->nhull, r->bb, r->n, r->bands);
+	/* the cells, when they have a size (a flat input has no use for them) */
+	r->use_cells = r->grid.xcut[TDC_TP_GRID] > r->grid.xcut[0] && r->grid.ycut[TDC_TP_GRID] > r->grid.ycut[0];
+	r->cellst = malloc((size_t) TDC_TP_GRID * TDC_TP_GRID);
+	r->added = calloc((size_t) TDC_TP_GRID * TDC_TP_GRID, 1);
+	r->hcells = malloc(sizeof(uint32_t) * TDC_TP_HULL_CELLS);
+	if (r->cellst == NULL || r->added == NULL || r->hcells == NULL)
+		die(1, "out of memory%s", "");
+	tdc_tp_hull_bands(r->hull, r->nhull, tdc_tp_spacing(r->bb, r->n), r->bands);
 }
 
 /*
@@ -160,6 +242,12 @@ run_bounded(const char *xypath, const char *zpath, size_t n, const tdc_options *
 	for (int t = 0; t < r.nt; t++)
 		tile_run(&r, t);
 
+	free(r.counts);
+	free(r.ps);
+	free(r.cellst);
+	free(r.added);
+	free(r.added_list);
+	free(r.hcells);
 	free(r.extra);
 	free(r.bands);
 	free(r.inband);

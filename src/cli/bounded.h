@@ -4,7 +4,7 @@
  *		its files share (bounded.c explains the run).
  *
  *	bounded.c			the phases in order, and the plan
- *	bounded_policy.c	the tiling policy, pure (bounded_policy.h)
+ *	tile_plan.c	the tiling policy, pure (tile_plan.h)
  *	bounded_files.c		the source in chunks, the tile and halo files
  *	bounded_scan.c		pass 1: box, hull and cell counts
  *	bounded_bin.c		pass 2: every point to its tile's file and halos
@@ -13,10 +13,17 @@
 #ifndef TDC_BOUNDED_H
 #define TDC_BOUNDED_H
 
+#include <string.h>
 #include <time.h>
 
 #include "cli.h"
-#include "bounded_policy.h"
+#include "tile_plan.h"
+
+/*
+ * Bytes a point costs a tile run beside the engine and the finality check
+ * (tdc_tp_tile_bytes): its coordinates, its label, its z.
+ */
+#define POINT_BYTES(r)	((size_t) (16 + 8 + ((r)->has_z ? 8 : 0)))
 
 #define CHUNK		(1 << 16)	/* points per read of the source */
 
@@ -71,12 +78,14 @@ typedef struct bounded_run
 	double		bb[4];			/* the points' exact box */
 	double	   *hull;			/* their convex hull */
 	size_t		nhull;
-	uint32_t   *counts;			/* per cell of grid, freed by the plan */
+	uint32_t   *counts;			/* per cell of grid (EMPTY cells for the finality check) */
 	bool		counted;		/* pass 1 counted the cells too */
 
 	/* the plan */
-	bp_grid		grid;
-	bp_tile    *tiles;
+	tdc_tp_grid		grid;
+	size_t	   *ps;				/* prefix sums of counts, for the first regions */
+	size_t		tile_max;		/* the plan's tile size */
+	tdc_tp_tile    *tiles;
 	int			nt;
 	int16_t    *cell_tile;		/* the tile of each cell, freed by binning */
 
@@ -84,6 +93,8 @@ typedef struct bounded_run
 	double	   *bands;			/* every hull edge's band */
 	double	   *extra;			/* nhull + 1 boxes: a tile run's extra known boxes */
 	uint8_t    *inband;			/* nhull + 1: is it among this tile's extra boxes */
+	uint32_t   *hcells;			/* the hull cells of the tile's first region */
+	size_t		nhcells;
 	const double **xs;			/* nhull + 1: the bands a point is tested against */
 	bool		use_halo;		/* binning writes halo files */
 	double	   *kfirst;			/* each tile's first K */
@@ -92,10 +103,41 @@ typedef struct bounded_run
 	uint32_t   *cell_off;		/* per cell, its halo tiles: cell_halo[cell_off[c] ..] */
 	int16_t    *cell_halo;
 
+	/* the cells a tile run knows whole (tdc_tile_grid, bounded_tile.c) */
+	bool		use_cells;		/* the grid has cells of non-zero size */
+	uint8_t    *cellst;			/* per cell: TDC_TILE_CELL_EMPTY, _KNOWN or _OTHER */
+	uint8_t    *added;			/* per cell: added to this tile's region by a rerun */
+	uint32_t   *added_list;		/* those cells */
+	size_t		nadded,
+				added_cap;
+
 	/* pass 2 */
 	int			nparts;			/* binning parts: files per tile and kind */
 	size_t	   *halo_count;		/* each tile's halo file's points */
 } bounded_run;
+
+/*
+ * Tile t's first known region, as the policy makes it from its cell box:
+ * K and the halo h, in r->inband (cleared here) its hull bands, and in
+ * r->hcells the cells along the hull edges near it, whole (at most half
+ * the tile's points, tdc_tp_hull_cells).
+ */
+static inline void
+first_region(struct bounded_run *r, int t, double K[4], double *h)
+{
+	double		box[4];
+
+	tdc_tp_least_known(&r->tiles[t], &r->grid, box);
+	tdc_tp_fit_known(r->ps, &r->grid, box, r->tiles[t].count, tdc_tp_spacing(r->bb, r->n),
+					 tdc_tp_known_limit(r->tiles[t].count, r->tile_max), K, h);
+	memset(r->inband, 0, r->nhull + 1);
+	tdc_tp_first_bands(K, r->tiles[t].count, r->bands, r->nhull, r->inband);
+	r->nhcells = r->use_cells ?
+		tdc_tp_hull_cells(&r->grid, r->counts, &r->tiles[t], r->hull, r->nhull, r->inband,
+						  r->tiles[t].count / 2 > 1000 ? r->tiles[t].count / 2 : 1000, r->hcells) : 0;
+	tdc_tp_fit_bands(r->ps, &r->grid, r->bands, r->nhull,
+					 r->tiles[t].count / 8 > 1000 ? r->tiles[t].count / 8 : 1000, r->inband);
+}
 
 static inline double
 now_s(void)
@@ -133,6 +175,7 @@ rec_put(recfile *r, const double *v, int w)
 /* bounded_scan.c */
 extern void scan_input(bounded_run *r);
 extern void scan_count(bounded_run *r);
+extern void dense_spot(bounded_run *r, int cell, size_t limit, double spot[2], size_t *copies);
 
 /* bounded_bin.c */
 extern void halo_index(bounded_run *r);

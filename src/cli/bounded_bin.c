@@ -4,7 +4,7 @@
  *		to its tile's file, and to the halo file of every other tile whose
  *		first known region holds it.
  *
- * Each tile's first known region (K and its bands, bp_first_known) is
+ * Each tile's first known region (K and its bands, first_region) is
  * fixed by the plan, so binning can also write every point that lies in
  * another tile's first region to that tile's halo file: a tile's first run
  * then reads its own file and its halo file once, without filtering,
@@ -29,8 +29,25 @@
  * Each tile's first region: r->kfirst[t], its first K, and r->band_idx
  * from r->band_off[t], its hull bands; and in *pairs (*npairs of them,
  * *cap allocated) a (cell, tile) pair for every cell that a box of the
- * region meets, but the tile's own cells.
+ * region meets, but the tile's own cells, and (cell, tile | WHOLE) for its
+ * hull cells, whose points all belong to the region.
  */
+#define WHOLE	0x8000
+
+static void
+add_pair(uint32_t **pairs, size_t *npairs, size_t *cap, uint32_t cell, uint32_t t)
+{
+	if (*npairs == *cap)
+	{
+		*pairs = realloc(*pairs, sizeof(uint32_t) * 2 * (*cap *= 2));
+		if (*pairs == NULL)
+			die(1, "out of memory%s", "");
+	}
+	(*pairs)[2 * *npairs] = cell;
+	(*pairs)[2 * *npairs + 1] = t;
+	(*npairs)++;
+}
+
 static void
 first_regions(bounded_run *r, uint32_t **pairs, size_t *npairs, size_t *cap)
 {
@@ -51,8 +68,7 @@ first_regions(bounded_run *r, uint32_t **pairs, size_t *npairs, size_t *cap)
 		r->band_off[t + 1] = r->band_off[t];
 		if (r->tiles[t].count == 0)
 			continue;
-		memset(r->inband, 0, r->nhull + 1);
-		bp_first_known(&r->tiles[t], &r->grid, r->bands, r->nhull, K, &h, r->inband);
+		first_region(r, t, K, &h);
 		for (size_t i = 0; r->nhull > 1 && i < r->nhull; i++)
 			if (r->inband[i])
 				r->xs[nb++] = r->bands + 4 * i;
@@ -66,35 +82,30 @@ first_regions(bounded_run *r, uint32_t **pairs, size_t *npairs, size_t *cap)
 		for (size_t e = 0; e <= nb; e++)
 		{
 			const double *b = e == 0 ? K : r->xs[e - 1];
-			int			c0 = bp_cell_of(b[0], grid[0], sx, xcut),
-						c1 = bp_cell_of(b[2], grid[0], sx, xcut),
-						r0 = bp_cell_of(b[1], grid[1], sy, ycut),
-						r1 = bp_cell_of(b[3], grid[1], sy, ycut);
+			int			c0 = tdc_tp_cell_of(b[0], grid[0], sx, xcut),
+						c1 = tdc_tp_cell_of(b[2], grid[0], sx, xcut),
+						r0 = tdc_tp_cell_of(b[1], grid[1], sy, ycut),
+						r1 = tdc_tp_cell_of(b[3], grid[1], sy, ycut);
 
 			if (b[2] < bb[0] || b[0] > bb[2] || b[3] < bb[1] || b[1] > bb[3])
 				continue;
 			for (int row = r0; row <= r1; row++)
 				for (int c = c0; c <= c1; c++)
 				{
-					if (r->cell_tile[row * BP_GRID + c] == t)
+					if (r->cell_tile[row * TDC_TP_GRID + c] == t)
 						continue;
-					if (*npairs == *cap)
-					{
-						*pairs = realloc(*pairs, sizeof(uint32_t) * 2 * (*cap *= 2));
-						if (*pairs == NULL)
-							die(1, "out of memory%s", "");
-					}
-					(*pairs)[2 * *npairs] = (uint32_t) (row * BP_GRID + c);
-					(*pairs)[2 * *npairs + 1] = (uint32_t) t;
-					(*npairs)++;
+					add_pair(pairs, npairs, cap, (uint32_t) (row * TDC_TP_GRID + c), (uint32_t) t);
 				}
 		}
+		for (size_t k = 0; k < r->nhcells; k++)
+			add_pair(pairs, npairs, cap, r->hcells[k], (uint32_t) t | WHOLE);
 	}
 }
 
 /*
  * Per cell, its tiles of the pairs, once each: r->cell_halo from
- * r->cell_off[cell] (zeroed by the caller), as a counting sort by cell.
+ * r->cell_off[cell] (zeroed by the caller), as a counting sort by cell; a
+ * tile that has the cell whole as -1 - tile.
  */
 static void
 index_cells(bounded_run *r, const uint32_t *pairs, size_t npairs)
@@ -106,31 +117,33 @@ index_cells(bounded_run *r, const uint32_t *pairs, size_t npairs)
 
 	for (size_t i = 0; i < npairs; i++)
 		cell_off[pairs[2 * i] + 1]++;
-	for (size_t c = 0; c < (size_t) BP_GRID * BP_GRID; c++)
+	for (size_t c = 0; c < (size_t) TDC_TP_GRID * TDC_TP_GRID; c++)
 		cell_off[c + 1] += cell_off[c];
-	fill = malloc(sizeof(uint32_t) * ((size_t) BP_GRID * BP_GRID + 1));
+	fill = malloc(sizeof(uint32_t) * ((size_t) TDC_TP_GRID * TDC_TP_GRID + 1));
 	r->cell_halo = cell_halo = malloc(sizeof(int16_t) * (npairs + 1));
 	if (!fill || !cell_halo || !seen)
 		die(1, "out of memory%s", "");
-	memcpy(fill, cell_off, sizeof(uint32_t) * ((size_t) BP_GRID * BP_GRID + 1));
+	memcpy(fill, cell_off, sizeof(uint32_t) * ((size_t) TDC_TP_GRID * TDC_TP_GRID + 1));
 	for (size_t i = 0; i < npairs; i++)
 		cell_halo[fill[pairs[2 * i]]++] = (int16_t) pairs[2 * i + 1];
-	/* drop repeats within a cell (a tile whose K and bands meet it) */
-	for (size_t c = 0, at = 0; c < (size_t) BP_GRID * BP_GRID; c++)
+	/* drop repeats within a cell (a tile whose K and bands meet it), whole first */
+	for (size_t c = 0, at = 0; c < (size_t) TDC_TP_GRID * TDC_TP_GRID; c++)
 	{
 		uint32_t	a = cell_off[c],
 					b = cell_off[c + 1];
 
 		cell_off[c] = (uint32_t) at;
 		for (uint32_t j = a; j < b; j++)
-			if (!seen[cell_halo[j]])
-			{
-				seen[cell_halo[j]] = 1;
-				cell_halo[at++] = cell_halo[j];
-			}
-		for (uint32_t j = cell_off[c]; j < at; j++)
-			seen[cell_halo[j]] = 0;
-		if (c + 1 == (size_t) BP_GRID * BP_GRID)
+			seen[(uint16_t) cell_halo[j] & ~WHOLE] |= ((uint16_t) cell_halo[j] & WHOLE) ? 2 : 1;
+		for (uint32_t j = a; j < b; j++)
+		{
+			int			u = (uint16_t) cell_halo[j] & ~WHOLE;
+
+			if (seen[u])
+				cell_halo[at++] = (int16_t) ((seen[u] & 2) ? -1 - u : u);
+			seen[u] = 0;
+		}
+		if (c + 1 == (size_t) TDC_TP_GRID * TDC_TP_GRID)
 			cell_off[c + 1] = (uint32_t) at;
 	}
 	free(fill);
@@ -157,7 +170,7 @@ halo_index(bounded_run *r)
 	pairs = malloc(sizeof(uint32_t) * 2 * cap);
 	r->kfirst = malloc(32 * (size_t) (nt > 0 ? nt : 1));
 	r->band_off = malloc(sizeof(size_t) * (nt + 1));
-	r->cell_off = calloc((size_t) BP_GRID * BP_GRID + 1, sizeof(uint32_t));
+	r->cell_off = calloc((size_t) TDC_TP_GRID * TDC_TP_GRID + 1, sizeof(uint32_t));
 	if (!pairs || !r->kfirst || !r->band_off || !r->cell_off)
 		die(1, "out of memory%s", "");
 	first_regions(r, &pairs, &npairs, &cap);
@@ -211,8 +224,8 @@ bin_range(void *arg)
 		for (size_t i = 0; i < k; i++)
 		{
 			double		rec[4] = {src.xy[2 * i], src.xy[2 * i + 1], src.z ? src.z[i] : 0, 0};
-			int			cell = bp_cell_of(rec[1], grid[1], sy, ycut) * BP_GRID +
-				bp_cell_of(rec[0], grid[0], sx, xcut),
+			int			cell = tdc_tp_cell_of(rec[1], grid[1], sy, ycut) * TDC_TP_GRID +
+				tdc_tp_cell_of(rec[0], grid[0], sx, xcut),
 						t = cell_tile[cell];
 			double	   *bb = b->bb + 4 * t;
 
@@ -229,9 +242,10 @@ bin_range(void *arg)
 				continue;
 			for (uint32_t j = cell_off[cell]; j < cell_off[cell + 1]; j++)
 			{
-				int			u = cell_halo[j];
+				int			u = cell_halo[j] < 0 ? -1 - cell_halo[j] : cell_halo[j];
 				const double *K = kfirst + 4 * u;
-				bool		in = rec[0] >= K[0] && rec[0] <= K[2] && rec[1] >= K[1] && rec[1] <= K[3];
+				bool		in = cell_halo[j] < 0 ||
+					(rec[0] >= K[0] && rec[0] <= K[2] && rec[1] >= K[1] && rec[1] <= K[3]);
 
 				for (size_t e = band_off[u]; e < band_off[u + 1] && !in; e++)
 				{
@@ -313,7 +327,7 @@ bin_points(bounded_run *r)
 	{
 		for (int t = 0; t < nt; t++)
 		{
-			bp_box_union(r->tiles[t].bb, bw[p].bb + 4 * t);
+			tdc_tp_box_union(r->tiles[t].bb, bw[p].bb + 4 * t);
 			if (use_halo)
 				r->halo_count[t] += bw[p].halo[t].count;
 		}

@@ -17,33 +17,56 @@
 #include "bounded.h"
 
 /*
- * The box of a sample of the .bin source (256 runs of 256 points spread
- * over the file) in g, made a grid's box by bp_grid_from_sample.  False
- * when n is small, the file unreadable or the sample flat.
+ * A sample of the .bin source (256 runs of 256 points spread over the
+ * file): its box in g, made a grid's box by tdc_tp_grid_from_sample, and
+ * the grid r->grid over it with its cell sides at the sample's quantiles
+ * (tdc_tp_grid_quantiles).  False when n is small, the file unreadable or
+ * the sample flat.
  */
 static bool
-sample_grid(const char *xypath, size_t n, double g[4])
+sample_grid(bounded_run *r)
 {
 	FILE	   *f;
-	double		buf[2 * 256];
+	double		buf[2 * 256],
+				g[4],
+			   *xs,
+			   *ys;
+	size_t		ns = 0;
 
-	if (n < ((size_t) 1 << 18) || (f = fopen(xypath, "rb")) == NULL)
+	if (r->n < ((size_t) 1 << 18) || (f = fopen(r->xypath, "rb")) == NULL)
 		return false;
+	xs = malloc(sizeof(double) * 256 * 256);
+	ys = malloc(sizeof(double) * 256 * 256);
+	if (xs == NULL || ys == NULL)
+		die(1, "out of memory%s", "");
 	g[0] = g[1] = INFINITY;
 	g[2] = g[3] = -INFINITY;
 	for (size_t j = 0; j < 256; j++)
 	{
 		size_t		got;
 
-		if (fseeko(f, (off_t) ((n - 256) / 255 * j) * 16, SEEK_SET) != 0)
+		if (fseeko(f, (off_t) ((r->n - 256) / 255 * j) * 16, SEEK_SET) != 0)
 			break;
 		got = fread(buf, 16, 256, f);
 		for (size_t i = 0; i < got; i++)
 			if (isfinite(buf[2 * i]) && isfinite(buf[2 * i + 1]))
-				bp_box_add(g, buf[2 * i], buf[2 * i + 1]);
+			{
+				tdc_tp_box_add(g, buf[2 * i], buf[2 * i + 1]);
+				xs[ns] = buf[2 * i];
+				ys[ns++] = buf[2 * i + 1];
+			}
 	}
 	fclose(f);
-	return bp_grid_from_sample(g);
+	if (tdc_tp_grid_from_sample(g))
+	{
+		tdc_tp_grid_quantiles(&r->grid, g, xs, ys, ns);
+		free(xs);
+		free(ys);
+		return true;
+	}
+	free(xs);
+	free(ys);
+	return false;
 }
 
 /*
@@ -60,7 +83,7 @@ typedef struct scan_work
 	const char *xypath;
 	size_t		from,
 				count;
-	const bp_grid *grid;
+	const tdc_tp_grid *grid;
 	uint32_t   *counts;
 	/* results */
 	double		bb[4];
@@ -82,7 +105,7 @@ inner_rectangle(const double *hull, size_t nhull, double inner[4])
 				cy;
 
 	for (size_t i = 0; i < nhull; i++)
-		bp_box_add(hb, hull[2 * i], hull[2 * i + 1]);
+		tdc_tp_box_add(hb, hull[2 * i], hull[2 * i + 1]);
 	cx = 0.5 * (hb[0] + hb[2]);
 	cy = 0.5 * (hb[1] + hb[3]);
 	for (double f = 0.98; f > 0.2; f -= 0.16)
@@ -170,7 +193,7 @@ scan_range(void *arg)
 			if (y > bb[3])
 				bb[3] = y;
 			if (counted)
-				counts[bp_cell_of(y, grid[1], sy, ycut) * BP_GRID + bp_cell_of(x, grid[0], sx, xcut)]++;
+				counts[tdc_tp_cell_of(y, grid[1], sy, ycut) * TDC_TP_GRID + tdc_tp_cell_of(x, grid[0], sx, xcut)]++;
 			if (x > inner[0] && x < inner[2] && y > inner[1] && y < inner[3])
 				continue;
 			buf[2 * m] = x;
@@ -208,14 +231,11 @@ scan_input(bounded_run *r)
 	scan_work	sw[2];
 	pthread_t	th;
 	bool		started = false;
-	double		g[4];
 
-	r->counts = calloc((size_t) BP_GRID * BP_GRID, sizeof(uint32_t));
+	r->counts = calloc((size_t) TDC_TP_GRID * TDC_TP_GRID, sizeof(uint32_t));
 	if (r->counts == NULL)
 		die(1, "out of memory%s", "");
-	r->counted = sample_grid(r->xypath, r->n, g);
-	if (r->counted)
-		bp_grid_set(&r->grid, g);
+	r->counted = sample_grid(r);
 	np = r->counted ? 2 : 1;
 	for (int p = 0; p < np; p++)
 	{
@@ -223,7 +243,7 @@ scan_input(bounded_run *r)
 		sw[p].from = r->n / np * p;
 		sw[p].count = p == np - 1 ? r->n - sw[p].from : r->n / np;
 		sw[p].grid = r->counted ? &r->grid : NULL;
-		sw[p].counts = p == 0 ? r->counts : calloc((size_t) BP_GRID * BP_GRID, sizeof(uint32_t));
+		sw[p].counts = p == 0 ? r->counts : calloc((size_t) TDC_TP_GRID * TDC_TP_GRID, sizeof(uint32_t));
 		if (sw[p].counts == NULL)
 			die(1, "out of memory%s", "");
 	}
@@ -246,7 +266,7 @@ scan_input(bounded_run *r)
 
 		if (buf == NULL)
 			die(1, "out of memory%s", "");
-		bp_box_union(r->bb, sw[1].bb);
+		tdc_tp_box_union(r->bb, sw[1].bb);
 		memcpy(buf, r->hull, 16 * r->nhull);
 		memcpy(buf + 2 * r->nhull, sw[1].hull, 16 * sw[1].nhull);
 		free(r->hull);
@@ -254,7 +274,7 @@ scan_input(bounded_run *r)
 			die(1, "out of memory%s", "");
 		free(buf);
 		free(sw[1].hull);
-		for (size_t c = 0; c < (size_t) BP_GRID * BP_GRID; c++)
+		for (size_t c = 0; c < (size_t) TDC_TP_GRID * TDC_TP_GRID; c++)
 			r->counts[c] += sw[1].counts[c];
 		free(sw[1].counts);
 	}
@@ -270,6 +290,66 @@ scan_count(bounded_run *r)
 	source_open(&src, r->xypath, NULL);
 	while ((k = source_read(&src)) > 0)
 		for (size_t i = 0; i < k; i++)
-			r->counts[bp_cell(&r->grid, src.xy[2 * i], src.xy[2 * i + 1])]++;
+			r->counts[tdc_tp_cell(&r->grid, src.xy[2 * i], src.xy[2 * i + 1])]++;
+	source_close(&src);
+}
+
+static int
+cmp_xy(const void *a, const void *b)
+{
+	const double *p = a,
+			   *q = b;
+
+	return p[0] < q[0] ? -1 : p[0] > q[0] ? 1 : p[1] < q[1] ? -1 : p[1] > q[1];
+}
+
+/*
+ * For the refusal of a cell too dense to be a tile (bounded.c): the point
+ * with the most exact copies among the first limit points of cell (a
+ * sample), in spot, and its copies in the whole input, counted exactly in
+ * a second pass.  A read of the input, only on the way to an error.
+ */
+void
+dense_spot(bounded_run *r, int cell, size_t limit, double spot[2], size_t *copies)
+{
+	source		src;
+	size_t		k,
+				m = 0,
+				best = 0;
+	double	   *pts = malloc(16 * (limit + 1));
+
+	spot[0] = spot[1] = NAN;
+	*copies = 0;
+	if (pts == NULL)
+		die(1, "out of memory%s", "");
+	source_open(&src, r->xypath, NULL);
+	while (m < limit && (k = source_read(&src)) > 0)
+		for (size_t i = 0; i < k && m < limit; i++)
+			if (tdc_tp_cell(&r->grid, src.xy[2 * i], src.xy[2 * i + 1]) == cell)
+			{
+				pts[2 * m] = src.xy[2 * i];
+				pts[2 * m + 1] = src.xy[2 * i + 1];
+				m++;
+			}
+	source_close(&src);
+	qsort(pts, m, 16, cmp_xy);
+	for (size_t i = 0, j; i < m; i = j)
+	{
+		for (j = i + 1; j < m && cmp_xy(pts + 2 * i, pts + 2 * j) == 0; j++)
+			;
+		if (j - i > best)
+		{
+			best = j - i;
+			spot[0] = pts[2 * i];
+			spot[1] = pts[2 * i + 1];
+		}
+	}
+	free(pts);
+	if (best < 2)
+		return;
+	source_open(&src, r->xypath, NULL);
+	while ((k = source_read(&src)) > 0)
+		for (size_t i = 0; i < k; i++)
+			*copies += src.xy[2 * i] == spot[0] && src.xy[2 * i + 1] == spot[1];
 	source_close(&src);
 }

@@ -15,10 +15,20 @@
  * gathered and shrunk as a rerun's is), and is an error when it still
  * does not fit, never a silent overrun.
  */
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "bounded.h"
+
+/*
+ * How far a tile's first request reaches past the nearest cell it needs,
+ * in that cell's sides (tdc_tile_grid.rings); doubled on every rerun.  At
+ * 0.5 of the one-shot's peak on ~300,000 clustered points, 1 ring took
+ * 104 to 250 runs a set, 4 took 62 to 216, 8 took 55 to 200 with the peak
+ * within 1 % of the limit on 9 tight clusters.
+ */
+#define FIRST_RINGS	4
 
 /* A tile run's points: coordinates, z (or NULL) and each one's label. */
 typedef struct tile_points
@@ -49,8 +59,9 @@ points_free(tile_points *p)
 }
 
 /*
- * TDC_TILE_CHECK=1 (tests): the points inside K or an extra box, counted
- * from every tile file, for checking a first run's tile and halo files.
+ * TDC_TILE_CHECK=1 (tests): the points inside K, an extra box or an added
+ * cell (the hull cells), counted from every tile file, for checking a
+ * first run's tile and halo files.
  */
 static size_t
 count_known(const bounded_run *r, const double *K, size_t nextra)
@@ -80,6 +91,8 @@ count_known(const bounded_run *r, const double *K, size_t nextra)
 
 					in = p[0] >= x[0] && p[0] <= x[2] && p[1] >= x[1] && p[1] <= x[3];
 				}
+				if (!in && r->nadded > 0)
+					in = r->added[tdc_tp_cell(&r->grid, p[0], p[1])];
 				m += in;
 			}
 		mr_close(&f);
@@ -95,7 +108,7 @@ count_known(const bounded_run *r, const double *K, size_t nextra)
 static void
 gather_first(const bounded_run *r, int t, const double *K, size_t nextra, tile_points *p)
 {
-	const bp_tile *ti = &r->tiles[t];
+	const tdc_tp_tile *ti = &r->tiles[t];
 	size_t		nh = r->halo_count[t],
 				at = 0,
 				got,
@@ -152,9 +165,27 @@ gather_first(const bounded_run *r, int t, const double *K, size_t nextra, tile_p
 	}
 }
 
+/* Does tile s own one of the cells added to this tile's region? */
+static bool
+owns_added(const bounded_run *r, int s)
+{
+	const tdc_tp_tile *ti = &r->tiles[s];
+
+	for (size_t k = 0; k < r->nadded; k++)
+	{
+		int			i = (int) (r->added_list[k] % TDC_TP_GRID),
+					j = (int) (r->added_list[k] / TDC_TP_GRID);
+
+		if (i >= ti->c0 && i < ti->c1 && j >= ti->r0 && j < ti->r1)
+			return true;
+	}
+	return false;
+}
+
 /*
- * The points inside K or one of the nextra boxes of r->extra, from the
- * files of the tiles whose boxes meet them, tile t's own first and then
+ * The points inside K, one of the nextra boxes of r->extra or one of the
+ * cells a rerun added (r->added), from the files of the tiles whose boxes
+ * meet them (or that own an added cell), tile t's own first and then
  * the others in order, each file in input order: counted, or with p,
  * copied into p with their tiles' labels.  Returns their number.
  */
@@ -163,7 +194,7 @@ region_points(const bounded_run *r, int t, const double *Kr, size_t nextra, tile
 {
 	const double *extra = r->extra;
 	const double K[4] = {Kr[0], Kr[1], Kr[2], Kr[3]};
-	const bp_tile *tiles = r->tiles;
+	const tdc_tp_tile *tiles = r->tiles;
 	int			w = r->w;
 	size_t		m = 0;
 	double		rec[4 * 4096];
@@ -174,16 +205,18 @@ region_points(const bounded_run *r, int t, const double *Kr, size_t nextra, tile
 		mreader		f;
 		size_t		got,
 					nx;
-		bool		meets = bp_box_meets(tiles[s].bb, K);
+		bool		meets = tdc_tp_box_meets(tiles[s].bb, K);
 
 		for (size_t e = 0; e < nextra && !meets; e++)
-			meets = bp_box_meets(tiles[s].bb, extra + 4 * e);
+			meets = tdc_tp_box_meets(tiles[s].bb, extra + 4 * e);
+		if (!meets && r->nadded > 0)
+			meets = owns_added(r, s);
 		if ((u >= 0 && u == t) || tiles[s].count == 0 || !meets)
 			continue;
 		/* only the bands that meet this file's box need testing */
 		nx = 0;
 		for (size_t e = 0; e < nextra; e++)
-			if (bp_box_meets(tiles[s].bb, extra + 4 * e))
+			if (tdc_tp_box_meets(tiles[s].bb, extra + 4 * e))
 				r->xs[nx++] = extra + 4 * e;
 		mr_open(&f, "tile", s, r->nparts);
 		while ((got = mr_read(&f, rec, 8 * (size_t) w, 4096)) > 0)
@@ -199,6 +232,8 @@ region_points(const bounded_run *r, int t, const double *Kr, size_t nextra, tile
 
 					in = q[0] >= x[0] && q[0] <= x[2] && q[1] >= x[1] && q[1] <= x[3];
 				}
+				if (!in && r->nadded > 0)
+					in = r->added[tdc_tp_cell(&r->grid, q[0], q[1])];
 				if (!in)
 					continue;
 				if (p)
@@ -233,24 +268,162 @@ gather_region(const bounded_run *r, int t, double K[4], const double Kmin[4], si
 	{
 		m = region_points(r, t, K, nextra, NULL);
 		if (getenv("TDC_TILE_DEBUG"))
-			fprintf(stderr, "tile %d/%d: own %zu, K %g %g %g %g: %zu points\n", t, r->nt,
-					r->tiles[t].count, K[0], K[1], K[2], K[3], m);
-		if (bp_tile_bytes(m, r->opt, r->has_z) > r->budget && shrinks < 4 &&
+			fprintf(stderr, "tile %d/%d: own %zu, K %g %g %g %g, %zu cells added: %zu points\n", t, r->nt,
+					r->tiles[t].count, K[0], K[1], K[2], K[3], r->nadded, m);
+		if (tdc_tp_tile_bytes(m, r->opt, POINT_BYTES(r)) > r->budget && shrinks < 4 &&
 			memcmp(K, Kmin, 4 * sizeof(double)) != 0)
-			bp_shrink_known(K, Kmin, shrinks);
+			tdc_tp_shrink_known(K, Kmin, shrinks);
 		else
 			break;
 	}
-	if (bp_tile_bytes(m, r->opt, r->has_z) > r->budget)
+	if (tdc_tp_tile_bytes(m, r->opt, POINT_BYTES(r)) > r->budget)
 	{
 		char		msg[160];
 
-		snprintf(msg, sizeof(msg), "tile %d needs %zu points with its halo, about %zu MB",
-				 t, m, bp_tile_bytes(m, r->opt, r->has_z) >> 20);
-		die(1, "%s: more than --max-memory allows (the data is too clustered or the limit too small)", msg);
+		snprintf(msg, sizeof(msg), "tile %d of %d (%zu own points) needs %zu points with the region it must know, "
+				 "about %zu MB, more than --max-memory %zu", t, r->nt, r->tiles[t].count, m,
+				 (tdc_tp_tile_bytes(m, r->opt, POINT_BYTES(r)) >> 20) + 1, r->budget >> 20);
+		die(1, "%s: the data is too clustered around this tile for the limit", msg);
 	}
 	points_alloc(p, m, r->has_z);
 	region_points(r, t, K, nextra, p);
+}
+
+/*
+ * The states of the grid's cells for a run that knows K, the extra boxes
+ * and the added cells: EMPTY where the input has no point, KNOWN for the
+ * added cells and the cells whose closed box lies inside K (every point
+ * there is in K, hence passed), OTHER elsewhere.  The finality check then
+ * takes a disk over empty cells as known, and names the OTHER cells it
+ * needs (tdc_tile_grid in tdc.h).
+ */
+static void
+cell_states(bounded_run *r, const double K[4])
+{
+	const double *xc = r->grid.xcut,
+			   *yc = r->grid.ycut;
+
+	for (int j = 0; j < TDC_TP_GRID; j++)
+	{
+		bool		row_in = yc[j] >= K[1] && yc[j + 1] <= K[3];
+
+		for (int i = 0; i < TDC_TP_GRID; i++)
+		{
+			size_t		c = (size_t) j * TDC_TP_GRID + i;
+
+			r->cellst[c] = r->counts[c] == 0 ? TDC_TILE_CELL_EMPTY :
+				r->added[c] || (row_in && xc[i] >= K[0] && xc[i + 1] <= K[2]) ?
+				TDC_TILE_CELL_KNOWN : TDC_TILE_CELL_OTHER;
+		}
+	}
+}
+
+/* The cells a run asked for (or the first region's hull cells), added to the tile's region. */
+static void
+add_cells(bounded_run *r, const uint32_t *cells, size_t ncells)
+{
+	if (r->nadded + ncells > r->added_cap)
+	{
+		size_t		cap = (r->nadded + ncells) * 2;
+		uint32_t   *a = realloc(r->added_list, cap * sizeof(uint32_t));
+
+		if (a == NULL)
+			die(1, "out of memory%s", "");
+		r->added_list = a;
+		r->added_cap = cap;
+	}
+	for (size_t k = 0; k < ncells; k++)
+		if (!r->added[cells[k]])
+		{
+			r->added[cells[k]] = 1;
+			r->added_list[r->nadded++] = cells[k];
+		}
+}
+
+/* The distance of a cell's box from a tile's cell box (qsort_r's context). */
+static double
+cell_gap(const bounded_run *r, const double *tb, uint32_t c)
+{
+	int			i = (int) (c % TDC_TP_GRID),
+				j = (int) (c / TDC_TP_GRID);
+	double		dx = fmax(fmax(r->grid.xcut[i] - tb[2], tb[0] - r->grid.xcut[i + 1]), 0),
+				dy = fmax(fmax(r->grid.ycut[j] - tb[3], tb[1] - r->grid.ycut[j + 1]), 0);
+
+	return dx * dx + dy * dy;
+}
+
+typedef struct gap_ctx
+{
+	const bounded_run *r;
+	double		tb[4];
+} gap_ctx;
+
+static int
+cmp_gap(const void *a, const void *b, void *arg)
+{
+	const gap_ctx *g = arg;
+	double		u = cell_gap(g->r, g->tb, *(const uint32_t *) a),
+				v = cell_gap(g->r, g->tb, *(const uint32_t *) b);
+
+	return u < v ? -1 : u > v;
+}
+
+/*
+ * The cells a rerun asked for (ncells of them, in cells[], reordered
+ * here), added to tile t's region of m points as far as the budget
+ * allows: when all of them would not fit (their points by the counts),
+ * those nearest to the tile's cell box first, and the next run asks again
+ * for what it still needs.  A request reaches about the distance of the
+ * nearest unknown points and a little more (tile_cells.c); between tight
+ * clusters a little more is a whole cluster, which only part of the tile's
+ * stars need.  Returns the number of cells added: 0 when not even the
+ * nearest fits.
+ */
+static size_t
+add_cells_fit(bounded_run *r, int t, uint32_t *cells, size_t ncells, size_t m)
+{
+	size_t		more = 0,
+				fit,
+				lo = 0,
+				hi = r->n + 1,
+				k,
+				n0 = r->nadded;
+	gap_ctx		g = {r, {0}};
+
+	for (k = 0; k < ncells; k++)
+		more += r->added[cells[k]] ? 0 : r->counts[cells[k]];
+	/*
+	 * the most points a run may hold: the last m with tdc_tp_tile_bytes
+	 * within 7/8 of the budget (at the whole budget, 9 tight clusters at
+	 * 18 MB peaked at 17.8 MB)
+	 */
+	while (lo + 1 < hi)
+	{
+		size_t		mid = lo + (hi - lo) / 2;
+
+		if (tdc_tp_tile_bytes(mid, r->opt, POINT_BYTES(r)) <= r->budget / 8 * 7)
+			lo = mid;
+		else
+			hi = mid;
+	}
+	fit = lo;
+	if (m + more <= fit)
+	{
+		add_cells(r, cells, ncells);
+		return r->nadded - n0;
+	}
+	tdc_tp_least_known(&r->tiles[t], &r->grid, g.tb);
+	qsort_r(cells, ncells, sizeof(uint32_t), cmp_gap, &g);
+	for (k = 0, more = 0; k < ncells; k++)
+	{
+		size_t		c = r->added[cells[k]] ? 0 : r->counts[cells[k]];
+
+		if (m + more + c > fit)
+			break;
+		more += c;
+	}
+	add_cells(r, cells, k);
+	return r->nadded - n0;
 }
 
 /*
@@ -317,15 +490,15 @@ tile_write(bounded_run *r, int t, const tile_points *p, const tdc_tile_result *r
 /*
  * Tile t, run until its run is final, its triangles then written: each
  * global triangle it owns once, whatever the runs before.  Its known
- * region starts as the policy's first region (bp_first_known) and only
- * grows (bp_grow_bands, then bp_grow_known) between runs, except for the
+ * region starts as the policy's first region (first_region) and only
+ * grows (tdc_tp_grow_bands, then tdc_tp_grow_known) between runs, except for the
  * shrinking back of a region that does not fit.  A tile that owns no
  * point has no triangle.
  */
 void
 tile_run(bounded_run *r, int t)
 {
-	bp_tile    *ti = &r->tiles[t];
+	tdc_tp_tile    *ti = &r->tiles[t];
 	double		K[4],
 				Kmin[4],		/* the least K this round may shrink back to */
 				h;
@@ -333,11 +506,17 @@ tile_run(bounded_run *r, int t)
 	tdc_tile_spec spec = {0};
 	bool		first = r->use_halo;	/* the first run reads the tile and halo files */
 
+	tdc_tile_grid tg = {TDC_TP_GRID, TDC_TP_GRID, r->grid.xcut, r->grid.ycut, r->cellst, FIRST_RINGS};
+
 	if (ti->count == 0)
 		return;					/* owns nothing */
-	memset(r->inband, 0, r->nhull + 1);
-	bp_first_known(ti, &r->grid, r->bands, r->nhull, K, &h, r->inband);
-	bp_least_known(ti, &r->grid, Kmin);
+	/* no cells added yet */
+	for (size_t k = 0; k < r->nadded; k++)
+		r->added[r->added_list[k]] = 0;
+	r->nadded = 0;
+	first_region(r, t, K, &h);
+	add_cells(r, r->hcells, r->nhcells);
+	tdc_tp_least_known(ti, &r->grid, Kmin);
 	for (size_t i = 0; r->nhull > 1 && i < r->nhull; i++)
 		if (r->inband[i])
 			memcpy(r->extra + 4 * nextra++, r->bands + 4 * i, 32);
@@ -346,6 +525,7 @@ tile_run(bounded_run *r, int t)
 	spec.self = t;
 	spec.hull = r->hull;
 	spec.nhull = r->nhull;
+	spec.grid = r->use_cells ? &tg : NULL;
 	for (;;)
 	{
 		tile_points p = {0};
@@ -353,7 +533,7 @@ tile_run(bounded_run *r, int t)
 		tdc_job    *job;
 		double		t0 = now_s();
 
-		if (first && bp_tile_bytes(ti->count + r->halo_count[t], r->opt, r->has_z) > r->budget)
+		if (first && tdc_tp_tile_bytes(ti->count + r->halo_count[t], r->opt, POINT_BYTES(r)) > r->budget)
 			first = false;
 		if (first)
 		{
@@ -363,6 +543,8 @@ tile_run(bounded_run *r, int t)
 		else
 			gather_region(r, t, K, Kmin, nextra, &p);
 		memcpy(spec.known, K, sizeof(K));
+		if (r->use_cells)
+			cell_states(r, K);
 		spec.tile = p.ql;
 		r->st->runs++;
 		r->st->gather += now_s() - t0;
@@ -371,7 +553,27 @@ tile_run(bounded_run *r, int t)
 		tile_account(r, job);
 		if (res.final)
 			tile_write(r, t, &p, &res);
-		else if (bp_grow_bands(r->bands, r->nhull, res.need, r->inband, r->extra, &nextra) > 0)
+		else if (res.nneed_cells > 0)
+		{
+			/*
+			 * the same K with the cells the check named, as many as fit;
+			 * the next request reaches twice as far past the nearest cell
+			 */
+			tg.rings = fmin(2 * tg.rings, 4096);
+			if (add_cells_fit(r, t, res.need_cells, res.nneed_cells, p.m) == 0)
+			{
+				char		msg[160];
+
+				snprintf(msg, sizeof(msg), "tile %d of %d (%zu own points) holds %zu points and needs "
+						 "more, beyond --max-memory %zu", t, r->nt, ti->count, p.m, r->budget >> 20);
+				die(1, "%s: the data is too clustered around this tile for the limit", msg);
+			}
+			tdc_tile_result_free(&res);
+			points_free(&p);
+			continue;
+		}
+		else if (!r->use_cells &&
+				 tdc_tp_grow_bands(r->bands, r->nhull, res.need, r->inband, r->extra, &nextra) > 0)
 		{
 			/* the same K with more bands */
 			spec.nextra = nextra;
@@ -380,7 +582,7 @@ tile_run(bounded_run *r, int t)
 			continue;
 		}
 		else
-			bp_grow_known(K, Kmin, res.need, h);
+			tdc_tp_grow_known(K, Kmin, res.need, h);
 		tdc_tile_result_free(&res);
 		points_free(&p);
 		r->st->write += now_s() - t0;

@@ -343,6 +343,37 @@ extern void tdc_circumcenter(const double *a, const double *b, const double *c,
  * tile number, a rank of a tile column value); the own points of a tile
  * must lie inside its K.  No tolerance (options.tolerance must be 0).
  */
+/*
+ * Optional: a grid of cells over P that tells the check where P has no
+ * point and which cells' points the caller passes whole.  Every point of P
+ * lies in the closed box of its cell (cut[i] <= v < cut[i + 1] decides
+ * the cell; the outer cuts reach P's box).  A cell is TDC_TILE_CELL_EMPTY
+ * when it holds no point of P (known for free: a void between clusters, the
+ * sea beside a coast), KNOWN when every point of P in it is passed, OTHER
+ * otherwise.  With a grid a disk or a hull edge is also final when the
+ * cells it meets are EMPTY or KNOWN, and a tile that is not final names the
+ * OTHER cells it needs (need_cells): the next run adds their points, so the
+ * known region grows by the cells that matter, not by a box around them.
+ * A request names, for each disk or edge, the OTHER cells within the
+ * least distance to them (from the own vertices, from the edge) plus
+ * rings of the nearest cell's smaller side (0 counts as 1): a caller whose
+ * tile keeps asking doubles it from run to run, so that a walk along a
+ * rim of cells takes a few runs, not one run a cell.
+ */
+typedef struct tdc_tile_grid
+{
+	int			nx,
+				ny;
+	const double *xcut;			/* nx + 1 cell sides in x, non-decreasing */
+	const double *ycut;			/* ny + 1 in y */
+	const uint8_t *cell;		/* nx * ny states, row by row (row j: ycut[j] .. ycut[j + 1]) */
+	double		rings;			/* how far a request reaches past the nearest cell, in its sides */
+} tdc_tile_grid;
+
+#define TDC_TILE_CELL_EMPTY		0
+#define TDC_TILE_CELL_KNOWN		1
+#define TDC_TILE_CELL_OTHER		2
+
 typedef struct tdc_tile_spec
 {
 	const int64_t *tile;		/* n labels: the tile owning each point */
@@ -352,6 +383,7 @@ typedef struct tdc_tile_spec
 	size_t		nextra;			/* too: thin bands along long edges of C, say (may be 0) */
 	const double *hull;			/* convex polygon C containing P: nhull x,y vertices */
 	size_t		nhull;			/* (the convex hull of P, or the 4 corners of P's bounding box) */
+	const tdc_tile_grid *grid;	/* NULL, or the cells above */
 	int			test_weaken;	/* tests only: 0, TDC_TILE_WEAKEN_DISKS or _BLOCKS */
 } tdc_tile_spec;
 
@@ -372,6 +404,8 @@ typedef struct tdc_tile_result
 	size_t		unfinal;		/* triangles and hull edges at own sites found not final */
 	size_t		deep;			/* triangles at own sites found final from block counts
 								 * alone (a deep vertex, see tile_final.c), without a disk */
+	uint32_t   *need_cells;		/* not final, with a grid: the OTHER cells (j * nx + i) */
+	size_t		nneed_cells;	/* the next run needs, sorted; 0: grow to need instead */
 } tdc_tile_result;
 
 /*

@@ -30,6 +30,7 @@
 #include <string.h>
 
 #include "mesh_view.h"
+#include "tile_cells.h"
 
 #define EPS		0x1p-53
 
@@ -195,6 +196,8 @@ typedef struct tile_ctx
 	bool		want_all;		/* a request we could not bound: ask for B */
 	const double **known_list;	/* K, then the extra boxes */
 	bool		skip_checks;	/* K covers B: only collect the triangles */
+	const tdc_cells *cells;		/* the caller's grid, or NULL */
+	tdc_cell_list cl;			/* the OTHER cells asked for (each thread its own) */
 } tile_ctx;
 
 static void
@@ -262,6 +265,13 @@ box_known(const tile_ctx *cx, const double *box)
 	if (cx->spec->nextra == 0)
 		return false;
 	return box_covered(r, cx->known_list, cx->spec->nextra + 1, 0);
+}
+
+/* box_known for the cells' walks (tile_cells.c). */
+static bool
+cell_covered(const void *arg, const double box[4])
+{
+	return box_known((const tile_ctx *) arg, box);
 }
 
 /*
@@ -382,6 +392,9 @@ hull_edge_final(tile_ctx *cx, const double *a, const double *b)
 
 			if (!left_or_on(a, b, p))
 			{
+				/* with a grid: known if no cell beyond it may hold a point Q lacks */
+				if (cx->cells && tdc_cells_beyond(cx->cells, a, b, cell_covered, cx, &cx->cl))
+					return true;
 				hull_edge_request(cx, a, b, rq, best);
 				return false;
 			}
@@ -448,13 +461,13 @@ segment_box(const double *a, const double *b, const double *c, double box[4])
  * Lemma 1 (docs/design/tiles.md; the finalization rule of Isenburg, Liu,
  * Shewchuk, Snoeyink 2006) for triangle v[0..2] (counter-clockwise) of
  * T(Q); glob[k] says whether edge v[k] -> v[k+1] is a hull edge of T(Q)
- * certified global.
+ * certified global, own[k] whether v[k] is an own site (one is).
  * The disk's box is tried first; if it is not known, the box of the disk's
  * part inside C (clipped by C's edges and the certified hull edges, whose
  * lines support C) is tried.
  */
 static bool
-triangle_final(tile_ctx *cx, const double *p[3], const bool glob[3])
+triangle_final(tile_ctx *cx, const double *p[3], const bool glob[3], const bool own[3])
 {
 	const tdc_tile_spec *sp = cx->spec;
 	double		box[4],
@@ -479,6 +492,22 @@ triangle_final(tile_ctx *cx, const double *p[3], const bool glob[3])
 		clip_box(disk, sp->hull + 2 * i, sp->hull + 2 * ((i + 1) % sp->nhull), box);
 	if (box_known(cx, box))
 		return true;
+	/* with a grid: known if every cell the disk meets is empty or passed whole */
+	if (cx->cells)
+	{
+		/* its own vertices: their stars need the points near them first */
+		double		near[6];
+		int			nnear = 0;
+
+		for (int k = 0; k < 3; k++)
+			if (own[k])
+			{
+				near[2 * nnear] = p[k][0];
+				near[2 * nnear++ + 1] = p[k][1];
+			}
+		if (tdc_cells_disk(cx->cells, disk, box, near, nnear, cell_covered, cx, &cx->cl))
+			return true;
+	}
 	request(cx, box);
 	return false;
 }
@@ -681,7 +710,8 @@ check_range(tile_work *w)
 					v[3],
 					hh[3];
 		const double *p[3];
-		bool		glob[3];
+		bool		glob[3],
+					own[3];
 		uint8_t		fl;
 
 #ifdef __GNUC__
@@ -787,7 +817,10 @@ check_range(tile_work *w)
 					glob[k] = left_or_on(p[k], q, spec->hull + 2 * i);
 			}
 		}
-		if (!triangle_final(&w->cx, p, glob))
+		own[0] = flag[v[0]] & SITE_OWN;
+		own[1] = flag[v[1]] & SITE_OWN;
+		own[2] = flag[v[2]] & SITE_OWN;
+		if (!triangle_final(&w->cx, p, glob, own))
 			w->unfinal++;
 	}
 }
@@ -845,6 +878,7 @@ tile_finish(const tdc_mesh_view *mesh, const tdc_tile_spec *spec, tdc_tile_resul
 	uint8_t    *flag = NULL;		/* per site: SITE_OWN, SITE_DEEP */
 	const double **known_list = NULL;
 	tile_work  *tw = NULL;
+	tdc_cells	cells = {0};
 	int			nthreads;
 	bool		covers;
 	size_t		nsites_own = 0;
@@ -853,7 +887,8 @@ tile_finish(const tdc_mesh_view *mesh, const tdc_tile_spec *spec, tdc_tile_resul
 	if (err && errlen)
 		err[0] = '\0';
 #define FAIL(code, ...) do { if (err && errlen) snprintf(err, errlen, __VA_ARGS__); \
-		free(lab); free(flag); free(known_list); free(tw); tdc_tile_result_free(res); return (code); } while (0)
+		free(lab); free(flag); free(known_list); free(tw); tdc_cells_free(&cells); \
+		tdc_tile_result_free(res); return (code); } while (0)
 
 	if (mesh->opt->tolerance > 0)
 		FAIL(TDC_EINVAL, "a tiled triangulation cannot use a tolerance: which points it merges depends on all of them");
@@ -864,8 +899,18 @@ tile_finish(const tdc_mesh_view *mesh, const tdc_tile_spec *spec, tdc_tile_resul
 	if (mesh->n > 0 && spec->tile == NULL)
 		FAIL(TDC_EINVAL, "no tile labels given");
 
+	memset(&cx, 0, sizeof(cx));
 	cx.spec = spec;
 	cx.want_all = false;
+	if (spec->grid)
+	{
+		if (spec->grid->nx < 1 || spec->grid->ny < 1 ||
+			(size_t) spec->grid->nx * spec->grid->ny > UINT32_MAX)
+			FAIL(TDC_EINVAL, "the tile grid has no cells or too many");
+		if (!tdc_cells_init(&cells, spec->grid))
+			FAIL(TDC_ENOMEM, "out of memory");
+		cx.cells = &cells;
+	}
 	cx.B[0] = cx.B[1] = INFINITY;
 	cx.B[2] = cx.B[3] = -INFINITY;
 	for (size_t i = 0; i < spec->nhull; i++)
@@ -923,9 +968,11 @@ tile_finish(const tdc_mesh_view *mesh, const tdc_tile_spec *spec, tdc_tile_resul
 
 				in_extra = p[0] >= x[0] && p[0] <= x[2] && p[1] >= x[1] && p[1] <= x[3];
 			}
+			if (!in_extra && cx.cells && spec->tile[i] != spec->self)
+				in_extra = tdc_cells_point_known(cx.cells, p);
 			if (!in_extra)
 				FAIL(TDC_EINVAL, "point %zu (%.17g %.17g) lies outside the known box%s", i, p[0], p[1],
-					 spec->tile[i] == spec->self ? " (an own point must lie in K)" : " and the extra boxes");
+					 spec->tile[i] == spec->self ?  " (an own point must lie in K)" : " and the extra boxes and known cells");
 		}
 		if (!(p[0] >= cx.B[0] && p[0] <= cx.B[2] && p[1] >= cx.B[1] && p[1] <= cx.B[3]))
 			FAIL(TDC_EINVAL, "point %zu (%.17g %.17g) lies outside the extent polygon", i, p[0], p[1]);
@@ -974,6 +1021,33 @@ tile_finish(const tdc_mesh_view *mesh, const tdc_tile_spec *spec, tdc_tile_resul
 		res->deep += tw[w].deep;
 		box_union(cx.need, tw[w].cx.need);
 		cx.want_all |= tw[w].cx.want_all;
+	}
+	if (cx.cells)
+	{
+		tdc_cell_list *lists = malloc(sizeof(tdc_cell_list) * nthreads);
+		bool		ok = lists != NULL;
+
+		for (int w = 0; w < nthreads; w++)
+		{
+			if (lists)
+				lists[w] = tw[w].cx.cl;
+			else
+				free(tw[w].cx.cl.v);
+			memset(&tw[w].cx.cl, 0, sizeof(tw[w].cx.cl));
+		}
+		if (ok && res->unfinal > 0)
+			ok = tdc_cells_merge(&cells, lists, nthreads, &res->need_cells, &res->nneed_cells);
+		else
+			for (int w = 0; lists && w < nthreads; w++)
+				free(lists[w].v);
+		free(lists);
+		tdc_cells_free(&cells);
+		if (!ok)
+		{
+			for (int w = 0; w < nthreads; w++)
+				free(tw[w].tri);
+			FAIL(TDC_ENOMEM, "out of memory");
+		}
 	}
 	if (res->unfinal > 0)
 	{
@@ -1060,4 +1134,7 @@ tdc_tile_result_free(tdc_tile_result *res)
 	free(res->tri);
 	res->tri = NULL;
 	res->ntri = 0;
+	free(res->need_cells);
+	res->need_cells = NULL;
+	res->nneed_cells = 0;
 }
