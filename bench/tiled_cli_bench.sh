@@ -18,6 +18,12 @@
 # the same, whether the peak RSS stayed within 2000 MB and whether the
 # triangle counts agree, and deletes the 1.6 GB input.
 #
+# Then the same on clustered points (gen_points clusters64: 64 Gaussian
+# clusters of widths 0.1 to 20 in a 1000 square, the shape on which a grid of
+# equal tiles fails), one-shot against each limit of BENCH_TILED_CLUSTERED,
+# the runs alternating as above: the adaptive tiles must hold the limit
+# there too, with the one-shot's triangle count.
+#
 # The report, docs/benchmarks/tiled.md, starts with bench_publish's header
 # (date, commit, machine, load).  On a loaded machine the ratios mean more
 # than the times.
@@ -37,6 +43,8 @@
 #                              input, 1.6 GB more for the tiles, and ~11 GB of
 #                              free memory for its one-shot run, skipped if not)
 #   BENCH_TILED_100M_LIMIT=2000
+#   BENCH_TILED_CLUSTERED="300"   --max-memory values (MB) for the clusters64
+#                              case of BENCH_TILED_N points ("" skips it)
 #   BENCH_TIMEOUT=1800         seconds per single run
 # Output: stdout, build/bench/tiled_cli.txt (the same), tiled_cli_runs.csv
 # (every run), and docs/benchmarks/tiled.md.
@@ -54,6 +62,7 @@ OUTPUT=${BENCH_TILED_OUTPUT:-none}
 TMPD=${BENCH_TILED_TMP:-${TMPDIR:-/tmp}}
 BIG=${BENCH_TILED_100M:-0}
 BIG_LIMIT=${BENCH_TILED_100M_LIMIT:-2000}
+CLIMITS=${BENCH_TILED_CLUSTERED-300}
 TMO=${BENCH_TIMEOUT:-1800}
 
 case $OUTPUT in none | text | null) ;; *) die "BENCH_TILED_OUTPUT must be none, text or null" ;; esac
@@ -106,6 +115,9 @@ run_one() {
 	echo "$kind,$n,$limit,$round,$wall,$cpu,$rss$f" >> "$RUNS"
 }
 
+# the run kind the others are compared with (table, paired)
+base=oneshot
+
 # col KIND N FIELD: median of a column of $RUNS for that kind and n
 col() {
 	awk -F, -v k="$1" -v n="$2" -v f="$3" 'NR == 1 { for (i = 1; i <= NF; i++) c[$i] = i; next }
@@ -124,8 +136,8 @@ colmin() {
 }
 # paired KIND N: median over rounds of (KIND's wall / the one-shot wall of the same round)
 paired() {
-	awk -F, -v k="$1" -v n="$2" 'NR == 1 { for (i = 1; i <= NF; i++) c[$i] = i; next }
-		$2 == n && $1 == "oneshot" { o[$c["round"]] = $c["wall"] }
+	awk -F, -v k="$1" -v n="$2" -v b="$base" 'NR == 1 { for (i = 1; i <= NF; i++) c[$i] = i; next }
+		$2 == n && $1 == b { o[$c["round"]] = $c["wall"] }
 		$2 == n && $1 == k { t[$c["round"]] = $c["wall"] }
 		END { for (r in t) if (o[r] > 0) printf "%.4f\n", t[r] / o[r] }' "$RUNS" | median |
 		awk '$1 != "" { printf "%.2fx", $1 }'
@@ -136,9 +148,9 @@ table() {
 	local n=$1
 	shift
 	local w0 c0 tri0
-	w0=$(col oneshot "$n" wall)
-	c0=$(col oneshot "$n" cpu)
-	tri0=$(distinct oneshot "$n" triangles)
+	w0=$(col "$base" "$n" wall)
+	c0=$(col "$base" "$n" cpu)
+	tri0=$(distinct "$base" "$n" triangles)
 	printf '%-16s %9s %9s %9s %6s %6s %10s %12s %9s %9s  %s\n' run wall_s cpu_s rss_mb tiles runs halo triangles wall/1 cpu/1 same_count
 	local k
 	for k in "$@"; do
@@ -156,14 +168,14 @@ table() {
 	done
 	echo "wall/1 and cpu/1: ratios of the medians.  Less sensitive to a load that changes during the run:"
 	for k in "$@"; do
-		[ "$k" = oneshot ] && continue
+		[ "$k" = "$base" ] && continue
 		printf '  %-14s median of the per-round ratios %s; best runs %s s vs %s s one-shot (%s)\n' "$k" \
-			"$(paired "$k" "$n")" "$(colmin "$k" "$n" wall)" "$(colmin oneshot "$n" wall)" \
-			"$(ratio "$(colmin "$k" "$n" wall)" "$(colmin oneshot "$n" wall)")"
+			"$(paired "$k" "$n")" "$(colmin "$k" "$n" wall)" "$(colmin "$base" "$n" wall)" \
+			"$(ratio "$(colmin "$k" "$n" wall)" "$(colmin "$base" "$n" wall)")"
 	done
 	echo "tiled phases (medians, wall s): scan = box, hull, counts; bin = tile files; gather = reading tiles back; engine = tdc_triangulate; finish = tdc_tile_finish"
 	for k in "$@"; do
-		[ "$k" = oneshot ] && continue
+		[ "$k" = "$base" ] && continue
 		printf '  %-14s' "$k"
 		local p
 		for p in scan bin gather engine finish write; do printf ' %s=%s' $p "$(col "$k" "$n" $p)"; done
@@ -211,6 +223,25 @@ if [ "$BIG" = 1 ]; then
 		rss=$(col "mm$BIG_LIMIT" "$BN" rss_mb)
 		[ -z "$rss" ] || echo "peak RSS of --max-memory $BIG_LIMIT: $rss MB, $(awk -v r="$rss" -v l="$BIG_LIMIT" 'BEGIN { print (r <= l ? "within" : "OVER") }') the limit; triangles $(distinct "mm$BIG_LIMIT" "$BN" triangles) (2n - 2 - h for n distinct points with h on the hull)"
 	fi
+fi
+
+if [ -n "$CLIMITS" ]; then
+	CIN=$(ensure_points clusters64 "$NLABEL")
+	base=c_oneshot
+	ckinds=(c_oneshot)
+	for l in $CLIMITS; do ckinds+=("c_mm$l"); done
+	log "$N clustered points ($CIN): ${ckinds[*]}, $REPS rounds"
+	for ((r = 1; r <= REPS; r++)); do
+		run_one c_oneshot "$N" "$CIN" 0 "$r"
+		for l in $CLIMITS; do run_one "c_mm$l" "$N" "$CIN" "$l" "$r"; done
+	done
+	echo
+	echo "== $N clustered points (clusters64: 64 Gaussian clusters, widths 0.1 to 20, in a 1000 square), $REPS rounds (c_mmX = --max-memory X)"
+	table "$N" "${ckinds[@]}"
+	for l in $CLIMITS; do
+		rss=$(awk -F, -v k="c_mm$l" -v n="$N" '$1 == k && $2 == n && $7 + 0 > m { m = $7 + 0 } END { print m }' "$RUNS")
+		[ -z "$rss" ] || echo "largest peak RSS of --max-memory $l: $rss MB, $(awk -v r="$rss" -v l="$l" 'BEGIN { print (r <= l ? "within" : "OVER") }') the limit"
+	done
 fi
 exec >&-
 wait "$TEE_PID" 2>/dev/null || true
