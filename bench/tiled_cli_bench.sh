@@ -183,15 +183,24 @@ table() {
 	done
 }
 
+# rounds PREFIX INPUT WHAT LIMITS...: REPS alternating rounds of the one-shot
+# run (kind PREFIXoneshot) and each limit (PREFIXmmX); kinds := the run kinds
+rounds() {
+	local p=$1 in=$2 what=$3 l r
+	shift 3
+	kinds=("${p}oneshot")
+	for l in "$@"; do kinds+=("${p}mm$l"); done
+	log "$N $what points ($in): ${kinds[*]}, $REPS rounds"
+	for ((r = 1; r <= REPS; r++)); do
+		run_one "${p}oneshot" "$N" "$in" 0 "$r"
+		for l in "$@"; do run_one "${p}mm$l" "$N" "$in" "$l" "$r"; done
+	done
+}
+
 N=$(n_of "$NLABEL")
 IN=$(ensure_points uniform "$NLABEL")
-kinds=(oneshot)
-for l in $LIMITS; do kinds+=("mm$l"); done
-log "$N uniform points ($IN): ${kinds[*]}, $REPS rounds"
-for ((r = 1; r <= REPS; r++)); do
-	run_one oneshot "$N" "$IN" 0 "$r"
-	for l in $LIMITS; do run_one "mm$l" "$N" "$IN" "$l" "$r"; done
-done
+# shellcheck disable=SC2086
+rounds "" "$IN" uniform $LIMITS
 echo
 echo "== $N uniform points, $REPS rounds (mmX = --max-memory X)"
 table "$N" "${kinds[@]}"
@@ -228,16 +237,11 @@ fi
 if [ -n "$CLIMITS" ]; then
 	CIN=$(ensure_points clusters64 "$NLABEL")
 	base=c_oneshot
-	ckinds=(c_oneshot)
-	for l in $CLIMITS; do ckinds+=("c_mm$l"); done
-	log "$N clustered points ($CIN): ${ckinds[*]}, $REPS rounds"
-	for ((r = 1; r <= REPS; r++)); do
-		run_one c_oneshot "$N" "$CIN" 0 "$r"
-		for l in $CLIMITS; do run_one "c_mm$l" "$N" "$CIN" "$l" "$r"; done
-	done
+	# shellcheck disable=SC2086
+	rounds c_ "$CIN" clustered $CLIMITS
 	echo
 	echo "== $N clustered points (clusters64: 64 Gaussian clusters, widths 0.1 to 20, in a 1000 square), $REPS rounds (c_mmX = --max-memory X)"
-	table "$N" "${ckinds[@]}"
+	table "$N" "${kinds[@]}"
 	for l in $CLIMITS; do
 		rss=$(awk -F, -v k="c_mm$l" -v n="$N" '$1 == k && $2 == n && $7 + 0 > m { m = $7 + 0 } END { print m }' "$RUNS")
 		[ -z "$rss" ] || echo "largest peak RSS of --max-memory $l: $rss MB, $(awk -v r="$rss" -v l="$l" 'BEGIN { print (r <= l ? "within" : "OVER") }') the limit"
