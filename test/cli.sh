@@ -153,9 +153,17 @@ check "--max-memory: NaN: temporary files removed" "[ -z \"\$(ls -A $tmp/tiles)\
 perl -e 'srand(5); for $i (1..270000) { printf "%.17g %.17g %.17g\n", rand(100), rand(100), rand(9);
   printf "%d %d %d\n", int(rand(60)), int(rand(60)), 50 + int(rand(9)) if $i % 90 == 0 }' > "$tmp/z3.txt"
 $TDC -o "$tmp/z31.out" "$tmp/z3.txt"
-TDC_TILE_CHECK=1 $TDC --max-memory 10 --tmpdir "$tmp/tiles" -o "$tmp/z32.out" --stats "$tmp/z3.txt" 2> "$tmp/z32.err"
+TDC_TILE_CHECK=1 $TDC --max-memory 16 --tmpdir "$tmp/tiles" -o "$tmp/z32.out" --stats "$tmp/z3.txt" 2> "$tmp/z32.err"
+z_rss=$(sed -n 's/.*peak_rss_mb=\([0-9.]*\).*/\1/p' "$tmp/z32.err")
 check "--max-memory, text with z: tiled" "grep -qE ' tiles=([2-9]|[1-9][0-9]+) ' $tmp/z32.err"
 check "--max-memory, text with z: same triangles and z" "cmp -s <(canon_d $tmp/z31.out 3) <(canon_d $tmp/z32.out 3)"
+check "--max-memory 16, text with z: peak RSS ${z_rss:-?} MB under the limit" "awk 'BEGIN { exit !(\"${z_rss:-999999}\" + 0 < 16) }'"
+# a limit below what the run holds before its first tile (read buffers, the
+# counting grid, the halo index: some 12 MB here) is refused, not overrun
+# (it peaked at 12.6 MB under --max-memory 10 before)
+expect_error "--max-memory 10, text with z: below the run's own buffers" $TDC --max-memory 10 --tmpdir "$tmp/tiles" "$tmp/z3.txt"
+check "--max-memory 10: the message says what it held" "grep -qE 'below the [0-9]+ MB this run held before its first tile' $tmp/e.err"
+check "--max-memory 10: temporary files removed" "[ -z \"\$(ls -A $tmp/tiles)\" ]"
 
 # adaptive tiles on clustered data (issue 28): under half of what the
 # one-shot run needs, the same triangle set, the peak under the limit, in

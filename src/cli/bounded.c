@@ -48,9 +48,6 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
-#ifdef __GLIBC__
-#include <malloc.h>
-#endif
 
 #include "bounded.h"
 
@@ -81,13 +78,13 @@ refuse_plan(bounded_run *r, size_t tile_max, tdc_tp_plan_status rc)
 			dcell = c;
 		}
 	floor_bytes = tdc_tp_tile_bytes(TDC_TP_ALLOW(dmax > TILE_FLOOR ? dmax : TILE_FLOOR), r->opt,
-									POINT_BYTES(r));
+									POINT_BYTES(r)) + r->outside;
 	if (rc == TDC_TP_PLAN_TOO_MANY_TILES)
 	{
 		snprintf(msg, sizeof(msg), "--max-memory %zu is too small for this input: tiles of at most %zu points "
 				 "(the most that fit with their halos) would be more than %d; with %zu points allow about %zu MB",
-				 r->budget >> 20, tile_max, TDC_TP_MAX_TILES, r->n,
-				 (tdc_tp_tile_bytes(TDC_TP_ALLOW(r->n / (TDC_TP_MAX_TILES / 2)), r->opt, POINT_BYTES(r)) >> 20) + 1);
+				 r->limit >> 20, tile_max, TDC_TP_MAX_TILES, r->n,
+				 ((tdc_tp_tile_bytes(TDC_TP_ALLOW(r->n / (TDC_TP_MAX_TILES / 2)), r->opt, POINT_BYTES(r)) + r->outside) >> 20) + 1);
 		die(1, "%s", msg);
 	}
 	if (dmax > tile_max && dmax >= 2)
@@ -100,7 +97,7 @@ refuse_plan(bounded_run *r, size_t tile_max, tdc_tp_plan_status rc)
 	snprintf(msg, sizeof(msg), "--max-memory %zu is below this input's floor of %zu MB: the densest cell of the "
 			 "tiling grid, %.6g x %.6g at (%.17g %.17g), holds %zu points (a tile may hold %zu within the limit), "
 			 "and a tile of them with its halo needs about %zu MB%s",
-			 r->budget >> 20, (floor_bytes >> 20) + 1,
+			 r->limit >> 20, (floor_bytes >> 20) + 1,
 			 r->grid.xcut[dcell % TDC_TP_GRID + 1] - r->grid.xcut[dcell % TDC_TP_GRID],
 			 r->grid.ycut[dcell / TDC_TP_GRID + 1] - r->grid.ycut[dcell / TDC_TP_GRID],
 			 r->grid.xcut[dcell % TDC_TP_GRID], r->grid.ycut[dcell / TDC_TP_GRID],
@@ -204,24 +201,16 @@ run_bounded(const char *xypath, const char *zpath, size_t n, const tdc_options *
 			size_t budget, FILE *out, bounded_stats *st)
 {
 	bounded_run r = {
-		.xypath = xypath, .zpath = zpath, .n = n, .opt = opt, .budget = budget,
+		.xypath = xypath, .zpath = zpath, .n = n, .opt = opt, .limit = budget,
 		.out = out, .st = st, .has_z = zpath != NULL, .w = zpath != NULL ? 3 : 2
 	};
 	double		t0;
 
 	memset(st, 0, sizeof(*st));
 	st->n = n;
-#ifdef __GLIBC__
 
-	/*
-	 * Every tile allocates and frees the same large arrays.  Served by mmap
-	 * they go back to the kernel at each free and come back as fresh pages
-	 * to fault in and zero, a tenth of the run; kept in the heap they are
-	 * reused.  The peak stays that of the largest tile.
-	 */
-	mallopt(M_MMAP_MAX, 0);
-	mallopt(M_TRIM_THRESHOLD, INT32_MAX);
-#endif
+	/* the heap kept between tiles; the limit less what the process holds beside them */
+	heap_start(&r);
 
 	t0 = now_s();
 	/* the points' box and hull; the cells counted when the grid is known */
@@ -237,6 +226,9 @@ run_bounded(const char *xypath, const char *zpath, size_t n, const tdc_options *
 	t0 = now_s();
 	bin_points(&r);
 	st->bin = now_s() - t0;
+	/* the scan's and the bins' buffers, freed, are not the tiles' to reuse */
+	heap_settle(&r, true);
+	before_tiles(&r);
 
 	/* every global triangle written once, by the tile that owns it */
 	for (int t = 0; t < r.nt; t++)

@@ -68,7 +68,9 @@ typedef struct bounded_run
 			   *zpath;			/* the .bin source, and z beside it or NULL */
 	size_t		n;
 	const tdc_options *opt;
-	size_t		budget;			/* bytes */
+	size_t		limit;			/* --max-memory, bytes */
+	size_t		outside;		/* what the process holds beyond the tiles' model */
+	size_t		budget;			/* the tiles' share: limit - outside */
 	FILE	   *out;			/* NULL: the triangles are not written */
 	bounded_stats *st;
 	int			has_z,
@@ -176,6 +178,11 @@ rec_put(recfile *r, const double *v, int w)
 extern void scan_input(bounded_run *r);
 extern void scan_count(bounded_run *r);
 extern void dense_spot(bounded_run *r, int cell, size_t limit, double spot[2], size_t *copies);
+
+/* bounded_mem.c */
+extern void heap_start(bounded_run *r);
+extern void heap_settle(const bounded_run *r, bool always);
+extern void before_tiles(const bounded_run *r);
 
 /* bounded_bin.c */
 extern void halo_index(bounded_run *r);

@@ -282,7 +282,7 @@ gather_region(const bounded_run *r, int t, double K[4], const double Kmin[4], si
 
 		snprintf(msg, sizeof(msg), "tile %d of %d (%zu own points) needs %zu points with the region it must know, "
 				 "about %zu MB, more than --max-memory %zu", t, r->nt, r->tiles[t].count, m,
-				 (tdc_tp_tile_bytes(m, r->opt, POINT_BYTES(r)) >> 20) + 1, r->budget >> 20);
+				 ((tdc_tp_tile_bytes(m, r->opt, POINT_BYTES(r)) + r->outside) >> 20) + 1, r->limit >> 20);
 		die(1, "%s: the data is too clustered around this tile for the limit", msg);
 	}
 	points_alloc(p, m, r->has_z);
@@ -565,11 +565,12 @@ tile_run(bounded_run *r, int t)
 				char		msg[160];
 
 				snprintf(msg, sizeof(msg), "tile %d of %d (%zu own points) holds %zu points and needs "
-						 "more, beyond --max-memory %zu", t, r->nt, ti->count, p.m, r->budget >> 20);
+						 "more, beyond --max-memory %zu", t, r->nt, ti->count, p.m, r->limit >> 20);
 				die(1, "%s: the data is too clustered around this tile for the limit", msg);
 			}
 			tdc_tile_result_free(&res);
 			points_free(&p);
+			heap_settle(r, false);
 			continue;
 		}
 		else if (!r->use_cells &&
@@ -579,12 +580,14 @@ tile_run(bounded_run *r, int t)
 			spec.nextra = nextra;
 			tdc_tile_result_free(&res);
 			points_free(&p);
+			heap_settle(r, false);
 			continue;
 		}
 		else
 			tdc_tp_grow_known(K, Kmin, res.need, h);
 		tdc_tile_result_free(&res);
 		points_free(&p);
+		heap_settle(r, false);
 		r->st->write += now_s() - t0;
 		if (spec.known[0] == K[0] && spec.known[1] == K[1] &&
 			spec.known[2] == K[2] && spec.known[3] == K[3])
