@@ -100,3 +100,122 @@ CREATE AGGREGATE _tdc_hull(float8[]) (
 
 COMMENT ON AGGREGATE _tdc_hull(float8[]) IS
 'Internal, for tdc_delaunay_tiled: the convex hull of partial hulls given as {x,y,...}.';
+
+-- The tiling policy of src/core/tile_plan.c, the one ./tdc --max-memory
+-- follows (src/pg/fn_tiled_plan.c): labels of squares, a tile's first known
+-- region {h, K, extra boxes...} and its growth, and the adaptive plan of
+-- automatic tiles.
+
+CREATE FUNCTION _tdc_square_label(float8, float8, float8, float8, float8)
+RETURNS int8
+AS 'MODULE_PATHNAME', '_tdc_square_label'
+LANGUAGE C IMMUTABLE STRICT PARALLEL SAFE;
+
+COMMENT ON FUNCTION _tdc_square_label(float8, float8, float8, float8, float8) IS
+'Internal, for tdc_delaunay_tiled: _tdc_square_label(x, y, origin_x, origin_y, size), the label column * 2^32 + row '
+'of the square of side size holding the point, counted from the origin (an error past 2^31 columns or rows).';
+
+CREATE FUNCTION _tdc_tile_region(float8[], int8, float8[], int8, float8[])
+RETURNS float8[]
+AS 'MODULE_PATHNAME', '_tdc_tile_region'
+LANGUAGE C IMMUTABLE STRICT PARALLEL SAFE;
+
+COMMENT ON FUNCTION _tdc_tile_region(float8[], int8, float8[], int8, float8[]) IS
+'Internal, for tdc_delaunay_tiled: _tdc_tile_region(tile box, tile points, extent, points, hull), the first known region '
+'{h, xmin, ymin, xmax, ymax, extra boxes...} of a tile: its box with a halo h of 8 of its mean spacings and the hull bands near it.';
+
+CREATE FUNCTION _tdc_tile_regrow(float8[], float8[], float8[], int8, float8[])
+RETURNS float8[]
+AS 'MODULE_PATHNAME', '_tdc_tile_regrow'
+LANGUAGE C IMMUTABLE STRICT PARALLEL SAFE;
+
+COMMENT ON FUNCTION _tdc_tile_regrow(float8[], float8[], float8[], int8, float8[]) IS
+'Internal, for tdc_delaunay_tiled: _tdc_tile_regrow(region, box needed, extent, points, hull), the region of a tile''s next run: '
+'the hull bands meeting the box needed that it lacks, else its known box grown to that box and half its halo beyond.';
+
+CREATE FUNCTION _tdc_plan_tile_max(int8, boolean)
+RETURNS int8
+AS 'MODULE_PATHNAME', '_tdc_plan_tile_max'
+LANGUAGE C STABLE STRICT PARALLEL SAFE;
+
+COMMENT ON FUNCTION _tdc_plan_tile_max(int8, boolean) IS
+'Internal, for tdc_delaunay_tiled: _tdc_plan_tile_max(points, has Z), the most points an automatic tile may own '
+'under tdc_delaunay.max_memory (all of them when they fit as one tile).';
+
+CREATE FUNCTION _tdc_plan_grid_transfn(internal, geometry, int8)
+RETURNS internal
+AS 'MODULE_PATHNAME', '_tdc_plan_grid_transfn'
+LANGUAGE C IMMUTABLE;
+
+COMMENT ON FUNCTION _tdc_plan_grid_transfn(internal, geometry, int8) IS
+'Transition function of _tdc_plan_grid: the vertices'' box and the sample ./tdc takes (in the rows'' order).';
+
+CREATE FUNCTION _tdc_plan_grid_finalfn(internal)
+RETURNS bytea
+AS 'MODULE_PATHNAME', '_tdc_plan_grid_finalfn'
+LANGUAGE C IMMUTABLE;
+
+COMMENT ON FUNCTION _tdc_plan_grid_finalfn(internal) IS
+'Final function of _tdc_plan_grid: the counting grid of the plan, its cell sides at the sample''s quantiles.';
+
+CREATE AGGREGATE _tdc_plan_grid(geometry, int8) (
+	SFUNC = _tdc_plan_grid_transfn,
+	STYPE = internal,
+	FINALFUNC = _tdc_plan_grid_finalfn
+);
+
+COMMENT ON AGGREGATE _tdc_plan_grid(geometry, int8) IS
+'Internal, for tdc_delaunay_tiled: _tdc_plan_grid(geometry, number of vertices) over the rows in the source''s order, '
+'the grid that _tdc_plan counts on, as ./tdc --max-memory makes it.';
+
+CREATE FUNCTION _tdc_plan_transfn(internal, geometry, bytea)
+RETURNS internal
+AS 'MODULE_PATHNAME', '_tdc_plan_transfn'
+LANGUAGE C IMMUTABLE;
+
+COMMENT ON FUNCTION _tdc_plan_transfn(internal, geometry, bytea) IS
+'Transition function of _tdc_plan: counts the vertices in the cells of the grid.';
+
+CREATE FUNCTION _tdc_plan_finalfn(internal)
+RETURNS bytea
+AS 'MODULE_PATHNAME', '_tdc_plan_finalfn'
+LANGUAGE C STABLE;
+
+COMMENT ON FUNCTION _tdc_plan_finalfn(internal) IS
+'Final function of _tdc_plan: the tiles cut from the counted grid under tdc_delaunay.max_memory, or an error with the floor.';
+
+CREATE AGGREGATE _tdc_plan(geometry, bytea) (
+	SFUNC = _tdc_plan_transfn,
+	STYPE = internal,
+	FINALFUNC = _tdc_plan_finalfn
+);
+
+COMMENT ON AGGREGATE _tdc_plan(geometry, bytea) IS
+'Internal, for tdc_delaunay_tiled: _tdc_plan(geometry, grid) over every row, the plan of automatic tiles '
+'(counts on the grid split k-d by counts, src/core/tile_plan.c).';
+
+CREATE FUNCTION _tdc_plan_label(float8, float8, bytea)
+RETURNS int8
+AS 'MODULE_PATHNAME', '_tdc_plan_label'
+LANGUAGE C IMMUTABLE STRICT PARALLEL SAFE;
+
+COMMENT ON FUNCTION _tdc_plan_label(float8, float8, bytea) IS
+'Internal, for tdc_delaunay_tiled: _tdc_plan_label(x, y, plan), the tile (from 0) of the plan that owns the point.';
+
+CREATE FUNCTION _tdc_plan_regions(bytea, float8[])
+RETURNS TABLE(tile int8, n int8, region float8[])
+AS 'MODULE_PATHNAME', '_tdc_plan_regions'
+LANGUAGE C IMMUTABLE STRICT PARALLEL SAFE
+ROWS 100;
+
+COMMENT ON FUNCTION _tdc_plan_regions(bytea, float8[]) IS
+'Internal, for tdc_delaunay_tiled: _tdc_plan_regions(plan, hull), every tile of the plan with its count and first known '
+'region {h, xmin, ymin, xmax, ymax, extra boxes...}, fitted to the counts as ./tdc fits it.';
+
+CREATE FUNCTION _tdc_plan_box(bytea)
+RETURNS float8[]
+AS 'MODULE_PATHNAME', '_tdc_plan_box'
+LANGUAGE C IMMUTABLE STRICT PARALLEL SAFE;
+
+COMMENT ON FUNCTION _tdc_plan_box(bytea) IS
+'Internal, for tdc_delaunay_tiled: _tdc_plan_box(plan), {xmin, ymin, xmax, ymax, vertices, tiles} of the planned vertices.';
