@@ -49,6 +49,7 @@
 
 #include "tdc_pg.h"
 #include "tile_plan.h"
+#include "tiled_plan.h"
 
 #define TILED_FNAME		"tdc_delaunay_tiled"
 #define PLAN_MAGIC		0x50434454	/* "TDCP" */
@@ -246,16 +247,89 @@ _tdc_tile_region(PG_FUNCTION_ARGS)
 										tdc_tp_spacing(extent, (size_t) npts), NULL, NULL));
 }
 
+/* The first i with cut[i] == v (the side of a cell), or -1. */
+static int
+side_index(const double *cut, int n, double v)
+{
+	int			l = 0,
+				h = n;
+
+	while (l < h)
+	{
+		int			m = (l + h) / 2;
+
+		if (cut[m] >= v)
+			h = m;
+		else
+			l = m + 1;
+	}
+	return cut[l] == v ? l : -1;
+}
+
+/* The index of the cell of the plan's grid whose closed box is ring r's (5 vertices). */
+static int32
+ring_cell(const TiledPlanGrid *pg, const double *r)
+{
+	int			n = pg->n,
+				i = side_index(pg->xcut, n, r[0]),
+				j = side_index(pg->ycut, n, r[1]);
+
+	/* equal cuts make empty cells: the cell is the last of them */
+	while (i >= 0 && i < n - 1 && pg->xcut[i + 1] != r[4])
+		i++;
+	while (j >= 0 && j < n - 1 && pg->ycut[j + 1] != r[5])
+		j++;
+	if (i < 0 || j < 0 || i >= n || j >= n || pg->xcut[i + 1] != r[4] || pg->ycut[j + 1] != r[5])
+		ereport(ERROR,
+				(errcode(ERRCODE_INTERNAL_ERROR),
+				 errmsg("%s: a cell needed is not a cell of the plan", TILED_FNAME)));
+	return (int32) j * n + i;
+}
+
+PG_FUNCTION_INFO_V1(_tdc_tile_need_cells);
+
+/*
+ * _tdc_tile_need_cells(need geometry, plan bytea) RETURNS int4[]
+ * The cells of the plan that a tile's run that was not final named, from
+ * its row (the rings after the first, see _tdc_tile_triangles): the next
+ * run adds their points, as ./tdc's does (add_cells).  Empty when it named
+ * none: its known box must grow (_tdc_tile_regrow).
+ */
+Datum
+_tdc_tile_need_cells(PG_FUNCTION_ARGS)
+{
+	TdcPointBuf rings;
+	TiledPlanGrid pg;
+	Datum	   *d;
+	uint64		ncells;
+
+	tdc_pointbuf_init(&rings, CurrentMemoryContext);
+	(void) tdc_read_geometry(&rings, PG_GETARG_DATUM(0), TILED_FNAME);
+	if (rings.n == 0 || rings.n % 5 != 0)
+		ereport(ERROR,
+				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
+				 errmsg("%s: the box needed must be rings of 5 vertices", TILED_FNAME)));
+	tdc_tiled_plan_grid(PG_GETARG_BYTEA_P(1), &pg);
+	ncells = rings.n / 5 - 1;
+	d = palloc(sizeof(Datum) * (ncells + 1));
+	for (uint64 k = 0; k < ncells; k++)
+		d[k] = Int32GetDatum(ring_cell(&pg, rings.xy + 10 * (k + 1)));
+	PG_RETURN_ARRAYTYPE_P(construct_array(d, (int) ncells, INT4OID, 4, true, TYPALIGN_INT));
+}
+
 PG_FUNCTION_INFO_V1(_tdc_tile_regrow);
 
 /*
- * _tdc_tile_regrow(region float8[], need float8[], extent float8[],
- *					npts int8, hull float8[]) RETURNS float8[]
- * The region of a tile's next run, after a run that was not final and
- * asked for the box need: the same K with the bands of the hull edges that
- * meet need and it lacks, if there are such (tdc_tp_grow_bands), else K
- * grown to need and half the halo beyond (tdc_tp_grow_known), as ./tdc
- * grows a tile without cells.
+ * _tdc_tile_regrow(region float8[], need geometry, extent float8[],
+ *					npts int8, hull float8[], plan bytea) RETURNS float8[]
+ * The region of a tile's next run, after a run that was not final: need is
+ * the row _tdc_tile_triangles gave for it, a POLYGON whose first ring is
+ * the box it needs (the other rings are the cells it needs, which the
+ * procedure adds with _tdc_tile_need_cells).  As ./tdc grows a tile
+ * that named no cell: without
+ * a plan's cells (plan NULL) the bands of the hull edges that meet the
+ * box and that it lacks, if there are such (tdc_tp_grow_bands); else K
+ * grown to the box and half the halo beyond (tdc_tp_grow_known).
  */
 Datum
 _tdc_tile_regrow(PG_FUNCTION_ARGS)
@@ -272,30 +346,49 @@ _tdc_tile_regrow(PG_FUNCTION_ARGS)
 	int			nregion,
 				nhull;
 	size_t		nextra;
-	int64		npts = PG_GETARG_INT64(3);
+	int64		npts;
+	bool		cells = !PG_ARGISNULL(5);
+	TdcPointBuf rings;
+
+	if (PG_ARGISNULL(0) || PG_ARGISNULL(1) || PG_ARGISNULL(2) || PG_ARGISNULL(3) || PG_ARGISNULL(4))
+		PG_RETURN_NULL();
+	npts = PG_GETARG_INT64(3);
 
 	region = float8_array(PG_GETARG_ARRAYTYPE_P(0), &nregion, 5, 1, "the region");
 	if ((nregion - 5) % 4 != 0)
 		ereport(ERROR,
 				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
 				 errmsg("%s: a region is {h, xmin, ymin, xmax, ymax, boxes...}", TILED_FNAME)));
-	box_arg(PG_GETARG_ARRAYTYPE_P(1), need, "the box needed");
+	tdc_pointbuf_init(&rings, CurrentMemoryContext);
+	(void) tdc_read_geometry(&rings, PG_GETARG_DATUM(1), TILED_FNAME);
+	if (rings.n == 0 || rings.n % 5 != 0)
+		ereport(ERROR,
+				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
+				 errmsg("%s: the box needed must be rings of 5 vertices", TILED_FNAME)));
+	/* ring k's box: corners 0 and 2 */
+	need[0] = rings.xy[0];
+	need[1] = rings.xy[1];
+	need[2] = rings.xy[4];
+	need[3] = rings.xy[5];
 	box_arg(PG_GETARG_ARRAYTYPE_P(2), extent, "the extent");
 	hull = float8_array(PG_GETARG_ARRAYTYPE_P(4), &nhull, 0, 2, "the hull");
 	nhull /= 2;
-	bands = palloc(sizeof(double) * 4 * (nhull + 1));
-	inband = palloc0(nhull + 1);
-	tdc_tp_hull_bands(hull, (size_t) nhull, tdc_tp_spacing(extent, (size_t) Max(npts, 0)), bands);
 	nextra = (nregion - 5) / 4;
 	extra = palloc(sizeof(double) * (5 + 4 * (nextra + nhull + 1)));
 	memcpy(extra, region, sizeof(double) * nregion);
-	/* the bands the tile has: the same doubles, made by the same call */
-	for (int i = 0; nhull > 1 && i < nhull; i++)
-		for (size_t e = 0; e < nextra; e++)
-			if (memcmp(bands + 4 * i, region + 5 + 4 * e, 4 * sizeof(double)) == 0)
-				inband[i] = 1;
-	if (tdc_tp_grow_bands(bands, (size_t) nhull, need, inband, extra + 5, &nextra) > 0)
-		PG_RETURN_ARRAYTYPE_P(float8_result(extra, 5 + 4 * (int) nextra));
+	if (!cells)
+	{
+		bands = palloc(sizeof(double) * 4 * (nhull + 1));
+		inband = palloc0(nhull + 1);
+		tdc_tp_hull_bands(hull, (size_t) nhull, tdc_tp_spacing(extent, (size_t) Max(npts, 0)), bands);
+		/* the bands the tile has: the same doubles, made by the same call */
+		for (int i = 0; nhull > 1 && i < nhull; i++)
+			for (size_t e = 0; e < nextra; e++)
+				if (memcmp(bands + 4 * i, region + 5 + 4 * e, 4 * sizeof(double)) == 0)
+					inband[i] = 1;
+		if (tdc_tp_grow_bands(bands, (size_t) nhull, need, inband, extra + 5, &nextra) > 0)
+			PG_RETURN_ARRAYTYPE_P(float8_result(extra, 5 + 4 * (int) nextra));
+	}
 	memcpy(K, region + 1, sizeof(K));
 	tdc_tp_grow_known(K, Kmin, need, region[0]);
 	memcpy(extra + 1, K, sizeof(K));
@@ -716,24 +809,12 @@ typedef struct LabelCache
 	int16	   *cell_tile;
 } LabelCache;
 
-PG_FUNCTION_INFO_V1(_tdc_plan_label);
-
-/*
- * _tdc_plan_label(x, y, plan bytea) RETURNS int8
- * The tile (from 0) that owns the point (x, y) in the plan: the tile of its
- * cell, the cell decided exactly against the doubles of the cell sides
- * (tdc_tp_cell), as ./tdc bins it.  A point in a cell that the plan counted
- * no point in has no tile: an ERROR (the source changed).
- */
-Datum
-_tdc_plan_label(PG_FUNCTION_ARGS)
+/* The cache of _tdc_plan_label and _tdc_plan_cell for plan b. */
+static LabelCache *
+label_cache(FunctionCallInfo fcinfo, bytea *b)
 {
-	double		x = PG_GETARG_FLOAT8(0),
-				y = PG_GETARG_FLOAT8(1);
-	bytea	   *b = PG_GETARG_BYTEA_P(2);
 	LabelCache *c = (LabelCache *) fcinfo->flinfo->fn_extra;
 	PlanHdr		h;
-	int			t;
 
 	if (VARSIZE(b) < sizeof(PlanHdr))
 		ereport(ERROR,
@@ -761,6 +842,26 @@ _tdc_plan_label(PG_FUNCTION_ARGS)
 		c->nt = p->nt;
 		pfree(p);
 	}
+	return c;
+}
+
+PG_FUNCTION_INFO_V1(_tdc_plan_label);
+
+/*
+ * _tdc_plan_label(x, y, plan bytea) RETURNS int8
+ * The tile (from 0) that owns the point (x, y) in the plan: the tile of its
+ * cell, the cell decided exactly against the doubles of the cell sides
+ * (tdc_tp_cell), as ./tdc bins it.  A point in a cell that the plan counted
+ * no point in has no tile: an ERROR (the source changed).
+ */
+Datum
+_tdc_plan_label(PG_FUNCTION_ARGS)
+{
+	double		x = PG_GETARG_FLOAT8(0),
+				y = PG_GETARG_FLOAT8(1);
+	LabelCache *c = label_cache(fcinfo, PG_GETARG_BYTEA_P(2));
+	int			t;
+
 	t = c->cell_tile[tdc_tp_cell(&c->g, x, y)];
 	if (t < 0)
 		ereport(ERROR,
@@ -836,4 +937,139 @@ _tdc_plan_box(PG_FUNCTION_ARGS)
 	double		v[6] = {p->bb[0], p->bb[1], p->bb[2], p->bb[3], (double) p->n, (double) p->nt};
 
 	PG_RETURN_ARRAYTYPE_P(float8_result(v, 6));
+}
+
+/* ---- the plan's cells in a tile's run (fn_tiled.c) ---- */
+
+void
+tdc_tiled_plan_grid(const bytea *plan, TiledPlanGrid *pg)
+{
+	PlanHdr    *p = plan_of((bytea *) plan, CurrentMemoryContext, NULL);
+
+	pg->n = TDC_TP_GRID;
+	pg->xcut = p->xcut;
+	pg->ycut = p->ycut;
+	pg->counts = PLAN_COUNTS(p);
+}
+
+/* The cells [*lo, *hi) whose sides lie in [a, b]: cut[*lo] >= a, cut[*hi] <= b. */
+static void
+cells_within(const double *cut, int n, double a, double b, int *lo, int *hi)
+{
+	int			l = 0,
+				h = n;
+
+	/* the first side >= a */
+	while (l < h)
+	{
+		int			m = (l + h) / 2;
+
+		if (cut[m] >= a)
+			h = m;
+		else
+			l = m + 1;
+	}
+	*lo = l;
+	/* the last side <= b */
+	l = 0;
+	h = n;
+	while (l < h)
+	{
+		int			m = (l + h + 1) / 2;
+
+		if (cut[m] <= b)
+			l = m;
+		else
+			h = m - 1;
+	}
+	*hi = cut[l] <= b ? l : 0;
+}
+
+void
+tdc_tiled_cell_states(const TiledPlanGrid *pg, const double K[4], const double *extra, int nextra,
+					  const int32 *added, int nadded, uint8 *cell, tdc_tile_grid *g)
+{
+	int			n = pg->n;
+
+	for (size_t c = 0; c < (size_t) n * n; c++)
+		cell[c] = pg->counts[c] == 0 ? TDC_TILE_CELL_EMPTY : TDC_TILE_CELL_OTHER;
+	for (int e = -1; e < nextra; e++)
+	{
+		const double *b = e < 0 ? K : extra + 4 * e;
+		int			c0,
+					c1,
+					r0,
+					r1;
+
+		cells_within(pg->xcut, n, b[0], b[2], &c0, &c1);
+		cells_within(pg->ycut, n, b[1], b[3], &r0, &r1);
+		for (int r = r0; r < r1; r++)
+			for (int c = c0; c < c1; c++)
+				if (cell[(size_t) r * n + c] == TDC_TILE_CELL_OTHER)
+					cell[(size_t) r * n + c] = TDC_TILE_CELL_KNOWN;
+	}
+	for (int k = 0; k < nadded; k++)
+		if (added[k] >= 0 && added[k] < n * n && cell[added[k]] == TDC_TILE_CELL_OTHER)
+			cell[added[k]] = TDC_TILE_CELL_KNOWN;
+	g->nx = g->ny = n;
+	g->xcut = pg->xcut;
+	g->ycut = pg->ycut;
+	g->cell = cell;
+}
+
+void
+tdc_tiled_cell_box(const TiledPlanGrid *pg, uint32 c, double box[4])
+{
+	int			i = (int) (c % (uint32) pg->n),
+				j = (int) (c / (uint32) pg->n);
+
+	box[0] = pg->xcut[i];
+	box[1] = pg->ycut[j];
+	box[2] = pg->xcut[i + 1];
+	box[3] = pg->ycut[j + 1];
+}
+
+PG_FUNCTION_INFO_V1(_tdc_plan_cell);
+
+/*
+ * _tdc_plan_cell(x, y, plan bytea) RETURNS int4
+ * The cell of the plan's grid (row * 512 + column) that holds the point,
+ * decided exactly as ./tdc decides it (tdc_tp_cell): a tile's rerun takes
+ * the points of the cells it named.
+ */
+Datum
+_tdc_plan_cell(PG_FUNCTION_ARGS)
+{
+	LabelCache *c = label_cache(fcinfo, PG_GETARG_BYTEA_P(2));
+
+	PG_RETURN_INT32(tdc_tp_cell(&c->g, PG_GETARG_FLOAT8(0), PG_GETARG_FLOAT8(1)));
+}
+
+PG_FUNCTION_INFO_V1(_tdc_in_boxes);
+
+/*
+ * _tdc_in_boxes(x, y, boxes float8[]) RETURNS boolean
+ * Whether a closed box of {xmin, ymin, xmax, ymax, ...} holds the point:
+ * a point of a cell a rerun adds is passed once, not again when K or a
+ * band already holds it.
+ */
+Datum
+_tdc_in_boxes(PG_FUNCTION_ARGS)
+{
+	double		x = PG_GETARG_FLOAT8(0),
+				y = PG_GETARG_FLOAT8(1);
+	ArrayType  *a = PG_GETARG_ARRAYTYPE_P(2);
+	int			n;
+	const double *b;
+
+	if (ARR_NDIM(a) > 1 || ARR_ELEMTYPE(a) != FLOAT8OID || ARR_HASNULL(a))
+		ereport(ERROR,
+				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
+				 errmsg("%s: the boxes must be a one-dimensional float8 array without NULLs", TILED_FNAME)));
+	n = ARR_NDIM(a) == 0 ? 0 : ARR_DIMS(a)[0] / 4;
+	b = (const double *) ARR_DATA_PTR(a);
+	for (int i = 0; i < n; i++)
+		if (b[4 * i] <= x && x <= b[4 * i + 2] && b[4 * i + 1] <= y && y <= b[4 * i + 3])
+			PG_RETURN_BOOL(true);
+	PG_RETURN_BOOL(false);
 }

@@ -42,6 +42,8 @@ DECLARE
 	grid bytea;					-- automatic tiles: the counting grid of the plan
 	plan bytea;					-- automatic tiles: the plan (src/pg/fn_tiled_plan.c)
 	pbox float8[];
+	need_cells int4[];			-- the plan's cells a tile that was not final named
+	cells_max constant int := 8;	-- rounds a tile grows by cells before its box grows
 	tparts text[];
 	tschema text; tname text; qtarget text;
 	pts text; tiles text; rt text; halo text;
@@ -279,7 +281,7 @@ BEGIN
 	EXECUTE format('CREATE TEMP TABLE %1$s AS
 					SELECT tile, row_number() OVER (ORDER BY tile) AS label, n, x0, y0, x1, y1,
 						   NULL::float8[] AS region, NULL::float8[] AS known, NULL::float8[] AS extra,
-						   true AS pending
+						   ''{}''::int4[] AS added, 0 AS cell_runs, true AS pending
 					  FROM (SELECT tile, count(*) AS n, min(%3$s) AS x0, min(%4$s) AS y0,
 								   max(%3$s) AS x1, max(%4$s) AS y1
 							  FROM %2$s GROUP BY tile) t',
@@ -364,7 +366,7 @@ BEGIN
 		tile_sql := format('INSERT INTO %s (id, tile, geom)
 			SELECT CASE WHEN (q.t).k = 0 THEN -1 ELSE $2 * 4294967296 + (q.t).k END, q.tile, (q.t).geom
 			  FROM (SELECT s.tile, _tdc_tile_triangles(s.r) AS t
-					  FROM (SELECT h.tile, _tdc_tile(h.g, h.label, $2, $3, %L::float8[], $4, h.seq, h.vi) AS r
+					  FROM (SELECT h.tile, _tdc_tile(h.g, h.label, $2, $3, %L::float8[], $4, h.seq, h.vi, $5, $6) AS r
 							  FROM %s h
 							 WHERE h.tile = $1::%s AND h.tl = $2
 							 GROUP BY h.tile) s) q',
@@ -451,14 +453,28 @@ BEGIN
 		END IF;
 		GET DIAGNOSTICS ntri = ROW_COUNT;
 		halo_pts := halo_pts + ntri;
+		-- the plan's cells that reruns added, as ./tdc adds them: every
+		-- point of such a cell (_tdc_plan_cell, the cell ./tdc bins it to)
+		-- that no box of the tile holds
+		IF plan IS NOT NULL AND round > 1 THEN
+			EXECUTE format('INSERT INTO %1$s (tile, label, seq, vi, g, tl)
+							SELECT k.tile, o.label, p.seq, p.vi, p.g, k.label
+							  FROM (SELECT tile, label, unnest(added) AS c, known || extra AS bx
+									  FROM %3$s WHERE pending AND cardinality(added) > 0) k
+							  JOIN %2$s p ON _tdc_plan_cell(p.x, p.y, $1) = k.c AND NOT _tdc_in_boxes(p.x, p.y, k.bx)
+							  JOIN %3$s o ON o.tile = p.tile',
+						   halo, pts, tiles) USING plan;
+			GET DIAGNOSTICS ntri = ROW_COUNT;
+			halo_pts := halo_pts + ntri;
+		END IF;
 		IF citus THEN
 			EXECUTE tile_sql;
 		ELSE
 			reported := 0;
 			i := 0;
-			FOR r IN EXECUTE format('SELECT tile::text AS tile, label, known, extra FROM %s WHERE pending ORDER BY label',
+			FOR r IN EXECUTE format('SELECT tile::text AS tile, label, known, extra, added FROM %s WHERE pending ORDER BY label',
 									tiles) LOOP
-				EXECUTE tile_sql USING r.tile, r.label, r.known, r.extra;
+				EXECUTE tile_sql USING r.tile, r.label, r.known, r.extra, plan, r.added;
 				GET DIAGNOSTICS nrows = ROW_COUNT;
 				written := written + nrows;
 				-- a tile that is not final writes one row: its box
@@ -473,24 +489,35 @@ BEGIN
 			END LOOP;
 		END IF;
 		-- tiles that were not final: the region of their next run, from the
-		-- box they need (_tdc_tile_regrow: the hull bands they lack, else K
-		-- grown to the box and half the halo beyond), as ./tdc grows a tile
+		-- row they wrote (_tdc_tile_regrow: with a plan the cells they named,
+		-- else the hull bands they lack, else K grown to the box they need
+		-- and half the halo beyond), as ./tdc grows a tile
 		-- (on plain PostgreSQL only the tiles that wrote one row can be
 		-- among them: the target is scanned for their boxes only if there
 		-- are such tiles)
 		EXECUTE format('UPDATE %s SET pending = false WHERE pending', tiles);
-		FOR r IN EXECUTE format('SELECT tile::text AS tile, ST_X(ST_PointN(ST_ExteriorRing(geom), 1)) AS x0,
-									   ST_Y(ST_PointN(ST_ExteriorRing(geom), 1)) AS y0,
-									   ST_X(ST_PointN(ST_ExteriorRing(geom), 3)) AS x1,
-									   ST_Y(ST_PointN(ST_ExteriorRing(geom), 3)) AS y1
-								  FROM %s WHERE id = -1 %s', qtarget,
+		FOR r IN EXECUTE format('SELECT tile::text AS tile, geom FROM %s WHERE id = -1 %s', qtarget,
 								CASE WHEN citus THEN '' WHEN cardinality(one_row) = 0 THEN 'AND false'
 									 ELSE 'AND tile::text = ANY($1)' END)
 						 USING one_row LOOP
-			EXECUTE format('UPDATE %1$s SET pending = true, region = g.r, known = g.r[2:5], extra = g.r[6:cardinality(g.r)]
-							  FROM (SELECT _tdc_tile_regrow(region, $2, $3, $4, $5) AS r FROM %1$s WHERE tile = $1::%2$s) g
-							 WHERE tile = $1::%2$s', tiles, ttype)
-			USING r.tile, ARRAY[r.x0, r.y0, r.x1, r.y1], extent, npts, hull;
+			-- With a plan: the cells it named, if any; else the region grown.
+			-- (The check names the cells the disks of the triangles not yet
+			-- final meet, and a rerun may find the next ones needed: along a
+			-- long hull edge a tile of 5,000 points in a strip with gaps took
+			-- 170 rounds so.  A round is a pass over the points, so after
+			-- cells_max rounds of cells a tile grows its box instead.)
+			need_cells := CASE WHEN plan IS NULL THEN '{}' ELSE _tdc_tile_need_cells(r.geom, plan) END;
+			EXECUTE format('SELECT cell_runs FROM %s WHERE tile = $1::%s', tiles, ttype) INTO nrows USING r.tile;
+			IF cardinality(need_cells) > 0 AND nrows < cells_max THEN
+				EXECUTE format('UPDATE %1$s SET pending = true, added = added || $2, cell_runs = cell_runs + 1
+								 WHERE tile = $1::%2$s', tiles, ttype)
+				USING r.tile, need_cells;
+			ELSE
+				EXECUTE format('UPDATE %1$s SET pending = true, region = g.r, known = g.r[2:5], extra = g.r[6:cardinality(g.r)]
+								  FROM (SELECT _tdc_tile_regrow(region, $2, $3, $4, $5, $6) AS r FROM %1$s WHERE tile = $1::%2$s) g
+								 WHERE tile = $1::%2$s', tiles, ttype)
+				USING r.tile, r.geom, extent, npts, hull, plan;
+			END IF;
 			rerun := rerun + 1;
 		END LOOP;
 		IF citus OR rerun > 0 THEN

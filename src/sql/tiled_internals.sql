@@ -124,14 +124,15 @@ COMMENT ON FUNCTION _tdc_tile_region(float8[], int8, float8[], int8, float8[]) I
 'Internal, for tdc_delaunay_tiled: _tdc_tile_region(tile box, tile points, extent, points, hull), the first known region '
 '{h, xmin, ymin, xmax, ymax, extra boxes...} of a tile: its box with a halo h of 8 of its mean spacings and the hull bands near it.';
 
-CREATE FUNCTION _tdc_tile_regrow(float8[], float8[], float8[], int8, float8[])
+CREATE FUNCTION _tdc_tile_regrow(float8[], geometry, float8[], int8, float8[], bytea)
 RETURNS float8[]
 AS 'MODULE_PATHNAME', '_tdc_tile_regrow'
-LANGUAGE C IMMUTABLE STRICT PARALLEL SAFE;
+LANGUAGE C IMMUTABLE PARALLEL SAFE;
 
-COMMENT ON FUNCTION _tdc_tile_regrow(float8[], float8[], float8[], int8, float8[]) IS
-'Internal, for tdc_delaunay_tiled: _tdc_tile_regrow(region, box needed, extent, points, hull), the region of a tile''s next run: '
-'the hull bands meeting the box needed that it lacks, else its known box grown to that box and half its halo beyond.';
+COMMENT ON FUNCTION _tdc_tile_regrow(float8[], geometry, float8[], int8, float8[], bytea) IS
+'Internal, for tdc_delaunay_tiled: _tdc_tile_regrow(region, need, extent, points, hull, plan), the region of a tile''s next run '
+'from the row of a run that was not final (rings: the box it needs, then the cells it needs): the cells added, '
+'else (without cells) the hull bands meeting the box that it lacks, else its known box grown to the box and half its halo beyond.';
 
 CREATE FUNCTION _tdc_plan_tile_max(int8, boolean)
 RETURNS int8
@@ -219,3 +220,50 @@ LANGUAGE C IMMUTABLE STRICT PARALLEL SAFE;
 
 COMMENT ON FUNCTION _tdc_plan_box(bytea) IS
 'Internal, for tdc_delaunay_tiled: _tdc_plan_box(plan), {xmin, ymin, xmax, ymax, vertices, tiles} of the planned vertices.';
+
+-- _tdc_tile with the plan of automatic tiles: its cells tell the finality
+-- check where the data has no point, and a tile that is not final names
+-- the cells it needs, whose points its rerun adds (src/pg/fn_tiled.c)
+CREATE FUNCTION _tdc_tile_transfn(internal, geometry, int8, int8, float8[], float8[], float8[], int8, int8, bytea, int4[])
+RETURNS internal
+AS 'MODULE_PATHNAME', '_tdc_tile_transfn'
+LANGUAGE C IMMUTABLE PARALLEL SAFE;
+
+COMMENT ON FUNCTION _tdc_tile_transfn(internal, geometry, int8, int8, float8[], float8[], float8[], int8, int8, bytea, int4[]) IS
+'Transition function of _tdc_tile with a plan: collects the vertices of a tile and its halo with the label of their owning tile.';
+
+CREATE AGGREGATE _tdc_tile(geometry, int8, int8, float8[], float8[], float8[], int8, int8, bytea, int4[]) (
+	SFUNC = _tdc_tile_transfn,
+	STYPE = internal,
+	FINALFUNC = _tdc_tile_finalfn
+);
+
+COMMENT ON AGGREGATE _tdc_tile(geometry, int8, int8, float8[], float8[], float8[], int8, int8, bytea, int4[]) IS
+'Internal, for tdc_delaunay_tiled: _tdc_tile as with eight arguments, and the plan of automatic tiles (NULL: none), '
+'whose cells the finality check uses, and the cells of the plan whose points a rerun added; '
+'a tile that is not final then names the cells it needs.';
+
+CREATE FUNCTION _tdc_plan_cell(float8, float8, bytea)
+RETURNS int4
+AS 'MODULE_PATHNAME', '_tdc_plan_cell'
+LANGUAGE C IMMUTABLE STRICT PARALLEL SAFE;
+
+COMMENT ON FUNCTION _tdc_plan_cell(float8, float8, bytea) IS
+'Internal, for tdc_delaunay_tiled: _tdc_plan_cell(x, y, plan), the cell (row * 512 + column) of the plan''s grid that holds the point.';
+
+CREATE FUNCTION _tdc_in_boxes(float8, float8, float8[])
+RETURNS boolean
+AS 'MODULE_PATHNAME', '_tdc_in_boxes'
+LANGUAGE C IMMUTABLE STRICT PARALLEL SAFE;
+
+COMMENT ON FUNCTION _tdc_in_boxes(float8, float8, float8[]) IS
+'Internal, for tdc_delaunay_tiled: whether one of the closed boxes {xmin,ymin,xmax,ymax,...} holds the point x, y.';
+
+CREATE FUNCTION _tdc_tile_need_cells(geometry, bytea)
+RETURNS int4[]
+AS 'MODULE_PATHNAME', '_tdc_tile_need_cells'
+LANGUAGE C IMMUTABLE STRICT PARALLEL SAFE;
+
+COMMENT ON FUNCTION _tdc_tile_need_cells(geometry, bytea) IS
+'Internal, for tdc_delaunay_tiled: _tdc_tile_need_cells(need, plan), the cells of the plan that a tile''s run that was '
+'not final named (the rings of its row after the first), whose points its rerun adds.';
