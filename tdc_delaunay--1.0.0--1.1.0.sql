@@ -181,9 +181,10 @@ COMMENT ON AGGREGATE ST_TDCDrape(geometry, geometry, text) IS
 -- from its tiling-policy part, and src/sql/tiled.sql)
 
 -- The tiling policy of src/core/tile_plan.c, the one ./tdc --max-memory
--- follows (src/pg/fn_tiled_plan.c): labels of squares, a tile's first known
--- region {h, K, extra boxes...} and its growth, and the adaptive plan of
--- automatic tiles.
+-- follows (src/pg/fn_tiled_region.c, fn_tiled_plan.c, fn_tiled_cells.c):
+-- labels of squares, a tile's first known region {h, K, extra boxes...} and
+-- its growth, the adaptive plan of automatic tiles, and the cells a rerun
+-- adds.
 
 CREATE FUNCTION _tdc_square_label(float8, float8, float8, float8, float8)
 RETURNS int8
@@ -303,24 +304,24 @@ COMMENT ON FUNCTION _tdc_plan_box(bytea) IS
 -- _tdc_tile with the plan of automatic tiles: its cells tell the finality
 -- check where the data has no point, and a tile that is not final names
 -- the cells it needs, whose points its rerun adds (src/pg/fn_tiled.c)
-CREATE FUNCTION _tdc_tile_transfn(internal, geometry, int8, int8, float8[], float8[], float8[], int8, int8, bytea, int4[])
+CREATE FUNCTION _tdc_tile_transfn(internal, geometry, int8, int8, float8[], float8[], float8[], int8, int8, bytea, int4[], int4)
 RETURNS internal
 AS 'MODULE_PATHNAME', '_tdc_tile_transfn'
 LANGUAGE C IMMUTABLE PARALLEL SAFE;
 
-COMMENT ON FUNCTION _tdc_tile_transfn(internal, geometry, int8, int8, float8[], float8[], float8[], int8, int8, bytea, int4[]) IS
+COMMENT ON FUNCTION _tdc_tile_transfn(internal, geometry, int8, int8, float8[], float8[], float8[], int8, int8, bytea, int4[], int4) IS
 'Transition function of _tdc_tile with a plan: collects the vertices of a tile and its halo with the label of their owning tile.';
 
-CREATE AGGREGATE _tdc_tile(geometry, int8, int8, float8[], float8[], float8[], int8, int8, bytea, int4[]) (
+CREATE AGGREGATE _tdc_tile(geometry, int8, int8, float8[], float8[], float8[], int8, int8, bytea, int4[], int4) (
 	SFUNC = _tdc_tile_transfn,
 	STYPE = internal,
 	FINALFUNC = _tdc_tile_finalfn
 );
 
-COMMENT ON AGGREGATE _tdc_tile(geometry, int8, int8, float8[], float8[], float8[], int8, int8, bytea, int4[]) IS
+COMMENT ON AGGREGATE _tdc_tile(geometry, int8, int8, float8[], float8[], float8[], int8, int8, bytea, int4[], int4) IS
 'Internal, for tdc_delaunay_tiled: _tdc_tile as with eight arguments, and the plan of automatic tiles (NULL: none), '
-'whose cells the finality check uses, and the cells of the plan whose points a rerun added; '
-'a tile that is not final then names the cells it needs.';
+'whose cells the finality check uses, the cells of the plan whose points a rerun added, and the number of runs '
+'before that added cells; a tile that is not final then names the cells it needs, reaching farther after each such run.';
 
 CREATE FUNCTION _tdc_plan_cell(float8, float8, bytea)
 RETURNS int4
@@ -338,14 +339,15 @@ LANGUAGE C IMMUTABLE STRICT PARALLEL SAFE;
 COMMENT ON FUNCTION _tdc_in_boxes(float8, float8, float8[]) IS
 'Internal, for tdc_delaunay_tiled: whether one of the closed boxes {xmin,ymin,xmax,ymax,...} holds the point x, y.';
 
-CREATE FUNCTION _tdc_tile_need_cells(geometry, bytea)
+CREATE FUNCTION _tdc_tile_need_cells(geometry, bytea, int8, int8, int4[])
 RETURNS int4[]
 AS 'MODULE_PATHNAME', '_tdc_tile_need_cells'
 LANGUAGE C IMMUTABLE STRICT PARALLEL SAFE;
 
-COMMENT ON FUNCTION _tdc_tile_need_cells(geometry, bytea) IS
-'Internal, for tdc_delaunay_tiled: _tdc_tile_need_cells(need, plan), the cells of the plan that a tile''s run that was '
-'not final named (the rings of its row after the first), whose points its rerun adds.';
+COMMENT ON FUNCTION _tdc_tile_need_cells(geometry, bytea, int8, int8, int4[]) IS
+'Internal, for tdc_delaunay_tiled: _tdc_tile_need_cells(need, plan, tile, points, added), the cells of the plan that a '
+'tile''s run of that many points that was not final named (the rings of its row after the first) and that its rerun adds: '
+'all when they fit tdc_delaunay.max_memory, else the nearest first as far as they fit.';
 
 CREATE OR REPLACE PROCEDURE tdc_delaunay_tiled(source regclass, target text, geom_column name DEFAULT 'geom',
 									tile_column name DEFAULT NULL, tile_size float8 DEFAULT NULL)
@@ -700,7 +702,7 @@ BEGIN
 		tile_sql := format('INSERT INTO %s (id, tile, geom)
 			SELECT CASE WHEN (q.t).k = 0 THEN -1 ELSE $2 * 4294967296 + (q.t).k END, q.tile, (q.t).geom
 			  FROM (SELECT s.tile, _tdc_tile_triangles(s.r) AS t
-					  FROM (SELECT h.tile, _tdc_tile(h.g, h.label, $2, $3, %L::float8[], $4, h.seq, h.vi, $5, $6) AS r
+					  FROM (SELECT h.tile, _tdc_tile(h.g, h.label, $2, $3, %L::float8[], $4, h.seq, h.vi, $5, $6, $7) AS r
 							  FROM %s h
 							 WHERE h.tile = $1::%s AND h.tl = $2
 							 GROUP BY h.tile) s) q',
@@ -806,9 +808,9 @@ BEGIN
 		ELSE
 			reported := 0;
 			i := 0;
-			FOR r IN EXECUTE format('SELECT tile::text AS tile, label, known, extra, added FROM %s WHERE pending ORDER BY label',
-									tiles) LOOP
-				EXECUTE tile_sql USING r.tile, r.label, r.known, r.extra, plan, r.added;
+			FOR r IN EXECUTE format('SELECT tile::text AS tile, label, known, extra, added, cell_runs
+									   FROM %s WHERE pending ORDER BY label', tiles) LOOP
+				EXECUTE tile_sql USING r.tile, r.label, r.known, r.extra, plan, r.added, r.cell_runs;
 				GET DIAGNOSTICS nrows = ROW_COUNT;
 				written := written + nrows;
 				-- a tile that is not final writes one row: its box
@@ -840,9 +842,19 @@ BEGIN
 			-- long hull edge a tile of 5,000 points in a strip with gaps took
 			-- 170 rounds so.  A round is a pass over the points, so after
 			-- cells_max rounds of cells a tile grows its box instead.)
-			need_cells := CASE WHEN plan IS NULL THEN '{}' ELSE _tdc_tile_need_cells(r.geom, plan) END;
+			-- (The cells come as ./tdc adds them: all when they fit, else
+			-- the nearest first as far as they fit, by the points this run
+			-- held, its halo partition's rows; an ERROR when not even the
+			-- nearest fits.)
 			EXECUTE format('SELECT cell_runs FROM %s WHERE tile = $1::%s', tiles, ttype) INTO nrows USING r.tile;
-			IF cardinality(need_cells) > 0 AND nrows < cells_max THEN
+			need_cells := '{}';
+			IF plan IS NOT NULL AND nrows < cells_max THEN
+				EXECUTE format('SELECT _tdc_tile_need_cells($1, $2, k.tile, (SELECT count(*) FROM %2$s h WHERE h.tl = k.label),
+												  k.added)
+								  FROM %1$s k WHERE k.tile = $3::bigint', tiles, halo)
+				   INTO need_cells USING r.geom, plan, r.tile;
+			END IF;
+			IF cardinality(need_cells) > 0 THEN
 				EXECUTE format('UPDATE %1$s SET pending = true, added = added || $2, cell_runs = cell_runs + 1
 								 WHERE tile = $1::%2$s', tiles, ttype)
 				USING r.tile, need_cells;

@@ -79,6 +79,7 @@ typedef struct TileState
 	bytea	   *plan;			/* NULL, or the plan of automatic tiles: its cells */
 	int32	   *added;			/* the plan's cells a rerun added, whose points are passed */
 	int			nadded;
+	int			reruns;			/* the runs before that added cells (tdc_tp_rings) */
 } TileState;
 
 /* Header of the aggregate's bytea result. */
@@ -298,6 +299,8 @@ _tdc_tile_transfn(PG_FUNCTION_ARGS)
 			if (st->nadded > 0)
 				memcpy(st->added, ARR_DATA_PTR(a), sizeof(int32) * st->nadded);
 		}
+		if (PG_NARGS() > 11 && !PG_ARGISNULL(11))
+			st->reruns = Max(PG_GETARG_INT32(11), 0);
 		MemoryContextSwitchTo(old);
 	}
 
@@ -393,7 +396,7 @@ _tdc_tile_finalfn(PG_FUNCTION_ARGS)
 		 */
 		tdc_tiled_plan_grid(st->plan, &pgrid);
 		cellst = palloc((Size) pgrid.n * pgrid.n);
-		tdc_tiled_cell_states(&pgrid, st->known, st->extra, st->nextra, st->added, st->nadded,
+		tdc_tiled_cell_states(&pgrid, st->known, st->extra, st->nextra, st->added, st->nadded, st->reruns,
 							  cellst, &tgrid);
 		spec.grid = &tgrid;
 	}

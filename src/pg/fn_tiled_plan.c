@@ -1,19 +1,11 @@
 /*
  * fn_tiled_plan.c
- *		The tiling policy of tdc_delaunay_tiled (src/sql/tiled.sql), from
- *		the core (src/core/tile_plan.c) through small C helpers: the labels
- *		of squares, the first known region of a tile and its growth on a
- *		rerun, and the adaptive plan of automatic tiles.
- *
- * The procedure used to repeat the policy in PL/pgSQL (a halo of 8
- * spacings, hull bands of 16, K "grown by a tenth", a uniform grid of
- * squares labelled floor(x / size) * 2^32 + floor(y / size), which
- * overflowed bigint far from the origin) and had drifted from ./tdc's.  Now
- * every number comes from tile_plan.c, the file ./tdc --max-memory calls.
- *
- * A tile's known region travels as one float8[]: {h, K (4 values), the
- * extra known boxes (4 values each)}, h being the tile's halo, which the
- * growth on a rerun is measured in.
+ *		The automatic tiles of tdc_delaunay_tiled (src/sql/tiled.sql): the
+ *		adaptive plan of the core (src/core/tile_plan.c), made as ./tdc
+ *		--max-memory makes it, each tile's first region from it, and the
+ *		tile of a point.  (Regions of other tiles and their growth:
+ *		fn_tiled_region.c; the plan's cells in a tile's run:
+ *		fn_tiled_cells.c.)
  *
  * The automatic plan is made as ./tdc makes it, in two passes over the
  * vertices in the source's order:
@@ -51,8 +43,7 @@
 #include "tile_plan.h"
 #include "tiled_plan.h"
 
-#define TILED_FNAME		"tdc_delaunay_tiled"
-#define PLAN_MAGIC		0x50434454	/* "TDCP" */
+
 #define PLAN_GRID_MAGIC 0x47434454	/* "TDCG" */
 /* ./tdc's TILE_FLOOR: the plan makes tiles smaller down to this many points */
 #define PLAN_FLOOR		1000
@@ -60,15 +51,6 @@
 #define PLAN_SAMPLE_MIN ((uint64) 1 << 18)
 #define PLAN_RUNS		256
 #define PLAN_RUN_LEN	256
-
-/*
- * The bytes of a tile's backend beside the engine for each point it holds,
- * as _tdc_tile (fn_tiled.c) counts them against tdc_delaunay.max_memory:
- * coordinates (16, Z 8), owner label and source position (24), in arrays
- * that grow by doubling (so twice that), and the triangles of the result
- * value (2 a point, 3 vertices of 2 or 3 doubles).
- */
-#define PLAN_POINT_BYTES(hasz)	((size_t) (2 * (16 + ((hasz) ? 8 : 0) + 24) + 2 * 3 * ((hasz) ? 3 : 2) * 8))
 
 /* The counting grid that _tdc_plan_grid makes and _tdc_plan counts on. */
 typedef struct PlanGrid
@@ -82,324 +64,12 @@ typedef struct PlanGrid
 				ycut[TDC_TP_GRID + 1];
 } PlanGrid;
 
-/* The plan: this header, nt tdc_tp_tile, TDC_TP_GRID^2 uint32 counts. */
-typedef struct PlanHdr
-{
-	int32		vl_len_;
-	int32		magic;
-	int32		nt;
-	int32		hasz;
-	uint64		id;				/* hash of the tiles and cuts: the label cache's key */
-	uint64		n;
-	uint64		tile_max;		/* the tile size the plan fitted */
-	double		bb[4];
-	double		xcut[TDC_TP_GRID + 1],
-				ycut[TDC_TP_GRID + 1];
-} PlanHdr;
-
-#define PLAN_TILES(p)	((tdc_tp_tile *) ((char *) (p) + sizeof(PlanHdr)))
-#define PLAN_COUNTS(p)	((uint32 *) (PLAN_TILES(p) + (p)->nt))
-#define PLAN_SIZE(nt)	(sizeof(PlanHdr) + (Size) (nt) * sizeof(tdc_tp_tile) + \
-						 (Size) TDC_TP_GRID * TDC_TP_GRID * sizeof(uint32))
-
-/*
- * A float8[] argument as doubles, copied (aligned); n its length.  NULLs,
- * more dimensions or too few values are errors.
- */
-static double *
-float8_array(ArrayType *a, int *n, int want_min, int multiple, const char *what)
-{
-	double	   *out;
-	int			count;
-
-	if (ARR_NDIM(a) > 1 || ARR_ELEMTYPE(a) != FLOAT8OID || ARR_HASNULL(a))
-		ereport(ERROR,
-				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
-				 errmsg("%s: %s must be a one-dimensional float8 array without NULLs",
-						TILED_FNAME, what)));
-	count = ARR_NDIM(a) == 0 ? 0 : ARR_DIMS(a)[0];
-	if (count < want_min || count % multiple != 0)
-		ereport(ERROR,
-				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
-				 errmsg("%s: %s has %d values, want a multiple of %d, at least %d",
-						TILED_FNAME, what, count, multiple, want_min)));
-	out = palloc(sizeof(double) * (count + 1));
-	if (count > 0)
-		memcpy(out, ARR_DATA_PTR(a), sizeof(double) * count);
-	*n = count;
-	return out;
-}
-
-static ArrayType *
-float8_result(const double *v, int n)
-{
-	Datum	   *d = palloc(sizeof(Datum) * (n + 1));
-
-	for (int i = 0; i < n; i++)
-		d[i] = Float8GetDatum(v[i]);
-	return construct_array(d, n, FLOAT8OID, 8, FLOAT8PASSBYVAL, TYPALIGN_DOUBLE);
-}
-
-/* A box argument {xmin, ymin, xmax, ymax}. */
-static void
-box_arg(ArrayType *a, double box[4], const char *what)
-{
-	int			n;
-	double	   *v = float8_array(a, &n, 4, 4, what);
-
-	if (n != 4)
-		ereport(ERROR,
-				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
-				 errmsg("%s: %s must be {xmin, ymin, xmax, ymax}", TILED_FNAME, what)));
-	memcpy(box, v, 4 * sizeof(double));
-}
-
-PG_FUNCTION_INFO_V1(_tdc_square_label);
-
-/*
- * _tdc_square_label(x, y, origin_x, origin_y, size) RETURNS int8
- * The label of the square of side size that holds (x, y), counted from the
- * origin (tdc_tp_square_label): column * 2^32 + row.  An ERROR when the
- * point lies below the origin, or its column or row passes 2^31 - 1.
- */
-Datum
-_tdc_square_label(PG_FUNCTION_ARGS)
-{
-	double		x = PG_GETARG_FLOAT8(0),
-				y = PG_GETARG_FLOAT8(1),
-				origin[2] = {PG_GETARG_FLOAT8(2), PG_GETARG_FLOAT8(3)},
-				size = PG_GETARG_FLOAT8(4);
-	int64_t		label;
-
-	if (!tdc_tp_square_label(x, y, origin, size, &label))
-		ereport(ERROR,
-				(errcode(ERRCODE_PROGRAM_LIMIT_EXCEEDED),
-				 errmsg("%s: the point (%.17g %.17g) has no square of tile_size %.17g counted from (%.17g %.17g)",
-						TILED_FNAME, x, y, size, origin[0], origin[1]),
-				 errdetail("A square's column and row count from the data's lower left corner and must stay below 2^31."),
-				 errhint("Use a larger tile_size.")));
-	PG_RETURN_INT64((int64) label);
-}
-
-/*
- * The region {h, K, bands...} of a tile whose first K and halo h are given:
- * the hull bands (tdc_tp_hull_bands over the data's mean spacing) that
- * tdc_tp_first_bands takes for it, unless counts (ps, g) drop those that
- * would hold clusters (tdc_tp_fit_bands), as ./tdc does.
- */
-static ArrayType *
-region_result(const double K[4], double h, size_t count, const double *hull, int nhull,
-			  double spacing, const size_t *ps, const tdc_tp_grid *g)
-{
-	double	   *bands = palloc(sizeof(double) * 4 * (nhull + 1)),
-			   *out = palloc(sizeof(double) * (5 + 4 * (nhull + 1)));
-	uint8	   *mark = palloc0(nhull + 1);
-	int			n = 5;
-
-	out[0] = h;
-	memcpy(out + 1, K, 4 * sizeof(double));
-	tdc_tp_hull_bands(hull, (size_t) nhull, spacing, bands);
-	tdc_tp_first_bands(K, count, bands, (size_t) nhull, mark);
-	if (ps != NULL)
-		tdc_tp_fit_bands(ps, g, bands, (size_t) nhull, count / 8 > 1000 ? count / 8 : 1000, mark);
-	for (int i = 0; nhull > 1 && i < nhull; i++)
-		if (mark[i])
-		{
-			memcpy(out + n, bands + 4 * i, 4 * sizeof(double));
-			n += 4;
-		}
-	return float8_result(out, n);
-}
-
-PG_FUNCTION_INFO_V1(_tdc_tile_region);
-
-/*
- * _tdc_tile_region(box float8[], n int8, extent float8[], npts int8,
- *					hull float8[]) RETURNS float8[]
- * The first known region {h, K, bands...} of a tile of n points whose box
- * is box, in data of npts points with box extent and convex hull hull
- * {x,y,...}: K is the box plus a halo of 8 of the tile's mean spacings,
- * the bands those of the hull edges near K (tdc_tp_first_known,
- * tdc_tp_first_bands).  For tiles of a column or of squares; the
- * automatic plan's come from _tdc_plan_regions.
- */
-Datum
-_tdc_tile_region(PG_FUNCTION_ARGS)
-{
-	double		box[4],
-				extent[4],
-				K[4],
-				h,
-			   *hull;
-	int64		n = PG_GETARG_INT64(1),
-				npts = PG_GETARG_INT64(3);
-	int			nhull;
-
-	box_arg(PG_GETARG_ARRAYTYPE_P(0), box, "the tile's box");
-	box_arg(PG_GETARG_ARRAYTYPE_P(2), extent, "the extent");
-	hull = float8_array(PG_GETARG_ARRAYTYPE_P(4), &nhull, 0, 2, "the hull");
-	if (n < 0 || npts < 0)
-		ereport(ERROR,
-				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
-				 errmsg("%s: negative point counts", TILED_FNAME)));
-	tdc_tp_first_known(box, (size_t) n, tdc_tp_spacing(extent, (size_t) npts), K, &h);
-	PG_RETURN_ARRAYTYPE_P(region_result(K, h, (size_t) n, hull, nhull / 2,
-										tdc_tp_spacing(extent, (size_t) npts), NULL, NULL));
-}
-
-/* The first i with cut[i] == v (the side of a cell), or -1. */
-static int
-side_index(const double *cut, int n, double v)
-{
-	int			l = 0,
-				h = n;
-
-	while (l < h)
-	{
-		int			m = (l + h) / 2;
-
-		if (cut[m] >= v)
-			h = m;
-		else
-			l = m + 1;
-	}
-	return cut[l] == v ? l : -1;
-}
-
-/* The index of the cell of the plan's grid whose closed box is ring r's (5 vertices). */
-static int32
-ring_cell(const TiledPlanGrid *pg, const double *r)
-{
-	int			n = pg->n,
-				i = side_index(pg->xcut, n, r[0]),
-				j = side_index(pg->ycut, n, r[1]);
-
-	/* equal cuts make empty cells: the cell is the last of them */
-	while (i >= 0 && i < n - 1 && pg->xcut[i + 1] != r[4])
-		i++;
-	while (j >= 0 && j < n - 1 && pg->ycut[j + 1] != r[5])
-		j++;
-	if (i < 0 || j < 0 || i >= n || j >= n || pg->xcut[i + 1] != r[4] || pg->ycut[j + 1] != r[5])
-		ereport(ERROR,
-				(errcode(ERRCODE_INTERNAL_ERROR),
-				 errmsg("%s: a cell needed is not a cell of the plan", TILED_FNAME)));
-	return (int32) j * n + i;
-}
-
-PG_FUNCTION_INFO_V1(_tdc_tile_need_cells);
-
-/*
- * _tdc_tile_need_cells(need geometry, plan bytea) RETURNS int4[]
- * The cells of the plan that a tile's run that was not final named, from
- * its row (the rings after the first, see _tdc_tile_triangles): the next
- * run adds their points, as ./tdc's does (add_cells).  Empty when it named
- * none: its known box must grow (_tdc_tile_regrow).
- */
-Datum
-_tdc_tile_need_cells(PG_FUNCTION_ARGS)
-{
-	TdcPointBuf rings;
-	TiledPlanGrid pg;
-	Datum	   *d;
-	uint64		ncells;
-
-	tdc_pointbuf_init(&rings, CurrentMemoryContext);
-	(void) tdc_read_geometry(&rings, PG_GETARG_DATUM(0), TILED_FNAME);
-	if (rings.n == 0 || rings.n % 5 != 0)
-		ereport(ERROR,
-				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
-				 errmsg("%s: the box needed must be rings of 5 vertices", TILED_FNAME)));
-	tdc_tiled_plan_grid(PG_GETARG_BYTEA_P(1), &pg);
-	ncells = rings.n / 5 - 1;
-	d = palloc(sizeof(Datum) * (ncells + 1));
-	for (uint64 k = 0; k < ncells; k++)
-		d[k] = Int32GetDatum(ring_cell(&pg, rings.xy + 10 * (k + 1)));
-	PG_RETURN_ARRAYTYPE_P(construct_array(d, (int) ncells, INT4OID, 4, true, TYPALIGN_INT));
-}
-
-PG_FUNCTION_INFO_V1(_tdc_tile_regrow);
-
-/*
- * _tdc_tile_regrow(region float8[], need geometry, extent float8[],
- *					npts int8, hull float8[], plan bytea) RETURNS float8[]
- * The region of a tile's next run, after a run that was not final: need is
- * the row _tdc_tile_triangles gave for it, a POLYGON whose first ring is
- * the box it needs (the other rings are the cells it needs, which the
- * procedure adds with _tdc_tile_need_cells).  As ./tdc grows a tile
- * that named no cell: without
- * a plan's cells (plan NULL) the bands of the hull edges that meet the
- * box and that it lacks, if there are such (tdc_tp_grow_bands); else K
- * grown to the box and half the halo beyond (tdc_tp_grow_known).
- */
-Datum
-_tdc_tile_regrow(PG_FUNCTION_ARGS)
-{
-	double	   *region,
-				need[4],
-				extent[4],
-			   *hull,
-			   *bands,
-			   *extra,
-				K[4],
-				Kmin[4];
-	uint8	   *inband;
-	int			nregion,
-				nhull;
-	size_t		nextra;
-	int64		npts;
-	bool		cells = !PG_ARGISNULL(5);
-	TdcPointBuf rings;
-
-	if (PG_ARGISNULL(0) || PG_ARGISNULL(1) || PG_ARGISNULL(2) || PG_ARGISNULL(3) || PG_ARGISNULL(4))
-		PG_RETURN_NULL();
-	npts = PG_GETARG_INT64(3);
-
-	region = float8_array(PG_GETARG_ARRAYTYPE_P(0), &nregion, 5, 1, "the region");
-	if ((nregion - 5) % 4 != 0)
-		ereport(ERROR,
-				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
-				 errmsg("%s: a region is {h, xmin, ymin, xmax, ymax, boxes...}", TILED_FNAME)));
-	tdc_pointbuf_init(&rings, CurrentMemoryContext);
-	(void) tdc_read_geometry(&rings, PG_GETARG_DATUM(1), TILED_FNAME);
-	if (rings.n == 0 || rings.n % 5 != 0)
-		ereport(ERROR,
-				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
-				 errmsg("%s: the box needed must be rings of 5 vertices", TILED_FNAME)));
-	/* ring k's box: corners 0 and 2 */
-	need[0] = rings.xy[0];
-	need[1] = rings.xy[1];
-	need[2] = rings.xy[4];
-	need[3] = rings.xy[5];
-	box_arg(PG_GETARG_ARRAYTYPE_P(2), extent, "the extent");
-	hull = float8_array(PG_GETARG_ARRAYTYPE_P(4), &nhull, 0, 2, "the hull");
-	nhull /= 2;
-	nextra = (nregion - 5) / 4;
-	extra = palloc(sizeof(double) * (5 + 4 * (nextra + nhull + 1)));
-	memcpy(extra, region, sizeof(double) * nregion);
-	if (!cells)
-	{
-		bands = palloc(sizeof(double) * 4 * (nhull + 1));
-		inband = palloc0(nhull + 1);
-		tdc_tp_hull_bands(hull, (size_t) nhull, tdc_tp_spacing(extent, (size_t) Max(npts, 0)), bands);
-		/* the bands the tile has: the same doubles, made by the same call */
-		for (int i = 0; nhull > 1 && i < nhull; i++)
-			for (size_t e = 0; e < nextra; e++)
-				if (memcmp(bands + 4 * i, region + 5 + 4 * e, 4 * sizeof(double)) == 0)
-					inband[i] = 1;
-		if (tdc_tp_grow_bands(bands, (size_t) nhull, need, inband, extra + 5, &nextra) > 0)
-			PG_RETURN_ARRAYTYPE_P(float8_result(extra, 5 + 4 * (int) nextra));
-	}
-	memcpy(K, region + 1, sizeof(K));
-	tdc_tp_grow_known(K, Kmin, need, region[0]);
-	memcpy(extra + 1, K, sizeof(K));
-	PG_RETURN_ARRAYTYPE_P(float8_result(extra, nregion));
-}
 
 /* ---- the automatic plan ---- */
 
 /* Options of a tile's run, as run.c sets them, for tdc_estimate_memory. */
-static void
-plan_options(tdc_options *opt)
+void
+tdc_tiled_plan_options(tdc_options *opt)
 {
 	tdc_options_init(opt);
 	opt->threads = tdc_effective_threads();
@@ -425,7 +95,7 @@ _tdc_plan_tile_max(PG_FUNCTION_ARGS)
 
 	if (npts <= 0 || budget == 0)
 		PG_RETURN_INT64(Max(npts, 0));
-	plan_options(&opt);
+	tdc_tiled_plan_options(&opt);
 	PG_RETURN_INT64((int64) tdc_tp_tile_max((size_t) npts, &opt, PLAN_POINT_BYTES(hasz), (size_t) budget));
 }
 
@@ -729,7 +399,7 @@ _tdc_plan_finalfn(PG_FUNCTION_ARGS)
 				(errcode(ERRCODE_OBJECT_NOT_IN_PREREQUISITE_STATE),
 				 errmsg("%s: the source changed while it was planned (%llu vertices, then %llu)",
 						TILED_FNAME, (unsigned long long) st->grid->n, (unsigned long long) st->n)));
-	plan_options(&opt);
+	tdc_tiled_plan_options(&opt);
 	per = PLAN_POINT_BYTES(st->hasz);
 	ps = plan_prefix_sums(st->counts);
 	tiles = palloc0(sizeof(tdc_tp_tile) * TDC_TP_MAX_TILES);
@@ -770,8 +440,8 @@ _tdc_plan_finalfn(PG_FUNCTION_ARGS)
  * A plan argument, checked and copied into aligned memory of cxt, with its
  * grid in g (when not NULL).
  */
-static PlanHdr *
-plan_of(bytea *b, MemoryContext cxt, tdc_tp_grid *g)
+PlanHdr *
+tdc_tiled_plan_of(bytea *b, MemoryContext cxt, tdc_tp_grid *g)
 {
 	PlanHdr		h;
 	PlanHdr    *p;
@@ -834,7 +504,7 @@ label_cache(FunctionCallInfo fcinfo, bytea *b)
 			c->cell_tile = MemoryContextAlloc(cxt, sizeof(int16) * TDC_TP_GRID * TDC_TP_GRID);
 			fcinfo->flinfo->fn_extra = c;
 		}
-		p = plan_of(b, CurrentMemoryContext, &c->g);
+		p = tdc_tiled_plan_of(b, CurrentMemoryContext, &c->g);
 		tiles = PLAN_TILES(p);
 		memset(c->cell_tile, 0xff, sizeof(int16) * TDC_TP_GRID * TDC_TP_GRID);
 		tdc_tp_label_cells(tiles, p->nt, c->cell_tile);
@@ -895,8 +565,8 @@ _tdc_plan_regions(PG_FUNCTION_ARGS)
 	double		spacing;
 
 	InitMaterializedSRF(fcinfo, 0);
-	p = plan_of(PG_GETARG_BYTEA_P(0), CurrentMemoryContext, g);
-	hull = float8_array(PG_GETARG_ARRAYTYPE_P(1), &nhull, 0, 2, "the hull");
+	p = tdc_tiled_plan_of(PG_GETARG_BYTEA_P(0), CurrentMemoryContext, g);
+	hull = tdc_tiled_float8_array(PG_GETARG_ARRAYTYPE_P(1), &nhull, 0, 2, "the hull");
 	nhull /= 2;
 	tiles = PLAN_TILES(p);
 	ps = plan_prefix_sums(PLAN_COUNTS(p));
@@ -917,7 +587,7 @@ _tdc_plan_regions(PG_FUNCTION_ARGS)
 						 tdc_tp_known_limit(tiles[t].count, (size_t) p->tile_max), K, &h);
 		values[0] = Int64GetDatum(t);
 		values[1] = Int64GetDatum((int64) tiles[t].count);
-		values[2] = PointerGetDatum(region_result(K, h, tiles[t].count, hull, nhull, spacing, ps, g));
+		values[2] = PointerGetDatum(tdc_tiled_region_result(K, h, tiles[t].count, hull, nhull, spacing, ps, g));
 		tuplestore_putvalues(rsinfo->setResult, rsinfo->setDesc, values, nulls);
 	}
 	return (Datum) 0;
@@ -933,100 +603,10 @@ PG_FUNCTION_INFO_V1(_tdc_plan_box);
 Datum
 _tdc_plan_box(PG_FUNCTION_ARGS)
 {
-	PlanHdr    *p = plan_of(PG_GETARG_BYTEA_P(0), CurrentMemoryContext, NULL);
+	PlanHdr    *p = tdc_tiled_plan_of(PG_GETARG_BYTEA_P(0), CurrentMemoryContext, NULL);
 	double		v[6] = {p->bb[0], p->bb[1], p->bb[2], p->bb[3], (double) p->n, (double) p->nt};
 
-	PG_RETURN_ARRAYTYPE_P(float8_result(v, 6));
-}
-
-/* ---- the plan's cells in a tile's run (fn_tiled.c) ---- */
-
-void
-tdc_tiled_plan_grid(const bytea *plan, TiledPlanGrid *pg)
-{
-	PlanHdr    *p = plan_of((bytea *) plan, CurrentMemoryContext, NULL);
-
-	pg->n = TDC_TP_GRID;
-	pg->xcut = p->xcut;
-	pg->ycut = p->ycut;
-	pg->counts = PLAN_COUNTS(p);
-}
-
-/* The cells [*lo, *hi) whose sides lie in [a, b]: cut[*lo] >= a, cut[*hi] <= b. */
-static void
-cells_within(const double *cut, int n, double a, double b, int *lo, int *hi)
-{
-	int			l = 0,
-				h = n;
-
-	/* the first side >= a */
-	while (l < h)
-	{
-		int			m = (l + h) / 2;
-
-		if (cut[m] >= a)
-			h = m;
-		else
-			l = m + 1;
-	}
-	*lo = l;
-	/* the last side <= b */
-	l = 0;
-	h = n;
-	while (l < h)
-	{
-		int			m = (l + h + 1) / 2;
-
-		if (cut[m] <= b)
-			l = m;
-		else
-			h = m - 1;
-	}
-	*hi = cut[l] <= b ? l : 0;
-}
-
-void
-tdc_tiled_cell_states(const TiledPlanGrid *pg, const double K[4], const double *extra, int nextra,
-					  const int32 *added, int nadded, uint8 *cell, tdc_tile_grid *g)
-{
-	int			n = pg->n;
-
-	for (size_t c = 0; c < (size_t) n * n; c++)
-		cell[c] = pg->counts[c] == 0 ? TDC_TILE_CELL_EMPTY : TDC_TILE_CELL_OTHER;
-	for (int e = -1; e < nextra; e++)
-	{
-		const double *b = e < 0 ? K : extra + 4 * e;
-		int			c0,
-					c1,
-					r0,
-					r1;
-
-		cells_within(pg->xcut, n, b[0], b[2], &c0, &c1);
-		cells_within(pg->ycut, n, b[1], b[3], &r0, &r1);
-		for (int r = r0; r < r1; r++)
-			for (int c = c0; c < c1; c++)
-				if (cell[(size_t) r * n + c] == TDC_TILE_CELL_OTHER)
-					cell[(size_t) r * n + c] = TDC_TILE_CELL_KNOWN;
-	}
-	for (int k = 0; k < nadded; k++)
-		if (added[k] >= 0 && added[k] < n * n && cell[added[k]] == TDC_TILE_CELL_OTHER)
-			cell[added[k]] = TDC_TILE_CELL_KNOWN;
-	g->nx = g->ny = n;
-	g->xcut = pg->xcut;
-	g->ycut = pg->ycut;
-	g->cell = cell;
-}
-
-void
-tdc_tiled_cell_box(const TiledPlanGrid *pg, uint32 c, double box[4])
-{
-	int			i = (int) (c % (uint32) pg->n),
-				j = (int) (c / (uint32) pg->n);
-
-	box[0] = pg->xcut[i];
-	box[1] = pg->ycut[j];
-	box[2] = pg->xcut[i + 1];
-	box[3] = pg->ycut[j + 1];
+	PG_RETURN_ARRAYTYPE_P(tdc_tiled_float8_result(v, 6));
 }
 
 PG_FUNCTION_INFO_V1(_tdc_plan_cell);
@@ -1043,33 +623,4 @@ _tdc_plan_cell(PG_FUNCTION_ARGS)
 	LabelCache *c = label_cache(fcinfo, PG_GETARG_BYTEA_P(2));
 
 	PG_RETURN_INT32(tdc_tp_cell(&c->g, PG_GETARG_FLOAT8(0), PG_GETARG_FLOAT8(1)));
-}
-
-PG_FUNCTION_INFO_V1(_tdc_in_boxes);
-
-/*
- * _tdc_in_boxes(x, y, boxes float8[]) RETURNS boolean
- * Whether a closed box of {xmin, ymin, xmax, ymax, ...} holds the point:
- * a point of a cell a rerun adds is passed once, not again when K or a
- * band already holds it.
- */
-Datum
-_tdc_in_boxes(PG_FUNCTION_ARGS)
-{
-	double		x = PG_GETARG_FLOAT8(0),
-				y = PG_GETARG_FLOAT8(1);
-	ArrayType  *a = PG_GETARG_ARRAYTYPE_P(2);
-	int			n;
-	const double *b;
-
-	if (ARR_NDIM(a) > 1 || ARR_ELEMTYPE(a) != FLOAT8OID || ARR_HASNULL(a))
-		ereport(ERROR,
-				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
-				 errmsg("%s: the boxes must be a one-dimensional float8 array without NULLs", TILED_FNAME)));
-	n = ARR_NDIM(a) == 0 ? 0 : ARR_DIMS(a)[0] / 4;
-	b = (const double *) ARR_DATA_PTR(a);
-	for (int i = 0; i < n; i++)
-		if (b[4 * i] <= x && x <= b[4 * i + 2] && b[4 * i + 1] <= y && y <= b[4 * i + 3])
-			PG_RETURN_BOOL(true);
-	PG_RETURN_BOOL(false);
 }

@@ -366,7 +366,7 @@ BEGIN
 		tile_sql := format('INSERT INTO %s (id, tile, geom)
 			SELECT CASE WHEN (q.t).k = 0 THEN -1 ELSE $2 * 4294967296 + (q.t).k END, q.tile, (q.t).geom
 			  FROM (SELECT s.tile, _tdc_tile_triangles(s.r) AS t
-					  FROM (SELECT h.tile, _tdc_tile(h.g, h.label, $2, $3, %L::float8[], $4, h.seq, h.vi, $5, $6) AS r
+					  FROM (SELECT h.tile, _tdc_tile(h.g, h.label, $2, $3, %L::float8[], $4, h.seq, h.vi, $5, $6, $7) AS r
 							  FROM %s h
 							 WHERE h.tile = $1::%s AND h.tl = $2
 							 GROUP BY h.tile) s) q',
@@ -472,9 +472,9 @@ BEGIN
 		ELSE
 			reported := 0;
 			i := 0;
-			FOR r IN EXECUTE format('SELECT tile::text AS tile, label, known, extra, added FROM %s WHERE pending ORDER BY label',
-									tiles) LOOP
-				EXECUTE tile_sql USING r.tile, r.label, r.known, r.extra, plan, r.added;
+			FOR r IN EXECUTE format('SELECT tile::text AS tile, label, known, extra, added, cell_runs
+									   FROM %s WHERE pending ORDER BY label', tiles) LOOP
+				EXECUTE tile_sql USING r.tile, r.label, r.known, r.extra, plan, r.added, r.cell_runs;
 				GET DIAGNOSTICS nrows = ROW_COUNT;
 				written := written + nrows;
 				-- a tile that is not final writes one row: its box
@@ -506,9 +506,19 @@ BEGIN
 			-- long hull edge a tile of 5,000 points in a strip with gaps took
 			-- 170 rounds so.  A round is a pass over the points, so after
 			-- cells_max rounds of cells a tile grows its box instead.)
-			need_cells := CASE WHEN plan IS NULL THEN '{}' ELSE _tdc_tile_need_cells(r.geom, plan) END;
+			-- (The cells come as ./tdc adds them: all when they fit, else
+			-- the nearest first as far as they fit, by the points this run
+			-- held, its halo partition's rows; an ERROR when not even the
+			-- nearest fits.)
 			EXECUTE format('SELECT cell_runs FROM %s WHERE tile = $1::%s', tiles, ttype) INTO nrows USING r.tile;
-			IF cardinality(need_cells) > 0 AND nrows < cells_max THEN
+			need_cells := '{}';
+			IF plan IS NOT NULL AND nrows < cells_max THEN
+				EXECUTE format('SELECT _tdc_tile_need_cells($1, $2, k.tile, (SELECT count(*) FROM %2$s h WHERE h.tl = k.label),
+												  k.added)
+								  FROM %1$s k WHERE k.tile = $3::bigint', tiles, halo)
+				   INTO need_cells USING r.geom, plan, r.tile;
+			END IF;
+			IF cardinality(need_cells) > 0 THEN
 				EXECUTE format('UPDATE %1$s SET pending = true, added = added || $2, cell_runs = cell_runs + 1
 								 WHERE tile = $1::%2$s', tiles, ttype)
 				USING r.tile, need_cells;

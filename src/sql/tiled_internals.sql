@@ -102,9 +102,10 @@ COMMENT ON AGGREGATE _tdc_hull(float8[]) IS
 'Internal, for tdc_delaunay_tiled: the convex hull of partial hulls given as {x,y,...}.';
 
 -- The tiling policy of src/core/tile_plan.c, the one ./tdc --max-memory
--- follows (src/pg/fn_tiled_plan.c): labels of squares, a tile's first known
--- region {h, K, extra boxes...} and its growth, and the adaptive plan of
--- automatic tiles.
+-- follows (src/pg/fn_tiled_region.c, fn_tiled_plan.c, fn_tiled_cells.c):
+-- labels of squares, a tile's first known region {h, K, extra boxes...} and
+-- its growth, the adaptive plan of automatic tiles, and the cells a rerun
+-- adds.
 
 CREATE FUNCTION _tdc_square_label(float8, float8, float8, float8, float8)
 RETURNS int8
@@ -224,24 +225,24 @@ COMMENT ON FUNCTION _tdc_plan_box(bytea) IS
 -- _tdc_tile with the plan of automatic tiles: its cells tell the finality
 -- check where the data has no point, and a tile that is not final names
 -- the cells it needs, whose points its rerun adds (src/pg/fn_tiled.c)
-CREATE FUNCTION _tdc_tile_transfn(internal, geometry, int8, int8, float8[], float8[], float8[], int8, int8, bytea, int4[])
+CREATE FUNCTION _tdc_tile_transfn(internal, geometry, int8, int8, float8[], float8[], float8[], int8, int8, bytea, int4[], int4)
 RETURNS internal
 AS 'MODULE_PATHNAME', '_tdc_tile_transfn'
 LANGUAGE C IMMUTABLE PARALLEL SAFE;
 
-COMMENT ON FUNCTION _tdc_tile_transfn(internal, geometry, int8, int8, float8[], float8[], float8[], int8, int8, bytea, int4[]) IS
+COMMENT ON FUNCTION _tdc_tile_transfn(internal, geometry, int8, int8, float8[], float8[], float8[], int8, int8, bytea, int4[], int4) IS
 'Transition function of _tdc_tile with a plan: collects the vertices of a tile and its halo with the label of their owning tile.';
 
-CREATE AGGREGATE _tdc_tile(geometry, int8, int8, float8[], float8[], float8[], int8, int8, bytea, int4[]) (
+CREATE AGGREGATE _tdc_tile(geometry, int8, int8, float8[], float8[], float8[], int8, int8, bytea, int4[], int4) (
 	SFUNC = _tdc_tile_transfn,
 	STYPE = internal,
 	FINALFUNC = _tdc_tile_finalfn
 );
 
-COMMENT ON AGGREGATE _tdc_tile(geometry, int8, int8, float8[], float8[], float8[], int8, int8, bytea, int4[]) IS
+COMMENT ON AGGREGATE _tdc_tile(geometry, int8, int8, float8[], float8[], float8[], int8, int8, bytea, int4[], int4) IS
 'Internal, for tdc_delaunay_tiled: _tdc_tile as with eight arguments, and the plan of automatic tiles (NULL: none), '
-'whose cells the finality check uses, and the cells of the plan whose points a rerun added; '
-'a tile that is not final then names the cells it needs.';
+'whose cells the finality check uses, the cells of the plan whose points a rerun added, and the number of runs '
+'before that added cells; a tile that is not final then names the cells it needs, reaching farther after each such run.';
 
 CREATE FUNCTION _tdc_plan_cell(float8, float8, bytea)
 RETURNS int4
@@ -259,11 +260,12 @@ LANGUAGE C IMMUTABLE STRICT PARALLEL SAFE;
 COMMENT ON FUNCTION _tdc_in_boxes(float8, float8, float8[]) IS
 'Internal, for tdc_delaunay_tiled: whether one of the closed boxes {xmin,ymin,xmax,ymax,...} holds the point x, y.';
 
-CREATE FUNCTION _tdc_tile_need_cells(geometry, bytea)
+CREATE FUNCTION _tdc_tile_need_cells(geometry, bytea, int8, int8, int4[])
 RETURNS int4[]
 AS 'MODULE_PATHNAME', '_tdc_tile_need_cells'
 LANGUAGE C IMMUTABLE STRICT PARALLEL SAFE;
 
-COMMENT ON FUNCTION _tdc_tile_need_cells(geometry, bytea) IS
-'Internal, for tdc_delaunay_tiled: _tdc_tile_need_cells(need, plan), the cells of the plan that a tile''s run that was '
-'not final named (the rings of its row after the first), whose points its rerun adds.';
+COMMENT ON FUNCTION _tdc_tile_need_cells(geometry, bytea, int8, int8, int4[]) IS
+'Internal, for tdc_delaunay_tiled: _tdc_tile_need_cells(need, plan, tile, points, added), the cells of the plan that a '
+'tile''s run of that many points that was not final named (the rings of its row after the first) and that its rerun adds: '
+'all when they fit tdc_delaunay.max_memory, else the nearest first as far as they fit.';
