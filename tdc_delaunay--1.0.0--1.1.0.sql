@@ -379,7 +379,6 @@ DECLARE
 	plan bytea;					-- automatic tiles: the plan (src/pg/fn_tiled_plan.c)
 	pbox float8[];
 	need_cells int4[];			-- the plan's cells a tile that was not final named
-	cells_max constant int := 8;	-- rounds a tile grows by cells before its box grows
 	tparts text[];
 	tschema text; tname text; qtarget text;
 	pts text; tiles text; rt text; halo text;
@@ -836,19 +835,14 @@ BEGIN
 								CASE WHEN citus THEN '' WHEN cardinality(one_row) = 0 THEN 'AND false'
 									 ELSE 'AND tile::text = ANY($1)' END)
 						 USING one_row LOOP
-			-- With a plan: the cells it named, if any; else the region grown.
-			-- (The check names the cells the disks of the triangles not yet
-			-- final meet, and a rerun may find the next ones needed: along a
-			-- long hull edge a tile of 5,000 points in a strip with gaps took
-			-- 170 rounds so.  A round is a pass over the points, so after
-			-- cells_max rounds of cells a tile grows its box instead.)
-			-- (The cells come as ./tdc adds them: all when they fit, else
-			-- the nearest first as far as they fit, by the points this run
-			-- held, its halo partition's rows; an ERROR when not even the
-			-- nearest fits.)
-			EXECUTE format('SELECT cell_runs FROM %s WHERE tile = $1::%s', tiles, ttype) INTO nrows USING r.tile;
+			-- With a plan: the cells it named, if any, as ./tdc adds them
+			-- (_tdc_tile_need_cells: all when they fit, else the nearest
+			-- first as far as they fit, by the points this run held, its
+			-- halo partition's rows; an ERROR when not even the nearest
+			-- fits); its next request reaches twice as far (cell_runs, see
+			-- tdc_tp_rings).  Else the region grown.
 			need_cells := '{}';
-			IF plan IS NOT NULL AND nrows < cells_max THEN
+			IF plan IS NOT NULL THEN
 				EXECUTE format('SELECT _tdc_tile_need_cells($1, $2, k.tile, (SELECT count(*) FROM %2$s h WHERE h.tl = k.label),
 												  k.added)
 								  FROM %1$s k WHERE k.tile = $3::bigint', tiles, halo)

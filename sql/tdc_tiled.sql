@@ -144,12 +144,12 @@ SET client_min_messages = warning;
 SELECT * FROM tiled_vs_dump('tt_ring_tri', 'SELECT geom FROM tt_ring');
 
 
--- labels of squares count from the data's lower left corner: 50,000 points
+-- labels of squares count from the data's lower left corner: 20,000 points
 -- at 5e6 + [0, 1e-3)^2 (floor(x / size) passes 2^31 there), squares of
 -- 0.0006 and of 0.00025, and squares too small to count
 SELECT setseed(0.375);
 CREATE TABLE tt_far AS
-	SELECT ST_MakePoint(5e6 + random() * 1e-3, 5e6 + random() * 1e-3) AS geom FROM generate_series(1, 50000);
+	SELECT ST_MakePoint(5e6 + random() * 1e-3, 5e6 + random() * 1e-3) AS geom FROM generate_series(1, 20000);
 CALL tdc_delaunay_tiled('tt_far', 'tt_far_tri', 'geom', NULL, 0.0006);
 SELECT * FROM tiled_vs_dump('tt_far_tri', 'SELECT geom FROM tt_far');
 SELECT DISTINCT tile FROM tt_far_tri ORDER BY tile;
@@ -192,13 +192,18 @@ CREATE TABLE tt_coast AS
 			  FROM (SELECT random() AS u FROM generate_series(1, 30000)) a
 			UNION ALL
 			SELECT random() * 1000, -400 + random() * 300 FROM generate_series(1, 3000)) s;
-SET tdc_delaunay.max_memory = 16;
+-- (each at about the least limit it passes at: a rerun adds the cells it
+-- named within 7/8 of the limit, nearest first, as ./tdc does, and below
+-- that limit a tile cannot add even its nearest cell)
+SET tdc_delaunay.max_memory = 20;
 SET client_min_messages = notice;
 CALL tdc_delaunay_tiled('tt_c9', 'tt_c9_auto');
 SET client_min_messages = warning;
-SET tdc_delaunay.max_memory = 10;
+SET tdc_delaunay.max_memory = 14;
 CALL tdc_delaunay_tiled('tt_town', 'tt_town_auto');
+SET tdc_delaunay.max_memory = 10;
 CALL tdc_delaunay_tiled('tt_strip', 'tt_strip_auto');
+SET tdc_delaunay.max_memory = 12;
 CALL tdc_delaunay_tiled('tt_coast', 'tt_coast_auto');
 RESET tdc_delaunay.max_memory;
 CALL tdc_delaunay_tiled('tt_c9', 'tt_c9_col', tile_column => 't');
