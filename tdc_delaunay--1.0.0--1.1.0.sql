@@ -752,7 +752,10 @@ BEGIN
 			-- step rounds monotonically), so a point in a box is in one of its
 			-- cells; the exact test is _tdc_first_box.  Cells outside the
 			-- extent (gx0 .. gx1: the values' boxes, rounded outward) hold
-			-- no point and are left out.
+			-- no point and are left out.  (OFFSET 0: a tile's boxes, known ||
+			-- extra, are built once, and the earlier boxes each box overlaps once
+			-- per box, not at every use and for every cell: with the 90 hull
+			-- bands of a ring of 90 points this statement took 8 s, not 0.1 s.)
 			EXECUTE format('SELECT coalesce(sum(greatest(least(b.x1, %3$L::float8) - greatest(b.x0, %1$L::float8), 0)
 												* greatest(least(b.y1, %4$L::float8) - greatest(b.y0, %2$L::float8), 0)), 0)
 							  FROM (%5$s) b',
@@ -770,7 +773,8 @@ BEGIN
 													  WHERE k.bx[4*j+1] <= k.x1 AND k.x0 <= k.bx[4*j+3]
 														AND k.bx[4*j+2] <= k.y1 AND k.y0 <= k.bx[4*j+4]),
 													''{}'') || k.bx[4*k.i+1:4*k.i+4] AS boxes
-									  FROM (%2$s) k) b,
+									  FROM (SELECT * FROM (%2$s) k0 OFFSET 0) k
+									OFFSET 0) b,
 								   generate_series(greatest(floor((b.x0 - %3$L::float8) / %5$L::float8), 0)::bigint,
 												   least(floor((b.x1 - %3$L::float8) / %5$L::float8), %6$s)::bigint) cx,
 								   generate_series(greatest(floor((b.y0 - %4$L::float8) / %5$L::float8), 0)::bigint,
