@@ -4,8 +4,11 @@
 \echo Use "ALTER EXTENSION tdc_delaunay UPDATE TO '1.1.0'" to load this file. \quit
 
 -- 1.1.0 adds TIN analysis, the objects of src/sql/tin.sql as they are in the
--- 1.1.0 install script; every object of 1.0.0 stays as it was (test/upgrade.sh
--- compares the catalogue with a fresh 1.1.0 install).
+-- 1.1.0 install script, and puts tdc_delaunay_tiled on the core's tiling
+-- policy: the new internal functions of src/sql/tiled_internals.sql and the
+-- procedure as src/sql/tiled.sql has it (at the end).  Every other object of
+-- 1.0.0 stays as it was (test/upgrade.sh compares the catalogue with a fresh
+-- 1.1.0 install).
 
 -- ST_TDCContours: contour lines of the TIN of all rows' vertices (heights from Z)
 
@@ -173,3 +176,721 @@ COMMENT ON AGGREGATE ST_TDCDrape(geometry, geometry, text) IS
 'The target with Z at every vertex from the samples by method ''linear'' (lines split at the triangle edges; '
 '''linear:breaklines=true'' takes the samples'' linestrings and polygon rings as hard breaklines), '
 '''nearest'' or ''natural_neighbor'' (Sibson); a target vertex outside the samples'' convex hull is an error.';
+
+-- tdc_delaunay_tiled on the core's tiling policy (src/sql/tiled_internals.sql,
+-- from its tiling-policy part, and src/sql/tiled.sql)
+
+-- The tiling policy of src/core/tile_plan.c, the one ./tdc --max-memory
+-- follows (src/pg/fn_tiled_region.c, fn_tiled_plan.c, fn_tiled_cells.c):
+-- labels of squares, a tile's first known region {h, K, extra boxes...} and
+-- its growth, the adaptive plan of automatic tiles, and the cells a rerun
+-- adds.
+
+CREATE FUNCTION _tdc_square_label(float8, float8, float8, float8, float8)
+RETURNS int8
+AS 'MODULE_PATHNAME', '_tdc_square_label'
+LANGUAGE C IMMUTABLE STRICT PARALLEL SAFE;
+
+COMMENT ON FUNCTION _tdc_square_label(float8, float8, float8, float8, float8) IS
+'Internal, for tdc_delaunay_tiled: _tdc_square_label(x, y, origin_x, origin_y, size), the label column * 2^32 + row '
+'of the square of side size holding the point, counted from the origin (an error past 2^31 columns or rows).';
+
+CREATE FUNCTION _tdc_tile_region(float8[], int8, float8[], int8, float8[])
+RETURNS float8[]
+AS 'MODULE_PATHNAME', '_tdc_tile_region'
+LANGUAGE C IMMUTABLE STRICT PARALLEL SAFE;
+
+COMMENT ON FUNCTION _tdc_tile_region(float8[], int8, float8[], int8, float8[]) IS
+'Internal, for tdc_delaunay_tiled: _tdc_tile_region(tile box, tile points, extent, points, hull), the first known region '
+'{h, xmin, ymin, xmax, ymax, extra boxes...} of a tile: its box with a halo h of 8 of its mean spacings and the hull bands near it.';
+
+CREATE FUNCTION _tdc_tile_regrow(float8[], geometry, float8[], int8, float8[], bytea)
+RETURNS float8[]
+AS 'MODULE_PATHNAME', '_tdc_tile_regrow'
+LANGUAGE C IMMUTABLE PARALLEL SAFE;
+
+COMMENT ON FUNCTION _tdc_tile_regrow(float8[], geometry, float8[], int8, float8[], bytea) IS
+'Internal, for tdc_delaunay_tiled: _tdc_tile_regrow(region, need, extent, points, hull, plan), the region of a tile''s next run '
+'from the row of a run that was not final (rings: the box it needs, then the cells it needs): the cells added, '
+'else (without cells) the hull bands meeting the box that it lacks, else its known box grown to the box and half its halo beyond.';
+
+CREATE FUNCTION _tdc_plan_tile_max(int8, boolean)
+RETURNS int8
+AS 'MODULE_PATHNAME', '_tdc_plan_tile_max'
+LANGUAGE C STABLE STRICT PARALLEL SAFE;
+
+COMMENT ON FUNCTION _tdc_plan_tile_max(int8, boolean) IS
+'Internal, for tdc_delaunay_tiled: _tdc_plan_tile_max(points, has Z), the most points an automatic tile may own '
+'under tdc_delaunay.max_memory (all of them when they fit as one tile).';
+
+CREATE FUNCTION _tdc_plan_grid_transfn(internal, geometry, int8)
+RETURNS internal
+AS 'MODULE_PATHNAME', '_tdc_plan_grid_transfn'
+LANGUAGE C IMMUTABLE;
+
+COMMENT ON FUNCTION _tdc_plan_grid_transfn(internal, geometry, int8) IS
+'Transition function of _tdc_plan_grid: the vertices'' box and the sample ./tdc takes (in the rows'' order).';
+
+CREATE FUNCTION _tdc_plan_grid_finalfn(internal)
+RETURNS bytea
+AS 'MODULE_PATHNAME', '_tdc_plan_grid_finalfn'
+LANGUAGE C IMMUTABLE;
+
+COMMENT ON FUNCTION _tdc_plan_grid_finalfn(internal) IS
+'Final function of _tdc_plan_grid: the counting grid of the plan, its cell sides at the sample''s quantiles.';
+
+CREATE AGGREGATE _tdc_plan_grid(geometry, int8) (
+	SFUNC = _tdc_plan_grid_transfn,
+	STYPE = internal,
+	FINALFUNC = _tdc_plan_grid_finalfn
+);
+
+COMMENT ON AGGREGATE _tdc_plan_grid(geometry, int8) IS
+'Internal, for tdc_delaunay_tiled: _tdc_plan_grid(geometry, number of vertices) over the rows in the source''s order, '
+'the grid that _tdc_plan counts on, as ./tdc --max-memory makes it.';
+
+CREATE FUNCTION _tdc_plan_transfn(internal, geometry, bytea)
+RETURNS internal
+AS 'MODULE_PATHNAME', '_tdc_plan_transfn'
+LANGUAGE C IMMUTABLE;
+
+COMMENT ON FUNCTION _tdc_plan_transfn(internal, geometry, bytea) IS
+'Transition function of _tdc_plan: counts the vertices in the cells of the grid.';
+
+CREATE FUNCTION _tdc_plan_finalfn(internal)
+RETURNS bytea
+AS 'MODULE_PATHNAME', '_tdc_plan_finalfn'
+LANGUAGE C STABLE;
+
+COMMENT ON FUNCTION _tdc_plan_finalfn(internal) IS
+'Final function of _tdc_plan: the tiles cut from the counted grid under tdc_delaunay.max_memory, or an error with the floor.';
+
+CREATE AGGREGATE _tdc_plan(geometry, bytea) (
+	SFUNC = _tdc_plan_transfn,
+	STYPE = internal,
+	FINALFUNC = _tdc_plan_finalfn
+);
+
+COMMENT ON AGGREGATE _tdc_plan(geometry, bytea) IS
+'Internal, for tdc_delaunay_tiled: _tdc_plan(geometry, grid) over every row, the plan of automatic tiles '
+'(counts on the grid split k-d by counts, src/core/tile_plan.c).';
+
+CREATE FUNCTION _tdc_plan_label(float8, float8, bytea)
+RETURNS int8
+AS 'MODULE_PATHNAME', '_tdc_plan_label'
+LANGUAGE C IMMUTABLE STRICT PARALLEL SAFE;
+
+COMMENT ON FUNCTION _tdc_plan_label(float8, float8, bytea) IS
+'Internal, for tdc_delaunay_tiled: _tdc_plan_label(x, y, plan), the tile (from 0) of the plan that owns the point.';
+
+CREATE FUNCTION _tdc_plan_regions(bytea, float8[])
+RETURNS TABLE(tile int8, n int8, region float8[])
+AS 'MODULE_PATHNAME', '_tdc_plan_regions'
+LANGUAGE C IMMUTABLE STRICT PARALLEL SAFE
+ROWS 100;
+
+COMMENT ON FUNCTION _tdc_plan_regions(bytea, float8[]) IS
+'Internal, for tdc_delaunay_tiled: _tdc_plan_regions(plan, hull), every tile of the plan with its count and first known '
+'region {h, xmin, ymin, xmax, ymax, extra boxes...}, fitted to the counts as ./tdc fits it.';
+
+CREATE FUNCTION _tdc_plan_box(bytea)
+RETURNS float8[]
+AS 'MODULE_PATHNAME', '_tdc_plan_box'
+LANGUAGE C IMMUTABLE STRICT PARALLEL SAFE;
+
+COMMENT ON FUNCTION _tdc_plan_box(bytea) IS
+'Internal, for tdc_delaunay_tiled: _tdc_plan_box(plan), {xmin, ymin, xmax, ymax, vertices, tiles} of the planned vertices.';
+
+-- _tdc_tile with the plan of automatic tiles: its cells tell the finality
+-- check where the data has no point, and a tile that is not final names
+-- the cells it needs, whose points its rerun adds (src/pg/fn_tiled.c)
+CREATE FUNCTION _tdc_tile_transfn(internal, geometry, int8, int8, float8[], float8[], float8[], int8, int8, bytea, int4[], int4)
+RETURNS internal
+AS 'MODULE_PATHNAME', '_tdc_tile_transfn'
+LANGUAGE C IMMUTABLE PARALLEL SAFE;
+
+COMMENT ON FUNCTION _tdc_tile_transfn(internal, geometry, int8, int8, float8[], float8[], float8[], int8, int8, bytea, int4[], int4) IS
+'Transition function of _tdc_tile with a plan: collects the vertices of a tile and its halo with the label of their owning tile.';
+
+CREATE AGGREGATE _tdc_tile(geometry, int8, int8, float8[], float8[], float8[], int8, int8, bytea, int4[], int4) (
+	SFUNC = _tdc_tile_transfn,
+	STYPE = internal,
+	FINALFUNC = _tdc_tile_finalfn
+);
+
+COMMENT ON AGGREGATE _tdc_tile(geometry, int8, int8, float8[], float8[], float8[], int8, int8, bytea, int4[], int4) IS
+'Internal, for tdc_delaunay_tiled: _tdc_tile as with eight arguments, and the plan of automatic tiles (NULL: none), '
+'whose cells the finality check uses, the cells of the plan whose points a rerun added, and the number of runs '
+'before that added cells; a tile that is not final then names the cells it needs, reaching farther after each such run.';
+
+CREATE FUNCTION _tdc_plan_cell(float8, float8, bytea)
+RETURNS int4
+AS 'MODULE_PATHNAME', '_tdc_plan_cell'
+LANGUAGE C IMMUTABLE STRICT PARALLEL SAFE;
+
+COMMENT ON FUNCTION _tdc_plan_cell(float8, float8, bytea) IS
+'Internal, for tdc_delaunay_tiled: _tdc_plan_cell(x, y, plan), the cell (row * 512 + column) of the plan''s grid that holds the point.';
+
+CREATE FUNCTION _tdc_in_boxes(float8, float8, float8[])
+RETURNS boolean
+AS 'MODULE_PATHNAME', '_tdc_in_boxes'
+LANGUAGE C IMMUTABLE STRICT PARALLEL SAFE;
+
+COMMENT ON FUNCTION _tdc_in_boxes(float8, float8, float8[]) IS
+'Internal, for tdc_delaunay_tiled: whether one of the closed boxes {xmin,ymin,xmax,ymax,...} holds the point x, y.';
+
+CREATE FUNCTION _tdc_tile_need_cells(geometry, bytea, int8, int8, int4[])
+RETURNS int4[]
+AS 'MODULE_PATHNAME', '_tdc_tile_need_cells'
+LANGUAGE C IMMUTABLE STRICT PARALLEL SAFE;
+
+COMMENT ON FUNCTION _tdc_tile_need_cells(geometry, bytea, int8, int8, int4[]) IS
+'Internal, for tdc_delaunay_tiled: _tdc_tile_need_cells(need, plan, tile, points, added), the cells of the plan that a '
+'tile''s run of that many points that was not final named (the rings of its row after the first) and that its rerun adds: '
+'all when they fit tdc_delaunay.max_memory, else the nearest first as far as they fit.';
+
+CREATE OR REPLACE PROCEDURE tdc_delaunay_tiled(source regclass, target text, geom_column name DEFAULT 'geom',
+									tile_column name DEFAULT NULL, tile_size float8 DEFAULT NULL)
+LANGUAGE plpgsql
+-- a tile's statement is estimated at millions of rows, and compiling it
+-- cost a second per tile; boxes and the hull pass through the statements'
+-- text, so floats must print exactly
+SET jit = off
+SET extra_float_digits = 3
+-- the one-tile pass reads the source in its order, as the staging table does
+SET synchronize_seqscans = off
+AS $proc$
+DECLARE
+	fn constant text := 'tdc_delaunay_tiled';
+	gtyp name;
+	ttype text := 'bigint';
+	tv text;					-- SQL of a vertex's tile value
+	stroked text;				-- SQL of a row's geometry with its arcs stroked
+	citus boolean := false;
+	npts bigint;
+	srid_lo int; srid_hi int; zm_lo int; zm_hi int;
+	gx0 float8; gy0 float8; gx1 float8; gy1 float8;
+	w float8; h float8; spacing float8; size float8;
+	hull float8[];
+	extent float8[];			-- {xmin, ymin, xmax, ymax} the policy sizes tiles by
+	hasz boolean;
+	tile_max bigint;			-- automatic tiles: the most points one may own
+	grid bytea;					-- automatic tiles: the counting grid of the plan
+	plan bytea;					-- automatic tiles: the plan (src/pg/fn_tiled_plan.c)
+	pbox float8[];
+	need_cells int4[];			-- the plan's cells a tile that was not final named
+	tparts text[];
+	tschema text; tname text; qtarget text;
+	pts text; tiles text; rt text; halo text;
+	ntiles bigint; done bigint; pending bigint; reported int; i bigint; rerun bigint;
+	round int := 0;
+	has_null boolean;
+	halo_pts bigint := 0;
+	ntri bigint;
+	r record;
+	tile_sql text;
+	tile_box text;
+	px text := 'ST_X(g)';
+	py text := 'ST_Y(g)';
+	cells text;
+	cell float8;				-- side of the halo join's grid cells
+	ncx bigint;
+	ncy bigint;
+	cell_of text;				-- SQL of a staged point's cell
+	nparts bigint;
+	one_row text[];				-- plain PostgreSQL: tiles whose statement wrote one row
+	written bigint := 0;		-- plain PostgreSQL: rows written, boxes included
+	nrows bigint;
+BEGIN
+	-- the geometry column
+	SELECT t.typname INTO gtyp
+	  FROM pg_attribute a JOIN pg_type t ON t.oid = a.atttypid
+	 WHERE a.attrelid = source AND a.attname = geom_column AND a.attnum > 0 AND NOT a.attisdropped;
+	IF NOT FOUND THEN
+		RAISE EXCEPTION '%: column "%" of relation % does not exist', fn, geom_column, source
+			USING ERRCODE = 'undefined_column';
+	END IF;
+	IF gtyp <> 'geometry' THEN
+		RAISE EXCEPTION '%: column "%" of relation % is of type %, not geometry', fn, geom_column, source, gtyp
+			USING ERRCODE = 'datatype_mismatch';
+	END IF;
+	-- the tiles
+	IF tile_column IS NOT NULL THEN
+		SELECT format_type(a.atttypid, a.atttypmod) INTO ttype
+		  FROM pg_attribute a
+		 WHERE a.attrelid = source AND a.attname = tile_column AND a.attnum > 0 AND NOT a.attisdropped;
+		IF NOT FOUND THEN
+			RAISE EXCEPTION '%: tile column "%" of relation % does not exist', fn, tile_column, source
+				USING ERRCODE = 'undefined_column';
+		END IF;
+		IF tile_size IS NOT NULL THEN
+			RAISE EXCEPTION '%: give tile_column or tile_size, not both', fn
+				USING ERRCODE = 'invalid_parameter_value';
+		END IF;
+	ELSIF tile_size IS NOT NULL AND NOT (tile_size > 0 AND tile_size < 'infinity'::float8) THEN
+		RAISE EXCEPTION '%: tile_size must be positive and finite, not %', fn, tile_size
+			USING ERRCODE = 'invalid_parameter_value';
+	END IF;
+	-- the target: never overwritten
+	tparts := parse_ident(target);
+	IF cardinality(tparts) = 1 THEN
+		tschema := current_schema();
+		tname := tparts[1];
+	ELSIF cardinality(tparts) = 2 THEN
+		tschema := tparts[1];
+		tname := tparts[2];
+	ELSE
+		RAISE EXCEPTION '%: target "%" is not a table name', fn, target
+			USING ERRCODE = 'invalid_name';
+	END IF;
+	qtarget := format('%I.%I', tschema, tname);
+	IF to_regclass(qtarget) IS NOT NULL THEN
+		RAISE EXCEPTION '%: target % already exists', fn, qtarget
+			USING ERRCODE = 'duplicate_table', HINT = 'Drop it or choose another name; it is never overwritten.';
+	END IF;
+	-- Citus: source distributed by hash of tile_column
+	IF tile_column IS NOT NULL AND to_regclass('pg_catalog.pg_dist_partition') IS NOT NULL THEN
+		EXECUTE 'SELECT EXISTS (SELECT 1 FROM pg_dist_partition WHERE logicalrelid = $1 AND partmethod = ''h''
+					AND column_to_column_name(logicalrelid, partkey) = $2)'
+		   INTO citus USING source, tile_column;
+	END IF;
+	IF citus THEN
+		-- The staging tables are written and then read by other statements of
+		-- this one transaction (the halo is repartitioned from pts); Citus
+		-- allows that only over one connection per worker, chosen before the
+		-- transaction's first distributed query.
+		PERFORM set_config('citus.multi_shard_modify_mode', 'sequential', true);
+		-- the tiles run on the workers: they must see this session's
+		-- tdc_delaunay.max_memory (Citus passes on SET LOCAL only)
+		PERFORM set_config('citus.propagate_set_commands', 'local', true);
+		IF current_setting('tdc_delaunay.max_memory', true) IS NOT NULL THEN
+			EXECUTE format('SET LOCAL tdc_delaunay.max_memory = %L', current_setting('tdc_delaunay.max_memory'));
+		END IF;
+	END IF;
+
+	-- a value with arcs is stroked as ST_TDCDelaunayDump strokes it (see
+	-- tdc_curves.c); GeometryType reads only the header, so only
+	-- collections and curve types are looked into
+	stroked := format('CASE WHEN GeometryType(s.%1$I) IN (''CIRCULARSTRING'', ''COMPOUNDCURVE'', ''CURVEPOLYGON'',
+															 ''MULTICURVE'', ''MULTISURFACE'', ''GEOMETRYCOLLECTION'')
+							 THEN _tdc_curve_to_line(s.%1$I) ELSE s.%1$I END', geom_column);
+
+	-- SRID and dimensions, as ST_TDCDelaunayDump checks them, and the number
+	-- and extent of the vertices (the extent from the values' boxes, which
+	-- may be rounded outward: it only sizes the tiles)
+	EXECUTE format('SELECT min(ST_SRID(s.%1$I)), max(ST_SRID(s.%1$I)), min(ST_Zmflag(s.%1$I)), max(ST_Zmflag(s.%1$I)),
+						   coalesce(sum(ST_NPoints(%3$s)), 0), min(ST_XMin(s.%1$I)), min(ST_YMin(s.%1$I)),
+						   max(ST_XMax(s.%1$I)), max(ST_YMax(s.%1$I))
+					  FROM %2$s s WHERE s.%1$I IS NOT NULL', geom_column, source, stroked)
+	   INTO srid_lo, srid_hi, zm_lo, zm_hi, npts, gx0, gy0, gx1, gy1;
+	IF srid_lo <> srid_hi THEN
+		RAISE EXCEPTION '%: mixed SRIDs in %.% (% and %)', fn, source, geom_column, srid_lo, srid_hi
+			USING ERRCODE = 'invalid_parameter_value';
+	END IF;
+	IF zm_lo <> zm_hi THEN
+		RAISE EXCEPTION '%: mixed dimensions in %.% (with and without Z or M)', fn, source, geom_column
+			USING ERRCODE = 'invalid_parameter_value';
+	END IF;
+
+	-- The tiles: squares of tile_size labelled column * 2^32 + row counted
+	-- from the data's lower left corner (_tdc_square_label), or with no
+	-- tile_size the core's adaptive plan under tdc_delaunay.max_memory, as
+	-- ./tdc --max-memory makes it: counts on a grid whose sides are at the
+	-- quantiles of a sample, split k-d by counts (_tdc_plan_grid, _tdc_plan;
+	-- src/pg/fn_tiled_plan.c).  Every number of the policy comes from
+	-- src/core/tile_plan.c.
+	w := coalesce(gx1 - gx0, 0);
+	h := coalesce(gy1 - gy0, 0);
+	spacing := CASE WHEN npts > 0 AND w * h > 0 THEN sqrt(w * h / npts)
+					WHEN npts > 0 AND w + h > 0 THEN (w + h) / npts
+					ELSE 1 END;
+	extent := ARRAY[gx0, gy0, gx1, gy1];
+	hasz := zm_lo IN (2, 3);
+	IF tile_column IS NULL THEN
+		size := coalesce(tile_size, 'infinity'::float8);
+		IF tile_size IS NULL AND npts > 0 THEN
+			tile_max := _tdc_plan_tile_max(npts, hasz);
+			IF npts > tile_max THEN
+				-- two passes over the vertices in the source's order (the
+				-- procedure turns synchronized scans off), as ./tdc reads its file
+				EXECUTE format('SELECT _tdc_plan_grid(%1$s, %2$s) FROM %3$s s WHERE s.%4$I IS NOT NULL',
+							   stroked, npts, source, geom_column) INTO grid;
+				EXECUTE format('SELECT _tdc_plan(%1$s, $1) FROM %2$s s WHERE s.%3$I IS NOT NULL',
+							   stroked, source, geom_column) INTO plan USING grid;
+				pbox := _tdc_plan_box(plan);
+				-- the exact box: the policy's spacing is that of ./tdc
+				gx0 := pbox[1]; gy0 := pbox[2]; gx1 := pbox[3]; gy1 := pbox[4];
+				extent := pbox[1:4];
+				RAISE NOTICE '%: % tiles of at most % points planned under tdc_delaunay.max_memory', fn,
+					pbox[6], tile_max;
+			END IF;
+		END IF;
+		IF plan IS NOT NULL THEN
+			tv := '_tdc_plan_label(ST_X(d.geom), ST_Y(d.geom), $1)';
+		ELSIF size < 'infinity'::float8 THEN
+			tv := format('_tdc_square_label(ST_X(d.geom), ST_Y(d.geom), %1$L::float8, %2$L::float8, %3$L::float8)',
+						 gx0, gy0, size);
+		ELSE
+			tv := '0::bigint';
+		END IF;
+
+		-- One tile: every point is known to it, so its halo is everything and
+		-- every triangle is its own.  That is ST_TDCDelaunayDump of the
+		-- source, read in the source's order like the staging table (the
+		-- procedure turns synchronized scans off), without the staging tables,
+		-- the halo or the index.  The box may be rounded outward, so a
+		-- square counts as the only one only when that box lies in it.
+		IF plan IS NULL AND (npts = 0 OR size = 'infinity'::float8
+							 OR _tdc_square_label(gx1, gy1, gx0, gy0, size) = 0) THEN
+			-- (CREATE TABLE AS: it writes in bulk, an INSERT into a new table
+			-- took about twice as long)
+			EXECUTE format('CREATE TABLE %s AS
+							SELECT (4294967296 + d.id)::bigint AS id, 0::bigint AS tile,
+								   d.geom::geometry(%s, %s) AS geom
+							  FROM ST_TDCDelaunayDump(%L) d', qtarget,
+						   CASE WHEN zm_lo = 2 THEN 'PolygonZ' WHEN zm_lo = 1 THEN 'PolygonM'
+								WHEN zm_lo = 3 THEN 'PolygonZM' ELSE 'Polygon' END, coalesce(srid_lo, 0),
+						   format('SELECT %I FROM %s', geom_column, source));
+			GET DIAGNOSTICS ntri = ROW_COUNT;
+			RAISE NOTICE '%: % triangles from % points in 1 tile, in one pass', fn, ntri, npts;
+			RETURN;
+		END IF;
+	END IF;
+
+	-- staging tables: temporary on plain PostgreSQL, distributed on Citus
+	IF citus THEN
+		pts := format('%I.%I', tschema, 'tdc_tiled_' || pg_backend_pid() || '_pts');
+		tiles := 'pg_temp.tdc_tiled_tiles';
+		rt := format('%I.%I', tschema, 'tdc_tiled_' || pg_backend_pid() || '_tiles');
+		halo := format('%I.%I', tschema, 'tdc_tiled_' || pg_backend_pid() || '_halo');
+		EXECUTE format('CREATE TABLE %s (tile %s, seq bigint, vi bigint, g geometry)', pts, ttype);
+		EXECUTE format('SELECT create_distributed_table(%L, %L, colocate_with => %L)', pts, 'tile', source::text);
+	ELSE
+		pts := 'pg_temp.tdc_tiled_pts';
+		tiles := 'pg_temp.tdc_tiled_tiles';
+		rt := tiles;
+		halo := 'pg_temp.tdc_tiled_halo';
+		cells := 'pg_temp.tdc_tiled_cells';
+		EXECUTE format('CREATE TEMP TABLE %s (tile %s, seq bigint, vi bigint, g geometry, x float8, y float8)',
+					   'tdc_tiled_pts', ttype);
+		px := 'x';
+		py := 'y';
+	END IF;
+
+	-- every vertex, in the source's order (block, offset, vertex), with its
+	-- tile: the tile column's value, or its square
+	IF tile_column IS NOT NULL THEN
+		tv := format('s.%I', tile_column);
+	END IF;
+	IF citus THEN
+		EXECUTE format('INSERT INTO %s (tile, seq, vi, g)
+						SELECT %s, ((s.ctid::text::point)[0])::bigint * 65536 + ((s.ctid::text::point)[1])::bigint,
+							   d.vi, d.geom
+						  FROM %s s, LATERAL ST_DumpPoints(%s) WITH ORDINALITY AS d(path, geom, vi)
+						 WHERE s.%I IS NOT NULL', pts, tv, source, stroked, geom_column);
+	ELSE
+		-- a row that is one point is its own vertex: ST_DumpPoints is most
+		-- of the cost of a point table, and only the other rows need it
+		EXECUTE format('INSERT INTO %1$s (tile, seq, vi, g, x, y)
+						SELECT %2$s, (d.c[0])::bigint * 65536 + (d.c[1])::bigint, 1, d.geom, ST_X(d.geom), ST_Y(d.geom)
+						  FROM %3$s s, LATERAL (SELECT s.%4$I AS geom, s.ctid::text::point AS c) d
+						 WHERE ST_GeometryType(s.%4$I) = ''ST_Point'' AND NOT ST_IsEmpty(s.%4$I)',
+					   pts, tv, source, geom_column) USING plan;
+		EXECUTE format('INSERT INTO %1$s (tile, seq, vi, g, x, y)
+						SELECT %2$s, ((s.ctid::text::point)[0])::bigint * 65536 + ((s.ctid::text::point)[1])::bigint,
+							   d.vi, d.geom, ST_X(d.geom), ST_Y(d.geom)
+						  FROM %3$s s, LATERAL ST_DumpPoints(%5$s) WITH ORDINALITY AS d(path, geom, vi)
+						 WHERE ST_GeometryType(s.%4$I) <> ''ST_Point''',
+					   pts, tv, source, geom_column, stroked) USING plan;
+	END IF;
+	IF tile_column IS NOT NULL THEN
+		EXECUTE format('SELECT EXISTS (SELECT 1 FROM %s WHERE tile IS NULL)', pts) INTO has_null;
+		IF has_null THEN
+			RAISE EXCEPTION '%: tile column "%" of % is NULL for some rows with a geometry', fn, tile_column, source
+				USING ERRCODE = 'null_value_not_allowed';
+		END IF;
+	END IF;
+
+
+	-- the tiles, labelled 1.. in the order of their tile values
+	EXECUTE format('CREATE TEMP TABLE %1$s AS
+					SELECT tile, row_number() OVER (ORDER BY tile) AS label, n, x0, y0, x1, y1,
+						   NULL::float8[] AS region, NULL::float8[] AS known, NULL::float8[] AS extra,
+						   ''{}''::int4[] AS added, 0 AS cell_runs, true AS pending
+					  FROM (SELECT tile, count(*) AS n, min(%3$s) AS x0, min(%4$s) AS y0,
+								   max(%3$s) AS x1, max(%4$s) AS y1
+							  FROM %2$s GROUP BY tile) t',
+				   'tdc_tiled_tiles', pts, px, py);
+	EXECUTE format('SELECT count(*) FROM %s', tiles) INTO ntiles;
+	-- C, a convex polygon containing every point: their exact convex hull,
+	-- from the hulls of the tiles (on the workers on Citus)
+	EXECUTE format('SELECT _tdc_hull(h) FROM (SELECT _tdc_hull(g) AS h FROM %s GROUP BY tile) s', pts) INTO hull;
+
+	-- Each tile's first known region {h, K, extra boxes...}, by the core's
+	-- policy: K is the tile's box (of its points, or of its cells in a
+	-- plan) with a halo h of 8 of its mean spacings, and the extra boxes are
+	-- the bands along the hull edges near K.  A long hull edge has a
+	-- triangle whose circle bulges far out of C; only its thin part inside
+	-- C must be known, and the band holds it without widening K along the
+	-- whole edge.  A plan's regions are fitted to its counts, as ./tdc's.
+	IF plan IS NOT NULL THEN
+		EXECUTE format('UPDATE %s k SET region = r.region FROM _tdc_plan_regions($1, $2) r WHERE r.tile = k.tile',
+					   tiles) USING plan, hull;
+	ELSE
+		EXECUTE format('UPDATE %s SET region = _tdc_tile_region(ARRAY[x0, y0, x1, y1], n, $1, $2, $3)', tiles)
+			USING extent, npts, hull;
+	END IF;
+	EXECUTE format('UPDATE %s SET known = region[2:5], extra = region[6:cardinality(region)]', tiles);
+
+	-- the target
+	EXECUTE format('CREATE TABLE %s (id bigint, tile %s, geom geometry(%s, %s))', qtarget, ttype,
+				   CASE WHEN zm_lo = 2 THEN 'PolygonZ' WHEN zm_lo = 1 THEN 'PolygonM'
+						WHEN zm_lo = 3 THEN 'PolygonZM' ELSE 'Polygon' END, coalesce(srid_lo, 0));
+	IF citus THEN
+		EXECUTE format('CREATE TABLE %s (tile %s, label bigint, seq bigint, vi bigint, g geometry)', halo, ttype);
+		EXECUTE format('SELECT create_distributed_table(%L, %L, colocate_with => %L)', halo, 'tile', source::text);
+		EXECUTE format('SELECT create_distributed_table(%L, %L, colocate_with => %L)', qtarget, 'tile', source::text);
+		-- the tiles, for the workers: a copy of the coordinator's table
+		EXECUTE format('CREATE TABLE %s (tile %s, label bigint, known float8[], extra float8[], pending boolean)',
+					   rt, ttype);
+		EXECUTE format('SELECT create_reference_table(%L)', rt);
+	ELSE
+		-- The halo, partitioned by the label of its tile (tl): a tile's
+		-- statement reads its own partition from end to end, where an index
+		-- on a table of every tile's rows, in the points' order, sent it
+		-- to almost every block.  One partition per tile, or per run of
+		-- consecutive labels beyond 64 tiles.
+		EXECUTE format('CREATE TEMP TABLE %s (tile %s, label bigint, seq bigint, vi bigint, g geometry, tl bigint)
+						PARTITION BY RANGE (tl)', 'tdc_tiled_halo', ttype);
+		nparts := least(ntiles, 64);
+		FOR part IN 0 .. nparts - 1 LOOP
+			EXECUTE format('CREATE TEMP TABLE %I PARTITION OF %s FOR VALUES FROM (%s) TO (%s)',
+						   'tdc_tiled_halo_' || part, halo, 1 + part * ntiles / nparts,
+						   1 + (part + 1) * ntiles / nparts);
+		END LOOP;
+		-- the halo join's grid: a row per box and grid cell it meets (below)
+		EXECUTE format('CREATE TEMP TABLE %s (cell bigint, tile %s, tl bigint, nprior int, boxes float8[])',
+					   'tdc_tiled_cells', ttype);
+	END IF;
+	IF npts > 0 THEN
+		IF citus THEN
+			EXECUTE format('CREATE INDEX ON %s USING gist (g)', pts);
+		END IF;
+		EXECUTE format('ANALYZE %s', pts);
+	END IF;
+
+	-- the per-tile statement: on Citus one for all tiles, the function in
+	-- FROM; on plain PostgreSQL one tile ($1, its label $2) at a time, the
+	-- function in the select list, where its rows stream into the INSERT
+	-- (in FROM the executor first collects a tile's rows in a tuplestore)
+	IF citus THEN
+		tile_sql := format('INSERT INTO %s (id, tile, geom)
+			SELECT CASE WHEN t.k = 0 THEN -1 ELSE s.label * 4294967296 + t.k END, s.tile, t.geom
+			  FROM (SELECT h.tile, k.label,
+						   _tdc_tile(h.g, h.label, k.label, k.known, %L::float8[], k.extra, h.seq, h.vi) AS r
+					  FROM %s h JOIN %s k ON k.tile = h.tile
+					 WHERE k.pending
+					 GROUP BY h.tile, k.label) s,
+				   LATERAL _tdc_tile_triangles(s.r) t',
+			qtarget, hull, halo, rt);
+	ELSE
+		-- (the tile's label, known box and extra boxes come as $2 to $4,
+		-- not from a join with the tiles: the halo's partitions have no
+		-- statistics, and with a thousand tiles the planner's nested loop
+		-- over the tiles for every halo row took most of the time)
+		tile_sql := format('INSERT INTO %s (id, tile, geom)
+			SELECT CASE WHEN (q.t).k = 0 THEN -1 ELSE $2 * 4294967296 + (q.t).k END, q.tile, (q.t).geom
+			  FROM (SELECT s.tile, _tdc_tile_triangles(s.r) AS t
+					  FROM (SELECT h.tile, _tdc_tile(h.g, h.label, $2, $3, %L::float8[], $4, h.seq, h.vi, $5, $6, $7) AS r
+							  FROM %s h
+							 WHERE h.tile = $1::%s AND h.tl = $2
+							 GROUP BY h.tile) s) q',
+			qtarget, hull, halo, ttype);
+	END IF;
+
+	done := 0;
+	LOOP
+		EXECUTE format('SELECT count(*) FROM %s WHERE pending', tiles) INTO pending;
+		EXIT WHEN pending = 0;
+		round := round + 1;
+		IF round > 64 THEN
+			RAISE EXCEPTION '%: % tiles still not final after 64 rounds', fn, pending
+				USING ERRCODE = 'internal_error';
+		END IF;
+		rerun := 0;
+		one_row := '{}';
+		IF citus THEN
+			EXECUTE format('DELETE FROM %s', rt);
+			EXECUTE format('INSERT INTO %s SELECT tile, label, known, extra, pending FROM %s', rt, tiles);
+		END IF;
+		-- the halo of every pending tile: every point in its closed K, with its owner
+		EXECUTE format('DELETE FROM %s', halo);
+		-- (K and the extra boxes: a point is taken from the first box that holds it)
+		tile_box := format('SELECT k.tile, k.label, k.bx, i, k.bx[4*i+1] AS x0, k.bx[4*i+2] AS y0,
+								   k.bx[4*i+3] AS x1, k.bx[4*i+4] AS y1
+							  FROM (SELECT tile, label, known || extra AS bx FROM %s WHERE pending) k,
+								   generate_series(0, cardinality(k.bx) / 4 - 1) i', rt);
+		IF citus THEN
+			-- each box against the points' GiST index; Citus pushes the
+			-- statement down only with the subquery inline
+			EXECUTE format('INSERT INTO %1$s (tile, label, seq, vi, g)
+							SELECT b.tile, o.label, p.seq, p.vi, p.g
+							  FROM (%5$s) b
+							  JOIN %2$s p ON p.g && ST_MakeEnvelope(b.x0, b.y0, b.x1, b.y1, %4$s)
+										AND _tdc_first_box(ST_X(p.g), ST_Y(p.g), b.bx, b.i)
+							  JOIN %3$s o ON o.tile = p.tile',
+						   halo, pts, rt, coalesce(srid_lo, 0), tile_box);
+		ELSE
+			-- One pass over the points, hashed against a grid: every box
+			-- lists the cells it meets, with the tile's earlier boxes that
+			-- overlap it (a point in box i and in no earlier box of its tile
+			-- comes from box i; an earlier box holding it must overlap box i).
+			-- The cell side is about 32 point spacings, coarser where the
+			-- boxes together would make more than npts / 64 + 1000 cells, and
+			-- at least 2^-20 of the extent, so that both cell numbers fit one
+			-- key.  A point's cell number rises with its coordinate (each
+			-- step rounds monotonically), so a point in a box is in one of its
+			-- cells; the exact test is _tdc_first_box.  Cells outside the
+			-- extent (gx0 .. gx1: the values' boxes, rounded outward) hold
+			-- no point and are left out.  (OFFSET 0: a tile's boxes, known ||
+			-- extra, are built once, and the earlier boxes each box overlaps once
+			-- per box, not at every use and for every cell: with the 90 hull
+			-- bands of a ring of 90 points this statement took 8 s, not 0.1 s.)
+			EXECUTE format('SELECT coalesce(sum(greatest(least(b.x1, %3$L::float8) - greatest(b.x0, %1$L::float8), 0)
+												* greatest(least(b.y1, %4$L::float8) - greatest(b.y0, %2$L::float8), 0)), 0)
+							  FROM (%5$s) b',
+						   gx0, gy0, gx1, gy1, tile_box) INTO cell;
+			cell := greatest(32 * spacing, sqrt(cell / (npts::float8 / 64 + 1000)),
+							 (gx1 - gx0) / 1048576, (gy1 - gy0) / 1048576);
+			ncx := floor((gx1 - gx0) / cell);
+			ncy := floor((gy1 - gy0) / cell);
+			EXECUTE format('DELETE FROM %s', cells);
+			EXECUTE format('INSERT INTO %1$s (cell, tile, tl, nprior, boxes)
+							SELECT cx * 2097152 + cy, b.tile, b.label, cardinality(b.boxes) / 4 - 1, b.boxes
+							  FROM (SELECT k.tile, k.label, k.x0, k.y0, k.x1, k.y1,
+										   coalesce((SELECT array_agg(k.bx[4*j+m] ORDER BY j, m)
+													   FROM generate_series(0, k.i - 1) j, generate_series(1, 4) m
+													  WHERE k.bx[4*j+1] <= k.x1 AND k.x0 <= k.bx[4*j+3]
+														AND k.bx[4*j+2] <= k.y1 AND k.y0 <= k.bx[4*j+4]),
+													''{}'') || k.bx[4*k.i+1:4*k.i+4] AS boxes
+									  FROM (SELECT * FROM (%2$s) k0 OFFSET 0) k
+									OFFSET 0) b,
+								   generate_series(greatest(floor((b.x0 - %3$L::float8) / %5$L::float8), 0)::bigint,
+												   least(floor((b.x1 - %3$L::float8) / %5$L::float8), %6$s)::bigint) cx,
+								   generate_series(greatest(floor((b.y0 - %4$L::float8) / %5$L::float8), 0)::bigint,
+												   least(floor((b.y1 - %4$L::float8) / %5$L::float8), %7$s)::bigint) cy',
+						   cells, tile_box, gx0, gy0, cell, ncx, ncy);
+			EXECUTE format('ANALYZE %s', cells);
+			cell_of := format('floor((p.x - %1$L::float8) / %3$L::float8)::bigint * 2097152
+							   + floor((p.y - %2$L::float8) / %3$L::float8)::bigint', gx0, gy0, cell);
+			EXECUTE format('INSERT INTO %1$s (tile, label, seq, vi, g, tl)
+							SELECT c.tile, o.label, p.seq, p.vi, p.g, c.tl
+							  FROM %2$s p
+							  JOIN %3$s c ON c.cell = %5$s AND _tdc_first_box(p.x, p.y, c.boxes, c.nprior)
+							  JOIN %4$s o ON o.tile = p.tile',
+						   halo, pts, cells, tiles, cell_of);
+		END IF;
+		GET DIAGNOSTICS ntri = ROW_COUNT;
+		halo_pts := halo_pts + ntri;
+		-- the plan's cells that reruns added, as ./tdc adds them: every
+		-- point of such a cell (_tdc_plan_cell, the cell ./tdc bins it to)
+		-- that no box of the tile holds
+		IF plan IS NOT NULL AND round > 1 THEN
+			EXECUTE format('INSERT INTO %1$s (tile, label, seq, vi, g, tl)
+							SELECT k.tile, o.label, p.seq, p.vi, p.g, k.label
+							  FROM (SELECT tile, label, unnest(added) AS c, known || extra AS bx
+									  FROM %3$s WHERE pending AND cardinality(added) > 0) k
+							  JOIN %2$s p ON _tdc_plan_cell(p.x, p.y, $1) = k.c AND NOT _tdc_in_boxes(p.x, p.y, k.bx)
+							  JOIN %3$s o ON o.tile = p.tile',
+						   halo, pts, tiles) USING plan;
+			GET DIAGNOSTICS ntri = ROW_COUNT;
+			halo_pts := halo_pts + ntri;
+		END IF;
+		IF citus THEN
+			EXECUTE tile_sql;
+		ELSE
+			reported := 0;
+			i := 0;
+			FOR r IN EXECUTE format('SELECT tile::text AS tile, label, known, extra, added, cell_runs
+									   FROM %s WHERE pending ORDER BY label', tiles) LOOP
+				EXECUTE tile_sql USING r.tile, r.label, r.known, r.extra, plan, r.added, r.cell_runs;
+				GET DIAGNOSTICS nrows = ROW_COUNT;
+				written := written + nrows;
+				-- a tile that is not final writes one row: its box
+				IF nrows = 1 THEN
+					one_row := one_row || r.tile;
+				END IF;
+				i := i + 1;
+				IF (i * 10 / pending)::int > reported THEN
+					reported := (i * 10 / pending)::int;
+					RAISE NOTICE '%: round %: % of % tiles run', fn, round, i, pending;
+				END IF;
+			END LOOP;
+		END IF;
+		-- tiles that were not final: the region of their next run, from the
+		-- row they wrote (_tdc_tile_regrow: with a plan the cells they named,
+		-- else the hull bands they lack, else K grown to the box they need
+		-- and half the halo beyond), as ./tdc grows a tile
+		-- (on plain PostgreSQL only the tiles that wrote one row can be
+		-- among them: the target is scanned for their boxes only if there
+		-- are such tiles)
+		EXECUTE format('UPDATE %s SET pending = false WHERE pending', tiles);
+		FOR r IN EXECUTE format('SELECT tile::text AS tile, geom FROM %s WHERE id = -1 %s', qtarget,
+								CASE WHEN citus THEN '' WHEN cardinality(one_row) = 0 THEN 'AND false'
+									 ELSE 'AND tile::text = ANY($1)' END)
+						 USING one_row LOOP
+			-- With a plan: the cells it named, if any, as ./tdc adds them
+			-- (_tdc_tile_need_cells: all when they fit, else the nearest
+			-- first as far as they fit, by the points this run held, its
+			-- halo partition's rows; an ERROR when not even the nearest
+			-- fits); its next request reaches twice as far (cell_runs, see
+			-- tdc_tp_rings).  Else the region grown.
+			need_cells := '{}';
+			IF plan IS NOT NULL THEN
+				EXECUTE format('SELECT _tdc_tile_need_cells($1, $2, k.tile, (SELECT count(*) FROM %2$s h WHERE h.tl = k.label),
+												  k.added)
+								  FROM %1$s k WHERE k.tile = $3::bigint', tiles, halo)
+				   INTO need_cells USING r.geom, plan, r.tile;
+			END IF;
+			IF cardinality(need_cells) > 0 THEN
+				EXECUTE format('UPDATE %1$s SET pending = true, added = added || $2, cell_runs = cell_runs + 1
+								 WHERE tile = $1::%2$s', tiles, ttype)
+				USING r.tile, need_cells;
+			ELSE
+				EXECUTE format('UPDATE %1$s SET pending = true, region = g.r, known = g.r[2:5], extra = g.r[6:cardinality(g.r)]
+								  FROM (SELECT _tdc_tile_regrow(region, $2, $3, $4, $5, $6) AS r FROM %1$s WHERE tile = $1::%2$s) g
+								 WHERE tile = $1::%2$s', tiles, ttype)
+				USING r.tile, r.geom, extent, npts, hull, plan;
+			END IF;
+			rerun := rerun + 1;
+		END LOOP;
+		IF citus OR rerun > 0 THEN
+			EXECUTE format('DELETE FROM %s WHERE id = -1', qtarget);
+		END IF;
+		written := written - rerun;
+		done := done + pending - rerun;
+		RAISE NOTICE '%: round %: % of % tiles final', fn, round, done, ntiles;
+	END LOOP;
+
+	IF citus THEN
+		EXECUTE format('SELECT count(*) FROM %s', qtarget) INTO ntri;
+	ELSE
+		ntri := written;
+	END IF;
+	EXECUTE format('DROP TABLE %s, %s, %s', halo, tiles, pts);
+	IF citus THEN
+		EXECUTE format('DROP TABLE %s', rt);
+	ELSE
+		EXECUTE format('DROP TABLE %s', cells);
+	END IF;
+	RAISE NOTICE '%: % triangles from % points in % tiles, % rounds, % halo points', fn, ntri, npts, ntiles,
+		round, halo_pts;
+END
+$proc$;
+
+COMMENT ON PROCEDURE tdc_delaunay_tiled(regclass, text, name, name, float8) IS
+'Triangulates the vertices of source.geom_column (duplicates merged, Z of the first copy, one SRID) tile by tile '
+'into a new table target(id bigint, tile, geom geometry(Polygon)): the same triangles as ST_TDCDelaunayDump, each once. '
+'Tiles: the groups of tile_column, else squares of tile_size counted from the data''s lower left corner, '
+'else tiles split by counts so that each fits tdc_delaunay.max_memory, as ./tdc --max-memory plans them. '
+'On Citus, with source distributed by tile_column, the tiles run on the workers.';

@@ -143,6 +143,104 @@ CALL tdc_delaunay_tiled('tt_ring', 'tt_ring_tri', tile_column => 'q');
 SET client_min_messages = warning;
 SELECT * FROM tiled_vs_dump('tt_ring_tri', 'SELECT geom FROM tt_ring');
 
+
+-- labels of squares count from the data's lower left corner: 5,000 points
+-- at 5e6 + [0, 1e-3)^2 (floor(x / size) passes 2^31 there), squares of
+-- 0.0006 and of 0.00025, and squares too small to count
+SELECT setseed(0.375);
+CREATE TABLE tt_far AS
+	SELECT ST_MakePoint(5e6 + random() * 1e-3, 5e6 + random() * 1e-3) AS geom FROM generate_series(1, 5000);
+CALL tdc_delaunay_tiled('tt_far', 'tt_far_tri', 'geom', NULL, 0.0006);
+SELECT * FROM tiled_vs_dump('tt_far_tri', 'SELECT geom FROM tt_far');
+SELECT DISTINCT tile FROM tt_far_tri ORDER BY tile;
+CALL tdc_delaunay_tiled('tt_far', 'tt_far_tiny', 'geom', NULL, 0.00025);
+SELECT * FROM tiled_vs_dump('tt_far_tiny', 'SELECT geom FROM tt_far');
+SELECT count(DISTINCT tile) AS tiles, min(tile), max(tile) FROM tt_far_tiny;
+\set VERBOSITY terse
+CALL tdc_delaunay_tiled('tt_far', 'tt_err', 'geom', NULL, 1e-13);
+\set VERBOSITY default
+
+-- Clustered sets through automatic tiles (the core's adaptive plan under
+-- tdc_delaunay.max_memory, as ./tdc --max-memory makes it) and through a
+-- tile column, each the Dump's set.  Below 2^18 points the plan's grid is
+-- uniform, as ./tdc's; from 2^18 points on (tt_q) its sides are at the
+-- quantiles of ./tdc's sample.
+-- (the plan depends on the engine's memory estimate, which depends on
+-- the thread count: one thread, the same plan on every machine)
+SET tdc_delaunay.threads = 1;
+SELECT setseed(0.125);
+-- 9 tight clusters
+CREATE TABLE tt_c9 AS
+	SELECT ST_MakePoint(cx + 0.3 * (random() - 0.5), cy + 0.3 * (random() - 0.5)) AS geom, k AS t
+	  FROM (SELECT i AS k, (i % 3) * 100 AS cx, ((i / 3) % 3) * 100 AS cy FROM generate_series(0, 8) i) c,
+		   generate_series(1, 1500);
+-- a dense town in sparse country
+CREATE TABLE tt_town AS
+	SELECT ST_MakePoint(x, y) AS geom, (floor(x / 250) * 4 + floor(y / 250))::int AS t
+	  FROM (SELECT random() * 1000 AS x, random() * 1000 AS y FROM generate_series(1, 5000)
+			UNION ALL
+			SELECT 600 + random() * 4, 400 + random() * 4 FROM generate_series(1, 5000)) s;
+-- a strip with gaps
+CREATE TABLE tt_strip AS
+	SELECT ST_MakePoint(x, y) AS geom, floor(x / 100)::int AS t
+	  FROM (SELECT random() * 2000 AS x, random() * 10 AS y FROM generate_series(1, 13000)) s
+	 WHERE x::int % 200 NOT BETWEEN 60 AND 110;
+-- a coastline: a wiggly line of dense points, a few inland
+CREATE TABLE tt_coast AS
+	SELECT ST_MakePoint(x, y) AS geom, floor(x / 200)::int AS t
+	  FROM (SELECT u * 1000 AS x, 80 * sin(u * 9) + 25 * sin(u * 57) + 6 * sin(u * 301) + 0.01 * random() AS y
+			  FROM (SELECT random() AS u FROM generate_series(1, 10000)) a
+			UNION ALL
+			SELECT random() * 1000, -400 + random() * 300 FROM generate_series(1, 1000)) s;
+-- (each at about the least limit it passes at: a rerun adds the cells it
+-- named within 7/8 of the limit, nearest first, as ./tdc does, and below
+-- that limit a tile cannot add even its nearest cell)
+SET tdc_delaunay.max_memory = 12;
+SET client_min_messages = notice;
+CALL tdc_delaunay_tiled('tt_c9', 'tt_c9_auto');
+SET client_min_messages = warning;
+SET tdc_delaunay.max_memory = 9;
+CALL tdc_delaunay_tiled('tt_town', 'tt_town_auto');
+SET tdc_delaunay.max_memory = 7;
+CALL tdc_delaunay_tiled('tt_strip', 'tt_strip_auto');
+SET tdc_delaunay.max_memory = 8;
+CALL tdc_delaunay_tiled('tt_coast', 'tt_coast_auto');
+RESET tdc_delaunay.max_memory;
+CALL tdc_delaunay_tiled('tt_c9', 'tt_c9_col', tile_column => 't');
+CALL tdc_delaunay_tiled('tt_town', 'tt_town_col', tile_column => 't');
+CALL tdc_delaunay_tiled('tt_strip', 'tt_strip_col', tile_column => 't');
+CALL tdc_delaunay_tiled('tt_coast', 'tt_coast_col', tile_column => 't');
+SELECT s.name, v.*
+  FROM (VALUES ('tt_c9_auto', 'tt_c9'), ('tt_c9_col', 'tt_c9'), ('tt_town_auto', 'tt_town'), ('tt_town_col', 'tt_town'),
+			   ('tt_strip_auto', 'tt_strip'), ('tt_strip_col', 'tt_strip'),
+			   ('tt_coast_auto', 'tt_coast'), ('tt_coast_col', 'tt_coast')) s(name, src),
+	   LATERAL tiled_vs_dump(s.name::regclass, 'SELECT geom FROM ' || s.src) v;
+-- each automatic plan has several tiles
+SELECT (SELECT count(DISTINCT tile) > 1 FROM tt_town_auto) AS town, (SELECT count(DISTINCT tile) > 1 FROM tt_strip_auto) AS strip,
+	   (SELECT count(DISTINCT tile) > 1 FROM tt_coast_auto) AS coast;
+-- 2^18 points, half of them uniform over a 100 square and half in a unit
+-- square inside it: the plan's grid at the quantiles of ./tdc's sample has
+-- cells of about 1/256 in the dense square, where the uniform grid's cells
+-- of 100/512 would hold some 5,000 points each.  (Tiling 2^18 points took
+-- 30 to 77 s here; this refusal comes before any staging.)
+CREATE TABLE tt_q AS
+	SELECT ST_MakePoint(x, y) AS geom
+	  FROM (SELECT random() * 100 AS x, random() * 100 AS y FROM generate_series(1, 131072)
+			UNION ALL
+			SELECT 50 + random(), 50 + random() FROM generate_series(1, 131072)) s;
+SET tdc_delaunay.max_memory = 5;
+\set VERBOSITY terse
+CALL tdc_delaunay_tiled('tt_q', 'tt_err');
+\set VERBOSITY default
+-- a limit below the data's floor is refused before any tile is staged, with the numbers
+SET tdc_delaunay.max_memory = 6;
+\set VERBOSITY terse
+CALL tdc_delaunay_tiled('tt_c9', 'tt_err');
+\set VERBOSITY default
+RESET tdc_delaunay.max_memory;
+RESET tdc_delaunay.threads;
+SELECT to_regclass('tt_err') AS no_target, count(*) AS staging FROM pg_class WHERE relname LIKE 'tdc_tiled%';
+
 -- errors: each leaves no target behind
 \set VERBOSITY terse
 CALL tdc_delaunay_tiled('tt_uni', 'tt_err', geom_column => 'nosuch');
@@ -167,15 +265,56 @@ SELECT to_regclass('tt_err') AS no_target, count(*) AS staging FROM pg_class WHE
 -- the existing target was not touched
 SELECT count(*) FROM tt_uni_tri;
 
--- cancel (statement_timeout) while it runs: no half target, server alive
-CREATE TABLE tt_big AS SELECT ST_MakePoint(random(), random()) AS geom FROM generate_series(1, 200000);
-SET statement_timeout = '300ms';
-CALL tdc_delaunay_tiled('tt_big', 'tt_big_tri', tile_size => 0.25);
+-- cancel (statement_timeout) during a tile: no target, no staging table,
+-- server alive.  The timeout lands at a fraction of the time a whole call
+-- takes here and now, in the loop over the tiles, which the error's
+-- context shows (the tile's statement calls _tdc_tile).  Staging takes
+-- the first half or more of a call and the time varies with the load: a
+-- try that finished first or was cancelled before the tiles is followed
+-- by one at another fraction, until one lands in a tile.
+CREATE TABLE tt_big AS SELECT ST_MakePoint(random(), random()) AS geom FROM generate_series(1, 60000);
+CREATE FUNCTION tt_call_ms() RETURNS int LANGUAGE plpgsql AS $$
+DECLARE
+	t0 timestamptz := clock_timestamp();
+BEGIN
+	CALL tdc_delaunay_tiled('tt_big', 'tt_big_ok', tile_size => 0.25);
+	RETURN ceil(extract(epoch FROM clock_timestamp() - t0) * 1000);
+END $$;
+CREATE TEMP TABLE tt_cancel (in_tile boolean);
+CREATE FUNCTION tt_try_cancel() RETURNS void LANGUAGE plpgsql AS $$
+DECLARE
+	ctx text;
+BEGIN
+	IF EXISTS (SELECT 1 FROM tt_cancel WHERE in_tile) THEN
+		RETURN;
+	END IF;
+	CALL tdc_delaunay_tiled('tt_big', 'tt_big_tri', tile_size => 0.25);
+	DROP TABLE tt_big_tri;
+	INSERT INTO tt_cancel VALUES (NULL);
+EXCEPTION WHEN query_canceled THEN
+	GET STACKED DIAGNOSTICS ctx = PG_EXCEPTION_CONTEXT;
+	INSERT INTO tt_cancel VALUES (ctx LIKE '%_tdc_tile(%');
+END $$;
+SELECT tt_call_ms() AS call_ms \gset
+DROP TABLE tt_big_ok;
+SELECT set_config('statement_timeout', (:call_ms * 8 / 10)::text, false) IS NOT NULL AS timeout_set;
+SELECT tt_try_cancel();
+SELECT set_config('statement_timeout', (:call_ms * 65 / 100)::text, false) IS NOT NULL AS timeout_set;
+SELECT tt_try_cancel();
+SELECT set_config('statement_timeout', (:call_ms * 9 / 10)::text, false) IS NOT NULL AS timeout_set;
+SELECT tt_try_cancel();
+SELECT set_config('statement_timeout', (:call_ms * 5 / 10)::text, false) IS NOT NULL AS timeout_set;
+SELECT tt_try_cancel();
 RESET statement_timeout;
+SELECT bool_or(in_tile) AS cancelled_during_a_tile FROM tt_cancel;
 SELECT to_regclass('tt_big_tri') AS no_target, count(*) AS staging FROM pg_class WHERE relname LIKE 'tdc_tiled%';
 SELECT 1 AS alive;
 \set VERBOSITY default
 
 DROP TABLE tt_uni, tt_uni_tri, tt_uni_sq, tt_uni_auto, tt_uni_many, tt_uni_notice, tt_dup, tt_dup_tri, tt_dup_one, tt_dup_sq, tt_lat, tt_lat_tri,
-	tt_col, tt_col_tri, tt_line, tt_line_tri, tt_empty, tt_empty_tri, tt_ring, tt_ring_tri, tt_srid, tt_nulltile, tt_big;
+	tt_col, tt_col_tri, tt_line, tt_line_tri, tt_empty, tt_empty_tri, tt_ring, tt_ring_tri, tt_srid, tt_nulltile, tt_big,
+	tt_far, tt_far_tri, tt_far_tiny, tt_c9, tt_c9_auto, tt_c9_col, tt_town, tt_town_auto, tt_town_col,
+	tt_strip, tt_strip_auto, tt_strip_col, tt_coast, tt_coast_auto, tt_coast_col, tt_q, tt_cancel;
 DROP FUNCTION tiled_vs_dump(regclass, text);
+DROP FUNCTION tt_call_ms();
+DROP FUNCTION tt_try_cancel();

@@ -1348,11 +1348,56 @@ test_hull_cells(void)
 	free(cells);
 }
 
+/*
+ * The cells a rerun adds (tdc_tp_cells_fit): on the uniform grid of unit
+ * cells, 100 points each, a tile of cells [0, 8) x [0, 8) asks for cells at
+ * distances 30, 1, 10 and 5 (a cell already added among them): all when
+ * they fit, else the nearest first as far as they fit, none when not even
+ * the nearest does; and the requests' reach (tdc_tp_rings) doubles to its cap.
+ */
+static void
+test_cells_fit(void)
+{
+	tdc_tp_grid *g = malloc(sizeof(tdc_tp_grid));
+	uint32_t   *counts = malloc(sizeof(uint32_t) * TDC_TP_GRID * TDC_TP_GRID);
+	uint8_t    *added = calloc((size_t) TDC_TP_GRID * TDC_TP_GRID, 1);
+	double		box[4] = {0, 0, 512, 512};
+	tdc_tp_tile ti = {0, 8, 0, 8, 6400, {0}};
+	uint32_t	ask[4] = {38, 9, 18, 13},	/* row 0: gaps 30, 1, 10, 5 from column 8 */
+				cells[4];
+	size_t		k;
+
+	for (size_t c = 0; c < (size_t) TDC_TP_GRID * TDC_TP_GRID; c++)
+		counts[c] = 100;
+	tdc_tp_grid_set(g, box);
+	memcpy(cells, ask, sizeof(cells));
+	k = tdc_tp_cells_fit(g, counts, added, &ti, cells, 4, 6400, 6800);
+	CHECK(k == 4 && memcmp(cells, ask, sizeof(cells)) == 0, "all fit: %zu cells, want the 4 as asked", k);
+	k = tdc_tp_cells_fit(g, counts, added, &ti, cells, 4, 6400, 6650);
+	CHECK(k == 2 && cells[0] == 9 && cells[1] == 13 && cells[2] == 18 && cells[3] == 38,
+		  "room for 2 cells: %zu, order %u %u %u %u, want 2 of 9 13 18 38", k, cells[0], cells[1],
+		  cells[2], cells[3]);
+	added[13] = 1;
+	memcpy(cells, ask, sizeof(cells));
+	k = tdc_tp_cells_fit(g, counts, added, &ti, cells, 4, 6400, 6650);
+	CHECK(k == 3, "an added cell costs nothing: %zu cells, want 3", k);
+	memcpy(cells, ask, sizeof(cells));
+	CHECK(tdc_tp_cells_fit(g, counts, added, &ti, cells, 4, 6400, 6450) == 0,
+		  "not even the nearest fits, yet cells");
+	CHECK(tdc_tp_rings(0) == TDC_TP_FIRST_RINGS && tdc_tp_rings(1) == 2 * TDC_TP_FIRST_RINGS &&
+		  tdc_tp_rings(100) == TDC_TP_RINGS_MAX, "rings %g %g %g", tdc_tp_rings(0), tdc_tp_rings(1),
+		  tdc_tp_rings(100));
+	free(g);
+	free(counts);
+	free(added);
+}
+
 void
 test_tile(void)
 {
 	test_cells();
 	test_hull_cells();
+	test_cells_fit();
 	test_square_labels();
 	test_tile_errors();
 	test_hull_sliver();

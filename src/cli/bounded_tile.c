@@ -21,15 +21,6 @@
 
 #include "bounded.h"
 
-/*
- * How far a tile's first request reaches past the nearest cell it needs,
- * in that cell's sides (tdc_tile_grid.rings); doubled on every rerun.  At
- * 0.5 of the one-shot's peak on ~300,000 clustered points, 1 ring took
- * 104 to 250 runs a set, 4 took 62 to 216, 8 took 55 to 200 with the peak
- * within 1 % of the limit on 9 tight clusters.
- */
-#define FIRST_RINGS	4
-
 /* A tile run's points: coordinates, z (or NULL) and each one's label. */
 typedef struct tile_points
 {
@@ -340,88 +331,20 @@ add_cells(bounded_run *r, const uint32_t *cells, size_t ncells)
 		}
 }
 
-/* The distance of a cell's box from a tile's cell box (qsort_r's context). */
-static double
-cell_gap(const bounded_run *r, const double *tb, uint32_t c)
-{
-	int			i = (int) (c % TDC_TP_GRID),
-				j = (int) (c / TDC_TP_GRID);
-	double		dx = fmax(fmax(r->grid.xcut[i] - tb[2], tb[0] - r->grid.xcut[i + 1]), 0),
-				dy = fmax(fmax(r->grid.ycut[j] - tb[3], tb[1] - r->grid.ycut[j + 1]), 0);
-
-	return dx * dx + dy * dy;
-}
-
-typedef struct gap_ctx
-{
-	const bounded_run *r;
-	double		tb[4];
-} gap_ctx;
-
-static int
-cmp_gap(const void *a, const void *b, void *arg)
-{
-	const gap_ctx *g = arg;
-	double		u = cell_gap(g->r, g->tb, *(const uint32_t *) a),
-				v = cell_gap(g->r, g->tb, *(const uint32_t *) b);
-
-	return u < v ? -1 : u > v;
-}
-
 /*
  * The cells a rerun asked for (ncells of them, in cells[], reordered
  * here), added to tile t's region of m points as far as the budget
- * allows: when all of them would not fit (their points by the counts),
- * those nearest to the tile's cell box first, and the next run asks again
- * for what it still needs.  A request reaches about the distance of the
- * nearest unknown points and a little more (tile_cells.c); between tight
- * clusters a little more is a whole cluster, which only part of the tile's
- * stars need.  Returns the number of cells added: 0 when not even the
- * nearest fits.
+ * allows, nearest first (tdc_tp_cells_fit).  Returns the number of cells
+ * added: 0 when not even the nearest fits.
  */
 static size_t
 add_cells_fit(bounded_run *r, int t, uint32_t *cells, size_t ncells, size_t m)
 {
-	size_t		more = 0,
-				fit,
-				lo = 0,
-				hi = r->n + 1,
-				k,
-				n0 = r->nadded;
-	gap_ctx		g = {r, {0}};
+	size_t		n0 = r->nadded,
+				k;
 
-	for (k = 0; k < ncells; k++)
-		more += r->added[cells[k]] ? 0 : r->counts[cells[k]];
-	/*
-	 * the most points a run may hold: the last m with tdc_tp_tile_bytes
-	 * within 7/8 of the budget (at the whole budget, 9 tight clusters at
-	 * 18 MB peaked at 17.8 MB)
-	 */
-	while (lo + 1 < hi)
-	{
-		size_t		mid = lo + (hi - lo) / 2;
-
-		if (tdc_tp_tile_bytes(mid, r->opt, POINT_BYTES(r)) <= r->budget / 8 * 7)
-			lo = mid;
-		else
-			hi = mid;
-	}
-	fit = lo;
-	if (m + more <= fit)
-	{
-		add_cells(r, cells, ncells);
-		return r->nadded - n0;
-	}
-	tdc_tp_least_known(&r->tiles[t], &r->grid, g.tb);
-	qsort_r(cells, ncells, sizeof(uint32_t), cmp_gap, &g);
-	for (k = 0, more = 0; k < ncells; k++)
-	{
-		size_t		c = r->added[cells[k]] ? 0 : r->counts[cells[k]];
-
-		if (m + more + c > fit)
-			break;
-		more += c;
-	}
+	k = tdc_tp_cells_fit(&r->grid, r->counts, r->added, &r->tiles[t], cells, ncells, m,
+						 tdc_tp_run_max(r->n, r->opt, POINT_BYTES(r), r->budget));
 	add_cells(r, cells, k);
 	return r->nadded - n0;
 }
@@ -506,7 +429,7 @@ tile_run(bounded_run *r, int t)
 	tdc_tile_spec spec = {0};
 	bool		first = r->use_halo;	/* the first run reads the tile and halo files */
 
-	tdc_tile_grid tg = {TDC_TP_GRID, TDC_TP_GRID, r->grid.xcut, r->grid.ycut, r->cellst, FIRST_RINGS};
+	tdc_tile_grid tg = {TDC_TP_GRID, TDC_TP_GRID, r->grid.xcut, r->grid.ycut, r->cellst, TDC_TP_FIRST_RINGS};
 
 	if (ti->count == 0)
 		return;					/* owns nothing */
@@ -559,7 +482,7 @@ tile_run(bounded_run *r, int t)
 			 * the same K with the cells the check named, as many as fit;
 			 * the next request reaches twice as far past the nearest cell
 			 */
-			tg.rings = fmin(2 * tg.rings, 4096);
+			tg.rings = fmin(2 * tg.rings, TDC_TP_RINGS_MAX);
 			if (add_cells_fit(r, t, res.need_cells, res.nneed_cells, p.m) == 0)
 			{
 				char		msg[160];

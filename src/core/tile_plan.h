@@ -43,6 +43,15 @@
 #define TDC_TP_HULL_CELLS	(8 * TDC_TP_EDGE_CELLS)
 /* The most points a tile's first K may hold (tdc_tp_known_limit) */
 #define TDC_TP_KNOWN_MAX(tile_max)	((tile_max) * 3 / 2)
+/*
+ * How far a tile's first request for cells reaches past the nearest cell it
+ * needs, in that cell's sides (tdc_tile_grid.rings), doubled on every rerun
+ * up to TDC_TP_RINGS_MAX.  At 0.5 of the one-shot's peak on ~300,000
+ * clustered points, 1 ring took 104 to 250 runs a set, 4 took 62 to 216, 8
+ * took 55 to 200 with the peak within 1 % of the limit on 9 tight clusters.
+ */
+#define TDC_TP_FIRST_RINGS	4
+#define TDC_TP_RINGS_MAX	4096
 #define TDC_TP_FINISH_BYTES	61		/* tile_final.c's bytes a point, triangles included */
 /*
  * The cells' bytes in a tile run: the caller's counts, states and added
@@ -191,5 +200,10 @@ extern void tdc_tp_shrink_known(double K[4], const double Kmin[4], int shrinks);
 extern size_t tdc_tp_grow_bands(const double *bands, size_t nhull, const double need[4],
 							uint8_t *inband, double *extra, size_t *nextra);
 extern void tdc_tp_grow_known(double K[4], double Kmin[4], const double need[4], double h);
+extern double tdc_tp_rings(int reruns);
+extern size_t tdc_tp_run_max(size_t n, const tdc_options *opt, size_t per_point, size_t budget);
+extern size_t tdc_tp_cells_fit(const tdc_tp_grid *g, const uint32_t *counts, const uint8_t *added,
+							   const tdc_tp_tile *ti, uint32_t *cells, size_t ncells, size_t m,
+							   size_t fit);
 
 #endif							/* TDC_TILE_PLAN_H */

@@ -34,8 +34,15 @@ DECLARE
 	npts bigint;
 	srid_lo int; srid_hi int; zm_lo int; zm_hi int;
 	gx0 float8; gy0 float8; gx1 float8; gy1 float8;
-	w float8; h float8; spacing float8; margin float8; size float8;
+	w float8; h float8; spacing float8; size float8;
 	hull float8[];
+	extent float8[];			-- {xmin, ymin, xmax, ymax} the policy sizes tiles by
+	hasz boolean;
+	tile_max bigint;			-- automatic tiles: the most points one may own
+	grid bytea;					-- automatic tiles: the counting grid of the plan
+	plan bytea;					-- automatic tiles: the plan (src/pg/fn_tiled_plan.c)
+	pbox float8[];
+	need_cells int4[];			-- the plan's cells a tile that was not final named
 	tparts text[];
 	tschema text; tname text; qtarget text;
 	pts text; tiles text; rt text; halo text;
@@ -149,23 +156,44 @@ BEGIN
 			USING ERRCODE = 'invalid_parameter_value';
 	END IF;
 
-	-- the squares: tile = floor(x / size) * 2^32 + floor(y / size), a label later
+	-- The tiles: squares of tile_size labelled column * 2^32 + row counted
+	-- from the data's lower left corner (_tdc_square_label), or with no
+	-- tile_size the core's adaptive plan under tdc_delaunay.max_memory, as
+	-- ./tdc --max-memory makes it: counts on a grid whose sides are at the
+	-- quantiles of a sample, split k-d by counts (_tdc_plan_grid, _tdc_plan;
+	-- src/pg/fn_tiled_plan.c).  Every number of the policy comes from
+	-- src/core/tile_plan.c.
 	w := coalesce(gx1 - gx0, 0);
 	h := coalesce(gy1 - gy0, 0);
 	spacing := CASE WHEN npts > 0 AND w * h > 0 THEN sqrt(w * h / npts)
 					WHEN npts > 0 AND w + h > 0 THEN (w + h) / npts
 					ELSE 1 END;
+	extent := ARRAY[gx0, gy0, gx1, gy1];
+	hasz := zm_lo IN (2, 3);
 	IF tile_column IS NULL THEN
-		size := tile_size;
-		IF size IS NULL THEN
-			-- about a million points per tile
-			size := CASE WHEN npts <= 1000000 THEN 'infinity'::float8
-						 WHEN w * h > 0 THEN sqrt(w * h / (npts / 1000000.0))
-						 ELSE greatest(w, h) / (npts / 1000000.0) END;
+		size := coalesce(tile_size, 'infinity'::float8);
+		IF tile_size IS NULL AND npts > 0 THEN
+			tile_max := _tdc_plan_tile_max(npts, hasz);
+			IF npts > tile_max THEN
+				-- two passes over the vertices in the source's order (the
+				-- procedure turns synchronized scans off), as ./tdc reads its file
+				EXECUTE format('SELECT _tdc_plan_grid(%1$s, %2$s) FROM %3$s s WHERE s.%4$I IS NOT NULL',
+							   stroked, npts, source, geom_column) INTO grid;
+				EXECUTE format('SELECT _tdc_plan(%1$s, $1) FROM %2$s s WHERE s.%3$I IS NOT NULL',
+							   stroked, source, geom_column) INTO plan USING grid;
+				pbox := _tdc_plan_box(plan);
+				-- the exact box: the policy's spacing is that of ./tdc
+				gx0 := pbox[1]; gy0 := pbox[2]; gx1 := pbox[3]; gy1 := pbox[4];
+				extent := pbox[1:4];
+				RAISE NOTICE '%: % tiles of at most % points planned under tdc_delaunay.max_memory', fn,
+					pbox[6], tile_max;
+			END IF;
 		END IF;
-		IF size < 'infinity'::float8 THEN
-			tv := format('floor(ST_X(d.geom) / %1$L::float8)::bigint * 4294967296 + floor(ST_Y(d.geom) / %1$L::float8)::bigint',
-						 size);
+		IF plan IS NOT NULL THEN
+			tv := '_tdc_plan_label(ST_X(d.geom), ST_Y(d.geom), $1)';
+		ELSIF size < 'infinity'::float8 THEN
+			tv := format('_tdc_square_label(ST_X(d.geom), ST_Y(d.geom), %1$L::float8, %2$L::float8, %3$L::float8)',
+						 gx0, gy0, size);
 		ELSE
 			tv := '0::bigint';
 		END IF;
@@ -176,16 +204,14 @@ BEGIN
 		-- procedure turns synchronized scans off), without the staging tables,
 		-- the halo or the index.  The box may be rounded outward, so a
 		-- square counts as the only one only when that box lies in it.
-		IF npts = 0 OR size = 'infinity'::float8
-		   OR (floor(gx0 / size) = floor(gx1 / size) AND floor(gy0 / size) = floor(gy1 / size)) THEN
+		IF plan IS NULL AND (npts = 0 OR size = 'infinity'::float8
+							 OR _tdc_square_label(gx1, gy1, gx0, gy0, size) = 0) THEN
 			-- (CREATE TABLE AS: it writes in bulk, an INSERT into a new table
 			-- took about twice as long)
 			EXECUTE format('CREATE TABLE %s AS
-							SELECT (4294967296 + d.id)::bigint AS id, %s::bigint AS tile,
+							SELECT (4294967296 + d.id)::bigint AS id, 0::bigint AS tile,
 								   d.geom::geometry(%s, %s) AS geom
 							  FROM ST_TDCDelaunayDump(%L) d', qtarget,
-						   CASE WHEN npts = 0 OR size = 'infinity'::float8 THEN 0
-								ELSE floor(gx0 / size)::bigint * 4294967296 + floor(gy0 / size)::bigint END,
 						   CASE WHEN zm_lo = 2 THEN 'PolygonZ' WHEN zm_lo = 1 THEN 'PolygonM'
 								WHEN zm_lo = 3 THEN 'PolygonZM' ELSE 'Polygon' END, coalesce(srid_lo, 0),
 						   format('SELECT %I FROM %s', geom_column, source));
@@ -233,13 +259,13 @@ BEGIN
 						SELECT %2$s, (d.c[0])::bigint * 65536 + (d.c[1])::bigint, 1, d.geom, ST_X(d.geom), ST_Y(d.geom)
 						  FROM %3$s s, LATERAL (SELECT s.%4$I AS geom, s.ctid::text::point AS c) d
 						 WHERE ST_GeometryType(s.%4$I) = ''ST_Point'' AND NOT ST_IsEmpty(s.%4$I)',
-					   pts, tv, source, geom_column);
+					   pts, tv, source, geom_column) USING plan;
 		EXECUTE format('INSERT INTO %1$s (tile, seq, vi, g, x, y)
 						SELECT %2$s, ((s.ctid::text::point)[0])::bigint * 65536 + ((s.ctid::text::point)[1])::bigint,
 							   d.vi, d.geom, ST_X(d.geom), ST_Y(d.geom)
 						  FROM %3$s s, LATERAL ST_DumpPoints(%5$s) WITH ORDINALITY AS d(path, geom, vi)
 						 WHERE ST_GeometryType(s.%4$I) <> ''ST_Point''',
-					   pts, tv, source, geom_column, stroked);
+					   pts, tv, source, geom_column, stroked) USING plan;
 	END IF;
 	IF tile_column IS NOT NULL THEN
 		EXECUTE format('SELECT EXISTS (SELECT 1 FROM %s WHERE tile IS NULL)', pts) INTO has_null;
@@ -253,35 +279,32 @@ BEGIN
 	-- the tiles, labelled 1.. in the order of their tile values
 	EXECUTE format('CREATE TEMP TABLE %1$s AS
 					SELECT tile, row_number() OVER (ORDER BY tile) AS label, n, x0, y0, x1, y1,
-						   NULL::float8[] AS known, NULL::float8[] AS extra, true AS pending
+						   NULL::float8[] AS region, NULL::float8[] AS known, NULL::float8[] AS extra,
+						   ''{}''::int4[] AS added, 0 AS cell_runs, true AS pending
 					  FROM (SELECT tile, count(*) AS n, min(%3$s) AS x0, min(%4$s) AS y0,
 								   max(%3$s) AS x1, max(%4$s) AS y1
 							  FROM %2$s GROUP BY tile) t',
 				   'tdc_tiled_tiles', pts, px, py);
-	-- a first K: the tile's extent plus some eight point spacings
-	margin := 8 * spacing;
-	EXECUTE format('UPDATE %s SET known = ARRAY[x0 - %2$L::float8, y0 - %2$L::float8, x1 + %2$L::float8, y1 + %2$L::float8]',
-				   tiles, margin);
 	EXECUTE format('SELECT count(*) FROM %s', tiles) INTO ntiles;
 	-- C, a convex polygon containing every point: their exact convex hull,
 	-- from the hulls of the tiles (on the workers on Citus)
 	EXECUTE format('SELECT _tdc_hull(h) FROM (SELECT _tdc_hull(g) AS h FROM %s GROUP BY tile) s', pts) INTO hull;
 
-	-- Extra known boxes: the boxes of the hull edges that meet K, grown by
-	-- 16 point spacings.  A long hull edge has a triangle whose circle bulges
-	-- far out of C; only its thin part inside C must be known, and the band
-	-- holds it without widening K along the whole edge (as the CLI does).
-	EXECUTE format('UPDATE %s k SET extra = coalesce((
-			SELECT array_agg(v ORDER BY e.i, u.j)
-			  FROM (SELECT i, least(h[2*i+1], h[2*((i+1) %% n)+1]) - %3$L::float8 AS x0,
-							  least(h[2*i+2], h[2*((i+1) %% n)+2]) - %3$L::float8 AS y0,
-							  greatest(h[2*i+1], h[2*((i+1) %% n)+1]) + %3$L::float8 AS x1,
-							  greatest(h[2*i+2], h[2*((i+1) %% n)+2]) + %3$L::float8 AS y1
-					  FROM (SELECT %2$L::float8[] AS h, cardinality(%2$L::float8[]) / 2 AS n) c,
-						   generate_series(0, CASE WHEN n > 1 THEN n - 1 ELSE -1 END) i) e,
-				   unnest(ARRAY[e.x0, e.y0, e.x1, e.y1]) WITH ORDINALITY AS u(v, j)
-			 WHERE e.x0 <= k.known[3] AND k.known[1] <= e.x1 AND e.y0 <= k.known[4] AND k.known[2] <= e.y1),
-			''{}'')', tiles, hull, 16 * spacing);
+	-- Each tile's first known region {h, K, extra boxes...}, by the core's
+	-- policy: K is the tile's box (of its points, or of its cells in a
+	-- plan) with a halo h of 8 of its mean spacings, and the extra boxes are
+	-- the bands along the hull edges near K.  A long hull edge has a
+	-- triangle whose circle bulges far out of C; only its thin part inside
+	-- C must be known, and the band holds it without widening K along the
+	-- whole edge.  A plan's regions are fitted to its counts, as ./tdc's.
+	IF plan IS NOT NULL THEN
+		EXECUTE format('UPDATE %s k SET region = r.region FROM _tdc_plan_regions($1, $2) r WHERE r.tile = k.tile',
+					   tiles) USING plan, hull;
+	ELSE
+		EXECUTE format('UPDATE %s SET region = _tdc_tile_region(ARRAY[x0, y0, x1, y1], n, $1, $2, $3)', tiles)
+			USING extent, npts, hull;
+	END IF;
+	EXECUTE format('UPDATE %s SET known = region[2:5], extra = region[6:cardinality(region)]', tiles);
 
 	-- the target
 	EXECUTE format('CREATE TABLE %s (id bigint, tile %s, geom geometry(%s, %s))', qtarget, ttype,
@@ -342,7 +365,7 @@ BEGIN
 		tile_sql := format('INSERT INTO %s (id, tile, geom)
 			SELECT CASE WHEN (q.t).k = 0 THEN -1 ELSE $2 * 4294967296 + (q.t).k END, q.tile, (q.t).geom
 			  FROM (SELECT s.tile, _tdc_tile_triangles(s.r) AS t
-					  FROM (SELECT h.tile, _tdc_tile(h.g, h.label, $2, $3, %L::float8[], $4, h.seq, h.vi) AS r
+					  FROM (SELECT h.tile, _tdc_tile(h.g, h.label, $2, $3, %L::float8[], $4, h.seq, h.vi, $5, $6, $7) AS r
 							  FROM %s h
 							 WHERE h.tile = $1::%s AND h.tl = $2
 							 GROUP BY h.tile) s) q',
@@ -393,7 +416,10 @@ BEGIN
 			-- step rounds monotonically), so a point in a box is in one of its
 			-- cells; the exact test is _tdc_first_box.  Cells outside the
 			-- extent (gx0 .. gx1: the values' boxes, rounded outward) hold
-			-- no point and are left out.
+			-- no point and are left out.  (OFFSET 0: a tile's boxes, known ||
+			-- extra, are built once, and the earlier boxes each box overlaps once
+			-- per box, not at every use and for every cell: with the 90 hull
+			-- bands of a ring of 90 points this statement took 8 s, not 0.1 s.)
 			EXECUTE format('SELECT coalesce(sum(greatest(least(b.x1, %3$L::float8) - greatest(b.x0, %1$L::float8), 0)
 												* greatest(least(b.y1, %4$L::float8) - greatest(b.y0, %2$L::float8), 0)), 0)
 							  FROM (%5$s) b',
@@ -411,7 +437,8 @@ BEGIN
 													  WHERE k.bx[4*j+1] <= k.x1 AND k.x0 <= k.bx[4*j+3]
 														AND k.bx[4*j+2] <= k.y1 AND k.y0 <= k.bx[4*j+4]),
 													''{}'') || k.bx[4*k.i+1:4*k.i+4] AS boxes
-									  FROM (%2$s) k) b,
+									  FROM (SELECT * FROM (%2$s) k0 OFFSET 0) k
+									OFFSET 0) b,
 								   generate_series(greatest(floor((b.x0 - %3$L::float8) / %5$L::float8), 0)::bigint,
 												   least(floor((b.x1 - %3$L::float8) / %5$L::float8), %6$s)::bigint) cx,
 								   generate_series(greatest(floor((b.y0 - %4$L::float8) / %5$L::float8), 0)::bigint,
@@ -429,14 +456,28 @@ BEGIN
 		END IF;
 		GET DIAGNOSTICS ntri = ROW_COUNT;
 		halo_pts := halo_pts + ntri;
+		-- the plan's cells that reruns added, as ./tdc adds them: every
+		-- point of such a cell (_tdc_plan_cell, the cell ./tdc bins it to)
+		-- that no box of the tile holds
+		IF plan IS NOT NULL AND round > 1 THEN
+			EXECUTE format('INSERT INTO %1$s (tile, label, seq, vi, g, tl)
+							SELECT k.tile, o.label, p.seq, p.vi, p.g, k.label
+							  FROM (SELECT tile, label, unnest(added) AS c, known || extra AS bx
+									  FROM %3$s WHERE pending AND cardinality(added) > 0) k
+							  JOIN %2$s p ON _tdc_plan_cell(p.x, p.y, $1) = k.c AND NOT _tdc_in_boxes(p.x, p.y, k.bx)
+							  JOIN %3$s o ON o.tile = p.tile',
+						   halo, pts, tiles) USING plan;
+			GET DIAGNOSTICS ntri = ROW_COUNT;
+			halo_pts := halo_pts + ntri;
+		END IF;
 		IF citus THEN
 			EXECUTE tile_sql;
 		ELSE
 			reported := 0;
 			i := 0;
-			FOR r IN EXECUTE format('SELECT tile::text AS tile, label, known, extra FROM %s WHERE pending ORDER BY label',
-									tiles) LOOP
-				EXECUTE tile_sql USING r.tile, r.label, r.known, r.extra;
+			FOR r IN EXECUTE format('SELECT tile::text AS tile, label, known, extra, added, cell_runs
+									   FROM %s WHERE pending ORDER BY label', tiles) LOOP
+				EXECUTE tile_sql USING r.tile, r.label, r.known, r.extra, plan, r.added, r.cell_runs;
 				GET DIAGNOSTICS nrows = ROW_COUNT;
 				written := written + nrows;
 				-- a tile that is not final writes one row: its box
@@ -450,25 +491,41 @@ BEGIN
 				END IF;
 			END LOOP;
 		END IF;
-		-- tiles that were not final: K := the box they need, grown by a tenth
+		-- tiles that were not final: the region of their next run, from the
+		-- row they wrote (_tdc_tile_regrow: with a plan the cells they named,
+		-- else the hull bands they lack, else K grown to the box they need
+		-- and half the halo beyond), as ./tdc grows a tile
 		-- (on plain PostgreSQL only the tiles that wrote one row can be
 		-- among them: the target is scanned for their boxes only if there
 		-- are such tiles)
 		EXECUTE format('UPDATE %s SET pending = false WHERE pending', tiles);
-		FOR r IN EXECUTE format('SELECT tile::text AS tile, ST_X(ST_PointN(ST_ExteriorRing(geom), 1)) AS x0,
-									   ST_Y(ST_PointN(ST_ExteriorRing(geom), 1)) AS y0,
-									   ST_X(ST_PointN(ST_ExteriorRing(geom), 3)) AS x1,
-									   ST_Y(ST_PointN(ST_ExteriorRing(geom), 3)) AS y1
-								  FROM %s WHERE id = -1 %s', qtarget,
+		FOR r IN EXECUTE format('SELECT tile::text AS tile, geom FROM %s WHERE id = -1 %s', qtarget,
 								CASE WHEN citus THEN '' WHEN cardinality(one_row) = 0 THEN 'AND false'
 									 ELSE 'AND tile::text = ANY($1)' END)
 						 USING one_row LOOP
-			EXECUTE format('UPDATE %s SET pending = true,
-								known = ARRAY[%2$L::float8 - %6$L::float8, %3$L::float8 - %7$L::float8,
-											  %4$L::float8 + %6$L::float8, %5$L::float8 + %7$L::float8]
-							 WHERE tile = $1::%8$s',
-						   tiles, r.x0, r.y0, r.x1, r.y1, (r.x1 - r.x0) / 10, (r.y1 - r.y0) / 10, ttype)
-			USING r.tile;
+			-- With a plan: the cells it named, if any, as ./tdc adds them
+			-- (_tdc_tile_need_cells: all when they fit, else the nearest
+			-- first as far as they fit, by the points this run held, its
+			-- halo partition's rows; an ERROR when not even the nearest
+			-- fits); its next request reaches twice as far (cell_runs, see
+			-- tdc_tp_rings).  Else the region grown.
+			need_cells := '{}';
+			IF plan IS NOT NULL THEN
+				EXECUTE format('SELECT _tdc_tile_need_cells($1, $2, k.tile, (SELECT count(*) FROM %2$s h WHERE h.tl = k.label),
+												  k.added)
+								  FROM %1$s k WHERE k.tile = $3::bigint', tiles, halo)
+				   INTO need_cells USING r.geom, plan, r.tile;
+			END IF;
+			IF cardinality(need_cells) > 0 THEN
+				EXECUTE format('UPDATE %1$s SET pending = true, added = added || $2, cell_runs = cell_runs + 1
+								 WHERE tile = $1::%2$s', tiles, ttype)
+				USING r.tile, need_cells;
+			ELSE
+				EXECUTE format('UPDATE %1$s SET pending = true, region = g.r, known = g.r[2:5], extra = g.r[6:cardinality(g.r)]
+								  FROM (SELECT _tdc_tile_regrow(region, $2, $3, $4, $5, $6) AS r FROM %1$s WHERE tile = $1::%2$s) g
+								 WHERE tile = $1::%2$s', tiles, ttype)
+				USING r.tile, r.geom, extent, npts, hull, plan;
+			END IF;
 			rerun := rerun + 1;
 		END LOOP;
 		IF citus OR rerun > 0 THEN
@@ -498,5 +555,6 @@ $proc$;
 COMMENT ON PROCEDURE tdc_delaunay_tiled(regclass, text, name, name, float8) IS
 'Triangulates the vertices of source.geom_column (duplicates merged, Z of the first copy, one SRID) tile by tile '
 'into a new table target(id bigint, tile, geom geometry(Polygon)): the same triangles as ST_TDCDelaunayDump, each once. '
-'Tiles: the groups of tile_column, else squares of tile_size, else squares of about a million points. '
+'Tiles: the groups of tile_column, else squares of tile_size counted from the data''s lower left corner, '
+'else tiles split by counts so that each fits tdc_delaunay.max_memory, as ./tdc --max-memory plans them. '
 'On Citus, with source distributed by tile_column, the tiles run on the workers.';
