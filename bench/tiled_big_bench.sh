@@ -142,4 +142,7 @@ echo "70 MB of memory, on a 2006 laptop with two hard drives, the mesh written t
 exec >&-
 wait "$TEE_PID" 2>/dev/null || true
 bench_end
-bench_publish tiled_big "Tiles at scale: ./tdc --max-memory on 1e9 uniform and 1e8 clustered points" "$TXT" text
+what=
+[ -z "$UN" ] || what="$UN uniform"
+[ -z "$CN" ] || what="${what:+$what and }$CN clustered"
+bench_publish tiled_big "Tiles at scale: ./tdc --max-memory $LIMIT on $what points" "$TXT" text
