@@ -77,14 +77,13 @@ refuse_plan(bounded_run *r, size_t tile_max, tdc_tp_plan_status rc)
 			dmax = r->counts[c];
 			dcell = c;
 		}
-	floor_bytes = tdc_tp_tile_bytes(TDC_TP_ALLOW(dmax > TILE_FLOOR ? dmax : TILE_FLOOR), r->opt,
-									POINT_BYTES(r)) + r->outside;
+	floor_bytes = run_need(r, TDC_TP_ALLOW(dmax > TILE_FLOOR ? dmax : TILE_FLOOR));
 	if (rc == TDC_TP_PLAN_TOO_MANY_TILES)
 	{
 		snprintf(msg, sizeof(msg), "--max-memory %zu is too small for this input: tiles of at most %zu points "
 				 "(the most that fit with their halos) would be more than %d; with %zu points allow about %zu MB",
 				 r->limit >> 20, tile_max, TDC_TP_MAX_TILES, r->n,
-				 ((tdc_tp_tile_bytes(TDC_TP_ALLOW(r->n / (TDC_TP_MAX_TILES / 2)), r->opt, POINT_BYTES(r)) + r->outside) >> 20) + 1);
+				 (run_need(r, TDC_TP_ALLOW(r->n / (TDC_TP_MAX_TILES / 2))) >> 20) + 1);
 		die(1, "%s", msg);
 	}
 	if (dmax > tile_max && dmax >= 2)

@@ -179,6 +179,13 @@ extern void scan_input(bounded_run *r);
 extern void scan_count(bounded_run *r);
 extern void dense_spot(bounded_run *r, int cell, size_t limit, double spot[2], size_t *copies);
 
+/* The process's bytes for a run of m points: the tiles' model and what it holds beside them. */
+static inline size_t
+run_need(const bounded_run *r, size_t m)
+{
+	return tdc_tp_tile_bytes(m, r->opt, POINT_BYTES(r)) + r->outside;
+}
+
 /* bounded_mem.c */
 extern void heap_start(bounded_run *r);
 extern void heap_settle(const bounded_run *r, bool always);

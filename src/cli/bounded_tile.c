@@ -273,7 +273,7 @@ gather_region(const bounded_run *r, int t, double K[4], const double Kmin[4], si
 
 		snprintf(msg, sizeof(msg), "tile %d of %d (%zu own points) needs %zu points with the region it must know, "
 				 "about %zu MB, more than --max-memory %zu", t, r->nt, r->tiles[t].count, m,
-				 ((tdc_tp_tile_bytes(m, r->opt, POINT_BYTES(r)) + r->outside) >> 20) + 1, r->limit >> 20);
+				 (run_need(r, m) >> 20) + 1, r->limit >> 20);
 		die(1, "%s: the data is too clustered around this tile for the limit", msg);
 	}
 	points_alloc(p, m, r->has_z);
@@ -386,6 +386,15 @@ tile_account(bounded_run *r, tdc_job *job)
 	tdc_job_free(job);
 }
 
+/* A run's result and points freed, and the heap handed back if it nears the limit. */
+static void
+run_done(bounded_run *r, tdc_tile_result *res, tile_points *p)
+{
+	tdc_tile_result_free(res);
+	points_free(p);
+	heap_settle(r, false);
+}
+
 /* The output: a final run's triangles to -o, one per line, and its counts. */
 static void
 tile_write(bounded_run *r, int t, const tile_points *p, const tdc_tile_result *res)
@@ -491,9 +500,7 @@ tile_run(bounded_run *r, int t)
 						 "more, beyond --max-memory %zu", t, r->nt, ti->count, p.m, r->limit >> 20);
 				die(1, "%s: the data is too clustered around this tile for the limit", msg);
 			}
-			tdc_tile_result_free(&res);
-			points_free(&p);
-			heap_settle(r, false);
+			run_done(r, &res, &p);
 			continue;
 		}
 		else if (!r->use_cells &&
@@ -501,16 +508,12 @@ tile_run(bounded_run *r, int t)
 		{
 			/* the same K with more bands */
 			spec.nextra = nextra;
-			tdc_tile_result_free(&res);
-			points_free(&p);
-			heap_settle(r, false);
+			run_done(r, &res, &p);
 			continue;
 		}
 		else
 			tdc_tp_grow_known(K, Kmin, res.need, h);
-		tdc_tile_result_free(&res);
-		points_free(&p);
-		heap_settle(r, false);
+		run_done(r, &res, &p);
 		r->st->write += now_s() - t0;
 		if (spec.known[0] == K[0] && spec.known[1] == K[1] &&
 			spec.known[2] == K[2] && spec.known[3] == K[3])
