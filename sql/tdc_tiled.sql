@@ -266,12 +266,13 @@ SELECT to_regclass('tt_err') AS no_target, count(*) AS staging FROM pg_class WHE
 SELECT count(*) FROM tt_uni_tri;
 
 -- cancel (statement_timeout) during a tile: no target, no staging table,
--- server alive.  The timeout lands at a fraction of the time a whole call
--- takes here and now, in the loop over the tiles, which the error's
--- context shows (the tile's statement calls _tdc_tile).  Staging takes
--- the first half or more of a call and the time varies with the load: a
--- try that finished first or was cancelled before the tiles is followed
--- by one at another fraction, until one lands in a tile.
+-- server alive.  Where the tiles fall in a call, and how long a call takes,
+-- vary with the machine's load, so the timeout is found by bisection: a try
+-- cancelled before the tiles (its context is a staging statement of the
+-- procedure) raises the lower bound, a try that finished, or was cancelled
+-- after the procedure, lowers the upper bound, and the next try waits
+-- halfway between the latest of each.  It stops at the first cancel whose
+-- context shows the tile's statement (which calls _tdc_tile).
 CREATE TABLE tt_big AS SELECT ST_MakePoint(random(), random()) AS geom FROM generate_series(1, 60000);
 CREATE FUNCTION tt_call_ms() RETURNS int LANGUAGE plpgsql AS $$
 DECLARE
@@ -280,33 +281,41 @@ BEGIN
 	CALL tdc_delaunay_tiled('tt_big', 'tt_big_ok', tile_size => 0.25);
 	RETURN ceil(extract(epoch FROM clock_timestamp() - t0) * 1000);
 END $$;
-CREATE TEMP TABLE tt_cancel (in_tile boolean);
+CREATE TEMP TABLE tt_cancel (try serial, ms int, outcome text);
+CREATE FUNCTION tt_arm() RETURNS void LANGUAGE plpgsql AS $$
+DECLARE
+	lo int := coalesce((SELECT ms FROM tt_cancel WHERE outcome = 'before' ORDER BY try DESC LIMIT 1), 0);
+	hi int := coalesce((SELECT ms FROM tt_cancel WHERE outcome = 'after' ORDER BY try DESC LIMIT 1),
+					   current_setting('tt.call_ms')::int);
+BEGIN
+	PERFORM set_config('statement_timeout', greatest((lo + hi) / 2, 1)::text, false);
+END $$;
 CREATE FUNCTION tt_try_cancel() RETURNS void LANGUAGE plpgsql AS $$
 DECLARE
+	ms int := (SELECT setting::int FROM pg_settings WHERE name = 'statement_timeout');
 	ctx text;
 BEGIN
-	IF EXISTS (SELECT 1 FROM tt_cancel WHERE in_tile) THEN
+	IF EXISTS (SELECT 1 FROM tt_cancel WHERE outcome = 'tile') THEN
 		RETURN;
 	END IF;
 	CALL tdc_delaunay_tiled('tt_big', 'tt_big_tri', tile_size => 0.25);
 	DROP TABLE tt_big_tri;
-	INSERT INTO tt_cancel VALUES (NULL);
+	INSERT INTO tt_cancel (ms, outcome) VALUES (ms, 'after');
 EXCEPTION WHEN query_canceled THEN
 	GET STACKED DIAGNOSTICS ctx = PG_EXCEPTION_CONTEXT;
-	INSERT INTO tt_cancel VALUES (ctx LIKE '%_tdc_tile(%');
+	INSERT INTO tt_cancel (ms, outcome)
+		VALUES (ms, CASE WHEN ctx LIKE '%_tdc_tile(%' THEN 'tile'
+						 WHEN ctx LIKE '%PL/pgSQL function tdc_delaunay_tiled(%' THEN 'before'
+						 ELSE 'after' END);
 END $$;
-SELECT tt_call_ms() AS call_ms \gset
+SELECT set_config('tt.call_ms', tt_call_ms()::text, false) IS NOT NULL AS measured;
 DROP TABLE tt_big_ok;
-SELECT set_config('statement_timeout', (:call_ms * 8 / 10)::text, false) IS NOT NULL AS timeout_set;
-SELECT tt_try_cancel();
-SELECT set_config('statement_timeout', (:call_ms * 65 / 100)::text, false) IS NOT NULL AS timeout_set;
-SELECT tt_try_cancel();
-SELECT set_config('statement_timeout', (:call_ms * 9 / 10)::text, false) IS NOT NULL AS timeout_set;
-SELECT tt_try_cancel();
-SELECT set_config('statement_timeout', (:call_ms * 5 / 10)::text, false) IS NOT NULL AS timeout_set;
-SELECT tt_try_cancel();
+-- (each try prints an empty row: only the statements are shown)
+\o /dev/null
+SELECT q FROM generate_series(1, 16) i, (VALUES (1, 'SELECT tt_arm()'), (2, 'SELECT tt_try_cancel()')) v(o, q) ORDER BY i, o \gexec
+\o
 RESET statement_timeout;
-SELECT bool_or(in_tile) AS cancelled_during_a_tile FROM tt_cancel;
+SELECT bool_or(outcome = 'tile') AS cancelled_during_a_tile FROM tt_cancel;
 SELECT to_regclass('tt_big_tri') AS no_target, count(*) AS staging FROM pg_class WHERE relname LIKE 'tdc_tiled%';
 SELECT 1 AS alive;
 \set VERBOSITY default
@@ -318,3 +327,4 @@ DROP TABLE tt_uni, tt_uni_tri, tt_uni_sq, tt_uni_auto, tt_uni_many, tt_uni_notic
 DROP FUNCTION tiled_vs_dump(regclass, text);
 DROP FUNCTION tt_call_ms();
 DROP FUNCTION tt_try_cancel();
+DROP FUNCTION tt_arm();
