@@ -228,6 +228,9 @@ run_bounded(const char *xypath, const char *zpath, size_t n, const tdc_options *
 	/* the scan's and the bins' buffers, freed, are not the tiles' to reuse */
 	heap_settle(&r, true);
 	before_tiles(&r);
+	r.sorted = calloc((size_t) (r.nt > 0 ? r.nt : 1), 1);
+	if (r.sorted == NULL)
+		die(1, "out of memory%s", "");
 
 	/* every global triangle written once, by the tile that owns it */
 	for (int t = 0; t < r.nt; t++)
@@ -249,4 +252,5 @@ run_bounded(const char *xypath, const char *zpath, size_t n, const tdc_options *
 	free(r.band_off);
 	free(r.band_idx);
 	free(r.halo_count);
+	free(r.sorted);
 }

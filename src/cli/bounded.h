@@ -8,6 +8,7 @@
  *	bounded_files.c		the source in chunks, the tile and halo files
  *	bounded_scan.c		pass 1: box, hull and cell counts
  *	bounded_bin.c		pass 2: every point to its tile's file and halos
+ *	bounded_cells.c		a tile's file in cell order, for the reruns
  *	bounded_tile.c		a tile's runs until final, and its triangles out
  */
 #ifndef TDC_BOUNDED_H
@@ -116,6 +117,9 @@ typedef struct bounded_run
 	/* pass 2 */
 	int			nparts;			/* binning parts: files per tile and kind */
 	size_t	   *halo_count;		/* each tile's halo file's points */
+
+	/* the tiles */
+	uint8_t    *sorted;			/* per tile: its file is in cell order (bounded_cells.c) */
 } bounded_run;
 
 /*
@@ -158,6 +162,8 @@ extern void source_close(source *s);
 extern void rec_open(recfile *r, const char *kind, int t, int part, size_t cap);
 extern void rec_flush(recfile *r);
 extern void rec_close(recfile *r);
+extern FILE *part_file(const char *kind, int t, int part, const char *mode);
+extern void tmp_remove(const char *kind, int t, int part);
 extern void mr_open(mreader *m, const char *kind, int t, int nparts);
 extern size_t mr_read(mreader *m, void *buf, size_t size, size_t count);
 extern void mr_close(mreader *m);
@@ -172,6 +178,16 @@ rec_put(recfile *r, const double *v, int w)
 		r->buf[r->len + k] = v[k];
 	r->len += w;
 	r->count++;
+}
+
+/* Tile s's own points, read whole: from binning's parts, or in cell order once sorted. */
+static inline void
+tile_open(const bounded_run *r, mreader *m, int s)
+{
+	if (r->sorted[s])
+		mr_open(m, "cell", s, 1);
+	else
+		mr_open(m, "tile", s, r->nparts);
 }
 
 /* bounded_scan.c */
@@ -194,6 +210,11 @@ extern void before_tiles(const bounded_run *r);
 /* bounded_bin.c */
 extern void halo_index(bounded_run *r);
 extern void bin_points(bounded_run *r);
+
+/* bounded_cells.c */
+extern void tile_region_records(bounded_run *r, int s, bool whole, const double *K, size_t nx,
+								double *buf, size_t cap,
+								void (*take) (void *arg, const double *rec, size_t got), void *arg);
 
 /* bounded_tile.c */
 extern void tile_run(bounded_run *r, int t);

@@ -115,10 +115,11 @@ source_close(source *s)
  * Tile t's file of a kind ("tile": its own points, "halo": the others of
  * its first region) written by binning part `part`: the parts hold
  * consecutive ranges of the input, so read one after the other they keep
- * input order.
+ * input order.  ("cell": its own points in cell order, one part,
+ * bounded_cells.c.)
  */
-static FILE *
-part_open(const char *kind, int t, int part, const char *mode)
+FILE *
+part_file(const char *kind, int t, int part, const char *mode)
 {
 	char		name[48];
 
@@ -126,10 +127,21 @@ part_open(const char *kind, int t, int part, const char *mode)
 	return tmp_open(name, mode);
 }
 
+/* That file removed: its space back as soon as it is not needed. */
+void
+tmp_remove(const char *kind, int t, int part)
+{
+	char		p[4400];
+
+	snprintf(p, sizeof(p), "%s/%s%d.%d", tmp_dir, kind, t, part);
+	if (unlink(p) != 0)
+		die(1, "cannot remove temporary file %s", p);
+}
+
 void
 rec_open(recfile *r, const char *kind, int t, int part, size_t cap)
 {
-	r->f = part_open(kind, t, part, "wb");
+	r->f = part_file(kind, t, part, "wb");
 	r->buf = malloc(8 * cap);
 	r->cap = cap;
 	r->len = 0;
@@ -166,7 +178,7 @@ mr_open(mreader *m, const char *kind, int t, int nparts)
 	m->t = t;
 	m->part = 0;
 	m->nparts = nparts;
-	m->f = part_open(kind, t, 0, "rb");
+	m->f = part_file(kind, t, 0, "rb");
 }
 
 /* Up to count whole records of size bytes; 0 at the end of the last part. */
@@ -178,7 +190,7 @@ mr_read(mreader *m, void *buf, size_t size, size_t count)
 	while ((got = fread(buf, size, count, m->f)) == 0 && m->part + 1 < m->nparts)
 	{
 		fclose(m->f);
-		m->f = part_open(m->kind, m->t, ++m->part, "rb");
+		m->f = part_file(m->kind, m->t, ++m->part, "rb");
 	}
 	return got;
 }

@@ -8,7 +8,8 @@
  * triangles or asks for a larger known region, and the tile runs again
  * (first with the bands of the hull edges the request meets, then with a
  * larger K), gathering every point inside the new region from the tile
- * files whose boxes meet it.
+ * files whose boxes meet it, of each only the cells that meet the region
+ * (bounded_cells.c).
  *
  * Memory: a tile whose region would exceed the budget is shrunk towards
  * its least region first (a first region too big for the budget is
@@ -69,7 +70,7 @@ count_known(const bounded_run *r, const double *K, size_t nextra)
 
 		if (r->tiles[s].count == 0)
 			continue;
-		mr_open(&f, "tile", s, r->nparts);
+		tile_open(r, &f, s);
 		while ((got = mr_read(&f, rec, 8 * (size_t) w, 1024)) > 0)
 			for (size_t i = 0; i < got; i++)
 			{
@@ -113,10 +114,10 @@ gather_first(const bounded_run *r, int t, const double *K, size_t nextra, tile_p
 				ti->count, K[0], K[1], K[2], K[3], m);
 	points_alloc(p, m, r->has_z);
 	if (!r->has_z)
-		read_all("tile", t, r->nparts, p->q, ti->count, 2);
+		read_all(r->sorted[t] ? "cell" : "tile", t, r->sorted[t] ? 1 : r->nparts, p->q, ti->count, 2);
 	else
 	{
-		mr_open(&f, "tile", t, r->nparts);
+		tile_open(r, &f, t);
 		while ((got = mr_read(&f, rec, 24, 4096)) > 0)
 			for (size_t i = 0; i < got && at < ti->count; i++, at++)
 			{
@@ -173,29 +174,72 @@ owns_added(const bounded_run *r, int s)
 	return false;
 }
 
+/* What region_points takes from a tile's records. */
+typedef struct region_take
+{
+	const bounded_run *r;
+	const double *K;
+	size_t		nx;				/* the boxes of r->xs to test */
+	tile_points *p;				/* NULL: count only */
+	size_t		m;
+	int			s;				/* the records' tile */
+} region_take;
+
+static void
+take_points(void *arg, const double *rec, size_t got)
+{
+	region_take *a = arg;
+	const bounded_run *r = a->r;
+	const double *K = a->K;
+	int			w = r->w;
+
+	for (size_t i = 0; i < got; i++)
+	{
+		const double *q = rec + w * i;
+		bool		in = q[0] >= K[0] && q[0] <= K[2] && q[1] >= K[1] && q[1] <= K[3];
+
+		for (size_t e = 0; e < a->nx && !in; e++)
+		{
+			const double *x = r->xs[e];
+
+			in = q[0] >= x[0] && q[0] <= x[2] && q[1] >= x[1] && q[1] <= x[3];
+		}
+		if (!in && r->nadded > 0)
+			in = r->added[tdc_tp_cell(&r->grid, q[0], q[1])];
+		if (!in)
+			continue;
+		if (a->p)
+		{
+			a->p->q[2 * a->m] = q[0];
+			a->p->q[2 * a->m + 1] = q[1];
+			if (a->p->qz)
+				a->p->qz[a->m] = q[2];
+			a->p->ql[a->m] = a->s;
+		}
+		a->m++;
+	}
+}
+
 /*
  * The points inside K, one of the nextra boxes of r->extra or one of the
  * cells a rerun added (r->added), from the files of the tiles whose boxes
  * meet them (or that own an added cell), tile t's own first and then
- * the others in order, each file in input order: counted, or with p,
- * copied into p with their tiles' labels.  Returns their number.
+ * the others in order (of each neighbour only its cells that meet the
+ * region, bounded_cells.c): counted, or with p, copied into p with their
+ * tiles' labels.  Returns their number.
  */
 static size_t
-region_points(const bounded_run *r, int t, const double *Kr, size_t nextra, tile_points *p)
+region_points(bounded_run *r, int t, const double *Kr, size_t nextra, tile_points *p)
 {
 	const double *extra = r->extra;
 	const double K[4] = {Kr[0], Kr[1], Kr[2], Kr[3]};
 	const tdc_tp_tile *tiles = r->tiles;
-	int			w = r->w;
-	size_t		m = 0;
+	region_take a = {r, K, 0, p, 0, 0};
 	double		rec[4 * 4096];
 
 	for (int u = -1; u < r->nt; u++)
 	{
 		int			s = u < 0 ? t : u;
-		mreader		f;
-		size_t		got,
-					nx;
 		bool		meets = tdc_tp_box_meets(tiles[s].bb, K);
 
 		for (size_t e = 0; e < nextra && !meets; e++)
@@ -205,41 +249,14 @@ region_points(const bounded_run *r, int t, const double *Kr, size_t nextra, tile
 		if ((u >= 0 && u == t) || tiles[s].count == 0 || !meets)
 			continue;
 		/* only the bands that meet this file's box need testing */
-		nx = 0;
+		a.nx = 0;
 		for (size_t e = 0; e < nextra; e++)
 			if (tdc_tp_box_meets(tiles[s].bb, extra + 4 * e))
-				r->xs[nx++] = extra + 4 * e;
-		mr_open(&f, "tile", s, r->nparts);
-		while ((got = mr_read(&f, rec, 8 * (size_t) w, 4096)) > 0)
-			for (size_t i = 0; i < got; i++)
-			{
-				double	   *q = rec + w * i;
-				bool		in = q[0] >= K[0] && q[0] <= K[2] &&
-					q[1] >= K[1] && q[1] <= K[3];
-
-				for (size_t e = 0; e < nx && !in; e++)
-				{
-					const double *x = r->xs[e];
-
-					in = q[0] >= x[0] && q[0] <= x[2] && q[1] >= x[1] && q[1] <= x[3];
-				}
-				if (!in && r->nadded > 0)
-					in = r->added[tdc_tp_cell(&r->grid, q[0], q[1])];
-				if (!in)
-					continue;
-				if (p)
-				{
-					p->q[2 * m] = q[0];
-					p->q[2 * m + 1] = q[1];
-					if (p->qz)
-						p->qz[m] = q[2];
-					p->ql[m] = s;
-				}
-				m++;
-			}
-		mr_close(&f);
+				r->xs[a.nx++] = extra + 4 * e;
+		a.s = s;
+		tile_region_records(r, s, s == t, K, a.nx, rec, 4096 * 4 / r->w, take_points, &a);
 	}
-	return m;
+	return a.m;
 }
 
 /*
@@ -250,7 +267,7 @@ region_points(const bounded_run *r, int t, const double *Kr, size_t nextra, tile
  * still does not fit is an error.
  */
 static void
-gather_region(const bounded_run *r, int t, double K[4], const double Kmin[4], size_t nextra,
+gather_region(bounded_run *r, int t, double K[4], const double Kmin[4], size_t nextra,
 			  tile_points *p)
 {
 	size_t		m;

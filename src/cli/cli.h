@@ -98,7 +98,8 @@ typedef struct bounded_stats
 				unique,
 				ntri,
 				halo,
-				runs;
+				runs,
+				reread;			/* records reruns read from other tiles' files */
 	int			tiles,
 				threads;
 	tdc_times	t;

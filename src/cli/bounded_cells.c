@@ -1,0 +1,191 @@
+/*
+ * bounded_cells.c
+ *		A tile's file in the order of its cells, for the reruns that need
+ *		only some of them.
+ *
+ * Binning appends each point to its tile's file in input order.  A rerun
+ * of a tile needs, from each neighbour, only the points in its grown
+ * region: a strip along the shared edge, or the cells the finality check
+ * named.  Read in input order, that meant reading every neighbour's whole
+ * file, twice (counted, then copied); on a billion points, where the first
+ * runs of most tiles are not final, that was several times the input read
+ * again per round of reruns.
+ *
+ * So the first time a rerun needs a tile's file, the file is rewritten in
+ * the order of the grid's cells (row-major within the tile's rectangle of
+ * cells), stably: a cell's points keep their input order, so exact copies
+ * of a point reach the engine in the same order as before and the one kept
+ * is the same.  A cell's records then start at the sum of the counts of the
+ * cells before it (pass 1's counts, which the rewrite checks against the
+ * points), and a region reads only the runs of consecutive cells whose
+ * closed boxes meet it: every point lies in its cell's closed box
+ * (tdc_tp_cell decides it against the doubles of the sides, and the
+ * rewrite checks that too), so a cell whose box misses the region holds
+ * none of its points.  Tiles that no rerun needs are never rewritten.
+ */
+#include <stdlib.h>
+
+#include "bounded.h"
+
+/*
+ * Tile s's file rewritten in cell order as its single part, the other parts
+ * removed.  Each record goes straight to its place among the tile's points,
+ * which the cells' counts give, so the rewrite holds the tile's points once
+ * and two numbers per cell of its rectangle: less than the tile's own run.
+ */
+static void
+sort_tile(bounded_run *r, int s)
+{
+	const tdc_tp_tile *ti = &r->tiles[s];
+	const tdc_tp_grid *g = &r->grid;
+	int			w = r->w,
+				cw = ti->c1 - ti->c0;
+	size_t		n = ti->count,
+				ncell = (size_t) cw * (size_t) (ti->r1 - ti->r0),
+				at = 0,
+				got;
+	double	   *out = malloc(8 * (size_t) w * n + 8),
+				rec[4 * 1024];
+	uint32_t   *next = malloc(4 * ncell + 4),
+			   *end = malloc(4 * ncell + 4);
+	mreader		m;
+	FILE	   *f;
+
+	if (!out || !next || !end)
+		die(1, "out of memory%s", "");
+	for (size_t c = 0; c < ncell; c++)
+	{
+		next[c] = (uint32_t) at;
+		at += r->counts[(size_t) (ti->r0 + c / cw) * TDC_TP_GRID + ti->c0 + c % cw];
+		end[c] = (uint32_t) at;
+	}
+	if (at != n)
+		die(1, "internal error: a tile file in %s does not match the counts of its cells", tmp_dir);
+	mr_open(&m, "tile", s, r->nparts);
+	while ((got = mr_read(&m, rec, 8 * (size_t) w, 4096 / w)) > 0)
+		for (size_t k = 0; k < got; k++)
+		{
+			const double *q = rec + w * k;
+			int			c = tdc_tp_cell(g, q[0], q[1]),
+						i = c % TDC_TP_GRID,
+						j = c / TDC_TP_GRID;
+			size_t		lc;
+
+			/* the cell's closed box holds the point: cell_meets relies on it */
+			if (i < ti->c0 || i >= ti->c1 || j < ti->r0 || j >= ti->r1 ||
+				q[0] < g->xcut[i] || q[0] > g->xcut[i + 1] || q[1] < g->ycut[j] || q[1] > g->ycut[j + 1])
+				die(1, "internal error: a point of a tile file in %s lies outside its cells", tmp_dir);
+			lc = (size_t) (j - ti->r0) * cw + (i - ti->c0);
+			if (next[lc] >= end[lc])
+				die(1, "internal error: a tile file in %s does not match the counts of its cells", tmp_dir);
+			for (int e = 0; e < w; e++)
+				out[(size_t) w * next[lc] + e] = q[e];
+			next[lc]++;
+		}
+	mr_close(&m);
+	for (size_t c = 0; c < ncell; c++)
+		if (next[c] != end[c])
+			die(1, "internal error: a tile file in %s does not match the counts of its cells", tmp_dir);
+	free(next);
+	free(end);
+	f = part_file("cell", s, 0, "wb");
+	if ((n > 0 && fwrite(out, 8 * (size_t) w, n, f) != n) || fclose(f) != 0)
+		die(1, "cannot write temporary files in %s (disk full?)", tmp_dir);
+	free(out);
+	for (int p = 0; p < r->nparts; p++)
+		tmp_remove("tile", s, p);
+	r->sorted[s] = 1;
+}
+
+/*
+ * Does cell c (of tile s's rectangle) hold a point the region may take:
+ * does its closed box meet K or one of the nx boxes of r->xs, or was it
+ * added to the region?
+ */
+static bool
+cell_meets(const bounded_run *r, int c, const double *K, size_t nx)
+{
+	int			i = c % TDC_TP_GRID,
+				j = c / TDC_TP_GRID;
+	double		box[4] = {r->grid.xcut[i], r->grid.ycut[j], r->grid.xcut[i + 1], r->grid.ycut[j + 1]};
+
+	if (r->counts[c] == 0)
+		return false;
+	if (r->nadded > 0 && r->added[c])
+		return true;
+	if (tdc_tp_box_meets(box, K))
+		return true;
+	for (size_t e = 0; e < nx; e++)
+		if (tdc_tp_box_meets(box, r->xs[e]))
+			return true;
+	return false;
+}
+
+/*
+ * The records of tile s that a region (K, the nx boxes of r->xs, the added
+ * cells) may take, in file order, handed to take(arg, records, count) in
+ * pieces of at most cap records of buf: with whole (a tile's own file), or
+ * on a grid of cells of no size, the whole file; else, once the file is in
+ * cell order (sorted the first time), the runs of cells that meet the
+ * region.  take still tests every point.
+ */
+void
+tile_region_records(bounded_run *r, int s, bool whole, const double *K, size_t nx, double *buf, size_t cap,
+					void (*take) (void *arg, const double *rec, size_t got), void *arg)
+{
+	const tdc_tp_tile *ti = &r->tiles[s];
+	int			w = r->w;
+	size_t		got,
+				at = 0;
+	mreader		f;
+
+	if (whole || !r->use_cells)
+	{
+		tile_open(r, &f, s);
+		while ((got = mr_read(&f, buf, 8 * (size_t) w, cap)) > 0)
+		{
+			take(arg, buf, got);
+			if (!whole)
+				r->st->reread += got;
+		}
+		mr_close(&f);
+		return;
+	}
+	if (!r->sorted[s])
+		sort_tile(r, s);
+	mr_open(&f, "cell", s, 1);
+	for (int j = ti->r0; j < ti->r1; j++)
+	{
+		int			i = ti->c0;
+
+		while (i < ti->c1)
+		{
+			int			c = j * TDC_TP_GRID + i;
+			size_t		from = at,
+						len = 0;
+
+			/* a run of cells that meet the region, or of cells that do not */
+			if (cell_meets(r, c, K, nx))
+				for (; i < ti->c1 && cell_meets(r, j * TDC_TP_GRID + i, K, nx); i++)
+					len += r->counts[j * TDC_TP_GRID + i];
+			else
+				for (; i < ti->c1 && !cell_meets(r, j * TDC_TP_GRID + i, K, nx); i++)
+					at += r->counts[j * TDC_TP_GRID + i];
+			if (len == 0)
+				continue;
+			at += len;
+			if (fseeko(f.f, (off_t) from * 8 * w, SEEK_SET) != 0)
+				die(1, "cannot seek in a temporary file in %s", tmp_dir);
+			while (len > 0)
+			{
+				got = fread(buf, 8 * (size_t) w, len < cap ? len : cap, f.f);
+				if (got == 0)
+					die(1, "short read on a temporary file in %s", tmp_dir);
+				take(arg, buf, got);
+				r->st->reread += got;
+				len -= got;
+			}
+		}
+	}
+	mr_close(&f);
+}
