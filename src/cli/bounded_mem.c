@@ -1,15 +1,17 @@
 /*
- * bounded_mem.c -- the memory of a run in tiles (./tdc --max-memory)
+ * bounded_mem.c -- the process's memory around a run in tiles (./tdc --max-memory)
  *
  * --max-memory is a limit on the process's peak resident size, which the
  * tiles' model (tdc_tp_tile_bytes) does not see whole.  Three things stand
- * between the model and the peak, and each is dealt with here:
+ * between the model and the peak; the core's bounded run (tdc_bounded_run)
+ * knows the process only through what this file hands it:
  *
  * - What the process holds beside a tile's arrays: its own pages and
- *   libraries, and the plan's prefix sums, kept for the first regions.  It
- *   is taken off the limit before the plan (heap_start), so tiles are cut
- *   for what is left.  Left out, 9 tight clusters under 18 MB peaked at
- *   16.1 MB where the model said 12.4.
+ *   libraries.  It is measured before the run and passed as `outside`,
+ *   which the run takes off the limit (with the plan's prefix sums, kept
+ *   for the first regions) before the plan, so tiles are cut for what is
+ *   left.  Left out, 9 tight clusters under 18 MB peaked at 16.1 MB where
+ *   the model said 12.4.
  * - What the heap keeps.  Every tile allocates and frees the same large
  *   arrays, so the heap is kept rather than handed back at each free
  *   (served by mmap, 10M uniform points under 400 MB took 11.1 s against
@@ -17,13 +19,13 @@
  *   also keeps what the scan and the bins freed, and the holes between
  *   arrays that grow by a few cells on each rerun: the same clusters crept
  *   from 16.1 to 18.0 MB over 87 runs, more under load, where the threads'
- *   allocations interleave differently.  heap_settle hands the free heap
- *   back after the bins, and after any run that leaves the process above
- *   3/4 of the limit; the next run starts from what is live.
+ *   allocations interleave differently.  The settle callback hands the
+ *   free heap back after the bins, and after any run that leaves the
+ *   process above 3/4 of the limit; the next run starts from what is live.
  * - What the run needs before its first tile: read buffers, two counting
  *   grids, the sample and the halo index, some 10 MB whatever the limit.
- *   A limit below what was held by then is an error (before_tiles), not a
- *   silent overrun.
+ *   The peak callback gives the run the process's peak so far, and a limit
+ *   below it is an error, not a silent overrun.
  */
 #include <stdio.h>
 #include <stdlib.h>
@@ -33,7 +35,7 @@
 #include <malloc.h>
 #endif
 
-#include "bounded.h"
+#include "cli.h"
 
 /* The process's resident bytes (/proc/self/statm), 0 where unknown. */
 static size_t
@@ -52,57 +54,49 @@ resident_bytes(void)
 }
 
 /*
- * r->outside and r->budget from r->limit, at the start of the run; the
- * heap kept from here on.  Where the resident size is unknown, the
- * process's own pages are taken as 2 MB (1.8 MB for ./tdc on three points).
+ * At the start of the run: what the process holds (its resident size;
+ * where unknown, 2 MB, what ./tdc holds on three points: 1.8 MB); the
+ * heap kept from here on.
  */
-void
-heap_start(bounded_run *r)
+size_t
+heap_start(void)
 {
 	size_t		base = resident_bytes();
 
-	r->outside = (base != 0 ? base : (size_t) 2 << 20) +
-		sizeof(size_t) * (TDC_TP_GRID + 1) * (TDC_TP_GRID + 1);
-	r->budget = r->limit > r->outside ? r->limit - r->outside : 0;
 #ifdef __GLIBC__
 	mallopt(M_MMAP_MAX, 0);
 	mallopt(M_TRIM_THRESHOLD, INT32_MAX);
 #endif
+	return base != 0 ? base : (size_t) 2 << 20;
 }
 
 /*
- * The free heap handed back: always, or when the process holds more than
- * 3/4 of the limit.  Where the resident size is unknown, always.
+ * For the settle callback: the free heap handed back always, or when the
+ * process holds more than 3/4 of the limit.  Where the resident size is
+ * unknown, always.
  */
 void
-heap_settle(const bounded_run *r, bool always)
+heap_settle(size_t limit, bool always)
 {
 #ifdef __GLIBC__
 	size_t		now;
 
-	if (!always && (now = resident_bytes()) != 0 && now <= r->limit / 4 * 3)
+	if (!always && (now = resident_bytes()) != 0 && now <= limit / 4 * 3)
 		return;
 	(void) malloc_trim(0);
 #else
-	(void) r;
+	(void) limit;
 	(void) always;
 #endif
 }
 
-/* The peak so far against the limit, before any tile; dies when above it. */
-void
-before_tiles(const bounded_run *r)
+/* For the peak callback: the process's peak resident bytes so far, 0 where unknown. */
+size_t
+heap_peak(void)
 {
 	struct rusage ru;
-	size_t		peak;
-	char		msg[200];
 
 	if (getrusage(RUSAGE_SELF, &ru) != 0)
-		return;
-	peak = (size_t) ru.ru_maxrss << 10;
-	if (peak <= r->limit)
-		return;
-	snprintf(msg, sizeof(msg), "--max-memory %zu is below the %zu MB this run held before its first tile",
-			 r->limit >> 20, (peak >> 20) + 1);
-	die(1, "%s (read buffers, the counting grid and the halo index); raise it", msg);
+		return 0;
+	return (size_t) ru.ru_maxrss << 10;
 }

@@ -5,13 +5,15 @@
  *	tdc.c		the front end: arguments, which run, the --max-memory sizing
  *	input.c		reading INPUT and the segment file
  *	oneshot.c	the run with the whole input in memory, and its output
- *	bounded*.c	the run of --max-memory that does not fit: tile by tile
- *				through files (bounded.h)
+ *	tiles.c		the run of --max-memory that does not fit: the core's
+ *				tdc_bounded_run (src/core/bounded*.c), its triangles as text
+ *	bounded_mem.c	the process's memory around that run
+ *	tmpdir.c	the temporary directory of --max-memory
  *	tin_out.c	--contours and --grid: the TIN of x y z input, written as text
  *	die.c		how ./tdc fails
- * Layered without loops: die.c at the bottom, then bounded_files.c, then
- * input.c and the bounded run's phases, then bounded.c, oneshot.c and
- * tin_out.c, then tdc.c.
+ * Layered without loops: die.c at the bottom, then tmpdir.c and
+ * bounded_mem.c, then input.c and tiles.c, then oneshot.c and tin_out.c,
+ * then tdc.c.
  */
 #ifndef TDC_CLI_H
 #define TDC_CLI_H
@@ -85,34 +87,19 @@ extern void oneshot_free(oneshot *r, cli_input *in);
 /* tin_out.c: --contours or --grid on the one-shot triangulation */
 extern void tin_output(const cli_args *a, const cli_input *in, const oneshot *r);
 
-/* bounded_files.c: the temporary directory of the tiles */
+/* tmpdir.c: the temporary directory of --max-memory, removed at exit */
 extern char tmp_dir[4096];
 extern void tmp_create(const char *base);
 extern void tmp_cleanup(void);
 extern FILE *tmp_open(const char *name, const char *mode);
 
-/* Counts and wall times of a bounded run, for --stats. */
-typedef struct bounded_stats
-{
-	size_t		n,
-				unique,
-				ntri,
-				halo,
-				runs,
-				reread;			/* records reruns read from other tiles' files */
-	int			tiles,
-				threads;
-	tdc_times	t;
-	double		scan,			/* wall seconds: box, hull and counts */
-				bin,			/* the points to the tile files */
-				gather,			/* each tile's points read back */
-				engine,			/* tdc_triangulate */
-				finish,			/* tdc_tile_finish */
-				write;			/* the triangles to -o, and the frees */
-} bounded_stats;
+/* bounded_mem.c: the process's memory around a run in tiles */
+extern size_t heap_start(void);
+extern void heap_settle(size_t limit, bool always);
+extern size_t heap_peak(void);
 
-/* bounded.c */
+/* tiles.c: the run in tiles (tdc_bounded_run), its triangles to out (when not NULL) */
 extern void run_bounded(const char *xypath, const char *zpath, size_t n, const tdc_options *opt,
-						size_t budget, FILE *out, bounded_stats *st);
+						size_t limit, FILE *out, tdc_bounded_stats *st);
 
 #endif							/* TDC_CLI_H */

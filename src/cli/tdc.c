@@ -24,8 +24,8 @@
  * This interface is fixed: scripts depend on it.
  *
  * --max-memory MB [--tmpdir DIR] runs here as usual when the one-shot run
- * fits; otherwise bounded.c triangulates the input tile by tile through
- * files.
+ * fits; otherwise the core's tdc_bounded_run (src/core/bounded*.c, called
+ * from tiles.c) triangulates the input tile by tile through files.
  *
  * --contours INTERVAL [--base B] and --grid CELLSIZE [--extent X0,Y0,X1,Y1]
  * [--method M]: the TIN of 'x y z' input, its contour lines or a grid of
@@ -300,14 +300,14 @@ fits(const cli_args *a, const staged *s)
 }
 
 /*
- * The staged input triangulated tile by tile (bounded.c), the triangles
+ * The staged input triangulated tile by tile (tiles.c), the triangles
  * to -o, the --stats line.  The options that need the whole triangulation
  * in memory are refused.
  */
 static void
 run_in_tiles(const cli_args *a, const staged *s)
 {
-	bounded_stats st;
+	tdc_bounded_stats st;
 	FILE	   *f = NULL;
 	struct timespec t0,
 				t1;

@@ -33,6 +33,7 @@
 #define TDC_EMEMLIMIT		(-5)	/* would exceed options.max_memory */
 #define TDC_ETHREAD			(-6)	/* pthread_create failed */
 #define TDC_ECROSS			(-7)	/* two constraint segments cross (cdt_insert.c) */
+#define TDC_EIO				(-8)	/* a file could not be read or written (bounded*.c) */
 
 /*
  * Largest input size: the mesh numbers half-edges with uint32_t and needs
@@ -725,5 +726,87 @@ extern int	tdc_tin_drape_start(tdc_tin *tin, const tdc_interp_spec *spec,
  */
 extern size_t tdc_tin_drape_result(const tdc_tin *tin, const tdc_drape_vertex **v,
 								   const size_t **chain_off);
+
+/* --- Bounded runs: an input that does not fit, tile by tile through files --- */
+
+/*
+ * tdc_bounded_run (bounded*.c) triangulates n points that need not fit in
+ * memory: they are read from a file, cut into tiles on disk with the tiling
+ * policy of tile_plan.c, and each tile is run until final (tile_final.c), so
+ * the triangles are exactly those of one tdc_triangulate over all points
+ * (each once, in tile order, not the one-shot run's order).  The caller's
+ * process stays under limit bytes at its peak as far as the tiles' model
+ * (tdc_tp_tile_bytes) and the callbacks' view of the heap go; a plan or a
+ * tile that would not fit is an error, never a silent overrun.
+ *
+ * Runs on the caller's thread (with one more thread for each of the two
+ * passes over the input) and calls every callback from it.  Never exits:
+ * an error returns its code with a message, after freeing what the run
+ * allocated and removing the files it created.
+ */
+typedef struct tdc_bounded_stats
+{
+	size_t		n,				/* input points */
+				unique,			/* distinct sites, each counted by its owning tile */
+				ntri,			/* triangles emitted */
+				halo,			/* points of other tiles in the final runs */
+				runs,			/* tile runs, reruns included */
+				reread;			/* records reruns read from other tiles' files */
+	int			tiles,			/* tiles of the plan */
+				threads;		/* worker threads of the engine's last run */
+	tdc_times	t;				/* the engine's phases, summed over the runs */
+	double		scan,			/* wall seconds: box, hull and counts */
+				bin,			/* the points to the tile files */
+				gather,			/* each tile's points read back */
+				engine,			/* tdc_triangulate */
+				finish,			/* tdc_tile_finish */
+				write;			/* emit, and the frees after a run */
+} tdc_bounded_stats;
+
+typedef struct tdc_bounded_params
+{
+	const char *xypath;			/* n x,y pairs of doubles, in this machine's byte order */
+	const char *zpath;			/* NULL, or n z doubles beside them (passed to emit) */
+	size_t		n;
+	const tdc_options *opt;		/* the engine's options; tolerance must be 0 */
+	size_t		limit;			/* bytes the caller's process may hold at its peak */
+	size_t		outside;		/* bytes the process holds beside the run: off the limit */
+	const char *tmpdir;			/* an existing directory: the run creates its files
+								 * there (named tile*, halo* and cell*) and removes them */
+	const char *limit_name;		/* how messages name the limit; NULL: "--max-memory" */
+
+	/*
+	 * The triangles of a final tile: ntri triangles, 3 indices each, counter-
+	 * clockwise, into q (x,y pairs) and qz (z, or NULL without zpath), valid
+	 * during the call.  Nonzero stops the run: a negative TDC_ code is
+	 * returned as it is, anything else as TDC_EINVAL.  NULL: not emitted.
+	 */
+	int			(*emit) (void *arg, const double *q, const double *qz,
+						 const size_t *tri, size_t ntri);
+	/*
+	 * Optional memory hooks.  settle: hand the free heap back (always, or
+	 * only when the process nears the limit: the caller's policy), called
+	 * after binning with always and after every tile run without.  peak:
+	 * the process's peak resident bytes so far (0: unknown), checked
+	 * against limit before the first tile.
+	 */
+	void		(*settle) (void *arg, bool always);
+	size_t		(*peak) (void *arg);
+	void	   *arg;			/* passed to the three callbacks */
+	/*
+	 * NULL, or a flag another thread may set to nonzero: polled between
+	 * chunks of input, tile runs and tiles; the run then returns
+	 * TDC_ECANCELED.  A tile's engine run is not interrupted.
+	 */
+	const volatile int *cancel;
+} tdc_bounded_params;
+
+/*
+ * Run it: TDC_OK with *st filled, or an error code with a message in err
+ * (the plan's refusals, with this input's floor, are TDC_EMEMLIMIT; file
+ * errors TDC_EIO; a bad coordinate TDC_EINVAL).
+ */
+extern int	tdc_bounded_run(const tdc_bounded_params *p, tdc_bounded_stats *st,
+							char *err, size_t errlen);
 
 #endif							/* TDC_H */

@@ -38,7 +38,13 @@ sample_grid(bounded_run *r)
 	xs = malloc(sizeof(double) * 256 * 256);
 	ys = malloc(sizeof(double) * 256 * 256);
 	if (xs == NULL || ys == NULL)
-		die(1, "out of memory%s", "");
+	{
+		fclose(f);
+		free(xs);
+		free(ys);
+		tdc_bd_nomem(&r->e);
+		return false;
+	}
 	g[0] = g[1] = INFINITY;
 	g[2] = g[3] = -INFINITY;
 	for (size_t j = 0; j < 256; j++)
@@ -85,11 +91,13 @@ typedef struct scan_work
 				count;
 	const tdc_tp_grid *grid;
 	uint32_t   *counts;
+	const volatile int *cancel;
 	/* results */
 	double		bb[4];
 	double	   *hull;
 	size_t		nhull;
 	bool		bad;			/* a coordinate not finite or out of range */
+	bd_err		e;				/* this part's first error */
 } scan_work;
 
 /*
@@ -97,8 +105,8 @@ typedef struct scan_work
  * open inside is inside the hull (nhull >= 3 vertices): into inner, left
  * as it is when none is found.
  */
-static void
-inner_rectangle(const double *hull, size_t nhull, double inner[4])
+static int
+inner_rectangle(const double *hull, size_t nhull, double inner[4], bd_err *e)
 {
 	double		hb[4] = {INFINITY, INFINITY, -INFINITY, -INFINITY},
 				cx,
@@ -123,20 +131,24 @@ inner_rectangle(const double *hull, size_t nhull, double inner[4])
 		 * the hull's, whose points are no vertices.
 		 */
 		if (hb2 == NULL)
-			die(1, "out of memory%s", "");
+			return tdc_bd_nomem(e);
 		memcpy(hb2, hull, 16 * nhull);
 		memcpy(hb2 + 2 * nhull, (double[8]) {r[0], r[1], r[2], r[1], r[2], r[3], r[0], r[3]}, 64);
 		if (in && tdc_convex_hull(hb2, nhull + 4, &h3, &n3) != TDC_OK)
-			die(1, "out of memory%s", "");
+		{
+			free(hb2);
+			return tdc_bd_nomem(e);
+		}
 		in = in && n3 == nhull && memcmp(h3, hull, 16 * nhull) == 0;
 		free(hb2);
 		free(h3);
 		if (in)
 		{
 			memcpy(inner, r, sizeof(r));
-			return;
+			return TDC_OK;
 		}
 	}
+	return TDC_OK;
 }
 
 static void *
@@ -160,9 +172,12 @@ scan_range(void *arg)
 	bb[0] = bb[1] = INFINITY;
 	bb[2] = bb[3] = -INFINITY;
 	sw->bad = false;
-	source_open(&src, sw->xypath, NULL);
-	source_range(&src, sw->from, sw->count);
-	while ((k = source_read(&src)) > 0)
+	sw->hull = NULL;
+	sw->nhull = 0;
+	if (tdc_bd_source_open(&src, sw->xypath, NULL, &sw->e, sw->cancel) != TDC_OK)
+		return NULL;
+	tdc_bd_source_range(&src, sw->from, sw->count);
+	while ((k = tdc_bd_source_read(&src)) > 0)
 	{
 		double	   *buf,
 				   *h2;
@@ -171,7 +186,10 @@ scan_range(void *arg)
 
 		buf = malloc(16 * (k + nhull));
 		if (buf == NULL)
-			die(1, "out of memory%s", "");
+		{
+			tdc_bd_nomem(&sw->e);
+			break;
+		}
 		for (size_t i = 0; i < k; i++)
 		{
 			double		x = src.xy[2 * i],
@@ -203,15 +221,19 @@ scan_range(void *arg)
 		if (nhull)
 			memcpy(buf + 2 * m, hull, 16 * nhull);
 		if (tdc_convex_hull(buf, m + nhull, &h2, &n2) != TDC_OK)
-			die(1, "out of memory%s", "");
+		{
+			free(buf);
+			tdc_bd_nomem(&sw->e);
+			break;
+		}
 		free(buf);
 		free(hull);
 		hull = h2;
 		nhull = n2;
-		if (nhull >= 3)
-			inner_rectangle(hull, nhull, inner);
+		if (nhull >= 3 && inner_rectangle(hull, nhull, inner, &sw->e) != TDC_OK)
+			break;
 	}
-	source_close(&src);
+	tdc_bd_source_close(&src);
 	sw->hull = hull;
 	sw->nhull = nhull;
 	return NULL;
@@ -220,11 +242,11 @@ scan_range(void *arg)
 /*
  * Pass 1: r->bb the exact box of the points, r->hull their convex hull,
  * and, when a sample of the file gave a grid (r->counted), r->grid that
- * grid and r->counts its cells' counts.  Dies on a coordinate that is not
+ * grid and r->counts its cells' counts.  Fails on a coordinate that is not
  * finite or out of the supported range.
  */
-void
-scan_input(bounded_run *r)
+int
+tdc_bd_scan_input(bounded_run *r)
 {
 	/* the two halves of the input on two threads when the grid is known */
 	int			np;
@@ -232,10 +254,13 @@ scan_input(bounded_run *r)
 	pthread_t	th;
 	bool		started = false;
 
+	memset(sw, 0, sizeof(sw));
 	r->counts = calloc((size_t) TDC_TP_GRID * TDC_TP_GRID, sizeof(uint32_t));
 	if (r->counts == NULL)
-		die(1, "out of memory%s", "");
+		return tdc_bd_nomem(&r->e);
 	r->counted = sample_grid(r);
+	if (r->e.code != TDC_OK)
+		return r->e.code;
 	np = r->counted ? 2 : 1;
 	for (int p = 0; p < np; p++)
 	{
@@ -243,9 +268,10 @@ scan_input(bounded_run *r)
 		sw[p].from = r->n / np * p;
 		sw[p].count = p == np - 1 ? r->n - sw[p].from : r->n / np;
 		sw[p].grid = r->counted ? &r->grid : NULL;
+		sw[p].cancel = r->p->cancel;
 		sw[p].counts = p == 0 ? r->counts : calloc((size_t) TDC_TP_GRID * TDC_TP_GRID, sizeof(uint32_t));
 		if (sw[p].counts == NULL)
-			die(1, "out of memory%s", "");
+			return tdc_bd_nomem(&r->e);
 	}
 	if (np == 2)
 		started = pthread_create(&th, NULL, scan_range, &sw[1]) == 0;
@@ -254,44 +280,55 @@ scan_input(bounded_run *r)
 		pthread_join(th, NULL);
 	else if (np == 2)
 		scan_range(&sw[1]);
-	for (int p = 0; p < np; p++)
-		if (sw[p].bad)
-			die(1, "a point has a non-finite coordinate or one outside the supported magnitude range%s", "");
-	memcpy(r->bb, sw[0].bb, sizeof(r->bb));
 	r->hull = sw[0].hull;
 	r->nhull = sw[0].nhull;
+	for (int p = 0; p < np; p++)
+		if (sw[p].e.code != TDC_OK)
+			tdc_bd_fail(&r->e, sw[p].e.code, "%s", sw[p].e.msg);
+	for (int p = 0; p < np && r->e.code == TDC_OK; p++)
+		if (sw[p].bad)
+			tdc_bd_fail(&r->e, TDC_EINVAL, "a point has a non-finite coordinate or one outside the "
+						"supported magnitude range");
+	memcpy(r->bb, sw[0].bb, sizeof(r->bb));
 	if (np == 2)
 	{
-		double	   *buf = malloc(16 * (r->nhull + sw[1].nhull + 1));
+		double	   *buf = r->e.code == TDC_OK ? malloc(16 * (r->nhull + sw[1].nhull + 1)) : NULL;
 
-		if (buf == NULL)
-			die(1, "out of memory%s", "");
-		tdc_tp_box_union(r->bb, sw[1].bb);
-		memcpy(buf, r->hull, 16 * r->nhull);
-		memcpy(buf + 2 * r->nhull, sw[1].hull, 16 * sw[1].nhull);
-		free(r->hull);
-		if (tdc_convex_hull(buf, r->nhull + sw[1].nhull, &r->hull, &r->nhull) != TDC_OK)
-			die(1, "out of memory%s", "");
-		free(buf);
+		if (buf != NULL)
+		{
+			tdc_tp_box_union(r->bb, sw[1].bb);
+			memcpy(buf, r->hull, 16 * r->nhull);
+			memcpy(buf + 2 * r->nhull, sw[1].hull, 16 * sw[1].nhull);
+			free(r->hull);
+			r->hull = NULL;
+			if (tdc_convex_hull(buf, r->nhull + sw[1].nhull, &r->hull, &r->nhull) != TDC_OK)
+				tdc_bd_nomem(&r->e);
+			free(buf);
+			for (size_t c = 0; c < (size_t) TDC_TP_GRID * TDC_TP_GRID; c++)
+				r->counts[c] += sw[1].counts[c];
+		}
+		else
+			tdc_bd_nomem(&r->e);
 		free(sw[1].hull);
-		for (size_t c = 0; c < (size_t) TDC_TP_GRID * TDC_TP_GRID; c++)
-			r->counts[c] += sw[1].counts[c];
 		free(sw[1].counts);
 	}
+	return r->e.code;
 }
 
 /* r->counts: the cells' counts on r->grid, in a pass of their own. */
-void
-scan_count(bounded_run *r)
+int
+tdc_bd_scan_count(bounded_run *r)
 {
 	source		src;
 	size_t		k;
 
-	source_open(&src, r->xypath, NULL);
-	while ((k = source_read(&src)) > 0)
+	if (tdc_bd_source_open(&src, r->xypath, NULL, &r->e, r->p->cancel) != TDC_OK)
+		return r->e.code;
+	while ((k = tdc_bd_source_read(&src)) > 0)
 		for (size_t i = 0; i < k; i++)
 			r->counts[tdc_tp_cell(&r->grid, src.xy[2 * i], src.xy[2 * i + 1])]++;
-	source_close(&src);
+	tdc_bd_source_close(&src);
+	return r->e.code;
 }
 
 static int
@@ -309,8 +346,8 @@ cmp_xy(const void *a, const void *b)
  * sample), in spot, and its copies in the whole input, counted exactly in
  * a second pass.  A read of the input, only on the way to an error.
  */
-void
-dense_spot(bounded_run *r, int cell, size_t limit, double spot[2], size_t *copies)
+int
+tdc_bd_dense_spot(bounded_run *r, int cell, size_t limit, double spot[2], size_t *copies)
 {
 	source		src;
 	size_t		k,
@@ -321,9 +358,13 @@ dense_spot(bounded_run *r, int cell, size_t limit, double spot[2], size_t *copie
 	spot[0] = spot[1] = NAN;
 	*copies = 0;
 	if (pts == NULL)
-		die(1, "out of memory%s", "");
-	source_open(&src, r->xypath, NULL);
-	while (m < limit && (k = source_read(&src)) > 0)
+		return tdc_bd_nomem(&r->e);
+	if (tdc_bd_source_open(&src, r->xypath, NULL, &r->e, r->p->cancel) != TDC_OK)
+	{
+		free(pts);
+		return r->e.code;
+	}
+	while (m < limit && (k = tdc_bd_source_read(&src)) > 0)
 		for (size_t i = 0; i < k && m < limit; i++)
 			if (tdc_tp_cell(&r->grid, src.xy[2 * i], src.xy[2 * i + 1]) == cell)
 			{
@@ -331,7 +372,7 @@ dense_spot(bounded_run *r, int cell, size_t limit, double spot[2], size_t *copie
 				pts[2 * m + 1] = src.xy[2 * i + 1];
 				m++;
 			}
-	source_close(&src);
+	tdc_bd_source_close(&src);
 	qsort(pts, m, 16, cmp_xy);
 	for (size_t i = 0, j; i < m; i = j)
 	{
@@ -345,11 +386,13 @@ dense_spot(bounded_run *r, int cell, size_t limit, double spot[2], size_t *copie
 		}
 	}
 	free(pts);
-	if (best < 2)
-		return;
-	source_open(&src, r->xypath, NULL);
-	while ((k = source_read(&src)) > 0)
+	if (best < 2 || r->e.code != TDC_OK)
+		return r->e.code;
+	if (tdc_bd_source_open(&src, r->xypath, NULL, &r->e, r->p->cancel) != TDC_OK)
+		return r->e.code;
+	while ((k = tdc_bd_source_read(&src)) > 0)
 		for (size_t i = 0; i < k; i++)
 			*copies += src.xy[2 * i] == spot[0] && src.xy[2 * i + 1] == spot[1];
-	source_close(&src);
+	tdc_bd_source_close(&src);
+	return r->e.code;
 }

@@ -1,24 +1,40 @@
 /*
  * bounded.h
- *		The run of ./tdc --max-memory that does not fit in one piece: what
- *		its files share (bounded.c explains the run).
+ *		The bounded run (tdc_bounded_run in tdc.h: an input that does not
+ *		fit, tile by tile through files): what its files share (bounded.c
+ *		explains the run).  Private to the core.
  *
- *	bounded.c			the phases in order, and the plan
- *	tile_plan.c	the tiling policy, pure (tile_plan.h)
- *	bounded_files.c		the source in chunks, the tile and halo files
+ *	bounded.c			the phases in order, the plan, tdc_bounded_run
+ *	tile_plan.c			the tiling policy, pure (tile_plan.h)
+ *	bounded_files.c		errors, the source in chunks, the tile and halo files
  *	bounded_scan.c		pass 1: box, hull and cell counts
  *	bounded_bin.c		pass 2: every point to its tile's file and halos
  *	bounded_cells.c		a tile's file in cell order, for the reruns
  *	bounded_tile.c		a tile's runs until final, and its triangles out
+ * Layered without loops: bounded_files.c at the bottom, then the phases,
+ * then bounded.c.
+ *
+ * Errors: every function that can fail returns TDC_OK or an error code and
+ * leaves the first error's code and message in a bd_err, which unwinds to
+ * tdc_bounded_run; it frees the run's arrays and removes its files.  The
+ * threads of the two passes have a bd_err each, merged after the join.
  */
 #ifndef TDC_BOUNDED_H
 #define TDC_BOUNDED_H
 
+#include <stdio.h>
 #include <string.h>
 #include <time.h>
 
-#include "cli.h"
+#include "tdc.h"
 #include "tile_plan.h"
+
+/* The first error of a run or of one of its threads: code and message. */
+typedef struct bd_err
+{
+	int			code;			/* TDC_OK until the first error */
+	char		msg[640];
+} bd_err;
 
 /*
  * Bytes a point costs a tile run beside the engine and the finality check
@@ -36,6 +52,8 @@ typedef struct source
 	double	   *xy,
 			   *z;
 	size_t		left;			/* points still to read */
+	bd_err	   *e;				/* a read error or the cancel flag: 0 points, e set */
+	const volatile int *cancel;
 } source;
 
 /* Buffered appends of fixed-size records to one temporary file. */
@@ -46,6 +64,8 @@ typedef struct recfile
 	size_t		len,			/* doubles in buf */
 				cap;
 	size_t		count;			/* records written */
+	const char *dir;
+	bd_err	   *e;				/* a write error: later records dropped, e set */
 } recfile;
 
 /* Reads a tile's file of a kind across its parts, in order. */
@@ -55,7 +75,9 @@ typedef struct mreader
 	int			t,
 				part,
 				nparts;
-	FILE	   *f;
+	FILE	   *f;				/* NULL after an error: reads give 0 */
+	const char *dir;
+	bd_err	   *e;
 } mreader;
 
 /*
@@ -65,15 +87,18 @@ typedef struct mreader
 typedef struct bounded_run
 {
 	/* the call's */
+	const tdc_bounded_params *p;
 	const char *xypath,
 			   *zpath;			/* the .bin source, and z beside it or NULL */
+	const char *dir;			/* the caller's temporary directory */
+	const char *lname;			/* the limit's name in messages */
 	size_t		n;
 	const tdc_options *opt;
-	size_t		limit;			/* --max-memory, bytes */
+	size_t		limit;			/* bytes */
 	size_t		outside;		/* what the process holds beyond the tiles' model */
 	size_t		budget;			/* the tiles' share: limit - outside */
-	FILE	   *out;			/* NULL: the triangles are not written */
-	bounded_stats *st;
+	tdc_bounded_stats *st;
+	bd_err		e;				/* the run's first error */
 	int			has_z,
 				w;				/* doubles per point record: 2, or 3 with z */
 
@@ -155,25 +180,36 @@ now_s(void)
 }
 
 /* bounded_files.c */
-extern void source_open(source *s, const char *xypath, const char *zpath);
-extern void source_range(source *s, size_t from, size_t count);
-extern size_t source_read(source *s);
-extern void source_close(source *s);
-extern void rec_open(recfile *r, const char *kind, int t, int part, size_t cap);
-extern void rec_flush(recfile *r);
-extern void rec_close(recfile *r);
-extern FILE *part_file(const char *kind, int t, int part, const char *mode);
-extern void tmp_remove(const char *kind, int t, int part);
-extern void mr_open(mreader *m, const char *kind, int t, int nparts);
-extern size_t mr_read(mreader *m, void *buf, size_t size, size_t count);
-extern void mr_close(mreader *m);
-extern void read_all(const char *kind, int t, int nparts, double *buf, size_t k, int w);
+extern int	tdc_bd_fail(bd_err *e, int code, const char *fmt,...)
+			__attribute__((format(printf, 3, 4)));
+extern int	tdc_bd_nomem(bd_err *e);
+extern bool tdc_bd_canceled(const volatile int *cancel);
+extern int	tdc_bd_source_open(source *s, const char *xypath, const char *zpath, bd_err *e,
+							   const volatile int *cancel);
+extern int	tdc_bd_source_range(source *s, size_t from, size_t count);
+extern size_t tdc_bd_source_read(source *s);
+extern void tdc_bd_source_close(source *s);
+extern int	tdc_bd_rec_open(recfile *r, const char *dir, bd_err *e, const char *kind, int t,
+							int part, size_t cap);
+extern void tdc_bd_rec_flush(recfile *r);
+extern int	tdc_bd_rec_close(recfile *r);
+extern FILE *tdc_bd_part_file(const char *dir, bd_err *e, const char *kind, int t, int part,
+							  const char *mode);
+extern int	tdc_bd_remove(const char *dir, bd_err *e, const char *kind, int t, int part);
+extern void tdc_bd_remove_all(const char *dir, int nt);
+extern int	tdc_bd_mr_open(mreader *m, const char *dir, bd_err *e, const char *kind, int t,
+						   int nparts);
+extern size_t tdc_bd_mr_read(mreader *m, void *buf, size_t size, size_t count);
+extern void tdc_bd_mr_close(mreader *m);
+extern int	tdc_bd_read_all(const char *dir, bd_err *e, const char *kind, int t, int nparts,
+							double *buf, size_t k, int w);
 
+/* One record appended; after a write error (r->e set) records are dropped. */
 static inline void
 rec_put(recfile *r, const double *v, int w)
 {
 	if (r->len + w > r->cap)
-		rec_flush(r);
+		tdc_bd_rec_flush(r);
 	for (int k = 0; k < w; k++)
 		r->buf[r->len + k] = v[k];
 	r->len += w;
@@ -181,19 +217,18 @@ rec_put(recfile *r, const double *v, int w)
 }
 
 /* Tile s's own points, read whole: from binning's parts, or in cell order once sorted. */
-static inline void
-tile_open(const bounded_run *r, mreader *m, int s)
+static inline int
+tile_open(bounded_run *r, mreader *m, int s)
 {
 	if (r->sorted[s])
-		mr_open(m, "cell", s, 1);
-	else
-		mr_open(m, "tile", s, r->nparts);
+		return tdc_bd_mr_open(m, r->dir, &r->e, "cell", s, 1);
+	return tdc_bd_mr_open(m, r->dir, &r->e, "tile", s, r->nparts);
 }
 
 /* bounded_scan.c */
-extern void scan_input(bounded_run *r);
-extern void scan_count(bounded_run *r);
-extern void dense_spot(bounded_run *r, int cell, size_t limit, double spot[2], size_t *copies);
+extern int	tdc_bd_scan_input(bounded_run *r);
+extern int	tdc_bd_scan_count(bounded_run *r);
+extern int	tdc_bd_dense_spot(bounded_run *r, int cell, size_t limit, double spot[2], size_t *copies);
 
 /* The process's bytes for a run of m points: the tiles' model and what it holds beside them. */
 static inline size_t
@@ -202,21 +237,24 @@ run_need(const bounded_run *r, size_t m)
 	return tdc_tp_tile_bytes(m, r->opt, POINT_BYTES(r)) + r->outside;
 }
 
-/* bounded_mem.c */
-extern void heap_start(bounded_run *r);
-extern void heap_settle(const bounded_run *r, bool always);
-extern void before_tiles(const bounded_run *r);
+/* The caller's heap policy (tdc_bounded_params.settle), when it has one. */
+static inline void
+heap_settle(const bounded_run *r, bool always)
+{
+	if (r->p->settle)
+		r->p->settle(r->p->arg, always);
+}
 
 /* bounded_bin.c */
-extern void halo_index(bounded_run *r);
-extern void bin_points(bounded_run *r);
+extern int	tdc_bd_halo_index(bounded_run *r);
+extern int	tdc_bd_bin_points(bounded_run *r);
 
 /* bounded_cells.c */
-extern void tile_region_records(bounded_run *r, int s, bool whole, const double *K, size_t nx,
-								double *buf, size_t cap,
-								void (*take) (void *arg, const double *rec, size_t got), void *arg);
+extern int	tdc_bd_region_records(bounded_run *r, int s, bool whole, const double *K, size_t nx,
+								  double *buf, size_t cap,
+								  void (*take) (void *arg, const double *rec, size_t got), void *arg);
 
 /* bounded_tile.c */
-extern void tile_run(bounded_run *r, int t);
+extern int	tdc_bd_tile_run(bounded_run *r, int t);
 
 #endif							/* TDC_BOUNDED_H */

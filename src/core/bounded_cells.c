@@ -33,7 +33,7 @@
  * which the cells' counts give, so the rewrite holds the tile's points once
  * and two numbers per cell of its rectangle: less than the tile's own run.
  */
-static void
+static int
 sort_tile(bounded_run *r, int s)
 {
 	const tdc_tp_tile *ti = &r->tiles[s];
@@ -52,7 +52,10 @@ sort_tile(bounded_run *r, int s)
 	FILE	   *f;
 
 	if (!out || !next || !end)
-		die(1, "out of memory%s", "");
+	{
+		tdc_bd_nomem(&r->e);
+		goto done;
+	}
 	for (size_t c = 0; c < ncell; c++)
 	{
 		next[c] = (uint32_t) at;
@@ -60,9 +63,14 @@ sort_tile(bounded_run *r, int s)
 		end[c] = (uint32_t) at;
 	}
 	if (at != n)
-		die(1, "internal error: a tile file in %s does not match the counts of its cells", tmp_dir);
-	mr_open(&m, "tile", s, r->nparts);
-	while ((got = mr_read(&m, rec, 8 * (size_t) w, 4096 / w)) > 0)
+	{
+		tdc_bd_fail(&r->e, TDC_EINVAL, "internal error: a tile file in %s does not match the counts "
+					"of its cells", r->dir);
+		goto done;
+	}
+	if (tdc_bd_mr_open(&m, r->dir, &r->e, "tile", s, r->nparts) != TDC_OK)
+		goto done;
+	while ((got = tdc_bd_mr_read(&m, rec, 8 * (size_t) w, 4096 / w)) > 0 && r->e.code == TDC_OK)
 		for (size_t k = 0; k < got; k++)
 		{
 			const double *q = rec + w * k;
@@ -74,27 +82,51 @@ sort_tile(bounded_run *r, int s)
 			/* the cell's closed box holds the point: cell_meets relies on it */
 			if (i < ti->c0 || i >= ti->c1 || j < ti->r0 || j >= ti->r1 ||
 				q[0] < g->xcut[i] || q[0] > g->xcut[i + 1] || q[1] < g->ycut[j] || q[1] > g->ycut[j + 1])
-				die(1, "internal error: a point of a tile file in %s lies outside its cells", tmp_dir);
+			{
+				tdc_bd_fail(&r->e, TDC_EINVAL, "internal error: a point of a tile file in %s lies "
+							"outside its cells", r->dir);
+				break;
+			}
 			lc = (size_t) (j - ti->r0) * cw + (i - ti->c0);
 			if (next[lc] >= end[lc])
-				die(1, "internal error: a tile file in %s does not match the counts of its cells", tmp_dir);
+			{
+				tdc_bd_fail(&r->e, TDC_EINVAL, "internal error: a tile file in %s does not match the "
+							"counts of its cells", r->dir);
+				break;
+			}
 			for (int e = 0; e < w; e++)
 				out[(size_t) w * next[lc] + e] = q[e];
 			next[lc]++;
 		}
-	mr_close(&m);
-	for (size_t c = 0; c < ncell; c++)
+	tdc_bd_mr_close(&m);
+	for (size_t c = 0; c < ncell && r->e.code == TDC_OK; c++)
 		if (next[c] != end[c])
-			die(1, "internal error: a tile file in %s does not match the counts of its cells", tmp_dir);
+			tdc_bd_fail(&r->e, TDC_EINVAL, "internal error: a tile file in %s does not match the "
+						"counts of its cells", r->dir);
+	if (r->e.code != TDC_OK)
+		goto done;
 	free(next);
 	free(end);
-	f = part_file("cell", s, 0, "wb");
-	if ((n > 0 && fwrite(out, 8 * (size_t) w, n, f) != n) || fclose(f) != 0)
-		die(1, "cannot write temporary files in %s (disk full?)", tmp_dir);
+	next = end = NULL;
+	f = tdc_bd_part_file(r->dir, &r->e, "cell", s, 0, "wb");
+	if (f == NULL)
+		goto done;
+	if ((n > 0 && fwrite(out, 8 * (size_t) w, n, f) != n) | (fclose(f) != 0))
+	{
+		tdc_bd_fail(&r->e, TDC_EIO, "cannot write temporary files in %s (disk full?)", r->dir);
+		goto done;
+	}
 	free(out);
+	out = NULL;
 	for (int p = 0; p < r->nparts; p++)
-		tmp_remove("tile", s, p);
+		if (tdc_bd_remove(r->dir, &r->e, "tile", s, p) != TDC_OK)
+			goto done;
 	r->sorted[s] = 1;
+done:
+	free(out);
+	free(next);
+	free(end);
+	return r->e.code;
 }
 
 /*
@@ -129,9 +161,9 @@ cell_meets(const bounded_run *r, int c, const double *K, size_t nx)
  * cell order (sorted the first time), the runs of cells that meet the
  * region.  take still tests every point.
  */
-void
-tile_region_records(bounded_run *r, int s, bool whole, const double *K, size_t nx, double *buf, size_t cap,
-					void (*take) (void *arg, const double *rec, size_t got), void *arg)
+int
+tdc_bd_region_records(bounded_run *r, int s, bool whole, const double *K, size_t nx, double *buf,
+					  size_t cap, void (*take) (void *arg, const double *rec, size_t got), void *arg)
 {
 	const tdc_tp_tile *ti = &r->tiles[s];
 	int			w = r->w;
@@ -141,19 +173,21 @@ tile_region_records(bounded_run *r, int s, bool whole, const double *K, size_t n
 
 	if (whole || !r->use_cells)
 	{
-		tile_open(r, &f, s);
-		while ((got = mr_read(&f, buf, 8 * (size_t) w, cap)) > 0)
+		if (tile_open(r, &f, s) != TDC_OK)
+			return r->e.code;
+		while ((got = tdc_bd_mr_read(&f, buf, 8 * (size_t) w, cap)) > 0)
 		{
 			take(arg, buf, got);
 			if (!whole)
 				r->st->reread += got;
 		}
-		mr_close(&f);
-		return;
+		tdc_bd_mr_close(&f);
+		return r->e.code;
 	}
-	if (!r->sorted[s])
-		sort_tile(r, s);
-	mr_open(&f, "cell", s, 1);
+	if (!r->sorted[s] && sort_tile(r, s) != TDC_OK)
+		return r->e.code;
+	if (tdc_bd_mr_open(&f, r->dir, &r->e, "cell", s, 1) != TDC_OK)
+		return r->e.code;
 	for (int j = ti->r0; j < ti->r1; j++)
 	{
 		int			i = ti->c0;
@@ -175,17 +209,24 @@ tile_region_records(bounded_run *r, int s, bool whole, const double *K, size_t n
 				continue;
 			at += len;
 			if (fseeko(f.f, (off_t) from * 8 * w, SEEK_SET) != 0)
-				die(1, "cannot seek in a temporary file in %s", tmp_dir);
+			{
+				tdc_bd_mr_close(&f);
+				return tdc_bd_fail(&r->e, TDC_EIO, "cannot seek in a temporary file in %s", r->dir);
+			}
 			while (len > 0)
 			{
 				got = fread(buf, 8 * (size_t) w, len < cap ? len : cap, f.f);
 				if (got == 0)
-					die(1, "short read on a temporary file in %s", tmp_dir);
+				{
+					tdc_bd_mr_close(&f);
+					return tdc_bd_fail(&r->e, TDC_EIO, "short read on a temporary file in %s", r->dir);
+				}
 				take(arg, buf, got);
 				r->st->reread += got;
 				len -= got;
 			}
 		}
 	}
-	mr_close(&f);
+	tdc_bd_mr_close(&f);
+	return r->e.code;
 }

@@ -34,21 +34,25 @@
  */
 #define WHOLE	0x8000
 
-static void
-add_pair(uint32_t **pairs, size_t *npairs, size_t *cap, uint32_t cell, uint32_t t)
+static int
+add_pair(bounded_run *r, uint32_t **pairs, size_t *npairs, size_t *cap, uint32_t cell, uint32_t t)
 {
 	if (*npairs == *cap)
 	{
-		*pairs = realloc(*pairs, sizeof(uint32_t) * 2 * (*cap *= 2));
-		if (*pairs == NULL)
-			die(1, "out of memory%s", "");
+		uint32_t   *a = realloc(*pairs, sizeof(uint32_t) * 2 * (*cap * 2));
+
+		if (a == NULL)
+			return tdc_bd_nomem(&r->e);
+		*pairs = a;
+		*cap *= 2;
 	}
 	(*pairs)[2 * *npairs] = cell;
 	(*pairs)[2 * *npairs + 1] = t;
 	(*npairs)++;
+	return TDC_OK;
 }
 
-static void
+static int
 first_regions(bounded_run *r, uint32_t **pairs, size_t *npairs, size_t *cap)
 {
 	const double *grid = r->grid.box,
@@ -72,9 +76,13 @@ first_regions(bounded_run *r, uint32_t **pairs, size_t *npairs, size_t *cap)
 		for (size_t i = 0; r->nhull > 1 && i < r->nhull; i++)
 			if (r->inband[i])
 				r->xs[nb++] = r->bands + 4 * i;
-		r->band_idx = realloc(r->band_idx, sizeof(size_t) * (r->band_off[t] + nb + 1));
-		if (r->band_idx == NULL)
-			die(1, "out of memory%s", "");
+		{
+			size_t	   *a = realloc(r->band_idx, sizeof(size_t) * (r->band_off[t] + nb + 1));
+
+			if (a == NULL)
+				return tdc_bd_nomem(&r->e);
+			r->band_idx = a;
+		}
 		for (size_t i = 0; r->nhull > 1 && i < r->nhull; i++)
 			if (r->inband[i])
 				r->band_idx[r->band_off[t + 1]++] = i;
@@ -94,12 +102,16 @@ first_regions(bounded_run *r, uint32_t **pairs, size_t *npairs, size_t *cap)
 				{
 					if (r->cell_tile[row * TDC_TP_GRID + c] == t)
 						continue;
-					add_pair(pairs, npairs, cap, (uint32_t) (row * TDC_TP_GRID + c), (uint32_t) t);
+					if (add_pair(r, pairs, npairs, cap, (uint32_t) (row * TDC_TP_GRID + c),
+								 (uint32_t) t) != TDC_OK)
+						return r->e.code;
 				}
 		}
 		for (size_t k = 0; k < r->nhcells; k++)
-			add_pair(pairs, npairs, cap, r->hcells[k], (uint32_t) t | WHOLE);
+			if (add_pair(r, pairs, npairs, cap, r->hcells[k], (uint32_t) t | WHOLE) != TDC_OK)
+				return r->e.code;
 	}
+	return TDC_OK;
 }
 
 /*
@@ -107,7 +119,7 @@ first_regions(bounded_run *r, uint32_t **pairs, size_t *npairs, size_t *cap)
  * r->cell_off[cell] (zeroed by the caller), as a counting sort by cell; a
  * tile that has the cell whole as -1 - tile.
  */
-static void
+static int
 index_cells(bounded_run *r, const uint32_t *pairs, size_t npairs)
 {
 	uint32_t   *fill,
@@ -122,7 +134,11 @@ index_cells(bounded_run *r, const uint32_t *pairs, size_t npairs)
 	fill = malloc(sizeof(uint32_t) * ((size_t) TDC_TP_GRID * TDC_TP_GRID + 1));
 	r->cell_halo = cell_halo = malloc(sizeof(int16_t) * (npairs + 1));
 	if (!fill || !cell_halo || !seen)
-		die(1, "out of memory%s", "");
+	{
+		free(fill);
+		free(seen);
+		return tdc_bd_nomem(&r->e);
+	}
 	memcpy(fill, cell_off, sizeof(uint32_t) * ((size_t) TDC_TP_GRID * TDC_TP_GRID + 1));
 	for (size_t i = 0; i < npairs; i++)
 		cell_halo[fill[pairs[2 * i]]++] = (int16_t) pairs[2 * i + 1];
@@ -148,6 +164,7 @@ index_cells(bounded_run *r, const uint32_t *pairs, size_t npairs)
 	}
 	free(fill);
 	free(seen);
+	return TDC_OK;
 }
 
 /*
@@ -156,8 +173,8 @@ index_cells(bounded_run *r, const uint32_t *pairs, size_t npairs)
  * cell, the other tiles whose first region meets the cell's box, each
  * once (index_cells): a point is tested only against those.
  */
-void
-halo_index(bounded_run *r)
+int
+tdc_bd_halo_index(bounded_run *r)
 {
 	size_t		npairs = 0,
 				cap = 1024;
@@ -166,16 +183,20 @@ halo_index(bounded_run *r)
 
 	r->use_halo = nt <= 400;
 	if (!r->use_halo)
-		return;
+		return TDC_OK;
 	pairs = malloc(sizeof(uint32_t) * 2 * cap);
 	r->kfirst = malloc(32 * (size_t) (nt > 0 ? nt : 1));
 	r->band_off = malloc(sizeof(size_t) * (nt + 1));
 	r->cell_off = calloc((size_t) TDC_TP_GRID * TDC_TP_GRID + 1, sizeof(uint32_t));
 	if (!pairs || !r->kfirst || !r->band_off || !r->cell_off)
-		die(1, "out of memory%s", "");
-	first_regions(r, &pairs, &npairs, &cap);
-	index_cells(r, pairs, npairs);
+	{
+		free(pairs);
+		return tdc_bd_nomem(&r->e);
+	}
+	if (first_regions(r, &pairs, &npairs, &cap) == TDC_OK)
+		index_cells(r, pairs, npairs);
 	free(pairs);
+	return r->e.code;
 }
 
 /*
@@ -194,6 +215,7 @@ typedef struct bin_work
 	recfile    *own,
 			   *halo;
 	double	   *bb;				/* nt boxes */
+	bd_err		e;				/* this part's first error */
 } bin_work;
 
 static void *
@@ -218,9 +240,9 @@ bin_range(void *arg)
 			   *band_idx = r->band_idx;
 	bool		use_halo = r->use_halo;
 
-	source_open(&src, r->xypath, r->zpath);
-	source_range(&src, b->from, b->count);
-	while ((k = source_read(&src)) > 0)
+	if (tdc_bd_source_open(&src, r->xypath, r->zpath, &b->e, r->p->cancel) == TDC_OK)
+		tdc_bd_source_range(&src, b->from, b->count);
+	while ((k = tdc_bd_source_read(&src)) > 0)
 		for (size_t i = 0; i < k; i++)
 		{
 			double		rec[4] = {src.xy[2 * i], src.xy[2 * i + 1], src.z ? src.z[i] : 0, 0};
@@ -260,12 +282,12 @@ bin_range(void *arg)
 				}
 			}
 		}
-	source_close(&src);
+	tdc_bd_source_close(&src);
 	for (int t = 0; t < r->nt; t++)
 	{
-		rec_close(&b->own[t]);
+		tdc_bd_rec_close(&b->own[t]);
 		if (use_halo)
-			rec_close(&b->halo[t]);
+			tdc_bd_rec_close(&b->halo[t]);
 	}
 	return NULL;
 }
@@ -277,8 +299,8 @@ bin_range(void *arg)
  * on two threads (each with its own files) when there are file handles
  * enough.  Frees the cell maps.
  */
-void
-bin_points(bounded_run *r)
+int
+tdc_bd_bin_points(bounded_run *r)
 {
 	int			nt = r->nt,
 				w = r->w;
@@ -289,10 +311,11 @@ bin_points(bounded_run *r)
 	pthread_t	th;
 	bool		started = false;
 
+	memset(bw, 0, sizeof(bw));
 	r->nparts = r->n >= ((size_t) 1 << 18) && (size_t) nt * (use_halo ? 2 : 1) * 2 <= 800 ? 2 : 1;
 	per = r->budget / 16 / (size_t) (2 * r->nparts * (nt > 0 ? nt : 1)) / 8;
 	per = per < 512 ? 512 : per > 32768 ? 32768 : per;
-	for (int p = 0; p < r->nparts; p++)
+	for (int p = 0; p < r->nparts && r->e.code == TDC_OK; p++)
 	{
 		bin_work   *b = &bw[p];
 
@@ -303,29 +326,54 @@ bin_points(bounded_run *r)
 		b->halo = use_halo ? calloc((size_t) (nt > 0 ? nt : 1), sizeof(recfile)) : NULL;
 		b->bb = malloc(32 * (size_t) (nt > 0 ? nt : 1));
 		if (b->own == NULL || (use_halo && b->halo == NULL) || b->bb == NULL)
-			die(1, "out of memory%s", "");
+		{
+			tdc_bd_nomem(&r->e);
+			break;
+		}
 		for (int t = 0; t < nt; t++)
 		{
 			b->bb[4 * t] = b->bb[4 * t + 1] = INFINITY;
 			b->bb[4 * t + 2] = b->bb[4 * t + 3] = -INFINITY;
-			rec_open(&b->own[t], "tile", t, p, per - per % w);
-			if (use_halo)
-				rec_open(&b->halo[t], "halo", t, p, (per / 4) - (per / 4) % (w + 1));
+			if (tdc_bd_rec_open(&b->own[t], r->dir, &b->e, "tile", t, p, per - per % w) != TDC_OK ||
+				(use_halo &&
+				 tdc_bd_rec_open(&b->halo[t], r->dir, &b->e, "halo", t, p,
+								 (per / 4) - (per / 4) % (w + 1)) != TDC_OK))
+				break;
 		}
+		if (b->e.code != TDC_OK)
+			tdc_bd_fail(&r->e, b->e.code, "%s", b->e.msg);
 	}
-	if (r->nparts == 2)
-		started = pthread_create(&th, NULL, bin_range, &bw[1]) == 0;
-	bin_range(&bw[0]);
-	if (started)
-		pthread_join(th, NULL);
-	else if (r->nparts == 2)
-		bin_range(&bw[1]);
+	if (r->e.code == TDC_OK)
+	{
+		if (r->nparts == 2)
+			started = pthread_create(&th, NULL, bin_range, &bw[1]) == 0;
+		bin_range(&bw[0]);
+		if (started)
+			pthread_join(th, NULL);
+		else if (r->nparts == 2)
+			bin_range(&bw[1]);
+		for (int p = 0; p < r->nparts; p++)
+			if (bw[p].e.code != TDC_OK)
+				tdc_bd_fail(&r->e, bw[p].e.code, "%s", bw[p].e.msg);
+	}
+	else
+	{
+		/* the files opened before the error, closed (removed with the rest) */
+		for (int p = 0; p < r->nparts; p++)
+			for (int t = 0; t < nt; t++)
+			{
+				if (bw[p].own)
+					tdc_bd_rec_close(&bw[p].own[t]);
+				if (bw[p].halo)
+					tdc_bd_rec_close(&bw[p].halo[t]);
+			}
+	}
 	r->halo_count = calloc((size_t) (nt > 0 ? nt : 1), sizeof(size_t));
 	if (r->halo_count == NULL)
-		die(1, "out of memory%s", "");
+		tdc_bd_nomem(&r->e);
 	for (int p = 0; p < r->nparts; p++)
 	{
-		for (int t = 0; t < nt; t++)
+		for (int t = 0; t < nt && r->e.code == TDC_OK; t++)
 		{
 			tdc_tp_box_union(r->tiles[t].bb, bw[p].bb + 4 * t);
 			if (use_halo)
@@ -341,4 +389,5 @@ bin_points(bounded_run *r)
 	r->cell_tile = NULL;
 	r->cell_off = NULL;
 	r->cell_halo = NULL;
+	return r->e.code;
 }

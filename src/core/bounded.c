@@ -1,13 +1,15 @@
 /*
  * bounded.c
- *		./tdc --max-memory MB [--tmpdir DIR]: the triangulation of an input
- *		that does not fit, tile by tile through files.
+ *		tdc_bounded_run (tdc.h): the triangulation of an input that does not
+ *		fit, tile by tile through files; ./tdc --max-memory MB is its first
+ *		caller.
  *
  * When the one-shot run (the input, the engine, the result) would not fit
- * in MB, the input is cut into tiles on disk and triangulated tile by tile
- * with the core's exact tiling (src/core/tile_final.c), and the triangles are
- * written as each tile finishes.  Two sequential reads of the input (text
- * input is first converted to a temporary .bin), in phases:
+ * in the limit, the input is cut into tiles on disk and triangulated tile
+ * by tile with the core's exact tiling (tile_final.c), and the triangles
+ * are handed to the caller (emit) as each tile finishes.  Two sequential
+ * reads of the input (a .bin file the caller staged: ./tdc converts text
+ * input to one first), in phases:
  *	scan	bounding box, convex hull (in chunks: the hull of a union is the
  *			hull of the parts' hulls, and a point inside a rectangle inside
  *			the hull so far is skipped) and counts on a fine grid, whose box
@@ -25,7 +27,7 @@
  *			every other tile whose first known region holds it; the two
  *			halves of the input on two threads, each with its own files,
  *			read back one after the other (bounded_bin.c);
- *	tiles	each tile run until final, its triangles written
+ *	tiles	each tile run until final, its triangles emitted
  *			(bounded_tile.c).
  * A point's cell is decided exactly against the doubles of the cell sides,
  * so a tile's points lie in its cells' box, and its first known region is
@@ -44,6 +46,12 @@
  * rings of cells past the nearest one needed, twice as far on every
  * rerun, and are added as far as the budget holds them, nearest first
  * (bounded_tile.c).
+ *
+ * The process around the run is the caller's: what it holds beside the
+ * tiles comes in as `outside`, its heap policy and its peak through the
+ * settle and peak callbacks (./tdc: src/cli/bounded_mem.c).  Nothing here
+ * exits: an error unwinds to tdc_bounded_run with its message (bd_err,
+ * bounded.h), which frees the run's arrays and removes its files.
  */
 #include <math.h>
 #include <stdlib.h>
@@ -60,7 +68,7 @@
  */
 #define TILE_FLOOR	1000
 
-static void
+static int
 refuse_plan(bounded_run *r, size_t tile_max, tdc_tp_plan_status rc)
 {
 	size_t		dmax = 0,
@@ -80,37 +88,38 @@ refuse_plan(bounded_run *r, size_t tile_max, tdc_tp_plan_status rc)
 	floor_bytes = run_need(r, TDC_TP_ALLOW(dmax > TILE_FLOOR ? dmax : TILE_FLOOR));
 	if (rc == TDC_TP_PLAN_TOO_MANY_TILES)
 	{
-		snprintf(msg, sizeof(msg), "--max-memory %zu is too small for this input: tiles of at most %zu points "
+		snprintf(msg, sizeof(msg), "%s %zu is too small for this input: tiles of at most %zu points "
 				 "(the most that fit with their halos) would be more than %d; with %zu points allow about %zu MB",
-				 r->limit >> 20, tile_max, TDC_TP_MAX_TILES, r->n,
+				 r->lname, r->limit >> 20, tile_max, TDC_TP_MAX_TILES, r->n,
 				 (run_need(r, TDC_TP_ALLOW(r->n / (TDC_TP_MAX_TILES / 2))) >> 20) + 1);
-		die(1, "%s", msg);
+		return tdc_bd_fail(&r->e, TDC_EMEMLIMIT, "%s", msg);
 	}
 	if (dmax > tile_max && dmax >= 2)
 	{
-		dense_spot(r, dcell, tile_max, spot, &copies);
+		if (tdc_bd_dense_spot(r, dcell, tile_max, spot, &copies) != TDC_OK)
+			return r->e.code;
 		if (copies * 2 >= dmax)
 			snprintf(dup, sizeof(dup), "; %zu of them are exact copies of (%.17g %.17g)",
 					 copies, spot[0], spot[1]);
 	}
-	snprintf(msg, sizeof(msg), "--max-memory %zu is below this input's floor of %zu MB: the densest cell of the "
+	snprintf(msg, sizeof(msg), "%s %zu is below this input's floor of %zu MB: the densest cell of the "
 			 "tiling grid, %.6g x %.6g at (%.17g %.17g), holds %zu points (a tile may hold %zu within the limit), "
 			 "and a tile of them with its halo needs about %zu MB%s",
-			 r->limit >> 20, (floor_bytes >> 20) + 1,
+			 r->lname, r->limit >> 20, (floor_bytes >> 20) + 1,
 			 r->grid.xcut[dcell % TDC_TP_GRID + 1] - r->grid.xcut[dcell % TDC_TP_GRID],
 			 r->grid.ycut[dcell / TDC_TP_GRID + 1] - r->grid.ycut[dcell / TDC_TP_GRID],
 			 r->grid.xcut[dcell % TDC_TP_GRID], r->grid.ycut[dcell / TDC_TP_GRID],
 			 dmax, tile_max, (floor_bytes >> 20) + 1, dup);
-	die(1, "%s", msg);
+	return tdc_bd_fail(&r->e, TDC_EMEMLIMIT, "%s", msg);
 }
 
 /*
  * The plan: after it, r->grid is the grid every point is placed on (its
  * outer cells reaching the true box), r->tiles[0 .. r->nt) the tiles, each
  * with its cells, its count and an empty box, and r->cell_tile each cell's
- * tile.  Dies when the policy refuses the plan.
+ * tile.  Fails when the policy refuses the plan.
  */
-static void
+static int
 plan(bounded_run *r)
 {
 	size_t	   *ps,
@@ -140,23 +149,25 @@ plan(bounded_run *r)
 	if (!r->counted)
 		tdc_tp_grid_set(&r->grid, r->bb);
 	tdc_tp_grid_reach(&r->grid, r->bb);
-	ps = calloc((size_t) (TDC_TP_GRID + 1) * (TDC_TP_GRID + 1), sizeof(size_t));
+	r->ps = ps = calloc((size_t) (TDC_TP_GRID + 1) * (TDC_TP_GRID + 1), sizeof(size_t));
 	r->tiles = calloc(TDC_TP_MAX_TILES, sizeof(tdc_tp_tile));
 	r->cell_tile = malloc((size_t) TDC_TP_GRID * TDC_TP_GRID * sizeof(int16_t));
 	if (!ps || !r->tiles || !r->cell_tile)
-		die(1, "out of memory%s", "");
-	if (!r->counted)
-		scan_count(r);
+		return tdc_bd_nomem(&r->e);
+	if (!r->counted && tdc_bd_scan_count(r) != TDC_OK)
+		return r->e.code;
 	tdc_tp_prefix_sums(r->counts, ps);
 
 	tile_max = tdc_tp_tile_max(r->n, r->opt, POINT_BYTES(r), r->budget);
 	if (tdc_tp_tile_bytes(TDC_TP_ALLOW(tile_max), r->opt, POINT_BYTES(r)) > r->budget)
-		refuse_plan(r, 0, TDC_TP_PLAN_DENSE_CELL);
+		return refuse_plan(r, 0, TDC_TP_PLAN_DENSE_CELL);
 	rc = tdc_tp_plan_fit(ps, &r->grid, tile_max, TILE_FLOOR, tdc_tp_spacing(r->bb, r->n),
 						 r->tiles, &r->nt, &fit_max);
 	if (rc != TDC_TP_PLAN_OK)
-		refuse_plan(r, fit_max, rc);
-	r->ps = ps;
+	{
+		r->nt = 0;				/* no tile has a file yet */
+		return refuse_plan(r, fit_max, rc);
+	}
 	r->tile_max = fit_max;
 	for (int t = 0; t < r->nt; t++)
 	{
@@ -165,13 +176,14 @@ plan(bounded_run *r)
 	}
 	tdc_tp_label_cells(r->tiles, r->nt, r->cell_tile);
 	r->st->tiles = r->nt;
+	return TDC_OK;
 }
 
 /*
  * The hull bands, r->bands, and the scratch arrays of a tile's extra known
  * boxes, sized by the hull.
  */
-static void
+static int
 bands(bounded_run *r)
 {
 	r->extra = malloc(32 * (r->nhull + 1));
@@ -179,65 +191,116 @@ bands(bounded_run *r)
 	r->inband = calloc(r->nhull + 1, 1);
 	r->xs = malloc(sizeof(double *) * (r->nhull + 1));
 	if (r->extra == NULL || r->bands == NULL || r->inband == NULL || r->xs == NULL)
-		die(1, "out of memory%s", "");
+		return tdc_bd_nomem(&r->e);
 	/* the cells, when they have a size (a flat input has no use for them) */
 	r->use_cells = r->grid.xcut[TDC_TP_GRID] > r->grid.xcut[0] && r->grid.ycut[TDC_TP_GRID] > r->grid.ycut[0];
 	r->cellst = malloc((size_t) TDC_TP_GRID * TDC_TP_GRID);
 	r->added = calloc((size_t) TDC_TP_GRID * TDC_TP_GRID, 1);
 	r->hcells = malloc(sizeof(uint32_t) * TDC_TP_HULL_CELLS);
 	if (r->cellst == NULL || r->added == NULL || r->hcells == NULL)
-		die(1, "out of memory%s", "");
+		return tdc_bd_nomem(&r->e);
 	tdc_tp_hull_bands(r->hull, r->nhull, tdc_tp_spacing(r->bb, r->n), r->bands);
+	return TDC_OK;
 }
 
 /*
- * The bounded run.  xypath/zpath: the .bin source (z beside it for text
- * input with z).  budget: bytes.  Writes the triangles to out (when not
- * NULL) and the counts and times to st; dies on errors.
+ * The peak so far (the caller's peak callback) against the limit, before
+ * any tile: what the run held by then (read buffers, the counting grids,
+ * the halo index) is beyond the tiles' model, and a limit below it is an
+ * error, not a silent overrun.
  */
-void
-run_bounded(const char *xypath, const char *zpath, size_t n, const tdc_options *opt,
-			size_t budget, FILE *out, bounded_stats *st)
+static int
+before_tiles(bounded_run *r)
 {
-	bounded_run r = {
-		.xypath = xypath, .zpath = zpath, .n = n, .opt = opt, .limit = budget,
-		.out = out, .st = st, .has_z = zpath != NULL, .w = zpath != NULL ? 3 : 2
-	};
+	size_t		peak = r->p->peak ? r->p->peak(r->p->arg) : 0;
+
+	if (peak <= r->limit)
+		return TDC_OK;
+	return tdc_bd_fail(&r->e, TDC_EMEMLIMIT, "%s %zu is below the %zu MB this run held before its "
+					   "first tile (read buffers, the counting grid and the halo index); raise it",
+					   r->lname, r->limit >> 20, (peak >> 20) + 1);
+}
+
+/* The phases in order; the first error stops them. */
+static int
+run_phases(bounded_run *r)
+{
+	tdc_bounded_stats *st = r->st;
 	double		t0;
-
-	memset(st, 0, sizeof(*st));
-	st->n = n;
-
-	/* the heap kept between tiles; the limit less what the process holds beside them */
-	heap_start(&r);
 
 	t0 = now_s();
 	/* the points' box and hull; the cells counted when the grid is known */
-	scan_input(&r);
+	if (tdc_bd_scan_input(r) != TDC_OK)
+		return r->e.code;
 	/* every cell in one tile, every tile at most tile_max points */
-	plan(&r);
+	if (plan(r) != TDC_OK)
+		return r->e.code;
 	/* every tile's first known region fixed: K and its bands */
-	bands(&r);
-	halo_index(&r);
+	if (bands(r) != TDC_OK || tdc_bd_halo_index(r) != TDC_OK)
+		return r->e.code;
 	st->scan = now_s() - t0;
 
 	/* every point in its tile's file, and in the halo files of the others' first regions */
 	t0 = now_s();
-	bin_points(&r);
+	if (tdc_bd_bin_points(r) != TDC_OK)
+		return r->e.code;
 	st->bin = now_s() - t0;
 	/* the scan's and the bins' buffers, freed, are not the tiles' to reuse */
-	heap_settle(&r, true);
-	before_tiles(&r);
-	r.sorted = calloc((size_t) (r.nt > 0 ? r.nt : 1), 1);
-	if (r.sorted == NULL)
-		die(1, "out of memory%s", "");
+	heap_settle(r, true);
+	if (before_tiles(r) != TDC_OK)
+		return r->e.code;
+	r->sorted = calloc((size_t) (r->nt > 0 ? r->nt : 1), 1);
+	if (r->sorted == NULL)
+		return tdc_bd_nomem(&r->e);
 
-	/* every global triangle written once, by the tile that owns it */
-	for (int t = 0; t < r.nt; t++)
-		tile_run(&r, t);
+	/* every global triangle emitted once, by the tile that owns it */
+	for (int t = 0; t < r->nt; t++)
+	{
+		if (tdc_bd_canceled(r->p->cancel))
+			return tdc_bd_fail(&r->e, TDC_ECANCELED, "canceled");
+		if (tdc_bd_tile_run(r, t) != TDC_OK)
+			return r->e.code;
+	}
+	return TDC_OK;
+}
 
+/*
+ * The bounded run (tdc.h).  The limit less what the process holds beside
+ * the tiles (the caller's outside, and the plan's prefix sums, kept for
+ * the first regions) is the tiles' budget.  Whatever the outcome, the
+ * run's arrays are freed and its files removed before it returns.
+ */
+int
+tdc_bounded_run(const tdc_bounded_params *p, tdc_bounded_stats *st, char *err, size_t errlen)
+{
+	bounded_run r = {
+		.p = p, .xypath = p->xypath, .zpath = p->zpath, .dir = p->tmpdir,
+		.lname = p->limit_name ? p->limit_name : "--max-memory",
+		.n = p->n, .opt = p->opt, .limit = p->limit, .st = st,
+		.has_z = p->zpath != NULL, .w = p->zpath != NULL ? 3 : 2
+	};
+
+	memset(st, 0, sizeof(*st));
+	st->n = p->n;
+	if (err && errlen)
+		err[0] = '\0';
+	r.outside = p->outside + sizeof(size_t) * (TDC_TP_GRID + 1) * (TDC_TP_GRID + 1);
+	r.budget = r.limit > r.outside ? r.limit - r.outside : 0;
+	if (p->xypath == NULL || p->tmpdir == NULL || p->opt == NULL)
+		tdc_bd_fail(&r.e, TDC_EINVAL, "tdc_bounded_run: xypath, tmpdir and opt are required");
+	else if (p->opt->tolerance > 0)
+		tdc_bd_fail(&r.e, TDC_EINVAL, "a tolerance cannot be used when the input is tiled "
+					"(which points are merged depends on all of them)");
+	else
+		run_phases(&r);
+
+	tdc_bd_remove_all(r.dir, r.nt);
 	free(r.counts);
 	free(r.ps);
+	free(r.tiles);
+	free(r.cell_tile);
+	free(r.cell_off);
+	free(r.cell_halo);
 	free(r.cellst);
 	free(r.added);
 	free(r.added_list);
@@ -246,11 +309,13 @@ run_bounded(const char *xypath, const char *zpath, size_t n, const tdc_options *
 	free(r.bands);
 	free(r.inband);
 	free(r.xs);
-	free(r.tiles);
 	free(r.hull);
 	free(r.kfirst);
 	free(r.band_off);
 	free(r.band_idx);
 	free(r.halo_count);
 	free(r.sorted);
+	if (r.e.code != TDC_OK && err && errlen)
+		snprintf(err, errlen, "%s", r.e.msg);
+	return r.e.code;
 }

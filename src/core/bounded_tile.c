@@ -31,15 +31,16 @@ typedef struct tile_points
 	int64_t    *ql;
 } tile_points;
 
-static void
-points_alloc(tile_points *p, size_t m, int has_z)
+static int
+points_alloc(bounded_run *r, tile_points *p, size_t m, int has_z)
 {
 	p->m = m;
 	p->q = malloc(16 * m + 16);
 	p->ql = malloc(8 * m + 8);
 	p->qz = has_z ? malloc(8 * m + 8) : NULL;
 	if (!p->q || !p->ql || (has_z && !p->qz))
-		die(1, "out of memory%s", "");
+		return tdc_bd_nomem(&r->e);
+	return TDC_OK;
 }
 
 static void
@@ -48,6 +49,8 @@ points_free(tile_points *p)
 	free(p->q);
 	free(p->ql);
 	free(p->qz);
+	p->q = p->qz = NULL;
+	p->ql = NULL;
 }
 
 /*
@@ -56,7 +59,7 @@ points_free(tile_points *p)
  * first run's tile and halo files.
  */
 static size_t
-count_known(const bounded_run *r, const double *K, size_t nextra)
+count_known(bounded_run *r, const double *K, size_t nextra)
 {
 	size_t		m = 0,
 				got;
@@ -70,8 +73,9 @@ count_known(const bounded_run *r, const double *K, size_t nextra)
 
 		if (r->tiles[s].count == 0)
 			continue;
-		tile_open(r, &f, s);
-		while ((got = mr_read(&f, rec, 8 * (size_t) w, 1024)) > 0)
+		if (tile_open(r, &f, s) != TDC_OK)
+			return 0;
+		while ((got = tdc_bd_mr_read(&f, rec, 8 * (size_t) w, 1024)) > 0)
 			for (size_t i = 0; i < got; i++)
 			{
 				const double *p = rec + w * i;
@@ -87,7 +91,7 @@ count_known(const bounded_run *r, const double *K, size_t nextra)
 					in = r->added[tdc_tp_cell(&r->grid, p[0], p[1])];
 				m += in;
 			}
-		mr_close(&f);
+		tdc_bd_mr_close(&f);
 	}
 	return m;
 }
@@ -97,8 +101,8 @@ count_known(const bounded_run *r, const double *K, size_t nextra)
  * in input order; those are exactly the points of its first region (K and
  * the nextra boxes of r->extra), which TDC_TILE_CHECK=1 verifies.
  */
-static void
-gather_first(const bounded_run *r, int t, const double *K, size_t nextra, tile_points *p)
+static int
+gather_first(bounded_run *r, int t, const double *K, size_t nextra, tile_points *p)
 {
 	const tdc_tp_tile *ti = &r->tiles[t];
 	size_t		nh = r->halo_count[t],
@@ -112,28 +116,37 @@ gather_first(const bounded_run *r, int t, const double *K, size_t nextra, tile_p
 	if (getenv("TDC_TILE_DEBUG"))
 		fprintf(stderr, "tile %d/%d: own %zu, K %g %g %g %g: %zu points\n", t, r->nt,
 				ti->count, K[0], K[1], K[2], K[3], m);
-	points_alloc(p, m, r->has_z);
+	if (points_alloc(r, p, m, r->has_z) != TDC_OK)
+		return r->e.code;
 	if (!r->has_z)
-		read_all(r->sorted[t] ? "cell" : "tile", t, r->sorted[t] ? 1 : r->nparts, p->q, ti->count, 2);
+	{
+		if (tdc_bd_read_all(r->dir, &r->e, r->sorted[t] ? "cell" : "tile", t,
+							r->sorted[t] ? 1 : r->nparts, p->q, ti->count, 2) != TDC_OK)
+			return r->e.code;
+	}
 	else
 	{
-		tile_open(r, &f, t);
-		while ((got = mr_read(&f, rec, 24, 4096)) > 0)
+		if (tile_open(r, &f, t) != TDC_OK)
+			return r->e.code;
+		while ((got = tdc_bd_mr_read(&f, rec, 24, 4096)) > 0)
 			for (size_t i = 0; i < got && at < ti->count; i++, at++)
 			{
 				p->q[2 * at] = rec[3 * i];
 				p->q[2 * at + 1] = rec[3 * i + 1];
 				p->qz[at] = rec[3 * i + 2];
 			}
-		mr_close(&f);
+		tdc_bd_mr_close(&f);
+		if (r->e.code != TDC_OK)
+			return r->e.code;
 		if (at != ti->count)
-			die(1, "short read on a temporary file in %s", tmp_dir);
+			return tdc_bd_fail(&r->e, TDC_EIO, "short read on a temporary file in %s", r->dir);
 	}
 	for (size_t i = 0; i < ti->count; i++)
 		p->ql[i] = t;
 	at = ti->count;
-	mr_open(&f, "halo", t, r->nparts);
-	while ((got = mr_read(&f, rec, 8 * (size_t) (w + 1), 4096 * 4 / (w + 1))) > 0)
+	if (tdc_bd_mr_open(&f, r->dir, &r->e, "halo", t, r->nparts) != TDC_OK)
+		return r->e.code;
+	while ((got = tdc_bd_mr_read(&f, rec, 8 * (size_t) (w + 1), 4096 * 4 / (w + 1))) > 0)
 		for (size_t i = 0; i < got && at < m; i++, at++)
 		{
 			const double *h = rec + (w + 1) * i;
@@ -144,17 +157,20 @@ gather_first(const bounded_run *r, int t, const double *K, size_t nextra, tile_p
 				p->qz[at] = h[2];
 			p->ql[at] = (int64_t) h[w];
 		}
-	mr_close(&f);
+	tdc_bd_mr_close(&f);
+	if (r->e.code != TDC_OK)
+		return r->e.code;
 	if (at != m)
-		die(1, "short read on a temporary file in %s", tmp_dir);
-	if (getenv("TDC_TILE_CHECK") && count_known(r, K, nextra) != m)
+		return tdc_bd_fail(&r->e, TDC_EIO, "short read on a temporary file in %s", r->dir);
+	if (getenv("TDC_TILE_CHECK"))
 	{
-		char		msg[160];
+		size_t		known = count_known(r, K, nextra);
 
-		snprintf(msg, sizeof(msg), "tile %d: %zu points in its files, %zu in its first region",
-				 t, m, count_known(r, K, nextra));
-		die(1, "TDC_TILE_CHECK: %s", msg);
+		if (r->e.code == TDC_OK && known != m)
+			tdc_bd_fail(&r->e, TDC_EINVAL, "TDC_TILE_CHECK: tile %d: %zu points in its files, "
+						"%zu in its first region", t, m, known);
 	}
+	return r->e.code;
 }
 
 /* Does tile s own one of the cells added to this tile's region? */
@@ -177,7 +193,7 @@ owns_added(const bounded_run *r, int s)
 /* What region_points takes from a tile's records. */
 typedef struct region_take
 {
-	const bounded_run *r;
+	bounded_run *r;
 	const double *K;
 	size_t		nx;				/* the boxes of r->xs to test */
 	tile_points *p;				/* NULL: count only */
@@ -231,6 +247,7 @@ take_points(void *arg, const double *rec, size_t got)
 static size_t
 region_points(bounded_run *r, int t, const double *Kr, size_t nextra, tile_points *p)
 {
+	/* the points' number; 0 with r->e set on an error */
 	const double *extra = r->extra;
 	const double K[4] = {Kr[0], Kr[1], Kr[2], Kr[3]};
 	const tdc_tp_tile *tiles = r->tiles;
@@ -254,7 +271,8 @@ region_points(bounded_run *r, int t, const double *Kr, size_t nextra, tile_point
 			if (tdc_tp_box_meets(tiles[s].bb, extra + 4 * e))
 				r->xs[a.nx++] = extra + 4 * e;
 		a.s = s;
-		tile_region_records(r, s, s == t, K, a.nx, rec, 4096 * 4 / r->w, take_points, &a);
+		if (tdc_bd_region_records(r, s, s == t, K, a.nx, rec, 4096 * 4 / r->w, take_points, &a) != TDC_OK)
+			return 0;
 	}
 	return a.m;
 }
@@ -266,7 +284,7 @@ region_points(bounded_run *r, int t, const double *Kr, size_t nextra, tile_point
  * budget, K is shrunk towards Kmin (at most four times); a region that
  * still does not fit is an error.
  */
-static void
+static int
 gather_region(bounded_run *r, int t, double K[4], const double Kmin[4], size_t nextra,
 			  tile_points *p)
 {
@@ -275,6 +293,8 @@ gather_region(bounded_run *r, int t, double K[4], const double Kmin[4], size_t n
 	for (int shrinks = 0;; shrinks++)
 	{
 		m = region_points(r, t, K, nextra, NULL);
+		if (r->e.code != TDC_OK)
+			return r->e.code;
 		if (getenv("TDC_TILE_DEBUG"))
 			fprintf(stderr, "tile %d/%d: own %zu, K %g %g %g %g, %zu cells added: %zu points\n", t, r->nt,
 					r->tiles[t].count, K[0], K[1], K[2], K[3], r->nadded, m);
@@ -285,16 +305,14 @@ gather_region(bounded_run *r, int t, double K[4], const double Kmin[4], size_t n
 			break;
 	}
 	if (tdc_tp_tile_bytes(m, r->opt, POINT_BYTES(r)) > r->budget)
-	{
-		char		msg[160];
-
-		snprintf(msg, sizeof(msg), "tile %d of %d (%zu own points) needs %zu points with the region it must know, "
-				 "about %zu MB, more than --max-memory %zu", t, r->nt, r->tiles[t].count, m,
-				 (run_need(r, m) >> 20) + 1, r->limit >> 20);
-		die(1, "%s: the data is too clustered around this tile for the limit", msg);
-	}
-	points_alloc(p, m, r->has_z);
+		return tdc_bd_fail(&r->e, TDC_EMEMLIMIT, "tile %d of %d (%zu own points) needs %zu points with "
+						   "the region it must know, about %zu MB, more than %s %zu: the data is too "
+						   "clustered around this tile for the limit", t, r->nt, r->tiles[t].count, m,
+						   (run_need(r, m) >> 20) + 1, r->lname, r->limit >> 20);
+	if (points_alloc(r, p, m, r->has_z) != TDC_OK)
+		return r->e.code;
 	region_points(r, t, K, nextra, p);
+	return r->e.code;
 }
 
 /*
@@ -327,7 +345,7 @@ cell_states(bounded_run *r, const double K[4])
 }
 
 /* The cells a run asked for (or the first region's hull cells), added to the tile's region. */
-static void
+static int
 add_cells(bounded_run *r, const uint32_t *cells, size_t ncells)
 {
 	if (r->nadded + ncells > r->added_cap)
@@ -336,7 +354,7 @@ add_cells(bounded_run *r, const uint32_t *cells, size_t ncells)
 		uint32_t   *a = realloc(r->added_list, cap * sizeof(uint32_t));
 
 		if (a == NULL)
-			die(1, "out of memory%s", "");
+			return tdc_bd_nomem(&r->e);
 		r->added_list = a;
 		r->added_cap = cap;
 	}
@@ -346,6 +364,7 @@ add_cells(bounded_run *r, const uint32_t *cells, size_t ncells)
 			r->added[cells[k]] = 1;
 			r->added_list[r->nadded++] = cells[k];
 		}
+	return TDC_OK;
 }
 
 /*
@@ -362,30 +381,37 @@ add_cells_fit(bounded_run *r, int t, uint32_t *cells, size_t ncells, size_t m)
 
 	k = tdc_tp_cells_fit(&r->grid, r->counts, r->added, &r->tiles[t], cells, ncells, m,
 						 tdc_tp_run_max(r->n, r->opt, POINT_BYTES(r), r->budget));
-	add_cells(r, cells, k);
+	if (add_cells(r, cells, k) != TDC_OK)
+		return 0;
 	return r->nadded - n0;
 }
 
 /*
  * One run of the engine on a tile's points, then the finality check: res
- * holds the tile's triangles (res->final) or the box it needs.  Returns
- * the job, for tile_account.
+ * holds the tile's triangles (res->final) or the box it needs.  *job: the
+ * job, for tile_account (NULL when the engine failed); free res in any
+ * case.
  */
-static tdc_job *
-tile_engine(bounded_run *r, const tile_points *p, const tdc_tile_spec *spec, tdc_tile_result *res)
+static int
+tile_engine(bounded_run *r, const tile_points *p, const tdc_tile_spec *spec, tdc_tile_result *res,
+			tdc_job **job)
 {
-	tdc_job    *job;
 	char		err[512];
 	double		t0 = now_s();
+	int			rc;
 
-	if (tdc_triangulate(p->q, p->m, r->opt, &job, err, sizeof(err)) != TDC_OK)
-		die(1, "%s", err);
+	memset(res, 0, sizeof(*res));
+	if ((rc = tdc_triangulate(p->q, p->m, r->opt, job, err, sizeof(err))) != TDC_OK)
+	{
+		*job = NULL;
+		return tdc_bd_fail(&r->e, rc, "%s", err);
+	}
 	r->st->engine += now_s() - t0;
 	t0 = now_s();
-	if (tdc_tile_finish(job, spec, res, err, sizeof(err)) != TDC_OK)
-		die(1, "%s", err);
+	if ((rc = tdc_tile_finish(*job, spec, res, err, sizeof(err))) != TDC_OK)
+		return tdc_bd_fail(&r->e, rc, "%s", err);
 	r->st->finish += now_s() - t0;
-	return job;
+	return TDC_OK;
 }
 
 /* The job's phase times into the run's, and the job freed. */
@@ -412,40 +438,32 @@ run_done(bounded_run *r, tdc_tile_result *res, tile_points *p)
 	heap_settle(r, false);
 }
 
-/* The output: a final run's triangles to -o, one per line, and its counts. */
-static void
+/* The output: a final run's triangles to the caller's emit, and its counts. */
+static int
 tile_write(bounded_run *r, int t, const tile_points *p, const tdc_tile_result *res)
 {
-	for (size_t j = 0; r->out && j < res->ntri; j++)
-	{
-		const size_t *v = res->tri + 3 * j;
+	int			rc;
 
-		for (int k = 0; k < 3; k++)
-		{
-			const double *c = p->q + 2 * v[k];
-
-			if (p->qz)
-				fprintf(r->out, k ? " %.17g %.17g %.17g" : "%.17g %.17g %.17g", c[0], c[1], p->qz[v[k]]);
-			else
-				fprintf(r->out, k ? " %.17g %.17g" : "%.17g %.17g", c[0], c[1]);
-		}
-		fputc('\n', r->out);
-	}
+	if (r->p->emit && (rc = r->p->emit(r->p->arg, p->q, p->qz, res->tri, res->ntri)) != 0)
+		return tdc_bd_fail(&r->e, rc < 0 ? rc : TDC_EINVAL, "the triangles of tile %d of %d were "
+						   "not taken (the caller's emit returned %d)", t, r->nt, rc);
 	r->st->ntri += res->ntri;
 	r->st->unique += res->own_sites;
 	r->st->halo += p->m - r->tiles[t].count;
+	return TDC_OK;
 }
 
 /*
- * Tile t, run until its run is final, its triangles then written: each
+ * Tile t, run until its run is final, its triangles then emitted: each
  * global triangle it owns once, whatever the runs before.  Its known
  * region starts as the policy's first region (first_region) and only
  * grows (tdc_tp_grow_bands, then tdc_tp_grow_known) between runs, except for the
  * shrinking back of a region that does not fit.  A tile that owns no
- * point has no triangle.
+ * point has no triangle.  The caller's cancel flag is polled before every
+ * run.
  */
-void
-tile_run(bounded_run *r, int t)
+int
+tdc_bd_tile_run(bounded_run *r, int t)
 {
 	tdc_tp_tile    *ti = &r->tiles[t];
 	double		K[4],
@@ -458,13 +476,14 @@ tile_run(bounded_run *r, int t)
 	tdc_tile_grid tg = {TDC_TP_GRID, TDC_TP_GRID, r->grid.xcut, r->grid.ycut, r->cellst, TDC_TP_FIRST_RINGS};
 
 	if (ti->count == 0)
-		return;					/* owns nothing */
+		return TDC_OK;			/* owns nothing */
 	/* no cells added yet */
 	for (size_t k = 0; k < r->nadded; k++)
 		r->added[r->added_list[k]] = 0;
 	r->nadded = 0;
 	first_region(r, t, K, &h);
-	add_cells(r, r->hcells, r->nhcells);
+	if (add_cells(r, r->hcells, r->nhcells) != TDC_OK)
+		return r->e.code;
 	tdc_tp_least_known(ti, &r->grid, Kmin);
 	for (size_t i = 0; r->nhull > 1 && i < r->nhull; i++)
 		if (r->inband[i])
@@ -482,6 +501,8 @@ tile_run(bounded_run *r, int t)
 		tdc_job    *job;
 		double		t0 = now_s();
 
+		if (tdc_bd_canceled(r->p->cancel))
+			return tdc_bd_fail(&r->e, TDC_ECANCELED, "canceled");
 		if (first && tdc_tp_tile_bytes(ti->count + r->halo_count[t], r->opt, POINT_BYTES(r)) > r->budget)
 			first = false;
 		if (first)
@@ -491,17 +512,36 @@ tile_run(bounded_run *r, int t)
 		}
 		else
 			gather_region(r, t, K, Kmin, nextra, &p);
+		if (r->e.code != TDC_OK)
+		{
+			points_free(&p);
+			return r->e.code;
+		}
 		memcpy(spec.known, K, sizeof(K));
 		if (r->use_cells)
 			cell_states(r, K);
 		spec.tile = p.ql;
 		r->st->runs++;
 		r->st->gather += now_s() - t0;
-		job = tile_engine(r, &p, &spec, &res);
+		if (tile_engine(r, &p, &spec, &res, &job) != TDC_OK)
+		{
+			if (job)
+				tdc_job_free(job);
+			tdc_tile_result_free(&res);
+			points_free(&p);
+			return r->e.code;
+		}
 		t0 = now_s();
 		tile_account(r, job);
 		if (res.final)
-			tile_write(r, t, &p, &res);
+		{
+			if (tile_write(r, t, &p, &res) != TDC_OK)
+			{
+				tdc_tile_result_free(&res);
+				points_free(&p);
+				return r->e.code;
+			}
+		}
 		else if (res.nneed_cells > 0)
 		{
 			/*
@@ -511,11 +551,13 @@ tile_run(bounded_run *r, int t)
 			tg.rings = fmin(2 * tg.rings, TDC_TP_RINGS_MAX);
 			if (add_cells_fit(r, t, res.need_cells, res.nneed_cells, p.m) == 0)
 			{
-				char		msg[160];
-
-				snprintf(msg, sizeof(msg), "tile %d of %d (%zu own points) holds %zu points and needs "
-						 "more, beyond --max-memory %zu", t, r->nt, ti->count, p.m, r->limit >> 20);
-				die(1, "%s: the data is too clustered around this tile for the limit", msg);
+				if (r->e.code == TDC_OK)
+					tdc_bd_fail(&r->e, TDC_EMEMLIMIT, "tile %d of %d (%zu own points) holds %zu points "
+								"and needs more, beyond %s %zu: the data is too clustered around this "
+								"tile for the limit", t, r->nt, ti->count, p.m, r->lname, r->limit >> 20);
+				tdc_tile_result_free(&res);
+				points_free(&p);
+				return r->e.code;
 			}
 			run_done(r, &res, &p);
 			continue;
@@ -536,4 +578,5 @@ tile_run(bounded_run *r, int t)
 			spec.known[2] == K[2] && spec.known[3] == K[3])
 			break;				/* final: K was not changed */
 	}
+	return TDC_OK;
 }

@@ -1,0 +1,84 @@
+/*
+ * tiles.c
+ *		./tdc --max-memory when the one-shot run does not fit: the core's
+ *		bounded run (tdc_bounded_run, src/core/bounded*.c) on the staged
+ *		.bin input, its triangles written as text.
+ *
+ * The core runs the phases and the tiles; what belongs to the process
+ * stays here: the temporary directory (tmpdir.c), the resident size at the
+ * start, the heap's policy and the peak (bounded_mem.c), handed over as
+ * `outside` and the settle and peak callbacks, and the output.  Each final
+ * tile's triangles are written by emit as the core hands them over, one
+ * per line, counter-clockwise, each vertex "x y" (and z with z input),
+ * %.17g: the same lines in the same order as when these files were the
+ * CLI's.  An error of the run is fatal here (die, with the core's message).
+ */
+#include <stdio.h>
+
+#include "cli.h"
+
+/* What the callbacks share. */
+typedef struct tiles_out
+{
+	FILE	   *out;			/* NULL: no -o */
+	size_t		limit;			/* --max-memory, bytes */
+} tiles_out;
+
+static int
+emit_text(void *arg, const double *q, const double *qz, const size_t *tri, size_t ntri)
+{
+	FILE	   *out = ((tiles_out *) arg)->out;
+
+	for (size_t j = 0; out && j < ntri; j++)
+	{
+		const size_t *v = tri + 3 * j;
+
+		for (int k = 0; k < 3; k++)
+		{
+			const double *c = q + 2 * v[k];
+
+			if (qz)
+				fprintf(out, k ? " %.17g %.17g %.17g" : "%.17g %.17g %.17g", c[0], c[1], qz[v[k]]);
+			else
+				fprintf(out, k ? " %.17g %.17g" : "%.17g %.17g", c[0], c[1]);
+		}
+		fputc('\n', out);
+	}
+	return 0;
+}
+
+static void
+settle(void *arg, bool always)
+{
+	heap_settle(((tiles_out *) arg)->limit, always);
+}
+
+static size_t
+peak(void *arg)
+{
+	(void) arg;
+	return heap_peak();
+}
+
+/*
+ * The run in tiles.  xypath/zpath: the .bin source (z beside it for text
+ * input with z), in tmp_dir or not.  limit: bytes.  Writes the triangles
+ * to out (when not NULL) and the counts and times to st; dies on errors.
+ */
+void
+run_bounded(const char *xypath, const char *zpath, size_t n, const tdc_options *opt,
+			size_t limit, FILE *out, tdc_bounded_stats *st)
+{
+	tiles_out	to = {out, limit};
+	tdc_bounded_params p = {
+		.xypath = xypath, .zpath = zpath, .n = n, .opt = opt, .limit = limit,
+		.tmpdir = tmp_dir, .limit_name = "--max-memory",
+		.emit = emit_text, .settle = settle, .peak = peak, .arg = &to
+	};
+	char		err[1024];
+
+	/* the heap kept between tiles; what the process holds beside them off the limit */
+	p.outside = heap_start();
+	if (tdc_bounded_run(&p, st, err, sizeof(err)) != TDC_OK)
+		die(1, "%s", err);
+}
