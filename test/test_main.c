@@ -21,11 +21,18 @@ main(int argc, char **argv)
 	{
 		if (strcmp(argv[i], "--quick") == 0)
 			tdc_test_quick = 1;
-		/* one part alone, while working on it: --only tin, --only tile */
+		/* one part alone, while working on it: --only tin, --only tile, --only bounded */
 		else if (strcmp(argv[i], "--only") == 0 && i + 1 < argc && strcmp(argv[i + 1], "tin") == 0)
 		{
 			setvbuf(stdout, NULL, _IOLBF, 0);
 			test_tin();
+			printf("%ld passed, %ld failed\n", tdc_test_passed, tdc_test_failed);
+			return tdc_test_failed ? 1 : 0;
+		}
+		else if (strcmp(argv[i], "--only") == 0 && i + 1 < argc && strcmp(argv[i + 1], "bounded") == 0)
+		{
+			setvbuf(stdout, NULL, _IOLBF, 0);
+			test_bounded();
 			printf("%ld passed, %ld failed\n", tdc_test_passed, tdc_test_failed);
 			return tdc_test_failed ? 1 : 0;
 		}
@@ -57,6 +64,8 @@ main(int argc, char **argv)
 	printf("voronoi: %ld passed, %ld failed so far\n", tdc_test_passed, tdc_test_failed);
 	test_tile();
 	printf("tile: %ld passed, %ld failed so far\n", tdc_test_passed, tdc_test_failed);
+	test_bounded();
+	printf("bounded: %ld passed, %ld failed so far\n", tdc_test_passed, tdc_test_failed);
 	test_cdt();
 	printf("cdt: %ld passed, %ld failed so far\n", tdc_test_passed, tdc_test_failed);
 	test_tin();

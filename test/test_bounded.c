@@ -1,0 +1,290 @@
+/*
+ * test_bounded.c
+ *		The bounded run (tdc_bounded_run, src/core/bounded*.c) through its
+ *		API, without the CLI: the same triangle set as one tdc_triangulate,
+ *		and every way it stops (the caller's cancel flag before the run and
+ *		between tiles, emit refusing a tile, a directory that does not
+ *		exist, a limit below the input's floor or below the peak before the
+ *		first tile, a NaN, a tolerance) an error code with its message and
+ *		nothing left in the caller's directory but the caller's own file.
+ *
+ * Triangle sets are compared by count and by an order-free hash: each
+ * triangle turned to start at its least vertex (keeping it counter-
+ * clockwise), its six coordinates hashed, the hashes summed.
+ * ./tdc --max-memory (test/cli.sh) covers the inputs that need reruns,
+ * z, text input and the peak under the limit.
+ */
+#include <dirent.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "harness.h"
+#include "splitmix.h"
+#include "tdc.h"
+
+/* What emit gathers, and how it misbehaves when asked to. */
+typedef struct tri_sum
+{
+	size_t		ntri,
+				calls;
+	uint64_t	hash;
+	int			refuse_at;		/* > 0: return 7 on that call */
+	volatile int *cancel_at_first;	/* set after the first call */
+	volatile int cancel;
+} tri_sum;
+
+static uint64_t
+tri_hash(const double *a, const double *b, const double *c)
+{
+	const double *v[3] = {a, b, c};
+	int			k = 0;
+	uint64_t	h = 0x1234;
+
+	for (int i = 1; i < 3; i++)
+		if (v[i][0] < v[k][0] || (v[i][0] == v[k][0] && v[i][1] < v[k][1]))
+			k = i;
+	for (int i = 0; i < 3; i++)
+		for (int d = 0; d < 2; d++)
+		{
+			uint64_t	bits;
+
+			memcpy(&bits, &v[(k + i) % 3][d], 8);
+			h ^= bits;
+			h = tdc_splitmix64(&h);
+		}
+	return h;
+}
+
+static int
+emit_sum(void *arg, const double *q, const double *qz, const size_t *tri, size_t ntri)
+{
+	tri_sum    *s = arg;
+
+	s->calls++;
+	if (s->refuse_at > 0 && (int) s->calls == s->refuse_at)
+		return 7;
+	for (size_t j = 0; j < ntri; j++)
+		s->hash += tri_hash(q + 2 * tri[3 * j], q + 2 * tri[3 * j + 1], q + 2 * tri[3 * j + 2]);
+	s->ntri += ntri;
+	if (s->cancel_at_first)
+		*s->cancel_at_first = 1;
+	return 0;
+}
+
+static size_t
+huge_peak(void *arg)
+{
+	(void) arg;
+	return (size_t) 1 << 40;
+}
+
+/* Files in dir other than keep */
+static int
+others_in(const char *dir, const char *keep)
+{
+	DIR		   *d = opendir(dir);
+	struct dirent *e;
+	int			k = 0;
+
+	if (d == NULL)
+		return -1;
+	while ((e = readdir(d)) != NULL)
+		if (e->d_name[0] != '.' && strcmp(e->d_name, keep) != 0)
+			k++;
+	closedir(d);
+	return k;
+}
+
+static int
+write_bin(const char *path, const double *xy, size_t n)
+{
+	FILE	   *f = fopen(path, "wb");
+
+	if (f == NULL)
+		return -1;
+	if (fwrite(xy, 16, n, f) != n)
+	{
+		fclose(f);
+		return -1;
+	}
+	return fclose(f);
+}
+
+/* One run with these changes to the good params; its status, err and stats. */
+static int
+run(const tdc_bounded_params *p, tri_sum *s, tdc_bounded_stats *st, char *err, size_t errlen)
+{
+	tdc_bounded_params q = *p;
+
+	q.arg = s;
+	return tdc_bounded_run(&q, st, err, errlen);
+}
+
+void
+test_bounded(void)
+{
+	size_t		n = tdc_test_quick ? 120000 : 300000;
+	double	   *xy = malloc(16 * n);
+	uint64_t	seed = 28;
+	char		dir[4096],
+				bin[4200],
+				err[1024];
+	const char *base = getenv("TMPDIR") ? getenv("TMPDIR") : "/tmp";
+	tdc_options opt;
+	tdc_job    *job = NULL;
+	tdc_bounded_params p;
+	tdc_bounded_stats st;
+	tri_sum		one = {0},
+				s;
+	tdc_iter	it = {0};
+	uint32_t	v[3];
+	size_t		sites = 0;
+	int			rc;
+
+	CHECK(xy != NULL, "bounded: out of memory");
+	if (xy == NULL)
+		return;
+	snprintf(dir, sizeof(dir), "%s/tdc_test_bounded.XXXXXX", base);
+	CHECK(mkdtemp(dir) != NULL, "bounded: cannot make a directory in %s", base);
+	snprintf(bin, sizeof(bin), "%s/input.bin", dir);
+	/* uniform points, with a dense spot and exact copies */
+	for (size_t i = 0; i < n; i++)
+	{
+		xy[2 * i] = tdc_splitmix64(&seed) / 18446744073709551616.0 * 1000;
+		xy[2 * i + 1] = tdc_splitmix64(&seed) / 18446744073709551616.0 * 1000;
+		if (i % 10 == 3)
+		{
+			xy[2 * i] = 100 + xy[2 * i] / 1000;
+			xy[2 * i + 1] = 200 + xy[2 * i + 1] / 1000;
+		}
+		if (i % 997 == 5)
+		{
+			xy[2 * i] = 10;
+			xy[2 * i + 1] = 20;
+		}
+	}
+	CHECK(write_bin(bin, xy, n) == 0, "bounded: cannot write %s", bin);
+
+	/* the one-shot triangle set */
+	tdc_options_init(&opt);
+	rc = tdc_triangulate(xy, n, &opt, &job, err, sizeof(err));
+	CHECK(rc == TDC_OK, "bounded: one-shot run: %s", err);
+	if (rc != TDC_OK)
+		goto out;
+	while (tdc_next_triangle(job, &it, v))
+	{
+		one.hash += tri_hash(tdc_site_xy(job, v[0]), tdc_site_xy(job, v[1]), tdc_site_xy(job, v[2]));
+		one.ntri++;
+	}
+	sites = tdc_num_sites(job);
+	tdc_job_free(job);
+
+	memset(&p, 0, sizeof(p));
+	p.xypath = bin;
+	p.n = n;
+	p.opt = &opt;
+	p.limit = (size_t) (tdc_test_quick ? 8 : 14) << 20;
+	p.tmpdir = dir;
+	p.emit = emit_sum;
+
+	/* tiled: the same set, each triangle once; nothing of the run left */
+	memset(&s, 0, sizeof(s));
+	rc = run(&p, &s, &st, err, sizeof(err));
+	CHECK(rc == TDC_OK, "bounded: run: %d %s", rc, err);
+	CHECK(st.tiles > 1, "bounded: %d tiles, more than 1 expected", st.tiles);
+	CHECK(s.ntri == one.ntri && st.ntri == one.ntri, "bounded: %zu (stats %zu) triangles, one-shot %zu",
+		  s.ntri, st.ntri, one.ntri);
+	CHECK(s.hash == one.hash, "bounded: the triangle set differs from the one-shot run's");
+	CHECK(st.n == n && st.unique == sites, "bounded: stats n %zu unique %zu, one-shot %zu sites",
+		  st.n, st.unique, sites);
+	CHECK(others_in(dir, "input.bin") == 0, "bounded: files left in %s", dir);
+
+	/* canceled before it starts */
+	memset(&s, 0, sizeof(s));
+	s.cancel = 1;
+	p.cancel = &s.cancel;
+	rc = run(&p, &s, &st, err, sizeof(err));
+	CHECK(rc == TDC_ECANCELED && s.calls == 0, "bounded: preset cancel: %d %s", rc, err);
+	CHECK(others_in(dir, "input.bin") == 0, "bounded: preset cancel: files left");
+
+	/* canceled after the first tile's triangles */
+	memset(&s, 0, sizeof(s));
+	s.cancel_at_first = &s.cancel;
+	rc = run(&p, &s, &st, err, sizeof(err));
+	CHECK(rc == TDC_ECANCELED && s.calls == 1, "bounded: cancel after a tile: %d (%zu calls) %s",
+		  rc, s.calls, err);
+	CHECK(others_in(dir, "input.bin") == 0, "bounded: cancel after a tile: files left");
+	p.cancel = NULL;
+
+	/* emit refuses the second tile */
+	memset(&s, 0, sizeof(s));
+	s.refuse_at = 2;
+	rc = run(&p, &s, &st, err, sizeof(err));
+	CHECK(rc == TDC_EINVAL && strstr(err, "emit returned 7") != NULL, "bounded: emit refuses: %d %s",
+		  rc, err);
+	CHECK(others_in(dir, "input.bin") == 0, "bounded: emit refuses: files left");
+
+	/* a directory that is not there */
+	{
+		tdc_bounded_params q = p;
+		char		gone[4300];
+
+		snprintf(gone, sizeof(gone), "%s/not-there", dir);
+		q.tmpdir = gone;
+		memset(&s, 0, sizeof(s));
+		rc = run(&q, &s, &st, err, sizeof(err));
+		CHECK(rc == TDC_EIO && strstr(err, "cannot open temporary file") != NULL,
+			  "bounded: no directory: %d %s", rc, err);
+	}
+
+	/* below the floor: refused before any file, the limit named as asked */
+	{
+		tdc_bounded_params q = p;
+
+		q.limit = (size_t) 3 << 20;
+		q.limit_name = "tdc.test_limit";
+		memset(&s, 0, sizeof(s));
+		rc = run(&q, &s, &st, err, sizeof(err));
+		CHECK(rc == TDC_EMEMLIMIT && strncmp(err, "tdc.test_limit 3 is below this input's floor of ", 48) == 0,
+			  "bounded: below the floor: %d %s", rc, err);
+		CHECK(others_in(dir, "input.bin") == 0, "bounded: below the floor: files left");
+	}
+
+	/* a peak above the limit before the first tile */
+	{
+		tdc_bounded_params q = p;
+
+		q.peak = huge_peak;
+		memset(&s, 0, sizeof(s));
+		rc = run(&q, &s, &st, err, sizeof(err));
+		CHECK(rc == TDC_EMEMLIMIT && strstr(err, "this run held before its first tile") != NULL &&
+			  s.calls == 0, "bounded: peak: %d %s", rc, err);
+		CHECK(others_in(dir, "input.bin") == 0, "bounded: peak: files left");
+	}
+
+	/* a tolerance, and a NaN */
+	{
+		tdc_bounded_params q = p;
+		tdc_options tol = opt;
+
+		tol.tolerance = 0.5;
+		q.opt = &tol;
+		rc = run(&q, &s, &st, err, sizeof(err));
+		CHECK(rc == TDC_EINVAL && strstr(err, "tolerance") != NULL, "bounded: tolerance: %d %s", rc, err);
+	}
+	xy[2 * (n - 7) + 1] = NAN;
+	CHECK(write_bin(bin, xy, n) == 0, "bounded: cannot write %s", bin);
+	memset(&s, 0, sizeof(s));
+	rc = run(&p, &s, &st, err, sizeof(err));
+	CHECK(rc == TDC_EINVAL && strstr(err, "non-finite") != NULL && s.calls == 0,
+		  "bounded: NaN: %d %s", rc, err);
+	CHECK(others_in(dir, "input.bin") == 0, "bounded: NaN: files left");
+
+out:
+	unlink(bin);
+	rmdir(dir);
+	free(xy);
+}
