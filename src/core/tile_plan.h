@@ -1,14 +1,16 @@
 /*
  * tile_plan.h
- *		The tiling policy of the bounded-memory runs (./tdc --max-memory
- *		and tdc_delaunay_tiled): which tiles, which points each tile's
- *		first run must know, how a tile's known region grows when its run
- *		is not final, and the labels of the tiles.
+ *		The tiling policy of the bounded-memory runs (tdc_bounded_run,
+ *		which ./tdc --max-memory calls, and tdc_delaunay_tiled): which
+ *		tiles, which points each tile's first run must know, how a tile's
+ *		known region grows when its run is not final, and the labels of
+ *		the tiles.
  *
  * One policy for both callers, next to the finality check
- * (src/core/tile_final.c) that it serves: the CLI calls it directly, the
- * SQL procedure through small C helpers (src/pg/fn_tiled.c).  Pure
- * functions of their arguments: no I/O, no state, no PostgreSQL.
+ * (src/core/tile_final.c) that it serves: the bounded run
+ * (src/core/bounded*.c) calls it directly, the SQL procedure through small
+ * C helpers (src/pg/fn_tiled.c).  Pure functions of their arguments: no
+ * I/O, no state, no PostgreSQL.
  *
  * The plan is made on a fine grid of TDC_TP_GRID x TDC_TP_GRID cells over the
  * points' box: a point's cell, hence its tile, is decided exactly against
