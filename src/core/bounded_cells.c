@@ -50,6 +50,7 @@ sort_tile(bounded_run *r, int s)
 			   *end = malloc(4 * ncell + 4);
 	mreader		m;
 	FILE	   *f;
+	bool		short_write;
 
 	if (!out || !next || !end)
 	{
@@ -111,7 +112,8 @@ sort_tile(bounded_run *r, int s)
 	f = tdc_bd_part_file(r->dir, &r->e, "cell", s, 0, "wb");
 	if (f == NULL)
 		goto done;
-	if ((n > 0 && fwrite(out, 8 * (size_t) w, n, f) != n) | (fclose(f) != 0))
+	short_write = n > 0 && fwrite(out, 8 * (size_t) w, n, f) != n;
+	if (fclose(f) != 0 || short_write)
 	{
 		tdc_bd_fail(&r->e, TDC_EIO, "cannot write temporary files in %s (disk full?)", r->dir);
 		goto done;
