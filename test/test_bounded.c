@@ -5,8 +5,9 @@
  *		and every way it stops (the caller's cancel flag before the run and
  *		between tiles, emit refusing a tile, a directory that does not
  *		exist, a limit below the input's floor or below the peak before the
- *		first tile, a NaN, a tolerance) an error code with its message and
- *		nothing left in the caller's directory but the caller's own file.
+ *		first tile, a source shorter than n, a NaN, a tolerance) an error
+ *		code with its message and nothing left in the caller's directory
+ *		but the caller's own file.
  *
  * Triangle sets are compared by count and by an order-free hash: each
  * triangle turned to start at its least vertex (keeping it counter-
@@ -263,6 +264,16 @@ test_bounded(void)
 		CHECK(rc == TDC_EMEMLIMIT && strstr(err, "this run held before its first tile") != NULL &&
 			  s.calls == 0, "bounded: peak: %d %s", rc, err);
 		CHECK(others_in(dir, "input.bin") == 0, "bounded: peak: files left");
+	}
+
+	/* a source shorter than n */
+	{
+		tdc_bounded_params q = p;
+
+		q.n = n + 1;
+		rc = run(&q, &s, &st, err, sizeof(err));
+		CHECK(rc == TDC_EINVAL && strstr(err, "fewer than the") != NULL, "bounded: short source: %d %s",
+			  rc, err);
 	}
 
 	/* a tolerance, and a NaN */

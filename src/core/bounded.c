@@ -56,6 +56,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "bounded.h"
 
@@ -221,6 +222,24 @@ before_tiles(bounded_run *r)
 					   r->lname, r->limit >> 20, (peak >> 20) + 1);
 }
 
+/*
+ * Does the file at path hold fewer than r->n records of size bytes?  (A
+ * source shorter than n would end the passes early and be found out only
+ * as a mismatch of counts.)  Sets r->e.
+ */
+static bool
+too_short(bounded_run *r, const char *path, size_t size)
+{
+	struct stat sb;
+
+	if (stat(path, &sb) != 0)
+		return tdc_bd_fail(&r->e, TDC_EIO, "cannot open %s", path) != TDC_OK;
+	if ((size_t) sb.st_size / size < r->n)
+		return tdc_bd_fail(&r->e, TDC_EINVAL, "%s holds %zu points, fewer than the %zu expected",
+						   path, (size_t) sb.st_size / size, r->n) != TDC_OK;
+	return false;
+}
+
 /* The phases in order; the first error stops them. */
 static int
 run_phases(bounded_run *r)
@@ -288,6 +307,8 @@ tdc_bounded_run(const tdc_bounded_params *p, tdc_bounded_stats *st, char *err, s
 	r.budget = r.limit > r.outside ? r.limit - r.outside : 0;
 	if (p->xypath == NULL || p->tmpdir == NULL || p->opt == NULL)
 		tdc_bd_fail(&r.e, TDC_EINVAL, "tdc_bounded_run: xypath, tmpdir and opt are required");
+	else if (too_short(&r, p->xypath, 16) || (p->zpath && too_short(&r, p->zpath, 8)))
+		;						/* r.e says which */
 	else if (p->opt->tolerance > 0)
 		tdc_bd_fail(&r.e, TDC_EINVAL, "a tolerance cannot be used when the input is tiled "
 					"(which points are merged depends on all of them)");
