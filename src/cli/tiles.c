@@ -14,6 +14,7 @@
  * CLI's.  An error of the run is fatal here (die, with the core's message).
  */
 #include <stdio.h>
+#include <stdlib.h>
 
 #include "cli.h"
 
@@ -53,6 +54,14 @@ settle(void *arg, bool always)
 	heap_settle(((tiles_out *) arg)->limit, always);
 }
 
+/* TDC_TILE_DEBUG=1: each tile run's region on stderr */
+static void
+trace(void *arg, const char *line)
+{
+	(void) arg;
+	fprintf(stderr, "%s\n", line);
+}
+
 static size_t
 peak(void *arg)
 {
@@ -77,6 +86,9 @@ run_bounded(const char *xypath, const char *zpath, size_t n, const tdc_options *
 	};
 	char		err[1024];
 
+	/* TDC_TILE_CHECK=1 (test/cli.sh): each first run's files checked against its region */
+	p.check_files = getenv("TDC_TILE_CHECK") != NULL;
+	p.trace = getenv("TDC_TILE_DEBUG") ? trace : NULL;
 	/* the heap kept between tiles; what the process holds beside them off the limit */
 	p.outside = heap_start();
 	if (tdc_bounded_run(&p, st, err, sizeof(err)) != TDC_OK)

@@ -54,7 +54,7 @@ points_free(tile_points *p)
 }
 
 /*
- * TDC_TILE_CHECK=1 (tests): the points inside K, an extra box or an added
+ * check_files (tests, TDC_TILE_CHECK=1 for ./tdc): the points inside K, an extra box or an added
  * cell (the hull cells), counted from every tile file, for checking a
  * first run's tile and halo files.
  */
@@ -99,7 +99,7 @@ count_known(bounded_run *r, const double *K, size_t nextra)
 /*
  * The points of tile t's first run: its own file, then its halo file, each
  * in input order; those are exactly the points of its first region (K and
- * the nextra boxes of r->extra), which TDC_TILE_CHECK=1 verifies.
+ * the nextra boxes of r->extra), which check_files verifies.
  */
 static int
 gather_first(bounded_run *r, int t, const double *K, size_t nextra, tile_points *p)
@@ -113,9 +113,14 @@ gather_first(bounded_run *r, int t, const double *K, size_t nextra, tile_points 
 	mreader		f;
 	double		rec[4 * 4096];
 
-	if (getenv("TDC_TILE_DEBUG"))
-		fprintf(stderr, "tile %d/%d: own %zu, K %g %g %g %g: %zu points\n", t, r->nt,
-				ti->count, K[0], K[1], K[2], K[3], m);
+	if (r->p->trace)
+	{
+		char		line[200];
+
+		snprintf(line, sizeof(line), "tile %d/%d: own %zu, K %g %g %g %g: %zu points", t, r->nt,
+				 ti->count, K[0], K[1], K[2], K[3], m);
+		r->p->trace(r->p->arg, line);
+	}
 	if (points_alloc(r, p, m, r->has_z) != TDC_OK)
 		return r->e.code;
 	if (!r->has_z)
@@ -162,12 +167,12 @@ gather_first(bounded_run *r, int t, const double *K, size_t nextra, tile_points 
 		return r->e.code;
 	if (at != m)
 		return tdc_bd_fail(&r->e, TDC_EIO, "short read on a temporary file in %s", r->dir);
-	if (getenv("TDC_TILE_CHECK"))
+	if (r->p->check_files)
 	{
 		size_t		known = count_known(r, K, nextra);
 
 		if (r->e.code == TDC_OK && known != m)
-			tdc_bd_fail(&r->e, TDC_EINVAL, "TDC_TILE_CHECK: tile %d: %zu points in its files, "
+			tdc_bd_fail(&r->e, TDC_EINVAL, "check_files: tile %d: %zu points in its files, "
 						"%zu in its first region", t, m, known);
 	}
 	return r->e.code;
@@ -295,9 +300,14 @@ gather_region(bounded_run *r, int t, double K[4], const double Kmin[4], size_t n
 		m = region_points(r, t, K, nextra, NULL);
 		if (r->e.code != TDC_OK)
 			return r->e.code;
-		if (getenv("TDC_TILE_DEBUG"))
-			fprintf(stderr, "tile %d/%d: own %zu, K %g %g %g %g, %zu cells added: %zu points\n", t, r->nt,
-					r->tiles[t].count, K[0], K[1], K[2], K[3], r->nadded, m);
+		if (r->p->trace)
+		{
+			char		line[200];
+
+			snprintf(line, sizeof(line), "tile %d/%d: own %zu, K %g %g %g %g, %zu cells added: %zu points",
+					 t, r->nt, r->tiles[t].count, K[0], K[1], K[2], K[3], r->nadded, m);
+			r->p->trace(r->p->arg, line);
+		}
 		if (tdc_tp_tile_bytes(m, r->opt, POINT_BYTES(r)) > r->budget && shrinks < 4 &&
 			memcmp(K, Kmin, 4 * sizeof(double)) != 0)
 			tdc_tp_shrink_known(K, Kmin, shrinks);

@@ -792,7 +792,15 @@ typedef struct tdc_bounded_params
 	 */
 	void		(*settle) (void *arg, bool always);
 	size_t		(*peak) (void *arg);
-	void	   *arg;			/* passed to the three callbacks */
+	/*
+	 * Optional, for tests and diagnosis.  trace: one line per tile run
+	 * (tile, K, points).  check_files: verify that each first run's files
+	 * hold exactly its first region, counted again from every tile file
+	 * (slow); a mismatch is an error.
+	 */
+	void		(*trace) (void *arg, const char *line);
+	bool		check_files;
+	void	   *arg;			/* passed to the callbacks */
 	/*
 	 * NULL, or a flag another thread may set to nonzero: polled between
 	 * chunks of input, tile runs and tiles; the run then returns
