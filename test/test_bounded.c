@@ -187,7 +187,7 @@ test_bounded(void)
 	p.xypath = bin;
 	p.n = n;
 	p.opt = &opt;
-	p.limit = (size_t) (tdc_test_quick ? 8 : 14) << 20;
+	p.limit = (size_t) (tdc_test_quick ? 16 : 14) << 20;
 	p.tmpdir = dir;
 	p.emit = emit_sum;
 	p.check_files = true;
