@@ -275,6 +275,17 @@ ensure_tdc() {
 	[ -x "$ROOT/tdc" ]
 }
 
+# bench_tdc_copy: GNU time, the point generator and ./tdc built, then a
+# private copy of ./tdc in $WORK (TDC_BIN) to time: a concurrent `make tdc`
+# must not swap the binary mid-run
+bench_tdc_copy() {
+	[ -x /usr/bin/time ] || ensure_debs time
+	build_helpers
+	ensure_tdc || die "cannot build ./tdc"
+	TDC_BIN=$WORK/tdc
+	cp -p "$ROOT/tdc" "$TDC_BIN"
+}
+
 # ---------------------------------------------------------------- reports
 
 # busy_procs: the processes that used at least 20% of a CPU over one second,

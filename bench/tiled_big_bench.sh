@@ -51,11 +51,7 @@ WORK=$(mktemp -d "$TMPD/big_bench.XXXXXX")
 INPUT=
 trap 'rm -rf "$WORK"; [ -z "$INPUT" ] || rm -f "$INPUT" "$INPUT.tmp"' EXIT
 
-[ -x /usr/bin/time ] || ensure_debs time
-build_helpers
-ensure_tdc || die "cannot build ./tdc"
-TDC_BIN=$WORK/tdc
-cp -p "$ROOT/tdc" "$TDC_BIN"
+bench_tdc_copy
 
 exec > >(tee "$TXT")
 TEE_PID=$!

@@ -74,12 +74,7 @@ WORK=$(mktemp -d "$TMPD/tiled_bench.XXXXXX")
 BIGIN=
 trap 'rm -rf "$WORK"; [ -z "$BIGIN" ] || rm -f "$BIGIN" "$BIGIN.tmp"' EXIT
 
-[ -x /usr/bin/time ] || ensure_debs time
-build_helpers
-ensure_tdc || die "cannot build ./tdc"
-# time a private copy: a concurrent `make tdc` must not swap the binary mid-run
-TDC_BIN=$WORK/tdc
-cp -p "$ROOT/tdc" "$TDC_BIN"
+bench_tdc_copy
 
 exec > >(tee "$TXT")
 TEE_PID=$!
