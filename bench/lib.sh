@@ -319,6 +319,10 @@ busy_procs() {
 # bench_begin, bench_end: note the time, the load average and the busy
 # processes before and after a benchmark's timed runs, for bench_publish
 bench_begin() {
+	# the commit the timed runs start from: the tree may move during a long run
+	BENCH_REV=$(git -C "$ROOT" rev-parse --short HEAD 2>/dev/null || echo unknown)
+	git -C "$ROOT" diff --quiet HEAD -- src bench 2>/dev/null ||
+		BENCH_REV="$BENCH_REV, with uncommitted changes in src/ or bench/"
 	BENCH_BUSY0=$(busy_procs)
 	BENCH_T0=$(date -u '+%Y-%m-%d %H:%M UTC')
 	BENCH_LOAD0=$(cut -d' ' -f1-3 /proc/loadavg)
@@ -343,8 +347,11 @@ pkg_ver() {
 bench_header() {
 	local title=$1 script=$2 rev os major
 	[ -n "${BENCH_T1:-}" ] || bench_end
-	rev=$(git -C "$ROOT" rev-parse --short HEAD 2>/dev/null || echo unknown)
-	git -C "$ROOT" diff --quiet HEAD -- src bench 2>/dev/null || rev="$rev, with uncommitted changes in src/ or bench/"
+	rev=${BENCH_REV:-}
+	if [ -z "$rev" ]; then
+		rev=$(git -C "$ROOT" rev-parse --short HEAD 2>/dev/null || echo unknown)
+		git -C "$ROOT" diff --quiet HEAD -- src bench 2>/dev/null || rev="$rev, with uncommitted changes in src/ or bench/"
+	fi
 	os=$(. /etc/os-release 2>/dev/null && echo "${PRETTY_NAME:-?}")
 	major=$(pg_config --version 2>/dev/null | awk '{ split($2, v, "."); print v[1] }')
 	cat <<EOF
