@@ -2,8 +2,10 @@
  * test_bounded.c
  *		The bounded run (tdc_bounded_run, src/core/bounded*.c) through its
  *		API, without the CLI: the same triangle set as one tdc_triangulate,
- *		and every way it stops (the caller's cancel flag before the run and
- *		between tiles, emit refusing a tile, a directory that does not
+ *		on the caller's thread and on a job's (tdc_bounded_start), and
+ *		every way it stops (the caller's cancel flag before the run, between
+ *		tiles and inside a tile's engine run, a job canceled or freed while
+ *		it runs, emit refusing a tile, a directory that does not
  *		exist, a limit below the input's floor or below the peak before the
  *		first tile, a source shorter than n, a NaN, a tolerance) an error
  *		code with its message and nothing left in the caller's directory
@@ -35,6 +37,8 @@ typedef struct tri_sum
 	int			refuse_at;		/* > 0: return 7 on that call */
 	volatile int *cancel_at_first;	/* set after the first call */
 	volatile int cancel;
+	volatile int *cancel_at_trace;	/* set at the first trace line */
+	size_t		traced_points;	/* the first trace line's points */
 } tri_sum;
 
 static uint64_t
@@ -73,6 +77,20 @@ emit_sum(void *arg, const double *q, const double *qz, const size_t *tri, size_t
 	if (s->cancel_at_first)
 		*s->cancel_at_first = 1;
 	return 0;
+}
+
+static void
+trace_cancel(void *arg, const char *line)
+{
+	tri_sum    *s = arg;
+
+	const char *c = strrchr(line, ':');
+
+	if (s->cancel_at_trace && !*s->cancel_at_trace)
+	{
+		*s->cancel_at_trace = 1;
+		s->traced_points = c ? strtoul(c + 1, NULL, 10) : 0;
+	}
 }
 
 static size_t
@@ -221,7 +239,69 @@ test_bounded(void)
 	CHECK(rc == TDC_ECANCELED && s.calls == 1, "bounded: cancel after a tile: %d (%zu calls) %s",
 		  rc, s.calls, err);
 	CHECK(others_in(dir, "input.bin") == 0, "bounded: cancel after a tile: files left");
+
+	/*
+	 * canceled while the first tile is gathered (trace comes between the
+	 * gathering and the engine): the engine's run is stopped, not
+	 * finished, so no engine time is counted and nothing is emitted.
+	 * (Tiles big enough for the engine's threads: below TDC_INLINE_MAX
+	 * points it runs inline, to the end.)
+	 */
+	{
+		tdc_bounded_params q = p;
+
+		q.limit = (size_t) 40 << 20;
+		memset(&s, 0, sizeof(s));
+		s.cancel_at_trace = &s.cancel;
+		q.trace = trace_cancel;
+		rc = run(&q, &s, &st, err, sizeof(err));
+		CHECK(s.traced_points > TDC_INLINE_MAX, "bounded: the first tile has %zu points, too few to test",
+			  s.traced_points);
+		CHECK(rc == TDC_ECANCELED && s.calls == 0 && st.runs == 1 && st.engine == 0,
+			  "bounded: cancel in a tile's engine run: %d (%zu calls, %zu runs, engine %g s) %s",
+			  rc, s.calls, st.runs, st.engine, err);
+		CHECK(others_in(dir, "input.bin") == 0, "bounded: cancel in the engine: files left");
+	}
 	p.cancel = NULL;
+
+	/* on a thread of its own (tdc_bounded_start): the same set; a cancel; its own flag */
+	{
+		tdc_bounded_job *bj = NULL;
+		tdc_bounded_params q = p;
+
+		memset(&s, 0, sizeof(s));
+		q.arg = &s;
+		rc = tdc_bounded_start(&q, &bj, err, sizeof(err));
+		CHECK(rc == TDC_OK, "bounded job: start: %d %s", rc, err);
+		if (rc == TDC_OK)
+		{
+			rc = tdc_bounded_wait(bj, -1);
+			CHECK(rc == TDC_OK && s.ntri == one.ntri && s.hash == one.hash &&
+				  tdc_bounded_stats_of(bj)->ntri == one.ntri,
+				  "bounded job: %d, %zu triangles, one-shot %zu, same set %d: %s", rc, s.ntri, one.ntri,
+				  s.hash == one.hash, tdc_bounded_error(bj));
+			tdc_bounded_free(bj);
+		}
+		memset(&s, 0, sizeof(s));
+		rc = tdc_bounded_start(&q, &bj, err, sizeof(err));
+		if (rc == TDC_OK)
+		{
+			tdc_bounded_cancel(bj);
+			rc = tdc_bounded_wait(bj, -1);
+			CHECK(rc == TDC_ECANCELED && strcmp(tdc_bounded_error(bj), "canceled") == 0,
+				  "bounded job: canceled: %d %s", rc, tdc_bounded_error(bj));
+			tdc_bounded_free(bj);
+		}
+		CHECK(others_in(dir, "input.bin") == 0, "bounded job: files left");
+		/* freed while it runs: canceled and joined, its files removed */
+		rc = tdc_bounded_start(&q, &bj, err, sizeof(err));
+		if (rc == TDC_OK)
+			tdc_bounded_free(bj);
+		CHECK(others_in(dir, "input.bin") == 0, "bounded job: freed while running: files left");
+		q.cancel = &s.cancel;
+		rc = tdc_bounded_start(&q, &bj, err, sizeof(err));
+		CHECK(rc == TDC_EINVAL && bj == NULL, "bounded job: a cancel of the caller's: %d %s", rc, err);
+	}
 
 	/* emit refuses the second tile */
 	memset(&s, 0, sizeof(s));

@@ -22,6 +22,9 @@
 
 #include "bounded.h"
 
+/* How often a tile's engine run looks at the caller's cancel flag. */
+#define ENGINE_POLL_MS		10
+
 /* A tile run's points: coordinates, z (or NULL) and each one's label. */
 typedef struct tile_points
 {
@@ -411,10 +414,25 @@ tile_engine(bounded_run *r, const tile_points *p, const tdc_tile_spec *spec, tdc
 	int			rc;
 
 	memset(res, 0, sizeof(*res));
-	if ((rc = tdc_triangulate(p->q, p->m, r->opt, job, err, sizeof(err))) != TDC_OK)
+	if ((rc = tdc_job_start(p->q, p->m, r->opt, job, err, sizeof(err))) != TDC_OK)
 	{
 		*job = NULL;
 		return tdc_bd_fail(&r->e, rc, "%s", err);
+	}
+	/* a big tile's engine runs for seconds: the caller's cancel reaches it */
+	for (;;)
+	{
+		if (tdc_bd_canceled(r->p->cancel))
+			tdc_job_cancel(*job);
+		if ((rc = tdc_job_wait(*job, ENGINE_POLL_MS)) != TDC_RUNNING)
+			break;
+	}
+	if (rc != TDC_OK)
+	{
+		rc = tdc_bd_fail(&r->e, rc, "%s", rc == TDC_ECANCELED ? "canceled" : tdc_job_error(*job));
+		tdc_job_free(*job);
+		*job = NULL;
+		return rc;
 	}
 	r->st->engine += now_s() - t0;
 	t0 = now_s();

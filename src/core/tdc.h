@@ -803,8 +803,8 @@ typedef struct tdc_bounded_params
 	void	   *arg;			/* passed to the callbacks */
 	/*
 	 * NULL, or a flag another thread may set to nonzero: polled between
-	 * chunks of input, tile runs and tiles; the run then returns
-	 * TDC_ECANCELED.  A tile's engine run is not interrupted.
+	 * chunks of input, tile runs and tiles, and every few ms while a
+	 * tile's engine runs; the run then returns TDC_ECANCELED.
 	 */
 	const volatile int *cancel;
 } tdc_bounded_params;
@@ -816,5 +816,25 @@ typedef struct tdc_bounded_params
  */
 extern int	tdc_bounded_run(const tdc_bounded_params *p, tdc_bounded_stats *st,
 							char *err, size_t errlen);
+
+/*
+ * The same run on a thread of its own (bounded_job.c), for a host whose
+ * thread must stay free to notice interrupts: start, wait with a timeout
+ * (TDC_RUNNING until it ends, then tdc_bounded_run's status), cancel
+ * (the run then returns TDC_ECANCELED within a few ms, a tile's engine run
+ * included), and free (cancels and joins first).  p->cancel must be NULL:
+ * the job has its own.  The callbacks run on the job's thread.  *p and
+ * what it points to must stay valid until the job is freed.
+ */
+typedef struct tdc_bounded_job tdc_bounded_job;
+
+extern int	tdc_bounded_start(const tdc_bounded_params *p, tdc_bounded_job **job,
+							  char *err, size_t errlen);
+extern int	tdc_bounded_wait(tdc_bounded_job *job, int timeout_ms);
+extern void tdc_bounded_cancel(tdc_bounded_job *job);
+extern const char *tdc_bounded_error(const tdc_bounded_job *job);
+/* valid once tdc_bounded_wait returned TDC_OK */
+extern const tdc_bounded_stats *tdc_bounded_stats_of(const tdc_bounded_job *job);
+extern void tdc_bounded_free(tdc_bounded_job *job);
 
 #endif							/* TDC_H */
