@@ -349,6 +349,26 @@ COMMENT ON FUNCTION _tdc_tile_need_cells(geometry, bytea, int8, int8, int4[]) IS
 'tile''s run of that many points that was not final named (the rings of its row after the first) and that its rerun adds: '
 'all when they fit tdc_delaunay.max_memory, else the nearest first as far as they fit.';
 
+CREATE FUNCTION _tdc_tiled_fits(int8, boolean)
+RETURNS boolean
+AS 'MODULE_PATHNAME', '_tdc_tiled_fits'
+LANGUAGE C STABLE STRICT PARALLEL SAFE;
+
+COMMENT ON FUNCTION _tdc_tiled_fits(int8, boolean) IS
+'Internal, for tdc_delaunay_tiled: _tdc_tiled_fits(points, has Z), whether ST_TDCDelaunayDump of that many vertices '
+'fits tdc_delaunay.max_memory, so that automatic tiles run in one pass.';
+
+CREATE FUNCTION _tdc_tiled_bounded(query text)
+RETURNS TABLE(id bigint, tile bigint, geom geometry)
+AS 'MODULE_PATHNAME', '_tdc_tiled_bounded'
+LANGUAGE C VOLATILE STRICT PARALLEL UNSAFE
+COST 10000 ROWS 100000;
+
+COMMENT ON FUNCTION _tdc_tiled_bounded(text) IS
+'Internal, for tdc_delaunay_tiled: the Delaunay triangles of the query''s vertices (one geometry column, as '
+'ST_TDCDelaunayDump takes it) tile by tile under tdc_delaunay.max_memory through the core''s bounded run, '
+'as ./tdc --max-memory makes them: rows (id = tile * 2^32 + k, tile from 1, one POLYGON per triangle).';
+
 CREATE OR REPLACE PROCEDURE tdc_delaunay_tiled(source regclass, target text, geom_column name DEFAULT 'geom',
 									tile_column name DEFAULT NULL, tile_size float8 DEFAULT NULL)
 LANGUAGE plpgsql
@@ -508,22 +528,21 @@ BEGIN
 	hasz := zm_lo IN (2, 3);
 	IF tile_column IS NULL THEN
 		size := coalesce(tile_size, 'infinity'::float8);
-		IF tile_size IS NULL AND npts > 0 THEN
-			tile_max := _tdc_plan_tile_max(npts, hasz);
-			IF npts > tile_max THEN
-				-- two passes over the vertices in the source's order (the
-				-- procedure turns synchronized scans off), as ./tdc reads its file
-				EXECUTE format('SELECT _tdc_plan_grid(%1$s, %2$s) FROM %3$s s WHERE s.%4$I IS NOT NULL',
-							   stroked, npts, source, geom_column) INTO grid;
-				EXECUTE format('SELECT _tdc_plan(%1$s, $1) FROM %2$s s WHERE s.%3$I IS NOT NULL',
-							   stroked, source, geom_column) INTO plan USING grid;
-				pbox := _tdc_plan_box(plan);
-				-- the exact box: the policy's spacing is that of ./tdc
-				gx0 := pbox[1]; gy0 := pbox[2]; gx1 := pbox[3]; gy1 := pbox[4];
-				extent := pbox[1:4];
-				RAISE NOTICE '%: % tiles of at most % points planned under tdc_delaunay.max_memory', fn,
-					pbox[6], tile_max;
-			END IF;
+		-- Automatic tiles when the one pass would not fit tdc_delaunay.max_memory
+		-- (_tdc_tiled_fits): the core's bounded run, the one ./tdc
+		-- --max-memory runs (_tdc_tiled_bounded, src/pg/fn_tiled_bounded.c).
+		-- The source is read once, as ST_TDCDelaunayDump reads it, into files
+		-- cut into tiles by counts; its rows are the target's, written in
+		-- bulk by CREATE TABLE AS, with no staging table.  Its NOTICE gives
+		-- the phases.
+		IF tile_size IS NULL AND npts > 0 AND NOT _tdc_tiled_fits(npts, hasz) THEN
+			EXECUTE format('CREATE TABLE %s AS
+							SELECT d.id, d.tile, d.geom::geometry(%s, %s) AS geom
+							  FROM _tdc_tiled_bounded(%L) d', qtarget,
+						   CASE WHEN zm_lo = 2 THEN 'PolygonZ' WHEN zm_lo = 1 THEN 'PolygonM'
+								WHEN zm_lo = 3 THEN 'PolygonZM' ELSE 'Polygon' END, coalesce(srid_lo, 0),
+						   format('SELECT %I FROM %s', geom_column, source));
+			RETURN;
 		END IF;
 		IF plan IS NOT NULL THEN
 			tv := '_tdc_plan_label(ST_X(d.geom), ST_Y(d.geom), $1)';

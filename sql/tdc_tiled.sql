@@ -160,11 +160,13 @@ SELECT count(DISTINCT tile) AS tiles, min(tile), max(tile) FROM tt_far_tiny;
 CALL tdc_delaunay_tiled('tt_far', 'tt_err', 'geom', NULL, 1e-13);
 \set VERBOSITY default
 
--- Clustered sets through automatic tiles (the core's adaptive plan under
--- tdc_delaunay.max_memory, as ./tdc --max-memory makes it) and through a
--- tile column, each the Dump's set.  Below 2^18 points the plan's grid is
--- uniform, as ./tdc's; from 2^18 points on (tt_q) its sides are at the
--- quantiles of ./tdc's sample.
+-- Clustered sets through a tile column (the rounds of SQL statements) and
+-- through automatic tiles: the core's bounded run under
+-- tdc_delaunay.max_memory, as ./tdc --max-memory runs it
+-- (_tdc_tiled_bounded), each the Dump's set.  The bounded run holds some
+-- 9 MB of its own (the counting grid and its sums), and its grid is
+-- uniform below 2^18 points and at the quantiles of a sample from there
+-- on, so the automatic sets have 2^18 points: their one pass needs 38 MB.
 -- (the plan depends on the engine's memory estimate, which depends on
 -- the thread count: one thread, the same plan on every machine)
 SET tdc_delaunay.threads = 1;
@@ -192,54 +194,91 @@ CREATE TABLE tt_coast AS
 			  FROM (SELECT random() AS u FROM generate_series(1, 10000)) a
 			UNION ALL
 			SELECT random() * 1000, -400 + random() * 300 FROM generate_series(1, 1000)) s;
--- (each at about the least limit it passes at: a rerun adds the cells it
--- named within 7/8 of the limit, nearest first, as ./tdc does, and below
--- that limit a tile cannot add even its nearest cell)
-SET tdc_delaunay.max_memory = 12;
-SET client_min_messages = notice;
-CALL tdc_delaunay_tiled('tt_c9', 'tt_c9_auto');
-SET client_min_messages = warning;
-SET tdc_delaunay.max_memory = 9;
-CALL tdc_delaunay_tiled('tt_town', 'tt_town_auto');
-SET tdc_delaunay.max_memory = 7;
-CALL tdc_delaunay_tiled('tt_strip', 'tt_strip_auto');
-SET tdc_delaunay.max_memory = 8;
-CALL tdc_delaunay_tiled('tt_coast', 'tt_coast_auto');
-RESET tdc_delaunay.max_memory;
 CALL tdc_delaunay_tiled('tt_c9', 'tt_c9_col', tile_column => 't');
 CALL tdc_delaunay_tiled('tt_town', 'tt_town_col', tile_column => 't');
 CALL tdc_delaunay_tiled('tt_strip', 'tt_strip_col', tile_column => 't');
 CALL tdc_delaunay_tiled('tt_coast', 'tt_coast_col', tile_column => 't');
+-- the same shapes with 2^18 points
+SELECT setseed(0.375);
+CREATE TABLE tb_c9 AS
+	SELECT ST_MakePoint(cx + 0.3 * (random() - 0.5), cy + 0.3 * (random() - 0.5)) AS geom
+	  FROM (SELECT (i % 3) * 100 AS cx, ((i / 3) % 3) * 100 AS cy FROM generate_series(0, 8) i) c,
+		   generate_series(1, 29200);
+CREATE TABLE tb_town AS
+	SELECT ST_MakePoint(x, y) AS geom
+	  FROM (SELECT random() * 1000 AS x, random() * 1000 AS y FROM generate_series(1, 131072)
+			UNION ALL
+			SELECT 600 + random() * 4, 400 + random() * 4 FROM generate_series(1, 131072)) s;
+CREATE TABLE tb_strip AS
+	SELECT ST_MakePoint(x, y) AS geom
+	  FROM (SELECT random() * 2000 AS x, random() * 10 AS y FROM generate_series(1, 350000)) s
+	 WHERE x::int % 200 NOT BETWEEN 60 AND 110;
+CREATE TABLE tb_coast AS
+	SELECT ST_MakePoint(x, y) AS geom
+	  FROM (SELECT u * 1000 AS x, 80 * sin(u * 9) + 25 * sin(u * 57) + 6 * sin(u * 301) + 0.01 * random() AS y
+			  FROM (SELECT random() AS u FROM generate_series(1, 240000)) a
+			UNION ALL
+			SELECT random() * 1000, -400 + random() * 300 FROM generate_series(1, 22144)) s;
+-- one pass does not fit these limits; tiles do (the summary is a NOTICE,
+-- its phases' seconds in the DETAIL)
+SET tdc_delaunay.max_memory = 12;
+SELECT _tdc_tiled_fits(262800, false) AS one_pass_fits;
+SET client_min_messages = notice;
+\set VERBOSITY terse
+CALL tdc_delaunay_tiled('tb_c9', 'tb_c9_auto');
+\set VERBOSITY default
+SET client_min_messages = warning;
+CALL tdc_delaunay_tiled('tb_town', 'tb_town_auto');
+SET tdc_delaunay.max_memory = 10;
+CALL tdc_delaunay_tiled('tb_strip', 'tb_strip_auto');
+-- (the line and the far inland points make triangles that reach across
+-- many tiles: the coast needs a larger limit)
+SET tdc_delaunay.max_memory = 24;
+CALL tdc_delaunay_tiled('tb_coast', 'tb_coast_auto');
+RESET tdc_delaunay.max_memory;
 SELECT s.name, v.*
-  FROM (VALUES ('tt_c9_auto', 'tt_c9'), ('tt_c9_col', 'tt_c9'), ('tt_town_auto', 'tt_town'), ('tt_town_col', 'tt_town'),
-			   ('tt_strip_auto', 'tt_strip'), ('tt_strip_col', 'tt_strip'),
-			   ('tt_coast_auto', 'tt_coast'), ('tt_coast_col', 'tt_coast')) s(name, src),
+  FROM (VALUES ('tb_c9_auto', 'tb_c9'), ('tt_c9_col', 'tt_c9'), ('tb_town_auto', 'tb_town'), ('tt_town_col', 'tt_town'),
+			   ('tb_strip_auto', 'tb_strip'), ('tt_strip_col', 'tt_strip'),
+			   ('tb_coast_auto', 'tb_coast'), ('tt_coast_col', 'tt_coast')) s(name, src),
 	   LATERAL tiled_vs_dump(s.name::regclass, 'SELECT geom FROM ' || s.src) v;
--- each automatic plan has several tiles
-SELECT (SELECT count(DISTINCT tile) > 1 FROM tt_town_auto) AS town, (SELECT count(DISTINCT tile) > 1 FROM tt_strip_auto) AS strip,
-	   (SELECT count(DISTINCT tile) > 1 FROM tt_coast_auto) AS coast;
+-- each automatic plan has several tiles, numbered from 1 in the ids
+SELECT s.name, (SELECT count(DISTINCT tile) > 1 FROM tb_c9_auto WHERE s.name = 'c9') OR
+			   (SELECT count(DISTINCT tile) > 1 FROM tb_town_auto WHERE s.name = 'town') OR
+			   (SELECT count(DISTINCT tile) > 1 FROM tb_strip_auto WHERE s.name = 'strip') OR
+			   (SELECT count(DISTINCT tile) > 1 FROM tb_coast_auto WHERE s.name = 'coast') AS several
+  FROM (VALUES ('c9'), ('town'), ('strip'), ('coast')) s(name);
+SELECT bool_and(id >> 32 = tile AND tile >= 1) AS ids_by_tile FROM tb_c9_auto;
+SELECT attname, format_type(atttypid, atttypmod) FROM pg_attribute
+ WHERE attrelid = 'tb_c9_auto'::regclass AND attnum > 0 ORDER BY attnum;
 -- 2^18 points, half of them uniform over a 100 square and half in a unit
--- square inside it: the plan's grid at the quantiles of ./tdc's sample has
+-- square inside it: the plan's grid at the quantiles of the sample has
 -- cells of about 1/256 in the dense square, where the uniform grid's cells
--- of 100/512 would hold some 5,000 points each.  (Tiling 2^18 points took
--- 30 to 77 s here; this refusal comes before any staging.)
+-- of 100/512 would hold some 5,000 points each.  The limits below the
+-- floors are refused before any tile runs, with the numbers; a floor made
+-- by exact copies of one point says so.
+SELECT setseed(0.125);
 CREATE TABLE tt_q AS
 	SELECT ST_MakePoint(x, y) AS geom
 	  FROM (SELECT random() * 100 AS x, random() * 100 AS y FROM generate_series(1, 131072)
 			UNION ALL
 			SELECT 50 + random(), 50 + random() FROM generate_series(1, 131072)) s;
+CREATE TABLE tt_spot AS
+	SELECT CASE WHEN i % 2 = 0 THEN ST_MakePoint(500, 500) ELSE ST_MakePoint(random() * 1000, random() * 1000) END AS geom
+	  FROM generate_series(1, 262144) i;
 SET tdc_delaunay.max_memory = 5;
 \set VERBOSITY terse
 CALL tdc_delaunay_tiled('tt_q', 'tt_err');
-\set VERBOSITY default
--- a limit below the data's floor is refused before any tile is staged, with the numbers
-SET tdc_delaunay.max_memory = 6;
-\set VERBOSITY terse
-CALL tdc_delaunay_tiled('tt_c9', 'tt_err');
+SET tdc_delaunay.max_memory = 12;
+CALL tdc_delaunay_tiled('tt_spot', 'tt_err');
+-- a tile that cannot take what its triangles need within the limit
+SET tdc_delaunay.max_memory = 9;
+CALL tdc_delaunay_tiled('tb_c9', 'tt_err');
 \set VERBOSITY default
 RESET tdc_delaunay.max_memory;
 RESET tdc_delaunay.threads;
 SELECT to_regclass('tt_err') AS no_target, count(*) AS staging FROM pg_class WHERE relname LIKE 'tdc_tiled%';
+-- nothing left in the temporary directory
+SELECT count(*) AS tmp_left FROM pg_ls_dir('base/pgsql_tmp', true, false) f WHERE f LIKE 'pgsql_tmp%.tdc.%';
 
 -- errors: each leaves no target behind
 \set VERBOSITY terse
@@ -266,65 +305,91 @@ SELECT to_regclass('tt_err') AS no_target, count(*) AS staging FROM pg_class WHE
 SELECT count(*) FROM tt_uni_tri;
 
 -- cancel (statement_timeout) during a tile: no target, no staging table,
--- server alive.  Where the tiles fall in a call, and how long a call takes,
--- vary with the machine's load, so the timeout is found by bisection: a try
--- cancelled before the tiles (its context is a staging statement of the
--- procedure) raises the lower bound, a try that finished, or was cancelled
--- after the procedure, lowers the upper bound, and the next try waits
--- halfway between the latest of each.  It stops at the first cancel whose
--- context shows the tile's statement (which calls _tdc_tile).
+-- no temporary file, server alive; for the rounds of SQL statements
+-- (squares of tile_size) and for the bounded run (automatic tiles).
+-- Where the tiles fall in a call, and how long a call takes, vary with the
+-- machine's load, so the timeout is found by bisection: a try cancelled
+-- before the tiles (its context is a staging statement of the procedure,
+-- or the bounded run reading the source) raises the lower bound, a try
+-- that finished, or was cancelled after the tiles, lowers the upper bound,
+-- and the next try waits halfway between the latest of each.  It stops at
+-- the first cancel whose context shows a tile running: the tile's
+-- statement (which calls _tdc_tile), or "running the tiles".
 CREATE TABLE tt_big AS SELECT ST_MakePoint(random(), random()) AS geom FROM generate_series(1, 60000);
-CREATE FUNCTION tt_call_ms() RETURNS int LANGUAGE plpgsql AS $$
+CREATE TABLE tt_bigger AS SELECT ST_MakePoint(random(), random()) AS geom FROM generate_series(1, 300000);
+CREATE TEMP TABLE tt_cancel (kind text, try serial, ms int, outcome text);
+-- the call of each kind, under tdc_delaunay.max_memory = 12 (one pass of
+-- tt_bigger would need 43 MB)
+CREATE FUNCTION tt_call(kind text, target text) RETURNS void LANGUAGE plpgsql AS $$
+BEGIN
+	IF kind = 'rounds' THEN
+		CALL tdc_delaunay_tiled('tt_big', target, tile_size => 0.25);
+	ELSE
+		CALL tdc_delaunay_tiled('tt_bigger', target);
+	END IF;
+END $$;
+CREATE FUNCTION tt_call_ms(kind text) RETURNS int LANGUAGE plpgsql AS $$
 DECLARE
 	t0 timestamptz := clock_timestamp();
 BEGIN
-	CALL tdc_delaunay_tiled('tt_big', 'tt_big_ok', tile_size => 0.25);
+	PERFORM tt_call(kind, 'tt_big_ok');
+	DROP TABLE tt_big_ok;
 	RETURN ceil(extract(epoch FROM clock_timestamp() - t0) * 1000);
 END $$;
-CREATE TEMP TABLE tt_cancel (try serial, ms int, outcome text);
-CREATE FUNCTION tt_arm() RETURNS void LANGUAGE plpgsql AS $$
+CREATE FUNCTION tt_arm(kind text) RETURNS void LANGUAGE plpgsql AS $$
 DECLARE
-	lo int := coalesce((SELECT ms FROM tt_cancel WHERE outcome = 'before' ORDER BY try DESC LIMIT 1), 0);
-	hi int := coalesce((SELECT ms FROM tt_cancel WHERE outcome = 'after' ORDER BY try DESC LIMIT 1),
-					   current_setting('tt.call_ms')::int);
+	lo int := coalesce((SELECT ms FROM tt_cancel c WHERE c.kind = tt_arm.kind AND outcome = 'before'
+						ORDER BY try DESC LIMIT 1), 0);
+	hi int := coalesce((SELECT ms FROM tt_cancel c WHERE c.kind = tt_arm.kind AND outcome = 'after'
+						ORDER BY try DESC LIMIT 1), current_setting('tt.call_ms_' || kind)::int);
 BEGIN
 	PERFORM set_config('statement_timeout', greatest((lo + hi) / 2, 1)::text, false);
 END $$;
-CREATE FUNCTION tt_try_cancel() RETURNS void LANGUAGE plpgsql AS $$
+CREATE FUNCTION tt_try_cancel(kind text) RETURNS void LANGUAGE plpgsql AS $$
 DECLARE
 	ms int := (SELECT setting::int FROM pg_settings WHERE name = 'statement_timeout');
 	ctx text;
 BEGIN
-	IF EXISTS (SELECT 1 FROM tt_cancel WHERE outcome = 'tile') THEN
+	IF EXISTS (SELECT 1 FROM tt_cancel c WHERE c.kind = tt_try_cancel.kind AND outcome = 'tile') THEN
 		RETURN;
 	END IF;
-	CALL tdc_delaunay_tiled('tt_big', 'tt_big_tri', tile_size => 0.25);
+	PERFORM tt_call(kind, 'tt_big_tri');
 	DROP TABLE tt_big_tri;
-	INSERT INTO tt_cancel (ms, outcome) VALUES (ms, 'after');
+	INSERT INTO tt_cancel (kind, ms, outcome) VALUES (kind, ms, 'after');
 EXCEPTION WHEN query_canceled THEN
 	GET STACKED DIAGNOSTICS ctx = PG_EXCEPTION_CONTEXT;
-	INSERT INTO tt_cancel (ms, outcome)
-		VALUES (ms, CASE WHEN ctx LIKE '%_tdc_tile(%' THEN 'tile'
-						 WHEN ctx LIKE '%PL/pgSQL function tdc_delaunay_tiled(%' THEN 'before'
-						 ELSE 'after' END);
+	INSERT INTO tt_cancel (kind, ms, outcome)
+		VALUES (kind, ms, CASE WHEN ctx LIKE '%_tdc_tile(%' OR ctx LIKE '%tdc_delaunay_tiled: running the tiles%' THEN 'tile'
+							   WHEN ctx LIKE '%tdc_delaunay_tiled: reading the source%' THEN 'before'
+							   WHEN ctx LIKE '%tdc_delaunay_tiled: writing the rows%' THEN 'after'
+							   WHEN ctx LIKE '%PL/pgSQL function tdc_delaunay_tiled(%' THEN 'before'
+							   ELSE 'after' END);
 END $$;
-SELECT set_config('tt.call_ms', tt_call_ms()::text, false) IS NOT NULL AS measured;
-DROP TABLE tt_big_ok;
+SET tdc_delaunay.max_memory = 12;
+SELECT set_config('tt.call_ms_rounds', tt_call_ms('rounds')::text, false) IS NOT NULL AS measured,
+	   set_config('tt.call_ms_bounded', tt_call_ms('bounded')::text, false) IS NOT NULL AS measured_bounded;
 -- (each try prints an empty row: only the statements are shown)
 \o /dev/null
-SELECT q FROM generate_series(1, 16) i, (VALUES (1, 'SELECT tt_arm()'), (2, 'SELECT tt_try_cancel()')) v(o, q) ORDER BY i, o \gexec
+SELECT q FROM generate_series(1, 16) i, (VALUES ('rounds'), ('bounded')) k(kind),
+	   (VALUES (1, 'SELECT tt_arm(%L)'), (2, 'SELECT tt_try_cancel(%L)')) v(o, q0),
+	   LATERAL format(v.q0, k.kind) q
+ ORDER BY k.kind DESC, i, o \gexec
 \o
 RESET statement_timeout;
-SELECT bool_or(outcome = 'tile') AS cancelled_during_a_tile FROM tt_cancel;
+RESET tdc_delaunay.max_memory;
+SELECT kind, bool_or(outcome = 'tile') AS cancelled_during_a_tile FROM tt_cancel GROUP BY kind ORDER BY kind;
 SELECT to_regclass('tt_big_tri') AS no_target, count(*) AS staging FROM pg_class WHERE relname LIKE 'tdc_tiled%';
+SELECT count(*) AS tmp_left FROM pg_ls_dir('base/pgsql_tmp', true, false) f WHERE f LIKE 'pgsql_tmp%.tdc.%';
 SELECT 1 AS alive;
 \set VERBOSITY default
 
 DROP TABLE tt_uni, tt_uni_tri, tt_uni_sq, tt_uni_auto, tt_uni_many, tt_uni_notice, tt_dup, tt_dup_tri, tt_dup_one, tt_dup_sq, tt_lat, tt_lat_tri,
 	tt_col, tt_col_tri, tt_line, tt_line_tri, tt_empty, tt_empty_tri, tt_ring, tt_ring_tri, tt_srid, tt_nulltile, tt_big,
-	tt_far, tt_far_tri, tt_far_tiny, tt_c9, tt_c9_auto, tt_c9_col, tt_town, tt_town_auto, tt_town_col,
-	tt_strip, tt_strip_auto, tt_strip_col, tt_coast, tt_coast_auto, tt_coast_col, tt_q, tt_cancel;
+	tt_far, tt_far_tri, tt_far_tiny, tt_c9, tt_c9_col, tt_town, tt_town_col,
+	tt_strip, tt_strip_col, tt_coast, tt_coast_col, tt_q, tt_spot, tt_cancel, tt_bigger,
+	tb_c9, tb_c9_auto, tb_town, tb_town_auto, tb_strip, tb_strip_auto, tb_coast, tb_coast_auto;
 DROP FUNCTION tiled_vs_dump(regclass, text);
-DROP FUNCTION tt_call_ms();
-DROP FUNCTION tt_try_cancel();
-DROP FUNCTION tt_arm();
+DROP FUNCTION tt_call(text, text);
+DROP FUNCTION tt_call_ms(text);
+DROP FUNCTION tt_try_cancel(text);
+DROP FUNCTION tt_arm(text);

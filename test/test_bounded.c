@@ -64,10 +64,11 @@ tri_hash(const double *a, const double *b, const double *c)
 }
 
 static int
-emit_sum(void *arg, const double *q, const double *qz, const size_t *tri, size_t ntri)
+emit_sum(void *arg, int tile, const double *q, const double *qz, const size_t *tri, size_t ntri)
 {
 	tri_sum    *s = arg;
 
+	(void) tile;
 	s->calls++;
 	if (s->refuse_at > 0 && (int) s->calls == s->refuse_at)
 		return 7;

@@ -472,7 +472,7 @@ tile_write(bounded_run *r, int t, const tile_points *p, const tdc_tile_result *r
 {
 	int			rc;
 
-	if (r->p->emit && (rc = r->p->emit(r->p->arg, p->q, p->qz, res->tri, res->ntri)) != 0)
+	if (r->p->emit && (rc = r->p->emit(r->p->arg, t, p->q, p->qz, res->tri, res->ntri)) != 0)
 		return tdc_bd_fail(&r->e, rc < 0 ? rc : TDC_EINVAL, "the triangles of tile %d of %d were "
 						   "not taken (the caller's emit returned %d)", t, r->nt, rc);
 	r->st->ntri += res->ntri;

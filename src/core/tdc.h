@@ -776,12 +776,14 @@ typedef struct tdc_bounded_params
 	const char *limit_name;		/* how messages name the limit; NULL: "--max-memory" */
 
 	/*
-	 * The triangles of a final tile: ntri triangles, 3 indices each, counter-
-	 * clockwise, into q (x,y pairs) and qz (z, or NULL without zpath), valid
-	 * during the call.  Nonzero stops the run: a negative TDC_ code is
-	 * returned as it is, anything else as TDC_EINVAL.  NULL: not emitted.
+	 * The triangles of final tile number tile (from 0, in the plan's
+	 * order, each tile at most once): ntri triangles, 3 indices each,
+	 * counter-clockwise, into q (x,y pairs) and qz (z, or NULL without
+	 * zpath), valid during the call.  Nonzero stops the run: a negative
+	 * TDC_ code is returned as it is, anything else as TDC_EINVAL.  NULL:
+	 * not emitted.
 	 */
-	int			(*emit) (void *arg, const double *q, const double *qz,
+	int			(*emit) (void *arg, int tile, const double *q, const double *qz,
 						 const size_t *tri, size_t ntri);
 	/*
 	 * Optional memory hooks.  settle: hand the free heap back (always, or

@@ -493,26 +493,6 @@ make_polygon_rings(const double *rings, int nrings, int dim, int32 srid)
 	return PointerGetDatum(out);
 }
 
-/* A POLYGON value with one ring of npts vertices (dim doubles each). */
-static Datum
-make_polygon(const double *ring, int npts, int dim, int32 srid)
-{
-	Size		size = VARHDRSZ + G_HEADER + 16 + (Size) npts * dim * sizeof(double);
-	char	   *out = palloc(size);
-	unsigned char *h = (unsigned char *) VARDATA(out);
-	uint32		s = (uint32) srid & 0x1fffff;
-	uint32		u[4] = {G_POLYGON, 1, (uint32) npts, 0};
-
-	SET_VARSIZE(out, size);
-	h[0] = (unsigned char) (s >> 16);
-	h[1] = (unsigned char) (s >> 8);
-	h[2] = (unsigned char) s;
-	h[3] = GF_VERSION | (dim == 3 ? GF_Z : 0);
-	memcpy(VARDATA(out) + G_HEADER, u, sizeof(u));
-	memcpy(VARDATA(out) + G_HEADER + 16, ring, (Size) npts * dim * sizeof(double));
-	return PointerGetDatum(out);
-}
-
 PG_FUNCTION_INFO_V1(_tdc_tile_triangles);
 
 /*
@@ -536,7 +516,6 @@ _tdc_tile_triangles(PG_FUNCTION_ARGS)
 	int			dim;
 	Datum		values[2];
 	bool		nulls[2] = {false, false};
-	double		ring[15];
 	HeapTuple	tuple;
 
 	tdc_signal_guard();
@@ -601,11 +580,11 @@ _tdc_tile_triangles(PG_FUNCTION_ARGS)
 	{
 		const double *tri = (const double *) ((const char *) in + sizeof(TileOut)) +
 			fctx->call_cntr * 3 * dim;
+		struct varlena *g = palloc(tdc_gser_triangle_size(dim == 3));
 
-		memcpy(ring, tri, 3 * dim * sizeof(double));
-		memcpy(ring + 3 * dim, tri, dim * sizeof(double));
+		tdc_gser_write_triangle_coords(g, tri, dim, h.srid);
 		values[0] = Int64GetDatum((int64) fctx->call_cntr + 1);
-		values[1] = make_polygon(ring, 4, dim, h.srid);
+		values[1] = PointerGetDatum(g);
 	}
 	tuple = heap_form_tuple(fctx->tuple_desc, values, nulls);
 	SRF_RETURN_NEXT(fctx, HeapTupleGetDatum(tuple));

@@ -71,10 +71,7 @@ typedef struct PlanGrid
 void
 tdc_tiled_plan_options(tdc_options *opt)
 {
-	tdc_options_init(opt);
-	opt->threads = tdc_effective_threads();
-	opt->grid_size = tdc_guc_grid_size;
-	opt->levels = tdc_guc_levels;
+	tdc_session_options(opt);
 }
 
 PG_FUNCTION_INFO_V1(_tdc_plan_tile_max);

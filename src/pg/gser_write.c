@@ -463,3 +463,25 @@ tdc_gser_write_triangle(struct varlena *out, const tdc_job *job,
 	p = VARDATA(out) + G_HEADER;
 	(void) put_triangle(p, job, buf, TDC_OUT_POLYGONS, buf->hasz, v);
 }
+
+/*
+ * Write the triangle of the three vertices at v (dim = 2 or 3 doubles
+ * each, in order) as a POLYGON value into out (tdc_gser_triangle_size):
+ * the bytes tdc_gser_write_triangle writes for the same vertices, for
+ * callers that hold coordinates rather than a job (the tiled runs).
+ */
+void
+tdc_gser_write_triangle_coords(struct varlena *out, const double *v, int dim, int32 srid)
+{
+	char	   *p;
+	Size		vb = (Size) dim * sizeof(double);
+
+	write_header((char *) out, tdc_gser_triangle_size(dim == 3), srid, dim == 3, false);
+	p = VARDATA(out) + G_HEADER;
+	p = put_u32(p, G_POLYGON);
+	p = put_u32(p, 1);
+	p = put_u32(p, 4);
+	p = put_u32(p, 0);			/* padding */
+	memcpy(p, v, 3 * vb);
+	memcpy(p + 3 * vb, v, vb);
+}

@@ -108,6 +108,22 @@ tdc_pointbuf_bytes(const TdcPointBuf *buf)
 }
 
 /*
+ * The bytes an empty buffer holds once n vertices were appended (the
+ * doubling of tdc_pointbuf_reserve; where the limit cuts the doubling
+ * short it holds less), for a caller deciding beforehand whether a
+ * collection and its run will fit.
+ */
+uint64
+tdc_pointbuf_bytes_after(uint64 n, bool hasz)
+{
+	uint64		cap = 16;
+
+	while (cap < n)
+		cap *= 2;
+	return pointbuf_bytes_for(Max(Min(cap, TDC_MAX_POINTS), n), hasz);
+}
+
+/*
  * The owner's arrays beside the vertices ("what") grow from old_bytes to
  * new_bytes: refused with the limit's ERROR before they do, if the buffer
  * would then pass tdc_delaunay.max_memory.

@@ -352,6 +352,16 @@ tdc_check_params(double tolerance, int flags, const char *fname)
  * ----------------------------------------------------------------
  */
 
+/* The engine's options from the session's settings (threads, grid, levels). */
+void
+tdc_session_options(tdc_options *opt)
+{
+	tdc_options_init(opt);
+	opt->threads = tdc_effective_threads();
+	opt->grid_size = tdc_guc_grid_size;
+	opt->levels = tdc_guc_levels;
+}
+
 /*
  * The options of a run on buf: the session's settings and the memory limit.
  * *room: what the limit leaves over once the run and its result are counted.
@@ -362,10 +372,7 @@ run_options(const TdcPointBuf *buf, double tolerance, uint64 result_bytes,
 {
 	uint64		limit = tdc_max_memory_bytes();
 
-	tdc_options_init(opt);
-	opt->threads = tdc_effective_threads();
-	opt->grid_size = tdc_guc_grid_size;
-	opt->levels = tdc_guc_levels;
+	tdc_session_options(opt);
 	opt->tolerance = tolerance;
 	opt->times = tdc_guc_stats;
 	if (limit > 0)

@@ -180,6 +180,7 @@ extern void tdc_pointbuf_init(TdcPointBuf *buf, MemoryContext cxt);
 extern void tdc_pointbuf_reserve(TdcPointBuf *buf, uint64 extra,
 								 const char *fname);
 extern uint64 tdc_pointbuf_bytes(const TdcPointBuf *buf);
+extern uint64 tdc_pointbuf_bytes_after(uint64 n, bool hasz);
 extern void tdc_pointbuf_side_grow(TdcPointBuf *buf, uint64 old_bytes,
 								   uint64 new_bytes, const char *what,
 								   const char *fname);
@@ -237,6 +238,8 @@ extern struct varlena *tdc_gser_edge_list(const tdc_job *job, const TdcPointBuf 
 extern Size tdc_gser_triangle_size(bool hasz);
 extern void tdc_gser_write_triangle(struct varlena *out, const tdc_job *job,
 									const uint32 v[3], const TdcPointBuf *buf);
+extern void tdc_gser_write_triangle_coords(struct varlena *out, const double *v,
+										   int dim, int32 srid);
 extern void tdc_gser_check_result_size(uint64 size, const char *fname);
 extern void tdc_advise_result(void *out, Size size);
 
@@ -338,6 +341,7 @@ extern void tdc_check_tolerance(bool isnull, double tolerance, const char *fname
 extern void tdc_check_params(double tolerance, int flags, const char *fname);
 /* the threads a triangulation starts now: the settings within the CPUs */
 extern int	tdc_effective_threads(void);
+extern void tdc_session_options(tdc_options *opt);
 extern void tdc_check_run_memory(const TdcPointBuf *buf, double tolerance,
 								 uint64 result_bytes, const char *fname);
 extern TdcRun *tdc_run(const TdcPointBuf *buf, double tolerance,

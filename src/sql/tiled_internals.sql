@@ -269,3 +269,23 @@ COMMENT ON FUNCTION _tdc_tile_need_cells(geometry, bytea, int8, int8, int4[]) IS
 'Internal, for tdc_delaunay_tiled: _tdc_tile_need_cells(need, plan, tile, points, added), the cells of the plan that a '
 'tile''s run of that many points that was not final named (the rings of its row after the first) and that its rerun adds: '
 'all when they fit tdc_delaunay.max_memory, else the nearest first as far as they fit.';
+
+CREATE FUNCTION _tdc_tiled_fits(int8, boolean)
+RETURNS boolean
+AS 'MODULE_PATHNAME', '_tdc_tiled_fits'
+LANGUAGE C STABLE STRICT PARALLEL SAFE;
+
+COMMENT ON FUNCTION _tdc_tiled_fits(int8, boolean) IS
+'Internal, for tdc_delaunay_tiled: _tdc_tiled_fits(points, has Z), whether ST_TDCDelaunayDump of that many vertices '
+'fits tdc_delaunay.max_memory, so that automatic tiles run in one pass.';
+
+CREATE FUNCTION _tdc_tiled_bounded(query text)
+RETURNS TABLE(id bigint, tile bigint, geom geometry)
+AS 'MODULE_PATHNAME', '_tdc_tiled_bounded'
+LANGUAGE C VOLATILE STRICT PARALLEL UNSAFE
+COST 10000 ROWS 100000;
+
+COMMENT ON FUNCTION _tdc_tiled_bounded(text) IS
+'Internal, for tdc_delaunay_tiled: the Delaunay triangles of the query''s vertices (one geometry column, as '
+'ST_TDCDelaunayDump takes it) tile by tile under tdc_delaunay.max_memory through the core''s bounded run, '
+'as ./tdc --max-memory makes them: rows (id = tile * 2^32 + k, tile from 1, one POLYGON per triangle).';
