@@ -42,14 +42,41 @@ SELECT * FROM tiled_vs_dump('tt_uni_sq', 'SELECT geom FROM tt_uni');
 SELECT count(DISTINCT tile) AS tiles FROM tt_uni_sq;
 CALL tdc_delaunay_tiled('tt_uni', 'public.tt_uni_auto');
 SELECT * FROM tiled_vs_dump('tt_uni_auto', 'SELECT geom FROM tt_uni');
--- more tiles than the halo has partitions (64): several tiles share one
-CALL tdc_delaunay_tiled('tt_uni', 'tt_uni_many', tile_size => 10);
+-- Squares label the triangles of the core's run: each triangle has the
+-- square a run tiled by the squares keeps it in.  The rounds with the
+-- squares' labels as a tile column (each tile keeps the triangles whose
+-- smallest vertex it owns) give the same (triangle, tile) pairs.
+ALTER TABLE tt_uni ADD COLUMN sq bigint;
+UPDATE tt_uni SET sq = _tdc_square_label(ST_X(geom), ST_Y(geom), b.x0, b.y0, 15)
+  FROM (SELECT min(ST_XMin(geom)) AS x0, min(ST_YMin(geom)) AS y0 FROM tt_uni) b;
+CALL tdc_delaunay_tiled('tt_uni', 'tt_uni_sqcol', tile_column => 'sq');
+SELECT (SELECT count(*) FROM (SELECT ST_AsEWKB(ST_Normalize(geom)), tile FROM tt_uni_sq
+							  EXCEPT ALL SELECT ST_AsEWKB(ST_Normalize(geom)), tile FROM tt_uni_sqcol) x) AS only_squares,
+	   (SELECT count(*) FROM (SELECT ST_AsEWKB(ST_Normalize(geom)), tile FROM tt_uni_sqcol
+							  EXCEPT ALL SELECT ST_AsEWKB(ST_Normalize(geom)), tile FROM tt_uni_sq) x) AS only_rounds;
+-- squares of any size: 40,000 squares of 0.5 for 4,000 points, 100 of 10
+CALL tdc_delaunay_tiled('tt_uni', 'tt_uni_tiny', tile_size => 0.5);
+SELECT * FROM tiled_vs_dump('tt_uni_tiny', 'SELECT geom FROM tt_uni');
+SELECT count(DISTINCT tile) AS tiles FROM tt_uni_tiny;
+CALL tdc_delaunay_tiled('tt_uni', 'tt_uni_ten', tile_size => 10);
+SELECT * FROM tiled_vs_dump('tt_uni_ten', 'SELECT geom FROM tt_uni');
+SELECT count(DISTINCT tile) AS tiles FROM tt_uni_ten;
+-- more tiles than the halo of the rounds has partitions (64): several tiles share one
+ALTER TABLE tt_uni ADD COLUMN t10 int;
+UPDATE tt_uni SET t10 = floor(ST_X(geom) / 10) * 10 + floor(ST_Y(geom) / 10);
+CALL tdc_delaunay_tiled('tt_uni', 'tt_uni_many', tile_column => 't10');
 SELECT * FROM tiled_vs_dump('tt_uni_many', 'SELECT geom FROM tt_uni');
 SELECT count(DISTINCT tile) AS tiles FROM tt_uni_many;
 
--- progress and the summary are NOTICEs
+-- progress and the summary are NOTICEs: the rounds' and the core run's
+-- (its DETAIL, the phases' seconds, is left out here)
 SET client_min_messages = notice;
-CALL tdc_delaunay_tiled('tt_uni', 'tt_uni_notice', tile_size => 50);
+CALL tdc_delaunay_tiled('tt_uni', 'tt_uni_notice', tile_column => 't');
+SET tdc_delaunay.max_memory = 100;
+\set VERBOSITY terse
+CALL tdc_delaunay_tiled('tt_uni', 'tt_uni_notice_sq', tile_size => 50);
+\set VERBOSITY default
+RESET tdc_delaunay.max_memory;
 SET client_min_messages = warning;
 
 -- exact duplicates split across tiles, with different Z: one vertex, the Z
@@ -294,11 +321,15 @@ INSERT INTO tt_srid VALUES ('SRID=4326;POINT(0 0)'), ('SRID=3857;POINT(1 1)'), (
 CALL tdc_delaunay_tiled('tt_srid', 'tt_err');
 CREATE TABLE tt_nulltile AS SELECT geom, CASE WHEN id > 10 THEN t END AS t FROM tt_uni;
 CALL tdc_delaunay_tiled('tt_nulltile', 'tt_err', tile_column => 't');
--- one tile (one pass) that would exceed tdc_delaunay.max_memory
+-- a limit below what the tiles need, for one square and for several
+-- (the core's run is refused before any work, with the floor)
 SET tdc_delaunay.max_memory = 1;
 CALL tdc_delaunay_tiled('tt_uni', 'tt_err', tile_size => 1000);
--- the same limit on a tile of several (tiles of 50: a quarter of the points and their halo)
 CALL tdc_delaunay_tiled('tt_uni', 'tt_err', tile_size => 50);
+-- the same limit on a tile of the rounds (quarters: a quarter of the points and their halo)
+ALTER TABLE tt_uni ADD COLUMN q4 int;
+UPDATE tt_uni SET q4 = floor(ST_X(geom) / 50) * 2 + floor(ST_Y(geom) / 50);
+CALL tdc_delaunay_tiled('tt_uni', 'tt_err', tile_column => 'q4');
 RESET tdc_delaunay.max_memory;
 SELECT to_regclass('tt_err') AS no_target, count(*) AS staging FROM pg_class WHERE relname LIKE 'tdc_tiled%';
 -- the existing target was not touched
@@ -306,7 +337,7 @@ SELECT count(*) FROM tt_uni_tri;
 
 -- cancel (statement_timeout) during a tile: no target, no staging table,
 -- no temporary file, server alive; for the rounds of SQL statements
--- (squares of tile_size) and for the bounded run (automatic tiles).
+-- (a tile column, 16 tiles) and for the core's run (automatic tiles).
 -- Where the tiles fall in a call, and how long a call takes, vary with the
 -- machine's load, so the timeout is found by bisection: a try cancelled
 -- before the tiles (its context is a staging statement of the procedure,
@@ -315,7 +346,9 @@ SELECT count(*) FROM tt_uni_tri;
 -- and the next try waits halfway between the latest of each.  It stops at
 -- the first cancel whose context shows a tile running: the tile's
 -- statement (which calls _tdc_tile), or "running the tiles".
-CREATE TABLE tt_big AS SELECT ST_MakePoint(random(), random()) AS geom FROM generate_series(1, 60000);
+CREATE TABLE tt_big AS
+	SELECT geom, (floor(ST_X(geom) * 4) * 4 + floor(ST_Y(geom) * 4))::int AS t
+	  FROM (SELECT ST_MakePoint(random(), random()) AS geom FROM generate_series(1, 60000)) s;
 CREATE TABLE tt_bigger AS SELECT ST_MakePoint(random(), random()) AS geom FROM generate_series(1, 300000);
 CREATE TEMP TABLE tt_cancel (kind text, try serial, ms int, outcome text);
 -- the call of each kind, under tdc_delaunay.max_memory = 12 (one pass of
@@ -323,7 +356,7 @@ CREATE TEMP TABLE tt_cancel (kind text, try serial, ms int, outcome text);
 CREATE FUNCTION tt_call(kind text, target text) RETURNS void LANGUAGE plpgsql AS $$
 BEGIN
 	IF kind = 'rounds' THEN
-		CALL tdc_delaunay_tiled('tt_big', target, tile_size => 0.25);
+		CALL tdc_delaunay_tiled('tt_big', target, tile_column => 't');
 	ELSE
 		CALL tdc_delaunay_tiled('tt_bigger', target);
 	END IF;
@@ -383,7 +416,7 @@ SELECT count(*) AS tmp_left FROM pg_ls_dir('base/pgsql_tmp', true, false) f WHER
 SELECT 1 AS alive;
 \set VERBOSITY default
 
-DROP TABLE tt_uni, tt_uni_tri, tt_uni_sq, tt_uni_auto, tt_uni_many, tt_uni_notice, tt_dup, tt_dup_tri, tt_dup_one, tt_dup_sq, tt_lat, tt_lat_tri,
+DROP TABLE tt_uni, tt_uni_tri, tt_uni_sq, tt_uni_auto, tt_uni_many, tt_uni_notice, tt_uni_notice_sq, tt_uni_sqcol, tt_uni_tiny, tt_uni_ten, tt_dup, tt_dup_tri, tt_dup_one, tt_dup_sq, tt_lat, tt_lat_tri,
 	tt_col, tt_col_tri, tt_line, tt_line_tri, tt_empty, tt_empty_tri, tt_ring, tt_ring_tri, tt_srid, tt_nulltile, tt_big,
 	tt_far, tt_far_tri, tt_far_tiny, tt_c9, tt_c9_col, tt_town, tt_town_col,
 	tt_strip, tt_strip_col, tt_coast, tt_coast_col, tt_q, tt_spot, tt_cancel, tt_bigger,

@@ -12,6 +12,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "predicates.h"
 #include "tile_plan.h"
 
 /*
@@ -683,6 +684,25 @@ tdc_tp_square_label(double x, double y, const double origin[2], double size, int
 		return false;
 	*label = (int64_t) c * 4294967296 + (int64_t) r;
 	return true;
+}
+
+/*
+ * Which vertex of a triangle (0, 1 or 2) decides the tile that keeps it:
+ * the smallest in the lexicographic order (x, then y), as tile_final.c
+ * keeps a triangle in the tile that owns that vertex.  A caller that
+ * labels a finished triangulation's triangles by tiles of its own (squares)
+ * gets the tiles a tiled run of those squares would give.
+ */
+int
+tdc_tp_owner_vertex(const double *a, const double *b, const double *c)
+{
+	const double *v[3] = {a, b, c};
+	int			lo = 0;
+
+	for (int k = 1; k < 3; k++)
+		if (tdc_lex_less(v[k], v[lo]))
+			lo = k;
+	return lo;
 }
 
 /*

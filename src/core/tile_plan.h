@@ -184,6 +184,7 @@ extern void tdc_tp_label_cells(const tdc_tp_tile *tiles, int nt, int16_t *cell_t
 /* The labels of squares of a given size, counted from the grid's origin */
 extern bool tdc_tp_square_label(double x, double y, const double origin[2], double size,
 								int64_t *label);
+extern int	tdc_tp_owner_vertex(const double *a, const double *b, const double *c);
 
 /* The first known region */
 extern double tdc_tp_spacing(const double bb[4], size_t n);

@@ -38,6 +38,7 @@
 #include "postgres.h"
 
 #include <errno.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <sys/stat.h>
@@ -282,12 +283,15 @@ read_all(FILE *f, void *p, size_t size, const char *path, const char *fname)
 }
 
 /*
- * The triangles file as rows (id, tile, geom): tile t + 1, and ids
- * (t + 1) * 2^32 + k, k = 1.. within the tile, as the procedure's other
- * paths number them.
+ * The triangles file as rows (id, tile, geom): ids (t + 1) * 2^32 + k,
+ * k = 1.. within the run's tile t, as the procedure's other paths number
+ * them; the tile t + 1, or with squares (size > 0) the label of the square
+ * of side size from origin that holds the triangle's owning vertex
+ * (tdc_tp_owner_vertex): the square a run tiled by squares keeps it in.
  */
 static uint64
-write_rows(BoundedRun *br, ReturnSetInfo *rsinfo, int32 srid, const char *fname)
+write_rows(BoundedRun *br, ReturnSetInfo *rsinfo, int32 srid, const double origin[2], double size,
+		   const char *fname)
 {
 	struct varlena *g = palloc(tdc_gser_triangle_size(br->hasz));
 	Datum		values[3];
@@ -307,7 +311,14 @@ write_rows(BoundedRun *br, ReturnSetInfo *rsinfo, int32 srid, const char *fname)
 			read_all(br->ftri, v, sizeof(double) * 3 * br->dim, br->tripath, fname);
 			tdc_gser_write_triangle_coords(g, v, br->dim, srid);
 			values[0] = Int64GetDatum((label << 32) + k);
-			values[1] = Int64GetDatum(label);
+			if (size > 0)
+			{
+				const double *o = v + br->dim * tdc_tp_owner_vertex(v, v + br->dim, v + 2 * br->dim);
+
+				values[1] = Int64GetDatum(tdc_tiled_square_label(o[0], o[1], origin, size));
+			}
+			else
+				values[1] = Int64GetDatum(label);
 			tuplestore_putvalues(rsinfo->setResult, rsinfo->setDesc, values, nulls);
 			if ((++rows & (ROWS_POLL - 1)) == 0)
 				CHECK_FOR_INTERRUPTS();
@@ -325,10 +336,12 @@ write_rows(BoundedRun *br, ReturnSetInfo *rsinfo, int32 srid, const char *fname)
 PG_FUNCTION_INFO_V1(_tdc_tiled_bounded);
 
 /*
- * _tdc_tiled_bounded(query text) RETURNS TABLE(id bigint, tile bigint, geom geometry)
+ * _tdc_tiled_bounded(query text [, origin_x float8, origin_y float8, size float8])
+ *		RETURNS TABLE(id bigint, tile bigint, geom geometry)
  * The Delaunay triangles of the query's vertices (its one geometry column,
  * as ST_TDCDelaunayDump takes it), tile by tile in bounded memory; see
- * the top of this file.  Internal to tdc_delaunay_tiled.
+ * the top of this file.  With squares, each triangle's tile is the label of
+ * its square (tdc_tiled_square_label).  Internal to tdc_delaunay_tiled.
  */
 Datum
 _tdc_tiled_bounded(PG_FUNCTION_ARGS)
@@ -338,6 +351,8 @@ _tdc_tiled_bounded(PG_FUNCTION_ARGS)
 	const char *setting;
 	uint64		limit_mb = tdc_memory_limit_mb(&setting);
 	char	   *query;
+	double		origin[2] = {0, 0},
+				size = 0;
 	MemoryContext cxt;
 	BoundedRun *br;
 	TdcPointBuf buf;
@@ -357,6 +372,16 @@ _tdc_tiled_bounded(PG_FUNCTION_ARGS)
 
 	tdc_signal_guard();
 	query = text_to_cstring(PG_GETARG_TEXT_PP(0));
+	if (PG_NARGS() == 4)
+	{
+		origin[0] = PG_GETARG_FLOAT8(1);
+		origin[1] = PG_GETARG_FLOAT8(2);
+		size = PG_GETARG_FLOAT8(3);
+		if (!(size > 0 && size < INFINITY))
+			ereport(ERROR,
+					(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
+					 errmsg("%s: tile_size must be positive and finite, not %g", fname, size)));
+	}
 	InitMaterializedSRF(fcinfo, 0);
 	if (limit_mb == 0)
 		ereport(ERROR,
@@ -436,16 +461,18 @@ _tdc_tiled_bounded(PG_FUNCTION_ARGS)
 	/* the rows */
 	phase = "writing the rows";
 	INSTR_TIME_SET_CURRENT(t0);
-	rows = write_rows(br, rsinfo, buf.srid, fname);
+	rows = write_rows(br, rsinfo, buf.srid, origin, size, fname);
 	rows_s = tdc_ms_since(t0) / 1000;
 	bounded_run_release(br);
 	error_context_stack = errcb.previous;
 
 	ereport(NOTICE,
-			(errmsg("%s: %llu triangles from %llu points in %d tiles under %s = %llu MB, "
-					"%zu tile runs, %zu halo points",
-					fname, (unsigned long long) rows, (unsigned long long) br->n, st.tiles, setting,
-					(unsigned long long) limit_mb, st.runs, st.halo),
+			(errmsg("%s: %llu triangles from %llu points%s in %d tile%s under %s = %llu MB, "
+					"%zu tile run%s, %zu halo points",
+					fname, (unsigned long long) rows, (unsigned long long) br->n,
+					size > 0 ? psprintf(" (labelled by squares of tile_size %.17g)", size) : "",
+					st.tiles, st.tiles == 1 ? "" : "s", setting, (unsigned long long) limit_mb,
+					st.runs, st.runs == 1 ? "" : "s", st.halo),
 			 errdetail("Phases in seconds: read %.3f, scan %.3f, bin %.3f, gather %.3f, engine %.3f, "
 					   "finish %.3f, rows %.3f (the tiles %.3f in all).",
 					   stage_s, st.scan, st.bin, st.gather, st.engine, st.finish, rows_s, tiles_s)));

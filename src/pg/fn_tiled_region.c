@@ -86,21 +86,14 @@ tdc_tiled_box_arg(ArrayType *a, double box[4], const char *what)
 	memcpy(box, v, 4 * sizeof(double));
 }
 
-PG_FUNCTION_INFO_V1(_tdc_square_label);
-
 /*
- * _tdc_square_label(x, y, origin_x, origin_y, size) RETURNS int8
  * The label of the square of side size that holds (x, y), counted from the
  * origin (tdc_tp_square_label): column * 2^32 + row.  An ERROR when the
  * point lies below the origin, or its column or row passes 2^31 - 1.
  */
-Datum
-_tdc_square_label(PG_FUNCTION_ARGS)
+int64
+tdc_tiled_square_label(double x, double y, const double origin[2], double size)
 {
-	double		x = PG_GETARG_FLOAT8(0),
-				y = PG_GETARG_FLOAT8(1),
-				origin[2] = {PG_GETARG_FLOAT8(2), PG_GETARG_FLOAT8(3)},
-				size = PG_GETARG_FLOAT8(4);
 	int64_t		label;
 
 	if (!tdc_tp_square_label(x, y, origin, size, &label))
@@ -110,7 +103,19 @@ _tdc_square_label(PG_FUNCTION_ARGS)
 						TILED_FNAME, x, y, size, origin[0], origin[1]),
 				 errdetail("A square's column and row count from the data's lower left corner and must stay below 2^31."),
 				 errhint("Use a larger tile_size.")));
-	PG_RETURN_INT64((int64) label);
+	return (int64) label;
+}
+
+PG_FUNCTION_INFO_V1(_tdc_square_label);
+
+/* _tdc_square_label(x, y, origin_x, origin_y, size) RETURNS int8: tdc_tiled_square_label. */
+Datum
+_tdc_square_label(PG_FUNCTION_ARGS)
+{
+	double		origin[2] = {PG_GETARG_FLOAT8(2), PG_GETARG_FLOAT8(3)};
+
+	PG_RETURN_INT64(tdc_tiled_square_label(PG_GETARG_FLOAT8(0), PG_GETARG_FLOAT8(1), origin,
+										   PG_GETARG_FLOAT8(4)));
 }
 
 /*

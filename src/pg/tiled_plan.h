@@ -54,6 +54,7 @@ extern double *tdc_tiled_float8_array(ArrayType *a, int *n, int want_min, int mu
 									  const char *what);
 extern ArrayType *tdc_tiled_float8_result(const double *v, int n);
 extern void tdc_tiled_box_arg(ArrayType *a, double box[4], const char *what);
+extern int64 tdc_tiled_square_label(double x, double y, const double origin[2], double size);
 extern ArrayType *tdc_tiled_region_result(const double K[4], double h, size_t count,
 										  const double *hull, int nhull, double spacing,
 										  const size_t *ps, const tdc_tp_grid *g);

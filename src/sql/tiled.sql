@@ -156,13 +156,14 @@ BEGIN
 			USING ERRCODE = 'invalid_parameter_value';
 	END IF;
 
-	-- The tiles: squares of tile_size labelled column * 2^32 + row counted
-	-- from the data's lower left corner (_tdc_square_label), or with no
-	-- tile_size the core's adaptive plan under tdc_delaunay.max_memory, as
-	-- ./tdc --max-memory makes it: counts on a grid whose sides are at the
-	-- quantiles of a sample, split k-d by counts (_tdc_plan_grid, _tdc_plan;
-	-- src/pg/fn_tiled_plan.c).  Every number of the policy comes from
-	-- src/core/tile_plan.c.
+	-- Without a tile column the core cuts the tiles, on plain PostgreSQL as
+	-- in ./tdc --max-memory: counts on a grid whose sides are at the
+	-- quantiles of a sample, split k-d by counts so that every tile with its
+	-- halo fits tdc_delaunay.max_memory (src/core/tile_plan.c).  Squares of
+	-- tile_size then only label the triangles: each is kept by the square
+	-- holding its smallest vertex, as a run tiled by the squares keeps it,
+	-- labelled column * 2^32 + row counted from the data's lower left corner
+	-- (_tdc_square_label).
 	w := coalesce(gx1 - gx0, 0);
 	h := coalesce(gy1 - gy0, 0);
 	spacing := CASE WHEN npts > 0 AND w * h > 0 THEN sqrt(w * h / npts)
@@ -172,39 +173,14 @@ BEGIN
 	hasz := zm_lo IN (2, 3);
 	IF tile_column IS NULL THEN
 		size := coalesce(tile_size, 'infinity'::float8);
-		-- Automatic tiles when the one pass would not fit tdc_delaunay.max_memory
-		-- (_tdc_tiled_fits): the core's bounded run, the one ./tdc
-		-- --max-memory runs (_tdc_tiled_bounded, src/pg/fn_tiled_bounded.c).
-		-- The source is read once, as ST_TDCDelaunayDump reads it, into files
-		-- cut into tiles by counts; its rows are the target's, written in
-		-- bulk by CREATE TABLE AS, with no staging table.  Its NOTICE gives
-		-- the phases.
-		IF tile_size IS NULL AND npts > 0 AND NOT _tdc_tiled_fits(npts, hasz) THEN
-			EXECUTE format('CREATE TABLE %s AS
-							SELECT d.id, d.tile, d.geom::geometry(%s, %s) AS geom
-							  FROM _tdc_tiled_bounded(%L) d', qtarget,
-						   CASE WHEN zm_lo = 2 THEN 'PolygonZ' WHEN zm_lo = 1 THEN 'PolygonM'
-								WHEN zm_lo = 3 THEN 'PolygonZM' ELSE 'Polygon' END, coalesce(srid_lo, 0),
-						   format('SELECT %I FROM %s', geom_column, source));
-			RETURN;
-		END IF;
-		IF plan IS NOT NULL THEN
-			tv := '_tdc_plan_label(ST_X(d.geom), ST_Y(d.geom), $1)';
-		ELSIF size < 'infinity'::float8 THEN
-			tv := format('_tdc_square_label(ST_X(d.geom), ST_Y(d.geom), %1$L::float8, %2$L::float8, %3$L::float8)',
-						 gx0, gy0, size);
-		ELSE
-			tv := '0::bigint';
-		END IF;
-
 		-- One tile: every point is known to it, so its halo is everything and
 		-- every triangle is its own.  That is ST_TDCDelaunayDump of the
-		-- source, read in the source's order like the staging table (the
-		-- procedure turns synchronized scans off), without the staging tables,
-		-- the halo or the index.  The box may be rounded outward, so a
+		-- source in its stored order (the procedure turns synchronized scans
+		-- off), when it fits tdc_delaunay.max_memory (_tdc_tiled_fits) and the
+		-- points lie in one square.  The box may be rounded outward, so a
 		-- square counts as the only one only when that box lies in it.
-		IF plan IS NULL AND (npts = 0 OR size = 'infinity'::float8
-							 OR _tdc_square_label(gx1, gy1, gx0, gy0, size) = 0) THEN
+		IF npts = 0 OR (_tdc_tiled_fits(npts, hasz)
+						AND (size = 'infinity'::float8 OR _tdc_square_label(gx1, gy1, gx0, gy0, size) = 0)) THEN
 			-- (CREATE TABLE AS: it writes in bulk, an INSERT into a new table
 			-- took about twice as long)
 			EXECUTE format('CREATE TABLE %s AS
@@ -218,6 +194,20 @@ BEGIN
 			RAISE NOTICE '%: % triangles from % points in 1 tile, in one pass', fn, ntri, npts;
 			RETURN;
 		END IF;
+		-- Else the core's bounded run, the one ./tdc --max-memory runs
+		-- (_tdc_tiled_bounded, src/pg/fn_tiled_bounded.c): the source read
+		-- once, as ST_TDCDelaunayDump reads it, into files cut into tiles;
+		-- its rows are the target's, written in bulk by CREATE TABLE AS, with
+		-- no staging table.  Its NOTICE gives the phases.
+		EXECUTE format('CREATE TABLE %s AS
+						SELECT d.id, d.tile, d.geom::geometry(%s, %s) AS geom
+						  FROM _tdc_tiled_bounded(%L%s) d', qtarget,
+					   CASE WHEN zm_lo = 2 THEN 'PolygonZ' WHEN zm_lo = 1 THEN 'PolygonM'
+							WHEN zm_lo = 3 THEN 'PolygonZM' ELSE 'Polygon' END, coalesce(srid_lo, 0),
+					   format('SELECT %I FROM %s', geom_column, source),
+					   CASE WHEN size < 'infinity'::float8
+							THEN format(', %L::float8, %L::float8, %L::float8', gx0, gy0, size) ELSE '' END);
+		RETURN;
 	END IF;
 
 	-- staging tables: temporary on plain PostgreSQL, distributed on Citus

@@ -289,3 +289,13 @@ COMMENT ON FUNCTION _tdc_tiled_bounded(text) IS
 'Internal, for tdc_delaunay_tiled: the Delaunay triangles of the query''s vertices (one geometry column, as '
 'ST_TDCDelaunayDump takes it) tile by tile under tdc_delaunay.max_memory through the core''s bounded run, '
 'as ./tdc --max-memory makes them: rows (id = tile * 2^32 + k, tile from 1, one POLYGON per triangle).';
+
+CREATE FUNCTION _tdc_tiled_bounded(query text, origin_x float8, origin_y float8, size float8)
+RETURNS TABLE(id bigint, tile bigint, geom geometry)
+AS 'MODULE_PATHNAME', '_tdc_tiled_bounded'
+LANGUAGE C VOLATILE STRICT PARALLEL UNSAFE
+COST 10000 ROWS 100000;
+
+COMMENT ON FUNCTION _tdc_tiled_bounded(text, float8, float8, float8) IS
+'Internal, for tdc_delaunay_tiled: _tdc_tiled_bounded(query) with each triangle''s tile the label of the square '
+'of side size counted from the origin that holds its smallest vertex (x, then y), as a run tiled by those squares keeps it.';
