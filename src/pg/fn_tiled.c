@@ -58,7 +58,6 @@
 
 #include "tdc_pg.h"
 #include "gser_format.h"
-#include "tiled_plan.h"
 
 #define TILE_FNAME		"tdc_delaunay_tiled"
 
@@ -76,10 +75,6 @@ typedef struct TileState
 	int			nhull;
 	double	   *extra;			/* nextra boxes */
 	int			nextra;
-	bytea	   *plan;			/* NULL, or the plan of automatic tiles: its cells */
-	int32	   *added;			/* the plan's cells a rerun added, whose points are passed */
-	int			nadded;
-	int			reruns;			/* the runs before that added cells (tdc_tp_rings) */
 } TileState;
 
 /* Header of the aggregate's bytea result. */
@@ -90,7 +85,7 @@ typedef struct TileOut
 	int32		srid;
 	int32		hasz;
 	double		need[4];
-	uint64		ntri;			/* not final: the cells the rerun needs (4 doubles each) */
+	uint64		ntri;			/* not final: 0 */
 } TileOut;
 
 static void
@@ -283,24 +278,6 @@ _tdc_tile_transfn(PG_FUNCTION_ARGS)
 					(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
 					 errmsg("%s: the extra boxes must be 4 values each", TILE_FNAME)));
 		st->nextra /= 4;
-		if (PG_NARGS() > 9 && !PG_ARGISNULL(9))
-			st->plan = (bytea *) PG_DETOAST_DATUM_COPY(PG_GETARG_DATUM(9));
-		if (PG_NARGS() > 10 && !PG_ARGISNULL(10))
-		{
-			ArrayType  *a = PG_GETARG_ARRAYTYPE_P(10);
-
-			if (ARR_NDIM(a) > 1 || ARR_ELEMTYPE(a) != INT4OID || ARR_HASNULL(a))
-				ereport(ERROR,
-						(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
-						 errmsg("%s: the added cells must be a one-dimensional int4 array without NULLs",
-								TILE_FNAME)));
-			st->nadded = ARR_NDIM(a) == 0 ? 0 : ARR_DIMS(a)[0];
-			st->added = palloc(sizeof(int32) * (st->nadded + 1));
-			if (st->nadded > 0)
-				memcpy(st->added, ARR_DATA_PTR(a), sizeof(int32) * st->nadded);
-		}
-		if (PG_NARGS() > 11 && !PG_ARGISNULL(11))
-			st->reruns = Max(PG_GETARG_INT32(11), 0);
 		MemoryContextSwitchTo(old);
 	}
 
@@ -352,9 +329,6 @@ _tdc_tile_finalfn(PG_FUNCTION_ARGS)
 	tdc_tile_result res;
 	TdcRun	   *run;
 	TileOut    *out;
-	TiledPlanGrid pgrid;
-	tdc_tile_grid tgrid;
-	uint8	   *cellst = NULL;
 	char		err[256];
 	int			rc;
 	int			dim;
@@ -386,20 +360,6 @@ _tdc_tile_finalfn(PG_FUNCTION_ARGS)
 	spec.nhull = st->nhull;
 	spec.extra = st->extra;
 	spec.nextra = st->nextra;
-	if (st->plan != NULL)
-	{
-		/*
-		 * The plan's cells: the check knows where the data has no point, and
-		 * a tile that is not final names the cells it needs, as ./tdc's
-		 * tiles do, rather than a box that on clustered data takes whole
-		 * clusters the disks only graze.
-		 */
-		tdc_tiled_plan_grid(st->plan, &pgrid);
-		cellst = palloc((Size) pgrid.n * pgrid.n);
-		tdc_tiled_cell_states(&pgrid, st->known, st->extra, st->nextra, st->added, st->nadded, st->reruns,
-							  cellst, &tgrid);
-		spec.grid = &tgrid;
-	}
 
 	run = tdc_run(&st->pts, 0.0, result_bytes, TILE_FNAME);
 	memset(&res, 0, sizeof(res));
@@ -414,8 +374,7 @@ _tdc_tile_finalfn(PG_FUNCTION_ARGS)
 				 errmsg("%s: tile " INT64_FORMAT ": %s", TILE_FNAME, st->self, err)));
 	}
 
-	size = sizeof(TileOut) + (res.final ? (uint64) res.ntri * 3 * dim * sizeof(double) :
-							  (uint64) res.nneed_cells * 4 * sizeof(double));
+	size = sizeof(TileOut) + (res.final ? (uint64) res.ntri * 3 * dim * sizeof(double) : 0);
 	if (size > MaxAllocSize)
 	{
 		uint64		ntri = res.ntri;
@@ -434,15 +393,8 @@ _tdc_tile_finalfn(PG_FUNCTION_ARGS)
 	out->srid = st->pts.srid;
 	out->hasz = st->pts.hasz;
 	memcpy(out->need, res.final ? st->known : res.need, sizeof(out->need));
-	out->ntri = res.final ? res.ntri : res.nneed_cells;
-	if (!res.final)
-	{
-		double	   *p = (double *) (out + 1);
-
-		for (size_t k = 0; k < res.nneed_cells; k++)
-			tdc_tiled_cell_box(&pgrid, res.need_cells[k], p + 4 * k);
-	}
-	else
+	out->ntri = res.final ? res.ntri : 0;
+	if (res.final)
 	{
 		double	   *p = (double *) (out + 1);
 
@@ -463,33 +415,34 @@ _tdc_tile_finalfn(PG_FUNCTION_ARGS)
 }
 
 /*
- * A POLYGON value of nrings rings of 5 vertices (dim doubles each): the
- * box a tile that is not final needs, and the cells it needs.
+ * A POLYGON value of one ring of 5 vertices (dim doubles each, Z 0): the
+ * box b {xmin, ymin, xmax, ymax} a tile that is not final needs, as
+ * (xmin ymin, xmax ymin, xmax ymax, xmin ymax, xmin ymin).
  */
 static Datum
-make_polygon_rings(const double *rings, int nrings, int dim, int32 srid)
+make_box_polygon(const double b[4], int dim, int32 srid)
 {
-	Size		head = 8 + 4 * (Size) nrings + (nrings % 2 ? 4 : 0);
-	Size		size = VARHDRSZ + G_HEADER + head + (Size) nrings * 5 * dim * sizeof(double);
+	const double c[5][2] = {{b[0], b[1]}, {b[2], b[1]}, {b[2], b[3]}, {b[0], b[3]}, {b[0], b[1]}};
+	Size		size = VARHDRSZ + G_HEADER + 16 + (Size) 5 * dim * sizeof(double);
 	char	   *out = palloc0(size);
 	unsigned char *h = (unsigned char *) VARDATA(out);
 	uint32		s = (uint32) srid & 0x1fffff;
-	uint32	   *u = (uint32 *) (VARDATA(out) + G_HEADER);
+	uint32		u[4] = {G_POLYGON, 1, 5, 0};
+	double	   *p = (double *) (VARDATA(out) + G_HEADER + 16);
 
-	if (size > MaxAllocSize)
-		ereport(ERROR,
-				(errcode(ERRCODE_PROGRAM_LIMIT_EXCEEDED),
-				 errmsg("%s: a tile needs %d cells, more than one value can hold", TILE_FNAME, nrings - 1)));
 	SET_VARSIZE(out, size);
 	h[0] = (unsigned char) (s >> 16);
 	h[1] = (unsigned char) (s >> 8);
 	h[2] = (unsigned char) s;
 	h[3] = GF_VERSION | (dim == 3 ? GF_Z : 0);
-	u[0] = G_POLYGON;
-	u[1] = (uint32) nrings;
-	for (int i = 0; i < nrings; i++)
-		u[2 + i] = 5;
-	memcpy(VARDATA(out) + G_HEADER + head, rings, (Size) nrings * 5 * dim * sizeof(double));
+	memcpy(VARDATA(out) + G_HEADER, u, sizeof(u));
+	for (int i = 0; i < 5; i++)
+	{
+		*p++ = c[i][0];
+		*p++ = c[i][1];
+		if (dim == 3)
+			*p++ = 0;
+	}
 	return PointerGetDatum(out);
 }
 
@@ -534,8 +487,8 @@ _tdc_tile_triangles(PG_FUNCTION_ARGS)
 					 errmsg("%s: not a tile result", TILE_FNAME)));
 		memcpy(&h, in, sizeof(h));
 		dim = h.hasz ? 3 : 2;
-		if ((h.final != 0 && h.final != 1) ||
-			VARSIZE(in) != sizeof(TileOut) + h.ntri * (h.final ? 3 * dim : 4) * sizeof(double))
+		if ((h.final != 0 && h.final != 1) || (h.final == 0 && h.ntri != 0) ||
+			VARSIZE(in) != sizeof(TileOut) + h.ntri * 3 * dim * sizeof(double))
 			ereport(ERROR,
 					(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
 					 errmsg("%s: corrupt tile result", TILE_FNAME)));
@@ -556,25 +509,8 @@ _tdc_tile_triangles(PG_FUNCTION_ARGS)
 	dim = h.hasz ? 3 : 2;
 	if (!h.final)
 	{
-		/* the box, then the box of every cell the rerun needs, as rings */
-		const double *cells = (const double *) ((const char *) in + sizeof(TileOut));
-		double	   *rings = palloc(sizeof(double) * 5 * dim * (h.ntri + 1));
-
-		for (uint64 k = 0; k <= h.ntri; k++)
-		{
-			const double *b = k == 0 ? h.need : cells + 4 * (k - 1);
-			double		c[5][2] = {{b[0], b[1]}, {b[2], b[1]}, {b[2], b[3]}, {b[0], b[3]}, {b[0], b[1]}};
-
-			for (int i = 0; i < 5; i++)
-			{
-				rings[dim * (5 * k + i)] = c[i][0];
-				rings[dim * (5 * k + i) + 1] = c[i][1];
-				if (dim == 3)
-					rings[dim * (5 * k + i) + 2] = 0;
-			}
-		}
 		values[0] = Int64GetDatum(0);
-		values[1] = make_polygon_rings(rings, (int) h.ntri + 1, dim, h.srid);
+		values[1] = make_box_polygon(h.need, dim, h.srid);
 	}
 	else
 	{

@@ -53,7 +53,8 @@
 #include "utils/tuplestore.h"
 
 #include "tdc_pg.h"
-#include "tiled_plan.h"
+
+#define TILED_FNAME		"tdc_delaunay_tiled"
 
 /* Vertices collected before they are appended to the files: 1.5 MB of xy. */
 #define STAGE_CHUNK			65536
