@@ -181,10 +181,9 @@ COMMENT ON AGGREGATE ST_TDCDrape(geometry, geometry, text) IS
 -- from its tiling-policy part, and src/sql/tiled.sql)
 
 -- The tiling policy of src/core/tile_plan.c, the one ./tdc --max-memory
--- follows (src/pg/fn_tiled_region.c, fn_tiled_plan.c, fn_tiled_cells.c):
--- labels of squares, a tile's first known region {h, K, extra boxes...} and
--- its growth, the adaptive plan of automatic tiles, and the cells a rerun
--- adds.
+-- follows (src/pg/fn_tiled_region.c): labels of squares, and a tile's first
+-- known region {h, K, extra boxes...} and its growth; and the automatic
+-- tiles, through the core's bounded run (src/pg/fn_tiled_bounded.c).
 
 CREATE FUNCTION _tdc_square_label(float8, float8, float8, float8, float8)
 RETURNS int8
@@ -204,150 +203,15 @@ COMMENT ON FUNCTION _tdc_tile_region(float8[], int8, float8[], int8, float8[]) I
 'Internal, for tdc_delaunay_tiled: _tdc_tile_region(tile box, tile points, extent, points, hull), the first known region '
 '{h, xmin, ymin, xmax, ymax, extra boxes...} of a tile: its box with a halo h of 8 of its mean spacings and the hull bands near it.';
 
-CREATE FUNCTION _tdc_tile_regrow(float8[], geometry, float8[], int8, float8[], bytea)
+CREATE FUNCTION _tdc_tile_regrow(float8[], geometry, float8[], int8, float8[])
 RETURNS float8[]
 AS 'MODULE_PATHNAME', '_tdc_tile_regrow'
-LANGUAGE C IMMUTABLE PARALLEL SAFE;
-
-COMMENT ON FUNCTION _tdc_tile_regrow(float8[], geometry, float8[], int8, float8[], bytea) IS
-'Internal, for tdc_delaunay_tiled: _tdc_tile_regrow(region, need, extent, points, hull, plan), the region of a tile''s next run '
-'from the row of a run that was not final (rings: the box it needs, then the cells it needs): the cells added, '
-'else (without cells) the hull bands meeting the box that it lacks, else its known box grown to the box and half its halo beyond.';
-
-CREATE FUNCTION _tdc_plan_tile_max(int8, boolean)
-RETURNS int8
-AS 'MODULE_PATHNAME', '_tdc_plan_tile_max'
-LANGUAGE C STABLE STRICT PARALLEL SAFE;
-
-COMMENT ON FUNCTION _tdc_plan_tile_max(int8, boolean) IS
-'Internal, for tdc_delaunay_tiled: _tdc_plan_tile_max(points, has Z), the most points an automatic tile may own '
-'under tdc_delaunay.max_memory (all of them when they fit as one tile).';
-
-CREATE FUNCTION _tdc_plan_grid_transfn(internal, geometry, int8)
-RETURNS internal
-AS 'MODULE_PATHNAME', '_tdc_plan_grid_transfn'
-LANGUAGE C IMMUTABLE;
-
-COMMENT ON FUNCTION _tdc_plan_grid_transfn(internal, geometry, int8) IS
-'Transition function of _tdc_plan_grid: the vertices'' box and the sample ./tdc takes (in the rows'' order).';
-
-CREATE FUNCTION _tdc_plan_grid_finalfn(internal)
-RETURNS bytea
-AS 'MODULE_PATHNAME', '_tdc_plan_grid_finalfn'
-LANGUAGE C IMMUTABLE;
-
-COMMENT ON FUNCTION _tdc_plan_grid_finalfn(internal) IS
-'Final function of _tdc_plan_grid: the counting grid of the plan, its cell sides at the sample''s quantiles.';
-
-CREATE AGGREGATE _tdc_plan_grid(geometry, int8) (
-	SFUNC = _tdc_plan_grid_transfn,
-	STYPE = internal,
-	FINALFUNC = _tdc_plan_grid_finalfn
-);
-
-COMMENT ON AGGREGATE _tdc_plan_grid(geometry, int8) IS
-'Internal, for tdc_delaunay_tiled: _tdc_plan_grid(geometry, number of vertices) over the rows in the source''s order, '
-'the grid that _tdc_plan counts on, as ./tdc --max-memory makes it.';
-
-CREATE FUNCTION _tdc_plan_transfn(internal, geometry, bytea)
-RETURNS internal
-AS 'MODULE_PATHNAME', '_tdc_plan_transfn'
-LANGUAGE C IMMUTABLE;
-
-COMMENT ON FUNCTION _tdc_plan_transfn(internal, geometry, bytea) IS
-'Transition function of _tdc_plan: counts the vertices in the cells of the grid.';
-
-CREATE FUNCTION _tdc_plan_finalfn(internal)
-RETURNS bytea
-AS 'MODULE_PATHNAME', '_tdc_plan_finalfn'
-LANGUAGE C STABLE;
-
-COMMENT ON FUNCTION _tdc_plan_finalfn(internal) IS
-'Final function of _tdc_plan: the tiles cut from the counted grid under tdc_delaunay.max_memory, or an error with the floor.';
-
-CREATE AGGREGATE _tdc_plan(geometry, bytea) (
-	SFUNC = _tdc_plan_transfn,
-	STYPE = internal,
-	FINALFUNC = _tdc_plan_finalfn
-);
-
-COMMENT ON AGGREGATE _tdc_plan(geometry, bytea) IS
-'Internal, for tdc_delaunay_tiled: _tdc_plan(geometry, grid) over every row, the plan of automatic tiles '
-'(counts on the grid split k-d by counts, src/core/tile_plan.c).';
-
-CREATE FUNCTION _tdc_plan_label(float8, float8, bytea)
-RETURNS int8
-AS 'MODULE_PATHNAME', '_tdc_plan_label'
 LANGUAGE C IMMUTABLE STRICT PARALLEL SAFE;
 
-COMMENT ON FUNCTION _tdc_plan_label(float8, float8, bytea) IS
-'Internal, for tdc_delaunay_tiled: _tdc_plan_label(x, y, plan), the tile (from 0) of the plan that owns the point.';
-
-CREATE FUNCTION _tdc_plan_regions(bytea, float8[])
-RETURNS TABLE(tile int8, n int8, region float8[])
-AS 'MODULE_PATHNAME', '_tdc_plan_regions'
-LANGUAGE C IMMUTABLE STRICT PARALLEL SAFE
-ROWS 100;
-
-COMMENT ON FUNCTION _tdc_plan_regions(bytea, float8[]) IS
-'Internal, for tdc_delaunay_tiled: _tdc_plan_regions(plan, hull), every tile of the plan with its count and first known '
-'region {h, xmin, ymin, xmax, ymax, extra boxes...}, fitted to the counts as ./tdc fits it.';
-
-CREATE FUNCTION _tdc_plan_box(bytea)
-RETURNS float8[]
-AS 'MODULE_PATHNAME', '_tdc_plan_box'
-LANGUAGE C IMMUTABLE STRICT PARALLEL SAFE;
-
-COMMENT ON FUNCTION _tdc_plan_box(bytea) IS
-'Internal, for tdc_delaunay_tiled: _tdc_plan_box(plan), {xmin, ymin, xmax, ymax, vertices, tiles} of the planned vertices.';
-
--- _tdc_tile with the plan of automatic tiles: its cells tell the finality
--- check where the data has no point, and a tile that is not final names
--- the cells it needs, whose points its rerun adds (src/pg/fn_tiled.c)
-CREATE FUNCTION _tdc_tile_transfn(internal, geometry, int8, int8, float8[], float8[], float8[], int8, int8, bytea, int4[], int4)
-RETURNS internal
-AS 'MODULE_PATHNAME', '_tdc_tile_transfn'
-LANGUAGE C IMMUTABLE PARALLEL SAFE;
-
-COMMENT ON FUNCTION _tdc_tile_transfn(internal, geometry, int8, int8, float8[], float8[], float8[], int8, int8, bytea, int4[], int4) IS
-'Transition function of _tdc_tile with a plan: collects the vertices of a tile and its halo with the label of their owning tile.';
-
-CREATE AGGREGATE _tdc_tile(geometry, int8, int8, float8[], float8[], float8[], int8, int8, bytea, int4[], int4) (
-	SFUNC = _tdc_tile_transfn,
-	STYPE = internal,
-	FINALFUNC = _tdc_tile_finalfn
-);
-
-COMMENT ON AGGREGATE _tdc_tile(geometry, int8, int8, float8[], float8[], float8[], int8, int8, bytea, int4[], int4) IS
-'Internal, for tdc_delaunay_tiled: _tdc_tile as with eight arguments, and the plan of automatic tiles (NULL: none), '
-'whose cells the finality check uses, the cells of the plan whose points a rerun added, and the number of runs '
-'before that added cells; a tile that is not final then names the cells it needs, reaching farther after each such run.';
-
-CREATE FUNCTION _tdc_plan_cell(float8, float8, bytea)
-RETURNS int4
-AS 'MODULE_PATHNAME', '_tdc_plan_cell'
-LANGUAGE C IMMUTABLE STRICT PARALLEL SAFE;
-
-COMMENT ON FUNCTION _tdc_plan_cell(float8, float8, bytea) IS
-'Internal, for tdc_delaunay_tiled: _tdc_plan_cell(x, y, plan), the cell (row * 512 + column) of the plan''s grid that holds the point.';
-
-CREATE FUNCTION _tdc_in_boxes(float8, float8, float8[])
-RETURNS boolean
-AS 'MODULE_PATHNAME', '_tdc_in_boxes'
-LANGUAGE C IMMUTABLE STRICT PARALLEL SAFE;
-
-COMMENT ON FUNCTION _tdc_in_boxes(float8, float8, float8[]) IS
-'Internal, for tdc_delaunay_tiled: whether one of the closed boxes {xmin,ymin,xmax,ymax,...} holds the point x, y.';
-
-CREATE FUNCTION _tdc_tile_need_cells(geometry, bytea, int8, int8, int4[])
-RETURNS int4[]
-AS 'MODULE_PATHNAME', '_tdc_tile_need_cells'
-LANGUAGE C IMMUTABLE STRICT PARALLEL SAFE;
-
-COMMENT ON FUNCTION _tdc_tile_need_cells(geometry, bytea, int8, int8, int4[]) IS
-'Internal, for tdc_delaunay_tiled: _tdc_tile_need_cells(need, plan, tile, points, added), the cells of the plan that a '
-'tile''s run of that many points that was not final named (the rings of its row after the first) and that its rerun adds: '
-'all when they fit tdc_delaunay.max_memory, else the nearest first as far as they fit.';
+COMMENT ON FUNCTION _tdc_tile_regrow(float8[], geometry, float8[], int8, float8[]) IS
+'Internal, for tdc_delaunay_tiled: _tdc_tile_regrow(region, need, extent, points, hull), the region of a tile''s next run '
+'from the row of a run that was not final (the box it needs): the hull bands meeting the box that it lacks, '
+'else its known box grown to the box and half its halo beyond.';
 
 CREATE FUNCTION _tdc_tiled_fits(int8, boolean)
 RETURNS boolean
@@ -404,11 +268,6 @@ DECLARE
 	hull float8[];
 	extent float8[];			-- {xmin, ymin, xmax, ymax} the policy sizes tiles by
 	hasz boolean;
-	tile_max bigint;			-- automatic tiles: the most points one may own
-	grid bytea;					-- automatic tiles: the counting grid of the plan
-	plan bytea;					-- automatic tiles: the plan (src/pg/fn_tiled_plan.c)
-	pbox float8[];
-	need_cells int4[];			-- the plan's cells a tile that was not final named
 	tparts text[];
 	tschema text; tname text; qtarget text;
 	pts text; tiles text; rt text; halo text;
@@ -597,10 +456,8 @@ BEGIN
 	END IF;
 
 	-- every vertex, in the source's order (block, offset, vertex), with its
-	-- tile: the tile column's value, or its square
-	IF tile_column IS NOT NULL THEN
-		tv := format('s.%I', tile_column);
-	END IF;
+	-- tile: the tile column's value
+	tv := format('s.%I', tile_column);
 	IF citus THEN
 		EXECUTE format('INSERT INTO %s (tile, seq, vi, g)
 						SELECT %s, ((s.ctid::text::point)[0])::bigint * 65536 + ((s.ctid::text::point)[1])::bigint,
@@ -614,20 +471,18 @@ BEGIN
 						SELECT %2$s, (d.c[0])::bigint * 65536 + (d.c[1])::bigint, 1, d.geom, ST_X(d.geom), ST_Y(d.geom)
 						  FROM %3$s s, LATERAL (SELECT s.%4$I AS geom, s.ctid::text::point AS c) d
 						 WHERE ST_GeometryType(s.%4$I) = ''ST_Point'' AND NOT ST_IsEmpty(s.%4$I)',
-					   pts, tv, source, geom_column) USING plan;
+					   pts, tv, source, geom_column);
 		EXECUTE format('INSERT INTO %1$s (tile, seq, vi, g, x, y)
 						SELECT %2$s, ((s.ctid::text::point)[0])::bigint * 65536 + ((s.ctid::text::point)[1])::bigint,
 							   d.vi, d.geom, ST_X(d.geom), ST_Y(d.geom)
 						  FROM %3$s s, LATERAL ST_DumpPoints(%5$s) WITH ORDINALITY AS d(path, geom, vi)
 						 WHERE ST_GeometryType(s.%4$I) <> ''ST_Point''',
-					   pts, tv, source, geom_column, stroked) USING plan;
+					   pts, tv, source, geom_column, stroked);
 	END IF;
-	IF tile_column IS NOT NULL THEN
-		EXECUTE format('SELECT EXISTS (SELECT 1 FROM %s WHERE tile IS NULL)', pts) INTO has_null;
-		IF has_null THEN
-			RAISE EXCEPTION '%: tile column "%" of % is NULL for some rows with a geometry', fn, tile_column, source
-				USING ERRCODE = 'null_value_not_allowed';
-		END IF;
+	EXECUTE format('SELECT EXISTS (SELECT 1 FROM %s WHERE tile IS NULL)', pts) INTO has_null;
+	IF has_null THEN
+		RAISE EXCEPTION '%: tile column "%" of % is NULL for some rows with a geometry', fn, tile_column, source
+			USING ERRCODE = 'null_value_not_allowed';
 	END IF;
 
 
@@ -635,7 +490,7 @@ BEGIN
 	EXECUTE format('CREATE TEMP TABLE %1$s AS
 					SELECT tile, row_number() OVER (ORDER BY tile) AS label, n, x0, y0, x1, y1,
 						   NULL::float8[] AS region, NULL::float8[] AS known, NULL::float8[] AS extra,
-						   ''{}''::int4[] AS added, 0 AS cell_runs, true AS pending
+						   true AS pending
 					  FROM (SELECT tile, count(*) AS n, min(%3$s) AS x0, min(%4$s) AS y0,
 								   max(%3$s) AS x1, max(%4$s) AS y1
 							  FROM %2$s GROUP BY tile) t',
@@ -646,19 +501,13 @@ BEGIN
 	EXECUTE format('SELECT _tdc_hull(h) FROM (SELECT _tdc_hull(g) AS h FROM %s GROUP BY tile) s', pts) INTO hull;
 
 	-- Each tile's first known region {h, K, extra boxes...}, by the core's
-	-- policy: K is the tile's box (of its points, or of its cells in a
-	-- plan) with a halo h of 8 of its mean spacings, and the extra boxes are
-	-- the bands along the hull edges near K.  A long hull edge has a
-	-- triangle whose circle bulges far out of C; only its thin part inside
-	-- C must be known, and the band holds it without widening K along the
-	-- whole edge.  A plan's regions are fitted to its counts, as ./tdc's.
-	IF plan IS NOT NULL THEN
-		EXECUTE format('UPDATE %s k SET region = r.region FROM _tdc_plan_regions($1, $2) r WHERE r.tile = k.tile',
-					   tiles) USING plan, hull;
-	ELSE
-		EXECUTE format('UPDATE %s SET region = _tdc_tile_region(ARRAY[x0, y0, x1, y1], n, $1, $2, $3)', tiles)
-			USING extent, npts, hull;
-	END IF;
+	-- policy: K is the box of the tile's points with a halo h of 8 of its
+	-- mean spacings, and the extra boxes are the bands along the hull edges
+	-- near K.  A long hull edge has a triangle whose circle bulges far out
+	-- of C; only its thin part inside C must be known, and the band holds it
+	-- without widening K along the whole edge.
+	EXECUTE format('UPDATE %s SET region = _tdc_tile_region(ARRAY[x0, y0, x1, y1], n, $1, $2, $3)', tiles)
+		USING extent, npts, hull;
 	EXECUTE format('UPDATE %s SET known = region[2:5], extra = region[6:cardinality(region)]', tiles);
 
 	-- the target
@@ -720,7 +569,7 @@ BEGIN
 		tile_sql := format('INSERT INTO %s (id, tile, geom)
 			SELECT CASE WHEN (q.t).k = 0 THEN -1 ELSE $2 * 4294967296 + (q.t).k END, q.tile, (q.t).geom
 			  FROM (SELECT s.tile, _tdc_tile_triangles(s.r) AS t
-					  FROM (SELECT h.tile, _tdc_tile(h.g, h.label, $2, $3, %L::float8[], $4, h.seq, h.vi, $5, $6, $7) AS r
+					  FROM (SELECT h.tile, _tdc_tile(h.g, h.label, $2, $3, %L::float8[], $4, h.seq, h.vi) AS r
 							  FROM %s h
 							 WHERE h.tile = $1::%s AND h.tl = $2
 							 GROUP BY h.tile) s) q',
@@ -811,28 +660,14 @@ BEGIN
 		END IF;
 		GET DIAGNOSTICS ntri = ROW_COUNT;
 		halo_pts := halo_pts + ntri;
-		-- the plan's cells that reruns added, as ./tdc adds them: every
-		-- point of such a cell (_tdc_plan_cell, the cell ./tdc bins it to)
-		-- that no box of the tile holds
-		IF plan IS NOT NULL AND round > 1 THEN
-			EXECUTE format('INSERT INTO %1$s (tile, label, seq, vi, g, tl)
-							SELECT k.tile, o.label, p.seq, p.vi, p.g, k.label
-							  FROM (SELECT tile, label, unnest(added) AS c, known || extra AS bx
-									  FROM %3$s WHERE pending AND cardinality(added) > 0) k
-							  JOIN %2$s p ON _tdc_plan_cell(p.x, p.y, $1) = k.c AND NOT _tdc_in_boxes(p.x, p.y, k.bx)
-							  JOIN %3$s o ON o.tile = p.tile',
-						   halo, pts, tiles) USING plan;
-			GET DIAGNOSTICS ntri = ROW_COUNT;
-			halo_pts := halo_pts + ntri;
-		END IF;
 		IF citus THEN
 			EXECUTE tile_sql;
 		ELSE
 			reported := 0;
 			i := 0;
-			FOR r IN EXECUTE format('SELECT tile::text AS tile, label, known, extra, added, cell_runs
+			FOR r IN EXECUTE format('SELECT tile::text AS tile, label, known, extra
 									   FROM %s WHERE pending ORDER BY label', tiles) LOOP
-				EXECUTE tile_sql USING r.tile, r.label, r.known, r.extra, plan, r.added, r.cell_runs;
+				EXECUTE tile_sql USING r.tile, r.label, r.known, r.extra;
 				GET DIAGNOSTICS nrows = ROW_COUNT;
 				written := written + nrows;
 				-- a tile that is not final writes one row: its box
@@ -847,9 +682,9 @@ BEGIN
 			END LOOP;
 		END IF;
 		-- tiles that were not final: the region of their next run, from the
-		-- row they wrote (_tdc_tile_regrow: with a plan the cells they named,
-		-- else the hull bands they lack, else K grown to the box they need
-		-- and half the halo beyond), as ./tdc grows a tile
+		-- row they wrote (_tdc_tile_regrow: the hull bands they lack, else K
+		-- grown to the box they need and half the halo beyond), as ./tdc
+		-- grows a tile
 		-- (on plain PostgreSQL only the tiles that wrote one row can be
 		-- among them: the target is scanned for their boxes only if there
 		-- are such tiles)
@@ -858,29 +693,10 @@ BEGIN
 								CASE WHEN citus THEN '' WHEN cardinality(one_row) = 0 THEN 'AND false'
 									 ELSE 'AND tile::text = ANY($1)' END)
 						 USING one_row LOOP
-			-- With a plan: the cells it named, if any, as ./tdc adds them
-			-- (_tdc_tile_need_cells: all when they fit, else the nearest
-			-- first as far as they fit, by the points this run held, its
-			-- halo partition's rows; an ERROR when not even the nearest
-			-- fits); its next request reaches twice as far (cell_runs, see
-			-- tdc_tp_rings).  Else the region grown.
-			need_cells := '{}';
-			IF plan IS NOT NULL THEN
-				EXECUTE format('SELECT _tdc_tile_need_cells($1, $2, k.tile, (SELECT count(*) FROM %2$s h WHERE h.tl = k.label),
-												  k.added)
-								  FROM %1$s k WHERE k.tile = $3::bigint', tiles, halo)
-				   INTO need_cells USING r.geom, plan, r.tile;
-			END IF;
-			IF cardinality(need_cells) > 0 THEN
-				EXECUTE format('UPDATE %1$s SET pending = true, added = added || $2, cell_runs = cell_runs + 1
-								 WHERE tile = $1::%2$s', tiles, ttype)
-				USING r.tile, need_cells;
-			ELSE
-				EXECUTE format('UPDATE %1$s SET pending = true, region = g.r, known = g.r[2:5], extra = g.r[6:cardinality(g.r)]
-								  FROM (SELECT _tdc_tile_regrow(region, $2, $3, $4, $5, $6) AS r FROM %1$s WHERE tile = $1::%2$s) g
-								 WHERE tile = $1::%2$s', tiles, ttype)
-				USING r.tile, r.geom, extent, npts, hull, plan;
-			END IF;
+			EXECUTE format('UPDATE %1$s SET pending = true, region = g.r, known = g.r[2:5], extra = g.r[6:cardinality(g.r)]
+							  FROM (SELECT _tdc_tile_regrow(region, $2, $3, $4, $5) AS r FROM %1$s WHERE tile = $1::%2$s) g
+							 WHERE tile = $1::%2$s', tiles, ttype)
+			USING r.tile, r.geom, extent, npts, hull;
 			rerun := rerun + 1;
 		END LOOP;
 		IF citus OR rerun > 0 THEN
@@ -910,6 +726,7 @@ $proc$;
 COMMENT ON PROCEDURE tdc_delaunay_tiled(regclass, text, name, name, float8) IS
 'Triangulates the vertices of source.geom_column (duplicates merged, Z of the first copy, one SRID) tile by tile '
 'into a new table target(id bigint, tile, geom geometry(Polygon)): the same triangles as ST_TDCDelaunayDump, each once. '
-'Tiles: the groups of tile_column, else squares of tile_size counted from the data''s lower left corner, '
-'else tiles split by counts so that each fits tdc_delaunay.max_memory, as ./tdc --max-memory plans them. '
+'Tiles: the groups of tile_column, run in rounds of SQL statements; else tiles split by counts so that each fits '
+'tdc_delaunay.max_memory, as ./tdc --max-memory plans and runs them, each triangle then labelled with the square of '
+'tile_size (counted from the data''s lower left corner) that holds its smallest vertex, when tile_size is given. '
 'On Citus, with source distributed by tile_column, the tiles run on the workers.';

@@ -342,7 +342,8 @@ SELECT count(*) FROM tt_uni_tri;
 -- machine's load, so the timeout is found by bisection: a try cancelled
 -- before the tiles (its context is a staging statement of the procedure,
 -- or the bounded run reading the source) raises the lower bound, a try
--- that finished, or was cancelled after the tiles, lowers the upper bound,
+-- that finished, or was cancelled after the tiles (the bounded run writing
+-- its rows, or CREATE TABLE AS storing them), lowers the upper bound,
 -- and the next try waits halfway between the latest of each.  It stops at
 -- the first cancel whose context shows a tile running: the tile's
 -- statement (which calls _tdc_tile), or "running the tiles".
@@ -395,6 +396,8 @@ EXCEPTION WHEN query_canceled THEN
 		VALUES (kind, ms, CASE WHEN ctx LIKE '%_tdc_tile(%' OR ctx LIKE '%tdc_delaunay_tiled: running the tiles%' THEN 'tile'
 							   WHEN ctx LIKE '%tdc_delaunay_tiled: reading the source%' THEN 'before'
 							   WHEN ctx LIKE '%tdc_delaunay_tiled: writing the rows%' THEN 'after'
+							   -- CREATE TABLE AS writing the rows the run returned
+							   WHEN ctx LIKE '%_tdc_tiled_bounded(%' THEN 'after'
 							   WHEN ctx LIKE '%PL/pgSQL function tdc_delaunay_tiled(%' THEN 'before'
 							   ELSE 'after' END);
 END $$;

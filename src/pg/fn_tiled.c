@@ -58,9 +58,7 @@
 
 #include "tdc_pg.h"
 #include "gser_format.h"
-#include "tiled_plan.h"
 
-#define TILE_FNAME		"tdc_delaunay_tiled"
 
 /* The aggregate's transition state: the tile's points with their owners. */
 typedef struct TileState
@@ -76,10 +74,6 @@ typedef struct TileState
 	int			nhull;
 	double	   *extra;			/* nextra boxes */
 	int			nextra;
-	bytea	   *plan;			/* NULL, or the plan of automatic tiles: its cells */
-	int32	   *added;			/* the plan's cells a rerun added, whose points are passed */
-	int			nadded;
-	int			reruns;			/* the runs before that added cells (tdc_tp_rings) */
 } TileState;
 
 /* Header of the aggregate's bytea result. */
@@ -90,7 +84,7 @@ typedef struct TileOut
 	int32		srid;
 	int32		hasz;
 	double		need[4];
-	uint64		ntri;			/* not final: the cells the rerun needs (4 doubles each) */
+	uint64		ntri;			/* not final: 0 */
 } TileOut;
 
 static void
@@ -103,21 +97,21 @@ read_box_array(ArrayType *a, double **out, int *n, int want_min, const char *wha
 	if (ARR_NDIM(a) > 1 || ARR_ELEMTYPE(a) != FLOAT8OID)
 		ereport(ERROR,
 				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
-				 errmsg("%s: %s must be a one-dimensional float8 array", TILE_FNAME, what)));
+				 errmsg("%s: %s must be a one-dimensional float8 array", TILED_FNAME, what)));
 	deconstruct_array(a, FLOAT8OID, 8, FLOAT8PASSBYVAL, TYPALIGN_DOUBLE,
 					  &elems, &nulls, &count);
 	if (count < want_min || count % 2 != 0)
 		ereport(ERROR,
 				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
 				 errmsg("%s: %s has %d values, want an even number of at least %d",
-						TILE_FNAME, what, count, want_min)));
+						TILED_FNAME, what, count, want_min)));
 	*out = palloc(sizeof(double) * count);
 	for (int i = 0; i < count; i++)
 	{
 		if (nulls[i])
 			ereport(ERROR,
 					(errcode(ERRCODE_NULL_VALUE_NOT_ALLOWED),
-					 errmsg("%s: %s contains NULL", TILE_FNAME, what)));
+					 errmsg("%s: %s contains NULL", TILED_FNAME, what)));
 		(*out)[i] = DatumGetFloat8(elems[i]);
 	}
 	*n = count;
@@ -255,7 +249,7 @@ _tdc_tile_transfn(PG_FUNCTION_ARGS)
 		ereport(ERROR,
 				(errcode(ERRCODE_NULL_VALUE_NOT_ALLOWED),
 				 errmsg("%s: label, tile, known box, hull and source position must not be NULL",
-						TILE_FNAME)));
+						TILED_FNAME)));
 	label = PG_GETARG_INT64(2);
 	seq = PG_GETARG_INT64(7);
 	vi = PG_GETARG_INT64(8);
@@ -273,7 +267,7 @@ _tdc_tile_transfn(PG_FUNCTION_ARGS)
 		if (nk != 4 || !(known[0] <= known[2] && known[1] <= known[3]))
 			ereport(ERROR,
 					(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
-					 errmsg("%s: the known box must be {xmin, ymin, xmax, ymax}", TILE_FNAME)));
+					 errmsg("%s: the known box must be {xmin, ymin, xmax, ymax}", TILED_FNAME)));
 		memcpy(st->known, known, sizeof(st->known));
 		read_box_array(PG_GETARG_ARRAYTYPE_P(5), &st->hull, &st->nhull, 2, "the hull");
 		st->nhull /= 2;
@@ -281,31 +275,13 @@ _tdc_tile_transfn(PG_FUNCTION_ARGS)
 		if (st->nextra % 4 != 0)
 			ereport(ERROR,
 					(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
-					 errmsg("%s: the extra boxes must be 4 values each", TILE_FNAME)));
+					 errmsg("%s: the extra boxes must be 4 values each", TILED_FNAME)));
 		st->nextra /= 4;
-		if (PG_NARGS() > 9 && !PG_ARGISNULL(9))
-			st->plan = (bytea *) PG_DETOAST_DATUM_COPY(PG_GETARG_DATUM(9));
-		if (PG_NARGS() > 10 && !PG_ARGISNULL(10))
-		{
-			ArrayType  *a = PG_GETARG_ARRAYTYPE_P(10);
-
-			if (ARR_NDIM(a) > 1 || ARR_ELEMTYPE(a) != INT4OID || ARR_HASNULL(a))
-				ereport(ERROR,
-						(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
-						 errmsg("%s: the added cells must be a one-dimensional int4 array without NULLs",
-								TILE_FNAME)));
-			st->nadded = ARR_NDIM(a) == 0 ? 0 : ARR_DIMS(a)[0];
-			st->added = palloc(sizeof(int32) * (st->nadded + 1));
-			if (st->nadded > 0)
-				memcpy(st->added, ARR_DATA_PTR(a), sizeof(int32) * st->nadded);
-		}
-		if (PG_NARGS() > 11 && !PG_ARGISNULL(11))
-			st->reruns = Max(PG_GETARG_INT32(11), 0);
 		MemoryContextSwitchTo(old);
 	}
 
 	before = st->pts.n;
-	(void) tdc_read_geometry(&st->pts, PG_GETARG_DATUM(1), TILE_FNAME);
+	(void) tdc_read_geometry(&st->pts, PG_GETARG_DATUM(1), TILED_FNAME);
 
 	if (st->pts.n > st->label_cap)
 	{
@@ -313,7 +289,7 @@ _tdc_tile_transfn(PG_FUNCTION_ARGS)
 
 		tdc_pointbuf_side_grow(&st->pts, st->label_cap * 3 * sizeof(int64),
 							   cap * 3 * sizeof(int64),
-							   "their tiles and source positions", TILE_FNAME);
+							   "their tiles and source positions", TILED_FNAME);
 		if (st->label == NULL)
 		{
 			st->label = MemoryContextAllocHuge(aggcxt, cap * sizeof(int64));
@@ -352,9 +328,6 @@ _tdc_tile_finalfn(PG_FUNCTION_ARGS)
 	tdc_tile_result res;
 	TdcRun	   *run;
 	TileOut    *out;
-	TiledPlanGrid pgrid;
-	tdc_tile_grid tgrid;
-	uint8	   *cellst = NULL;
 	char		err[256];
 	int			rc;
 	int			dim;
@@ -375,7 +348,7 @@ _tdc_tile_finalfn(PG_FUNCTION_ARGS)
 	 * as it comes first.
 	 */
 	result_bytes = (uint64) st->pts.n * 2 * 3 * dim * sizeof(double);
-	tdc_check_run_memory(&st->pts, 0.0, result_bytes, TILE_FNAME);
+	tdc_check_run_memory(&st->pts, 0.0, result_bytes, TILED_FNAME);
 	sort_by_source(st);
 
 	memset(&spec, 0, sizeof(spec));
@@ -386,22 +359,8 @@ _tdc_tile_finalfn(PG_FUNCTION_ARGS)
 	spec.nhull = st->nhull;
 	spec.extra = st->extra;
 	spec.nextra = st->nextra;
-	if (st->plan != NULL)
-	{
-		/*
-		 * The plan's cells: the check knows where the data has no point, and
-		 * a tile that is not final names the cells it needs, as ./tdc's
-		 * tiles do, rather than a box that on clustered data takes whole
-		 * clusters the disks only graze.
-		 */
-		tdc_tiled_plan_grid(st->plan, &pgrid);
-		cellst = palloc((Size) pgrid.n * pgrid.n);
-		tdc_tiled_cell_states(&pgrid, st->known, st->extra, st->nextra, st->added, st->nadded, st->reruns,
-							  cellst, &tgrid);
-		spec.grid = &tgrid;
-	}
 
-	run = tdc_run(&st->pts, 0.0, result_bytes, TILE_FNAME);
+	run = tdc_run(&st->pts, 0.0, result_bytes, TILED_FNAME);
 	memset(&res, 0, sizeof(res));
 	err[0] = '\0';
 	rc = tdc_tile_finish(run->job, &spec, &res, err, sizeof(err));
@@ -411,11 +370,10 @@ _tdc_tile_finalfn(PG_FUNCTION_ARGS)
 		tdc_run_free(run);
 		ereport(ERROR,
 				(errcode(ERRCODE_INTERNAL_ERROR),
-				 errmsg("%s: tile " INT64_FORMAT ": %s", TILE_FNAME, st->self, err)));
+				 errmsg("%s: tile " INT64_FORMAT ": %s", TILED_FNAME, st->self, err)));
 	}
 
-	size = sizeof(TileOut) + (res.final ? (uint64) res.ntri * 3 * dim * sizeof(double) :
-							  (uint64) res.nneed_cells * 4 * sizeof(double));
+	size = sizeof(TileOut) + (res.final ? (uint64) res.ntri * 3 * dim * sizeof(double) : 0);
 	if (size > MaxAllocSize)
 	{
 		uint64		ntri = res.ntri;
@@ -425,7 +383,7 @@ _tdc_tile_finalfn(PG_FUNCTION_ARGS)
 		ereport(ERROR,
 				(errcode(ERRCODE_PROGRAM_LIMIT_EXCEEDED),
 				 errmsg("%s: tile " INT64_FORMAT " has %llu triangles, more than one value can hold",
-						TILE_FNAME, st->self, (unsigned long long) ntri),
+						TILED_FNAME, st->self, (unsigned long long) ntri),
 				 errhint("Use smaller tiles (tile_size, or a finer tile column).")));
 	}
 	out = palloc(size);
@@ -434,15 +392,8 @@ _tdc_tile_finalfn(PG_FUNCTION_ARGS)
 	out->srid = st->pts.srid;
 	out->hasz = st->pts.hasz;
 	memcpy(out->need, res.final ? st->known : res.need, sizeof(out->need));
-	out->ntri = res.final ? res.ntri : res.nneed_cells;
-	if (!res.final)
-	{
-		double	   *p = (double *) (out + 1);
-
-		for (size_t k = 0; k < res.nneed_cells; k++)
-			tdc_tiled_cell_box(&pgrid, res.need_cells[k], p + 4 * k);
-	}
-	else
+	out->ntri = res.final ? res.ntri : 0;
+	if (res.final)
 	{
 		double	   *p = (double *) (out + 1);
 
@@ -463,33 +414,34 @@ _tdc_tile_finalfn(PG_FUNCTION_ARGS)
 }
 
 /*
- * A POLYGON value of nrings rings of 5 vertices (dim doubles each): the
- * box a tile that is not final needs, and the cells it needs.
+ * A POLYGON value of one ring of 5 vertices (dim doubles each, Z 0): the
+ * box b {xmin, ymin, xmax, ymax} a tile that is not final needs, as
+ * (xmin ymin, xmax ymin, xmax ymax, xmin ymax, xmin ymin).
  */
 static Datum
-make_polygon_rings(const double *rings, int nrings, int dim, int32 srid)
+make_box_polygon(const double b[4], int dim, int32 srid)
 {
-	Size		head = 8 + 4 * (Size) nrings + (nrings % 2 ? 4 : 0);
-	Size		size = VARHDRSZ + G_HEADER + head + (Size) nrings * 5 * dim * sizeof(double);
+	const double c[5][2] = {{b[0], b[1]}, {b[2], b[1]}, {b[2], b[3]}, {b[0], b[3]}, {b[0], b[1]}};
+	Size		size = VARHDRSZ + G_HEADER + 16 + (Size) 5 * dim * sizeof(double);
 	char	   *out = palloc0(size);
 	unsigned char *h = (unsigned char *) VARDATA(out);
 	uint32		s = (uint32) srid & 0x1fffff;
-	uint32	   *u = (uint32 *) (VARDATA(out) + G_HEADER);
+	uint32		u[4] = {G_POLYGON, 1, 5, 0};
+	double	   *p = (double *) (VARDATA(out) + G_HEADER + 16);
 
-	if (size > MaxAllocSize)
-		ereport(ERROR,
-				(errcode(ERRCODE_PROGRAM_LIMIT_EXCEEDED),
-				 errmsg("%s: a tile needs %d cells, more than one value can hold", TILE_FNAME, nrings - 1)));
 	SET_VARSIZE(out, size);
 	h[0] = (unsigned char) (s >> 16);
 	h[1] = (unsigned char) (s >> 8);
 	h[2] = (unsigned char) s;
 	h[3] = GF_VERSION | (dim == 3 ? GF_Z : 0);
-	u[0] = G_POLYGON;
-	u[1] = (uint32) nrings;
-	for (int i = 0; i < nrings; i++)
-		u[2 + i] = 5;
-	memcpy(VARDATA(out) + G_HEADER + head, rings, (Size) nrings * 5 * dim * sizeof(double));
+	memcpy(VARDATA(out) + G_HEADER, u, sizeof(u));
+	for (int i = 0; i < 5; i++)
+	{
+		*p++ = c[i][0];
+		*p++ = c[i][1];
+		if (dim == 3)
+			*p++ = 0;
+	}
 	return PointerGetDatum(out);
 }
 
@@ -531,16 +483,16 @@ _tdc_tile_triangles(PG_FUNCTION_ARGS)
 		if (VARSIZE(in) < sizeof(TileOut))
 			ereport(ERROR,
 					(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
-					 errmsg("%s: not a tile result", TILE_FNAME)));
+					 errmsg("%s: not a tile result", TILED_FNAME)));
 		memcpy(&h, in, sizeof(h));
 		dim = h.hasz ? 3 : 2;
-		if ((h.final != 0 && h.final != 1) ||
-			VARSIZE(in) != sizeof(TileOut) + h.ntri * (h.final ? 3 * dim : 4) * sizeof(double))
+		if ((h.final != 0 && h.final != 1) || (h.final == 0 && h.ntri != 0) ||
+			VARSIZE(in) != sizeof(TileOut) + h.ntri * 3 * dim * sizeof(double))
 			ereport(ERROR,
 					(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
-					 errmsg("%s: corrupt tile result", TILE_FNAME)));
+					 errmsg("%s: corrupt tile result", TILED_FNAME)));
 		if (get_call_result_type(fcinfo, NULL, &desc) != TYPEFUNC_COMPOSITE)
-			elog(ERROR, "%s: return type must be a row type", TILE_FNAME);
+			elog(ERROR, "%s: return type must be a row type", TILED_FNAME);
 		fctx->tuple_desc = BlessTupleDesc(desc);
 		fctx->user_fctx = (void *) in;
 		fctx->max_calls = h.final ? h.ntri : 1;
@@ -556,25 +508,8 @@ _tdc_tile_triangles(PG_FUNCTION_ARGS)
 	dim = h.hasz ? 3 : 2;
 	if (!h.final)
 	{
-		/* the box, then the box of every cell the rerun needs, as rings */
-		const double *cells = (const double *) ((const char *) in + sizeof(TileOut));
-		double	   *rings = palloc(sizeof(double) * 5 * dim * (h.ntri + 1));
-
-		for (uint64 k = 0; k <= h.ntri; k++)
-		{
-			const double *b = k == 0 ? h.need : cells + 4 * (k - 1);
-			double		c[5][2] = {{b[0], b[1]}, {b[2], b[1]}, {b[2], b[3]}, {b[0], b[3]}, {b[0], b[1]}};
-
-			for (int i = 0; i < 5; i++)
-			{
-				rings[dim * (5 * k + i)] = c[i][0];
-				rings[dim * (5 * k + i) + 1] = c[i][1];
-				if (dim == 3)
-					rings[dim * (5 * k + i) + 2] = 0;
-			}
-		}
 		values[0] = Int64GetDatum(0);
-		values[1] = make_polygon_rings(rings, (int) h.ntri + 1, dim, h.srid);
+		values[1] = make_box_polygon(h.need, dim, h.srid);
 	}
 	else
 	{
@@ -614,12 +549,12 @@ _tdc_first_box(PG_FUNCTION_ARGS)
 		ereport(ERROR,
 				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
 				 errmsg("%s: the boxes must be a one-dimensional float8 array without NULLs",
-						TILE_FNAME)));
+						TILED_FNAME)));
 	n = ARR_NDIM(a) == 0 ? 0 : ARR_DIMS(a)[0];
 	if (n % 4 != 0 || i < 0 || i >= n / 4)
 		ereport(ERROR,
 				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
-				 errmsg("%s: box %d of %d boxes", TILE_FNAME, i, n / 4)));
+				 errmsg("%s: box %d of %d boxes", TILED_FNAME, i, n / 4)));
 	b = (const double *) ARR_DATA_PTR(a);
 	if (!(b[4 * i] <= x && x <= b[4 * i + 2] && b[4 * i + 1] <= y && y <= b[4 * i + 3]))
 		PG_RETURN_BOOL(false);
@@ -655,7 +590,7 @@ hull_reduce(HullState *st)
 	if (tdc_convex_hull(st->xy, (size_t) st->n, &hull, &nh) != TDC_OK)
 		ereport(ERROR,
 				(errcode(ERRCODE_OUT_OF_MEMORY),
-				 errmsg("%s: out of memory computing the convex hull", TILE_FNAME)));
+				 errmsg("%s: out of memory computing the convex hull", TILED_FNAME)));
 	if (nh > 0)
 		memcpy(st->xy, hull, nh * 2 * sizeof(double));
 	st->n = nh;
@@ -670,7 +605,7 @@ hull_add(HullState *st, const double *xy, uint64 n, MemoryContext cxt)
 		if (!isfinite(xy[2 * i]) || !isfinite(xy[2 * i + 1]))
 			ereport(ERROR,
 					(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
-					 errmsg("%s: non-finite coordinate", TILE_FNAME)));
+					 errmsg("%s: non-finite coordinate", TILED_FNAME)));
 		if (st->n == st->cap)
 		{
 			hull_reduce(st);
@@ -720,7 +655,7 @@ _tdc_hull_transfn(PG_FUNCTION_ARGS)
 		TdcPointBuf buf;
 
 		tdc_pointbuf_init(&buf, CurrentMemoryContext);
-		(void) tdc_read_geometry(&buf, PG_GETARG_DATUM(1), TILE_FNAME);
+		(void) tdc_read_geometry(&buf, PG_GETARG_DATUM(1), TILED_FNAME);
 		if (buf.n > 0)
 			hull_add(st, buf.xy, buf.n, aggcxt);
 	}

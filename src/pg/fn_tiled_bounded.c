@@ -54,7 +54,8 @@
 #include "utils/tuplestore.h"
 
 #include "tdc_pg.h"
-#include "tiled_plan.h"
+#include "tile_plan.h"
+
 
 /* Vertices collected before they are appended to the files: 1.5 MB of xy. */
 #define STAGE_CHUNK			65536

@@ -3,15 +3,15 @@
  *		The known region of a tdc_delaunay_tiled tile (src/sql/tiled.sql)
  *		from the core's policy (src/core/tile_plan.c): the labels of
  *		squares of tile_size, a tile's first region, and its growth on a
- *		rerun that named no cell.
+ *		rerun.
  *
  * The procedure used to repeat the policy in PL/pgSQL (a halo of 8
  * spacings, hull bands of 16, K "grown by a tenth", a uniform grid of
  * squares labelled floor(x / size) * 2^32 + floor(y / size), which
  * overflowed bigint far from the origin) and had drifted from ./tdc's.  Now
  * every number comes from tile_plan.c, the file ./tdc --max-memory calls,
- * through these small helpers; the automatic plan is fn_tiled_plan.c's, the
- * plan's cells in a tile's run fn_tiled_cells.c's.
+ * through these small helpers.  (Automatic tiles do not come here: they run
+ * through the core's bounded run, fn_tiled_bounded.c.)
  *
  * A tile's known region travels as one float8[]: {h, K (4 values), the
  * extra known boxes (4 values each)}, h being the tile's halo, which the
@@ -31,14 +31,14 @@
 
 #include "tdc_pg.h"
 #include "tile_plan.h"
-#include "tiled_plan.h"
+
 
 
 /*
  * A float8[] argument as doubles, copied (aligned); n its length.  NULLs,
  * more dimensions or too few values are errors.
  */
-double *
+static double *
 tdc_tiled_float8_array(ArrayType *a, int *n, int want_min, int multiple, const char *what)
 {
 	double	   *out;
@@ -62,7 +62,7 @@ tdc_tiled_float8_array(ArrayType *a, int *n, int want_min, int multiple, const c
 	return out;
 }
 
-ArrayType *
+static ArrayType *
 tdc_tiled_float8_result(const double *v, int n)
 {
 	Datum	   *d = palloc(sizeof(Datum) * (n + 1));
@@ -73,7 +73,7 @@ tdc_tiled_float8_result(const double *v, int n)
 }
 
 /* A box argument {xmin, ymin, xmax, ymax}. */
-void
+static void
 tdc_tiled_box_arg(ArrayType *a, double box[4], const char *what)
 {
 	int			n;
@@ -121,12 +121,11 @@ _tdc_square_label(PG_FUNCTION_ARGS)
 /*
  * The region {h, K, bands...} of a tile whose first K and halo h are given:
  * the hull bands (tdc_tp_hull_bands over the data's mean spacing) that
- * tdc_tp_first_bands takes for it, unless counts (ps, g) drop those that
- * would hold clusters (tdc_tp_fit_bands), as ./tdc does.
+ * tdc_tp_first_bands takes for it.
  */
-ArrayType *
+static ArrayType *
 tdc_tiled_region_result(const double K[4], double h, size_t count, const double *hull, int nhull,
-			  double spacing, const size_t *ps, const tdc_tp_grid *g)
+						double spacing)
 {
 	double	   *bands = palloc(sizeof(double) * 4 * (nhull + 1)),
 			   *out = palloc(sizeof(double) * (5 + 4 * (nhull + 1)));
@@ -137,8 +136,6 @@ tdc_tiled_region_result(const double K[4], double h, size_t count, const double 
 	memcpy(out + 1, K, 4 * sizeof(double));
 	tdc_tp_hull_bands(hull, (size_t) nhull, spacing, bands);
 	tdc_tp_first_bands(K, count, bands, (size_t) nhull, mark);
-	if (ps != NULL)
-		tdc_tp_fit_bands(ps, g, bands, (size_t) nhull, count / 8 > 1000 ? count / 8 : 1000, mark);
 	for (int i = 0; nhull > 1 && i < nhull; i++)
 		if (mark[i])
 		{
@@ -157,8 +154,7 @@ PG_FUNCTION_INFO_V1(_tdc_tile_region);
  * is box, in data of npts points with box extent and convex hull hull
  * {x,y,...}: K is the box plus a halo of 8 of the tile's mean spacings,
  * the bands those of the hull edges near K (tdc_tp_first_known,
- * tdc_tp_first_bands).  For tiles of a column or of squares; the
- * automatic plan's come from _tdc_plan_regions.
+ * tdc_tp_first_bands).
  */
 Datum
 _tdc_tile_region(PG_FUNCTION_ARGS)
@@ -181,22 +177,20 @@ _tdc_tile_region(PG_FUNCTION_ARGS)
 				 errmsg("%s: negative point counts", TILED_FNAME)));
 	tdc_tp_first_known(box, (size_t) n, tdc_tp_spacing(extent, (size_t) npts), K, &h);
 	PG_RETURN_ARRAYTYPE_P(tdc_tiled_region_result(K, h, (size_t) n, hull, nhull / 2,
-										tdc_tp_spacing(extent, (size_t) npts), NULL, NULL));
+												  tdc_tp_spacing(extent, (size_t) npts)));
 }
 
 PG_FUNCTION_INFO_V1(_tdc_tile_regrow);
 
 /*
  * _tdc_tile_regrow(region float8[], need geometry, extent float8[],
- *					npts int8, hull float8[], plan bytea) RETURNS float8[]
+ *					npts int8, hull float8[]) RETURNS float8[]
  * The region of a tile's next run, after a run that was not final: need is
- * the row _tdc_tile_triangles gave for it, a POLYGON whose first ring is
- * the box it needs (the other rings are the cells it needs, which the
- * procedure adds with _tdc_tile_need_cells).  As ./tdc grows a tile
- * that named no cell: without
- * a plan's cells (plan NULL) the bands of the hull edges that meet the
- * box and that it lacks, if there are such (tdc_tp_grow_bands); else K
- * grown to the box and half the halo beyond (tdc_tp_grow_known).
+ * the row _tdc_tile_triangles gave for it, a POLYGON whose ring is the box
+ * it needs.  As ./tdc grows a tile that named no cell: the bands of the
+ * hull edges that meet the box and that it lacks, if there are such
+ * (tdc_tp_grow_bands); else K grown to the box and half the halo beyond
+ * (tdc_tp_grow_known).
  */
 Datum
 _tdc_tile_regrow(PG_FUNCTION_ARGS)
@@ -213,49 +207,41 @@ _tdc_tile_regrow(PG_FUNCTION_ARGS)
 	int			nregion,
 				nhull;
 	size_t		nextra;
-	int64		npts;
-	bool		cells = !PG_ARGISNULL(5);
-	TdcPointBuf rings;
-
-	if (PG_ARGISNULL(0) || PG_ARGISNULL(1) || PG_ARGISNULL(2) || PG_ARGISNULL(3) || PG_ARGISNULL(4))
-		PG_RETURN_NULL();
-	npts = PG_GETARG_INT64(3);
+	int64		npts = PG_GETARG_INT64(3);
+	TdcPointBuf ring;
 
 	region = tdc_tiled_float8_array(PG_GETARG_ARRAYTYPE_P(0), &nregion, 5, 1, "the region");
 	if ((nregion - 5) % 4 != 0)
 		ereport(ERROR,
 				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
 				 errmsg("%s: a region is {h, xmin, ymin, xmax, ymax, boxes...}", TILED_FNAME)));
-	tdc_pointbuf_init(&rings, CurrentMemoryContext);
-	(void) tdc_read_geometry(&rings, PG_GETARG_DATUM(1), TILED_FNAME);
-	if (rings.n == 0 || rings.n % 5 != 0)
+	tdc_pointbuf_init(&ring, CurrentMemoryContext);
+	(void) tdc_read_geometry(&ring, PG_GETARG_DATUM(1), TILED_FNAME);
+	if (ring.n != 5)
 		ereport(ERROR,
 				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
-				 errmsg("%s: the box needed must be rings of 5 vertices", TILED_FNAME)));
-	/* ring k's box: corners 0 and 2 */
-	need[0] = rings.xy[0];
-	need[1] = rings.xy[1];
-	need[2] = rings.xy[4];
-	need[3] = rings.xy[5];
+				 errmsg("%s: the box needed must be a ring of 5 vertices", TILED_FNAME)));
+	/* the box: corners 0 and 2 */
+	need[0] = ring.xy[0];
+	need[1] = ring.xy[1];
+	need[2] = ring.xy[4];
+	need[3] = ring.xy[5];
 	tdc_tiled_box_arg(PG_GETARG_ARRAYTYPE_P(2), extent, "the extent");
 	hull = tdc_tiled_float8_array(PG_GETARG_ARRAYTYPE_P(4), &nhull, 0, 2, "the hull");
 	nhull /= 2;
 	nextra = (nregion - 5) / 4;
 	extra = palloc(sizeof(double) * (5 + 4 * (nextra + nhull + 1)));
 	memcpy(extra, region, sizeof(double) * nregion);
-	if (!cells)
-	{
-		bands = palloc(sizeof(double) * 4 * (nhull + 1));
-		inband = palloc0(nhull + 1);
-		tdc_tp_hull_bands(hull, (size_t) nhull, tdc_tp_spacing(extent, (size_t) Max(npts, 0)), bands);
-		/* the bands the tile has: the same doubles, made by the same call */
-		for (int i = 0; nhull > 1 && i < nhull; i++)
-			for (size_t e = 0; e < nextra; e++)
-				if (memcmp(bands + 4 * i, region + 5 + 4 * e, 4 * sizeof(double)) == 0)
-					inband[i] = 1;
-		if (tdc_tp_grow_bands(bands, (size_t) nhull, need, inband, extra + 5, &nextra) > 0)
-			PG_RETURN_ARRAYTYPE_P(tdc_tiled_float8_result(extra, 5 + 4 * (int) nextra));
-	}
+	bands = palloc(sizeof(double) * 4 * (nhull + 1));
+	inband = palloc0(nhull + 1);
+	tdc_tp_hull_bands(hull, (size_t) nhull, tdc_tp_spacing(extent, (size_t) Max(npts, 0)), bands);
+	/* the bands the tile has: the same doubles, made by the same call */
+	for (int i = 0; nhull > 1 && i < nhull; i++)
+		for (size_t e = 0; e < nextra; e++)
+			if (memcmp(bands + 4 * i, region + 5 + 4 * e, 4 * sizeof(double)) == 0)
+				inband[i] = 1;
+	if (tdc_tp_grow_bands(bands, (size_t) nhull, need, inband, extra + 5, &nextra) > 0)
+		PG_RETURN_ARRAYTYPE_P(tdc_tiled_float8_result(extra, 5 + 4 * (int) nextra));
 	memcpy(K, region + 1, sizeof(K));
 	tdc_tp_grow_known(K, Kmin, need, region[0]);
 	memcpy(extra + 1, K, sizeof(K));

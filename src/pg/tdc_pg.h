@@ -499,6 +499,12 @@ extern struct varlena *tdc_drape_target_write(const TdcDrapeTarget *t,
 											  const size_t *chain_off, uint64 room,
 											  const char *fname);
 
+/* The tiled procedure's name in messages (fn_tiled*.c). */
+#define TILED_FNAME		"tdc_delaunay_tiled"
+
+/* fn_tiled_region.c: a square's label, an ERROR when it has none */
+extern int64 tdc_tiled_square_label(double x, double y, const double origin[2], double size);
+
 /* signals.c */
 extern bool tdc_signal_settled;
 extern void tdc_signal_settle(void);

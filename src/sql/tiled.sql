@@ -1,18 +1,24 @@
 -- src/sql/tiled.sql: the procedure tdc_delaunay_tiled, in PL/pgSQL over the
 -- internal functions of src/sql/tiled_internals.sql
 
--- The procedure.  Its tables: pts (every vertex, with the tile owning it and
--- its position in the source), tiles (one row per tile: label, extent, known
--- box K), halo (for every pending tile, the points inside its K) and the
--- target.  A round runs every pending tile; a tile whose stars are not all
--- final writes one marker row (id -1, its needed box) instead of triangles,
--- and the next round reruns it with a larger K.  On Citus, when source is
--- distributed by tile_column, pts, halo and the target are distributed on it
--- and co-located with source, tiles is a reference table, and a round is one
--- INSERT ... SELECT ... GROUP BY tile that runs on the workers.  On plain
--- PostgreSQL the same statement runs once per tile, so that a backend holds
--- one tile and its halo at a time.  Everything happens in the caller's
--- transaction: an error or a cancel leaves no target behind.
+-- The procedure.  Without a tile column it runs in one pass,
+-- ST_TDCDelaunayDump of the source, or when that would not fit
+-- tdc_delaunay.max_memory (or the squares of tile_size are several) through
+-- the core's bounded run (_tdc_tiled_bounded, the tiles of ./tdc
+-- --max-memory), squares of tile_size then labelling its triangles.  With a
+-- tile column it runs in rounds over staging tables: pts (every vertex, with
+-- the tile owning it and its position in the source), tiles (one row per
+-- tile: label, extent, known box K), halo (for every pending tile, the
+-- points inside its K) and the target.  A round runs every pending tile; a
+-- tile whose stars are not all final writes one marker row (id -1, its
+-- needed box) instead of triangles, and the next round reruns it with a
+-- larger K.  On Citus, when source is distributed by tile_column, pts, halo
+-- and the target are distributed on it and co-located with source, tiles is
+-- a reference table, and a round is one INSERT ... SELECT ... GROUP BY tile
+-- that runs on the workers.  On plain PostgreSQL the same statement runs
+-- once per tile, so that a backend holds one tile and its halo at a time.
+-- Everything happens in the caller's transaction: an error or a cancel
+-- leaves no target behind.
 CREATE PROCEDURE tdc_delaunay_tiled(source regclass, target text, geom_column name DEFAULT 'geom',
 									tile_column name DEFAULT NULL, tile_size float8 DEFAULT NULL)
 LANGUAGE plpgsql
@@ -38,11 +44,6 @@ DECLARE
 	hull float8[];
 	extent float8[];			-- {xmin, ymin, xmax, ymax} the policy sizes tiles by
 	hasz boolean;
-	tile_max bigint;			-- automatic tiles: the most points one may own
-	grid bytea;					-- automatic tiles: the counting grid of the plan
-	plan bytea;					-- automatic tiles: the plan (src/pg/fn_tiled_plan.c)
-	pbox float8[];
-	need_cells int4[];			-- the plan's cells a tile that was not final named
 	tparts text[];
 	tschema text; tname text; qtarget text;
 	pts text; tiles text; rt text; halo text;
@@ -231,10 +232,8 @@ BEGIN
 	END IF;
 
 	-- every vertex, in the source's order (block, offset, vertex), with its
-	-- tile: the tile column's value, or its square
-	IF tile_column IS NOT NULL THEN
-		tv := format('s.%I', tile_column);
-	END IF;
+	-- tile: the tile column's value
+	tv := format('s.%I', tile_column);
 	IF citus THEN
 		EXECUTE format('INSERT INTO %s (tile, seq, vi, g)
 						SELECT %s, ((s.ctid::text::point)[0])::bigint * 65536 + ((s.ctid::text::point)[1])::bigint,
@@ -248,20 +247,18 @@ BEGIN
 						SELECT %2$s, (d.c[0])::bigint * 65536 + (d.c[1])::bigint, 1, d.geom, ST_X(d.geom), ST_Y(d.geom)
 						  FROM %3$s s, LATERAL (SELECT s.%4$I AS geom, s.ctid::text::point AS c) d
 						 WHERE ST_GeometryType(s.%4$I) = ''ST_Point'' AND NOT ST_IsEmpty(s.%4$I)',
-					   pts, tv, source, geom_column) USING plan;
+					   pts, tv, source, geom_column);
 		EXECUTE format('INSERT INTO %1$s (tile, seq, vi, g, x, y)
 						SELECT %2$s, ((s.ctid::text::point)[0])::bigint * 65536 + ((s.ctid::text::point)[1])::bigint,
 							   d.vi, d.geom, ST_X(d.geom), ST_Y(d.geom)
 						  FROM %3$s s, LATERAL ST_DumpPoints(%5$s) WITH ORDINALITY AS d(path, geom, vi)
 						 WHERE ST_GeometryType(s.%4$I) <> ''ST_Point''',
-					   pts, tv, source, geom_column, stroked) USING plan;
+					   pts, tv, source, geom_column, stroked);
 	END IF;
-	IF tile_column IS NOT NULL THEN
-		EXECUTE format('SELECT EXISTS (SELECT 1 FROM %s WHERE tile IS NULL)', pts) INTO has_null;
-		IF has_null THEN
-			RAISE EXCEPTION '%: tile column "%" of % is NULL for some rows with a geometry', fn, tile_column, source
-				USING ERRCODE = 'null_value_not_allowed';
-		END IF;
+	EXECUTE format('SELECT EXISTS (SELECT 1 FROM %s WHERE tile IS NULL)', pts) INTO has_null;
+	IF has_null THEN
+		RAISE EXCEPTION '%: tile column "%" of % is NULL for some rows with a geometry', fn, tile_column, source
+			USING ERRCODE = 'null_value_not_allowed';
 	END IF;
 
 
@@ -269,7 +266,7 @@ BEGIN
 	EXECUTE format('CREATE TEMP TABLE %1$s AS
 					SELECT tile, row_number() OVER (ORDER BY tile) AS label, n, x0, y0, x1, y1,
 						   NULL::float8[] AS region, NULL::float8[] AS known, NULL::float8[] AS extra,
-						   ''{}''::int4[] AS added, 0 AS cell_runs, true AS pending
+						   true AS pending
 					  FROM (SELECT tile, count(*) AS n, min(%3$s) AS x0, min(%4$s) AS y0,
 								   max(%3$s) AS x1, max(%4$s) AS y1
 							  FROM %2$s GROUP BY tile) t',
@@ -280,19 +277,13 @@ BEGIN
 	EXECUTE format('SELECT _tdc_hull(h) FROM (SELECT _tdc_hull(g) AS h FROM %s GROUP BY tile) s', pts) INTO hull;
 
 	-- Each tile's first known region {h, K, extra boxes...}, by the core's
-	-- policy: K is the tile's box (of its points, or of its cells in a
-	-- plan) with a halo h of 8 of its mean spacings, and the extra boxes are
-	-- the bands along the hull edges near K.  A long hull edge has a
-	-- triangle whose circle bulges far out of C; only its thin part inside
-	-- C must be known, and the band holds it without widening K along the
-	-- whole edge.  A plan's regions are fitted to its counts, as ./tdc's.
-	IF plan IS NOT NULL THEN
-		EXECUTE format('UPDATE %s k SET region = r.region FROM _tdc_plan_regions($1, $2) r WHERE r.tile = k.tile',
-					   tiles) USING plan, hull;
-	ELSE
-		EXECUTE format('UPDATE %s SET region = _tdc_tile_region(ARRAY[x0, y0, x1, y1], n, $1, $2, $3)', tiles)
-			USING extent, npts, hull;
-	END IF;
+	-- policy: K is the box of the tile's points with a halo h of 8 of its
+	-- mean spacings, and the extra boxes are the bands along the hull edges
+	-- near K.  A long hull edge has a triangle whose circle bulges far out
+	-- of C; only its thin part inside C must be known, and the band holds it
+	-- without widening K along the whole edge.
+	EXECUTE format('UPDATE %s SET region = _tdc_tile_region(ARRAY[x0, y0, x1, y1], n, $1, $2, $3)', tiles)
+		USING extent, npts, hull;
 	EXECUTE format('UPDATE %s SET known = region[2:5], extra = region[6:cardinality(region)]', tiles);
 
 	-- the target
@@ -354,7 +345,7 @@ BEGIN
 		tile_sql := format('INSERT INTO %s (id, tile, geom)
 			SELECT CASE WHEN (q.t).k = 0 THEN -1 ELSE $2 * 4294967296 + (q.t).k END, q.tile, (q.t).geom
 			  FROM (SELECT s.tile, _tdc_tile_triangles(s.r) AS t
-					  FROM (SELECT h.tile, _tdc_tile(h.g, h.label, $2, $3, %L::float8[], $4, h.seq, h.vi, $5, $6, $7) AS r
+					  FROM (SELECT h.tile, _tdc_tile(h.g, h.label, $2, $3, %L::float8[], $4, h.seq, h.vi) AS r
 							  FROM %s h
 							 WHERE h.tile = $1::%s AND h.tl = $2
 							 GROUP BY h.tile) s) q',
@@ -445,28 +436,14 @@ BEGIN
 		END IF;
 		GET DIAGNOSTICS ntri = ROW_COUNT;
 		halo_pts := halo_pts + ntri;
-		-- the plan's cells that reruns added, as ./tdc adds them: every
-		-- point of such a cell (_tdc_plan_cell, the cell ./tdc bins it to)
-		-- that no box of the tile holds
-		IF plan IS NOT NULL AND round > 1 THEN
-			EXECUTE format('INSERT INTO %1$s (tile, label, seq, vi, g, tl)
-							SELECT k.tile, o.label, p.seq, p.vi, p.g, k.label
-							  FROM (SELECT tile, label, unnest(added) AS c, known || extra AS bx
-									  FROM %3$s WHERE pending AND cardinality(added) > 0) k
-							  JOIN %2$s p ON _tdc_plan_cell(p.x, p.y, $1) = k.c AND NOT _tdc_in_boxes(p.x, p.y, k.bx)
-							  JOIN %3$s o ON o.tile = p.tile',
-						   halo, pts, tiles) USING plan;
-			GET DIAGNOSTICS ntri = ROW_COUNT;
-			halo_pts := halo_pts + ntri;
-		END IF;
 		IF citus THEN
 			EXECUTE tile_sql;
 		ELSE
 			reported := 0;
 			i := 0;
-			FOR r IN EXECUTE format('SELECT tile::text AS tile, label, known, extra, added, cell_runs
+			FOR r IN EXECUTE format('SELECT tile::text AS tile, label, known, extra
 									   FROM %s WHERE pending ORDER BY label', tiles) LOOP
-				EXECUTE tile_sql USING r.tile, r.label, r.known, r.extra, plan, r.added, r.cell_runs;
+				EXECUTE tile_sql USING r.tile, r.label, r.known, r.extra;
 				GET DIAGNOSTICS nrows = ROW_COUNT;
 				written := written + nrows;
 				-- a tile that is not final writes one row: its box
@@ -481,9 +458,9 @@ BEGIN
 			END LOOP;
 		END IF;
 		-- tiles that were not final: the region of their next run, from the
-		-- row they wrote (_tdc_tile_regrow: with a plan the cells they named,
-		-- else the hull bands they lack, else K grown to the box they need
-		-- and half the halo beyond), as ./tdc grows a tile
+		-- row they wrote (_tdc_tile_regrow: the hull bands they lack, else K
+		-- grown to the box they need and half the halo beyond), as ./tdc
+		-- grows a tile
 		-- (on plain PostgreSQL only the tiles that wrote one row can be
 		-- among them: the target is scanned for their boxes only if there
 		-- are such tiles)
@@ -492,29 +469,10 @@ BEGIN
 								CASE WHEN citus THEN '' WHEN cardinality(one_row) = 0 THEN 'AND false'
 									 ELSE 'AND tile::text = ANY($1)' END)
 						 USING one_row LOOP
-			-- With a plan: the cells it named, if any, as ./tdc adds them
-			-- (_tdc_tile_need_cells: all when they fit, else the nearest
-			-- first as far as they fit, by the points this run held, its
-			-- halo partition's rows; an ERROR when not even the nearest
-			-- fits); its next request reaches twice as far (cell_runs, see
-			-- tdc_tp_rings).  Else the region grown.
-			need_cells := '{}';
-			IF plan IS NOT NULL THEN
-				EXECUTE format('SELECT _tdc_tile_need_cells($1, $2, k.tile, (SELECT count(*) FROM %2$s h WHERE h.tl = k.label),
-												  k.added)
-								  FROM %1$s k WHERE k.tile = $3::bigint', tiles, halo)
-				   INTO need_cells USING r.geom, plan, r.tile;
-			END IF;
-			IF cardinality(need_cells) > 0 THEN
-				EXECUTE format('UPDATE %1$s SET pending = true, added = added || $2, cell_runs = cell_runs + 1
-								 WHERE tile = $1::%2$s', tiles, ttype)
-				USING r.tile, need_cells;
-			ELSE
-				EXECUTE format('UPDATE %1$s SET pending = true, region = g.r, known = g.r[2:5], extra = g.r[6:cardinality(g.r)]
-								  FROM (SELECT _tdc_tile_regrow(region, $2, $3, $4, $5, $6) AS r FROM %1$s WHERE tile = $1::%2$s) g
-								 WHERE tile = $1::%2$s', tiles, ttype)
-				USING r.tile, r.geom, extent, npts, hull, plan;
-			END IF;
+			EXECUTE format('UPDATE %1$s SET pending = true, region = g.r, known = g.r[2:5], extra = g.r[6:cardinality(g.r)]
+							  FROM (SELECT _tdc_tile_regrow(region, $2, $3, $4, $5) AS r FROM %1$s WHERE tile = $1::%2$s) g
+							 WHERE tile = $1::%2$s', tiles, ttype)
+			USING r.tile, r.geom, extent, npts, hull;
 			rerun := rerun + 1;
 		END LOOP;
 		IF citus OR rerun > 0 THEN
@@ -544,6 +502,7 @@ $proc$;
 COMMENT ON PROCEDURE tdc_delaunay_tiled(regclass, text, name, name, float8) IS
 'Triangulates the vertices of source.geom_column (duplicates merged, Z of the first copy, one SRID) tile by tile '
 'into a new table target(id bigint, tile, geom geometry(Polygon)): the same triangles as ST_TDCDelaunayDump, each once. '
-'Tiles: the groups of tile_column, else squares of tile_size counted from the data''s lower left corner, '
-'else tiles split by counts so that each fits tdc_delaunay.max_memory, as ./tdc --max-memory plans them. '
+'Tiles: the groups of tile_column, run in rounds of SQL statements; else tiles split by counts so that each fits '
+'tdc_delaunay.max_memory, as ./tdc --max-memory plans and runs them, each triangle then labelled with the square of '
+'tile_size (counted from the data''s lower left corner) that holds its smallest vertex, when tile_size is given. '
 'On Citus, with source distributed by tile_column, the tiles run on the workers.';

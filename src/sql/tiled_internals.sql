@@ -102,10 +102,9 @@ COMMENT ON AGGREGATE _tdc_hull(float8[]) IS
 'Internal, for tdc_delaunay_tiled: the convex hull of partial hulls given as {x,y,...}.';
 
 -- The tiling policy of src/core/tile_plan.c, the one ./tdc --max-memory
--- follows (src/pg/fn_tiled_region.c, fn_tiled_plan.c, fn_tiled_cells.c):
--- labels of squares, a tile's first known region {h, K, extra boxes...} and
--- its growth, the adaptive plan of automatic tiles, and the cells a rerun
--- adds.
+-- follows (src/pg/fn_tiled_region.c): labels of squares, and a tile's first
+-- known region {h, K, extra boxes...} and its growth; and the automatic
+-- tiles, through the core's bounded run (src/pg/fn_tiled_bounded.c).
 
 CREATE FUNCTION _tdc_square_label(float8, float8, float8, float8, float8)
 RETURNS int8
@@ -125,150 +124,15 @@ COMMENT ON FUNCTION _tdc_tile_region(float8[], int8, float8[], int8, float8[]) I
 'Internal, for tdc_delaunay_tiled: _tdc_tile_region(tile box, tile points, extent, points, hull), the first known region '
 '{h, xmin, ymin, xmax, ymax, extra boxes...} of a tile: its box with a halo h of 8 of its mean spacings and the hull bands near it.';
 
-CREATE FUNCTION _tdc_tile_regrow(float8[], geometry, float8[], int8, float8[], bytea)
+CREATE FUNCTION _tdc_tile_regrow(float8[], geometry, float8[], int8, float8[])
 RETURNS float8[]
 AS 'MODULE_PATHNAME', '_tdc_tile_regrow'
-LANGUAGE C IMMUTABLE PARALLEL SAFE;
-
-COMMENT ON FUNCTION _tdc_tile_regrow(float8[], geometry, float8[], int8, float8[], bytea) IS
-'Internal, for tdc_delaunay_tiled: _tdc_tile_regrow(region, need, extent, points, hull, plan), the region of a tile''s next run '
-'from the row of a run that was not final (rings: the box it needs, then the cells it needs): the cells added, '
-'else (without cells) the hull bands meeting the box that it lacks, else its known box grown to the box and half its halo beyond.';
-
-CREATE FUNCTION _tdc_plan_tile_max(int8, boolean)
-RETURNS int8
-AS 'MODULE_PATHNAME', '_tdc_plan_tile_max'
-LANGUAGE C STABLE STRICT PARALLEL SAFE;
-
-COMMENT ON FUNCTION _tdc_plan_tile_max(int8, boolean) IS
-'Internal, for tdc_delaunay_tiled: _tdc_plan_tile_max(points, has Z), the most points an automatic tile may own '
-'under tdc_delaunay.max_memory (all of them when they fit as one tile).';
-
-CREATE FUNCTION _tdc_plan_grid_transfn(internal, geometry, int8)
-RETURNS internal
-AS 'MODULE_PATHNAME', '_tdc_plan_grid_transfn'
-LANGUAGE C IMMUTABLE;
-
-COMMENT ON FUNCTION _tdc_plan_grid_transfn(internal, geometry, int8) IS
-'Transition function of _tdc_plan_grid: the vertices'' box and the sample ./tdc takes (in the rows'' order).';
-
-CREATE FUNCTION _tdc_plan_grid_finalfn(internal)
-RETURNS bytea
-AS 'MODULE_PATHNAME', '_tdc_plan_grid_finalfn'
-LANGUAGE C IMMUTABLE;
-
-COMMENT ON FUNCTION _tdc_plan_grid_finalfn(internal) IS
-'Final function of _tdc_plan_grid: the counting grid of the plan, its cell sides at the sample''s quantiles.';
-
-CREATE AGGREGATE _tdc_plan_grid(geometry, int8) (
-	SFUNC = _tdc_plan_grid_transfn,
-	STYPE = internal,
-	FINALFUNC = _tdc_plan_grid_finalfn
-);
-
-COMMENT ON AGGREGATE _tdc_plan_grid(geometry, int8) IS
-'Internal, for tdc_delaunay_tiled: _tdc_plan_grid(geometry, number of vertices) over the rows in the source''s order, '
-'the grid that _tdc_plan counts on, as ./tdc --max-memory makes it.';
-
-CREATE FUNCTION _tdc_plan_transfn(internal, geometry, bytea)
-RETURNS internal
-AS 'MODULE_PATHNAME', '_tdc_plan_transfn'
-LANGUAGE C IMMUTABLE;
-
-COMMENT ON FUNCTION _tdc_plan_transfn(internal, geometry, bytea) IS
-'Transition function of _tdc_plan: counts the vertices in the cells of the grid.';
-
-CREATE FUNCTION _tdc_plan_finalfn(internal)
-RETURNS bytea
-AS 'MODULE_PATHNAME', '_tdc_plan_finalfn'
-LANGUAGE C STABLE;
-
-COMMENT ON FUNCTION _tdc_plan_finalfn(internal) IS
-'Final function of _tdc_plan: the tiles cut from the counted grid under tdc_delaunay.max_memory, or an error with the floor.';
-
-CREATE AGGREGATE _tdc_plan(geometry, bytea) (
-	SFUNC = _tdc_plan_transfn,
-	STYPE = internal,
-	FINALFUNC = _tdc_plan_finalfn
-);
-
-COMMENT ON AGGREGATE _tdc_plan(geometry, bytea) IS
-'Internal, for tdc_delaunay_tiled: _tdc_plan(geometry, grid) over every row, the plan of automatic tiles '
-'(counts on the grid split k-d by counts, src/core/tile_plan.c).';
-
-CREATE FUNCTION _tdc_plan_label(float8, float8, bytea)
-RETURNS int8
-AS 'MODULE_PATHNAME', '_tdc_plan_label'
 LANGUAGE C IMMUTABLE STRICT PARALLEL SAFE;
 
-COMMENT ON FUNCTION _tdc_plan_label(float8, float8, bytea) IS
-'Internal, for tdc_delaunay_tiled: _tdc_plan_label(x, y, plan), the tile (from 0) of the plan that owns the point.';
-
-CREATE FUNCTION _tdc_plan_regions(bytea, float8[])
-RETURNS TABLE(tile int8, n int8, region float8[])
-AS 'MODULE_PATHNAME', '_tdc_plan_regions'
-LANGUAGE C IMMUTABLE STRICT PARALLEL SAFE
-ROWS 100;
-
-COMMENT ON FUNCTION _tdc_plan_regions(bytea, float8[]) IS
-'Internal, for tdc_delaunay_tiled: _tdc_plan_regions(plan, hull), every tile of the plan with its count and first known '
-'region {h, xmin, ymin, xmax, ymax, extra boxes...}, fitted to the counts as ./tdc fits it.';
-
-CREATE FUNCTION _tdc_plan_box(bytea)
-RETURNS float8[]
-AS 'MODULE_PATHNAME', '_tdc_plan_box'
-LANGUAGE C IMMUTABLE STRICT PARALLEL SAFE;
-
-COMMENT ON FUNCTION _tdc_plan_box(bytea) IS
-'Internal, for tdc_delaunay_tiled: _tdc_plan_box(plan), {xmin, ymin, xmax, ymax, vertices, tiles} of the planned vertices.';
-
--- _tdc_tile with the plan of automatic tiles: its cells tell the finality
--- check where the data has no point, and a tile that is not final names
--- the cells it needs, whose points its rerun adds (src/pg/fn_tiled.c)
-CREATE FUNCTION _tdc_tile_transfn(internal, geometry, int8, int8, float8[], float8[], float8[], int8, int8, bytea, int4[], int4)
-RETURNS internal
-AS 'MODULE_PATHNAME', '_tdc_tile_transfn'
-LANGUAGE C IMMUTABLE PARALLEL SAFE;
-
-COMMENT ON FUNCTION _tdc_tile_transfn(internal, geometry, int8, int8, float8[], float8[], float8[], int8, int8, bytea, int4[], int4) IS
-'Transition function of _tdc_tile with a plan: collects the vertices of a tile and its halo with the label of their owning tile.';
-
-CREATE AGGREGATE _tdc_tile(geometry, int8, int8, float8[], float8[], float8[], int8, int8, bytea, int4[], int4) (
-	SFUNC = _tdc_tile_transfn,
-	STYPE = internal,
-	FINALFUNC = _tdc_tile_finalfn
-);
-
-COMMENT ON AGGREGATE _tdc_tile(geometry, int8, int8, float8[], float8[], float8[], int8, int8, bytea, int4[], int4) IS
-'Internal, for tdc_delaunay_tiled: _tdc_tile as with eight arguments, and the plan of automatic tiles (NULL: none), '
-'whose cells the finality check uses, the cells of the plan whose points a rerun added, and the number of runs '
-'before that added cells; a tile that is not final then names the cells it needs, reaching farther after each such run.';
-
-CREATE FUNCTION _tdc_plan_cell(float8, float8, bytea)
-RETURNS int4
-AS 'MODULE_PATHNAME', '_tdc_plan_cell'
-LANGUAGE C IMMUTABLE STRICT PARALLEL SAFE;
-
-COMMENT ON FUNCTION _tdc_plan_cell(float8, float8, bytea) IS
-'Internal, for tdc_delaunay_tiled: _tdc_plan_cell(x, y, plan), the cell (row * 512 + column) of the plan''s grid that holds the point.';
-
-CREATE FUNCTION _tdc_in_boxes(float8, float8, float8[])
-RETURNS boolean
-AS 'MODULE_PATHNAME', '_tdc_in_boxes'
-LANGUAGE C IMMUTABLE STRICT PARALLEL SAFE;
-
-COMMENT ON FUNCTION _tdc_in_boxes(float8, float8, float8[]) IS
-'Internal, for tdc_delaunay_tiled: whether one of the closed boxes {xmin,ymin,xmax,ymax,...} holds the point x, y.';
-
-CREATE FUNCTION _tdc_tile_need_cells(geometry, bytea, int8, int8, int4[])
-RETURNS int4[]
-AS 'MODULE_PATHNAME', '_tdc_tile_need_cells'
-LANGUAGE C IMMUTABLE STRICT PARALLEL SAFE;
-
-COMMENT ON FUNCTION _tdc_tile_need_cells(geometry, bytea, int8, int8, int4[]) IS
-'Internal, for tdc_delaunay_tiled: _tdc_tile_need_cells(need, plan, tile, points, added), the cells of the plan that a '
-'tile''s run of that many points that was not final named (the rings of its row after the first) and that its rerun adds: '
-'all when they fit tdc_delaunay.max_memory, else the nearest first as far as they fit.';
+COMMENT ON FUNCTION _tdc_tile_regrow(float8[], geometry, float8[], int8, float8[]) IS
+'Internal, for tdc_delaunay_tiled: _tdc_tile_regrow(region, need, extent, points, hull), the region of a tile''s next run '
+'from the row of a run that was not final (the box it needs): the hull bands meeting the box that it lacks, '
+'else its known box grown to the box and half its halo beyond.';
 
 CREATE FUNCTION _tdc_tiled_fits(int8, boolean)
 RETURNS boolean
