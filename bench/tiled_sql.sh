@@ -1,39 +1,170 @@
 #!/usr/bin/env bash
-# bench/tiled_sql.sh [NPOINTS]: tdc_delaunay_tiled against ST_TDCDelaunayDump
-# on NPOINTS uniform points (default 10000000), each in a fresh session, with
-# the wall time and the backend's peak RSS (VmHWM from /proc/self/status, so
-# the server must run on this machine and the user must be a superuser).
-# Uses the server of the PG* variables (e.g. eval "$(bash scripts/cluster.sh
-# env)").  With CITUS=1 it also runs the same count on the throw-away 3-node
-# Citus cluster of test/citus/run.sh (tiles of a 4 x 4 grid, 2 workers) and
-# prints the coordinator backend's peak RSS.
+# bench/tiled_sql.sh -- CALL tdc_delaunay_tiled against CREATE TABLE AS of
+# ST_TDCDelaunayDump (and, where PostGIS can take it in one value, of
+# ST_DelaunayTriangles): a program that prints figures and asserts nothing.
+#
+# Cases (each a table of points, loaded once):
+#   uniform 1e6 and 1e7: random points in a 1000 square (SQL random(),
+#     setseed 0.5), the procedure under tdc_delaunay.max_memory low enough
+#     that it runs in tiles (BENCH_TSQL_LIMITS: 40 MB for 1e6, 400 MB for 1e7),
+#     beside the Dump, and at 1e6 PostGIS's ST_DelaunayTriangles (at 1e7 its
+#     one GEOMETRYCOLLECTION would pass the 1 GB limit of a value);
+#   clusters64 2e6: gen_points clusters64 2000000 42 (64 Gaussian clusters of
+#     widths 0.1 to 20), the procedure under 60 MB beside the Dump, and once
+#     the two targets' triangle sets compared (ST_Normalize, EXCEPT ALL).
+# Every run is a statement of its own in a new session, timed by the client
+# (wall, connection included), with the backend's peak RSS (VmHWM, which
+# counts the shared buffers it touched); the kinds alternate, BENCH_TSQL_REPS
+# rounds, and the medians are printed with the ratio procedure / Dump, and,
+# for a load that changes during the run, the median of each round's ratio.
+# The procedure's NOTICE (tiles, runs, halo, phases) is kept from its last run.
+#
+# Uses the server of the PG* variables (eval "$(bash scripts/cluster.sh env)"),
+# which must run on this machine with a superuser (VmHWM is read with
+# pg_read_file), and the tdc_delaunay installed there; it makes and drops the
+# database tdc_tiled_bench.
+#
+# Environment knobs:
+#   BENCH_TSQL_REPS=3
+#   BENCH_TSQL_SIZES="1e6 1e7"     uniform sizes
+#   BENCH_TSQL_LIMITS="40 400"     max_memory (MB) of the procedure, per size
+#   BENCH_TSQL_CLUSTERED=2e6       clusters64 points ("" skips the case)
+#   BENCH_TSQL_CLUSTERED_LIMIT=60
+#   CITUS=1                        also the largest uniform size on the
+#                                  throw-away Citus cluster of test/citus/run.sh
+# Output: stdout, build/bench/tiled_sql.txt, build/bench/tiled_sql_runs.csv,
+# and docs/benchmarks/tiled_sql.md.
 set -euo pipefail
-N=${1:-10000000}
-HERE=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
-psql() { command psql -X -q -A -t -v ON_ERROR_STOP=1 "$@"; }
-hwm="SELECT regexp_replace(pg_read_file('/proc/self/status'), '.*VmHWM:\s*([0-9]+ kB).*', '\1')"
+
+ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+# shellcheck source=bench/lib.sh
+. "$ROOT/bench/lib.sh"
+
+REPS=${BENCH_TSQL_REPS:-3}
+read -r -a SIZES <<< "${BENCH_TSQL_SIZES:-1e6 1e7}"
+read -r -a LIMITS <<< "${BENCH_TSQL_LIMITS:-40 400}"
+CLU=${BENCH_TSQL_CLUSTERED-2e6}
+CLIMIT=${BENCH_TSQL_CLUSTERED_LIMIT:-60}
+DB=tdc_tiled_bench
+[ ${#SIZES[@]} -eq ${#LIMITS[@]} ] || die "BENCH_TSQL_SIZES and BENCH_TSQL_LIMITS differ in length"
+
+mkdir -p "$BENCH_OUT"
+TXT=$BENCH_OUT/tiled_sql.txt
+RUNS=$BENCH_OUT/tiled_sql_runs.csv
+WORK=$(mktemp -d "${TMPDIR:-/tmp}/tiled_sql.XXXXXX")
+trap 'rm -rf "$WORK"' EXIT
+build_helpers
+
+q() { command psql -X -q -A -t -v ON_ERROR_STOP=1 -d "$DB" "$@"; }
+hwm="SELECT regexp_replace(pg_read_file('/proc/self/status'), '.*VmHWM:\s*([0-9]+) kB.*', '\1')"
 now() { date +%s.%N; }
 
-echo "tiled_sql: $N uniform points, $(nproc) CPUs, $(date -u '+%Y-%m-%d %H:%M UTC'), load $(cut -d' ' -f1-3 /proc/loadavg)"
-psql -c "CREATE EXTENSION IF NOT EXISTS postgis; CREATE EXTENSION IF NOT EXISTS tdc_delaunay;
-	DROP TABLE IF EXISTS tb_pts, tb_tiled, tb_dump;
-	SELECT setseed(0.5);
-	CREATE TABLE tb_pts AS SELECT ST_MakePoint(random() * 1000, random() * 1000) AS geom FROM generate_series(1, $N);
-	ANALYZE tb_pts;" >/dev/null
+command psql -X -q -d postgres -c "DROP DATABASE IF EXISTS $DB" -c "CREATE DATABASE $DB" >/dev/null
+trap 'rm -rf "$WORK"; command psql -X -q -d postgres -c "DROP DATABASE IF EXISTS $DB" >/dev/null 2>&1 || true' EXIT
+q -c "CREATE EXTENSION postgis; CREATE EXTENSION tdc_delaunay" >/dev/null
 
-t1=$(now)
-out=$(psql -c "SET client_min_messages = notice; CALL tdc_delaunay_tiled('tb_pts', 'tb_tiled')" -c "$hwm" 2>&1)
-t2=$(now)
-echo "tiled_sql: tdc_delaunay_tiled (automatic tiles)  $(echo "$t2 - $t1" | bc) s, backend peak RSS $(echo "$out" | tail -1)"
-echo "$out" | grep -o '[0-9]* triangles from .*' | sed 's/^/tiled_sql:   /'
+# the tables
+for i in "${!SIZES[@]}"; do
+	n=$(n_of "${SIZES[$i]}")
+	log "loading $n uniform points"
+	q -c "SELECT setseed(0.5);
+		CREATE TABLE u_$i AS SELECT ST_MakePoint(random() * 1000, random() * 1000) AS geom FROM generate_series(1, $n);" \
+		-c "VACUUM ANALYZE u_$i" >/dev/null
+done
+if [ -n "$CLU" ]; then
+	cn=$(n_of "$CLU")
+	log "loading $cn clusters64 points (seed $POINT_SEED)"
+	"$BENCH_BIN/gen_points" clusters64 "$cn" "$POINT_SEED" "$WORK/c.bin" >/dev/null
+	q -c "CREATE TABLE c (geom geometry)"
+	# od prints each double in its shortest form that reads back exactly
+	od -A n -t f8 -v -w16 "$WORK/c.bin" | awk '{ print "POINT(" $1 " " $2 ")" }' |
+		q -c "COPY c (geom) FROM STDIN"
+	q -c "VACUUM ANALYZE c" >/dev/null
+	rm -f "$WORK/c.bin"
+fi
 
-t1=$(now)
-out=$(psql -c "CREATE TABLE tb_dump AS SELECT * FROM ST_TDCDelaunayDump('SELECT geom FROM tb_pts')" -c "$hwm" 2>&1)
-t2=$(now)
-echo "tiled_sql: CREATE TABLE AS ST_TDCDelaunayDump   $(echo "$t2 - $t1" | bc) s, backend peak RSS $(echo "$out" | tail -1)"
-echo "tiled_sql:   $(psql -c "SELECT (SELECT count(*) FROM tb_tiled) || ' tiled, ' || (SELECT count(*) FROM tb_dump) || ' one-shot triangles'")"
-psql -c "DROP TABLE tb_pts, tb_tiled, tb_dump"
+# one timed statement in a session of its own: "wall_s hwm_kb", the NOTICEs to $WORK/notice
+run() {
+	local pre=$1 stmt=$2 t0 t1 out
+	t0=$(now)
+	out=$(q -c "SET client_min_messages = notice" ${pre:+-c "$pre"} -c "$stmt" -c "$hwm" 2>"$WORK/notice")
+	t1=$(now)
+	echo "$(echo "$t1 - $t0" | bc) $(echo "$out" | tail -1)"
+}
+
+echo "case,kind,round,wall_s,hwm_kb" > "$RUNS"
+bench_begin
+exec > >(tee "$TXT")
+TEE_PID=$!
+
+echo "runs: each statement in a new session, timed by the client (wall); peak = the backend's VmHWM (shared buffers included)"
+echo "kinds alternate, $REPS rounds; medians; ratio = procedure / CREATE TABLE AS of the Dump"
+
+# case NAME TABLE LIMIT [postgis]: the rounds of one table
+bench_case() {
+	local name=$1 tab=$2 limit=$3 pg=${4:-} r kind stmt pre res
+	local kinds="dump tiled"
+	[ -n "$pg" ] && kinds="$kinds postgis"
+	echo
+	echo "== $name ($(q -c "SELECT to_char(count(*), 'FM999,999,999') FROM $tab") points), procedure under tdc_delaunay.max_memory = $limit MB"
+	for r in $(seq 1 "$REPS"); do
+		for kind in $kinds; do
+			q -c "DROP TABLE IF EXISTS out_$kind" 2>/dev/null
+			pre=
+			case $kind in
+				dump) stmt="CREATE TABLE out_dump AS SELECT * FROM ST_TDCDelaunayDump('SELECT geom FROM $tab')" ;;
+				tiled) pre="SET tdc_delaunay.max_memory = $limit"
+					stmt="CALL tdc_delaunay_tiled('$tab', 'out_tiled')" ;;
+				postgis) stmt="CREATE TABLE out_postgis AS SELECT (ST_Dump(ST_DelaunayTriangles(ST_Collect(geom)))).geom FROM $tab" ;;
+			esac
+			res=$(run "$pre" "$stmt")
+			echo "$name,$kind,$r,${res% *},${res#* }" >> "$RUNS"
+			[ "$kind" = tiled ] && cp "$WORK/notice" "$WORK/notice_tiled"
+		done
+	done
+	printf '%-26s %10s %10s %12s %10s\n' run wall_s peak_mb triangles ratio
+	local dmed
+	dmed=$(awk -F, -v c="$name" '$1 == c && $2 == "dump" { print $4 }' "$RUNS" | median)
+	for kind in $kinds; do
+		local med peak ntri label
+		med=$(awk -F, -v c="$name" -v k="$kind" '$1 == c && $2 == k { print $4 }' "$RUNS" | median)
+		peak=$(awk -F, -v c="$name" -v k="$kind" '$1 == c && $2 == k { print $5 / 1024 }' "$RUNS" | median)
+		ntri=$(q -c "SELECT count(*) FROM out_$kind")
+		case $kind in
+			dump) label="CREATE TABLE AS Dump" ;;
+			tiled) label="tdc_delaunay_tiled" ;;
+			postgis) label="PostGIS (CTAS, ST_Dump)" ;;
+		esac
+		printf '%-26s %10.2f %10.1f %12s %9.2fx\n' "$label" "$med" "$peak" "$(thousands "$ntri")" \
+			"$(echo "$med / $dmed" | bc -l)"
+	done
+	echo "  median of the per-round ratios, procedure / Dump: $(awk -F, -v c="$name" '
+		$1 == c && $2 == "dump" { d[$3] = $4 } $1 == c && $2 == "tiled" { t[$3] = $4 }
+		END { for (r in t) if (d[r] > 0) print t[r] / d[r] }' "$RUNS" | median | awk '{ printf "%.2fx", $1 }')"
+	echo "  the procedure's NOTICE (last run):"
+	sed 's/^/    /' "$WORK/notice_tiled"
+}
+
+for i in "${!SIZES[@]}"; do
+	pg=
+	[ "$(n_of "${SIZES[$i]}")" -le 1000000 ] && pg=postgis
+	bench_case "uniform ${SIZES[$i]}" "u_$i" "${LIMITS[$i]}" $pg
+done
+if [ -n "$CLU" ]; then
+	bench_case "clusters64 $CLU" c "$CLIMIT"
+	echo "  the procedure's triangles against the Dump's (normalized, with multiplicity):"
+	q -c "SELECT '    only in the procedure: ' || (SELECT count(*) FROM (SELECT ST_AsBinary(ST_Normalize(geom)) FROM out_tiled
+				EXCEPT ALL SELECT ST_AsBinary(ST_Normalize(geom)) FROM out_dump) x)
+		|| ', only in the Dump: ' || (SELECT count(*) FROM (SELECT ST_AsBinary(ST_Normalize(geom)) FROM out_dump
+				EXCEPT ALL SELECT ST_AsBinary(ST_Normalize(geom)) FROM out_tiled) x)"
+fi
 
 if [ "${CITUS:-0}" = 1 ]; then
-	TDC_CITUS_BENCH=$N bash "$HERE/../test/citus/run.sh" | grep 'citus bench'
+	echo
+	echo "== Citus: the same count on the throw-away 3-node cluster of test/citus/run.sh (tiles of a 4 x 4 grid, 2 workers)"
+	TDC_CITUS_BENCH=$(n_of "${SIZES[-1]}") bash "$ROOT/test/citus/run.sh" | grep 'citus bench'
 fi
+exec >&-
+wait "$TEE_PID" 2>/dev/null || true
+bench_end
+bench_publish tiled_sql "tdc_delaunay_tiled against CREATE TABLE AS of ST_TDCDelaunayDump" "$TXT" text
