@@ -190,7 +190,7 @@ CALL tdc_delaunay_tiled('tt_far', 'tt_err', 'geom', NULL, 1e-13);
 -- Clustered sets through a tile column (the rounds of SQL statements) and
 -- through automatic tiles: the core's bounded run under
 -- tdc_delaunay.max_memory, as ./tdc --max-memory runs it
--- (_tdc_tiled_bounded), each the Dump's set.  The bounded run holds some
+-- (_tdc_tiled_write), each the Dump's set.  The bounded run holds some
 -- 9 MB of its own (the counting grid and its sums), and its grid is
 -- uniform below 2^18 points and at the quantiles of a sample from there
 -- on, so the automatic sets have 2^18 points: their one pass needs 38 MB.
@@ -249,7 +249,6 @@ CREATE TABLE tb_coast AS
 -- one pass does not fit these limits; tiles do (the summary is a NOTICE,
 -- its phases' seconds in the DETAIL)
 SET tdc_delaunay.max_memory = 12;
-SELECT _tdc_tiled_fits(262800, false) AS one_pass_fits;
 SET client_min_messages = notice;
 \set VERBOSITY terse
 CALL tdc_delaunay_tiled('tb_c9', 'tb_c9_auto');
@@ -275,6 +274,17 @@ SELECT s.name, (SELECT count(DISTINCT tile) > 1 FROM tb_c9_auto WHERE s.name = '
 			   (SELECT count(DISTINCT tile) > 1 FROM tb_coast_auto WHERE s.name = 'coast') AS several
   FROM (VALUES ('c9'), ('town'), ('strip'), ('coast')) s(name);
 SELECT bool_and(id >> 32 = tile AND tile >= 1) AS ids_by_tile FROM tb_c9_auto;
+-- squares label the same in tiles as in one pass
+SET tdc_delaunay.max_memory = 12;
+CALL tdc_delaunay_tiled('tb_town', 'tb_town_sq', tile_size => 100);
+RESET tdc_delaunay.max_memory;
+CALL tdc_delaunay_tiled('tb_town', 'tb_town_sq1', tile_size => 100);
+SELECT (SELECT count(DISTINCT tile) FROM tb_town_sq) AS squares,
+	   (SELECT count(*) FROM (SELECT ST_AsEWKB(ST_Normalize(geom)), tile FROM tb_town_sq
+							  EXCEPT ALL SELECT ST_AsEWKB(ST_Normalize(geom)), tile FROM tb_town_sq1) x) AS only_tiles,
+	   (SELECT count(*) FROM (SELECT ST_AsEWKB(ST_Normalize(geom)), tile FROM tb_town_sq1
+							  EXCEPT ALL SELECT ST_AsEWKB(ST_Normalize(geom)), tile FROM tb_town_sq) x) AS only_one_pass,
+	   (SELECT count(DISTINCT id) = count(*) FROM tb_town_sq) AS ids_unique;
 SELECT attname, format_type(atttypid, atttypmod) FROM pg_attribute
  WHERE attrelid = 'tb_c9_auto'::regclass AND attnum > 0 ORDER BY attnum;
 -- 2^18 points, half of them uniform over a 100 square and half in a unit
@@ -343,7 +353,7 @@ SELECT count(*) FROM tt_uni_tri;
 -- before the tiles (its context is a staging statement of the procedure,
 -- or the bounded run reading the source) raises the lower bound, a try
 -- that finished, or was cancelled after the tiles (the bounded run writing
--- its rows, or CREATE TABLE AS storing them), lowers the upper bound,
+-- its rows), lowers the upper bound,
 -- and the next try waits halfway between the latest of each.  It stops at
 -- the first cancel whose context shows a tile running: the tile's
 -- statement (which calls _tdc_tile), or "running the tiles".
@@ -396,8 +406,6 @@ EXCEPTION WHEN query_canceled THEN
 		VALUES (kind, ms, CASE WHEN ctx LIKE '%_tdc_tile(%' OR ctx LIKE '%tdc_delaunay_tiled: running the tiles%' THEN 'tile'
 							   WHEN ctx LIKE '%tdc_delaunay_tiled: reading the source%' THEN 'before'
 							   WHEN ctx LIKE '%tdc_delaunay_tiled: writing the rows%' THEN 'after'
-							   -- CREATE TABLE AS writing the rows the run returned
-							   WHEN ctx LIKE '%_tdc_tiled_bounded(%' THEN 'after'
 							   WHEN ctx LIKE '%PL/pgSQL function tdc_delaunay_tiled(%' THEN 'before'
 							   ELSE 'after' END);
 END $$;
@@ -423,7 +431,7 @@ DROP TABLE tt_uni, tt_uni_tri, tt_uni_sq, tt_uni_auto, tt_uni_many, tt_uni_notic
 	tt_col, tt_col_tri, tt_line, tt_line_tri, tt_empty, tt_empty_tri, tt_ring, tt_ring_tri, tt_srid, tt_nulltile, tt_big,
 	tt_far, tt_far_tri, tt_far_tiny, tt_c9, tt_c9_col, tt_town, tt_town_col,
 	tt_strip, tt_strip_col, tt_coast, tt_coast_col, tt_q, tt_spot, tt_cancel, tt_bigger,
-	tb_c9, tb_c9_auto, tb_town, tb_town_auto, tb_strip, tb_strip_auto, tb_coast, tb_coast_auto;
+	tb_c9, tb_c9_auto, tb_town, tb_town_auto, tb_town_sq, tb_town_sq1, tb_strip, tb_strip_auto, tb_coast, tb_coast_auto;
 DROP FUNCTION tiled_vs_dump(regclass, text);
 DROP FUNCTION tt_call(text, text);
 DROP FUNCTION tt_call_ms(text);

@@ -181,6 +181,7 @@ extern void tdc_pointbuf_reserve(TdcPointBuf *buf, uint64 extra,
 								 const char *fname);
 extern uint64 tdc_pointbuf_bytes(const TdcPointBuf *buf);
 extern uint64 tdc_pointbuf_bytes_after(uint64 n, bool hasz);
+extern void tdc_pointbuf_drop_storage(TdcPointBuf *buf);
 extern void tdc_pointbuf_side_grow(TdcPointBuf *buf, uint64 old_bytes,
 								   uint64 new_bytes, const char *what,
 								   const char *fname);
@@ -498,6 +499,25 @@ extern struct varlena *tdc_drape_target_write(const TdcDrapeTarget *t,
 											  const tdc_drape_vertex *v,
 											  const size_t *chain_off, uint64 room,
 											  const char *fname);
+
+/* table_write.c: triangles inserted straight into a table just created */
+typedef struct TdcTableWriter
+{
+	struct RelationData *rel;
+	struct TupleTableSlot *slot;
+	struct BulkInsertStateData *bistate;
+	CommandId	cid;
+	Oid			geomoid;		/* the geom column's type */
+	int			dim;
+	int32		srid;
+	struct varlena *geom;		/* one triangle, reused */
+	uint64		rows;
+} TdcTableWriter;
+
+extern void tdc_table_writer_open(TdcTableWriter *tw, Oid relid, const char *fname);
+extern void tdc_table_writer_shape(TdcTableWriter *tw, int dim, int32 srid, const char *fname);
+extern void tdc_table_writer_put(TdcTableWriter *tw, int64 id, int64 tile, const double *v);
+extern void tdc_table_writer_close(TdcTableWriter *tw);
 
 /* The tiled procedure's name in messages (fn_tiled*.c). */
 #define TILED_FNAME		"tdc_delaunay_tiled"

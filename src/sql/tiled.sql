@@ -1,24 +1,23 @@
 -- src/sql/tiled.sql: the procedure tdc_delaunay_tiled, in PL/pgSQL over the
 -- internal functions of src/sql/tiled_internals.sql
 
--- The procedure.  Without a tile column it runs in one pass,
--- ST_TDCDelaunayDump of the source, or when that would not fit
--- tdc_delaunay.max_memory (or the squares of tile_size are several) through
--- the core's bounded run (_tdc_tiled_bounded, the tiles of ./tdc
--- --max-memory), squares of tile_size then labelling its triangles.  With a
--- tile column it runs in rounds over staging tables: pts (every vertex, with
--- the tile owning it and its position in the source), tiles (one row per
--- tile: label, extent, known box K), halo (for every pending tile, the
--- points inside its K) and the target.  A round runs every pending tile; a
--- tile whose stars are not all final writes one marker row (id -1, its
--- needed box) instead of triangles, and the next round reruns it with a
--- larger K.  On Citus, when source is distributed by tile_column, pts, halo
--- and the target are distributed on it and co-located with source, tiles is
--- a reference table, and a round is one INSERT ... SELECT ... GROUP BY tile
--- that runs on the workers.  On plain PostgreSQL the same statement runs
--- once per tile, so that a backend holds one tile and its halo at a time.
--- Everything happens in the caller's transaction: an error or a cancel
--- leaves no target behind.
+-- The procedure.  Without a tile column it makes the target and hands the
+-- source to _tdc_tiled_write (src/pg/fn_tiled_bounded.c): one pass, or when
+-- that would not fit tdc_delaunay.max_memory the core's bounded run (the
+-- tiles of ./tdc --max-memory), squares of tile_size labelling the
+-- triangles.  With a tile column it runs in rounds over staging tables: pts
+-- (every vertex, with the tile owning it and its position in the source),
+-- tiles (one row per tile: label, extent, known box K), halo (for every
+-- pending tile, the points inside its K) and the target.  A round runs every
+-- pending tile; a tile whose stars are not all final writes one marker row
+-- (id -1, its needed box) instead of triangles, and the next round reruns
+-- it with a larger K.  On Citus, when source is distributed by tile_column,
+-- pts, halo and the target are distributed on it and co-located with
+-- source, tiles is a reference table, and a round is one INSERT ... SELECT
+-- ... GROUP BY tile that runs on the workers.  On plain PostgreSQL the same
+-- statement runs once per tile, so that a backend holds one tile and its
+-- halo at a time.  Everything happens in the caller's transaction: an error
+-- or a cancel leaves no target behind.
 CREATE PROCEDURE tdc_delaunay_tiled(source regclass, target text, geom_column name DEFAULT 'geom',
 									tile_column name DEFAULT NULL, tile_size float8 DEFAULT NULL)
 LANGUAGE plpgsql
@@ -40,7 +39,7 @@ DECLARE
 	npts bigint;
 	srid_lo int; srid_hi int; zm_lo int; zm_hi int;
 	gx0 float8; gy0 float8; gx1 float8; gy1 float8;
-	w float8; h float8; spacing float8; size float8;
+	w float8; h float8; spacing float8;
 	hull float8[];
 	extent float8[];			-- {xmin, ymin, xmax, ymax} the policy sizes tiles by
 	hasz boolean;
@@ -140,6 +139,28 @@ BEGIN
 															 ''MULTICURVE'', ''MULTISURFACE'', ''GEOMETRYCOLLECTION'')
 							 THEN _tdc_curve_to_line(s.%1$I) ELSE s.%1$I END', geom_column);
 
+	-- Without a tile column: _tdc_tiled_write (src/pg/fn_tiled_bounded.c)
+	-- reads the source once, as ST_TDCDelaunayDump reads it, and triangulates
+	-- it in one pass while that fits tdc_delaunay.max_memory, else tile by
+	-- tile through the core's bounded run, as ./tdc --max-memory does (tiles
+	-- cut by counts, halos and reruns in files under pgsql_tmp); it writes
+	-- the rows straight into the target, which must exist first.  The first
+	-- row's SRID and dimensions give the target's type (M is dropped, as the
+	-- Delaunay functions drop it), and every other row must agree.  Squares
+	-- of tile_size only label the triangles: each is kept by the square
+	-- holding its smallest vertex, as a run tiled by the squares keeps it,
+	-- labelled column * 2^32 + row counted from the vertices' lower left
+	-- corner (_tdc_square_label).
+	IF tile_column IS NULL THEN
+		EXECUTE format('SELECT ST_SRID(s.%1$I), ST_Zmflag(s.%1$I) FROM %2$s s WHERE s.%1$I IS NOT NULL LIMIT 1',
+					   geom_column, source)
+		   INTO srid_lo, zm_lo;
+		EXECUTE format('CREATE TABLE %s (id bigint, tile bigint, geom geometry(%s, %s))', qtarget,
+					   CASE WHEN zm_lo IN (2, 3) THEN 'PolygonZ' ELSE 'Polygon' END, coalesce(srid_lo, 0));
+		PERFORM _tdc_tiled_write(format('SELECT %I FROM %s', geom_column, source), qtarget::regclass, tile_size);
+		RETURN;
+	END IF;
+
 	-- SRID and dimensions, as ST_TDCDelaunayDump checks them, and the number
 	-- and extent of the vertices (the extent from the values' boxes, which
 	-- may be rounded outward: it only sizes the tiles)
@@ -156,15 +177,6 @@ BEGIN
 		RAISE EXCEPTION '%: mixed dimensions in %.% (with and without Z or M)', fn, source, geom_column
 			USING ERRCODE = 'invalid_parameter_value';
 	END IF;
-
-	-- Without a tile column the core cuts the tiles, on plain PostgreSQL as
-	-- in ./tdc --max-memory: counts on a grid whose sides are at the
-	-- quantiles of a sample, split k-d by counts so that every tile with its
-	-- halo fits tdc_delaunay.max_memory (src/core/tile_plan.c).  Squares of
-	-- tile_size then only label the triangles: each is kept by the square
-	-- holding its smallest vertex, as a run tiled by the squares keeps it,
-	-- labelled column * 2^32 + row counted from the data's lower left corner
-	-- (_tdc_square_label).
 	w := coalesce(gx1 - gx0, 0);
 	h := coalesce(gy1 - gy0, 0);
 	spacing := CASE WHEN npts > 0 AND w * h > 0 THEN sqrt(w * h / npts)
@@ -172,44 +184,6 @@ BEGIN
 					ELSE 1 END;
 	extent := ARRAY[gx0, gy0, gx1, gy1];
 	hasz := zm_lo IN (2, 3);
-	IF tile_column IS NULL THEN
-		size := coalesce(tile_size, 'infinity'::float8);
-		-- One tile: every point is known to it, so its halo is everything and
-		-- every triangle is its own.  That is ST_TDCDelaunayDump of the
-		-- source in its stored order (the procedure turns synchronized scans
-		-- off), when it fits tdc_delaunay.max_memory (_tdc_tiled_fits) and the
-		-- points lie in one square.  The box may be rounded outward, so a
-		-- square counts as the only one only when that box lies in it.
-		IF npts = 0 OR (_tdc_tiled_fits(npts, hasz)
-						AND (size = 'infinity'::float8 OR _tdc_square_label(gx1, gy1, gx0, gy0, size) = 0)) THEN
-			-- (CREATE TABLE AS: it writes in bulk, an INSERT into a new table
-			-- took about twice as long)
-			EXECUTE format('CREATE TABLE %s AS
-							SELECT (4294967296 + d.id)::bigint AS id, 0::bigint AS tile,
-								   d.geom::geometry(%s, %s) AS geom
-							  FROM ST_TDCDelaunayDump(%L) d', qtarget,
-						   CASE WHEN zm_lo = 2 THEN 'PolygonZ' WHEN zm_lo = 1 THEN 'PolygonM'
-								WHEN zm_lo = 3 THEN 'PolygonZM' ELSE 'Polygon' END, coalesce(srid_lo, 0),
-						   format('SELECT %I FROM %s', geom_column, source));
-			GET DIAGNOSTICS ntri = ROW_COUNT;
-			RAISE NOTICE '%: % triangles from % points in 1 tile, in one pass', fn, ntri, npts;
-			RETURN;
-		END IF;
-		-- Else the core's bounded run, the one ./tdc --max-memory runs
-		-- (_tdc_tiled_bounded, src/pg/fn_tiled_bounded.c): the source read
-		-- once, as ST_TDCDelaunayDump reads it, into files cut into tiles;
-		-- its rows are the target's, written in bulk by CREATE TABLE AS, with
-		-- no staging table.  Its NOTICE gives the phases.
-		EXECUTE format('CREATE TABLE %s AS
-						SELECT d.id, d.tile, d.geom::geometry(%s, %s) AS geom
-						  FROM _tdc_tiled_bounded(%L%s) d', qtarget,
-					   CASE WHEN zm_lo = 2 THEN 'PolygonZ' WHEN zm_lo = 1 THEN 'PolygonM'
-							WHEN zm_lo = 3 THEN 'PolygonZM' ELSE 'Polygon' END, coalesce(srid_lo, 0),
-					   format('SELECT %I FROM %s', geom_column, source),
-					   CASE WHEN size < 'infinity'::float8
-							THEN format(', %L::float8, %L::float8, %L::float8', gx0, gy0, size) ELSE '' END);
-		RETURN;
-	END IF;
 
 	-- staging tables: temporary on plain PostgreSQL, distributed on Citus
 	IF citus THEN

@@ -134,32 +134,15 @@ COMMENT ON FUNCTION _tdc_tile_regrow(float8[], geometry, float8[], int8, float8[
 'from the row of a run that was not final (the box it needs): the hull bands meeting the box that it lacks, '
 'else its known box grown to the box and half its halo beyond.';
 
-CREATE FUNCTION _tdc_tiled_fits(int8, boolean)
-RETURNS boolean
-AS 'MODULE_PATHNAME', '_tdc_tiled_fits'
-LANGUAGE C STABLE STRICT PARALLEL SAFE;
+CREATE FUNCTION _tdc_tiled_write(query text, target regclass, tile_size float8)
+RETURNS bigint
+AS 'MODULE_PATHNAME', '_tdc_tiled_write'
+LANGUAGE C VOLATILE PARALLEL UNSAFE
+COST 10000;
 
-COMMENT ON FUNCTION _tdc_tiled_fits(int8, boolean) IS
-'Internal, for tdc_delaunay_tiled: _tdc_tiled_fits(points, has Z), whether ST_TDCDelaunayDump of that many vertices '
-'fits tdc_delaunay.max_memory, so that automatic tiles run in one pass.';
-
-CREATE FUNCTION _tdc_tiled_bounded(query text)
-RETURNS TABLE(id bigint, tile bigint, geom geometry)
-AS 'MODULE_PATHNAME', '_tdc_tiled_bounded'
-LANGUAGE C VOLATILE STRICT PARALLEL UNSAFE
-COST 10000 ROWS 100000;
-
-COMMENT ON FUNCTION _tdc_tiled_bounded(text) IS
+COMMENT ON FUNCTION _tdc_tiled_write(text, regclass, float8) IS
 'Internal, for tdc_delaunay_tiled: the Delaunay triangles of the query''s vertices (one geometry column, as '
-'ST_TDCDelaunayDump takes it) tile by tile under tdc_delaunay.max_memory through the core''s bounded run, '
-'as ./tdc --max-memory makes them: rows (id = tile * 2^32 + k, tile from 1, one POLYGON per triangle).';
-
-CREATE FUNCTION _tdc_tiled_bounded(query text, origin_x float8, origin_y float8, size float8)
-RETURNS TABLE(id bigint, tile bigint, geom geometry)
-AS 'MODULE_PATHNAME', '_tdc_tiled_bounded'
-LANGUAGE C VOLATILE STRICT PARALLEL UNSAFE
-COST 10000 ROWS 100000;
-
-COMMENT ON FUNCTION _tdc_tiled_bounded(text, float8, float8, float8) IS
-'Internal, for tdc_delaunay_tiled: _tdc_tiled_bounded(query) with each triangle''s tile the label of the square '
-'of side size counted from the origin that holds its smallest vertex (x, then y), as a run tiled by those squares keeps it.';
+'ST_TDCDelaunayDump takes it) written into target, a table (id bigint, tile bigint, geom geometry) created in this '
+'transaction: in one pass when it fits tdc_delaunay.max_memory, else tile by tile through the core''s bounded run, '
+'as ./tdc --max-memory runs it; with tile_size, each triangle''s tile is the square holding its smallest vertex. '
+'Returns the rows written.';
