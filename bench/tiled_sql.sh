@@ -6,9 +6,10 @@
 # Cases (each a table of points, loaded once):
 #   uniform 1e6 and 1e7: random points in a 1000 square (SQL random(),
 #     setseed 0.5), the procedure under tdc_delaunay.max_memory low enough
-#     that it runs in tiles (BENCH_TSQL_LIMITS: 40 MB for 1e6, 400 MB for 1e7),
-#     beside the Dump, and at 1e6 PostGIS's ST_DelaunayTriangles (at 1e7 its
-#     one GEOMETRYCOLLECTION would pass the 1 GB limit of a value);
+#     that it runs in tiles (BENCH_TSQL_LIMITS: 40 MB for 1e6, 400 MB for 1e7)
+#     and with the default settings (one pass), beside the Dump, and at 1e6
+#     PostGIS's ST_DelaunayTriangles (at 1e7 its one GEOMETRYCOLLECTION would
+#     pass the 1 GB limit of a value);
 #   clusters64 2e6: gen_points clusters64 2000000 42 (64 Gaussian clusters of
 #     widths 0.1 to 20), the procedure under 60 MB beside the Dump, and once
 #     the two targets' triangle sets compared (ST_Normalize, EXCEPT ALL).
@@ -103,7 +104,7 @@ echo "kinds alternate, $REPS rounds; medians; ratio = procedure / CREATE TABLE A
 # case NAME TABLE LIMIT [postgis]: the rounds of one table
 bench_case() {
 	local name=$1 tab=$2 limit=$3 pg=${4:-} r kind stmt pre res
-	local kinds="dump tiled"
+	local kinds="dump tiled onepass"
 	[ -n "$pg" ] && kinds="$kinds postgis"
 	echo
 	echo "== $name ($(q -c "SELECT to_char(count(*), 'FM999,999,999') FROM $tab") points), procedure under tdc_delaunay.max_memory = $limit MB"
@@ -115,6 +116,7 @@ bench_case() {
 				dump) stmt="CREATE TABLE out_dump AS SELECT * FROM ST_TDCDelaunayDump('SELECT geom FROM $tab')" ;;
 				tiled) pre="SET tdc_delaunay.max_memory = $limit"
 					stmt="CALL tdc_delaunay_tiled('$tab', 'out_tiled')" ;;
+				onepass) stmt="CALL tdc_delaunay_tiled('$tab', 'out_onepass')" ;;
 				postgis) stmt="CREATE TABLE out_postgis AS SELECT (ST_Dump(ST_DelaunayTriangles(ST_Collect(geom)))).geom FROM $tab" ;;
 			esac
 			res=$(run "$pre" "$stmt")
@@ -132,7 +134,8 @@ bench_case() {
 		ntri=$(q -c "SELECT count(*) FROM out_$kind")
 		case $kind in
 			dump) label="CREATE TABLE AS Dump" ;;
-			tiled) label="tdc_delaunay_tiled" ;;
+			tiled) label="tdc_delaunay_tiled, tiles" ;;
+			onepass) label="tdc_delaunay_tiled, 1 pass" ;;
 			postgis) label="PostGIS (CTAS, ST_Dump)" ;;
 		esac
 		printf '%-26s %10.2f %10.1f %12s %9.2fx\n' "$label" "$med" "$peak" "$(thousands "$ntri")" \
