@@ -18,6 +18,11 @@
 #include "varatt.h"
 #endif
 
+/* 17 moved PG_TEMP_FILE_PREFIX from storage/fd.h to common/file_utils.h. */
+#if PG_VERSION_NUM >= 170000
+#include "common/file_utils.h"
+#endif
+
 /*
  * 18 replaced the trailing pg_attribute_noreturn() by a leading pg_noreturn.
  * GCC and clang take the attribute in the leading position too.

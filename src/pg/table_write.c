@@ -9,9 +9,9 @@
  * inserts them, and the target's typmod, geometry(Polygon, srid), adds a
  * cast per row that PostGIS checks by reading the value: on 20 million
  * triangles the cast alone took 11 s of a 41 s statement.  Here each row is
- * formed once and inserted with the table AM's bulk insert (a
- * BulkInsertState, no free space map), as CREATE TABLE AS inserts; the
- * values are ours, of the column's type and SRID by construction, so no
+ * formed once and inserted in batches with the table AM's bulk insert (a
+ * BulkInsertState, no free space map, table_multi_insert as COPY uses it);
+ * the values are ours, of the column's type and SRID by construction, so no
  * cast is needed.
  *
  * Because this bypasses what INSERT would do (privileges, triggers, row
@@ -32,13 +32,18 @@
 #include "executor/tuptable.h"
 #include "miscadmin.h"
 #include "utils/lsyscache.h"
+#include "utils/memutils.h"
 #include "utils/rel.h"
 #include "utils/syscache.h"
 
 #include "tdc_pg.h"
 
-/* Rows inserted between two interrupt checks (a power of two). */
-#define TW_POLL_ROWS		65536
+/*
+ * Rows inserted at a time (table_multi_insert, as COPY inserts: the heap
+ * logs a page's rows as one WAL record, where one row at a time logs a
+ * record each), with an interrupt check after each batch.
+ */
+#define TW_BATCH			1000
 
 /* Whether typid is a type named geometry (PostGIS's, in whatever schema). */
 static bool
@@ -121,43 +126,75 @@ tdc_table_writer_shape(TdcTableWriter *tw, int dim, int32 srid, const char *fnam
 							fname, srid, dim == 3 ? " and Z" : "", tsrid, tz ? " and Z" : ""),
 					 errhint("The source changed while it was read; call again.")));
 	}
-	tw->slot = MakeSingleTupleTableSlot(RelationGetDescr(tw->rel), &TTSOpsVirtual);
+	tw->slots = palloc(sizeof(TupleTableSlot *) * TW_BATCH);
+	tw->geoms = palloc(sizeof(struct varlena *) * TW_BATCH);
+	/*
+	 * The table AM's own slots: a heap slot forms its tuple in its own
+	 * memory, freed when it is cleared (a virtual slot's tuple would be
+	 * copied into the current context, and kept there to the end).
+	 */
+	for (int i = 0; i < TW_BATCH; i++)
+	{
+		tw->slots[i] = table_slot_create(tw->rel, NULL);
+		tw->geoms[i] = palloc(tdc_gser_triangle_size(dim == 3));
+	}
+	tw->batch_cxt = AllocSetContextCreate(CurrentMemoryContext, "tdc table writer batch",
+										  ALLOCSET_DEFAULT_SIZES);
 	tw->bistate = GetBulkInsertState();
 	tw->cid = GetCurrentCommandId(true);
 	tw->dim = dim;
 	tw->srid = srid;
-	tw->geom = palloc(tdc_gser_triangle_size(dim == 3));
+}
+
+/* The batch so far into the table. */
+static void
+flush_batch(TdcTableWriter *tw)
+{
+	MemoryContext old;
+
+	if (tw->nbatch == 0)
+		return;
+	/* whatever the insert allocates goes with the batch */
+	old = MemoryContextSwitchTo(tw->batch_cxt);
+	table_multi_insert(tw->rel, tw->slots, tw->nbatch, tw->cid, TABLE_INSERT_SKIP_FSM, tw->bistate);
+	MemoryContextSwitchTo(old);
+	for (int i = 0; i < tw->nbatch; i++)
+		ExecClearTuple(tw->slots[i]);
+	MemoryContextReset(tw->batch_cxt);
+	tw->nbatch = 0;
+	CHECK_FOR_INTERRUPTS();
 }
 
 /* One row: the triangle of the three vertices at v (dim doubles each). */
 void
 tdc_table_writer_put(TdcTableWriter *tw, int64 id, int64 tile, const double *v)
 {
-	TupleTableSlot *slot = tw->slot;
+	TupleTableSlot *slot = tw->slots[tw->nbatch];
+	struct varlena *g = tw->geoms[tw->nbatch];
 
-	ExecClearTuple(slot);
-	tdc_gser_write_triangle_coords(tw->geom, v, tw->dim, tw->srid);
+	/* the tuples are formed when the batch goes in: each row has its own value */
+	tdc_gser_write_triangle_coords(g, v, tw->dim, tw->srid);
 	slot->tts_values[0] = Int64GetDatum(id);
 	slot->tts_values[1] = Int64GetDatum(tile);
-	slot->tts_values[2] = PointerGetDatum(tw->geom);
+	slot->tts_values[2] = PointerGetDatum(g);
 	slot->tts_isnull[0] = slot->tts_isnull[1] = slot->tts_isnull[2] = false;
 	ExecStoreVirtualTuple(slot);
-	/* the tuple is formed from the values here: geom is reused */
-	table_tuple_insert(tw->rel, slot, tw->cid, TABLE_INSERT_SKIP_FSM, tw->bistate);
-	if ((++tw->rows & (TW_POLL_ROWS - 1)) == 0)
-		CHECK_FOR_INTERRUPTS();
+	tw->rows++;
+	if (++tw->nbatch == TW_BATCH)
+		flush_batch(tw);
 }
 
-/* Finish the bulk insert; the lock stays until the transaction ends. */
+/* The last batch in, the bulk insert finished; the lock stays until the transaction ends. */
 void
 tdc_table_writer_close(TdcTableWriter *tw)
 {
-	if (tw->slot != NULL)
+	if (tw->slots != NULL)
 	{
-		ExecDropSingleTupleTableSlot(tw->slot);
+		flush_batch(tw);
+		for (int i = 0; i < TW_BATCH; i++)
+			ExecDropSingleTupleTableSlot(tw->slots[i]);
 		FreeBulkInsertState(tw->bistate);
 		table_finish_bulk_insert(tw->rel, TABLE_INSERT_SKIP_FSM);
-		pfree(tw->geom);
 	}
 	table_close(tw->rel, NoLock);
 	tw->rel = NULL;

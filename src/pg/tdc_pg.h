@@ -504,13 +504,15 @@ extern struct varlena *tdc_drape_target_write(const TdcDrapeTarget *t,
 typedef struct TdcTableWriter
 {
 	struct RelationData *rel;
-	struct TupleTableSlot *slot;
+	struct TupleTableSlot **slots;	/* a batch of rows, each with its own value */
+	struct varlena **geoms;
+	int			nbatch;
+	MemoryContext batch_cxt;	/* what an insert allocates, reset after each batch */
 	struct BulkInsertStateData *bistate;
 	CommandId	cid;
 	Oid			geomoid;		/* the geom column's type */
 	int			dim;
 	int32		srid;
-	struct varlena *geom;		/* one triangle, reused */
 	uint64		rows;
 } TdcTableWriter;
 
