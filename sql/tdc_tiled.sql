@@ -344,6 +344,38 @@ RESET tdc_delaunay.max_memory;
 SELECT to_regclass('tt_err') AS no_target, count(*) AS staging FROM pg_class WHERE relname LIKE 'tdc_tiled%';
 -- the existing target was not touched
 SELECT count(*) FROM tt_uni_tri;
+-- _tdc_tiled_write inserts rows without INSERT's checks: it takes only a
+-- table its caller created in this transaction, with nothing that could
+-- react to or restrict a row
+CREATE TABLE tt_w (id bigint, tile bigint, geom geometry);
+SELECT _tdc_tiled_write('SELECT geom FROM tt_uni', 'tt_w', NULL);
+BEGIN;
+CREATE TABLE tt_w2 (id bigint, tile bigint, geom geometry);
+CREATE INDEX ON tt_w2 (id);
+SELECT _tdc_tiled_write('SELECT geom FROM tt_uni', 'tt_w2', NULL);
+ROLLBACK;
+BEGIN;
+CREATE TABLE tt_w2 (id bigint, tile bigint, geom geometry CHECK (ST_Area(geom) > 1));
+SELECT _tdc_tiled_write('SELECT geom FROM tt_uni', 'tt_w2', NULL);
+ROLLBACK;
+BEGIN;
+CREATE TABLE tt_w2 (id bigint, geom geometry, tile bigint);
+SELECT _tdc_tiled_write('SELECT geom FROM tt_uni', 'tt_w2', NULL);
+ROLLBACK;
+BEGIN;
+CREATE TABLE tt_w2 (id bigint, tile bigint, geom geometry(PolygonZ, 4326));
+SELECT _tdc_tiled_write('SELECT geom FROM tt_uni', 'tt_w2', NULL);
+ROLLBACK;
+BEGIN;
+CREATE TABLE tt_w2 (id bigint, tile bigint, geom geometry(Polygon));
+SELECT _tdc_tiled_write('SELECT geom FROM tt_uni', 'tt_w2', NULL) AS written;
+SELECT count(*) AS rows, count(DISTINCT id) AS ids FROM tt_w2;
+ROLLBACK;
+-- an XYM source: M is dropped, as the Delaunay functions drop it
+CREATE TABLE tt_m AS SELECT ST_MakePointM(ST_X(geom), ST_Y(geom), id) AS geom FROM tt_uni;
+CALL tdc_delaunay_tiled('tt_m', 'tt_m_tri');
+SELECT format_type(atttypid, atttypmod) FROM pg_attribute WHERE attrelid = 'tt_m_tri'::regclass AND attname = 'geom';
+SELECT * FROM tiled_vs_dump('tt_m_tri', 'SELECT geom FROM tt_m');
 
 -- cancel (statement_timeout) during a tile: no target, no staging table,
 -- no temporary file, server alive; for the rounds of SQL statements
@@ -430,7 +462,7 @@ SELECT 1 AS alive;
 DROP TABLE tt_uni, tt_uni_tri, tt_uni_sq, tt_uni_auto, tt_uni_many, tt_uni_notice, tt_uni_notice_sq, tt_uni_sqcol, tt_uni_tiny, tt_uni_ten, tt_dup, tt_dup_tri, tt_dup_one, tt_dup_sq, tt_lat, tt_lat_tri,
 	tt_col, tt_col_tri, tt_line, tt_line_tri, tt_empty, tt_empty_tri, tt_ring, tt_ring_tri, tt_srid, tt_nulltile, tt_big,
 	tt_far, tt_far_tri, tt_far_tiny, tt_c9, tt_c9_col, tt_town, tt_town_col,
-	tt_strip, tt_strip_col, tt_coast, tt_coast_col, tt_q, tt_spot, tt_cancel, tt_bigger,
+	tt_strip, tt_strip_col, tt_coast, tt_coast_col, tt_q, tt_spot, tt_cancel, tt_bigger, tt_w, tt_m, tt_m_tri,
 	tb_c9, tb_c9_auto, tb_town, tb_town_auto, tb_town_sq, tb_town_sq1, tb_strip, tb_strip_auto, tb_coast, tb_coast_auto;
 DROP FUNCTION tiled_vs_dump(regclass, text);
 DROP FUNCTION tt_call(text, text);
