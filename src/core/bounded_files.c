@@ -46,11 +46,14 @@ tdc_bd_nomem(bd_err *e)
 	return tdc_bd_fail(e, TDC_ENOMEM, "out of memory");
 }
 
-/* Has the caller asked the run to stop? */
+/*
+ * Has the caller asked the run to stop?  Another thread sets the flag (a
+ * host's, or tdc_bounded_cancel): read atomically.
+ */
 bool
 tdc_bd_canceled(const volatile int *cancel)
 {
-	return cancel != NULL && *cancel != 0;
+	return cancel != NULL && __atomic_load_n(cancel, __ATOMIC_RELAXED) != 0;
 }
 
 /* s->xy (and s->z) of CHUNK points; reads from the start of the file. */

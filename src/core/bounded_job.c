@@ -91,7 +91,7 @@ tdc_bounded_wait(tdc_bounded_job *job, int timeout_ms)
 void
 tdc_bounded_cancel(tdc_bounded_job *job)
 {
-	job->flag = 1;
+	__atomic_store_n(&job->flag, 1, __ATOMIC_RELAXED);
 	tdc_runner_cancel(&job->run);
 }
 
@@ -112,7 +112,7 @@ tdc_bounded_free(tdc_bounded_job *job)
 {
 	if (job == NULL)
 		return;
-	job->flag = 1;
+	__atomic_store_n(&job->flag, 1, __ATOMIC_RELAXED);
 	tdc_runner_destroy(&job->run);
 	free(job);
 }

@@ -230,16 +230,27 @@ stage_flush(StageArg *sa)
 	buf->n = 0;
 }
 
-/* One pass no longer fits: the directory made, the buffer's vertices to the files, its arrays given back. */
+/*
+ * One pass no longer fits: the directory made, the buffer's vertices to the
+ * files, and its arrays given back.  The buffer has a context of its own
+ * (made for it in _tdc_tiled_write), so resetting that context frees its
+ * arrays and unmaps its mappings; the SRID and dimensions stay.
+ */
 static void
 stage_to_files(StageArg *sa)
 {
-	sa->br->hasz = sa->buf->hasz;
-	sa->br->dim = sa->buf->hasz ? 3 : 2;
+	TdcPointBuf *buf = sa->buf;
+
+	sa->br->hasz = buf->hasz;
+	sa->br->dim = buf->hasz ? 3 : 2;
 	make_run_dir(sa->br, sa->fname);
 	sa->to_files = true;
 	stage_flush(sa);
-	tdc_pointbuf_drop_storage(sa->buf);
+	MemoryContextReset(buf->cxt);
+	buf->map = NULL;
+	buf->xy = buf->z = NULL;
+	buf->n = buf->cap = 0;
+	buf->side_bytes = 0;
 }
 
 /*

@@ -108,22 +108,6 @@ tdc_pointbuf_bytes(const TdcPointBuf *buf)
 }
 
 /*
- * Give the arrays back and empty the buffer, keeping its SRID and
- * dimensions: for an owner that moves the vertices elsewhere as they come
- * (tdc_delaunay_tiled stages them to files).  The buffer's context is
- * reset, so it must be one of the buffer's own.
- */
-void
-tdc_pointbuf_drop_storage(TdcPointBuf *buf)
-{
-	MemoryContextReset(buf->cxt);
-	buf->map = NULL;
-	buf->xy = buf->z = NULL;
-	buf->n = buf->cap = 0;
-	buf->side_bytes = 0;
-}
-
-/*
  * The bytes an empty buffer holds once n vertices were appended (the
  * doubling of tdc_pointbuf_reserve; where the limit cuts the doubling
  * short it holds less), for a caller deciding beforehand whether a

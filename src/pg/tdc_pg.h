@@ -181,7 +181,6 @@ extern void tdc_pointbuf_reserve(TdcPointBuf *buf, uint64 extra,
 								 const char *fname);
 extern uint64 tdc_pointbuf_bytes(const TdcPointBuf *buf);
 extern uint64 tdc_pointbuf_bytes_after(uint64 n, bool hasz);
-extern void tdc_pointbuf_drop_storage(TdcPointBuf *buf);
 extern void tdc_pointbuf_side_grow(TdcPointBuf *buf, uint64 old_bytes,
 								   uint64 new_bytes, const char *what,
 								   const char *fname);
