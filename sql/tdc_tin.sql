@@ -132,7 +132,14 @@ SELECT GeometryType(poly), ST_IsValid(poly), ST_IsClosed(ST_ExteriorRing(poly)),
 	   ST_HausdorffDistance(poly, 'SRID=2056;POLYGON((100 100, 900 100, 900 900, 100 100))') < 1e-9 AS same_area,
 	   ST_NPoints(poly) > 4 AS split
 FROM tdc_tin_draped;
-SELECT ST_AsText(ST_Force2D(mp)) AS points, ST_NDims(mp) FROM tdc_tin_draped;
+SELECT ST_AsText(mp) AS points, ST_NDims(mp) FROM tdc_tin_draped;
+-- nearest drape (issue 36): every vertex had Z = 0, which the line above
+-- let through while it checked only the shape; each vertex takes its nearest
+-- sample's height
+SELECT ST_AsText(ST_TDCDrape(geom, 'MULTIPOINT(0.2 0.2, 0.6 0.1)', 'nearest')) AS nearest_drape
+FROM (VALUES ('POINT Z (0 0 1)'::geometry), ('POINT Z (1 0 2)'), ('POINT Z (0 1 3)')) v(geom);
+SELECT ST_AsText(ST_TDCDrape(geom, 'LINESTRING M (0.1 0.8 5, 0.9 0.05 6)', 'nearest')) AS nearest_line
+FROM (VALUES ('POINT Z (0 0 1)'::geometry), ('POINT Z (1 0 2)'), ('POINT Z (0 1 3)')) v(geom);
 -- the edge crossings: as many as the TIN's edges the segment crosses
 SELECT (SELECT ST_NPoints(ST_TDCDrape(geom, 'SRID=2056;LINESTRING(10 10, 990 980)')) - 2 FROM tdc_tin_plane) =
 	   (SELECT count(*) FROM (SELECT ST_TDCDelaunay(geom, 0, 1) AS e FROM tdc_tin_plane) t, ST_Dump(e) d

@@ -100,8 +100,15 @@ check_method(const char *method, tdc_interp_spec *spec)
 				 gdal_option ? errdetail("%s takes no options but linear's breaklines: every vertex of the target must lie in the samples' convex hull.",
 										 DRAPE_NAME) : (err[0] ? errdetail("%s.", err) : 0),
 				 errhint("Use 'linear', 'linear:breaklines=true', 'nearest' or 'natural_neighbor'.")));
-	/* outside the hull there is no value: an error, raised by the final function */
-	spec->radius = 0;
+	/*
+	 * Outside the hull there is no value: an error, raised by the final
+	 * function from where each vertex lies, not from its value.  In the
+	 * core's terms radius 0 is "never" and -1 "at any distance": linear and
+	 * natural neighbour take no site outside the hull, and nearest takes the
+	 * nearest site wherever the vertex is (0 there would give every vertex
+	 * nodata, Z = 0: issue 36).
+	 */
+	spec->radius = spec->method == TDC_INTERP_NEAREST ? -1 : 0;
 }
 
 /* From the first row, whose method fixes every row's: breaklines or not. */
