@@ -35,7 +35,7 @@
 #include <string.h>
 
 #include "tdc.h"
-#include "predicates.h"
+#include "engine/predicates.h"
 
 #define MAX_PTS		128
 #define MAX_SEGS	256

@@ -53,7 +53,7 @@
 
 #include "pg_shim.h"
 #include "tdc_pg.h"
-#include "raster_format.h"
+#include "formats/raster_format.h"
 
 static void
 fail(const char *what, const char *detail)

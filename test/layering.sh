@@ -2,7 +2,7 @@
 # test/layering.sh: no two files of src/ call each other in a loop, and only
 # the job's own layer reads struct tdc_job.
 #
-# Each file of src/core, src/cli and src/pg is compiled on its own to an
+# Each file under src/core, src/cli and src/pg is compiled on its own to an
 # object; nm gives the symbols it defines and the ones it leaves undefined.
 # An undefined symbol that another src/ file defines is an edge from the user
 # to the definer.  The strongly connected components of that graph are the
@@ -15,11 +15,11 @@
 # pg_config) when it is installed; without them src/core and src/cli alone
 # are checked, and the output says so.  No server is needed.
 #
-# A second rule: struct tdc_job (src/core/job.h) is read only by the job's
+# A second rule: struct tdc_job (src/core/engine/job.h) is read only by the job's
 # own layer, JOB_LAYER below: the files that build a triangulation and give
 # access to it.  Every other file, among them the consumers of a finished
 # job (Voronoi, constrained, tiles) and the front ends, reads a finished job
-# through the view of src/core/mesh_view.h or the public API of tdc.h; one
+# through the view of src/core/engine/mesh_view.h or the public API of tdc.h; one
 # that includes job.h, directly or through another header (as the compiler's
 # -MM lists them), fails.
 #
@@ -48,7 +48,7 @@ fi
 : > "$tmp/reads_job"
 : > "$tmp/uses"
 for d in $dirs; do
-	for f in "$d"/*.c; do
+	for f in $(find "$d" -name '*.c' | sort); do
 		[ -f "$f" ] || continue
 		o=$tmp/$(echo "$f" | tr / _).o
 		flags="-std=c11 -D_GNU_SOURCE -pthread -Isrc/core"
@@ -68,8 +68,8 @@ for d in $dirs; do
 		esac
 		# shellcheck disable=SC2086
 		if [ "${reads_job:-}" = check ] &&
-				$CC $flags -MM "$f" 2>/dev/null | tr ' \\' '\n\n' | grep -qx 'src/core/job.h'; then
-			echo "FAIL: $f includes src/core/job.h: outside the job's layer, read mesh_view.h or tdc.h"
+				$CC $flags -MM "$f" 2>/dev/null | tr ' \\' '\n\n' | grep -qx 'src/core/engine/job.h'; then
+			echo "FAIL: $f includes src/core/engine/job.h: outside the job's layer, read mesh_view.h or tdc.h"
 			echo "$f" >> "$tmp/reads_job"
 		fi
 		reads_job=
@@ -85,7 +85,7 @@ awk 'NR == FNR { if (!($1 in def)) def[$1] = $2; next }
 	"$tmp/defs" "$tmp/uses" | sort > "$tmp/edges"
 awk '{ print $2 }' "$tmp/defs" | sort -u > "$tmp/files"
 # files that define nothing another file could call still count
-for d in $dirs; do ls "$d"/*.c; done | sort -u > "$tmp/all"
+for d in $dirs; do find "$d" -name '*.c'; done | sort -u > "$tmp/all"
 
 # Tarjan's strongly connected components; for each component of two or more
 # files, one loop through it found by a breadth-first search inside it.  A

@@ -48,7 +48,7 @@
 #include "miscadmin.h"
 #include "utils/memutils.h"
 
-#include "gser_format.h"
+#include "formats/gser_format.h"
 #include "fn_voronoi.h"
 
 struct VorRun

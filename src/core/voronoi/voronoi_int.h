@@ -12,8 +12,8 @@
 #include <math.h>
 #include <stdlib.h>
 
-#include "exact.h"
-#include "mesh_view.h"
+#include "engine/exact.h"
+#include "engine/mesh_view.h"
 
 #define SITES_PER_TASK	4096	/* cells built per task, and per cancel poll */
 #define ITEMS_PER_TASK	65536	/* half-edges or triangles per task */

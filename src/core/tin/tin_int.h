@@ -21,8 +21,8 @@
 #include <math.h>
 #include <stdlib.h>
 
-#include "exact.h"
-#include "mesh_view.h"
+#include "engine/exact.h"
+#include "engine/mesh_view.h"
 
 #define TIN_KD_LEAF		8		/* k-d ranges of at most this many sites are scanned */
 

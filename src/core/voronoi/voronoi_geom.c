@@ -49,8 +49,8 @@
  */
 #include <math.h>
 
-#include "exact.h"
-#include "internal.h"
+#include "engine/exact.h"
+#include "engine/internal.h"
 
 /*
  * Circumcenter of the counter-clockwise, non-degenerate triangle a, b, c,

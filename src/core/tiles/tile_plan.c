@@ -12,7 +12,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "predicates.h"
+#include "engine/predicates.h"
 #include "tile_plan.h"
 
 /*

@@ -30,7 +30,7 @@
 #include <math.h>
 
 #include "tdc_pg.h"
-#include "tile_plan.h"
+#include "tiles/tile_plan.h"
 
 
 

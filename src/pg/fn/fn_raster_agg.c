@@ -51,7 +51,7 @@
 #include "utils/memutils.h"
 
 #include "tdc_pg.h"
-#include "raster_format.h"
+#include "formats/raster_format.h"
 #include "fn_raster.h"
 
 #define INTERP_NAME			"ST_TDCInterpolate"

@@ -22,7 +22,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "predicates.h"
+#include "engine/predicates.h"
 #include "tile_cells.h"
 
 #define EPS		0x1p-53

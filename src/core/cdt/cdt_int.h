@@ -7,7 +7,7 @@
 #ifndef TDC_CDT_INT_H
 #define TDC_CDT_INT_H
 
-#include "mesh_view.h"
+#include "engine/mesh_view.h"
 
 /* cons[] holds segment number + 1, so that the zeroed array means "none" */
 #define NO_SEG		0					/* edge is no constraint */

@@ -57,7 +57,7 @@
 #include <math.h>
 
 #include "tdc_pg.h"
-#include "gser_format.h"
+#include "formats/gser_format.h"
 
 
 /* The aggregate's transition state: the tile's points with their owners. */

@@ -7,7 +7,7 @@
 #define TDC_FN_RASTER_H
 
 #include "tdc_pg.h"
-#include "raster_format.h"
+#include "formats/raster_format.h"
 
 extern void tdc_raster_method(const char *method, tdc_interp_spec *spec,
 							  const char *fname);

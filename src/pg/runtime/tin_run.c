@@ -37,7 +37,7 @@
 #include "utils/memutils.h"
 
 #include "tdc_pg.h"
-#include "gser_format.h"
+#include "formats/gser_format.h"
 
 TDC_WORK_OPS(tin_ops, tdc_tin, tdc_tin, "TIN operation");
 

@@ -54,7 +54,7 @@
 #include "utils/memutils.h"
 
 #include "tdc_pg.h"
-#include "tile_plan.h"
+#include "tiles/tile_plan.h"
 
 
 /* Vertices collected before they are appended to the files: 1.5 MB of xy. */

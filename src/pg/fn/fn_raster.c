@@ -56,7 +56,7 @@
 #include "utils/memutils.h"
 
 #include "tdc_pg.h"
-#include "raster_format.h"
+#include "formats/raster_format.h"
 #include "fn_raster.h"
 
 #define INTERPOLATE_RASTER_NAME	"ST_TDCInterpolateRaster"

@@ -29,7 +29,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "mesh_view.h"
+#include "engine/mesh_view.h"
 #include "tile_cells.h"
 
 #define EPS		0x1p-53
