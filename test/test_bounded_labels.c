@@ -119,6 +119,23 @@ write_file(const char *path, const void *p, size_t size, size_t n)
 	return fclose(f);
 }
 
+/* A labelled run of the files in dir under 16 MB, emitting to emit_check. */
+static void
+labelled_params(tdc_bounded_params *p, const char *xypath, const char *zpath, const char *lpath, size_t n,
+				const tdc_options *opt, const char *dir, label_check *c)
+{
+	memset(p, 0, sizeof(*p));
+	p->xypath = xypath;
+	p->zpath = zpath;
+	p->lpath = lpath;
+	p->n = n;
+	p->opt = opt;
+	p->limit = (size_t) 16 << 20;
+	p->tmpdir = dir;
+	p->emit = emit_check;
+	p->arg = c;
+}
+
 void
 test_bounded_labels(void)
 {
@@ -224,16 +241,7 @@ test_bounded_labels(void)
 		label_check c = {.sites = all, .nsites = nsites};
 
 		c.with_z = with_z;
-		memset(&p, 0, sizeof(p));
-		p.xypath = xypath;
-		p.zpath = with_z ? zpath : NULL;
-		p.lpath = lpath;
-		p.n = n;
-		p.opt = &opt;
-		p.limit = (size_t) 16 << 20;
-		p.tmpdir = dir;
-		p.emit = emit_check;
-		p.arg = &c;
+		labelled_params(&p, xypath, with_z ? zpath : NULL, lpath, n, &opt, dir, &c);
 		p.check_files = true;
 		rc = tdc_bounded_run(&p, &st, err, sizeof(err));
 		CHECK(rc == TDC_OK, "bounded labels (z %d): run: %d %s", with_z, rc, err);
@@ -253,15 +261,7 @@ test_bounded_labels(void)
 		label_check c = {.sites = all, .nsites = nsites};
 
 		CHECK(write_file(lpath, lab, 8, n - 1) == 0, "bounded labels: cannot write %s", lpath);
-		memset(&p, 0, sizeof(p));
-		p.xypath = xypath;
-		p.lpath = lpath;
-		p.n = n;
-		p.opt = &opt;
-		p.limit = (size_t) 16 << 20;
-		p.tmpdir = dir;
-		p.emit = emit_check;
-		p.arg = &c;
+		labelled_params(&p, xypath, NULL, lpath, n, &opt, dir, &c);
 		rc = tdc_bounded_run(&p, &st, err, sizeof(err));
 		CHECK(rc == TDC_EINVAL && strstr(err, "input.l holds") != NULL && c.ntri == 0,
 			  "bounded labels: short label file: %d %s", rc, err);
