@@ -184,7 +184,7 @@ FROM generate_series(0, 2) f;
 -- Difference: flags out of range is an error in both, with our own message.
 SELECT ST_TDCDelaunayTriangles('MULTIPOINT(0 0,1 0,0 1)', 0, 3);
 -- Curves: PostGIS strokes them for GEOS as ST_CurveToLine does with its
--- defaults, and so do we (src/pg/curves.c): the same triangles, every type of
+-- defaults, and so do we (src/pg/formats/curves.c): the same triangles, every type of
 -- curve, at top level and nested, with Z and SRID, in every output form.
 -- (n: the members as ST_Dump gives them, the triangles of a TIN included;
 -- ST_NumGeometries counts a TIN as one geometry from PostGIS 3.6 on, and

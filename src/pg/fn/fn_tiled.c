@@ -2,7 +2,7 @@
  * fn_tiled.c
  *		The per-tile step of tdc_delaunay_tiled (src/sql/tiled.sql):
  *		an aggregate that triangulates one tile with its halo and keeps the
- *		tile's final triangles (src/core/tile_final.c), and a set-returning
+ *		tile's final triangles (src/core/tiles/tile_final.c), and a set-returning
  *		function that unnests its result into POLYGON rows.
  *
  * Why an aggregate.  The procedure's per-tile work must be one statement
