@@ -15,12 +15,12 @@
 # pg_config) when it is installed; without them src/core and src/cli alone
 # are checked, and the output says so.  No server is needed.
 #
-# A second rule: struct tdc_job (src/core/engine/job.h) is read only by the job's
+# A second rule: struct tdc_job (src/core/engine/job_int.h) is read only by the job's
 # own layer, JOB_LAYER below: the files that build a triangulation and give
 # access to it.  Every other file, among them the consumers of a finished
 # job (Voronoi, constrained, tiles) and the front ends, reads a finished job
 # through the view of src/core/engine/mesh_view.h or the public API of tdc.h; one
-# that includes job.h, directly or through another header (as the compiler's
+# that includes job_int.h, directly or through another header (as the compiler's
 # -MM lists them), fails.
 #
 #   bash test/layering.sh        prints "N passed, N failed" (one per file)
@@ -68,8 +68,8 @@ for d in $dirs; do
 		esac
 		# shellcheck disable=SC2086
 		if [ "${reads_job:-}" = check ] &&
-				$CC $flags -MM "$f" 2>/dev/null | tr ' \\' '\n\n' | grep -qx 'src/core/engine/job.h'; then
-			echo "FAIL: $f includes src/core/engine/job.h: outside the job's layer, read mesh_view.h or tdc.h"
+				$CC $flags -MM "$f" 2>/dev/null | tr ' \\' '\n\n' | grep -qx 'src/core/engine/job_int.h'; then
+			echo "FAIL: $f includes src/core/engine/job_int.h: outside the job's layer, read mesh_view.h or tdc.h"
 			echo "$f" >> "$tmp/reads_job"
 		fi
 		reads_job=

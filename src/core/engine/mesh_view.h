@@ -4,10 +4,10 @@
  *		diagram (voronoi*.c), the constrained insertion (cdt*.c) and the
  *		tile finalization (tile_final.c).  Not installed.
  *
- * struct tdc_job (job.h) holds some forty fields: the plan, the grid and
+ * struct tdc_job (job_int.h) holds some forty fields: the plan, the grid and
  * the subdivision tree, the pool, the arena, the lifecycle.  A consumer
  * needs only the result: the input, the sites, the half-edges and the
- * outer face.  So the consumers do not include job.h (test/layering.sh
+ * outer face.  So the consumers do not include job_int.h (test/layering.sh
  * checks it); they take a tdc_mesh_view, filled once from a finished job by
  * tdc_job_view (result.c, in the layer that owns the job), and keep the job
  * itself only as the opaque handle of tdc.h, for the public accessors
