@@ -457,22 +457,42 @@ typedef struct TdcTinAgg
 /* copies src's parameters into dst, or checks that they are dst's */
 typedef void (*TdcTinAggParams) (TdcTinAgg *dst, const TdcTinAgg *src, MemoryContext cxt);
 
+/*
+ * What one TIN aggregate's serial, deserial and combine functions need to
+ * know of it (tin_agg.c explains the shared form).  Its parameters come
+ * after the vertices: a fixed part (the set flag, a uint32 at 0, and the
+ * int64 rows at rows_at are tin_agg.c's; the rest the kind's), then
+ * var_len bytes more.
+ */
+typedef struct TdcTinAggKind
+{
+	const TdcStateFormat *fmt;	/* magic, version, the aggregate's name */
+	const char *sqlfn;			/* its support functions' prefix, in errors */
+	Size		size;			/* its state, which begins with a TdcTinAgg */
+	TdcCurves	curves;			/* how it reads a curved sample */
+	Size		fixed;			/* the parameters' fixed part, in bytes */
+	Size		rows_at;		/* where the rows lie in it */
+	TdcTinAggParams params;		/* the combine function's reconciliation */
+	/* the length of the variable part (0 when the parameters are unset) */
+	Size		(*var_len) (const TdcTinAgg *a);
+	/* the parameters into their zeroed part, but for the flag and the rows */
+	void		(*write) (const TdcTinAgg *a, char *extra);
+
+	/*
+	 * The parameters from the len bytes of extra, whose flag and rows are
+	 * read: checks them (tdc_agg_state_corrupt), sets the breaklines, and
+	 * returns their length; the segments follow.
+	 */
+	Size		(*read) (TdcTinAgg *a, const char *extra, Size len);
+} TdcTinAggKind;
+
 extern TdcTinAgg *tdc_tin_agg_new(MemoryContext cxt, Size size, TdcCurves curves);
-extern TdcTinAgg *tdc_tin_agg_combine(FunctionCallInfo fcinfo, const char *fn,
-									  const char *fname, Size size, TdcCurves curves,
-									  TdcTinAggParams params);
 extern void tdc_tin_agg_breaklines(TdcTinAgg *a, bool breaklines, MemoryContext cxt,
 								   const char *fname);
 extern void tdc_tin_agg_add(TdcTinAgg *a, Datum geom, const char *fname);
-extern void tdc_tin_agg_merge(TdcTinAgg *dst, const TdcTinAgg *src, const char *fname);
-extern char *tdc_tin_agg_extra(const TdcTinAgg *a, Size plen, Size *len);
-extern bytea *tdc_tin_agg_serialize(const TdcTinAgg *a, const TdcStateFormat *fmt,
-									char *extra, Size plen);
-extern const char *tdc_tin_agg_deserialize(TdcTinAgg *a, const bytea *in,
-										   const TdcStateFormat *fmt, TdcCurves curves,
-										   Size *extra_len);
-extern void tdc_tin_agg_read_segments(TdcTinAgg *a, const char *rest, Size len,
-									  const char *fname);
+extern Datum tdc_tin_agg_serialfn(FunctionCallInfo fcinfo, const TdcTinAggKind *k);
+extern Datum tdc_tin_agg_deserialfn(FunctionCallInfo fcinfo, const TdcTinAggKind *k);
+extern Datum tdc_tin_agg_combinefn(FunctionCallInfo fcinfo, const TdcTinAggKind *k);
 
 /* gser_contour.c: the contour lines of a TIN as a MULTILINESTRING Z */
 extern struct varlena *tdc_gser_contours(const tdc_tin *tin, int32 srid, uint64 room,

@@ -11,14 +11,25 @@
  * samples' linework as segments (seglist.c).  What follows it is the
  * aggregate's own parameters: levels, a target, a raster template.
  *
+ * The serial, deserial and combine functions of the three aggregates are
+ * written once, here (tdc_tin_agg_serialfn and the others), from a
+ * TdcTinAggKind that says what differs: the format's magic and version,
+ * the state's size, how a curved sample is read, and the aggregate's own
+ * parameters (how long they are, how they are written, read and checked,
+ * and how two states' parameters are reconciled).
+ *
  * The serialized form is agg_state.c's, under the aggregate's magic: the
- * vertices, then an extra part that is the aggregate's fixed parameters
- * and, last, the segments as k * 2 uint32 ends.  The segments go last so
- * that their count follows from the length, and so that each aggregate
- * lays out (and checks, when read) only its own part.  A segment must
- * have both ends among the state's vertices, a state without breaklines
- * no segment, and a state with vertices their heights: whatever a worker
- * sends is checked as if it came from outside.
+ * vertices, then an extra part that is the aggregate's parameters and,
+ * last, the segments as k * 2 uint32 ends.  The parameters begin with a
+ * fixed part whose first uint32 says whether they are set (0 or 1) and
+ * which holds the int64 count of rows at an offset of the aggregate's
+ * choosing; a variable part (a method's text, a target) may follow.  The
+ * segments go last so that their count follows from the length, and so
+ * that each aggregate lays out (and checks, when read) only its own part.
+ * A segment must have both ends among the state's vertices, a state
+ * without breaklines no segment, a state without parameters nothing at
+ * all, and a state with vertices their heights: whatever a worker sends is
+ * checked as if it came from outside.
  *
  * Combining appends the second state's vertices after the first's, so its
  * segments' ends shift by the first's vertex count before the merge.
@@ -71,8 +82,8 @@ tdc_tin_agg_add(TdcTinAgg *a, Datum geom, const char *fname)
 }
 
 /* src's samples after dst's; the caller has made their parameters agree. */
-void
-tdc_tin_agg_merge(TdcTinAgg *dst, const TdcTinAgg *src, const char *fname)
+static void
+tin_agg_merge(TdcTinAgg *dst, const TdcTinAgg *src, const char *fname)
 {
 	uint64		base = dst->base->pts.n;
 
@@ -82,84 +93,116 @@ tdc_tin_agg_merge(TdcTinAgg *dst, const TdcTinAgg *src, const char *fname)
 		tdc_seg_append(&dst->segs, &src->segs, base);
 }
 
-/*
- * The body of every TIN aggregate's combine function: the second state's
- * samples after the first's, once params has made the first's parameters
- * the second's (or checked that they agree).  A state whose parameters
- * are unset read no row and adds nothing.  NULL: no state yet.
- */
-TdcTinAgg *
-tdc_tin_agg_combine(FunctionCallInfo fcinfo, const char *fn, const char *fname, Size size,
-					TdcCurves curves, TdcTinAggParams params)
+/* The aggregate context, checked for the support function named sqlfn_what. */
+static MemoryContext
+tin_agg_context(FunctionCallInfo fcinfo, const TdcTinAggKind *k, const char *what)
 {
-	MemoryContext aggcxt = tdc_agg_context(fcinfo, fn);
-	TdcTinAgg  *a = PG_ARGISNULL(0) ? NULL : (TdcTinAgg *) PG_GETARG_POINTER(0);
-	TdcTinAgg  *b = PG_ARGISNULL(1) ? NULL : (TdcTinAgg *) PG_GETARG_POINTER(1);
+	char		fn[NAMEDATALEN + 16];
 
-	if (b == NULL || !b->params_set)
-		return a;
+	snprintf(fn, sizeof(fn), "%s_%s", k->sqlfn, what);
+	return tdc_agg_context(fcinfo, fn);
+}
+
+/*
+ * The combine function: the second state's samples after the first's,
+ * once the kind's params has made the first's parameters the second's (or
+ * checked that they agree).  A state whose parameters are unset read no
+ * row and adds nothing.  NULL: no state yet.
+ */
+Datum
+tdc_tin_agg_combinefn(FunctionCallInfo fcinfo, const TdcTinAggKind *k)
+{
+	MemoryContext aggcxt;
+	TdcTinAgg  *a,
+			   *b;
+
+	tdc_signal_guard();
+	aggcxt = tin_agg_context(fcinfo, k, "combinefn");
+	a = PG_ARGISNULL(0) ? NULL : (TdcTinAgg *) PG_GETARG_POINTER(0);
+	b = PG_ARGISNULL(1) ? NULL : (TdcTinAgg *) PG_GETARG_POINTER(1);
+	if (b != NULL && b->params_set)
+	{
+		if (a == NULL)
+			a = tdc_tin_agg_new(aggcxt, k->size, k->curves);
+		k->params(a, b, aggcxt);
+		tin_agg_merge(a, b, k->fmt->fname);
+	}
 	if (a == NULL)
-		a = tdc_tin_agg_new(aggcxt, size, curves);
-	params(a, b, aggcxt);
-	tdc_tin_agg_merge(a, b, fname);
-	return a;
+		PG_RETURN_NULL();
+	PG_RETURN_POINTER(a);
 }
 
 /*
- * A zeroed extra part of plen bytes for the aggregate's parameters, with
- * room for the segments after them; *len is its whole length.
+ * The serial function: the vertices, then the parameters (the set flag and
+ * the rows here, the rest by the kind's write into a zeroed part, whether
+ * set or not: a field the format ignores goes back as it came), then the
+ * segments.
  */
-char *
-tdc_tin_agg_extra(const TdcTinAgg *a, Size plen, Size *len)
+Datum
+tdc_tin_agg_serialfn(FunctionCallInfo fcinfo, const TdcTinAggKind *k)
 {
-	Size		slen = a->breaklines ? (Size) a->segs.nseg * 2 * sizeof(uint32) : 0;
+	TdcTinAgg  *a;
+	Size		plen,
+				slen;
+	char	   *extra;
+	uint32		set;
 
-	*len = plen + slen;
-	return palloc_extended(*len, MCXT_ALLOC_HUGE | MCXT_ALLOC_ZERO);
-}
-
-/* The state serialized, extra's first plen bytes filled by the caller. */
-bytea *
-tdc_tin_agg_serialize(const TdcTinAgg *a, const TdcStateFormat *fmt, char *extra, Size plen)
-{
-	Size		slen = a->breaklines ? (Size) a->segs.nseg * 2 * sizeof(uint32) : 0;
-
+	tdc_signal_guard();
+	(void) tin_agg_context(fcinfo, k, "serialfn");
+	a = (TdcTinAgg *) PG_GETARG_POINTER(0);
+	plen = k->fixed + k->var_len(a);
+	slen = a->breaklines ? (Size) a->segs.nseg * 2 * sizeof(uint32) : 0;
+	extra = palloc_extended(plen + slen, MCXT_ALLOC_HUGE | MCXT_ALLOC_ZERO);
+	set = a->params_set ? 1 : 0;
+	memcpy(extra, &set, sizeof(set));
+	memcpy(extra + k->rows_at, &a->rows, sizeof(a->rows));
+	k->write(a, extra);
 	if (slen > 0)
 		memcpy(extra + plen, a->segs.seg, slen);
-	return tdc_agg_state_serialize_with(a->base, fmt, extra, plen + slen,
-										slen == 0 ? NULL :
-										psprintf("%llu vertices and %llu breakline segments",
-												 (unsigned long long) a->base->pts.n,
-												 (unsigned long long) a->segs.nseg));
+	PG_RETURN_BYTEA_P(tdc_agg_state_serialize_with(a->base, k->fmt, extra, plen + slen,
+												   slen == 0 ? NULL :
+												   psprintf("%llu vertices and %llu breakline segments",
+															(unsigned long long) a->base->pts.n,
+															(unsigned long long) a->segs.nseg)));
 }
 
 /*
- * A serialized state's vertices into a (zeroed); returns its extra part, of
- * *extra_len bytes, for the aggregate to read its parameters from.
+ * The deserial function: the vertices (agg_state.c checks them), the set
+ * flag and the rows, the kind's parameters (its read checks their lengths
+ * and values, and sets the breaklines), then the segments, and the checks
+ * that hold for every state.
  */
-const char *
-tdc_tin_agg_deserialize(TdcTinAgg *a, const bytea *in, const TdcStateFormat *fmt,
-						TdcCurves curves, Size *extra_len)
+Datum
+tdc_tin_agg_deserialfn(FunctionCallInfo fcinfo, const TdcTinAggKind *k)
 {
+	const char *fname = k->fmt->fname;
+	TdcTinAgg  *a;
 	const char *extra;
+	Size		len,
+				plen;
+	uint32		set;
 
-	a->base = tdc_agg_state_deserialize_with(in, fmt, CurrentMemoryContext, &extra, extra_len);
-	a->base->pts.curves = curves;
-	return extra;
-}
-
-/*
- * The rest of a serialized state, after the aggregate's parameters have
- * been read and its breaklines set: len bytes of segments, then the
- * checks that hold for every state.
- */
-void
-tdc_tin_agg_read_segments(TdcTinAgg *a, const char *rest, Size len, const char *fname)
-{
-	if (!a->breaklines && len != 0)
+	tdc_signal_guard();
+	(void) tin_agg_context(fcinfo, k, "deserialfn");
+	a = palloc0(k->size);
+	a->base = tdc_agg_state_deserialize_with(PG_GETARG_BYTEA_P(0), k->fmt, CurrentMemoryContext,
+											 &extra, &len);
+	a->base->pts.curves = k->curves;
+	if (len < k->fixed)
+		tdc_agg_state_corrupt(fname, psprintf("%zu bytes of parameters, fewer than %zu",
+											  len, k->fixed));
+	memcpy(&set, extra, sizeof(set));
+	memcpy(&a->rows, extra + k->rows_at, sizeof(a->rows));
+	if (set > 1 || a->rows < 0)
+		tdc_agg_state_corrupt(fname, "bad parameter flag or row count");
+	a->params_set = set == 1;
+	tdc_agg_state_check_unset(a->base, a->params_set, a->rows, fname);
+	plen = k->read(a, extra, len);
+	if (!a->breaklines && len != plen)
 		tdc_agg_state_corrupt(fname, "segments without breaklines");
 	if (a->breaklines)
-		tdc_seg_read(&a->segs, rest, len, a->base->pts.n);
+		tdc_seg_read(&a->segs, extra + plen, len - plen, a->base->pts.n);
 	if (a->base->pts.n > 0 && !a->base->pts.hasz)
 		tdc_agg_state_corrupt(fname, "samples without Z");
+	PG_RETURN_POINTER(a);
 }
