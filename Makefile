@@ -204,8 +204,8 @@ FUZZ_GSER_SRCS = src/pg/formats/gser_read.c src/pg/formats/gser_write.c src/pg/r
 # which brings the raster and geometry readers and writers, and the
 # breaklines' segment list in seglist.c);
 # pg_shim_agg.c stands in for tin_run.c, run.c's wait loop and the rest.
-FUZZ_STATE_SRCS = $(addprefix src/pg/runtime/,agg_state.c tin_agg.c seglist.c) \
-	$(addprefix src/pg/fn/,fn_contours_agg.c fn_drape_agg.c fn_raster_agg.c fn_raster.c) \
+FUZZ_STATE_SRCS = $(addprefix src/pg/runtime/,agg_state.c seglist.c) \
+	$(addprefix src/pg/fn/,tin_agg.c fn_contours_agg.c fn_drape_agg.c fn_raster_agg.c fn_raster.c) \
 	$(addprefix src/pg/formats/,raster_read.c raster_write.c gser_contour.c gser_drape.c) \
 	$(FUZZ_GSER_SRCS)
 FUZZ_PG_DEPS = fuzz/pg_shim.c fuzz/pg_shim.h src/pg/tdc_pg.h src/pg/runtime/pg_version_compat.h \
