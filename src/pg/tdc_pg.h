@@ -195,8 +195,9 @@ extern bool tdc_gser_append(TdcPointBuf *buf, const struct varlena *geom,
 extern bool tdc_gser_append_source(TdcPointBuf *buf, TdcGserSource *src,
 								   const char *fname);
 
-/* toast_stream.c: any geometry argument, TOASTed or not */
+/* toast_stream.c: any geometry argument, TOASTed or not; a TIN's sample (with Z) */
 extern bool tdc_read_geometry(TdcPointBuf *buf, Datum d, const char *fname);
+extern void tdc_tin_read_sample(TdcPointBuf *buf, Datum d, int64 row, const char *fname);
 
 /* curves.c */
 extern struct varlena *tdc_curve_to_line(Datum geom, const char *fname);
@@ -438,7 +439,6 @@ typedef struct TdcTinRun
 	size_t		max_memory;		/* the TIN's and its operations' share (0: no limit) */
 } TdcTinRun;
 
-extern void tdc_tin_read_sample(TdcPointBuf *buf, Datum d, int64 row, const char *fname);
 extern TdcTinRun *tdc_tin_run_start(const TdcPointBuf *buf, const TdcSegList *breaklines,
 									uint64 extra, const char *fname);
 extern void tdc_tin_run_wait(TdcTinRun *tr, int rc, const char *err, const char *fname);
