@@ -137,7 +137,7 @@ build/regress:
 src/core/%.o: src/core/%.c $(CORE_HDRS)
 	$(CC) $(CFLAGS) -std=c11 -D_GNU_SOURCE -ffp-contract=off -pthread -Isrc/core -c -o $@ $<
 # PGXS does not track headers: a changed struct must rebuild every user.
-$(PG_SRCS:.c=.o): src/pg/tdc_pg.h $(wildcard src/pg/*/*.h) src/core/tdc.h
+$(PG_SRCS:.c=.o): $(wildcard src/pg/*.h src/pg/*/*.h) src/core/tdc.h
 # tdc_delaunay_full_version() reports the PostGIS found here at build time:
 # the default_version of its control file (the library does not compile
 # against PostGIS, so nothing more precise exists), or "unknown".
@@ -208,7 +208,7 @@ FUZZ_STATE_SRCS = $(addprefix src/pg/runtime/,agg_state.c seglist.c) \
 	$(addprefix src/pg/fn/,tin_agg.c fn_contours_agg.c fn_drape_agg.c fn_raster_agg.c fn_raster.c) \
 	$(addprefix src/pg/formats/,raster_read.c raster_write.c gser_contour.c gser_drape.c) \
 	$(FUZZ_GSER_SRCS)
-FUZZ_PG_DEPS = fuzz/pg_shim.c fuzz/pg_shim.h src/pg/tdc_pg.h src/pg/runtime/pg_version_compat.h \
+FUZZ_PG_DEPS = fuzz/pg_shim.c fuzz/pg_shim.h src/pg/tdc_pg.h src/pg/pg_version_compat.h \
 	src/pg/formats/gser_format.h
 
 build/fuzz/fuzz_voronoi: fuzz/fuzz_voronoi.c $(FUZZ_CORE_DEPS)

@@ -47,7 +47,7 @@
 
 #include "postgres.h"
 
-#include "runtime/pg_version_compat.h"
+#include "pg_version_compat.h"
 
 #include "fmgr.h"
 #include "portability/instr_time.h"
