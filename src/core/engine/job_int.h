@@ -9,7 +9,7 @@
 #ifndef TDC_JOB_INT_H
 #define TDC_JOB_INT_H
 
-#include "internal.h"
+#include "engine_int.h"
 #include "mesh_view.h"
 
 /* A rectangle of grid cells: rows [r0, r1), columns [c0, c1). */

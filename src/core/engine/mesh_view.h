@@ -29,7 +29,7 @@
 #ifndef TDC_MESH_VIEW_H
 #define TDC_MESH_VIEW_H
 
-#include "internal.h"
+#include "engine_int.h"
 
 typedef struct tdc_mesh_view
 {
@@ -48,7 +48,7 @@ typedef struct tdc_mesh_view
 	const uint32_t *site_of;	/* position -> its site (itself if a site) */
 	const uint32_t *idx;		/* position -> its input index (a site's first) */
 
-	/* the mesh (internal.h) */
+	/* the mesh (engine_int.h) */
 	const tdc_he *he;			/* 6 nin half-edges; org TDC_NIL: a free slot */
 	size_t		ntri;			/* triangles */
 	const uint64_t *outer;		/* bitmap of the outer face's half-edges;
