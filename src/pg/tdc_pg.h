@@ -1,43 +1,53 @@
 /*
  * tdc_pg.h
- *		The runtime of the PostgreSQL side of tdc_delaunay: what every SQL
- *		function is built from.
+ *		The PostgreSQL side of tdc_delaunay: what every SQL function is
+ *		built from, and what its folders share.
  *
- * src/pg is a runtime plus one file set per feature.  The runtime:
+ * src/pg is three folders, each calling only the ones below it
+ * (test/layering.sh; docs/design/pg-runtime.md says why):
  *
+ * runtime/, running the core in a backend:
+ *	settings.c		_PG_init and the tdc_delaunay.* settings
  *	run.c			runs a job (and any work on it) while watching for
  *					interrupts: the one wait loop; core status to SQLSTATE;
  *					the parameter checks every function shares
- *	toast_stream.c	reads a function's geometry argument, a big TOASTed
- *					value a slice at a time (tdc_read_geometry)
- *	gser_read.c		reads PostGIS geometry values straight into a point
- *					buffer (the format is in gser_format.h)
- *	gser_write.c	writes triangulations back as geometry values
- *	curves.c		curved input: stroked by PostGIS's ST_CurveToLine for
- *					the Delaunay functions, as ST_DelaunayTriangles does
- *	pointbuf.c		the point buffer the vertices of the input collect in
- *	agg_state.c		the aggregates' state, its merging and serialized form
- *	dump_query.c	the Dump functions' query: checked, run, collected
- *	settings.c		_PG_init and the tdc_delaunay.* settings
- *	mem_cache.c		the engine's big arrays kept between runs
  *	signals.c		keeps PostGIS's cancel handler from allocating inside a
  *					signal; every SQL entry point calls tdc_signal_guard()
- *	version.c		the versions and thread count a bug report needs
+ *	mem_cache.c		the engine's big arrays kept between runs
+ *	pointbuf.c		the point buffer the vertices of the input collect in
+ *	agg_state.c		the aggregates' state, its merging and serialized form
  *	seglist.c		constraint segments from linework, and their insertion
  *					(the constrained functions and the TIN's breaklines)
- *	tin_run.c		a TIN of samples with Z, and the operations on it, waited on
+ *	tin_run.c		a TIN of the samples, and the operations on it, waited on
+ *
+ * formats/, the bytes of PostgreSQL and PostGIS values:
+ *	gser_read.c		reads PostGIS geometry values straight into a point
+ *					buffer (the format is in gser_format.h)
+ *	toast_stream.c	reads a function's geometry argument, a big TOASTed
+ *					value a slice at a time (tdc_read_geometry), and a TIN's
+ *					sample (tdc_tin_read_sample)
+ *	curves.c		curved input: stroked by PostGIS's ST_CurveToLine for
+ *					the Delaunay functions, as ST_DelaunayTriangles does
+ *	gser_write.c	writes triangulations back as geometry values
  *	gser_contour.c	contour lines written as a MULTILINESTRING Z
  *	gser_drape.c	a target geometry read as chains and written again draped
- *	pg_version_compat.h  every difference between PostgreSQL majors
+ *	raster_read.c, raster_write.c  PostGIS rasters (raster_format.h)
+ *	table_write.c	rows written straight into a table just created
+ *	dump_query.c	the Dump functions' query: checked, run, collected
  *
- * The features, each a set of thin fmgr adapters over the runtime
+ * fn/, the SQL entry points, thin fmgr adapters named after their SQL names
  * (fn_<feature>[_agg|_dump].c): fn_delaunay (ST_TDCDelaunayTriangles,
  * ST_TDCDelaunayDump), fn_delaunay_agg (ST_TDCDelaunay), fn_constrained
  * (ST_TDCConstrainedDelaunayTriangles, its Dump and aggregate), fn_voronoi
  * (ST_TDCVoronoiPolygons/Lines; fn_voronoi.h for its aggregate and Dump),
- * fn_tiled (tdc_delaunay_tiled's per-tile step and curve helper),
- * fn_contours_agg (ST_TDCContours), fn_drape_agg (ST_TDCDrape).
- * docs/design/pg-runtime.md tells why.
+ * fn_tiled (tdc_delaunay_tiled's per-tile step and curve helper, with
+ * fn_tiled_bounded and fn_tiled_region), fn_contours_agg (ST_TDCContours),
+ * fn_drape_agg (ST_TDCDrape), fn_raster and fn_raster_agg (the raster
+ * interpolation), version.c (the versions a bug report needs); and
+ * tin_agg.c, the TIN aggregates' shared samples and support functions.
+ *
+ * pg_version_compat.h, beside this header: every difference between
+ * PostgreSQL majors.
  *
  * Only the backend's main thread ever calls PostgreSQL.  The core's worker
  * threads see nothing but plain malloc'd arrays.
