@@ -4,6 +4,11 @@
 -- compared with ST_DelaunayTriangles on this server as a set of triangles
 -- (ST_Normalize), plus the documented differences asserted explicitly.
 --
+-- Test data: the cases' inputs are those of test/fixtures/postgis-cases.txt
+-- (PostGIS: GPL-2.0-or-later tests, CC BY-SA 3.0 documentation) and
+-- geos-cases.txt (GEOS: LGPL-2.1-or-later), and keep those licences
+-- (test/fixtures/README.md); the rest of this file is the project's.
+--
 
 -- The GEOS version, as {major, minor}.
 CREATE FUNCTION tdc_geos_version() RETURNS int[]
