@@ -477,7 +477,6 @@ typedef void (*TdcTinAggParams) (TdcTinAgg *dst, const TdcTinAgg *src, MemoryCon
 typedef struct TdcTinAggKind
 {
 	const TdcStateFormat *fmt;	/* magic, version, the aggregate's name */
-	const char *sqlfn;			/* its support functions' prefix, in errors */
 	Size		size;			/* its state, which begins with a TdcTinAgg */
 	TdcCurves	curves;			/* how it reads a curved sample */
 	Size		fixed;			/* the parameters' fixed part, in bytes */
@@ -500,9 +499,30 @@ extern TdcTinAgg *tdc_tin_agg_new(MemoryContext cxt, Size size, TdcCurves curves
 extern void tdc_tin_agg_breaklines(TdcTinAgg *a, bool breaklines, MemoryContext cxt,
 								   const char *fname);
 extern void tdc_tin_agg_add(TdcTinAgg *a, Datum geom, const char *fname);
-extern Datum tdc_tin_agg_serialfn(FunctionCallInfo fcinfo, const TdcTinAggKind *k);
-extern Datum tdc_tin_agg_deserialfn(FunctionCallInfo fcinfo, const TdcTinAggKind *k);
-extern Datum tdc_tin_agg_combinefn(FunctionCallInfo fcinfo, const TdcTinAggKind *k);
+extern Datum tdc_tin_agg_serialfn(FunctionCallInfo fcinfo, const TdcTinAggKind *k,
+								  const char *fn);
+extern Datum tdc_tin_agg_deserialfn(FunctionCallInfo fcinfo, const TdcTinAggKind *k,
+									const char *fn);
+extern Datum tdc_tin_agg_combinefn(FunctionCallInfo fcinfo, const TdcTinAggKind *k,
+								   const char *fn);
+
+/*
+ * The SQL entry points prefix_combinefn, prefix_serialfn and
+ * prefix_deserialfn of a TIN aggregate (st_tdccontours_combinefn, ...: the
+ * names its SQL scripts give), over tin_agg.c's functions for kind.  Used
+ * as a declaration, with a semicolon (as PG_FUNCTION_INFO_V1 is).
+ */
+#define TDC_TIN_AGG_SUPPORT(prefix, kind) \
+PG_FUNCTION_INFO_V1(prefix##_combinefn); \
+Datum prefix##_combinefn(PG_FUNCTION_ARGS) \
+{ return tdc_tin_agg_combinefn(fcinfo, &(kind), #prefix "_combinefn"); } \
+PG_FUNCTION_INFO_V1(prefix##_serialfn); \
+Datum prefix##_serialfn(PG_FUNCTION_ARGS) \
+{ return tdc_tin_agg_serialfn(fcinfo, &(kind), #prefix "_serialfn"); } \
+PG_FUNCTION_INFO_V1(prefix##_deserialfn); \
+Datum prefix##_deserialfn(PG_FUNCTION_ARGS) \
+{ return tdc_tin_agg_deserialfn(fcinfo, &(kind), #prefix "_deserialfn"); } \
+extern int	no_such_variable
 
 /* gser_contour.c: the contour lines of a TIN as a MULTILINESTRING Z */
 extern struct varlena *tdc_gser_contours(const tdc_tin *tin, int32 srid, uint64 room,

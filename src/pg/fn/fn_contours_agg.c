@@ -150,33 +150,12 @@ contour_read(TdcTinAgg *a, const char *extra, Size len)
 }
 
 static const TdcTinAggKind contour_kind = {
-	&contour_format, "st_tdccontours", sizeof(ContourState), TDC_CURVES_STROKE,
+	&contour_format, sizeof(ContourState), TDC_CURVES_STROKE,
 	CONTOUR_EXTRA, 24, contour_combine_params, contour_var_len, contour_write, contour_read
 };
 
-PG_FUNCTION_INFO_V1(st_tdccontours_combinefn);
-
-Datum
-st_tdccontours_combinefn(PG_FUNCTION_ARGS)
-{
-	return tdc_tin_agg_combinefn(fcinfo, &contour_kind);
-}
-
-PG_FUNCTION_INFO_V1(st_tdccontours_serialfn);
-
-Datum
-st_tdccontours_serialfn(PG_FUNCTION_ARGS)
-{
-	return tdc_tin_agg_serialfn(fcinfo, &contour_kind);
-}
-
-PG_FUNCTION_INFO_V1(st_tdccontours_deserialfn);
-
-Datum
-st_tdccontours_deserialfn(PG_FUNCTION_ARGS)
-{
-	return tdc_tin_agg_deserialfn(fcinfo, &contour_kind);
-}
+/* st_tdccontours_combinefn, _serialfn and _deserialfn */
+TDC_TIN_AGG_SUPPORT(st_tdccontours, contour_kind);
 
 PG_FUNCTION_INFO_V1(st_tdccontours_finalfn);
 

@@ -259,33 +259,12 @@ drape_read(TdcTinAgg *a, const char *extra, Size len)
 }
 
 static const TdcTinAggKind drape_kind = {
-	&drape_format, "st_tdcdrape", sizeof(DrapeState), TDC_CURVES_STROKE,
+	&drape_format, sizeof(DrapeState), TDC_CURVES_STROKE,
 	DRAPE_FIXED, 16, drape_combine_params, drape_var_len, drape_write, drape_read
 };
 
-PG_FUNCTION_INFO_V1(st_tdcdrape_combinefn);
-
-Datum
-st_tdcdrape_combinefn(PG_FUNCTION_ARGS)
-{
-	return tdc_tin_agg_combinefn(fcinfo, &drape_kind);
-}
-
-PG_FUNCTION_INFO_V1(st_tdcdrape_serialfn);
-
-Datum
-st_tdcdrape_serialfn(PG_FUNCTION_ARGS)
-{
-	return tdc_tin_agg_serialfn(fcinfo, &drape_kind);
-}
-
-PG_FUNCTION_INFO_V1(st_tdcdrape_deserialfn);
-
-Datum
-st_tdcdrape_deserialfn(PG_FUNCTION_ARGS)
-{
-	return tdc_tin_agg_deserialfn(fcinfo, &drape_kind);
-}
+/* st_tdcdrape_combinefn, _serialfn and _deserialfn */
+TDC_TIN_AGG_SUPPORT(st_tdcdrape, drape_kind);
 
 PG_FUNCTION_INFO_V1(st_tdcdrape_finalfn);
 

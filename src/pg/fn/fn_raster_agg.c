@@ -305,33 +305,12 @@ interp_read(TdcTinAgg *a, const char *extra, Size len)
 }
 
 static const TdcTinAggKind interp_kind = {
-	&interp_format, "st_tdcinterpolate", sizeof(InterpState), TDC_CURVES_VERTICES,
+	&interp_format, sizeof(InterpState), TDC_CURVES_VERTICES,
 	INTERP_FIXED, 8, interp_combine_params, interp_var_len, interp_write, interp_read
 };
 
-PG_FUNCTION_INFO_V1(st_tdcinterpolate_combinefn);
-
-Datum
-st_tdcinterpolate_combinefn(PG_FUNCTION_ARGS)
-{
-	return tdc_tin_agg_combinefn(fcinfo, &interp_kind);
-}
-
-PG_FUNCTION_INFO_V1(st_tdcinterpolate_serialfn);
-
-Datum
-st_tdcinterpolate_serialfn(PG_FUNCTION_ARGS)
-{
-	return tdc_tin_agg_serialfn(fcinfo, &interp_kind);
-}
-
-PG_FUNCTION_INFO_V1(st_tdcinterpolate_deserialfn);
-
-Datum
-st_tdcinterpolate_deserialfn(PG_FUNCTION_ARGS)
-{
-	return tdc_tin_agg_deserialfn(fcinfo, &interp_kind);
-}
+/* st_tdcinterpolate_combinefn, _serialfn and _deserialfn */
+TDC_TIN_AGG_SUPPORT(st_tdcinterpolate, interp_kind);
 
 PG_FUNCTION_INFO_V1(st_tdcinterpolate_finalfn);
 

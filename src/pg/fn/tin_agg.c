@@ -12,7 +12,8 @@
  * aggregate's own parameters: levels, a target, a raster template.
  *
  * The serial, deserial and combine functions of the three aggregates are
- * written once, here (tdc_tin_agg_serialfn and the others), from a
+ * written once, here (tdc_tin_agg_serialfn and the others, which each
+ * aggregate's SQL entry points call through TDC_TIN_AGG_SUPPORT), from a
  * TdcTinAggKind that says what differs: the format's magic and version,
  * the state's size, how a curved sample is read, and the aggregate's own
  * parameters (how long they are, how they are written, read and checked,
@@ -93,16 +94,6 @@ tin_agg_merge(TdcTinAgg *dst, const TdcTinAgg *src, const char *fname)
 		tdc_seg_append(&dst->segs, &src->segs, base);
 }
 
-/* The aggregate context, checked for the support function named sqlfn_what. */
-static MemoryContext
-tin_agg_context(FunctionCallInfo fcinfo, const TdcTinAggKind *k, const char *what)
-{
-	char		fn[NAMEDATALEN + 16];
-
-	snprintf(fn, sizeof(fn), "%s_%s", k->sqlfn, what);
-	return tdc_agg_context(fcinfo, fn);
-}
-
 /*
  * The combine function: the second state's samples after the first's,
  * once the kind's params has made the first's parameters the second's (or
@@ -110,14 +101,14 @@ tin_agg_context(FunctionCallInfo fcinfo, const TdcTinAggKind *k, const char *wha
  * row and adds nothing.  NULL: no state yet.
  */
 Datum
-tdc_tin_agg_combinefn(FunctionCallInfo fcinfo, const TdcTinAggKind *k)
+tdc_tin_agg_combinefn(FunctionCallInfo fcinfo, const TdcTinAggKind *k, const char *fn)
 {
 	MemoryContext aggcxt;
 	TdcTinAgg  *a,
 			   *b;
 
 	tdc_signal_guard();
-	aggcxt = tin_agg_context(fcinfo, k, "combinefn");
+	aggcxt = tdc_agg_context(fcinfo, fn);
 	a = PG_ARGISNULL(0) ? NULL : (TdcTinAgg *) PG_GETARG_POINTER(0);
 	b = PG_ARGISNULL(1) ? NULL : (TdcTinAgg *) PG_GETARG_POINTER(1);
 	if (b != NULL && b->params_set)
@@ -139,7 +130,7 @@ tdc_tin_agg_combinefn(FunctionCallInfo fcinfo, const TdcTinAggKind *k)
  * segments.
  */
 Datum
-tdc_tin_agg_serialfn(FunctionCallInfo fcinfo, const TdcTinAggKind *k)
+tdc_tin_agg_serialfn(FunctionCallInfo fcinfo, const TdcTinAggKind *k, const char *fn)
 {
 	TdcTinAgg  *a;
 	Size		plen,
@@ -148,7 +139,7 @@ tdc_tin_agg_serialfn(FunctionCallInfo fcinfo, const TdcTinAggKind *k)
 	uint32		set;
 
 	tdc_signal_guard();
-	(void) tin_agg_context(fcinfo, k, "serialfn");
+	(void) tdc_agg_context(fcinfo, fn);
 	a = (TdcTinAgg *) PG_GETARG_POINTER(0);
 	plen = k->fixed + k->var_len(a);
 	slen = a->breaklines ? (Size) a->segs.nseg * 2 * sizeof(uint32) : 0;
@@ -173,7 +164,7 @@ tdc_tin_agg_serialfn(FunctionCallInfo fcinfo, const TdcTinAggKind *k)
  * that hold for every state.
  */
 Datum
-tdc_tin_agg_deserialfn(FunctionCallInfo fcinfo, const TdcTinAggKind *k)
+tdc_tin_agg_deserialfn(FunctionCallInfo fcinfo, const TdcTinAggKind *k, const char *fn)
 {
 	const char *fname = k->fmt->fname;
 	TdcTinAgg  *a;
@@ -183,7 +174,7 @@ tdc_tin_agg_deserialfn(FunctionCallInfo fcinfo, const TdcTinAggKind *k)
 	uint32		set;
 
 	tdc_signal_guard();
-	(void) tin_agg_context(fcinfo, k, "deserialfn");
+	(void) tdc_agg_context(fcinfo, fn);
 	a = palloc0(k->size);
 	a->base = tdc_agg_state_deserialize_with(PG_GETARG_BYTEA_P(0), k->fmt, CurrentMemoryContext,
 											 &extra, &len);
