@@ -56,8 +56,20 @@ TEST_CFLAGS = -Itest -DTDC_SOURCE_DIR='"$(CURDIR)"'
 
 .PHONY: check-core check-core-asan check-core-tsan test demo bench bench-tin
 
+# ./tdc writes GeoTIFF through GDAL (src/cli/geotiff.c; Debian: libgdal-dev).
+# Only ./tdc links it, never the extension's library.  Its headers are
+# system headers here: their warnings are not ours.
+GDAL_CFLAGS ?= $(patsubst -I%,-isystem %,$(shell pkg-config --cflags gdal 2>/dev/null || gdal-config --cflags 2>/dev/null))
+GDAL_LIBS ?= $(shell pkg-config --libs gdal 2>/dev/null || gdal-config --libs 2>/dev/null)
+
 tdc: $(CLI_SRCS) $(wildcard src/cli/*.h) $(CORE_SRCS) $(wildcard src/core/*.h)
-	$(CC_CORE) $(CORE_CFLAGS) -o $@ $(CLI_SRCS) $(CORE_SRCS) -lm
+	@[ -n "$(GDAL_LIBS)" ] || { echo "./tdc needs GDAL's library: install libgdal-dev (or set GDAL_CFLAGS and GDAL_LIBS)" >&2; exit 1; }
+	$(CC_CORE) $(CORE_CFLAGS) $(GDAL_CFLAGS) -o $@ $(CLI_SRCS) $(CORE_SRCS) $(GDAL_LIBS) -lm
+
+# The GeoTIFF writer fed rows in pieces (test/cli_geotiff.sh)
+build/geotiff_rows: test/geotiff_rows.c src/cli/geotiff.c src/cli/cli.h
+	@mkdir -p build
+	$(CC_CORE) $(CORE_CFLAGS) $(GDAL_CFLAGS) -Isrc/cli -o $@ test/geotiff_rows.c src/cli/geotiff.c $(GDAL_LIBS) -lm
 
 build/test_core: $(TEST_SRCS) $(wildcard test/*.h) $(CORE_SRCS) $(wildcard src/core/*.h)
 	@mkdir -p build
