@@ -135,9 +135,11 @@ overlay "covered extent" "100 730" "50 450" "63 40" 10 100,50,725,441 2520
 awk '{ printf "%.17g %.17g %.17g\n", $1, $2, 3 * $1 - 2 * $2 + 5 }' "$tmp/s.xyz" > "$tmp/pl.xyz"
 $TDC --grid 10 --extent 0,0,1000,1000 --method linear:radius=0:nodata=-9999 --srs EPSG:25832 -o "$tmp/pl.tif" "$tmp/pl.xyz"
 aai "$tmp/pl.tif" "$tmp/pl.asc"
-check "the plane at the pixel centres of the .tif" "awk '\$1 !~ /^[a-zA-Z]/ { r++; for (c = 1; c <= NF; c++) if (\$c != -9999) { n++;
-	x = (c - 0.5) * 10; y = 1000 - (r - 0.5) * 10; d = \$c - (3 * x - 2 * y + 5); if (d > 1e-9 || d < -1e-9) exit 1 } }
-	END { exit !(r == 100 && n > 8000) }' $tmp/pl.asc"
+check "the plane at the pixel centres of the .tif's georeferencing" "awk '
+	\$1 == \"xllcorner\" { x0 = \$2 } \$1 == \"yllcorner\" { y0 = \$2 } \$1 == \"cellsize\" { cs = \$2 } \$1 == \"nrows\" { h = \$2 }
+	\$1 !~ /^[a-zA-Z]/ { r++; for (c = 1; c <= NF; c++) if (\$c != -9999) { n++;
+	x = x0 + (c - 0.5) * cs; y = y0 + (h - r + 0.5) * cs; d = \$c - (3 * x - 2 * y + 5); if (d > 1e-9 || d < -1e-9) exit 1 } }
+	END { exit !(r == 100 && h == 100 && cs == 10 && n > 8000) }' $tmp/pl.asc"
 
 # --- (d) errors: clear, early, and nothing left ------------------------------
 expect_error() {	# name code file-prefix command...
@@ -161,8 +163,10 @@ expect_error "--type Float32 and a nodata no float holds" 2 bad $TDC --grid 10 -
 printf '0 0 1e39\n1 0 1e39\n0 1 1e39\n' > "$tmp/huge.xyz"
 expect_error "--type Float32 and values beyond its range" 1 bad $TDC --grid 0.5 --type Float32 --srs EPSG:25832 -o "$tmp/bad.tif" "$tmp/huge.xyz"
 check "beyond Float32: says so" "grep -q 'beyond Float32' $tmp/e.err"
-expect_error "-o in a missing directory" 1 bad $TDC --grid 10 -o "$tmp/nodir/bad.tif" "$tmp/s.xyz"
-check "-o in a missing directory: the path named" "grep -q '$tmp/nodir/bad.tif' $tmp/e.err"
+# before the work: x y input (no heights) fails only after the triangulation
+awk '{ print $1, $2 }' "$tmp/s.xyz" > "$tmp/s.xy"
+expect_error "-o in a missing directory" 1 bad $TDC --grid 10 -o "$tmp/nodir/bad.tif" "$tmp/s.xy"
+check "-o in a missing directory: the path named, before the work" "grep -q '^tdc: cannot write $tmp/nodir/bad.tif: ' $tmp/e.err"
 mkdir "$tmp/dir.tif"
 expect_error "-o a directory" 1 bad $TDC --grid 10 -o "$tmp/dir.tif" "$tmp/s.xyz"
 rmdir "$tmp/dir.tif"
