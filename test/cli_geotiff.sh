@@ -163,9 +163,10 @@ expect_error "--type Float32 and a nodata no float holds" 2 bad $TDC --grid 10 -
 printf '0 0 1e39\n1 0 1e39\n0 1 1e39\n' > "$tmp/huge.xyz"
 expect_error "--type Float32 and values beyond its range" 1 bad $TDC --grid 0.5 --type Float32 --srs EPSG:25832 -o "$tmp/bad.tif" "$tmp/huge.xyz"
 check "beyond Float32: says so" "grep -q 'beyond Float32' $tmp/e.err"
-# before the work: x y input (no heights) fails only after the triangulation
-awk '{ print $1, $2 }' "$tmp/s.xyz" > "$tmp/s.xy"
-expect_error "-o in a missing directory" 1 bad $TDC --grid 10 -o "$tmp/nodir/bad.tif" "$tmp/s.xy"
+# before the work: crossing breaklines fail the constrained triangulation
+printf '0 0 1\n10 0 2\n0 10 3\n10 10 4\n' > "$tmp/x.xyz"; printf '0 3\n1 2\n' > "$tmp/x.seg"
+expect_error "crossing breaklines (what the next check needs)" 1 bad $TDC --grid 1 --method linear:breaklines=true --segments "$tmp/x.seg" --srs EPSG:25832 -o "$tmp/bad.tif" "$tmp/x.xyz"
+expect_error "-o in a missing directory" 1 bad $TDC --grid 1 --method linear:breaklines=true --segments "$tmp/x.seg" -o "$tmp/nodir/bad.tif" "$tmp/x.xyz"
 check "-o in a missing directory: the path named, before the work" "grep -q '^tdc: cannot write $tmp/nodir/bad.tif: ' $tmp/e.err"
 mkdir "$tmp/dir.tif"
 expect_error "-o a directory" 1 bad $TDC --grid 10 -o "$tmp/dir.tif" "$tmp/s.xyz"
