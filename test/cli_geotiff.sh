@@ -157,6 +157,8 @@ check "--srs that is no CRS: the value named" "grep -q \"'not a CRS'\" $tmp/e.er
 expect_error "--srs rejected before the input is read" 2 bad $TDC --grid 10 --srs EPSG:0 -o "$tmp/bad.tif" "$tmp/missing.xyz"
 expect_error "--srs with an .asc -o" 2 bad $TDC --grid 10 --srs EPSG:25832 -o "$tmp/bad.asc" "$tmp/s.xyz"
 expect_error "--type without a .tif" 2 bad $TDC --type Float32 "$tmp/s.xyz"
+expect_error "triangles to a .tif" 2 bad $TDC -o "$tmp/bad.tif" "$tmp/s.xyz"
+expect_error "contours to a .tif" 2 bad $TDC --contours 10 -o "$tmp/bad.tif" "$tmp/s.xyz"
 expect_error "--type Float16" 2 bad $TDC --grid 10 --type Float16 -o "$tmp/bad.tif" "$tmp/s.xyz"
 expect_error "--type Float32 and a nodata no float holds" 2 bad $TDC --grid 10 --type Float32 --method linear:nodata=0.1 -o "$tmp/bad.tif" "$tmp/s.xyz"
 # the temporary file is made before the work and removed when the work fails
@@ -179,6 +181,14 @@ cp "$tmp/m.tif" "$tmp/keep.tif"
 check "a failed write: exit 1, the file named" "[ $? -eq 1 ] && grep -q '^tdc: error writing $tmp/keep.tif' $tmp/e.err"
 check "a failed write: no temporary file left" "[ \$(ls $tmp | grep -c '^keep') -eq 1 ]"
 check "a failed write: the old file untouched" "cmp -s $tmp/m.tif $tmp/keep.tif"
+# SIGTERM while the grid is computed (its temporary file made): the file goes
+# with the process
+$TDC -t 1 --grid 0.25 --method natural_neighbor --srs EPSG:25832 -o "$tmp/sig.tif" "$tmp/s.xyz" 2> /dev/null &
+pid=$!
+for _ in $(seq 200); do ls "$tmp" | grep -q '^sig\.tif\..*\.tmp$' && break; sleep 0.05; done
+seen=$(ls "$tmp" | grep -c '^sig\.tif\..*\.tmp$')
+kill -TERM $pid; wait $pid; rc=$?
+check "SIGTERM: killed by it, its temporary file seen, then gone" "[ $rc -eq 143 ] && [ $seen -eq 1 ] && none_left sig"
 # the writer: rows out of order, or too few, fail and leave nothing
 build/geotiff_rows --short "$tmp/sh.tif" 2> "$tmp/e.err"
 check "writer: too few rows fail" "[ $? -eq 1 ] && grep -q '300 of 600 rows written' $tmp/e.err && none_left sh"

@@ -45,8 +45,9 @@
  * triangulation, not after it.  gtiff_open makes the GeoTIFF there,
  * gtiff_write_rows takes rows top down, in any counts, and gtiff_close
  * renames the file to OUT (replacing it atomically) once GDAL has closed
- * it without error.  Any failure, and any exit before the rename (die()
- * included), removes the temporary file: no partial .tif is left behind.
+ * it without error.  Any failure, any exit before the rename (die()
+ * included) and SIGINT, SIGTERM or SIGHUP remove the temporary file: no
+ * partial .tif is left behind.
  * A sidecar OUT.aux.xml describes the file it sits beside and GDAL reads
  * it before the file's own tags, so a stale one is removed with the file
  * it described; GDAL's own sidecar (a CRS the GeoTIFF keys cannot hold)
@@ -59,7 +60,8 @@
  * min(256, height) x width doubles, made when first needed.  GDAL's block
  * cache, which holds the blocks until DEFLATE writes them, is capped at
  * GTIFF_CACHE bytes (32 Float64 blocks); libtiff keeps 16 bytes a tile of
- * offsets and sizes and zlib a few hundred kilobytes.  GDAL calls are
+ * offsets and sizes, the driver a block's compression buffers.  Loading
+ * GDAL itself adds its libraries' 30 MB or so (above).  GDAL calls are
  * made on the caller's thread only.
  */
 #include <dlfcn.h>
@@ -67,6 +69,7 @@
 #include <fcntl.h>
 #include <float.h>
 #include <math.h>
+#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -117,22 +120,50 @@ struct gtiff_out
 };
 
 /*
- * The temporary file in the making, removed at exit unless renamed: the
- * process's one, as tmp_dir is for --max-memory.
+ * The temporary file in the making and its possible sidecar, removed at
+ * exit, or when SIGINT, SIGTERM or SIGHUP ends the process, unless
+ * renamed: the process's one, as tmp_dir is for --max-memory.
  */
-static char pending[4200];
+static char pending[4200],
+			pending_aux[4300];
 
 static void
 remove_pending(void)
 {
-	char		aux[4300];
-
 	if (pending[0] == '\0')
 		return;
-	snprintf(aux, sizeof(aux), "%s.aux.xml", pending);
 	unlink(pending);
-	unlink(aux);
+	unlink(pending_aux);
 	pending[0] = '\0';
+}
+
+/* unlink only (async-signal-safe), then the signal's default action */
+static void
+remove_pending_signal(int sig)
+{
+	if (pending[0] != '\0')
+	{
+		unlink(pending);
+		unlink(pending_aux);
+	}
+	raise(sig);
+}
+
+static void
+remove_pending_at_exit(void)
+{
+	static const int sigs[] = {SIGINT, SIGTERM, SIGHUP};
+	struct sigaction sa,
+				old;
+
+	atexit(remove_pending);
+	memset(&sa, 0, sizeof(sa));
+	sa.sa_handler = remove_pending_signal;
+	sa.sa_flags = SA_RESETHAND | SA_NODEFER;
+	sigemptyset(&sa.sa_mask);
+	for (int i = 0; i < 3; i++)
+		if (sigaction(sigs[i], NULL, &old) == 0 && old.sa_handler == SIG_DFL)
+			sigaction(sigs[i], &sa, NULL);
 }
 
 /*
@@ -237,6 +268,7 @@ gtiff_check_srs(const char *srs, char *err, size_t errlen)
 gtiff_out *
 gtiff_reserve(const char *path, char *err, size_t errlen)
 {
+	static bool registered;
 	gtiff_out  *g;
 	struct stat st;
 	char		msg[700];
@@ -276,8 +308,10 @@ gtiff_reserve(const char *path, char *err, size_t errlen)
 		return NULL;
 	}
 	close(fd);
-	if (pending[0] == '\0')
-		atexit(remove_pending);
+	if (!registered)
+		remove_pending_at_exit();
+	registered = true;
+	snprintf(pending_aux, sizeof(pending_aux), "%s.aux.xml", g->tmp);
 	snprintf(pending, sizeof(pending), "%s", g->tmp);
 	return g;
 }

@@ -278,6 +278,8 @@ parse_args(int argc, char **argv, cli_args *a)
 			die(2, "--type Float32: the method's nodata is not a Float32 value (%s)",
 				a->method ? a->method : "linear");
 	}
+	if (gtiff_path(a->outpath) && !a->grid)
+		die(2, "-o %s: a GeoTIFF holds a --grid; the other outputs are text", a->outpath);
 	if ((a->srs || has_type) && !(a->grid && gtiff_path(a->outpath)))
 		die(2, "--srs and --type go with --grid and an -o ending in .tif%s", "");
 	if (a->srs)
