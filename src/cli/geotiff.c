@@ -61,8 +61,10 @@
  * cache, which holds the blocks until DEFLATE writes them, is capped at
  * GTIFF_CACHE bytes (32 Float64 blocks); libtiff keeps 16 bytes a tile of
  * offsets and sizes, the driver a block's compression buffers.  Loading
- * GDAL itself adds its libraries' 30 MB or so (above).  GDAL calls are
- * made on the caller's thread only.
+ * GDAL itself costs more: a 10 x 10 grid written as .tif peaks at 38 MB
+ * resident, 44 MB with --srs EPSG:25832 (PROJ's database), and 16 million
+ * pixels at 197 MB against 142 MB as .asc.  GDAL calls are made on the
+ * caller's thread only.
  */
 #include <dlfcn.h>
 #include <errno.h>
