@@ -16,7 +16,7 @@
 #      file left behind; a failed write keeps the file it would replace.
 # The data are random points from a fixed seed (perl's srand), made here.
 set -u
-cd "$(dirname "$0")/.."
+cd "$(dirname "$0")/.." || exit 1
 TDC=./tdc
 pass=0; fail=0
 tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
@@ -37,7 +37,7 @@ aai() { gdal_translate -q --config AAIGRID_DATATYPE Float64 -of AAIGrid "$@"; }
 vals() { awk '$1 !~ /^[a-zA-Z]/ { for (i = 1; i <= NF; i++) print $i }' "$1"; }
 info() { gdalinfo "$1" 2>&1; }
 # nothing of name left in tmp (the file, its temporary files, sidecars)
-none_left() { ! ls "$tmp" | grep -q "^$1"; }
+none_left() { ! compgen -G "$tmp/$1*" > /dev/null; }
 
 # 500 random samples on [0, 1000]^2, heights in [0, 100)
 perl -e 'srand(39); for (1..500) { printf "%.17g %.17g %.17g\n", rand(1000), rand(1000), rand(100) }' > "$tmp/s.xyz"
@@ -64,6 +64,7 @@ check "Float32: not the Float64 values" "! cmp -s $tmp/f1.asc $tmp/a1.asc"
 build/geotiff_rows "$tmp/r0.tif" 530 700 0
 check "rows in pieces: the writer's file" "info $tmp/r0.tif | grep -q 'Size is 530, 700' && [ \"\$(gdallocationinfo -valonly $tmp/r0.tif 529 699)\" = 699529.25 ]"
 for p in "1 7 300" "255 2" "256" "13"; do
+	# shellcheck disable=SC2086  # the pieces, one argument each
 	build/geotiff_rows "$tmp/r1.tif" 530 700 $p
 	check "rows in pieces of $p: the same file" "cmp -s $tmp/r0.tif $tmp/r1.tif"
 done
@@ -179,14 +180,14 @@ rmdir "$tmp/dir.tif"
 cp "$tmp/m.tif" "$tmp/keep.tif"
 (trap '' XFSZ; ulimit -f 64; exec $TDC --grid 1 --srs EPSG:25832 -o "$tmp/keep.tif" "$tmp/s.xyz") > /dev/null 2> "$tmp/e.err"
 check "a failed write: exit 1, the file named" "[ $? -eq 1 ] && grep -q '^tdc: error writing $tmp/keep.tif' $tmp/e.err"
-check "a failed write: no temporary file left" "[ \$(ls $tmp | grep -c '^keep') -eq 1 ]"
+check "a failed write: no temporary file left" "[ \$(compgen -G '$tmp/keep*' | wc -l) -eq 1 ]"
 check "a failed write: the old file untouched" "cmp -s $tmp/m.tif $tmp/keep.tif"
 # SIGTERM while the grid is computed (its temporary file made): the file goes
 # with the process
 $TDC -t 1 --grid 0.25 --method natural_neighbor --srs EPSG:25832 -o "$tmp/sig.tif" "$tmp/s.xyz" 2> /dev/null &
 pid=$!
-for _ in $(seq 200); do ls "$tmp" | grep -q '^sig\.tif\..*\.tmp$' && break; sleep 0.05; done
-seen=$(ls "$tmp" | grep -c '^sig\.tif\..*\.tmp$')
+for _ in $(seq 200); do compgen -G "$tmp/sig.tif.*.tmp" > /dev/null && break; sleep 0.05; done
+seen=$(compgen -G "$tmp/sig.tif.*.tmp" | wc -l)
 kill -TERM $pid; wait $pid; rc=$?
 check "SIGTERM: killed by it, its temporary file seen, then gone" "[ $rc -eq 143 ] && [ $seen -eq 1 ] && none_left sig"
 # the writer: rows out of order, or too few, fail and leave nothing
