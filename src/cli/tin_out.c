@@ -228,16 +228,18 @@ tin_output_prepare(const cli_args *a, const cli_input *in)
 
 	if (!a->grid || !gtiff_path(a->outpath))
 		return NULL;
+	/* (GDAL loaded, or the error that says it is missing) */
+	if ((tif = gtiff_reserve(a->outpath, err, sizeof(err))) == NULL)
+		die(1, "%s", err);
 	if (a->srs == NULL && in->srs != NULL && gtiff_check_srs(in->srs, err, sizeof(err)) != 0)
 	{
 		char		msg[1400];
 
 		snprintf(msg, sizeof(msg), "%s: its CRS is not one GDAL reads (%s); give one with --srs",
 				 a->input, err);
+		gtiff_discard(tif);
 		die(1, "%s", msg);
 	}
-	if ((tif = gtiff_reserve(a->outpath, err, sizeof(err))) == NULL)
-		die(1, "%s", err);
 	if (a->srs == NULL && in->srs == NULL)
 		fprintf(stderr, "tdc: warning: %s gets no CRS: the input has none and no --srs was given\n",
 				a->outpath);
