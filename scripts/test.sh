@@ -427,10 +427,17 @@ fi
 
 if ((built && server)); then
 	mkdir -p build/regress
+	rm -f build/regress/tdc_raster_arbiter.txt
 	run_part pg_regress regress "${MAKE[@]}" installcheck
 	if [ -s build/regress/regression.diffs ]; then
 		echo "--- build/regress/regression.diffs (first 80 lines) ---"
 		head -n 80 build/regress/regression.diffs
+	fi
+	# GDAL's linear pixels the exact arbiter found wrong (tdc_raster_arbiter:
+	# they depend on GDAL's version, so its expected output cannot hold them)
+	if [ -s build/regress/tdc_raster_arbiter.txt ]; then
+		echo "--- build/regress/tdc_raster_arbiter.txt: GDAL's 'linear' against the exact value ---"
+		cat build/regress/tdc_raster_arbiter.txt
 	fi
 else
 	record pg_regress 0 1 "(not run: no build or no server)"

@@ -34,13 +34,15 @@
 -- the query points in tdc_arb_q, filled by tdc_arb_samples,
 -- tdc_arb_triangles and tdc_arb_queries (each call replaces what was
 -- there); tdc_arb_nearest() and tdc_arb_linear() give the references at
--- every query.  A test drops the tables and the functions at its end with
--- sql/include/tin_arbiter_drop.sql.
+-- every query (both VOLATILE: a stable SQL function returning a set would
+-- be inlined into the caller's query, and a nested loop there would
+-- compute it again for every outer row).  A test drops the tables and the
+-- functions at its end with sql/include/tin_arbiter_drop.sql.
 
 -- The exact value of a float8 as numeric: its 64 bits read as sign,
 -- exponent and 53-bit mantissa m, the value m * 2^e written as
 -- m * 5^-e * 10^e when e < 0 (a finite decimal).
-CREATE FUNCTION tdc_arb_num(f float8) RETURNS numeric LANGUAGE plpgsql IMMUTABLE STRICT AS $$
+CREATE FUNCTION tdc_arb_num_bits(f float8) RETURNS numeric LANGUAGE plpgsql IMMUTABLE STRICT AS $$
 DECLARE
 	bits	bigint := ('x' || encode(float8send(f), 'hex'))::bit(64)::bigint;
 	e		int := ((bits >> 52) & 2047)::int;
@@ -62,6 +64,14 @@ BEGIN
 	END IF;
 	RETURN trim_scale(CASE WHEN bits < 0 THEN -m ELSE m END);
 END $$;
+
+-- The same, quicker for the tests' data: a multiple of 2^-10 below 2^40 in
+-- magnitude is f * 1024 (an integer, exact in float8 and bigint) times
+-- 2^-10 = 0.0009765625, exactly.  (Not STRICT, so that it is inlined: a
+-- NULL reaches tdc_arb_num_bits, which is.)
+CREATE FUNCTION tdc_arb_num(f float8) RETURNS numeric LANGUAGE sql IMMUTABLE AS $$
+	SELECT CASE WHEN abs(f) < 1099511627776 AND f * 1024 = trunc(f * 1024)
+				THEN (f * 1024)::bigint * 0.0009765625 ELSE tdc_arb_num_bits(f) END $$;
 
 -- Twice the signed area of (a, b, c): > 0 counter-clockwise.
 CREATE FUNCTION tdc_arb_orient(ax numeric, ay numeric, bx numeric, b_y numeric, cx numeric, cy numeric)
@@ -85,10 +95,11 @@ CREATE FUNCTION tdc_arb_div(n numeric, d numeric) RETURNS numeric LANGUAGE sql I
 CREATE TABLE tdc_arb_s (ord bigint PRIMARY KEY, x numeric, y numeric, z numeric, fx float8, fy float8, fz float8,
 						g geometry);
 CREATE TABLE tdc_arb_t (id bigint PRIMARY KEY, a bigint, b bigint, c bigint, g geometry);
-CREATE TABLE tdc_arb_q (qid bigint PRIMARY KEY, x numeric, y numeric, fx float8, fy float8);
+CREATE TABLE tdc_arb_q (qid bigint PRIMARY KEY, x numeric, y numeric, fx float8, fy float8, g geometry);
 CREATE INDEX tdc_arb_s_g ON tdc_arb_s USING gist (g);
 CREATE INDEX tdc_arb_s_xy ON tdc_arb_s (fx, fy);
 CREATE INDEX tdc_arb_t_g ON tdc_arb_t USING gist (g);
+CREATE INDEX tdc_arb_q_g ON tdc_arb_q USING gist (g);
 
 -- The samples: every vertex of coll (points, lines' and rings' vertices),
 -- in the order ST_DumpPoints gives, Z required; of equal x and y the first
@@ -98,6 +109,7 @@ DECLARE
 	n		bigint;
 BEGIN
 	TRUNCATE tdc_arb_s, tdc_arb_t;
+	DROP INDEX tdc_arb_s_g, tdc_arb_s_xy;		-- built again once the rows are in: quicker
 	INSERT INTO tdc_arb_s
 	SELECT DISTINCT ON (fx, fy) ord, tdc_arb_num(fx), tdc_arb_num(fy), tdc_arb_num(fz), fx, fy, fz,
 		   ST_MakePoint(fx, fy)
@@ -108,6 +120,8 @@ BEGIN
 	IF EXISTS (SELECT 1 FROM tdc_arb_s WHERE fz IS NULL) THEN
 		RAISE EXCEPTION 'tdc_arb_samples: a sample without Z';
 	END IF;
+	CREATE INDEX tdc_arb_s_g ON tdc_arb_s USING gist (g);
+	CREATE INDEX tdc_arb_s_xy ON tdc_arb_s (fx, fy);
 	ANALYZE tdc_arb_s;
 	RETURN n;
 END $$;
@@ -119,28 +133,36 @@ DECLARE
 	n		bigint;
 BEGIN
 	TRUNCATE tdc_arb_q;
+	DROP INDEX tdc_arb_q_g;
 	INSERT INTO tdc_arb_q
-	SELECT p.ord, tdc_arb_num(ST_X(p.geom)), tdc_arb_num(ST_Y(p.geom)), ST_X(p.geom), ST_Y(p.geom)
+	SELECT p.ord, tdc_arb_num(ST_X(p.geom)), tdc_arb_num(ST_Y(p.geom)), ST_X(p.geom), ST_Y(p.geom),
+		   ST_MakePoint(ST_X(p.geom), ST_Y(p.geom))
 	FROM ST_DumpPoints(g) WITH ORDINALITY p(path, geom, ord);
 	GET DIAGNOSTICS n = ROW_COUNT;
+	CREATE INDEX tdc_arb_q_g ON tdc_arb_q USING gist (g);
 	ANALYZE tdc_arb_q;
 	RETURN n;
 END $$;
 
 -- Candidate triangles: the polygons (or triangles) of tin, each of whose
 -- corners must be a sample, stored counter-clockwise; a degenerate one is
--- an error.  Returns the number of triangles.
-CREATE FUNCTION tdc_arb_triangles(tin geometry) RETURNS bigint LANGUAGE plpgsql AS $$
+-- an error.  With near_queries, only those whose bounding box holds a
+-- query (load the queries first): a big TIN queried at a few points.
+-- Returns the number of triangles.
+CREATE FUNCTION tdc_arb_triangles(tin geometry, near_queries bool DEFAULT false) RETURNS bigint
+	LANGUAGE plpgsql AS $$
 DECLARE
 	n		bigint;
 BEGIN
 	TRUNCATE tdc_arb_t;
+	DROP INDEX tdc_arb_t_g;
 	INSERT INTO tdc_arb_t
 	SELECT t.id, sa.ord, CASE WHEN o > 0 THEN sb.ord ELSE sc.ord END, CASE WHEN o > 0 THEN sc.ord ELSE sb.ord END,
 		   t.g
 	FROM (SELECT d.path[1] AS id, d.geom AS g, ST_PointN(ST_ExteriorRing(d.geom), 1) AS pa,
 				 ST_PointN(ST_ExteriorRing(d.geom), 2) AS pb, ST_PointN(ST_ExteriorRing(d.geom), 3) AS pc
-		  FROM ST_Dump(ST_ForcePolygonCCW(tin)) d) t
+		  FROM ST_Dump(tin) d
+		  WHERE NOT near_queries OR EXISTS (SELECT 1 FROM tdc_arb_q q WHERE q.g && d.geom)) t
 		 LEFT JOIN tdc_arb_s sa ON sa.fx = ST_X(t.pa) AND sa.fy = ST_Y(t.pa)
 		 LEFT JOIN tdc_arb_s sb ON sb.fx = ST_X(t.pb) AND sb.fy = ST_Y(t.pb)
 		 LEFT JOIN tdc_arb_s sc ON sc.fx = ST_X(t.pc) AND sc.fy = ST_Y(t.pc),
@@ -154,16 +176,19 @@ BEGIN
 				 AND tdc_arb_orient(sa.x, sa.y, sb.x, sb.y, sc.x, sc.y) = 0) THEN
 		RAISE EXCEPTION 'tdc_arb_triangles: a degenerate triangle';
 	END IF;
+	CREATE INDEX tdc_arb_t_g ON tdc_arb_t USING gist (g);
 	ANALYZE tdc_arb_t;
 	RETURN n;
 END $$;
 
 -- A candidate triangle holding (qx, qy) exactly, boundary included (the one
--- with the least id); NULL when none does.
+-- with the least id); NULL when none does.  The bounding boxes only narrow
+-- the candidates (PostGIS rounds them outwards; the margin is for the
+-- point's own conversion to float8).
 CREATE FUNCTION tdc_arb_locate(qx numeric, qy numeric) RETURNS bigint LANGUAGE sql STABLE AS $$
 	SELECT t.id
 	FROM tdc_arb_t t, tdc_arb_s sa, tdc_arb_s sb, tdc_arb_s sc
-	WHERE t.g && ST_Expand(ST_MakePoint(qx::float8, qy::float8), 1e-6 * (1 + abs(qx::float8) + abs(qy::float8)))
+	WHERE t.g && ST_Expand(ST_MakePoint(qx::float8, qy::float8), 1e-9 * (1 + abs(qx::float8) + abs(qy::float8)))
 	  AND sa.ord = t.a AND sb.ord = t.b AND sc.ord = t.c
 	  AND tdc_arb_orient(sa.x, sa.y, sb.x, sb.y, qx, qy) >= 0
 	  AND tdc_arb_orient(sb.x, sb.y, sc.x, sc.y, qx, qy) >= 0
@@ -214,7 +239,7 @@ CREATE FUNCTION tdc_arb_value(tri bigint, qx numeric, qy numeric) RETURNS numeri
 -- computed in float8 for every (query, sample) pair, which is within a
 -- relative 1e-15 of the exact one, and only the samples within a relative
 -- 1e-12 of a query's least one are then ordered exactly.
-CREATE FUNCTION tdc_arb_nearest() RETURNS TABLE (qid bigint, z float8) LANGUAGE sql STABLE AS $$
+CREATE FUNCTION tdc_arb_nearest() RETURNS TABLE (qid bigint, z float8) LANGUAGE sql VOLATILE AS $$
 	SELECT q.qid, (SELECT s.fz FROM tdc_arb_s s
 				   WHERE (s.fx - q.fx) * (s.fx - q.fx) + (s.fy - q.fy) * (s.fy - q.fy) <= m.d2 * (1 + 1e-12::float8)
 				   ORDER BY (s.x - q.x) * (s.x - q.x) + (s.y - q.y) * (s.y - q.y), s.x, s.y LIMIT 1)
@@ -226,7 +251,7 @@ CREATE FUNCTION tdc_arb_nearest() RETURNS TABLE (qid bigint, z float8) LANGUAGE 
 -- when none does), that triangle's circumcircle (tdc_arb_circle) and the
 -- exact value there.
 CREATE FUNCTION tdc_arb_linear() RETURNS TABLE (qid bigint, tri bigint, circle int, z numeric)
-	LANGUAGE sql STABLE AS $$
+	LANGUAGE sql VOLATILE AS $$
 	WITH l AS (SELECT q.qid, q.x, q.y, tdc_arb_locate(q.x, q.y) AS tri FROM tdc_arb_q q),
 		 c AS (SELECT u.tri, tdc_arb_circle(u.tri) AS circle FROM (SELECT DISTINCT l.tri FROM l) u)
 	SELECT l.qid, l.tri, c.circle, tdc_arb_value(l.tri, l.x, l.y)
