@@ -239,10 +239,7 @@ FROM tv_lat;
 SELECT tdc_arb_queries(ST_Collect(ST_MakePoint(499997.5 + 5 * c + 2.5, 4000112.5 - 5 * r - 2.5) ORDER BY r, c)) AS pixel_centres
 FROM generate_series(0, 22) r, generate_series(0, 22) c;
 CREATE TABLE tv_lat_ref AS
-	SELECT q.qid, q.fx AS x, q.fy AS y, n.z AS near, l.tri, l.circle, l.z AS lin,
-		   (SELECT count(*) FROM tdc_arb_s s
-			WHERE (s.x - q.x) * (s.x - q.x) + (s.y - q.y) * (s.y - q.y) =
-				  (SELECT min((s2.x - q.x) * (s2.x - q.x) + (s2.y - q.y) * (s2.y - q.y)) FROM tdc_arb_s s2)) AS equally_near
+	SELECT q.qid, q.fx AS x, q.fy AS y, n.z AS near, n.ties AS equally_near, l.tri, l.circle, l.z AS lin
 	FROM tdc_arb_q q JOIN tdc_arb_nearest() n USING (qid) JOIN tdc_arb_linear() l USING (qid);
 SELECT equally_near, count(*) AS pixel_centres, min(circle) AS least_circle FROM tv_lat_ref GROUP BY 1 ORDER BY 1;
 CREATE TABLE tv_lat_out AS

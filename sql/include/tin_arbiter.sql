@@ -235,17 +235,21 @@ CREATE FUNCTION tdc_arb_value(tri bigint, qx numeric, qy numeric) RETURNS numeri
 
 -- The nearest sample's height at every query, by brute force over every
 -- sample: least squared distance, then least x, then least y (equal x and y
--- were merged into the first sample).  The squared distances are first
--- computed in float8 for every (query, sample) pair, which is within a
--- relative 1e-15 of the exact one, and only the samples within a relative
--- 1e-12 of a query's least one are then ordered exactly.
-CREATE FUNCTION tdc_arb_nearest() RETURNS TABLE (qid bigint, z float8) LANGUAGE sql VOLATILE AS $$
-	SELECT q.qid, (SELECT s.fz FROM tdc_arb_s s
-				   WHERE (s.fx - q.fx) * (s.fx - q.fx) + (s.fy - q.fy) * (s.fy - q.fy) <= m.d2 * (1 + 1e-12::float8)
-				   ORDER BY (s.x - q.x) * (s.x - q.x) + (s.y - q.y) * (s.y - q.y), s.x, s.y LIMIT 1)
+-- were merged into the first sample); and how many samples are that near
+-- (ties > 1: the rule decided).  The squared distances are first computed
+-- in float8 for every (query, sample) pair, within a relative 1e-15 of the
+-- exact ones, and only the samples within a relative 1e-12 of a query's
+-- least one are then compared exactly.
+CREATE FUNCTION tdc_arb_nearest() RETURNS TABLE (qid bigint, z float8, ties bigint) LANGUAGE sql VOLATILE AS $$
+	SELECT q.qid, n.z, n.ties
 	FROM tdc_arb_q q,
 		 LATERAL (SELECT min((s.fx - q.fx) * (s.fx - q.fx) + (s.fy - q.fy) * (s.fy - q.fy)) AS d2
-				  FROM tdc_arb_s s) m $$;
+				  FROM tdc_arb_s s) m,
+		 LATERAL (SELECT (array_agg(c.fz ORDER BY c.d2, c.x, c.y))[1] AS z, count(*) FILTER (WHERE c.d2 = c.least) AS ties
+				  FROM (SELECT s.fz, s.x, s.y, e.d2, min(e.d2) OVER () AS least
+						FROM tdc_arb_s s,
+							 LATERAL (SELECT (s.x - q.x) * (s.x - q.x) + (s.y - q.y) * (s.y - q.y) AS d2) e
+						WHERE (s.fx - q.fx) * (s.fx - q.fx) + (s.fy - q.fy) * (s.fy - q.fy) <= m.d2 * (1 + 1e-12::float8)) c) n $$;
 
 -- The linear value at every query: the candidate triangle holding it (NULL
 -- when none does), that triangle's circumcircle (tdc_arb_circle) and the
