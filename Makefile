@@ -91,6 +91,11 @@ build/cgal_linear: test/cgal_linear.cpp
 check-core: build/test_core $(CGAL_CDT) $(CGAL_NN) $(CGAL_LINEAR)
 	build/test_core
 
+# The exact arbiter of ./tdc's grids and contours (test/cli.sh): GMP.
+build/tin_arbiter: test/tin_arbiter.c
+	@mkdir -p build
+	$(CC_CORE) $(CORE_CFLAGS) -o $@ $< -lgmp -lm
+
 build/test_core_asan: $(TEST_SRCS) $(wildcard test/*.h) $(CORE_SRCS) $(wildcard src/core/*.h)
 	@mkdir -p build
 	clang $(filter-out -O2,$(CORE_CFLAGS)) -O1 -fno-omit-frame-pointer \
