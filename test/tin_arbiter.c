@@ -463,80 +463,55 @@ linear_error(size_t t, double x, double y, double v)
 	return e;
 }
 
-/* The brute-force nearest sample to (x, y). */
+/* The sign of |s_j - q|^2 - |s_i - q|^2 = (s_j - s_i).(s_j + s_i - 2q), exactly. */
+static int
+sqdist_cmp(size_t j, size_t i, double x, double y)
+{
+	mpq_set_ui(q[10], 0, 1);
+	for (int k = 0; k < 2; k++)
+	{
+		mpq_set_d(q[6], k ? S[j].y : S[j].x);
+		mpq_set_d(q[7], k ? S[i].y : S[i].x);
+		mpq_sub(q[8], q[6], q[7]);
+		mpq_add(q[6], q[6], q[7]);
+		mpq_set_d(q[7], k ? y : x);
+		mpq_sub(q[6], q[6], q[7]);
+		mpq_sub(q[6], q[6], q[7]);
+		mpq_mul(q[8], q[8], q[6]);
+		mpq_add(q[10], q[10], q[8]);
+	}
+	return mpq_sgn(q[10]);
+}
+
+/*
+ * The brute-force nearest sample to (x, y), ties to the first in (x, y)
+ * order (S is in that order), and how many are as near (*ties).
+ */
 static size_t
-nearest(double x, double y)
+nearest(double x, double y, size_t *ties)
 {
 	double		least = INFINITY;
 	long		best = -1;
 
 	for (size_t i = 0; i < ns; i++)
 		least = fmin(least, (S[i].x - x) * (S[i].x - x) + (S[i].y - y) * (S[i].y - y));
+	*ties = 0;
 	for (size_t i = 0; i < ns; i++)
 	{
+		int			c;
+
 		if ((S[i].x - x) * (S[i].x - x) + (S[i].y - y) * (S[i].y - y) > least * (1 + 1e-12))
 			continue;
-		if (best < 0)
-			best = (long) i;
-		else
+		c = best < 0 ? -1 : sqdist_cmp(i, (size_t) best, x, y);
+		if (c < 0)
 		{
-			/* exact: |s_i - q|^2 - |s_best - q|^2, ties to the first in (x, y) order (S is sorted) */
-			int			c;
-
-			mpq_set_d(q[6], S[i].x);
-			mpq_set_d(q[7], x);
-			mpq_sub(q[6], q[6], q[7]);
-			mpq_mul(q[6], q[6], q[6]);
-			mpq_set_d(q[8], S[i].y);
-			mpq_set_d(q[9], y);
-			mpq_sub(q[8], q[8], q[9]);
-			mpq_mul(q[8], q[8], q[8]);
-			mpq_add(q[6], q[6], q[8]);
-			mpq_set_d(q[8], S[best].x);
-			mpq_sub(q[8], q[8], q[7]);
-			mpq_mul(q[8], q[8], q[8]);
-			mpq_set_d(q[10], S[best].y);
-			mpq_sub(q[10], q[10], q[9]);
-			mpq_mul(q[10], q[10], q[10]);
-			mpq_add(q[8], q[8], q[10]);
-			c = mpq_cmp(q[6], q[8]);
-			if (c < 0)
-				best = (long) i;
+			best = (long) i;
+			*ties = 1;
 		}
+		else if (c == 0)
+			(*ties)++;
 	}
 	return (size_t) best;
-}
-
-/* How many samples are exactly as near to (x, y) as sample i. */
-static size_t
-equally_near(size_t i, double x, double y)
-{
-	double		d = (S[i].x - x) * (S[i].x - x) + (S[i].y - y) * (S[i].y - y);
-	size_t		n = 0;
-
-	for (size_t j = 0; j < ns; j++)
-	{
-		double		e = (S[j].x - x) * (S[j].x - x) + (S[j].y - y) * (S[j].y - y);
-
-		if (e > d * (1 + 1e-12) || e < d * (1 - 1e-12))
-			continue;
-		/* exactly: |sj - q|^2 - |si - q|^2 = (sj - si).(sj + si - 2q) = 0 */
-		mpq_set_ui(q[10], 0, 1);
-		for (int k = 0; k < 2; k++)
-		{
-			mpq_set_d(q[6], k ? S[j].y : S[j].x);
-			mpq_set_d(q[7], k ? S[i].y : S[i].x);
-			mpq_sub(q[8], q[6], q[7]);
-			mpq_add(q[6], q[6], q[7]);
-			mpq_set_d(q[7], k ? y : x);
-			mpq_sub(q[6], q[6], q[7]);
-			mpq_sub(q[6], q[6], q[7]);
-			mpq_mul(q[8], q[8], q[6]);
-			mpq_add(q[10], q[10], q[8]);
-		}
-		n += mpq_sgn(q[10]) == 0;
-	}
-	return n;
 }
 
 /*
@@ -614,6 +589,7 @@ check_grid(const char *path, const char *method)
 						x = hdr[2] + (c + 0.5) * hdr[4],
 						y = top + (r + 0.5) * -hdr[4];
 			long		t;
+			size_t		k;
 			bool		ok;
 
 			if (fscanf(f, "%lf", &v) != 1)
@@ -621,10 +597,10 @@ check_grid(const char *path, const char *method)
 			pixels++;
 			if (is_nearest)
 			{
-				size_t		n = nearest(x, y);
+				size_t		n = nearest(x, y, &k);
 
 				ok = v == S[n].z;
-				ties += equally_near(n, x, y) > 1;
+				ties += k > 1;
 			}
 			else if ((t = locate(x, y)) >= 0)
 			{
@@ -640,7 +616,7 @@ check_grid(const char *path, const char *method)
 			{
 				/* no candidate holds it: it must lie outside the hull, where
 				 * linear takes the nearest sample (radius -1) or nodata (0) */
-				ok = outside_hull(x, y) && (radius0 ? v == hdr[5] : v == S[nearest(x, y)].z);
+				ok = outside_hull(x, y) && (radius0 ? v == hdr[5] : v == S[nearest(x, y, &k)].z);
 			}
 			if (!ok && wrong++ < 5)
 				fprintf(stderr, "tin_arbiter: %s at (%.17g %.17g): %.17g is wrong\n", method, x, y, v);
