@@ -264,6 +264,12 @@ check "contours: stats line" "grep -qE '^tin=[0-9.]+ contours=[0-9.]+ lines=4 co
 perl -e 'for $x (-10..10) { for $y (-10..10) { printf "%d %d %.17g\n", $x, $y, 100 * exp(-($x*$x + $y*$y) / 20) } }' > "$tmp/hill.txt"
 $TDC --contours 20 -o "$tmp/hill.out" "$tmp/hill.txt"
 check "contours: a hill gives 4 closed rings" "[ \$(wc -l < $tmp/hill.out) -eq 4 ] && awk '{ if (\$2 != \$(NF-1) || \$3 != \$NF) exit 1 }' $tmp/hill.out"
+# and its vertices are the level crossings of the (lattice's, cocircular)
+# Delaunay triangulation's edges, each once: the arbiter (below), which
+# once only counted the rings; the peak at 100 is exactly at a level
+$TDC -o "$tmp/hill.tri" "$tmp/hill.txt"
+check "contours: the hill's vertices are the TIN's level crossings" \
+	"$ARB contours $tmp/hill.txt $tmp/hill.tri $tmp/hill.out 0 20 > /dev/null"
 $TDC -t 1 --contours 7 -o "$tmp/r1.cont" "$tmp/hill.txt"
 $TDC -t 3 --contours 7 -o "$tmp/r3.cont" "$tmp/hill.txt"
 check "contours: the same lines for 1 and 3 threads" "cmp -s $tmp/r1.cont $tmp/r3.cont"

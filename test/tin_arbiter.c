@@ -27,15 +27,17 @@
  *			  must be within 1e-9 of it.  Cocircular samples (on the circle)
  *			  are allowed and counted: there another Delaunay triangle is as
  *			  right.  Nodata only outside the samples' convex hull.
- *	contours  the candidates must be the Delaunay triangulation itself:
- *			  every circumcircle empty with no other sample on it (so each
- *			  triangle is in every Delaunay triangulation), no two alike, and
- *			  2n - 2 - h of them (h: the samples on the convex hull's
- *			  boundary, by an exact monotone chain).  Then every edge whose
- *			  ends lie on both sides of a level base + k * interval (a height
- *			  equal to the level counts as above) has its crossing, at the
- *			  exact linear position within 1e-6, among the contour lines'
- *			  vertices exactly once, and every vertex is such a crossing.
+ *	contours  the candidates must be a Delaunay triangulation: every
+ *			  circumcircle empty, every sample a corner, no directed edge
+ *			  twice (so no two triangles overlap), and 2n - 2 - h triangles
+ *			  (h: the samples on the convex hull's boundary, by an exact
+ *			  monotone chain).  When no circumcircle has another sample on it
+ *			  either, it is the only one.  Then every edge whose ends lie on
+ *			  both sides of a level base + k * interval (a height equal to
+ *			  the level counts as above) has its crossing, at the exact linear
+ *			  position within 1e-6, among the contour lines' vertices exactly
+ *			  once (but for a peak exactly at the level, which no line
+ *			  stands for), and every vertex is such a crossing.
  */
 #include <gmp.h>
 #include <stdbool.h>
@@ -694,13 +696,18 @@ check_contours(const char *path, double base, double interval)
 				capx = 1024,
 				capv = 1024,
 				strict = 0,
+				empty = 0,
 				once = 0,
 				vertex_hit = 0,
 				h;
 	lpoint	   *X = malloc(capx * sizeof(lpoint)),
 			   *V = malloc(capv * sizeof(lpoint));
 	size_t	   (*tri)[3] = malloc(nt * sizeof(*tri));
-	bool		distinct = true;
+	double	   *nbmax = malloc((ns + 1) * sizeof(double));
+	bool		distinct = true,
+				manifold = true,
+				all_used = true,
+			   *used = calloc(ns + 1, sizeof(bool));
 	double		worst = 0;
 	char		line[1 << 16];
 	mpq_t		t,
@@ -709,12 +716,23 @@ check_contours(const char *path, double base, double interval)
 
 	if (!f)
 		return 2;
-	/* the candidates are the Delaunay triangulation */
+	for (size_t i = 0; i < ns; i++)
+		nbmax[i] = -INFINITY;
+	/* the candidates are a Delaunay triangulation */
 	build_hull();
 	h = nh;
 	for (size_t k = 0; k < nt; k++)
 	{
-		strict += circle(k) == 1;
+		int			cc = circle(k);
+
+		strict += cc == 1;
+		empty += cc >= 0;
+		for (int i = 0; i < 3; i++)
+		{
+			used[T[k][i]] = true;
+			E[ne][0] = T[k][i];
+			E[ne++][1] = T[k][(i + 1) % 3];
+		}
 		memcpy(tri[k], T[k], sizeof(tri[k]));
 		for (int i = 0; i < 3; i++)		/* rotate the least index first */
 			if (tri[k][0] > tri[k][1] || tri[k][0] > tri[k][2])
@@ -730,18 +748,27 @@ check_contours(const char *path, double base, double interval)
 	for (size_t k = 1; k < nt; k++)
 		distinct &= memcmp(tri[k], tri[k - 1], sizeof(tri[k])) != 0;
 	free(tri);
-	/* the edges, and their crossings with the levels, exactly */
-	for (size_t k = 0; k < nt; k++)
-		for (int i = 0; i < 3; i++)
+	qsort(E, ne, sizeof(*E), cmp_edge);		/* directed: none twice */
+	for (size_t k = 1; k < ne; k++)
+		manifold &= cmp_edge(E[k], E[k - 1]) != 0;
+	for (size_t i = 0; i < ns; i++)
+		all_used &= used[i];
+	free(used);
+	/* the edges, undirected, and their crossings with the levels, exactly */
+	for (size_t k = 0; k < ne; k++)
+		if (E[k][0] > E[k][1])
 		{
-			size_t		a = T[k][i],
-						b = T[k][(i + 1) % 3];
+			size_t		s0 = E[k][0];
 
-			E[ne][0] = a < b ? a : b;
-			E[ne][1] = a < b ? b : a;
-			ne++;
+			E[k][0] = E[k][1];
+			E[k][1] = s0;
 		}
 	qsort(E, ne, sizeof(*E), cmp_edge);
+	for (size_t k = 0; k < ne; k++)
+	{
+		nbmax[E[k][0]] = fmax(nbmax[E[k][0]], S[E[k][1]].z);
+		nbmax[E[k][1]] = fmax(nbmax[E[k][1]], S[E[k][0]].z);
+	}
 	mpq_inits(t, u, NULL);
 	for (size_t k = 0; k < ne; k++)
 	{
@@ -757,6 +784,11 @@ check_contours(const char *path, double base, double interval)
 			double		lev = base + kk * interval;
 
 			if (!(lo->z < lev && hi->z >= lev))
+				continue;
+			/* a sample at the level whose neighbours are all below it is a
+			 * peak there: the level, lowered by an infinitesimal, rings it
+			 * with a ring of no size, which no line stands for */
+			if (hi->z == lev && nbmax[hi - S] < lev)
 				continue;
 			/* lo + (lev - lo.z) / (hi.z - lo.z) (hi - lo) */
 			if (nx == capx)
@@ -842,15 +874,18 @@ check_contours(const char *path, double base, double interval)
 	}
 	for (size_t j = 0; j < nv; j++)
 		vertex_hit += V[j].hits == 1;
-	printf("contours: %zu triangles (%zu with no other sample on their circumcircle, %s, "
-		   "2n - 2 - h = %zu), %zu crossings of the levels, %zu contour vertices, %zu crossings found "
-		   "once, %zu vertices a crossing once, largest offset %.3g\n", nt, strict,
-		   distinct ? "distinct" : "repeated", 2 * ns - 2 - h, nx, nv, once, vertex_hit, worst);
+	printf("contours: %zu triangles (%zu with an empty circumcircle, %zu with no other sample on it; "
+		   "%s, %s, %s; 2n - 2 - h = %zu), %zu crossings of the levels, %zu contour vertices, %zu "
+		   "crossings found once, %zu vertices a crossing once, largest offset %.3g\n", nt, empty, strict,
+		   distinct ? "distinct" : "repeated", manifold ? "no edge twice" : "an edge twice",
+		   all_used ? "every sample a corner" : "a sample unused", 2 * ns - 2 - h, nx, nv, once,
+		   vertex_hit, worst);
 	free(E);
 	free(X);
 	free(V);
-	return strict == nt && distinct && nt == 2 * ns - 2 - h && once == nx && vertex_hit == nv &&
-		nx == nv ? 0 : 1;
+	free(nbmax);
+	return empty == nt && distinct && manifold && all_used && nt == 2 * ns - 2 - h && once == nx &&
+		vertex_hit == nv && nx == nv ? 0 : 1;
 }
 
 int
