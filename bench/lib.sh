@@ -312,10 +312,10 @@ bench_begin() {
 	git -C "$ROOT" diff --quiet HEAD -- src bench 2>/dev/null ||
 		BENCH_REV="$BENCH_REV, with uncommitted changes in src/ or bench/"
 	if [ $noreport = 1 ]; then
-		BENCH_SETTLE=0 BENCH_NOISY=1 quiet_begin $server
-	else
-		quiet_begin $server
+		BENCH_SETTLE=0
+		BENCH_NOISY=1
 	fi
+	quiet_begin $server
 	BENCH_T0=$(date -u '+%Y-%m-%d %H:%M UTC')
 }
 bench_end() {

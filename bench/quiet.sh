@@ -34,6 +34,7 @@
 #
 # A process living less than one interval is seen only if it is alive at a
 # sample (with all its CPU: it is new) and through the load before and after.
+# The sampler itself (one of the run's processes) uses about 1% of a CPU.
 # A sample taken while waiting (phase wait-before, wait-after) is recorded but
 # not judged.  With a server shared with other clients, their backends count as
 # the run's own: bench_begin warns about them; use a private server (run.sh
@@ -60,6 +61,7 @@ BENCH_LOAD_PER_CORE=${BENCH_LOAD_PER_CORE:-0.5}
 BENCH_BUSY_PCT=${BENCH_BUSY_PCT:-20}
 BENCH_LOCK=${BENCH_LOCK:-/tmp/tdc_delaunay_bench.lock}
 BENCH_CORES=$(getconf _NPROCESSORS_ONLN 2>/dev/null || nproc)
+BENCH_HZ=$(getconf CLK_TCK 2>/dev/null || echo 100)
 BENCH_SAMPLES_HDR="phase,time,load1,load5,load15,others_pct,own_pct,busiest_other,others_over_limit,verdict"
 
 # refuse MESSAGE...: the run is not fit for a report: status 3
@@ -127,7 +129,7 @@ _q_snapshot() {
 _q_sample() {
 	local l1 l5 l15
 	read -r l1 l5 l15 _ < "$BENCH_LOADAVG_FILE"
-	awk -v phase="$1" -v a="$2" -v hz="$(getconf CLK_TCK)" -v roots="$BENCH_ROOTS" \
+	awk -v phase="$1" -v a="$2" -v hz="$BENCH_HZ" -v roots="$BENCH_ROOTS" \
 		-v lim="$BENCH_LOAD_LIMIT" -v busy="$BENCH_BUSY_PCT" -v now="$(date -u +%H:%M:%S)" \
 		-v l1="$l1" -v l5="$l5" -v l15="$l15" '
 		# pid (comm) state ppid ...: utime and stime are the 12th and 13th
@@ -333,8 +335,8 @@ quiet_gate() {
 		log "writing $BENCH_DOCS/$1.md marked \"(noisy machine)\" (BENCH_NOISY=1)"
 		return 0
 	fi
-	refuse "the machine was not quiet during the run, so $BENCH_DOCS/$1.md is not written:
-$(sed 's/^/  /' <<< "$BENCH_NOISE")
+	refuse "the machine was not quiet around the timed runs, so $BENCH_DOCS/$1.md is not written:
+$(head -n 20 <<< "$BENCH_NOISE" | sed 's/^/  /')$(n=$(wc -l <<< "$BENCH_NOISE"); [ "$n" -le 20 ] || printf '\n  and %d more' $((n - 20)))
   every sample: $BENCH_SAMPLES
   Stop the other work and run again, or set BENCH_NOISY=1 to write it marked \"(noisy machine)\"."
 }
