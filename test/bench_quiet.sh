@@ -172,15 +172,18 @@ fi
 [ "$RC" = 3 ] || show late
 
 # 4. made-up /proc: a foreign process busy only during the timed runs, and one
-#    of the run's own (its parent is the benchmark's shell), each gaining 100
-#    and 200 ticks every 0.1 s
+#    of the run's own (its parent is the benchmark's shell), gaining 50 and 100
+#    s of CPU every 0.1 s (so that a starved test still sees them busy), until
+#    the sampler has taken 3 samples since they appeared (or 30 s)
 mkdir -p "$FAKE/500" "$FAKE/600"
 run during "${fakeproc[@]}" TINY_DURING='
-	for ((i = 1; i <= 15; i++)); do
-		printf "500 (foreignbusy) R 1 0 0 0 -1 0 0 0 0 0 %d 0 0 0 20 0 1 0 200 0 0 0\n" $((i * 100)) > "$BENCH_PROC/500/s"
-		printf "600 (ownbusy) R %d 0 0 0 -1 0 0 0 0 0 %d 0 0 0 20 0 1 0 300 0 0 0\n" $$ $((i * 200)) > "$BENCH_PROC/600/s"
+	n0=$(grep -c "^during," "$BENCH_SAMPLES" || true)
+	for ((i = 1; i <= 300; i++)); do
+		printf "500 (foreignbusy) R 1 0 0 0 -1 0 0 0 0 0 %d 0 0 0 20 0 1 0 200 0 0 0\n" $((i * 5000)) > "$BENCH_PROC/500/s"
+		printf "600 (ownbusy) R %d 0 0 0 -1 0 0 0 0 0 %d 0 0 0 20 0 1 0 300 0 0 0\n" $$ $((i * 10000)) > "$BENCH_PROC/600/s"
 		mv "$BENCH_PROC/500/s" "$BENCH_PROC/500/stat"
 		mv "$BENCH_PROC/600/s" "$BENCH_PROC/600/stat"
+		[ "$(grep -c "^during," "$BENCH_SAMPLES")" -lt $((n0 + 3)) ] || break
 		sleep 0.1
 	done
 	rm -rf "$BENCH_PROC/500" "$BENCH_PROC/600"'
@@ -210,9 +213,10 @@ check "BENCH_NOISY=1: the header lists the noisy samples" \
 # 6. one benchmark at a time
 mkdir -p "$T/lock1/docs"
 env BENCH_DOCS="$T/lock1/docs" BENCH_OUT="$T/lock1/out" BENCH_LOCK="$T/shared.lock" "${fakeproc[@]}" \
-	TINY_DURING="sleep 2" "$T/tiny.sh" > /dev/null 2> "$T/lock1.err" &
+	TINY_DURING="for ((i = 0; i < 300; i++)); do [ -e '$T/lock.go' ] && break; sleep 0.1; done" \
+	"$T/tiny.sh" > /dev/null 2> "$T/lock1.err" &
 first=$!
-for ((i = 0; i < 50; i++)); do
+for ((i = 0; i < 300; i++)); do
 	[ -s "$T/shared.lock/owner" ] && break
 	sleep 0.1
 done
@@ -223,6 +227,7 @@ env BENCH_DOCS="$T/lock2/docs" BENCH_OUT="$T/lock2/out" BENCH_LOCK="$T/shared.lo
 check "lock: a second benchmark is refused (status $RC)" [ "$RC" = 3 ]
 check "lock: it names the first" grep -q "another benchmark runs: .*tiny.sh (pid $first)" "$T/lock2.err"
 check "lock: the second writes nothing" empty "$T/lock2/docs"
+touch "$T/lock.go"
 RC=0
 wait "$first" || RC=$?
 check "lock: the first writes its report (status $RC)" [ -s "$T/lock1/docs/tiny.md" ]
