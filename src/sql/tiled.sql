@@ -139,7 +139,7 @@ BEGIN
 															 ''MULTICURVE'', ''MULTISURFACE'', ''GEOMETRYCOLLECTION'')
 							 THEN _tdc_curve_to_line(s.%1$I) ELSE s.%1$I END', geom_column);
 
-	-- Without a tile column: _tdc_tiled_write (src/pg/fn/fn_tiled_bounded.c)
+	-- Without a tile column: _tdc_tiled_write (src/pg/fn_tiled_bounded.c)
 	-- reads the source once, as ST_TDCDelaunayDump reads it, and triangulates
 	-- it in one pass while that fits tdc_delaunay.max_memory, else tile by
 	-- tile through the core's bounded run, as ./tdc --max-memory does (tiles
