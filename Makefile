@@ -58,8 +58,27 @@ TEST_CFLAGS = -Itest -DTDC_SOURCE_DIR='"$(CURDIR)"'
 
 .PHONY: check-core check-core-asan check-core-tsan test demo bench bench-tin
 
+# ./tdc writes GeoTIFF through GDAL (src/cli/geotiff.c; Debian: libgdal-dev).
+# It compiles against GDAL's headers and loads the library it names
+# (TDC_GDAL_SONAME, read from the libgdal.so the compiler finds) only to
+# write a GeoTIFF: linking it would add some 30 MB to every run's resident
+# size.  The extension's library never uses GDAL.  GDAL's headers are
+# system headers here: their warnings are not ours.
+GDAL_CFLAGS ?= $(patsubst -I%,-isystem %,$(shell pkg-config --cflags gdal 2>/dev/null || gdal-config --cflags 2>/dev/null))
+GDAL_SONAME ?= $(shell objdump -p "$$($(firstword $(CC_CORE)) -print-file-name=libgdal.so)" 2>/dev/null | \
+	awk '$$1 == "SONAME" { print $$2 }')
+GDAL_BUILD = $(GDAL_CFLAGS) -DTDC_GDAL_SONAME='"$(GDAL_SONAME)"'
+GDAL_CHECK = @[ -n "$(GDAL_SONAME)" ] || { echo "./tdc needs GDAL's headers and library: install libgdal-dev (or set GDAL_CFLAGS and GDAL_SONAME)" >&2; exit 1; }
+
 tdc: $(CLI_SRCS) $(wildcard src/cli/*.h) $(CORE_SRCS) $(CORE_HDRS)
-	$(CC_CORE) $(CORE_CFLAGS) -o $@ $(CLI_SRCS) $(CORE_SRCS) -lm
+	$(GDAL_CHECK)
+	$(CC_CORE) $(CORE_CFLAGS) $(GDAL_BUILD) -o $@ $(CLI_SRCS) $(CORE_SRCS) -ldl -lm
+
+# The GeoTIFF writer fed rows in pieces (test/cli_geotiff.sh)
+build/geotiff_rows: test/geotiff_rows.c src/cli/geotiff.c src/cli/cli.h
+	$(GDAL_CHECK)
+	@mkdir -p build
+	$(CC_CORE) $(CORE_CFLAGS) $(GDAL_BUILD) -Isrc/cli -o $@ test/geotiff_rows.c src/cli/geotiff.c -ldl -lm
 
 build/test_core: $(TEST_SRCS) $(wildcard test/*.h) $(CORE_SRCS) $(CORE_HDRS)
 	@mkdir -p build
@@ -81,8 +100,22 @@ build/cgal_nn: test/cgal_nn.cpp
 	@mkdir -p build
 	$(CXX) -O2 -DNDEBUG -DCGAL_NDEBUG -o $@ $< -lgmp -lmpfr
 
-check-core: build/test_core $(CGAL_CDT) $(CGAL_NN)
+# The breakline reference (test/cgal_linear.cpp): linear on CGAL's constrained
+# Delaunay triangulation, exact; it made test/fixtures/tin-reference.txt,
+# which the core suite checks against it again.
+CGAL_LINEAR = $(if $(CGAL_CDT),build/cgal_linear)
+
+build/cgal_linear: test/cgal_linear.cpp
+	@mkdir -p build
+	$(CXX) -O2 -DNDEBUG -DCGAL_NDEBUG -o $@ $< -lgmp -lmpfr
+
+check-core: build/test_core $(CGAL_CDT) $(CGAL_NN) $(CGAL_LINEAR)
 	build/test_core
+
+# The exact arbiter of ./tdc's grids and contours (test/cli.sh): GMP.
+build/tin_arbiter: test/tin_arbiter.c
+	@mkdir -p build
+	$(CC_CORE) $(CORE_CFLAGS) -o $@ $< -lgmp -lm
 
 build/test_core_asan: $(TEST_SRCS) $(wildcard test/*.h) $(CORE_SRCS) $(CORE_HDRS)
 	@mkdir -p build
@@ -138,7 +171,7 @@ build/regress:
 src/core/%.o: src/core/%.c $(CORE_HDRS)
 	$(CC) $(CFLAGS) -std=c11 -D_GNU_SOURCE -ffp-contract=off -pthread -Isrc/core -c -o $@ $<
 # PGXS does not track headers: a changed struct must rebuild every user.
-$(PG_SRCS:.c=.o): src/pg/tdc_pg.h $(wildcard src/pg/*/*.h) src/core/tdc.h
+$(PG_SRCS:.c=.o): $(wildcard src/pg/*.h src/pg/*/*.h) src/core/tdc.h
 # tdc_delaunay_full_version() reports the PostGIS found here at build time:
 # the default_version of its control file (the library does not compile
 # against PostGIS, so nothing more precise exists), or "unknown".
@@ -205,11 +238,11 @@ FUZZ_GSER_SRCS = src/pg/formats/gser_read.c src/pg/formats/gser_write.c src/pg/r
 # which brings the raster and geometry readers and writers, and the
 # breaklines' segment list in seglist.c);
 # pg_shim_agg.c stands in for tin_run.c, run.c's wait loop and the rest.
-FUZZ_STATE_SRCS = $(addprefix src/pg/runtime/,agg_state.c tin_agg.c seglist.c) \
-	$(addprefix src/pg/fn/,fn_contours_agg.c fn_drape_agg.c fn_raster_agg.c fn_raster.c) \
+FUZZ_STATE_SRCS = $(addprefix src/pg/runtime/,agg_state.c seglist.c) \
+	$(addprefix src/pg/fn/,tin_agg.c fn_contours_agg.c fn_drape_agg.c fn_raster_agg.c fn_raster.c) \
 	$(addprefix src/pg/formats/,raster_read.c raster_write.c gser_contour.c gser_drape.c) \
 	$(FUZZ_GSER_SRCS)
-FUZZ_PG_DEPS = fuzz/pg_shim.c fuzz/pg_shim.h src/pg/tdc_pg.h src/pg/runtime/pg_version_compat.h \
+FUZZ_PG_DEPS = fuzz/pg_shim.c fuzz/pg_shim.h src/pg/tdc_pg.h src/pg/pg_version_compat.h \
 	src/pg/formats/gser_format.h
 
 build/fuzz/fuzz_voronoi: fuzz/fuzz_voronoi.c $(FUZZ_CORE_DEPS)

@@ -1,6 +1,6 @@
 /*
  * fuzz_cdt.c
- *		libFuzzer target for the constrained triangulation (src/core/cdt.c).
+ *		libFuzzer target for the constrained triangulation (src/core/cdt/cdt.c).
  *
  * Input layout (missing bytes read as 0):
  *

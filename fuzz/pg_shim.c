@@ -14,7 +14,7 @@
 #include "miscadmin.h"
 #include "utils/memutils.h"
 
-#include "runtime/pg_version_compat.h"
+#include "pg_version_compat.h"
 #include "pg_shim.h"
 /* the shim's tdc_* stand-ins checked against the real declarations */
 #include "tdc_pg.h"

@@ -8,7 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "internal.h"
+#include "engine_int.h"
 
 /* Lexicographic order of points, for the monotone chain. */
 static int

@@ -34,7 +34,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "job.h"
+#include "job_int.h"
 
 #define CHUNK			1024	/* triangles per chunk, and per callback */
 #define PREFETCH		16		/* half-edges ahead: see collect_task */

@@ -26,7 +26,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "job.h"
+#include "job_int.h"
 
 /*
  * The status of the phase that just ended, its message in job->err: a

@@ -12,7 +12,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "job.h"
+#include "job_int.h"
 
 /*
  * 16-aligned memory for one of the job's arrays, zeroed unless the caller

@@ -34,7 +34,7 @@
  * untouched slots in increasing order; on return every unused slot is on
  * out->fl, marked free, for the merges above.
  */
-#include "job.h"
+#include "job_int.h"
 
 #define SPLIT_MIN		12		/* below, quickselect's exact median is cheap */
 

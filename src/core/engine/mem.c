@@ -47,7 +47,7 @@
 #include <sys/mman.h>
 #include <unistd.h>
 
-#include "internal.h"
+#include "engine_int.h"
 
 #define BIG_HEADER		64
 #define HUGE_SIZE		((size_t) 2 << 20)

@@ -33,7 +33,7 @@
  */
 #include <string.h>
 
-#include "internal.h"
+#include "engine_int.h"
 
 /*
  * Zip steps between two looks at the cancel flag.  A step is a few

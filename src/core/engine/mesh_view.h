@@ -4,10 +4,10 @@
  *		diagram (voronoi*.c), the constrained insertion (cdt*.c) and the
  *		tile finalization (tile_final.c).  Not installed.
  *
- * struct tdc_job (job.h) holds some forty fields: the plan, the grid and
+ * struct tdc_job (job_int.h) holds some forty fields: the plan, the grid and
  * the subdivision tree, the pool, the arena, the lifecycle.  A consumer
  * needs only the result: the input, the sites, the half-edges and the
- * outer face.  So the consumers do not include job.h (test/layering.sh
+ * outer face.  So the consumers do not include job_int.h (test/layering.sh
  * checks it); they take a tdc_mesh_view, filled once from a finished job by
  * tdc_job_view (result.c, in the layer that owns the job), and keep the job
  * itself only as the opaque handle of tdc.h, for the public accessors
@@ -29,7 +29,7 @@
 #ifndef TDC_MESH_VIEW_H
 #define TDC_MESH_VIEW_H
 
-#include "internal.h"
+#include "engine_int.h"
 
 typedef struct tdc_mesh_view
 {
@@ -48,7 +48,7 @@ typedef struct tdc_mesh_view
 	const uint32_t *site_of;	/* position -> its site (itself if a site) */
 	const uint32_t *idx;		/* position -> its input index (a site's first) */
 
-	/* the mesh (internal.h) */
+	/* the mesh (engine_int.h) */
 	const tdc_he *he;			/* 6 nin half-edges; org TDC_NIL: a free slot */
 	size_t		ntri;			/* triangles */
 	const uint64_t *outer;		/* bitmap of the outer face's half-edges;

@@ -15,7 +15,7 @@
 #include <stdatomic.h>
 #include <stdlib.h>
 
-#include "job.h"
+#include "job_int.h"
 
 
 /*

@@ -37,7 +37,7 @@
 #include <string.h>
 #include <time.h>
 
-#include "internal.h"
+#include "engine_int.h"
 
 /*
  * Ready a runner for its owner's first work.  The cancel flag is the owner's,

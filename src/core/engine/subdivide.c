@@ -35,7 +35,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "job.h"
+#include "job_int.h"
 
 /*
  * Points between two looks at the cancel flag in the counting passes: their

@@ -26,7 +26,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "job.h"
+#include "job_int.h"
 
 /*
  * Units of work between two polls of the cancel flag.  A unit is a record

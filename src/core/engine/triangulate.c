@@ -40,7 +40,7 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "job.h"
+#include "job_int.h"
 
 #define LEAF_TARGET		65536	/* largest subset the auto depth allows */
 #define CELL_TARGET		4.0		/* points per grid cell the auto grid aims at */

@@ -57,14 +57,14 @@
  * tiles comes in as `outside`, its heap policy and its peak through the
  * settle and peak callbacks (./tdc: src/cli/bounded_mem.c).  Nothing here
  * exits: an error unwinds to tdc_bounded_run with its message (bd_err,
- * bounded.h), which frees the run's arrays and removes its files.
+ * bounded_int.h), which frees the run's arrays and removes its files.
  */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
 
-#include "bounded.h"
+#include "bounded_int.h"
 
 /*
  * The refusal of a plan: the limit is below this input's floor, the least

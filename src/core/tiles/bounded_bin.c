@@ -23,7 +23,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "bounded.h"
+#include "bounded_int.h"
 
 /*
  * Each tile's first region: r->kfirst[t], its first K, and r->band_idx

@@ -25,7 +25,7 @@
  */
 #include <stdlib.h>
 
-#include "bounded.h"
+#include "bounded_int.h"
 
 /*
  * Tile s's file rewritten in cell order as its single part, the other parts

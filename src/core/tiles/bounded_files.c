@@ -23,7 +23,7 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "bounded.h"
+#include "bounded_int.h"
 
 /* Keep the first error: code and message.  Returns the first error's code. */
 int

@@ -14,7 +14,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "bounded.h"
+#include "bounded_int.h"
 
 /*
  * A sample of the .bin source (256 runs of 256 points spread over the

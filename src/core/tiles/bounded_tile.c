@@ -20,7 +20,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "bounded.h"
+#include "bounded_int.h"
 
 /* How often a tile's engine run looks at the caller's cancel flag. */
 #define ENGINE_POLL_MS		10

@@ -9,7 +9,7 @@
  * closed box holds its points; a disk meets a row of cells over the x-range
  * of its widest slice in the row, taken with a relative slack of 1e-9 and
  * a few ulps of the magnitudes (the disk's radius already bounds the true
- * circle, tile_final.c's disk_box); a cell has a point strictly beyond a
+ * circle, tdc_disk_box in tile_disk.c); a cell has a point strictly beyond a
  * line only if a corner of its box is, decided by the exact orientation.
  * Reporting a cell too many only makes the tile read its points.
  *
@@ -294,8 +294,8 @@ tdc_cells_point_known(const tdc_cells *c, const double *p)
 /*
  * Does the closed disk (centre disk[0..1], radius disk[2]) meet no OTHER
  * cell inside the box clip that covered() does not vouch for?  clip holds
- * every point of P in the disk (the disk's part inside C, tile_final.c's
- * clip_box and segment_box): the disk of a sliver along the hull has a
+ * every point of P in the disk (the disk's part inside C, tile_disk.c's
+ * clip and segment boxes): the disk of a sliver along the hull has a
  * radius of 1e6 and meets the cells along the hull for hundreds of
  * spacings where its part inside C is a lens a few spacings long; without
  * the clip each tile along the hull of 1M uniform points ran 5 times.  Of the cells it does meet, the

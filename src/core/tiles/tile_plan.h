@@ -7,9 +7,9 @@
  *		the tiles.
  *
  * One policy for both callers, next to the finality check
- * (src/core/tile_final.c) that it serves: the bounded run
- * (src/core/bounded*.c) calls it directly, the SQL procedure through small
- * C helpers (src/pg/fn_tiled.c).  Pure functions of their arguments: no
+ * (src/core/tiles/tile_final.c) that it serves: the bounded run
+ * (src/core/tiles/bounded*.c) calls it directly, the SQL procedure through small
+ * C helpers (src/pg/fn/fn_tiled.c).  Pure functions of their arguments: no
  * I/O, no state, no PostgreSQL.
  *
  * The plan is made on a fine grid of TDC_TP_GRID x TDC_TP_GRID cells over the

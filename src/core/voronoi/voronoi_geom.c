@@ -50,7 +50,7 @@
 #include <math.h>
 
 #include "engine/exact.h"
-#include "engine/internal.h"
+#include "engine/engine_int.h"
 
 /*
  * Circumcenter of the counter-clockwise, non-degenerate triangle a, b, c,

@@ -117,75 +117,45 @@ contour_combine_params(TdcTinAgg *dst, const TdcTinAgg *src, MemoryContext cxt)
 	contour_params((ContourState *) dst, b->interval, b->level0);
 }
 
-PG_FUNCTION_INFO_V1(st_tdccontours_combinefn);
-
-Datum
-st_tdccontours_combinefn(PG_FUNCTION_ARGS)
+/* The parameters: uint32 params_set, uint32 zero, interval, base, rows. */
+static Size
+contour_var_len(const TdcTinAgg *a)
 {
-	TdcTinAgg  *st;
-
-	tdc_signal_guard();
-	st = tdc_tin_agg_combine(fcinfo, "st_tdccontours_combinefn", CONTOUR_NAME,
-							 sizeof(ContourState), TDC_CURVES_STROKE, contour_combine_params);
-	if (st == NULL)
-		PG_RETURN_NULL();
-	PG_RETURN_POINTER(st);
+	return 0;
 }
 
-PG_FUNCTION_INFO_V1(st_tdccontours_serialfn);
-
-Datum
-st_tdccontours_serialfn(PG_FUNCTION_ARGS)
+static void
+contour_write(const TdcTinAgg *a, char *extra)
 {
-	ContourState *st;
-	char	   *extra;
-	Size		len;
-	uint32		u[2];
+	const ContourState *st = (const ContourState *) a;
 
-	tdc_signal_guard();
-	(void) tdc_agg_context(fcinfo, "st_tdccontours_serialfn");
-	st = (ContourState *) PG_GETARG_POINTER(0);
-	extra = tdc_tin_agg_extra(&st->s, CONTOUR_EXTRA, &len);
-	u[0] = st->s.params_set ? 1 : 0;
-	u[1] = 0;
-	memcpy(extra, u, 8);
 	memcpy(extra + 8, &st->interval, 8);
 	memcpy(extra + 16, &st->level0, 8);
-	memcpy(extra + 24, &st->s.rows, 8);
-	PG_RETURN_BYTEA_P(tdc_tin_agg_serialize(&st->s, &contour_format, extra, CONTOUR_EXTRA));
 }
 
-PG_FUNCTION_INFO_V1(st_tdccontours_deserialfn);
-
-Datum
-st_tdccontours_deserialfn(PG_FUNCTION_ARGS)
+static Size
+contour_read(TdcTinAgg *a, const char *extra, Size len)
 {
-	ContourState *st;
-	const char *extra;
-	Size		extra_len;
-	uint32		u[2];
+	ContourState *st = (ContourState *) a;
+	uint32		zero;
 
-	tdc_signal_guard();
-	(void) tdc_agg_context(fcinfo, "st_tdccontours_deserialfn");
-	st = palloc0(sizeof(ContourState));
-	extra = tdc_tin_agg_deserialize(&st->s, PG_GETARG_BYTEA_P(0), &contour_format,
-									TDC_CURVES_STROKE, &extra_len);
-	if (extra_len != CONTOUR_EXTRA)
-		tdc_agg_state_corrupt(CONTOUR_NAME, psprintf("%zu bytes of parameters, not %d",
-													 extra_len, CONTOUR_EXTRA));
-	memcpy(u, extra, 8);
+	memcpy(&zero, extra + 4, 4);
 	memcpy(&st->interval, extra + 8, 8);
 	memcpy(&st->level0, extra + 16, 8);
-	memcpy(&st->s.rows, extra + 24, 8);
-	if (u[0] > 1 || u[1] != 0 || st->s.rows < 0)
+	if (zero != 0)
 		tdc_agg_state_corrupt(CONTOUR_NAME, "bad parameter flags");
-	st->s.params_set = u[0] == 1;
-	tdc_agg_state_check_unset(st->s.base, st->s.params_set, st->s.rows, CONTOUR_NAME);
 	if (st->s.params_set && (!(st->interval > 0) || isinf(st->interval) || !isfinite(st->level0)))
 		tdc_agg_state_corrupt(CONTOUR_NAME, "bad interval or base");
-	tdc_tin_agg_read_segments(&st->s, NULL, 0, CONTOUR_NAME);
-	PG_RETURN_POINTER(st);
+	return CONTOUR_EXTRA;
 }
+
+static const TdcTinAggKind contour_kind = {
+	&contour_format, sizeof(ContourState), TDC_CURVES_STROKE,
+	CONTOUR_EXTRA, 24, contour_combine_params, contour_var_len, contour_write, contour_read
+};
+
+/* st_tdccontours_combinefn, _serialfn and _deserialfn */
+TDC_TIN_AGG_SUPPORT(st_tdccontours, contour_kind);
 
 PG_FUNCTION_INFO_V1(st_tdccontours_finalfn);
 

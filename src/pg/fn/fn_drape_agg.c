@@ -199,101 +199,72 @@ drape_combine_params(TdcTinAgg *dst, const TdcTinAgg *src, MemoryContext cxt)
 	drape_params((DrapeState *) dst, cxt, b->method, b->target, VARSIZE_ANY(b->target));
 }
 
-PG_FUNCTION_INFO_V1(st_tdcdrape_combinefn);
-
-Datum
-st_tdcdrape_combinefn(PG_FUNCTION_ARGS)
+/*
+ * The parameters: uint32 params_set, uint32 method length, uint64 target
+ * length, int64 rows, then the method and the target.
+ */
+static Size
+drape_var_len(const TdcTinAgg *a)
 {
-	TdcTinAgg  *st;
+	const DrapeState *st = (const DrapeState *) a;
 
-	tdc_signal_guard();
-	st = tdc_tin_agg_combine(fcinfo, "st_tdcdrape_combinefn", DRAPE_NAME, sizeof(DrapeState),
-							 TDC_CURVES_STROKE, drape_combine_params);
-	if (st == NULL)
-		PG_RETURN_NULL();
-	PG_RETURN_POINTER(st);
+	return a->params_set ? strlen(st->method) + VARSIZE_ANY(st->target) : 0;
 }
 
-PG_FUNCTION_INFO_V1(st_tdcdrape_serialfn);
-
-Datum
-st_tdcdrape_serialfn(PG_FUNCTION_ARGS)
+static void
+drape_write(const TdcTinAgg *a, char *extra)
 {
-	DrapeState *st;
-	char	   *extra;
-	Size		mlen,
-				tlen,
-				len;
-	uint32		u[2];
+	const DrapeState *st = (const DrapeState *) a;
+	uint32		mlen;
 	uint64		tl;
 
-	tdc_signal_guard();
-	(void) tdc_agg_context(fcinfo, "st_tdcdrape_serialfn");
-	st = (DrapeState *) PG_GETARG_POINTER(0);
-	mlen = st->s.params_set ? strlen(st->method) : 0;
-	tlen = st->s.params_set ? VARSIZE_ANY(st->target) : 0;
-	extra = tdc_tin_agg_extra(&st->s, DRAPE_FIXED + mlen + tlen, &len);
-	u[0] = st->s.params_set ? 1 : 0;
-	u[1] = (uint32) mlen;
-	tl = tlen;
-	memcpy(extra, u, 8);
+	if (!a->params_set)
+		return;
+	mlen = (uint32) strlen(st->method);
+	tl = VARSIZE_ANY(st->target);
+	memcpy(extra + 4, &mlen, 4);
 	memcpy(extra + 8, &tl, 8);
-	memcpy(extra + 16, &st->s.rows, 8);
-	if (mlen > 0)
-		memcpy(extra + DRAPE_FIXED, st->method, mlen);
-	if (tlen > 0)
-		memcpy(extra + DRAPE_FIXED + mlen, st->target, tlen);
-	PG_RETURN_BYTEA_P(tdc_tin_agg_serialize(&st->s, &drape_format, extra,
-											DRAPE_FIXED + mlen + tlen));
+	memcpy(extra + DRAPE_FIXED, st->method, mlen);
+	memcpy(extra + DRAPE_FIXED + mlen, st->target, tl);
 }
 
-PG_FUNCTION_INFO_V1(st_tdcdrape_deserialfn);
-
-Datum
-st_tdcdrape_deserialfn(PG_FUNCTION_ARGS)
+static Size
+drape_read(TdcTinAgg *a, const char *extra, Size len)
 {
-	DrapeState *st;
-	const char *extra;
-	Size		extra_len,
-				p;
-	uint32		u[2];
+	DrapeState *st = (DrapeState *) a;
+	uint32		mlen;
 	uint64		tl;
 
-	tdc_signal_guard();
-	(void) tdc_agg_context(fcinfo, "st_tdcdrape_deserialfn");
-	st = palloc0(sizeof(DrapeState));
-	extra = tdc_tin_agg_deserialize(&st->s, PG_GETARG_BYTEA_P(0), &drape_format,
-									TDC_CURVES_STROKE, &extra_len);
-	if (extra_len < DRAPE_FIXED)
-		tdc_agg_state_corrupt(DRAPE_NAME, "its parameters are truncated");
-	memcpy(u, extra, 8);
+	memcpy(&mlen, extra + 4, 4);
 	memcpy(&tl, extra + 8, 8);
-	memcpy(&st->s.rows, extra + 16, 8);
-	if (u[0] > 1 || st->s.rows < 0 || u[1] > METHOD_MAX || tl > extra_len ||
-		(uint64) extra_len < DRAPE_FIXED + (uint64) u[1] + tl ||
-		(u[0] == 0 && (u[1] != 0 || tl != 0)) ||
-		(u[0] == 1 && (u[1] == 0 || tl < VARHDRSZ)))
+	if (mlen > METHOD_MAX || tl > len || (uint64) len < DRAPE_FIXED + (uint64) mlen + tl ||
+		(!a->params_set && (mlen != 0 || tl != 0)) ||
+		(a->params_set && (mlen == 0 || tl < VARHDRSZ)))
 		tdc_agg_state_corrupt(DRAPE_NAME, "bad method or target lengths");
-	st->s.params_set = u[0] == 1;
-	tdc_agg_state_check_unset(st->s.base, st->s.params_set, st->s.rows, DRAPE_NAME);
-	if (st->s.params_set)
+	if (a->params_set)
 	{
 		tdc_interp_spec spec;
 
-		st->method = pnstrdup(extra + DRAPE_FIXED, u[1]);
-		if (strlen(st->method) != u[1])
+		st->method = pnstrdup(extra + DRAPE_FIXED, mlen);
+		if (strlen(st->method) != mlen)
 			tdc_agg_state_corrupt(DRAPE_NAME, "a NUL in the method");
 		check_method(st->method, &spec);
 		st->target = palloc((Size) tl);
-		memcpy(st->target, extra + DRAPE_FIXED + u[1], (Size) tl);
+		memcpy(st->target, extra + DRAPE_FIXED + mlen, (Size) tl);
 		if (VARATT_IS_EXTENDED(st->target) || VARSIZE(st->target) != tl)
 			tdc_agg_state_corrupt(DRAPE_NAME, "the target's length");
 		drape_breaklines(st, CurrentMemoryContext);
 	}
-	p = DRAPE_FIXED + u[1] + (Size) tl;
-	tdc_tin_agg_read_segments(&st->s, extra + p, extra_len - p, DRAPE_NAME);
-	PG_RETURN_POINTER(st);
+	return DRAPE_FIXED + mlen + (Size) tl;
 }
+
+static const TdcTinAggKind drape_kind = {
+	&drape_format, sizeof(DrapeState), TDC_CURVES_STROKE,
+	DRAPE_FIXED, 16, drape_combine_params, drape_var_len, drape_write, drape_read
+};
+
+/* st_tdcdrape_combinefn, _serialfn and _deserialfn */
+TDC_TIN_AGG_SUPPORT(st_tdcdrape, drape_kind);
 
 PG_FUNCTION_INFO_V1(st_tdcdrape_finalfn);
 

@@ -228,51 +228,28 @@ interp_combine_params(TdcTinAgg *dst, const TdcTinAgg *src, MemoryContext cxt)
 	interp_params((InterpState *) dst, cxt, b->method, b->band, &b->tmpl);
 }
 
-PG_FUNCTION_INFO_V1(st_tdcinterpolate_combinefn);
-
-Datum
-st_tdcinterpolate_combinefn(PG_FUNCTION_ARGS)
+/*
+ * The parameters: uint32 params_set, uint32 method length, int64 rows,
+ * int32 band, int32 SRID, uint32 width, uint32 height, the geotransform,
+ * int32 pixel type, uint32 hasnodata, float8 nodata, then the method.
+ */
+static Size
+interp_var_len(const TdcTinAgg *a)
 {
-	TdcTinAgg  *st;
-
-	tdc_signal_guard();
-	st = tdc_tin_agg_combine(fcinfo, "st_tdcinterpolate_combinefn", INTERP_NAME,
-							 sizeof(InterpState), TDC_CURVES_VERTICES, interp_combine_params);
-	if (st == NULL)
-		PG_RETURN_NULL();
-	PG_RETURN_POINTER(st);
+	return a->params_set ? strlen(((const InterpState *) a)->method) : 0;
 }
 
-PG_FUNCTION_INFO_V1(st_tdcinterpolate_serialfn);
-
-Datum
-st_tdcinterpolate_serialfn(PG_FUNCTION_ARGS)
+static void
+interp_write(const TdcTinAgg *a, char *extra)
 {
-	InterpState *st;
-	char	   *extra;
-	Size		mlen,
-				len;
-	uint32		u[2];
-	int32		i4[2];
-	uint32		wh[2];
-	int32		pixtype;
-	uint32		hasnodata;
+	const InterpState *st = (const InterpState *) a;
+	uint32		mlen = (uint32) interp_var_len(a);
+	int32		i4[2] = {st->band, st->tmpl.srid};
+	uint32		wh[2] = {st->tmpl.width, st->tmpl.height};
+	int32		pixtype = st->tmpl.b.pixtype;
+	uint32		hasnodata = st->tmpl.b.hasnodata ? 1 : 0;
 
-	tdc_signal_guard();
-	(void) tdc_agg_context(fcinfo, "st_tdcinterpolate_serialfn");
-	st = (InterpState *) PG_GETARG_POINTER(0);
-	mlen = st->s.params_set ? strlen(st->method) : 0;
-	extra = tdc_tin_agg_extra(&st->s, INTERP_FIXED + mlen, &len);
-	u[0] = st->s.params_set ? 1 : 0;
-	u[1] = (uint32) mlen;
-	i4[0] = st->band;
-	i4[1] = st->tmpl.srid;
-	wh[0] = st->tmpl.width;
-	wh[1] = st->tmpl.height;
-	pixtype = st->tmpl.b.pixtype;
-	hasnodata = st->tmpl.b.hasnodata ? 1 : 0;
-	memcpy(extra, u, 8);
-	memcpy(extra + 8, &st->s.rows, 8);
+	memcpy(extra + 4, &mlen, 4);
 	memcpy(extra + 16, i4, 8);
 	memcpy(extra + 24, wh, 8);
 	memcpy(extra + 32, st->tmpl.gt, 48);
@@ -281,45 +258,29 @@ st_tdcinterpolate_serialfn(PG_FUNCTION_ARGS)
 	memcpy(extra + 88, &st->tmpl.b.nodata, 8);
 	if (mlen > 0)
 		memcpy(extra + INTERP_FIXED, st->method, mlen);
-	PG_RETURN_BYTEA_P(tdc_tin_agg_serialize(&st->s, &interp_format, extra, INTERP_FIXED + mlen));
 }
 
-PG_FUNCTION_INFO_V1(st_tdcinterpolate_deserialfn);
-
-Datum
-st_tdcinterpolate_deserialfn(PG_FUNCTION_ARGS)
+static Size
+interp_read(TdcTinAgg *a, const char *extra, Size len)
 {
-	InterpState *st;
-	const char *extra;
-	Size		extra_len;
-	uint32		u[2];
+	InterpState *st = (InterpState *) a;
+	uint32		mlen;
 	int32		i4[2];
 	uint32		wh[2];
 	int32		pixtype;
 	uint32		hasnodata;
 
-	tdc_signal_guard();
-	(void) tdc_agg_context(fcinfo, "st_tdcinterpolate_deserialfn");
-	st = palloc0(sizeof(InterpState));
-	extra = tdc_tin_agg_deserialize(&st->s, PG_GETARG_BYTEA_P(0), &interp_format,
-									TDC_CURVES_VERTICES, &extra_len);
-	if (extra_len < INTERP_FIXED)
-		tdc_agg_state_corrupt(INTERP_NAME, "its parameters are truncated");
-	memcpy(u, extra, 8);
-	memcpy(&st->s.rows, extra + 8, 8);
+	memcpy(&mlen, extra + 4, 4);
 	memcpy(i4, extra + 16, 8);
 	memcpy(wh, extra + 24, 8);
 	memcpy(st->tmpl.gt, extra + 32, 48);
 	memcpy(&pixtype, extra + 80, 4);
 	memcpy(&hasnodata, extra + 84, 4);
 	memcpy(&st->tmpl.b.nodata, extra + 88, 8);
-	if (u[0] > 1 || st->s.rows < 0 || u[1] > METHOD_MAX ||
-		(uint64) extra_len < INTERP_FIXED + (uint64) u[1] ||
-		(u[0] == 0 && (u[1] != 0 || extra_len != INTERP_FIXED)) || (u[0] == 1 && u[1] == 0))
+	if (mlen > METHOD_MAX || (uint64) len < INTERP_FIXED + (uint64) mlen ||
+		(!a->params_set && (mlen != 0 || len != INTERP_FIXED)) || (a->params_set && mlen == 0))
 		tdc_agg_state_corrupt(INTERP_NAME, "bad method length");
-	st->s.params_set = u[0] == 1;
-	tdc_agg_state_check_unset(st->s.base, st->s.params_set, st->s.rows, INTERP_NAME);
-	if (st->s.params_set)
+	if (a->params_set)
 	{
 		tdc_interp_spec spec;
 
@@ -334,16 +295,22 @@ st_tdcinterpolate_deserialfn(PG_FUNCTION_ARGS)
 		st->tmpl.band = st->band;
 		st->tmpl.b.pixtype = pixtype;
 		st->tmpl.b.hasnodata = hasnodata == 1;
-		st->method = pnstrdup(extra + INTERP_FIXED, u[1]);
-		if (strlen(st->method) != u[1])
+		st->method = pnstrdup(extra + INTERP_FIXED, mlen);
+		if (strlen(st->method) != mlen)
 			tdc_agg_state_corrupt(INTERP_NAME, "a NUL in the method");
 		tdc_raster_method(st->method, &spec, INTERP_NAME);
 		tdc_tin_agg_breaklines(&st->s, spec.breaklines, CurrentMemoryContext, INTERP_NAME);
 	}
-	tdc_tin_agg_read_segments(&st->s, extra + INTERP_FIXED + u[1],
-							  extra_len - INTERP_FIXED - u[1], INTERP_NAME);
-	PG_RETURN_POINTER(st);
+	return INTERP_FIXED + mlen;
 }
+
+static const TdcTinAggKind interp_kind = {
+	&interp_format, sizeof(InterpState), TDC_CURVES_VERTICES,
+	INTERP_FIXED, 8, interp_combine_params, interp_var_len, interp_write, interp_read
+};
+
+/* st_tdcinterpolate_combinefn, _serialfn and _deserialfn */
+TDC_TIN_AGG_SUPPORT(st_tdcinterpolate, interp_kind);
 
 PG_FUNCTION_INFO_V1(st_tdcinterpolate_finalfn);
 

@@ -13,7 +13,7 @@
  * tdc_delaunay.max_memory they stay in memory, and the triangulation is one
  * tdc_run, as the Dump's.  Past that they are appended, a chunk at a time, to
  * a file, handed to the core's bounded run (tdc_bounded_start,
- * src/core/bounded*.c), the one ./tdc --max-memory runs: the same plan of
+ * src/core/tiles/bounded*.c), the one ./tdc --max-memory runs: the same plan of
  * tiles cut by counts, the same halos and reruns, so the same triangles,
  * each once, within the limit.  The run works on a thread of its own while
  * this backend waits with its interrupts watched (run.c's wait loop: a

@@ -1,7 +1,7 @@
 /*
  * fn_tiled_region.c
  *		The known region of a tdc_delaunay_tiled tile (src/sql/tiled.sql)
- *		from the core's policy (src/core/tile_plan.c): the labels of
+ *		from the core's policy (src/core/tiles/tile_plan.c): the labels of
  *		squares of tile_size, a tile's first region, and its growth on a
  *		rerun.
  *

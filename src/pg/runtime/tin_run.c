@@ -1,18 +1,13 @@
 /*
  * tin_run.c
- *		A TIN inside a backend: samples with heights collected, the
- *		triangulation and its TIN built and waited for, an operation on the
- *		TIN (contours, a drape) run and waited for, and all of it freed.
+ *		A TIN inside a backend: the triangulation of the samples and its
+ *		TIN built and waited for, an operation on the TIN (contours, a
+ *		drape) run and waited for, and all of it freed.
  *
- * Samples.  The TIN functions need a height per sample, so a sample value
- * without Z is an error naming it: by its row (the aggregate's count of the
- * non-NULL rows it read, per parallel worker) and its first vertex.  Its
- * flags are read from the first bytes of the value (a slice of a TOASTed
- * one), so no value is read twice; an EMPTY sample has no vertex to lack a
- * height and is skipped, whatever its dimensions.  M is dropped.  Samples
- * with equal x and y keep the height of the first (the site's first input
- * point; under a parallel plan "first" follows the order in which partial
- * states are combined).
+ * The samples, with heights, are read by tdc_tin_read_sample
+ * (toast_stream.c).  Samples with equal x and y keep the height of the
+ * first (the site's first input point; under a parallel plan "first"
+ * follows the order in which partial states are combined).
  *
  * Breaklines.  With "linear:breaklines=true" the owner has the samples'
  * linework reported as segments (seglist.c), and they are inserted into
@@ -37,44 +32,8 @@
 #include "utils/memutils.h"
 
 #include "tdc_pg.h"
-#include "formats/gser_format.h"
 
 TDC_WORK_OPS(tin_ops, tdc_tin, tdc_tin, "TIN operation");
-
-/* ----------------------------------------------------------------
- *		samples
- * ----------------------------------------------------------------
- */
-void
-tdc_tin_read_sample(TdcPointBuf *buf, Datum d, int64 row, const char *fname)
-{
-	struct varlena *head = PG_DETOAST_DATUM_SLICE(d, 0, G_HEADER);
-	bool		hasz = VARSIZE_ANY_EXHDR(head) < G_HEADER ||
-		(((const unsigned char *) VARDATA_ANY(head))[3] & GF_Z) != 0;
-
-	if ((Pointer) head != DatumGetPointer(d))
-		pfree(head);
-	if (!hasz)
-	{
-		TdcPointBuf tmp;
-
-		/* its vertices, to tell EMPTY apart and to name the first */
-		tdc_pointbuf_init(&tmp, CurrentMemoryContext);
-		tmp.curves = TDC_CURVES_VERTICES;
-		(void) tdc_read_geometry(&tmp, d, fname);
-		if (tmp.n == 0)
-			return;
-		ereport(ERROR,
-				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
-				 errmsg("%s: sample row %lld has no Z coordinate", fname, (long long) row),
-				 errdetail("The row's first vertex is (%.17g %.17g); rows are counted from 1 among the "
-						   "non-NULL rows each aggregate (each parallel worker) reads.",
-						   tmp.xy[0], tmp.xy[1]),
-				 errhint("Every sample needs a height: make the samples XYZ, with ST_MakePoint(x, y, z) or "
-						 "ST_Force3DZ(geom, z).")));
-	}
-	(void) tdc_read_geometry(buf, d, fname);
-}
 
 /* ----------------------------------------------------------------
  *		the TIN

@@ -25,6 +25,8 @@
  * uncompressed, or an expanded or indirect datum, or compressed with a
  * method this code does not know) are detoasted as before.  An ERROR raised
  * while reading carries a CONTEXT line saying how the value was stored.
+ * The TIN functions read their samples through tdc_tin_read_sample, which
+ * also wants a height at every vertex.
  */
 #include "postgres.h"
 
@@ -37,6 +39,7 @@
 #include "utils/rel.h"
 
 #include "tdc_pg.h"
+#include "gser_format.h"
 
 /* Stored bytes fetched at a time: whole TOAST chunks, about 250 kB. */
 #define SLICE_BYTES			(128 * TOAST_MAX_CHUNK_SIZE)
@@ -519,4 +522,44 @@ tdc_read_geometry(TdcPointBuf *buf, Datum d, const char *fname)
 	if (geom != attr)
 		pfree(geom);
 	return stroked;
+}
+
+/*
+ * A sample of the TIN functions: a geometry whose vertices need a height,
+ * so a value without Z is an error naming it, by its row (the aggregate's
+ * count of the non-NULL rows it read, per parallel worker) and its first
+ * vertex.  Its flags are read from the first bytes of the value (a slice
+ * of a TOASTed one), so no value is read twice; an EMPTY sample has no
+ * vertex to lack a height and is skipped, whatever its dimensions.  M is
+ * dropped.
+ */
+void
+tdc_tin_read_sample(TdcPointBuf *buf, Datum d, int64 row, const char *fname)
+{
+	struct varlena *head = PG_DETOAST_DATUM_SLICE(d, 0, G_HEADER);
+	bool		hasz = VARSIZE_ANY_EXHDR(head) < G_HEADER ||
+		(((const unsigned char *) VARDATA_ANY(head))[3] & GF_Z) != 0;
+
+	if ((Pointer) head != DatumGetPointer(d))
+		pfree(head);
+	if (!hasz)
+	{
+		TdcPointBuf tmp;
+
+		/* its vertices, to tell EMPTY apart and to name the first */
+		tdc_pointbuf_init(&tmp, CurrentMemoryContext);
+		tmp.curves = TDC_CURVES_VERTICES;
+		(void) tdc_read_geometry(&tmp, d, fname);
+		if (tmp.n == 0)
+			return;
+		ereport(ERROR,
+				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
+				 errmsg("%s: sample row %lld has no Z coordinate", fname, (long long) row),
+				 errdetail("The row's first vertex is (%.17g %.17g); rows are counted from 1 among the "
+						   "non-NULL rows each aggregate (each parallel worker) reads.",
+						   tmp.xy[0], tmp.xy[1]),
+				 errhint("Every sample needs a height: make the samples XYZ, with ST_MakePoint(x, y, z) or "
+						 "ST_Force3DZ(geom, z).")));
+	}
+	(void) tdc_read_geometry(buf, d, fname);
 }

@@ -1,5 +1,5 @@
 /*
- * bounded.h
+ * bounded_int.h
  *		The bounded run (tdc_bounded_run in tdc.h: an input that does not
  *		fit, tile by tile through files): what its files share (bounded.c
  *		explains the run).  Private to the core.
@@ -19,8 +19,8 @@
  * tdc_bounded_run; it frees the run's arrays and removes its files.  The
  * threads of the two passes have a bd_err each, merged after the join.
  */
-#ifndef TDC_BOUNDED_H
-#define TDC_BOUNDED_H
+#ifndef TDC_BOUNDED_INT_H
+#define TDC_BOUNDED_INT_H
 
 #include <stdio.h>
 #include <string.h>
@@ -283,4 +283,4 @@ extern int	tdc_bd_region_records(bounded_run *r, int s, bool whole, const double
 /* bounded_tile.c */
 extern int	tdc_bd_tile_run(bounded_run *r, int t);
 
-#endif							/* TDC_BOUNDED_H */
+#endif							/* TDC_BOUNDED_INT_H */

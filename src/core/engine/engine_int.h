@@ -1,6 +1,7 @@
 /*
- * internal.h
- *		Structures shared by the phases of the core.  Not installed.
+ * engine_int.h
+ *		Structures shared by the engine's files (and the features that
+ *		run on its pool and runner).  Not installed.
  *
  * The mesh is Guibas & Stolfi's quad-edge structure reduced to its primal
  * half: undirected edge e owns half-edges 2e and 2e+1 (so Sym is h ^ 1), and
@@ -18,8 +19,8 @@
  * the subset's free list, so merging two adjacent subsets needs no locking:
  * their slot ranges and free lists are disjoint.
  */
-#ifndef TDC_INTERNAL_H
-#define TDC_INTERNAL_H
+#ifndef TDC_ENGINE_INT_H
+#define TDC_ENGINE_INT_H
 
 #include <pthread.h>
 #include <stdatomic.h>
@@ -280,4 +281,4 @@ tdc_pt(const tdc_mesh *m, uint32_t v)
 	return m->xy + 2 * (size_t) v;
 }
 
-#endif							/* TDC_INTERNAL_H */
+#endif							/* TDC_ENGINE_INT_H */

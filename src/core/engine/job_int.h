@@ -1,15 +1,15 @@
 /*
- * job.h
+ * job_int.h
  *		The state of one triangulation, shared by the core's sources (the
  *		plan and first phase in triangulate.c, the lifecycle in job.c on the
  *		runner of runner.c, the results in result.c).  Not installed.
  *		The consumers of a finished job (Voronoi, constrained, tiles) do
  *		not include it: they read the view of mesh_view.h.
  */
-#ifndef TDC_JOB_H
-#define TDC_JOB_H
+#ifndef TDC_JOB_INT_H
+#define TDC_JOB_INT_H
 
-#include "internal.h"
+#include "engine_int.h"
 #include "mesh_view.h"
 
 /* A rectangle of grid cells: rows [r0, r1), columns [c0, c1). */
@@ -182,4 +182,4 @@ extern void *tdc_job_alloc_uninit(tdc_job *job, size_t size);
 extern void tdc_job_release(tdc_job *job, void *ptr);
 extern void tdc_job_free_arrays(tdc_job *job);
 
-#endif							/* TDC_JOB_H */
+#endif							/* TDC_JOB_INT_H */
