@@ -40,8 +40,9 @@
  * value is seen the numbers become ranks in the type's order, a file of
  * them rewritten, and the core hands each vertex of a triangle the least
  * rank of its copies (tdc_least_labels; in the bounded run the labels ride
- * in its files).  The ids are the rounds' too: rank * 2^32 + k, k counting
- * the tile's triangles from 1 in the order they come out.  The memory the
+ * in its files).  The ids have the rounds' form, rank * 2^32 + k, k counting
+ * the tile's triangles from 1 in the order they come out (the rounds
+ * counted them in the order of the tile's own mesh).  The memory the
  * labels take, 8 bytes a vertex and the distinct values, counts against
  * the limit like the coordinates.  So the user's tiles only name the
  * triangles: the work is bounded by the core's plan, whatever their sizes.
