@@ -155,42 +155,38 @@ las_error() {	# name reason-pattern file [tdc options...]
 	check "$name, --max-memory: exit 1, the -o file untouched, no temporary file left" \
 		"[ $rc -eq 1 ] && grep -qE \"\$why\" $tmp/e.err && [ \"\$(cat $tmp/prev.out)\" = 'keep me' ] && [ -z \"\$(ls -A $tmp/tiles)\" ]"
 }
-fixture_points 6 | W "$tmp/lazbit.las" 4 6 fmtbyte=134
-las_error "LAZ: bit 7 of the format byte" 'LAZ \(compressed LAS\).*bit 7' "$tmp/lazbit.las"
-fixture_points 6 | W "$tmp/lazbit.laz" 4 6 fmtbyte=134
-las_error "LAZ named .laz" 'LAZ \(compressed LAS\)' "$tmp/lazbit.laz"
-fixture_points 1 | W "$tmp/lazvlr.las" 2 1 laszip=1
-las_error "LAZ: LASzip's VLR" "LAZ \\(compressed LAS\\).*LASzip's VLR" "$tmp/lazvlr.las"
-fixture_points 1 | W "$tmp/sig.las" 2 1 sig=LASX
-las_error "bad signature" 'not a LAS file \(no "LASF" signature\)' "$tmp/sig.las"
+# a fixture of FORMAT in LAS 1.MINOR written with OPTS, refused for WHY
+las_bad() {	# name why file minor format opts...
+	local name=$1 why=$2 file=$3 format=$5
+	fixture_points "$format" | W "$file" "${@:4}"
+	las_error "$name" "$why" "$file"
+}
+las_bad "LAZ: bit 7 of the format byte" 'LAZ \(compressed LAS\).*bit 7' "$tmp/lazbit.las" 4 6 fmtbyte=134
+las_bad "LAZ named .laz" 'LAZ \(compressed LAS\)' "$tmp/lazbit.laz" 4 6 fmtbyte=134
+las_bad "LAZ: LASzip's VLR" "LAZ \\(compressed LAS\\).*LASzip's VLR" "$tmp/lazvlr.las" 2 1 laszip=1
+las_bad "bad signature" 'not a LAS file \(no "LASF" signature\)' "$tmp/sig.las" 2 1 sig=LASX
+las_bad "version 1.1" 'LAS version 1.1 is not read \(1.2 to 1.4 are\)' "$tmp/v11.las" 1 1
+las_bad "version 1.5" 'LAS version 1.5 is not read' "$tmp/v15.las" 5 6
+las_bad "version 2.4" 'LAS version 2.4 is not read' "$tmp/v24.las" 4 6 major=2
+las_bad "format 11" 'point data record format 11 is not read \(0 to 10 are\)' "$tmp/f11.las" 4 6 fmtbyte=11
+las_bad "truncated header" 'truncated header: 100 bytes' "$tmp/th.las" 2 1 truncate=100
+las_bad "1.4 header cut at 300 bytes" "truncated header: 300 bytes, LAS 1.4's header has 375" "$tmp/th14.las" 4 6 truncate=300
+las_bad "1.4 header size field 227" "header size field says 227 bytes, LAS 1.4's header has 375" "$tmp/hs.las" 4 6 hsize=227
+las_bad "truncated points" 'truncated: the header says 7 points of 28 bytes' "$tmp/tp.las" 2 1 cut=5
+las_bad "truncated VLR" 'truncated: variable length record 0' "$tmp/tv.las" 2 1 wkt="$wkt_a" truncate=260
+las_bad "truncated EVLR" 'truncated: .*extended variable length record 0' "$tmp/te.las" 4 6 wktbit=1 wkt_evlr="$wkt_a" cut=3
+las_bad "record length 19 under format 0's 20" "point data record length 19 is shorter than format 0's 20 bytes" "$tmp/rl.las" 2 0 reclen=19
+las_bad "record length 29 under format 6's 30" "point data record length 29 is shorter than format 6's 30 bytes" "$tmp/rl6.las" 4 6 reclen=29
 : > "$tmp/empty.las"
 las_error "empty file" 'not a LAS file' "$tmp/empty.las"
-fixture_points 1 | W "$tmp/v11.las" 1 1
-las_error "version 1.1" 'LAS version 1.1 is not read \(1.2 to 1.4 are\)' "$tmp/v11.las"
-fixture_points 6 | W "$tmp/v15.las" 5 6
-las_error "version 1.5" 'LAS version 1.5 is not read' "$tmp/v15.las"
-fixture_points 6 | W "$tmp/v24.las" 4 6 major=2
-las_error "version 2.4" 'LAS version 2.4 is not read' "$tmp/v24.las"
-fixture_points 6 | W "$tmp/f11.las" 4 6 fmtbyte=11
-las_error "format 11" 'point data record format 11 is not read \(0 to 10 are\)' "$tmp/f11.las"
-fixture_points 1 | W "$tmp/th.las" 2 1 truncate=100
-las_error "truncated header" 'truncated header: 100 bytes' "$tmp/th.las"
-fixture_points 6 | W "$tmp/th14.las" 4 6 truncate=300
-las_error "1.4 header cut at 300 bytes" "truncated header: 300 bytes, LAS 1.4's header has 375" "$tmp/th14.las"
-fixture_points 6 | W "$tmp/hs.las" 4 6 hsize=227
-las_error "1.4 header size field 227" "header size field says 227 bytes, LAS 1.4's header has 375" "$tmp/hs.las"
-fixture_points 1 | W "$tmp/tp.las" 2 1 cut=5
-las_error "truncated points" 'truncated: the header says 7 points of 28 bytes' "$tmp/tp.las"
-fixture_points 1 | W "$tmp/tv.las" 2 1 wkt="$wkt_a" truncate=260
-las_error "truncated VLR" 'truncated: variable length record 0' "$tmp/tv.las"
-fixture_points 6 | W "$tmp/te.las" 4 6 wktbit=1 wkt_evlr="$wkt_a" cut=3
-las_error "truncated EVLR" 'truncated: .*extended variable length record 0' "$tmp/te.las"
-fixture_points 0 | W "$tmp/rl.las" 2 0 reclen=19
-las_error "record length 19 under format 0's 20" "point data record length 19 is shorter than format 0's 20 bytes" "$tmp/rl.las"
-fixture_points 6 | W "$tmp/rl6.las" 4 6 reclen=29
-las_error "record length 29 under format 6's 30" "point data record length 29 is shorter than format 6's 30 bytes" "$tmp/rl6.las"
+patch() {	# file offset pack-template value: overwrite bytes in place
+	perl -e 'open(F, "+<:raw", $ARGV[0]) or die; seek(F, $ARGV[1], 0); print F pack($ARGV[2], $ARGV[3]); close F' "$@"
+}
+fixture_points 1 | W "$tmp/vo.las" 2 1 wkt="$wkt_a"
+patch "$tmp/vo.las" 96 'L<' 240
+las_error "a VLR past the offset to the points" 'variable length record 0 ends at byte [0-9]+, past the offset to the point data \(240\)' "$tmp/vo.las"
 fixture_points 1 | W "$tmp/gk.las" 2 1 geokeys=3072:32632
-perl -e 'open(F, "+<:raw", $ARGV[0]) or die; seek(F, 227 + 54 + 6, 0); print F pack("S<", 9); close F' "$tmp/gk.las"
+patch "$tmp/gk.las" $((227 + 54 + 6)) 'S<' 9
 las_error "a GeoKey directory shorter than its keys" 'GeoKey directory of variable length record 0 \(16 bytes\) is shorter than its header and 9 keys' "$tmp/gk.las"
 rm -f "$tmp/prev.out"
 $TDC "$tmp/nope.las" 2> "$tmp/e.err"

@@ -113,10 +113,13 @@ static void las_fail(const las_file *lf, const char *fmt,...) __attribute__((nor
 static void
 las_fail(const las_file *lf, const char *fmt,...)
 {
-	char		msg[1024];
+	char		msg[8192];
 	va_list		ap;
-	int			k = snprintf(msg, sizeof(msg), "%s: ", lf->path);
+	int			k = snprintf(msg, sizeof(msg) / 2, "%s: ", lf->path);
 
+	/* a path too long for its half is cut there, and the reason still fits */
+	if (k < 0 || k >= (int) sizeof(msg) / 2)
+		k = (int) strlen(msg);
 	va_start(ap, fmt);
 	vsnprintf(msg + k, sizeof(msg) - k, fmt, ap);
 	va_end(ap);
