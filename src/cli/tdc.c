@@ -413,6 +413,7 @@ main(int argc, char **argv)
 		if (!fits(&a, &s))
 		{
 			run_in_tiles(&a, &s);
+			free(s.srs);
 			return 0;
 		}
 		read_staged(&s, &in);
