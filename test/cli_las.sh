@@ -179,14 +179,14 @@ las_bad "record length 19 under format 0's 20" "point data record length 19 is s
 las_bad "record length 29 under format 6's 30" "point data record length 29 is shorter than format 6's 30 bytes" "$tmp/rl6.las" 4 6 reclen=29
 : > "$tmp/empty.las"
 las_error "empty file" 'not a LAS file' "$tmp/empty.las"
-patch() {	# file offset pack-template value: overwrite bytes in place
+patch_bytes() {	# file offset pack-template value: overwrite bytes in place
 	perl -e 'open(F, "+<:raw", $ARGV[0]) or die; seek(F, $ARGV[1], 0); print F pack($ARGV[2], $ARGV[3]); close F' "$@"
 }
 fixture_points 1 | W "$tmp/vo.las" 2 1 wkt="$wkt_a"
-patch "$tmp/vo.las" 96 'L<' 240
+patch_bytes "$tmp/vo.las" 96 'L<' 240
 las_error "a VLR past the offset to the points" 'variable length record 0 ends at byte [0-9]+, past the offset to the point data \(240\)' "$tmp/vo.las"
 fixture_points 1 | W "$tmp/gk.las" 2 1 geokeys=3072:32632
-patch "$tmp/gk.las" $((227 + 54 + 6)) 'S<' 9
+patch_bytes "$tmp/gk.las" $((227 + 54 + 6)) 'S<' 9
 las_error "a GeoKey directory shorter than its keys" 'GeoKey directory of variable length record 0 \(16 bytes\) is shorter than its header and 9 keys' "$tmp/gk.las"
 rm -f "$tmp/prev.out"
 $TDC "$tmp/nope.las" 2> "$tmp/e.err"
