@@ -57,7 +57,8 @@ typedef struct cli_input
 	double	   *xy,
 			   *z;				/* NULL without z */
 	char	   *srs;			/* the input's CRS: a LAS file's WKT or "EPSG:N"
-								 * (las.c says which); NULL when none */
+								 * (las.c says which); NULL when none;
+								 * malloc'd, freed by oneshot_free */
 } cli_input;
 
 /* die.c: "tdc: " and fmt with arg on stderr, then exit(code) */
