@@ -79,8 +79,22 @@ build/cgal_nn: test/cgal_nn.cpp
 	@mkdir -p build
 	$(CXX) -O2 -DNDEBUG -DCGAL_NDEBUG -o $@ $< -lgmp -lmpfr
 
-check-core: build/test_core $(CGAL_CDT) $(CGAL_NN)
+# The breakline reference (test/cgal_linear.cpp): linear on CGAL's constrained
+# Delaunay triangulation, exact; it made test/fixtures/tin-reference.txt,
+# which the core suite checks against it again.
+CGAL_LINEAR = $(if $(CGAL_CDT),build/cgal_linear)
+
+build/cgal_linear: test/cgal_linear.cpp
+	@mkdir -p build
+	$(CXX) -O2 -DNDEBUG -DCGAL_NDEBUG -o $@ $< -lgmp -lmpfr
+
+check-core: build/test_core $(CGAL_CDT) $(CGAL_NN) $(CGAL_LINEAR)
 	build/test_core
+
+# The exact arbiter of ./tdc's grids and contours (test/cli.sh): GMP.
+build/tin_arbiter: test/tin_arbiter.c
+	@mkdir -p build
+	$(CC_CORE) $(CORE_CFLAGS) -o $@ $< -lgmp -lm
 
 build/test_core_asan: $(TEST_SRCS) $(wildcard test/*.h) $(CORE_SRCS) $(wildcard src/core/*.h)
 	@mkdir -p build

@@ -16,10 +16,17 @@
 #      interpolation into rasters against ST_InterpolateRaster (GDAL), draping,
 #      contours and the Delaunay aggregate on 10^6 terrain samples, and a size
 #      sweep of the interpolation                      -> tin.md
+#   H  bench/first_statement.sh  the 1M-point aggregate as the first statement of
+#      a freshly started server, and warm, ours against PostGIS (a server of its
+#      own, restarted before every first statement)   -> first_statement.md
 #
 # Each script writes its own report, docs/benchmarks/NAME.md (BENCH_DOCS),
 # with the header of bench_publish in bench/lib.sh: date, commit, machine,
 # software and load.  Every run is kept in build/bench/*.csv (BENCH_OUT).
+# A script refuses to write its report when the machine was not quiet
+# (bench/quiet.sh: exit status 3); the others still run, and this script then
+# names the refused ones and exits with status 3.  BENCH_NOISY=1 writes them
+# anyway, marked "(noisy machine)".  Run nothing else beside it.
 #
 # B, C, E, F and G run against the server the PG* variables point at when one answers;
 # otherwise a throw-away cluster is started with scripts/lib.sh and stopped
@@ -27,6 +34,7 @@
 #
 #   BENCH_SKIP_CORE=1   skip A          BENCH_SKIP_SQL=1   skip B
 #   BENCH_SKIP_SWEEP=1  skip C          BENCH_NO_INSTALL=1 do not run make install before B, C, E and F
+#   BENCH_SKIP_FIRST=1  skip H (some 6 minutes)
 #   BENCH_SKIP_TILED=1  skip D (about a minute; its 100M case only with BENCH_TILED_100M=1)
 #   BENCH_CONSTRAINED=1 run E too (some 10 minutes: SFCGAL takes 5-20 s a statement, 12 times)
 #   BENCH_VORONOI=1     run F too (BENCH_VOR_* knobs: see bench/voronoi_bench.sh)
@@ -39,40 +47,58 @@ ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 # shellcheck source=bench/lib.sh
 . "$ROOT/bench/lib.sh"
 
-mkdir -p "$BENCH_OUT" "$BENCH_DOCS"
+mkdir -p "$BENCH_OUT"
 log "tdc_delaunay benchmarks; results in $BENCH_OUT"
+
+# part SCRIPT: run bench/SCRIPT; a refusal (status 3, a noisy machine) is
+# noted and the run goes on, any other failure is returned
+REFUSED=()
+part() {
+	local rc=0
+	bash "$ROOT/bench/$1" || rc=$?
+	if [ $rc = 3 ]; then
+		log "bench/$1 refused to write its report: the machine was not quiet"
+		REFUSED+=("$1")
+		return 0
+	fi
+	return $rc
+}
 
 if [ "${BENCH_SKIP_CORE:-0}" != 1 ]; then
 	log "=== A: core benchmark"
-	bash "$ROOT/bench/core_bench.sh"
+	part core_bench.sh
 fi
 
 if [ "${BENCH_SKIP_TILED:-0}" != 1 ]; then
 	log "=== D: tiled command line (./tdc --max-memory)"
-	bash "$ROOT/bench/tiled_cli_bench.sh" || log "the tiled benchmark failed"
+	part tiled_cli_bench.sh || log "the tiled benchmark failed"
 fi
 
 # sql_parts: B, C, E, F and G, against the server the PG* variables now point at
 sql_parts() {
 	if [ "${BENCH_SKIP_SQL:-0}" != 1 ]; then
 		log "=== B: SQL benchmark"
-		bash "$ROOT/bench/sql_bench.sh"
+		part sql_bench.sh
 	fi
 	if [ "${BENCH_SKIP_SWEEP:-0}" != 1 ]; then
 		log "=== C: SQL size sweep"
-		bash "$ROOT/bench/sweep_bench.sh"
+		part sweep_bench.sh
 	fi
 	if [ "${BENCH_CONSTRAINED:-0}" = 1 ]; then
 		log "=== E: constrained, against SFCGAL"
-		bash "$ROOT/bench/constrained_bench.sh"
+		part constrained_bench.sh
 	fi
 	if [ "${BENCH_VORONOI:-0}" = 1 ]; then
 		log "=== F: Voronoi diagrams in SQL"
-		bash "$ROOT/bench/voronoi_bench.sh"
+		part voronoi_bench.sh
+	fi
+	if [ "${BENCH_SKIP_FIRST:-0}" != 1 ]; then
+		log "=== H: the first statement of a fresh server (a server of its own)"
+		part first_statement.sh
 	fi
 	if [ "${BENCH_TIN:-0}" = 1 ]; then
 		log "=== G: the TIN in SQL: interpolation, draping, contours"
-		bash "$ROOT/bench/tin_bench.sh"
+		part tin_bench.sh
 	fi
 }
 
@@ -97,4 +123,8 @@ if [ "${BENCH_SKIP_SQL:-0}" != 1 ] || [ "${BENCH_SKIP_SWEEP:-0}" != 1 ] || [ "${
 	sql_parts
 fi
 
+if [ ${#REFUSED[@]} -gt 0 ]; then
+	log "done, but no report from ${REFUSED[*]}: the machine was not quiet (their samples: $BENCH_OUT/*.load.csv)"
+	exit 3
+fi
 log "done: the reports are in $BENCH_DOCS/*.md (each written by its benchmark), every run in $BENCH_OUT"
