@@ -1846,4 +1846,5 @@ test_tin(void)
 	test_breaklines_parse();
 	test_breaklines_ridge();
 	test_breaklines_nearest();
+	test_tin_maxedge();			/* test_tin_maxedge.c */
 }
