@@ -1,13 +1,13 @@
 --
 -- tdc_maxedge: max_edge=L in the method of ST_TDCInterpolateRaster,
--- ST_TDCInterpolate and ST_TDCDrape (issue 39): the triangles with an edge
--- longer than L are dropped: their pixels are empty, a draped target may
--- not cross them.
+-- ST_TDCInterpolate, ST_TDCDrape and ST_TDCContours (issue 39): the
+-- triangles with an edge longer than L are dropped: their pixels are empty,
+-- a draped target may not cross them, contour lines stop at them.
 --
 -- The samples: a lake, the lattice 0..20 with no sample within 6 of
 -- (10 10) but one at it, heights z = x + 2 y.  The pixels expected empty
--- come from an independent rule in SQL: a pixel centre has a value when it
--- is a sample or some triangle of ST_TDCDelaunayTriangles covering it
+-- come from an independent rule in SQL: a pixel centre (never a sample)
+-- has a value when some triangle of ST_TDCDelaunayTriangles covering it
 -- (ST_Covers, closed) has no edge longer than L.
 --
 -- Independent of the other tests: the raster extension is created here if
@@ -34,17 +34,21 @@ CREATE TABLE tdc_me_tri AS
 CREATE TABLE tdc_me_rast AS
 	SELECT ST_AddBand(ST_MakeEmptyRaster(40, 40, 0, 20, 0.5, -0.5, 0, 0, 0), '32BF'::text, 0::float8, -9999::float8) AS tmpl;
 
--- each pixel: empty or not, against the rule
+-- each pixel centre (never a sample: they lie at quarters) by the rule, at
+-- max_edge 1.5 and 2
+CREATE TABLE tdc_me_px AS
+	SELECT c, rw,
+		   EXISTS (SELECT FROM tdc_me_tri WHERE t && p AND ST_Covers(t, p) AND longest <= 1.5) AS kept_1_5,
+		   EXISTS (SELECT FROM tdc_me_tri WHERE t && p AND ST_Covers(t, p) AND longest <= 2) AS kept_2
+	  FROM (SELECT c, rw, ST_MakePoint((c - 0.5) * 0.5, 20 - (rw - 0.5) * 0.5) AS p
+			  FROM generate_series(1, 40) c, generate_series(1, 40) rw) s;
+-- each pixel: empty or not, against the rule (l: 1.5, 2, or none)
 CREATE FUNCTION tdc_me_check(r raster, l float8)
 	RETURNS TABLE (empty_pixels bigint, unlike_the_rule bigint) LANGUAGE sql AS $$
-	WITH px AS (
-		SELECT c, rw, ST_Value(r, 1, c, rw) IS NULL AS empty,
-			   ST_MakePoint((c - 0.5) * 0.5, 20 - (rw - 0.5) * 0.5) AS p
-		  FROM generate_series(1, 40) c, generate_series(1, 40) rw)
-	SELECT count(*) FILTER (WHERE empty),
-		   count(*) FILTER (WHERE empty = (EXISTS (SELECT FROM tdc_me_lake s WHERE ST_Equals(ST_Force2D(s.geom), p))
-										OR EXISTS (SELECT FROM tdc_me_tri WHERE ST_Covers(t, p) AND longest <= l)))
-	  FROM px $$;
+	SELECT count(*) FILTER (WHERE ST_Value(r, 1, c, rw) IS NULL),
+		   count(*) FILTER (WHERE (ST_Value(r, 1, c, rw) IS NULL) =
+								  CASE l WHEN 1.5 THEN kept_1_5 WHEN 2 THEN kept_2 ELSE true END)
+	  FROM tdc_me_px $$;
 
 -- ----------------------------------------------------------------------
 -- ST_TDCInterpolateRaster and ST_TDCInterpolate: the lake is empty
@@ -58,7 +62,7 @@ SELECT (tdc_me_check(ST_TDCInterpolateRaster((SELECT ST_Collect(geom) FROM tdc_m
 SELECT (tdc_me_check(ST_TDCInterpolateRaster((SELECT ST_Collect(geom) FROM tdc_me_lake), 'linear:max_edge=2', tmpl), 2)).*
   FROM tdc_me_rast;
 -- kept pixels hold the values without the option; (2.25 2.25) is on the plane
-WITH a AS (SELECT ST_TDCInterpolateRaster((SELECT ST_Collect(geom) FROM tdc_me_lake), 'natural_neighbor', tmpl) AS r0,
+WITH a AS MATERIALIZED (SELECT ST_TDCInterpolateRaster((SELECT ST_Collect(geom) FROM tdc_me_lake), 'natural_neighbor', tmpl) AS r0,
 				  ST_TDCInterpolateRaster((SELECT ST_Collect(geom) FROM tdc_me_lake), 'natural_neighbor:max_edge=1.5', tmpl) AS r1
 			 FROM tdc_me_rast)
 SELECT count(*) FILTER (WHERE ST_Value(r1, 1, c, rw) IS NOT NULL AND ST_Value(r1, 1, c, rw) <> ST_Value(r0, 1, c, rw))
@@ -113,6 +117,70 @@ SELECT ST_TDCDrape(geom, 'POINT(2 1)', 'linear:breaklines=true:max_edge=3.9') FR
 SELECT ST_TDCDrape(geom, 'POINT(2 1)', 'linear:radius=1:max_edge=4') FROM tdc_me_ridge;
 
 -- ----------------------------------------------------------------------
+-- ST_TDCContours(geom, interval, base, method)
+-- ----------------------------------------------------------------------
+-- z = x: the levels 0.5 .. 19.5 are the lines x = level; with max_edge each
+-- is cut where the kept triangles end, and their length is that of the
+-- vertical lines within the kept triangles' union (computed by GEOS)
+CREATE TABLE tdc_me_zx AS SELECT ST_MakePoint(ST_X(geom), ST_Y(geom), ST_X(geom)) AS geom FROM tdc_me_lake;
+CREATE TABLE tdc_me_c AS
+	SELECT ST_TDCContours(geom, 1, 0.5) AS plain,
+		   ST_TDCContours(geom, 1, 0.5, 'linear') AS linear,
+		   ST_TDCContours(geom, 1, 0.5, 'linear:max_edge=1.5') AS cut
+	  FROM tdc_me_zx;
+SELECT ST_NumGeometries(plain) AS lines_without, ST_AsBinary(plain) = ST_AsBinary(linear) AS linear_is_plain,
+	   ST_NumGeometries(cut) AS lines_with_max_edge,
+	   (SELECT count(*) FROM ST_Dump(cut) d WHERE ST_Z(ST_StartPoint(d.geom)) = 10.5) AS pieces_at_10_5,
+	   (SELECT bool_and(NOT ST_IsClosed(d.geom)) FROM ST_Dump(cut) d) AS all_open
+  FROM tdc_me_c;
+SELECT abs(ST_Length(cut) - (SELECT sum(ST_Length(ST_Intersection(ST_MakeLine(ST_MakePoint(k + 0.5, 0), ST_MakePoint(k + 0.5, 20)), u)))
+							   FROM generate_series(0, 19) k,
+									(SELECT ST_Union(t) AS u FROM tdc_me_tri WHERE longest <= 1.5) kept)) < 1e-9
+	   AS length_within_the_kept_triangles,
+	   (SELECT bool_and(EXISTS (SELECT FROM tdc_me_tri WHERE longest <= 1.5 AND ST_DWithin(t, p.geom, 1e-12)))
+		  FROM ST_DumpPoints(cut) p) AS every_vertex_on_a_kept_triangle
+  FROM tdc_me_c;
+-- in a parallel plan the method travels with the states (serial, deserial, combine)
+CREATE TABLE tdc_me_par AS SELECT geom FROM tdc_me_zx, generate_series(1, 3);
+ANALYZE tdc_me_par;
+SET max_parallel_workers_per_gather = 0;
+CREATE TABLE tdc_me_serial AS SELECT ST_AsBinary(ST_TDCContours(geom, 1, 0.5, 'linear:max_edge=1.5')) AS c FROM tdc_me_par;
+ALTER FUNCTION st_tdccontours_serialfn(internal) COST 1;
+ALTER FUNCTION st_tdccontours_deserialfn(bytea, internal) COST 1;
+SET parallel_setup_cost = 0;
+SET parallel_tuple_cost = 0;
+SET min_parallel_table_scan_size = 0;
+SET max_parallel_workers_per_gather = 2;
+SET parallel_leader_participation = off;
+CREATE FUNCTION tdc_me_par_run(query text, OUT workers_launched int) LANGUAGE plpgsql AS $$
+DECLARE
+	plan		jsonb;
+BEGIN
+	EXECUTE format('EXPLAIN (ANALYZE, VERBOSE, COSTS OFF, TIMING OFF, SUMMARY OFF, FORMAT JSON) CREATE TABLE tdc_me_parallel AS %s',
+				   query) INTO plan;
+	SELECT coalesce(sum((n ->> 'Workers Launched')::int), 0) INTO workers_launched
+	  FROM jsonb_path_query(plan, 'strict $.** ? (exists (@."Workers Launched"))') n;
+END $$;
+SELECT workers_launched > 0 AS workers_ran
+  FROM tdc_me_par_run($q$SELECT ST_AsBinary(ST_TDCContours(geom, 1, 0.5, 'linear:max_edge=1.5')) AS c FROM tdc_me_par$q$);
+SELECT s.c = p.c AS parallel_same FROM tdc_me_serial s, tdc_me_parallel p;
+RESET parallel_leader_participation;
+RESET max_parallel_workers_per_gather;
+RESET min_parallel_table_scan_size;
+RESET parallel_tuple_cost;
+RESET parallel_setup_cost;
+ALTER FUNCTION st_tdccontours_serialfn(internal) COST 10000000;
+ALTER FUNCTION st_tdccontours_deserialfn(bytea, internal) COST 10000000;
+-- the method: linear with max_edge only, the same in every row; NULL skips the row
+SELECT ST_NumGeometries(ST_TDCContours(geom, 1, 0.5, CASE WHEN ST_X(geom) = 3 THEN NULL ELSE 'linear:max_edge=1.5' END))
+  FROM tdc_me_zx;
+SELECT ST_TDCContours(geom, 1, 0.5, 'nearest:max_edge=1.5') FROM tdc_me_zx;
+SELECT ST_TDCContours(geom, 1, 0.5, 'linear:radius=0:max_edge=1.5') FROM tdc_me_zx;
+SELECT ST_TDCContours(geom, 1, 0.5, 'linear:breaklines=true') FROM tdc_me_zx;
+SELECT ST_TDCContours(geom, 1, 0.5, 'linear:max_edge=-1') FROM tdc_me_zx;
+SELECT ST_TDCContours(geom, 1, 0.5, CASE WHEN ST_X(geom) < 5 THEN 'linear' ELSE 'linear:max_edge=2' END) FROM tdc_me_zx;
+
+-- ----------------------------------------------------------------------
 -- The parser's errors, the same for every function that takes a method
 -- ----------------------------------------------------------------------
 CREATE FUNCTION tdc_me_try(m text) RETURNS text LANGUAGE plpgsql AS $$
@@ -134,7 +202,9 @@ SELECT ST_TDCInterpolate(geom, (SELECT tmpl FROM tdc_me_rast), 'natural_neighbor
 
 DROP FUNCTION tdc_me_try(text);
 DROP FUNCTION tdc_me_check(raster, float8);
-DROP TABLE tdc_me_lake, tdc_me_tri, tdc_me_rast, tdc_me_ridge;
+DROP FUNCTION tdc_me_par_run(text);
+DROP TABLE tdc_me_lake, tdc_me_tri, tdc_me_px, tdc_me_rast, tdc_me_ridge, tdc_me_zx, tdc_me_c, tdc_me_par, tdc_me_serial,
+	tdc_me_parallel;
 SET client_min_messages = warning;
 \if :me_make_raster
 DROP EXTENSION tdc_delaunay_raster;
