@@ -207,7 +207,7 @@ for kvp in $SETTINGS; do
 	SET_SQL+="SET ${kvp%%=*} = '${kvp#*=}';"$'\n'
 done
 SO_START=$(so_id)
-bench_begin
+bench_begin server
 echo "dataset,statement,form,rep,ms,result,status,message,plan" > "$RUNS"
 
 run_dataset() {

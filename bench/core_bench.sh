@@ -13,8 +13,9 @@
 #   core.csv       medians per set
 #   phases.csv     phase times for threads 1..N on the phase set (1e7 uniform)
 #   core.txt       the printed tables
-# and docs/benchmarks/core.md (bench_publish's header, then core.txt) and
-# docs/benchmarks/core.png (seconds vs n for the synthetic sets).
+#   core.png       seconds vs n for the synthetic sets
+# and docs/benchmarks/core.md (bench_publish's header, then core.txt and the
+# figure, copied beside it) if the machine was quiet (bench/quiet.sh).
 #
 # Environment knobs:
 #   BENCH_SIZES="1e5 1e6 1e7"  BENCH_SETS="uniform clustered grid"
@@ -24,7 +25,7 @@
 #   BENCH_TIMEOUT=900 (seconds per single run)
 #   BENCH_NO_TDC=1   only CGAL
 #   BENCH_DOCS=DIR   where core.md and core.png go (default docs/benchmarks/)
-#   BENCH_PLOT_ONLY=1  only redraw core.png from build/bench/core.csv
+#   BENCH_PLOT_ONLY=1  only redraw build/bench/core.png from build/bench/core.csv
 set -euo pipefail
 
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
@@ -64,12 +65,11 @@ fi
 TDC_BIN=$WORK/tdc
 [ $HAVE_TDC = 1 ] && cp -p "$ROOT/tdc" "$TDC_BIN"
 
-# make_plot: $BENCH_DOCS/core.png (seconds vs n, log-log) from core.csv, per synthetic set:
+# make_plot: $BENCH_OUT/core.png (seconds vs n, log-log) from core.csv, per synthetic set:
 # tdc 1 thread / all threads / CGAL
 make_plot() {
+	rm -f "$BENCH_OUT/core.png"
 	if command -v gnuplot >/dev/null; then
-		DOCS=$BENCH_DOCS
-		mkdir -p "$DOCS"
 		pl=()
 		colors=("#1f77b4" "#2ca02c" "#9467bd")
 		ci=0
@@ -85,7 +85,7 @@ make_plot() {
 		if [ ${#pl[@]} -gt 0 ]; then
 			{
 				echo "set terminal pngcairo size 800,560 font 'DejaVu Sans,10'"
-				echo "set output '$DOCS/core.png'"
+				echo "set output '$BENCH_OUT/core.png'"
 				echo "set logscale xy"
 				echo "set format x '10^{%L}'"
 				echo "set xlabel 'points n'"
@@ -309,7 +309,6 @@ fi
 bench_end
 
 make_plot
-[ -s "$BENCH_DOCS/core.png" ] && printf '\n![engine time against n](core.png)\n' > "$WORK/png" || : > "$WORK/png"
+bench_figure "$BENCH_OUT/core.png" "engine time against n"
 bench_publish core "The engine: ./tdc against CGAL" "$TXT" text
-cat "$WORK/png" >> "$BENCH_DOCS/core.md"
 log "wrote $CSV, $RUNS$([ $HAVE_TDC = 1 ] && echo ", $PHASES"), $TXT"

@@ -3,10 +3,12 @@
 # Sourced, not executed.  Expects ROOT (the repository root) to be set.
 #
 # Data files (git-ignored) go to $BENCH_DATA (default data/bench), raw results
-# (CSV, every run) to $BENCH_OUT (default build/bench), helper binaries to
-# build/.  Each benchmark writes its report to $BENCH_DOCS/<name>.md (default
-# docs/benchmarks/) with bench_publish, which gives every report the same
-# header: date, commit, machine, software versions and load.
+# (CSV, every run, the load samples) and figures to $BENCH_OUT (default
+# build/bench), helper binaries to build/.  Each benchmark writes its report
+# to $BENCH_DOCS/<name>.md (default docs/benchmarks/) with bench_publish, which
+# gives every report the same header (date, commit, machine, software
+# versions, load) and writes it only if the machine was quiet during the timed
+# runs (bench/quiet.sh): nothing else writes into $BENCH_DOCS.
 
 BENCH_DATA=${BENCH_DATA:-$ROOT/data/bench}
 BENCH_OUT=${BENCH_OUT:-$ROOT/build/bench}
@@ -18,6 +20,8 @@ POINT_SEED=42
 
 log() { printf '[%s] %s\n' "$(date -u +%H:%M:%S)" "$*" >&2; }
 die() { log "ERROR: $*"; exit 1; }
+# shellcheck source=bench/quiet.sh
+. "$ROOT/bench/quiet.sh"
 
 # apt-get install the given Debian packages if any is missing (root only).
 ensure_debs() {
@@ -288,50 +292,41 @@ bench_tdc_copy() {
 
 # ---------------------------------------------------------------- reports
 
-# busy_procs: the processes that used at least 20% of a CPU over one second,
-# busiest first ("name pid NN%"), or "none"; read from /proc, so inside a
-# chroot it sees the whole machine
-busy_procs() {
-	local a b
-	a=$(cat /proc/[0-9]*/stat 2>/dev/null || true)
-	sleep 1
-	b=$(cat /proc/[0-9]*/stat 2>/dev/null || true)
-	awk -v hz="$(getconf CLK_TCK)" '
-		# pid (comm) state ppid ...: utime and stime are the 12th and 13th
-		# fields after the closing parenthesis (comm may hold spaces)
-		function parse(line,   i, rest, f) {
-			i = index(line, "(")
-			pid = substr(line, 1, i - 2)
-			rest = line
-			sub(/^.*\) /, "", rest)
-			comm = substr(line, i + 1)
-			sub(/\) [^)]*$/, "", comm)
-			split(rest, f, " ")
-			return f[12] + f[13]
-		}
-		NR == FNR { x = parse($0); t0[pid] = x; next }
-		{ x = parse($0); if (pid in t0) { d = (x - t0[pid]) * 100 / hz; if (d >= 20) printf "%d\t%s %s\n", d, comm, pid } }
-	' <(printf '%s\n' "$a") <(printf '%s\n' "$b") | sort -rn | awk -F'\t' '
-		{ printf "%s%s %d%%", (NR > 1 ? ", " : ""), $2, $1; n++ }
-		END { if (n == 0) printf "none" }'
-}
-
-# bench_begin, bench_end: note the time, the load average and the busy
-# processes before and after a benchmark's timed runs, for bench_publish
+# bench_begin [server] [noreport], bench_end: around a benchmark's timed runs
+# (bench/quiet.sh): the lock, the wait for a quiet machine (or the refusal),
+# the samples during the run, the wait for its own load to settle, the
+# verdict.  "server": the run's work is done by the server the PG* variables
+# name too.  "noreport": a trial run that writes no report (no waiting, no
+# refusal; the samples are still kept).
 bench_begin() {
+	local w server='' noreport=0
+	for w in "$@"; do
+		case $w in
+			server) server=server ;;
+			noreport) noreport=1 ;;
+			*) die "bench_begin: unknown word '$w'" ;;
+		esac
+	done
 	# the commit the timed runs start from: the tree may move during a long run
 	BENCH_REV=$(git -C "$ROOT" rev-parse --short HEAD 2>/dev/null || echo unknown)
 	git -C "$ROOT" diff --quiet HEAD -- src bench 2>/dev/null ||
 		BENCH_REV="$BENCH_REV, with uncommitted changes in src/ or bench/"
-	BENCH_BUSY0=$(busy_procs)
+	if [ $noreport = 1 ]; then
+		BENCH_SETTLE=0
+		BENCH_NOISY=1
+	fi
+	quiet_begin $server
 	BENCH_T0=$(date -u '+%Y-%m-%d %H:%M UTC')
-	BENCH_LOAD0=$(cut -d' ' -f1-3 /proc/loadavg)
 }
 bench_end() {
 	BENCH_T1=$(date -u '+%Y-%m-%d %H:%M UTC')
-	BENCH_LOAD1=$(cut -d' ' -f1-3 /proc/loadavg)
-	BENCH_BUSY1=$(busy_procs)
+	quiet_end
 }
+
+# bench_figure FILE ALT: a figure (drawn outside BENCH_DOCS, e.g. in BENCH_OUT)
+# that bench_publish copies next to the report and shows after its tables
+BENCH_FIGURES=()
+bench_figure() { BENCH_FIGURES+=("$1|$2"); }
 
 # pkg_ver PATTERN: "package version" of the installed Debian packages matching
 # PATTERN (a dpkg-query glob), or "-"
@@ -342,11 +337,10 @@ pkg_ver() {
 
 # bench_header TITLE SCRIPT: the header every report under docs/benchmarks/
 # starts with: what wrote it, when, on which commit, machine and software, and
-# how busy the machine was before and after the timed runs (bench_begin,
-# bench_end; without bench_end, "after" is now)
+# how busy the machine was before, during and after the timed runs, with the
+# verdict of the quiet rule (bench_begin, bench_end, bench/quiet.sh)
 bench_header() {
 	local title=$1 script=$2 rev os major
-	[ -n "${BENCH_T1:-}" ] || bench_end
 	rev=${BENCH_REV:-}
 	if [ -z "$rev" ]; then
 		rev=$(git -C "$ROOT" rev-parse --short HEAD 2>/dev/null || echo unknown)
@@ -363,7 +357,7 @@ Written by \`$script\` (part of \`make bench\`; see [the index](README.md)). Eve
 |---|---|
 | date | ${BENCH_T0:-?} to $BENCH_T1 |
 | commit | $rev |
-| CPU | $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ *//'), $(nproc) cores |
+| CPU | $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ *//'), $BENCH_CORES cores |
 | memory | $(awk '/^MemTotal:/ { printf "%.0f", $2 / 1048576 }' /proc/meminfo) GB |
 | kernel | $(uname -sr) |
 | Debian | $os ($(cat /etc/debian_version 2>/dev/null || echo ?)) |
@@ -372,16 +366,23 @@ Written by \`$script\` (part of \`make bench\`; see [the index](README.md)). Eve
 | GEOS | $(pkg_ver 'libgeos-c1*') |
 | SFCGAL | $(pkg_ver 'libsfcgal[0-9]*') |
 | CGAL | $(pkg_ver libcgal-dev) |
-| load average (1, 5, 15 min) | ${BENCH_LOAD0:-?} before, $BENCH_LOAD1 after |
-| other processes over 20% of a CPU | before: ${BENCH_BUSY0:-?}; after: $BENCH_BUSY1 |
+| load average (1, 5, 15 min) | $BENCH_LOAD0 before, $BENCH_LOAD1 after (taken $BENCH_SETTLED s after the timed runs, for their own load to settle) |
+$(quiet_rows)
 EOF
 }
 
 # bench_publish NAME TITLE TXT [text]: $BENCH_DOCS/NAME.md, the shared header
 # then the tables in TXT as the script printed them ("text": fixed-width
-# tables, put in a code block)
+# tables, put in a code block), then the figures of bench_figure, copied next
+# to it.  Only if the machine was quiet (bench/quiet.sh; BENCH_NOISY=1 writes
+# it anyway, titled "(noisy machine)"): a refusal exits with status 3 and
+# leaves BENCH_DOCS as it was.  The report and each figure are written whole
+# under a temporary name, then renamed.
 bench_publish() {
-	local name=$1 title=$2 txt=$3 kind=${4:-md} out
+	local name=$1 title=$2 txt=$3 kind=${4:-md} out f file alt
+	[ -n "${BENCH_T1:-}" ] || bench_end
+	quiet_gate "$name"
+	[ "$BENCH_QUIET" = yes ] || title="$title (noisy machine)"
 	mkdir -p "$BENCH_DOCS"
 	out=$BENCH_DOCS/$name.md
 	{
@@ -394,6 +395,19 @@ bench_publish() {
 		else
 			cat "$txt"
 		fi
-	} > "$out.tmp" && mv "$out.tmp" "$out"
+		for f in "${BENCH_FIGURES[@]}"; do
+			file=${f%%|*} alt=${f#*|}
+			[ ! -s "$file" ] || printf '\n![%s](%s)\n' "$alt" "$(basename "$file")"
+		done
+	} > "$out.tmp" || { rm -f "$out.tmp"; die "cannot write $out"; }
+	for f in "${BENCH_FIGURES[@]}"; do
+		file=${f%%|*}
+		[ -s "$file" ] || continue
+		{ cp "$file" "$BENCH_DOCS/$(basename "$file").tmp" &&
+			mv "$BENCH_DOCS/$(basename "$file").tmp" "$BENCH_DOCS/$(basename "$file")"; } ||
+			die "cannot copy $file into $BENCH_DOCS"
+	done
+	mv "$out.tmp" "$out"
+	_q_unlock
 	log "wrote $out"
 }

@@ -20,6 +20,10 @@
 # Each script writes its own report, docs/benchmarks/NAME.md (BENCH_DOCS),
 # with the header of bench_publish in bench/lib.sh: date, commit, machine,
 # software and load.  Every run is kept in build/bench/*.csv (BENCH_OUT).
+# A script refuses to write its report when the machine was not quiet
+# (bench/quiet.sh: exit status 3); the others still run, and this script then
+# names the refused ones and exits with status 3.  BENCH_NOISY=1 writes them
+# anyway, marked "(noisy machine)".  Run nothing else beside it.
 #
 # B, C, E, F and G run against the server the PG* variables point at when one answers;
 # otherwise a throw-away cluster is started with scripts/lib.sh and stopped
@@ -39,40 +43,54 @@ ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 # shellcheck source=bench/lib.sh
 . "$ROOT/bench/lib.sh"
 
-mkdir -p "$BENCH_OUT" "$BENCH_DOCS"
+mkdir -p "$BENCH_OUT"
 log "tdc_delaunay benchmarks; results in $BENCH_OUT"
+
+# part SCRIPT: run bench/SCRIPT; a refusal (status 3, a noisy machine) is
+# noted and the run goes on, any other failure is returned
+REFUSED=()
+part() {
+	local rc=0
+	bash "$ROOT/bench/$1" || rc=$?
+	if [ $rc = 3 ]; then
+		log "bench/$1 refused to write its report: the machine was not quiet"
+		REFUSED+=("$1")
+		return 0
+	fi
+	return $rc
+}
 
 if [ "${BENCH_SKIP_CORE:-0}" != 1 ]; then
 	log "=== A: core benchmark"
-	bash "$ROOT/bench/core_bench.sh"
+	part core_bench.sh
 fi
 
 if [ "${BENCH_SKIP_TILED:-0}" != 1 ]; then
 	log "=== D: tiled command line (./tdc --max-memory)"
-	bash "$ROOT/bench/tiled_cli_bench.sh" || log "the tiled benchmark failed"
+	part tiled_cli_bench.sh || log "the tiled benchmark failed"
 fi
 
 # sql_parts: B, C, E, F and G, against the server the PG* variables now point at
 sql_parts() {
 	if [ "${BENCH_SKIP_SQL:-0}" != 1 ]; then
 		log "=== B: SQL benchmark"
-		bash "$ROOT/bench/sql_bench.sh"
+		part sql_bench.sh
 	fi
 	if [ "${BENCH_SKIP_SWEEP:-0}" != 1 ]; then
 		log "=== C: SQL size sweep"
-		bash "$ROOT/bench/sweep_bench.sh"
+		part sweep_bench.sh
 	fi
 	if [ "${BENCH_CONSTRAINED:-0}" = 1 ]; then
 		log "=== E: constrained, against SFCGAL"
-		bash "$ROOT/bench/constrained_bench.sh"
+		part constrained_bench.sh
 	fi
 	if [ "${BENCH_VORONOI:-0}" = 1 ]; then
 		log "=== F: Voronoi diagrams in SQL"
-		bash "$ROOT/bench/voronoi_bench.sh"
+		part voronoi_bench.sh
 	fi
 	if [ "${BENCH_TIN:-0}" = 1 ]; then
 		log "=== G: the TIN in SQL: interpolation, draping, contours"
-		bash "$ROOT/bench/tin_bench.sh"
+		part tin_bench.sh
 	fi
 }
 
@@ -97,4 +115,8 @@ if [ "${BENCH_SKIP_SQL:-0}" != 1 ] || [ "${BENCH_SKIP_SWEEP:-0}" != 1 ] || [ "${
 	sql_parts
 fi
 
+if [ ${#REFUSED[@]} -gt 0 ]; then
+	log "done, but no report from ${REFUSED[*]}: the machine was not quiet (their samples: $BENCH_OUT/*.load.csv)"
+	exit 3
+fi
 log "done: the reports are in $BENCH_DOCS/*.md (each written by its benchmark), every run in $BENCH_OUT"

@@ -25,14 +25,15 @@
 # CGAL (exact predicates) on the same coordinates: its finite-face count.
 #
 # Outputs: build/bench/sql_runs.csv, build/bench/sql.csv, build/bench/sql.txt,
-#          docs/benchmarks/sql.md (bench_publish's header, then sql.txt),
-#          docs/benchmarks/sql.png (time vs n, log-log), docs/benchmarks/coast_tin.png.
+#          build/bench/sql.png (time vs n, log-log), build/bench/coast_tin.png, and
+#          docs/benchmarks/sql.md (bench_publish's header, then sql.txt and the two
+#          figures, copied beside it) if the machine was quiet (bench/quiet.sh).
 # Knobs: BENCH_SQL_SIZES="1e4 1e5 1e6" BENCH_SQL_SETS="uniform clustered"
 #        BENCH_SQL_REPS_SMALL=5 (n <= 1e5) BENCH_SQL_REPS_MID=3 (n <= 1e6)
 #        BENCH_SQL_COAST=1  BENCH_SQL_PG_COAST=1 (try PostGIS on the coastlines)
 #        BENCH_SQL_TDC_COAST_AGG=1 (try the ST_TDCDelaunay aggregate there)
 #        BENCH_SQL_HULLCHECK=1 (count unique vertices and hull vertices in SQL)
-#        BENCH_DOCS=DIR (where the report and PNGs go, default docs/benchmarks/)  BENCH_SQL_PLOT_ONLY=1 (replot from the CSVs)
+#        BENCH_DOCS=DIR (where the report and PNGs go, default docs/benchmarks/)  BENCH_SQL_PLOT_ONLY=1 (replot into build/bench/ from the CSVs)
 set -euo pipefail
 
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
@@ -49,9 +50,9 @@ TDC_COAST_AGG=${BENCH_SQL_TDC_COAST_AGG:-1}
 HULLCHECK=${BENCH_SQL_HULLCHECK:-1}
 TIMEOUT=${BENCH_SQL_TIMEOUT:-600}
 RELOAD=${BENCH_SQL_RELOAD:-0}
-DOCS=$BENCH_DOCS
+FIGS=$BENCH_OUT
 
-mkdir -p "$BENCH_OUT" "$DOCS"
+mkdir -p "$BENCH_OUT"
 RUNS=$BENCH_OUT/sql_runs.csv
 CSV=$BENCH_OUT/sql.csv
 TXT=$BENCH_OUT/sql.txt
@@ -95,9 +96,10 @@ END $$;
 EOF
 
 # ---------------------------------------------------------------- plots
-# make_plots: $DOCS/sql.png from sql.csv/sql_runs.csv, $DOCS/coast_tin.png from the server
+# make_plots: $FIGS/sql.png from sql.csv/sql_runs.csv, $FIGS/coast_tin.png from the server
 make_plots() {
-	log "plotting $DOCS/sql.png"
+	rm -f "$FIGS/sql.png" "$FIGS/coast_tin.png"
+	log "plotting $FIGS/sql.png"
 	for tool in tdc tdc_1t postgis; do
 		for k in $SETS; do
 			awk -F, -v k="$k" -v t="$tool" 'NR > 1 && $4 == t && index($1, k "_") == 1 && $6 != "-" { print $2, $6 }' "$CSV" > "$WORK/$tool.$k.dat"
@@ -124,7 +126,7 @@ make_plots() {
 	if [ ${#plotcmds[@]} -gt 0 ]; then
 		{
 			echo "set terminal pngcairo size 900,600 font 'DejaVu Sans,11'"
-			echo "set output '$DOCS/sql.png'"
+			echo "set output '$FIGS/sql.png'"
 			echo "set logscale xy"
 			echo "set format x '10^{%L}'"
 			echo "set xlabel 'points n'"
@@ -142,7 +144,7 @@ make_plots() {
 	if [ "$COAST" = 1 ] && [ $HAVE_TDC = 1 ]; then
 		# Strait of Gibraltar: triangulate the full-resolution coastline vertices
 		# inside the window and draw the triangles under the coastline
-		log "plotting $DOCS/coast_tin.png (Strait of Gibraltar)"
+		log "plotting $FIGS/coast_tin.png (Strait of Gibraltar)"
 		ENV="ST_MakeEnvelope(-6.0, 35.75, -5.25, 36.2, 4326)"
 		sql -F ' ' > "$WORK/tin.dat" <<-EOF
 	WITH pts AS (
@@ -164,7 +166,7 @@ make_plots() {
 		npts=$(sql -c "SELECT count(*) FROM (SELECT ST_DumpPoints(geom) AS d FROM bench.coastlines WHERE geom && $ENV) s WHERE ST_Intersects((d).geom, $ENV)")
 		gnuplot <<-EOF || log "gnuplot failed"
 	set terminal png size 900,700 font 'DejaVu Sans,9'
-	set output '$DOCS/coast_tin.png'
+	set output '$FIGS/coast_tin.png'
 	set title 'Strait of Gibraltar: ST\\_TDCDelaunay of $npts GSHHG full-resolution coastline vertices ($ntri triangles)'
 	set xrange [-6.0:-5.25]
 	set yrange [35.75:36.2]
@@ -283,7 +285,7 @@ timed() {
 TDC_Q='SELECT ST_NumGeometries(ST_TDCDelaunay(geom)) FROM bench.%s'
 PG_Q='SELECT ST_NumGeometries(ST_DelaunayTriangles(ST_Collect(geom))) FROM bench.%s'
 
-bench_begin
+bench_begin server
 for s in "${PT_SETS[@]}"; do
 	n=$(table_rows "bench.$s")
 	reps=1
@@ -406,9 +408,8 @@ if [ "$COAST" = 1 ]; then
 fi
 
 make_plots
-ls -l "$DOCS"/*.png 2>/dev/null >&2 || true
+ls -l "$FIGS"/sql.png "$FIGS"/coast_tin.png 2>/dev/null >&2 || true
+bench_figure "$FIGS/sql.png" sql
+bench_figure "$FIGS/coast_tin.png" coast_tin
 bench_publish sql "Aggregates in SQL: tdc_delaunay against PostGIS on uniform, clustered and coastline points" "$TXT" text
-for png in sql.png coast_tin.png; do
-	[ -s "$DOCS/$png" ] && printf '\n![%s](%s)\n' "${png%.png}" "$png" >> "$DOCS/sql.md"
-done
 log "wrote $CSV, $RUNS, $TXT"

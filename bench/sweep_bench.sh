@@ -42,10 +42,10 @@
 # Outputs: build/bench/sweep_runs.csv  every run (rep <= 0: warm-up)
 #          build/bench/sweep.csv       medians, PostGIS/ours ratio, time per call
 #          build/bench/sweep.txt       header + Markdown table (for the README)
-#          docs/benchmarks/sweep.md    the report: bench_publish's header + that table
-#          docs/benchmarks/sweep.png   log-log time per call vs points per call,
-#                                      and the ratio (quick mode: build/bench/sweep.png,
-#                                      and no report)
+#          build/bench/sweep.png       log-log time per call vs points per call, and the ratio
+#          docs/benchmarks/sweep.md    the report: bench_publish's header + that table and
+#                                      the figure, copied beside it, if the machine was
+#                                      quiet (bench/quiet.sh); quick mode writes no report
 # Knobs:   BENCH_SWEEP_REPS=5  BENCH_SWEEP_WORKLOADS="row group agg"
 #          BENCH_SWEEP_MAX_N (skip cells with more points per call; e.g. 1e5)
 #          BENCH_SWEEP_QUICK=1 (3 reps, at most 1e3 points per call: to try it out)
@@ -55,7 +55,7 @@
 #          BENCH_SWEEP_SETTINGS="jit=off" (session settings, name=value ...; see below)
 #          BENCH_SWEEP_ROW_SIZES, BENCH_SWEEP_GROUP_SIZES ("k:count ..."),
 #          BENCH_SWEEP_AGG_SIZES ("n ...") replace the lists above
-#          BENCH_SWEEP_PNG=FILE  BENCH_SWEEP_PLOT_ONLY=1 (redraw from the CSVs)
+#          BENCH_SWEEP_PNG=FILE (where the figure is drawn)  BENCH_SWEEP_PLOT_ONLY=1 (redraw it from the CSVs)
 #
 # jit=off by default: ST_DelaunayTriangles is declared COST 10000, ours less
 # (the header prints both), so with the server's jit=on the PostGIS statements
@@ -88,7 +88,7 @@ ROW_SIZES=${BENCH_SWEEP_ROW_SIZES:-"3:10000 5:10000 10:10000 20:10000 100:2000 1
 [ "$BIG" = 1 ] && [ -z "${BENCH_SWEEP_ROW_SIZES:-}" ] && ROW_SIZES="$ROW_SIZES 5e6:1"
 GROUP_SIZES=${BENCH_SWEEP_GROUP_SIZES:-"3:1000 10:1000 30:1000 100:1000 1000:100 1e4:10"}
 AGG_SIZES=${BENCH_SWEEP_AGG_SIZES:-"3 10 100 1e3 1e4 1e5 1e6 1e7"}
-if [ "$QUICK" = 1 ]; then PNG=${BENCH_SWEEP_PNG:-$BENCH_OUT/sweep.png}; else PNG=${BENCH_SWEEP_PNG:-$BENCH_DOCS/sweep.png}; fi
+PNG=${BENCH_SWEEP_PNG:-$BENCH_OUT/sweep.png}
 S=bench_sweep
 
 mkdir -p "$BENCH_OUT" "$(dirname "$PNG")"
@@ -107,6 +107,7 @@ command -v gnuplot >/dev/null || ensure_debs gnuplot-nox
 # ---------------------------------------------------------------- plot
 # make_plot: $PNG from sweep.csv (+ the failures in sweep_runs.csv)
 make_plot() {
+	rm -f "$PNG"
 	log "plotting $PNG"
 	local w sys col
 	for w in row group agg; do
@@ -303,7 +304,7 @@ done
 # afresh, so a make install during the run would mix two builds in the table.
 SO=$(pg_config --pkglibdir 2>/dev/null)/tdc_delaunay.so
 SO_START=$(so_id)
-bench_begin
+if [ "$QUICK" = 1 ]; then bench_begin server noreport; else bench_begin server; fi
 echo "workload,k,calls,points,system,rep,ms,result,status,message,plan" > "$RUNS"
 
 # run_cell WORKLOAD K CALLS: one psql session, warm-up then REPS interleaved runs
@@ -470,7 +471,7 @@ done
 
 make_plot
 if [ "$QUICK" != 1 ]; then
-	[ -s "$PNG" ] && printf '\n![time per call and ratio against points per call](%s)\n' "$(basename "$PNG")" >> "$TXT"
+	bench_figure "$PNG" "time per call and ratio against points per call"
 	bench_publish sweep "Size sweep in SQL: tdc_delaunay against PostGIS, 3 to 10^7 points per call" "$TXT"
 fi
 cat "$TXT"

@@ -94,7 +94,7 @@ run() {
 }
 
 echo "case,kind,round,wall_s,hwm_kb" > "$RUNS"
-bench_begin
+bench_begin server
 exec > >(tee "$TXT")
 TEE_PID=$!
 

@@ -406,7 +406,7 @@ target_arg() { if [ -n "$1" ]; then echo "(SELECT g FROM $S.$1)"; else echo "NUL
 echo "cell,key,rep,ms,result,status,message,plan" > "$RUNS"
 SO=$(pg_config --pkglibdir 2>/dev/null)/tdc_delaunay.so
 SO_START=$(so_id)
-bench_begin
+bench_begin server
 
 # run_cell CELL: the statements added since the last cell, in one session
 run_cell() {

@@ -134,7 +134,7 @@ done
 
 SO=$(pg_config --pkglibdir 2>/dev/null)/tdc_delaunay.so
 SO_START=$(so_id)
-bench_begin
+bench_begin server
 echo "n,form,system,rep,ms,result,status,message,plan" > "$RUNS"
 
 # run_size N: one session; warm-up, then REPS rounds of every statement
