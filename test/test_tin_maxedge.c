@@ -37,11 +37,12 @@
 #include "harness.h"
 #include "splitmix.h"
 #include "tdc.h"
+#include "tin_test.h"
 
+/* a TIN (tin_test.h) and its samples */
 typedef struct me_case
 {
-	tdc_job    *job;
-	tdc_tin    *tin;
+	tin_case	tc;
 	double	   *xy,
 			   *z;
 	size_t		n;
@@ -50,59 +51,17 @@ typedef struct me_case
 static bool
 me_mk(me_case *c, int threads)
 {
-	tdc_options o;
-	char		err[256];
-
-	tdc_options_init(&o);
-	o.threads = threads;
-	c->job = NULL;
-	c->tin = NULL;
-	if (tdc_triangulate(c->xy, c->n, &o, &c->job, err, sizeof(err)) != TDC_OK ||
-		tdc_tin_build(c->job, c->z, threads, 0, &c->tin, err, sizeof(err)) != TDC_OK)
-	{
-		CHECK(0, "max_edge: build: %s", err);
-		return false;
-	}
-	return true;
+	return mk(&c->tc, c->xy, c->z, c->n, threads);
 }
 
-static void
-me_rm(me_case *c)
-{
-	tdc_tin_free(c->tin);
-	tdc_job_free(c->job);
-	c->tin = NULL;
-	c->job = NULL;
-}
-
-static tdc_interp_spec
-me_spec(const char *text)
-{
-	tdc_interp_spec s;
-	char		err[256];
-
-	if (tdc_interp_parse(text, &s, err, sizeof(err)) != TDC_OK)
-		CHECK(0, "max_edge: parse %s: %s", text, err);
-	return s;
-}
-
-static int
-me_wait(tdc_tin *tin, int rc, const char *err)
-{
-	if (rc == TDC_OK)
-		rc = tdc_tin_wait(tin, -1);
-	if (rc != TDC_OK)
-		CHECK(0, "max_edge: an operation failed: %s / %s", err, tdc_tin_error(tin));
-	return rc;
-}
-
+/* tdc_tin_value's result, the value in *z */
 static int
 me_value(const me_case *c, const char *method, double x, double y, double *z)
 {
-	tdc_interp_spec s = me_spec(method);
-	double		q[2] = {x, y};
+	int			rc;
 
-	return tdc_tin_value(c->tin, &s, q, z);
+	*z = value(c->tc.tin, method, x, y, &rc);
+	return rc;
 }
 
 /* ----------------------------------------------------------------
@@ -142,24 +101,24 @@ test_me_parse(void)
 		  strstr(err, "max_edge)"), "an unknown option lists max_edge: %s", err);
 
 	/* contours: linear, max_edge only */
-	s = me_spec("linear:max_edge=3");
+	s = spec_of("linear:max_edge=3");
 	CHECK(tdc_tin_contours_spec_check(&s, err, sizeof(err)) == TDC_OK, "contours take linear:max_edge");
-	s = me_spec("linear:breaklines=false:max_edge=3");
+	s = spec_of("linear:breaklines=false:max_edge=3");
 	CHECK(tdc_tin_contours_spec_check(&s, err, sizeof(err)) == TDC_OK, "contours take breaklines=false");
 	CHECK(tdc_tin_contours_spec_check(NULL, err, sizeof(err)) == TDC_OK, "contours without a method");
-	s = me_spec("nearest:max_edge=3");
+	s = spec_of("nearest:max_edge=3");
 	CHECK(tdc_tin_contours_spec_check(&s, err, sizeof(err)) == TDC_EINVAL && strstr(err, "not nearest"),
 		  "contours refuse nearest: %s", err);
-	s = me_spec("natural_neighbor");
+	s = spec_of("natural_neighbor");
 	CHECK(tdc_tin_contours_spec_check(&s, err, sizeof(err)) == TDC_EINVAL &&
 		  strstr(err, "not natural_neighbor"), "contours refuse natural_neighbor: %s", err);
-	s = me_spec("linear:radius=0:max_edge=3");
+	s = spec_of("linear:radius=0:max_edge=3");
 	CHECK(tdc_tin_contours_spec_check(&s, err, sizeof(err)) == TDC_EINVAL && strstr(err, "radius"),
 		  "contours refuse radius: %s", err);
-	s = me_spec("linear:nodata=-1");
+	s = spec_of("linear:nodata=-1");
 	CHECK(tdc_tin_contours_spec_check(&s, err, sizeof(err)) == TDC_EINVAL && strstr(err, "nodata"),
 		  "contours refuse nodata: %s", err);
-	s = me_spec("linear:breaklines=true");
+	s = spec_of("linear:breaklines=true");
 	CHECK(tdc_tin_contours_spec_check(&s, err, sizeof(err)) == TDC_EINVAL && strstr(err, "breaklines"),
 		  "contours refuse breaklines: %s", err);
 }
@@ -175,7 +134,7 @@ one_triangle(const double *xy, double kept, double dropped, const char *name)
 				pts[6],
 				q[2],
 				v;
-	me_case		c = {NULL, NULL, pts, z, 3};
+	me_case		c = {{NULL, NULL}, pts, z, 3};
 	char		m[96];
 
 	memcpy(pts, xy, sizeof(pts));
@@ -198,7 +157,7 @@ one_triangle(const double *xy, double kept, double dropped, const char *name)
 					   (xy[2 * k + 1] + xy[(2 * k + 3) % 6]) / 2, &v) == 0,
 			  "%s: no value on hull edge %d", name, k);
 	}
-	me_rm(&c);
+	rm(&c.tc);
 }
 
 static void
@@ -323,19 +282,19 @@ lake_queries(const me_case *c, size_t *nq)
 	tdc_iter	it = {0};
 	uint32_t	e[2];
 	uint64_t	seed = 39;
-	size_t		cap = c->n + 4 * tdc_num_edges(c->job) + 2000,
+	size_t		cap = c->n + 4 * tdc_num_edges(c->tc.job) + 2000,
 				n = 0;
 	double	   *q = malloc(cap * 2 * sizeof(double));
 
-	for (size_t s = 0; s < tdc_num_sites(c->job); s++)
+	for (size_t s = 0; s < tdc_num_sites(c->tc.job); s++)
 	{
-		memcpy(q + 2 * n, tdc_site_xy(c->job, (uint32_t) s), 2 * sizeof(double));
+		memcpy(q + 2 * n, tdc_site_xy(c->tc.job, (uint32_t) s), 2 * sizeof(double));
 		n++;
 	}
-	while (tdc_next_edge(c->job, &it, e))
+	while (tdc_next_edge(c->tc.job, &it, e))
 	{
-		const double *a = tdc_site_xy(c->job, e[0]),
-				   *b = tdc_site_xy(c->job, e[1]);
+		const double *a = tdc_site_xy(c->tc.job, e[0]),
+				   *b = tdc_site_xy(c->tc.job, e[1]);
 
 		q[2 * n] = (a[0] + b[0]) / 2;
 		q[2 * n + 1] = (a[1] + b[1]) / 2;
@@ -380,14 +339,14 @@ test_me_lake(void)
 
 		snprintf(with, sizeof(with), "%s:max_edge=%g:nodata=-999", methods[m], LAKE_L);
 		snprintf(without, sizeof(without), "%s:nodata=-999", methods[m]);
-		s1 = me_spec(with);
-		s0 = me_spec(without);
-		if (me_wait(c.tin, tdc_tin_points_start(c.tin, &s0, q, nq, v0, ok0, err, sizeof(err)), err) == TDC_OK &&
-			me_wait(c.tin, tdc_tin_points_start(c.tin, &s1, q, nq, v1, ok1, err, sizeof(err)), err) == TDC_OK)
+		s1 = spec_of(with);
+		s0 = spec_of(without);
+		if (run_wait(c.tc.tin, tdc_tin_points_start(c.tc.tin, &s0, q, nq, v0, ok0, err, sizeof(err)), err) == TDC_OK &&
+			run_wait(c.tc.tin, tdc_tin_points_start(c.tc.tin, &s1, q, nq, v1, ok1, err, sizeof(err)), err) == TDC_OK)
 		{
 			for (size_t i = 0; i < nq; i++)
 			{
-				int			want = oracle(c.job, q + 2 * i, LAKE_L);
+				int			want = oracle(c.tc.job, q + 2 * i, LAKE_L);
 
 				if (want < 0)
 					continue;
@@ -445,7 +404,7 @@ test_me_lake(void)
 	/* a grid: the same for 1 and 3 threads, and the hole as the rule says */
 	{
 		tdc_grid_spec g = {{-0.5, 0.25, 0, 20.5, 0, -0.25}, 84, 84};
-		tdc_interp_spec s = me_spec("natural_neighbor:max_edge=1.5:nodata=-1");
+		tdc_interp_spec s = spec_of("natural_neighbor:max_edge=1.5:nodata=-1");
 		double	   *a = malloc(84 * 84 * sizeof(double)),
 				   *b = malloc(84 * 84 * sizeof(double));
 		uint8_t    *oka = malloc(84 * 84),
@@ -455,15 +414,15 @@ test_me_lake(void)
 		char		err[256];
 		me_case		c3 = c;
 
-		if (me_wait(c.tin, tdc_tin_grid_start(c.tin, &s, &g, a, oka, err, sizeof(err)), err) == TDC_OK &&
+		if (run_wait(c.tc.tin, tdc_tin_grid_start(c.tc.tin, &s, &g, a, oka, err, sizeof(err)), err) == TDC_OK &&
 			me_mk(&c3, 3) &&
-			me_wait(c3.tin, tdc_tin_grid_start(c3.tin, &s, &g, b, okb, err, sizeof(err)), err) == TDC_OK)
+			run_wait(c3.tc.tin, tdc_tin_grid_start(c3.tc.tin, &s, &g, b, okb, err, sizeof(err)), err) == TDC_OK)
 		{
 			for (int r = 0; r < 84; r++)
 				for (int col = 0; col < 84; col++)
 				{
 					double		p[2] = {-0.5 + (col + 0.5) * 0.25, 20.5 - (r + 0.5) * 0.25};
-					int			want = oracle(c.job, p, LAKE_L);
+					int			want = oracle(c.tc.job, p, LAKE_L);
 
 					if (want >= 0)
 					{
@@ -476,15 +435,15 @@ test_me_lake(void)
 			CHECK(memcmp(a, b, 84 * 84 * sizeof(double)) == 0 && memcmp(oka, okb, 84 * 84) == 0,
 				  "grid with max_edge: the same for 1 and 3 threads");
 		}
-		if (c3.tin != c.tin)
-			me_rm(&c3);
+		if (c3.tc.tin != c.tc.tin)
+			rm(&c3.tc);
 		free(a);
 		free(b);
 		free(oka);
 		free(okb);
 	}
 	free(q);
-	me_rm(&c);
+	rm(&c.tc);
 	free(c.xy);
 	free(c.z);
 }
@@ -496,7 +455,7 @@ test_me_collinear(void)
 	double		xy[8] = {0, 0, 1, 0, 5, 0, 6, 0},
 				z[4] = {1, 2, 3, 4},
 				v;
-	me_case		c = {NULL, NULL, xy, z, 4};
+	me_case		c = {{NULL, NULL}, xy, z, 4};
 
 	if (!me_mk(&c, 1))
 		return;
@@ -505,57 +464,13 @@ test_me_collinear(void)
 	CHECK(me_value(&c, "linear:max_edge=4", 3, 0, &v) == 1 && v == 2.5, "collinear: exactly max_edge long");
 	CHECK(me_value(&c, "linear:max_edge=2", 5, 0, &v) == 1 && v == 3, "collinear: a site keeps its height");
 	CHECK(me_value(&c, "nearest:max_edge=2", 3, 0, &v) == 0, "collinear: nearest masked the same way");
-	me_rm(&c);
+	rm(&c.tc);
 }
 
 /* ----------------------------------------------------------------
  *		contours
  * ----------------------------------------------------------------
  */
-
-/* Level L's length over the triangles no edge of which is longer than l (any: l = 0). */
-static double
-kept_level_length(const tdc_job *job, const double *z, double L, double l)
-{
-	tdc_iter	it = {0};
-	uint32_t	v[3];
-	long double len = 0;
-
-	while (tdc_next_triangle(job, &it, v))
-	{
-		long double px[2],
-					py[2];
-		int			np = 0;
-		bool		drop = false;
-
-		for (int k = 0; k < 3; k++)
-			drop |= l > 0 && long_small(tdc_site_xy(job, v[k]), tdc_site_xy(job, v[(k + 1) % 3]), l);
-		for (int k = 0; k < 3 && !drop; k++)
-		{
-			uint32_t	a = v[k],
-						b = v[(k + 1) % 3];
-			double		za = z[tdc_site_input(job, a)],
-						zb = z[tdc_site_input(job, b)];
-
-			if ((za >= L) == (zb >= L) || np == 2)
-				continue;
-			{
-				const double *lo = za >= L ? tdc_site_xy(job, b) : tdc_site_xy(job, a),
-						   *hi = za >= L ? tdc_site_xy(job, a) : tdc_site_xy(job, b);
-				double		zl = fmin(za, zb),
-							zh = fmax(za, zb);
-				long double t = ((long double) L - zl) / ((long double) zh - zl);
-
-				px[np] = lo[0] + t * ((long double) hi[0] - lo[0]);
-				py[np] = lo[1] + t * ((long double) hi[1] - lo[1]);
-				np++;
-			}
-		}
-		if (np == 2)
-			len += sqrtl((px[1] - px[0]) * (px[1] - px[0]) + (py[1] - py[0]) * (py[1] - py[0]));
-	}
-	return (double) len;
-}
 
 typedef struct me_lines
 {
@@ -571,16 +486,16 @@ typedef struct me_lines
 static void
 contours_of(me_case *c, const char *method, double interval, me_lines *st)
 {
-	tdc_interp_spec s = me_spec(method);
+	tdc_interp_spec s = spec_of(method);
 	char		err[256];
 	size_t		nl,
 				np,
 				i = 0;
 
 	memset(st, 0, sizeof(*st));
-	if (me_wait(c->tin, tdc_tin_contours_start_spec(c->tin, interval, 0.5, &s, err, sizeof(err)), err) != TDC_OK)
+	if (run_wait(c->tc.tin, tdc_tin_contours_start_spec(c->tc.tin, interval, 0.5, &s, err, sizeof(err)), err) != TDC_OK)
 		return;
-	nl = tdc_tin_contour_count(c->tin, &np);
+	nl = tdc_tin_contour_count(c->tc.tin, &np);
 	st->n = nl;
 	st->flat = malloc((3 * nl + 2 * np + 1) * sizeof(double));
 	while (i < nl)
@@ -595,7 +510,7 @@ contours_of(me_case *c, const char *method, double interval, me_lines *st)
 			double		l2;
 			size_t		n;
 			bool		closed;
-			const double *p = tdc_tin_contour_line(c->tin, j, &l2, &n, &closed);
+			const double *p = tdc_tin_contour_line(c->tc.tin, j, &l2, &n, &closed);
 
 			if (j == i)
 				lev = l2;
@@ -625,13 +540,13 @@ contours_of(me_case *c, const char *method, double interval, me_lines *st)
 									pr[2] = {q[0] + 1e-7 * cos(a), q[1] + 1e-7 * sin(a)},
 									zz;
 
-						none += tdc_tin_value(c->tin, &s, pr, &zz) == 0 || !tdc_tin_inside(c->tin, pr);
+						none += tdc_tin_value(c->tc.tin, &s, pr, &zz) == 0 || !tdc_tin_inside(c->tc.tin, pr);
 					}
 					st->open_ends_ok += none > 0;
 				}
 			}
 		}
-		want = kept_level_length(c->job, c->z, lev, s.max_edge);
+		want = level_length(c->tc.job, c->z, lev, s.max_edge);
 		st->worst = fmax(st->worst, fabs(len - want) / fmax(want, 1e-300));
 		i = j;
 	}
@@ -668,7 +583,7 @@ test_me_contours(void)
 			for (int j = 0; j <= 20 * 64; j++)
 			{
 				double		p[2] = {k + 0.5, j / 64.0};
-				bool		v = oracle(c.job, p, LAKE_L) == 1;
+				bool		v = oracle(c.tc.job, p, LAKE_L) == 1;
 
 				want += v && !in;
 				in = v;
@@ -682,7 +597,7 @@ test_me_contours(void)
 	}
 	free(plain.flat);
 	free(a.flat);
-	me_rm(&c);
+	rm(&c.tc);
 
 	/* a cone around the lake: rings beyond it closed, the others open or gone */
 	for (size_t i = 0; i < c.n; i++)
@@ -703,8 +618,8 @@ test_me_contours(void)
 	free(plain.flat);
 	free(a.flat);
 	free(b.flat);
-	me_rm(&c);
-	me_rm(&c3);
+	rm(&c.tc);
+	rm(&c3.tc);
 	free(c.xy);
 	free(c.z);
 }
@@ -719,7 +634,7 @@ static size_t
 drape_one(me_case *c, const char *method, double x0, double y0, double x1, double y1,
 		  const tdc_drape_vertex **out, size_t *ngap, size_t *ninvalid)
 {
-	tdc_interp_spec s = me_spec(method);
+	tdc_interp_spec s = spec_of(method);
 	double		xy[4] = {x0, y0, x1, y1};
 	size_t		end = 2,
 				nv;
@@ -727,9 +642,9 @@ drape_one(me_case *c, const char *method, double x0, double y0, double x1, doubl
 	char		err[256];
 
 	*ngap = *ninvalid = 0;
-	if (me_wait(c->tin, tdc_tin_drape_start(c->tin, &s, xy, &end, 1, err, sizeof(err)), err) != TDC_OK)
+	if (run_wait(c->tc.tin, tdc_tin_drape_start(c->tc.tin, &s, xy, &end, 1, err, sizeof(err)), err) != TDC_OK)
 		return 0;
-	nv = tdc_tin_drape_result(c->tin, out, &off);
+	nv = tdc_tin_drape_result(c->tc.tin, out, &off);
 	for (size_t i = 0; i < nv; i++)
 	{
 		*ngap += (*out)[i].gap;
@@ -791,7 +706,7 @@ test_me_drape(void)
 	nv = drape_one(&c, "natural_neighbor:max_edge=1.5", 9.5, 9.25, 10, 10, &v, &ngap, &ninv);
 	CHECK(nv == 2 && !v[0].valid && v[1].valid && v[1].z == lake_height(10, 10) && ngap == 0,
 		  "drape with natural neighbour: a vertex in the lake has no value, its sample has");
-	me_rm(&c);
+	rm(&c.tc);
 	free(c.xy);
 	free(c.z);
 
@@ -799,7 +714,7 @@ test_me_drape(void)
 	{
 		double		xy[8] = {0, 0, 1, 0, 5, 0, 6, 0},
 					z[4] = {1, 2, 3, 4};
-		me_case		l = {NULL, NULL, xy, z, 4};
+		me_case		l = {{NULL, NULL}, xy, z, 4};
 
 		if (me_mk(&l, 1))
 		{
@@ -812,7 +727,7 @@ test_me_drape(void)
 			nv = drape_one(&l, "linear:max_edge=2", 2, 0, 3, 0, &v, &ngap, &ninv);
 			CHECK(nv == 2 && ninv == 2 && ngap == 1 && v[0].gap,
 				  "collinear drape within the long segment: no value, marked");
-			me_rm(&l);
+			rm(&l.tc);
 		}
 	}
 }
