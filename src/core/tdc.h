@@ -588,9 +588,10 @@ typedef struct tdc_interp_spec
  * linear radius -1, nodata 0; nearest radius 0, nodata 0; max_edge, not
  * GDAL's, none); "natural_neighbour" and "invdist"-style names are not
  * accepted.  L must be a number > 0 (infinity: none); options may come in
- * any order, a repeated one counts its last value.  B is true, false, yes, no, on,
- * off, 1 or 0 (any case; default false); the parser only records it, the
- * host acts on it by building the TIN on a constrained triangulation.
+ * any order, a repeated one counts its last value.  B is true, false, yes,
+ * no, on, off, 1 or 0 (any case; default false); the parser only records
+ * it, the host acts on it by building the TIN on a constrained
+ * triangulation.
  * breaklines is an option of linear only: natural neighbour coordinates
  * are defined by the Delaunay triangulation (a constrained one has no
  * empty-circle property to take them from), and the nearest sample does
@@ -692,10 +693,11 @@ extern int	tdc_tin_grid_start(tdc_tin *tin, const tdc_interp_spec *spec,
  * Contour lines at the levels base + k * interval (k any integer; each
  * level computed as that one double expression), merged into maximal
  * lines: a line ends only on the hull's boundary (or max_edge's, below),
- * and is otherwise a closed ring (its first point repeated at its end).  Heights equal to a level
- * count as above it (the level lowered by an infinitesimal), so a line
- * through a sample or along an edge at the level's height appears once,
- * with no duplicate and no gap; a peak exactly at a level gives no line.
+ * and is otherwise a closed ring (its first point repeated at its end).
+ * Heights equal to a level count as above it (the level lowered by an
+ * infinitesimal), so a line through a sample or along an edge at the
+ * level's height appears once, with no duplicate and no gap; a peak
+ * exactly at a level gives no line.
  * Lines are oriented with the higher ground on their left (rings around
  * hills counter-clockwise; a ring starts at its point first in (x, y)
  * order), come level by level, increasing, and within a level sorted by
