@@ -22,7 +22,8 @@
  *	- contours on the lake: per level the length equals an independent sum
  *	  over the kept triangles, lines crossing the lake are cut in two and
  *	  open, their ends on the kept region's boundary, rings beyond the lake
- *	  stay closed; 1 and 3 threads agree;
+ *	  stay closed; 1 and 3 threads agree; the same on a lattice with many
+ *	  lakes, large enough to run on the pool's threads, with a grid;
  *	- draping with linear: pieces through the lake, or along an edge with no
  *	  kept triangle, mark the vertex they start from; a line along an edge
  *	  between kept and dropped triangles, or beside the lake, marks none; a
@@ -624,6 +625,90 @@ test_me_contours(void)
 	free(c.z);
 }
 
+/*
+ * Many lakes on a lattice of 360 x 360 samples (about 250,000 triangles,
+ * several ranges of the contours' passes, on the pool's threads): contour
+ * lengths per level against the sum over the kept triangles, and the
+ * lines, a grid and a drape the same for 1 and 3 threads.
+ */
+static void
+test_me_many_lakes(void)
+{
+	int			side = tdc_test_quick ? 160 : 360;
+	uint64_t	seed = 3924;
+	double		lakes[24][3];
+	me_case		c1,
+				c3;
+	me_lines	a,
+				b;
+	size_t		n = 0;
+
+	for (int k = 0; k < 24; k++)
+	{
+		lakes[k][0] = tdc_splitmix_unit(&seed) * side;
+		lakes[k][1] = tdc_splitmix_unit(&seed) * side;
+		lakes[k][2] = 2 + tdc_splitmix_unit(&seed) * side / 20.0;
+	}
+	c1.xy = malloc((size_t) side * side * 2 * sizeof(double));
+	c1.z = malloc((size_t) side * side * sizeof(double));
+	for (int i = 0; i < side; i++)
+		for (int j = 0; j < side; j++)
+		{
+			bool		wet = false;
+
+			for (int k = 0; k < 24; k++)
+				wet |= hypot(i - lakes[k][0], j - lakes[k][1]) < lakes[k][2];
+			if (wet)
+				continue;
+			c1.xy[2 * n] = i;
+			c1.xy[2 * n + 1] = j;
+			c1.z[n] = 50 * sin(i / 37.0) * cos(j / 23.0) + 0.1 * i;
+			n++;
+		}
+	c1.n = n;
+	c3 = c1;
+	if (me_mk(&c1, 1) && me_mk(&c3, 3))
+	{
+		tdc_grid_spec g = {{0, 0.7, 0, side, 0, -0.7}, (size_t) (side / 0.7), (size_t) (side / 0.7)};
+		tdc_interp_spec s = spec_of("linear:max_edge=1.5");
+		size_t		np = g.width * g.height,
+					empty = 0;
+		double	   *v1 = malloc(np * sizeof(double)),
+				   *v3 = malloc(np * sizeof(double));
+		uint8_t    *ok1 = malloc(np),
+				   *ok3 = malloc(np);
+		char		err[256];
+
+		contours_of(&c1, "linear:max_edge=1.5", 7, &a);
+		contours_of(&c3, "linear:max_edge=1.5", 7, &b);
+		printf("tin: max_edge: %zu samples with 24 lakes: %zu contour lines (%zu closed, %zu open), length "
+			   "error %g\n", n, a.n, a.closed, a.open, a.worst);
+		CHECK(a.n > 20 && a.open > 0 && a.open_ends_ok == 2 * a.open && a.worst < 1e-9,
+			  "many lakes: contour lengths over the kept triangles (error %g), every open end on a boundary",
+			  a.worst);
+		CHECK(a.nflat == b.nflat && memcmp(a.flat, b.flat, a.nflat * sizeof(double)) == 0,
+			  "many lakes: the same contour lines for 1 and 3 threads");
+		if (run_wait(c1.tc.tin, tdc_tin_grid_start(c1.tc.tin, &s, &g, v1, ok1, err, sizeof(err)), err) == TDC_OK &&
+			run_wait(c3.tc.tin, tdc_tin_grid_start(c3.tc.tin, &s, &g, v3, ok3, err, sizeof(err)), err) == TDC_OK)
+		{
+			for (size_t i = 0; i < np; i++)
+				empty += !ok1[i];
+			CHECK(empty > np / 100 && memcmp(v1, v3, np * sizeof(double)) == 0 && memcmp(ok1, ok3, np) == 0,
+				  "many lakes: a grid of %zu pixels, %zu empty, the same for 1 and 3 threads", np, empty);
+		}
+		free(a.flat);
+		free(b.flat);
+		free(v1);
+		free(v3);
+		free(ok1);
+		free(ok3);
+	}
+	rm(&c1.tc);
+	rm(&c3.tc);
+	free(c1.xy);
+	free(c1.z);
+}
+
 /* ----------------------------------------------------------------
  *		draping
  * ----------------------------------------------------------------
@@ -740,5 +825,6 @@ test_tin_maxedge(void)
 	test_me_lake();
 	test_me_collinear();
 	test_me_contours();
+	test_me_many_lakes();
 	test_me_drape();
 }
