@@ -764,8 +764,13 @@ contour_run(tdc_tin *tin)
 		{
 			level_out  *o = &op->out[l];
 
-			/* a level's lines in the order of their points, not of the mesh's numbering */
-			qsort_r(o->lines, o->nlines, sizeof(contour_line), cmp_line, o);
+			/*
+			 * a level's lines in the order of their points, not of the
+			 * mesh's numbering (a level may have none: max_edge dropped its
+			 * triangles, or a peak at the level; then no array either)
+			 */
+			if (o->nlines > 1)
+				qsort_r(o->lines, o->nlines, sizeof(contour_line), cmp_line, o);
 			for (size_t i = 0; i < o->nlines; i++)
 			{
 				contour_line *ln = &o->lines[i];
