@@ -57,8 +57,27 @@ TEST_CFLAGS = -Itest -DTDC_SOURCE_DIR='"$(CURDIR)"'
 
 .PHONY: check-core check-core-asan check-core-tsan test demo bench bench-tin
 
+# ./tdc writes GeoTIFF through GDAL (src/cli/geotiff.c; Debian: libgdal-dev).
+# It compiles against GDAL's headers and loads the library it names
+# (TDC_GDAL_SONAME, read from the libgdal.so the compiler finds) only to
+# write a GeoTIFF: linking it would add some 30 MB to every run's resident
+# size.  The extension's library never uses GDAL.  GDAL's headers are
+# system headers here: their warnings are not ours.
+GDAL_CFLAGS ?= $(patsubst -I%,-isystem %,$(shell pkg-config --cflags gdal 2>/dev/null || gdal-config --cflags 2>/dev/null))
+GDAL_SONAME ?= $(shell objdump -p "$$($(firstword $(CC_CORE)) -print-file-name=libgdal.so)" 2>/dev/null | \
+	awk '$$1 == "SONAME" { print $$2 }')
+GDAL_BUILD = $(GDAL_CFLAGS) -DTDC_GDAL_SONAME='"$(GDAL_SONAME)"'
+GDAL_CHECK = @[ -n "$(GDAL_SONAME)" ] || { echo "./tdc needs GDAL's headers and library: install libgdal-dev (or set GDAL_CFLAGS and GDAL_SONAME)" >&2; exit 1; }
+
 tdc: $(CLI_SRCS) $(wildcard src/cli/*.h) $(CORE_SRCS) $(wildcard src/core/*.h)
-	$(CC_CORE) $(CORE_CFLAGS) -o $@ $(CLI_SRCS) $(CORE_SRCS) -lm
+	$(GDAL_CHECK)
+	$(CC_CORE) $(CORE_CFLAGS) $(GDAL_BUILD) -o $@ $(CLI_SRCS) $(CORE_SRCS) -ldl -lm
+
+# The GeoTIFF writer fed rows in pieces (test/cli_geotiff.sh)
+build/geotiff_rows: test/geotiff_rows.c src/cli/geotiff.c src/cli/cli.h
+	$(GDAL_CHECK)
+	@mkdir -p build
+	$(CC_CORE) $(CORE_CFLAGS) $(GDAL_BUILD) -Isrc/cli -o $@ test/geotiff_rows.c src/cli/geotiff.c -ldl -lm
 
 build/test_core: $(TEST_SRCS) $(wildcard test/*.h) $(CORE_SRCS) $(wildcard src/core/*.h)
 	@mkdir -p build
@@ -80,8 +99,22 @@ build/cgal_nn: test/cgal_nn.cpp
 	@mkdir -p build
 	$(CXX) -O2 -DNDEBUG -DCGAL_NDEBUG -o $@ $< -lgmp -lmpfr
 
-check-core: build/test_core $(CGAL_CDT) $(CGAL_NN)
+# The breakline reference (test/cgal_linear.cpp): linear on CGAL's constrained
+# Delaunay triangulation, exact; it made test/fixtures/tin-reference.txt,
+# which the core suite checks against it again.
+CGAL_LINEAR = $(if $(CGAL_CDT),build/cgal_linear)
+
+build/cgal_linear: test/cgal_linear.cpp
+	@mkdir -p build
+	$(CXX) -O2 -DNDEBUG -DCGAL_NDEBUG -o $@ $< -lgmp -lmpfr
+
+check-core: build/test_core $(CGAL_CDT) $(CGAL_NN) $(CGAL_LINEAR)
 	build/test_core
+
+# The exact arbiter of ./tdc's grids and contours (test/cli.sh): GMP.
+build/tin_arbiter: test/tin_arbiter.c
+	@mkdir -p build
+	$(CC_CORE) $(CORE_CFLAGS) -o $@ $< -lgmp -lm
 
 build/test_core_asan: $(TEST_SRCS) $(wildcard test/*.h) $(CORE_SRCS) $(wildcard src/core/*.h)
 	@mkdir -p build

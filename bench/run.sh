@@ -16,6 +16,9 @@
 #      interpolation into rasters against ST_InterpolateRaster (GDAL), draping,
 #      contours and the Delaunay aggregate on 10^6 terrain samples, and a size
 #      sweep of the interpolation                      -> tin.md
+#   H  bench/first_statement.sh  the 1M-point aggregate as the first statement of
+#      a freshly started server, and warm, ours against PostGIS (a server of its
+#      own, restarted before every first statement)   -> first_statement.md
 #
 # Each script writes its own report, docs/benchmarks/NAME.md (BENCH_DOCS),
 # with the header of bench_publish in bench/lib.sh: date, commit, machine,
@@ -31,6 +34,7 @@
 #
 #   BENCH_SKIP_CORE=1   skip A          BENCH_SKIP_SQL=1   skip B
 #   BENCH_SKIP_SWEEP=1  skip C          BENCH_NO_INSTALL=1 do not run make install before B, C, E and F
+#   BENCH_SKIP_FIRST=1  skip H (some 6 minutes)
 #   BENCH_SKIP_TILED=1  skip D (about a minute; its 100M case only with BENCH_TILED_100M=1)
 #   BENCH_CONSTRAINED=1 run E too (some 10 minutes: SFCGAL takes 5-20 s a statement, 12 times)
 #   BENCH_VORONOI=1     run F too (BENCH_VOR_* knobs: see bench/voronoi_bench.sh)
@@ -87,6 +91,10 @@ sql_parts() {
 	if [ "${BENCH_VORONOI:-0}" = 1 ]; then
 		log "=== F: Voronoi diagrams in SQL"
 		part voronoi_bench.sh
+	fi
+	if [ "${BENCH_SKIP_FIRST:-0}" != 1 ]; then
+		log "=== H: the first statement of a fresh server (a server of its own)"
+		part first_statement.sh
 	fi
 	if [ "${BENCH_TIN:-0}" = 1 ]; then
 		log "=== G: the TIN in SQL: interpolation, draping, contours"

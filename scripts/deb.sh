@@ -42,7 +42,7 @@ check=0
 case "${TDC_DEB_CHECK:-0}" in 1 | yes | true) check=1 ;; esac
 # debian/control.in's Build-Depends for this major (PostGIS only without the
 # nocheck profile), and dpkg-buildpackage; dpkg-checkbuilddeps checks the list.
-TDC_PACKAGES=(dpkg-dev debhelper postgresql-server-dev-all "postgresql-server-dev-$major")
+TDC_PACKAGES=(dpkg-dev debhelper postgresql-server-dev-all "postgresql-server-dev-$major" libgdal-dev)
 ((check)) && TDC_PACKAGES+=("postgresql-$major" "postgresql-$major-postgis-3")
 tdc_ensure_packages
 [ -x "/usr/lib/postgresql/$major/bin/pg_config" ] ||

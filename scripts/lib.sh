@@ -67,6 +67,8 @@ tdc_set_major() {
 		${TDC_PG_MAJOR:+postgresql-server-dev-$TDC_PG_MAJOR}	# headers, pg_config, PGXS and pg_regress
 		${TDC_PG_MAJOR:+postgresql-$TDC_PG_MAJOR-postgis-3}	# PostGIS 3 (the geometry type, ST_DelaunayTriangles)
 		build-essential							# gcc, make, libc headers
+		libgdal-dev								# ./tdc's GeoTIFF output: GDAL's headers and library (src/cli/geotiff.c)
+		gdal-bin								# test/cli_geotiff.sh: gdalinfo, gdal_translate, gdal_grid read the GeoTIFFs back
 		libgmp-dev								# exact rational arithmetic in the core tests' oracle
 		libcgal-dev								# CGAL reference for the constrained tests (test/cgal_cdt.cpp)
 		clang									# the sanitizer builds (check-core-asan, check-core-tsan)

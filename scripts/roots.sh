@@ -383,6 +383,7 @@ tdc_root_inside_check() {
 	trap tdc_cluster_stop EXIT
 	tdc_cluster_start
 	# pg_regress: its own count line, and each test in the total
+	rm -f build/regress/tdc_raster_arbiter.txt build/regress/tdc_tin_jacksboro.txt
 	make --no-print-directory PG_CONFIG="$PG_CONFIG" with_llvm=no installcheck 2>&1 | tee regress.log || true
 	line=$(grep -Eo '(All [0-9]+ tests passed|[0-9]+ of [0-9]+ tests (failed|passed))' regress.log | tail -n 1 || true)
 	case "$line" in
@@ -397,6 +398,12 @@ tdc_root_inside_check() {
 		echo "--- regression.diffs (first 80 lines) ---"
 		head -n 80 build/regress/regression.diffs
 	fi
+	# GDAL's 'linear' against the exact arbiter (tdc_raster_arbiter,
+	# tdc_tin_jacksboro): the counts depend on GDAL's version, so the
+	# expected output cannot hold them; the tests write them here
+	for f in build/regress/tdc_raster_arbiter.txt build/regress/tdc_tin_jacksboro.txt; do
+		if [ -s "$f" ]; then echo "--- $f ---"; cat "$f"; fi
+	done
 	# smoke test: a fresh database, CREATE EXTENSION ... CASCADE, 100k points
 	tdc_psql -q -d postgres -c 'CREATE DATABASE tdc_smoke' >/dev/null
 	if tdc_psql -q -d tdc_smoke -c 'CREATE EXTENSION tdc_delaunay CASCADE' >/dev/null; then

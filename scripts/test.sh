@@ -427,11 +427,18 @@ fi
 
 if ((built && server)); then
 	mkdir -p build/regress
+	rm -f build/regress/tdc_raster_arbiter.txt build/regress/tdc_tin_jacksboro.txt
 	run_part pg_regress regress "${MAKE[@]}" installcheck
 	if [ -s build/regress/regression.diffs ]; then
 		echo "--- build/regress/regression.diffs (first 80 lines) ---"
 		head -n 80 build/regress/regression.diffs
 	fi
+	# GDAL's 'linear' against the exact arbiter (tdc_raster_arbiter,
+	# tdc_tin_jacksboro): the counts depend on GDAL's version, so the
+	# expected output cannot hold them; the tests write them here
+	for f in build/regress/tdc_raster_arbiter.txt build/regress/tdc_tin_jacksboro.txt; do
+		if [ -s "$f" ]; then echo "--- $f ---"; cat "$f"; fi
+	done
 else
 	record pg_regress 0 1 "(not run: no build or no server)"
 fi

@@ -157,6 +157,20 @@ FROM (SELECT ST_TDCDrape(geom, 'SRID=2056;TIN(((10 10, 900 10, 10 900, 10 10)), 
 SELECT ST_AsText(ST_TDCDrape(geom, 'SRID=2056;GEOMETRYCOLLECTION(POINT(1 1), LINESTRING EMPTY, POINT(2 2))')),
 	   ST_AsText(ST_TDCDrape(geom, 'SRID=2056;LINESTRING EMPTY'))
 FROM tdc_tin_plane;
+-- Their heights as well (these checks once looked at the shape alone): the
+-- polygon's, the M line's and the TIN's vertices lie on the plane, and the
+-- nearest drape's vertices have the nearest samples' heights (ordered by
+-- distance, then x, then y: the documented tie rule).
+SELECT k, count(*) AS vertices, max(abs(ST_Z(p.geom) - (2 * ST_X(p.geom) - 3 * ST_Y(p.geom) + 7))) < 1e-9 AS on_plane
+FROM (SELECT 'polygon' AS k, poly AS d FROM tdc_tin_draped
+	  UNION ALL SELECT 'line M', ST_TDCDrape(geom, 'SRID=2056;LINESTRING M (10 10 0, 990 990 10)') FROM tdc_tin_plane
+	  UNION ALL SELECT 'TIN', ST_TDCDrape(geom, 'SRID=2056;TIN(((10 10, 900 10, 10 900, 10 10)), ((900 10, 900 900, 10 900, 900 10)))')
+	  FROM tdc_tin_plane) s, ST_DumpPoints(d) p
+GROUP BY k ORDER BY k;
+SELECT count(*) AS vertices,
+	   bool_and(ST_Z(p.geom) = (SELECT ST_Z(s.geom) FROM tdc_tin_plane s
+								ORDER BY ST_Distance(s.geom, p.geom), ST_X(s.geom), ST_Y(s.geom) LIMIT 1)) AS nearest_heights
+FROM tdc_tin_draped, ST_DumpPoints(mp) p;
 
 -- NULLs and EMPTY: skipped rows; no row gives NULL
 SELECT ST_TDCContours(geom, 10) IS NULL AS no_rows FROM tdc_tin_terrain WHERE false;

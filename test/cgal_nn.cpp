@@ -78,7 +78,7 @@ main()
 		FT v = CGAL::linear_interpolation(coords.begin(), coords.end(), res.second,
 										  CGAL::Data_access<ZMap>(z));
 
-		std::printf("%.17g\n", CGAL::to_double(v));
+		std::printf("%.17g\n", CGAL::to_double(CGAL::exact(v)));
 	}
 	return 0;
 }

@@ -11,6 +11,9 @@ bad()  { fail=$((fail + 1)); echo "FAIL: $*" >&2; }
 check() { if eval "$2"; then ok; else bad "$1"; fi; }
 
 [ -x "$TDC" ] || make -s tdc >/dev/null || { echo "cannot build ./tdc"; echo "0 passed, 1 failed"; exit 1; }
+# the exact arbiter of grids and contours (GMP; test/tin_arbiter.c)
+ARB=build/tin_arbiter
+make -s "$ARB" >/dev/null || { echo "cannot build $ARB"; echo "0 passed, 1 failed"; exit 1; }
 
 # text input, 4 points, one per line; -o writes CCW triangles with %.17g
 printf '0 0\n1 0\n0 1\n1 1\n' > "$tmp/sq.txt"
@@ -261,6 +264,12 @@ check "contours: stats line" "grep -qE '^tin=[0-9.]+ contours=[0-9.]+ lines=4 co
 perl -e 'for $x (-10..10) { for $y (-10..10) { printf "%d %d %.17g\n", $x, $y, 100 * exp(-($x*$x + $y*$y) / 20) } }' > "$tmp/hill.txt"
 $TDC --contours 20 -o "$tmp/hill.out" "$tmp/hill.txt"
 check "contours: a hill gives 4 closed rings" "[ \$(wc -l < $tmp/hill.out) -eq 4 ] && awk '{ if (\$2 != \$(NF-1) || \$3 != \$NF) exit 1 }' $tmp/hill.out"
+# and its vertices are the level crossings of the (lattice's, cocircular)
+# Delaunay triangulation's edges, each once: the arbiter (below), which
+# once only counted the rings; the peak at 100 is exactly at a level
+$TDC -o "$tmp/hill.tri" "$tmp/hill.txt"
+check "contours: the hill's vertices are the TIN's level crossings" \
+	"$ARB contours $tmp/hill.txt $tmp/hill.tri $tmp/hill.out 0 20 > /dev/null"
 $TDC -t 1 --contours 7 -o "$tmp/r1.cont" "$tmp/hill.txt"
 $TDC -t 3 --contours 7 -o "$tmp/r3.cont" "$tmp/hill.txt"
 check "contours: the same lines for 1 and 3 threads" "cmp -s $tmp/r1.cont $tmp/r3.cont"
@@ -279,8 +288,12 @@ for m in linear natural_neighbor; do
 done
 $TDC --grid 5 --extent -50,0,100,50 --method linear:radius=0:nodata=-9999 -o "$tmp/out.asc" "$tmp/pl.txt"
 check "grid: outside the hull, radius=0 gives nodata" "awk 'NR > 6 { for (c = 1; c <= 10; c++) if (\$c != -9999) exit 1; if (\$11 == -9999) exit 1 }' $tmp/out.asc && grep -q '^NODATA_value -9999' $tmp/out.asc"
+# nearest everywhere, outside the hull too: the brute-force nearest sample
+# (build/tin_arbiter, below; this check once asked only for a value)
 $TDC --grid 5 --extent -50,0,100,50 --method nearest -o "$tmp/nn.asc" "$tmp/pl.txt"
-check "grid: nearest has a value everywhere" "awk 'NR > 6 { for (c = 1; c <= NF; c++) if (\$c == 0) exit 1 }' $tmp/nn.asc"
+$TDC -o "$tmp/pl.tri" "$tmp/pl.txt"
+check "grid: nearest is the nearest sample, inside and outside the hull" \
+	"$ARB grid $tmp/pl.txt $tmp/pl.tri $tmp/nn.asc nearest > /dev/null"
 $TDC -t 1 --grid 0.5 --method natural_neighbor -o "$tmp/g1.asc" "$tmp/hill.txt"
 $TDC -t 3 --grid 0.5 --method natural_neighbor -o "$tmp/g3.asc" "$tmp/hill.txt"
 check "grid: the same values for 1 and 3 threads" "cmp -s $tmp/g1.asc $tmp/g3.asc"
@@ -293,6 +306,59 @@ $TDC --grid 1 --extent 0,0.5,4,1.5 --method linear -o "$tmp/ridge0.asc" "$tmp/ri
 check "grid without breaklines: the ridge sags" "[ \"\$(sed -n 7p $tmp/ridge0.asc | tr -s ' ' | sed 's/ *\$//')\" = '8 4 4 8' ]"
 $TDC --grid 1 --extent 0,0.5,4,1.5 --method linear:breaklines=true --segments "$tmp/ridge.seg" -o "$tmp/ridge1.asc" "$tmp/ridge.txt"
 check "grid with breaklines: the ridge stays at 10" "[ \"\$(sed -n 7p $tmp/ridge1.asc | tr -s ' ' | sed 's/ *\$//')\" = '10 10 10 10' ]"
+
+# Values against independent references (issue 36), at a projected offset:
+# test/fixtures/tin-reference.txt (1,056 samples around (500000, 4000000),
+# 48 breakline segments, CGAL's values at the 1,024 pixel centres of 31.25 m
+# pixels).  nearest and linear against build/tin_arbiter (brute force and
+# the exact Delaunay value, GMP; test/tin_arbiter.c), natural neighbour and
+# breaklines against CGAL's values within 1e-9, contours against every
+# crossing of the certified Delaunay triangulation's edges; a lattice for
+# nearest ties and cocircular squares; a plane at the offset.
+awk '/^#/ { next } /^[a-z]/ { part = $1; next }
+	{ print > ("'"$tmp"'/ref." part) }' test/fixtures/tin-reference.txt
+$TDC -o "$tmp/ref.tri" "$tmp/ref.samples"
+refgrid() { $TDC --grid 31.25 --extent 500000,4000000,501000,4001000 "$@"; }
+for m in nearest linear linear:radius=0; do
+	refgrid --method "$m" -o "$tmp/ref.asc" "$tmp/ref.samples"
+	check "grid $m at an offset: the arbiter's values" "$ARB grid $tmp/ref.samples $tmp/ref.tri $tmp/ref.asc $m > /dev/null"
+done
+# the pixels in order against column col of the queries, within 1e-9
+against_cgal() {
+	tail -n +7 "$1" | tr ' ' '\n' | grep . | paste - "$tmp/ref.queries" |
+		awk -v col="$2" '{ d = $1 - $(col + 1); if (d > 1e-9 || d < -1e-9) bad++ } END { exit bad || NR != 1024 }'
+}
+refgrid --method natural_neighbor -o "$tmp/ref.nn.asc" "$tmp/ref.samples"
+check "grid natural_neighbor at an offset: CGAL's values" "against_cgal $tmp/ref.nn.asc 3"
+refgrid --method linear:breaklines=true --segments "$tmp/ref.segments" -o "$tmp/ref.brk.asc" "$tmp/ref.samples"
+check "grid breaklines at an offset: CGAL's constrained values" "against_cgal $tmp/ref.brk.asc 4"
+check "grid breaklines at an offset: not the plain TIN's" "! against_cgal $tmp/ref.nn.asc 4"
+$TDC --contours 7 --base 2.5 -o "$tmp/ref.cont" "$tmp/ref.samples"
+check "contours at an offset: every crossing of the Delaunay edges, once" \
+	"$ARB contours $tmp/ref.samples $tmp/ref.tri $tmp/ref.cont 2.5 7 > /dev/null"
+awk '{ printf "%s %s %.17g\n", $1, $2, 0.5 * ($1 - 500000) - 0.25 * ($2 - 4000000) + 100 }' "$tmp/ref.samples" > "$tmp/refpl.txt"
+for m in linear natural_neighbor; do
+	refgrid --method "$m" -o "$tmp/refpl.asc" "$tmp/refpl.txt"
+	check "grid $m at an offset: a plane" "awk 'NR > 6 { for (c = 1; c <= NF; c++) { x = 500000 + (c - 0.5) * 31.25;
+		y = 4001000 - (NR - 6 - 0.5) * 31.25; d = \$c - (0.5 * (x - 500000) - 0.25 * (y - 4000000) + 100);
+		if (d > 1e-9 || d < -1e-9) exit 1 } n++ } END { if (n != 32) exit 1 }' $tmp/refpl.asc"
+done
+# a 12 x 12 lattice 10 m apart, then 12 of its points again with other
+# heights (the first counts); pixel centres every 5 m: at the samples,
+# between two (two equally near) and at the squares' centres (four)
+awk 'BEGIN { for (i = 0; i < 12; i++) for (j = 0; j < 12; j++) print 500000 + 10 * i, 4000000 + 10 * j, (i * 37 + j * 91) % 50 / 4
+	for (i = 0; i < 12; i += 3) for (j = 0; j < 12; j += 4) print 500000 + 10 * i, 4000000 + 10 * j, -1000 }' > "$tmp/lat.txt"
+$TDC -o "$tmp/lat.tri" "$tmp/lat.txt"
+for m in nearest linear; do
+	$TDC --grid 5 --extent 499997.5,3999997.5,500112.5,4000112.5 --method "$m" -o "$tmp/lat.asc" "$tmp/lat.txt"
+	$ARB grid "$tmp/lat.txt" "$tmp/lat.tri" "$tmp/lat.asc" "$m" >> "$tmp/lat.arb"
+	check "grid $m on a lattice: the arbiter's values" "[ $? -eq 0 ]"
+done
+check "grid on a lattice: 385 nearest ties and cocircular triangles were there" \
+	"grep -q 'nearest: 529 pixels.* 385 nearest ties' $tmp/lat.arb && grep -q 'linear: 529 pixels, 529 inside, 0 wrong.* 529 on cocircular' $tmp/lat.arb"
+$ARB grid "$tmp/lat.txt" "$tmp/lat.tri" "$tmp/lat.asc" nearest > /dev/null 2>&1
+check "arbiter: a linear grid is not a nearest one" "[ $? -eq 1 ]"
+
 expect_error "--grid breaklines=true without --segments" $TDC --grid 1 --method linear:breaklines=true "$tmp/ridge.txt"
 expect_error "--grid with --segments without breaklines" $TDC --grid 1 --segments "$tmp/ridge.seg" "$tmp/ridge.txt"
 expect_error "--grid natural_neighbor:breaklines=true" $TDC --grid 1 --method natural_neighbor:breaklines=true --segments "$tmp/ridge.seg" "$tmp/ridge.txt"

@@ -26,6 +26,7 @@ main(int argc, char **argv)
 		{
 			setvbuf(stdout, NULL, _IOLBF, 0);
 			test_tin();
+			test_tin_reference();
 			printf("%ld passed, %ld failed\n", tdc_test_passed, tdc_test_failed);
 			return tdc_test_failed ? 1 : 0;
 		}
@@ -69,6 +70,7 @@ main(int argc, char **argv)
 	test_cdt();
 	printf("cdt: %ld passed, %ld failed so far\n", tdc_test_passed, tdc_test_failed);
 	test_tin();
+	test_tin_reference();
 	printf("%ld passed, %ld failed\n", tdc_test_passed, tdc_test_failed);
 	return tdc_test_failed ? 1 : 0;
 }

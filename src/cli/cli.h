@@ -10,9 +10,11 @@
  *	bounded_mem.c	the process's memory around that run
  *	tmpdir.c	the temporary directory of --max-memory
  *	tin_out.c	--contours and --grid: the TIN of x y z input, written as text
+ *				or (geotiff.c) as a GeoTIFF
+ *	geotiff.c	the GeoTIFF writer, through GDAL
  *	die.c		how ./tdc fails
- * Layered without loops: die.c at the bottom, then tmpdir.c and
- * bounded_mem.c, then input.c and tiles.c, then oneshot.c and tin_out.c,
+ * Layered without loops: die.c at the bottom, then tmpdir.c, bounded_mem.c
+ * and geotiff.c, then input.c and tiles.c, then oneshot.c and tin_out.c,
  * then tdc.c.
  */
 #ifndef TDC_CLI_H
@@ -45,6 +47,8 @@ typedef struct cli_args
 	int			has_extent;
 	double		extent[4];		/* xmin, ymin, xmax, ymax */
 	const char *method;			/* --method, GDAL's syntax; NULL: linear */
+	const char *srs;			/* --srs, for a GeoTIFF -o; NULL: the input's */
+	int			float32;		/* --type Float32 (GeoTIFF); else Float64 */
 } cli_args;
 
 /* The input points in memory */
@@ -53,6 +57,7 @@ typedef struct cli_input
 	size_t		n;
 	double	   *xy,
 			   *z;				/* NULL without z */
+	char	   *srs;			/* the input's CRS ("EPSG:N" or WKT), NULL if none */
 } cli_input;
 
 /* die.c: "tdc: " and fmt with arg on stderr, then exit(code) */
@@ -84,8 +89,25 @@ extern void oneshot_write(const cli_args *a, const cli_input *in, const oneshot 
 extern void oneshot_report(const cli_args *a, const oneshot *r);
 extern void oneshot_free(oneshot *r, cli_input *in);
 
+/* geotiff.c: a grid to a GeoTIFF through GDAL (errors: -1 and err) */
+typedef struct gtiff_out gtiff_out;
+extern bool gtiff_path(const char *path);	/* ends in .tif or .tiff, any case */
+extern int	gtiff_check_srs(const char *srs, char *err, size_t errlen);
+/* the temporary file beside path, now; removed at exit unless closed */
+extern gtiff_out *gtiff_reserve(const char *path, char *err, size_t errlen);
+extern int	gtiff_open(gtiff_out *g, size_t width, size_t height, const double gt[6],
+					   const char *srs, double nodata, bool float32, char *err, size_t errlen);
+/* rows y0 .. y0 + nrows - 1, top down, in order: width values a row */
+extern int	gtiff_write_rows(gtiff_out *g, size_t y0, size_t nrows, const double *values,
+							 char *err, size_t errlen);
+/* closed, renamed to path; frees g */
+extern int	gtiff_close(gtiff_out *g, char *err, size_t errlen);
+/* the file given up and removed; frees g */
+extern void gtiff_discard(gtiff_out *g);
+
 /* tin_out.c: --contours or --grid on the one-shot triangulation */
-extern void tin_output(const cli_args *a, const cli_input *in, const oneshot *r);
+extern gtiff_out *tin_output_prepare(const cli_args *a, const cli_input *in);
+extern void tin_output(const cli_args *a, const cli_input *in, const oneshot *r, gtiff_out *tif);
 
 /* tmpdir.c: the temporary directory of --max-memory, removed at exit */
 extern char tmp_dir[4096];

@@ -258,4 +258,5 @@ oneshot_free(oneshot *r, cli_input *in)
 	free(r->seg);
 	free(in->xy);
 	free(in->z);
+	free(in->srs);
 }

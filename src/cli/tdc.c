@@ -30,7 +30,9 @@
  * --contours INTERVAL [--base B] and --grid CELLSIZE [--extent X0,Y0,X1,Y1]
  * [--method M]: the TIN of 'x y z' input, its contour lines or a grid of
  * its heights (tin_out.c, which says the formats), written to -o instead
- * of the triangles.  --grid with --segments FILE and --method
+ * of the triangles.  A grid's -o ending in .tif is a GeoTIFF (geotiff.c)
+ * with the CRS of --srs SRS (checked by GDAL here, before any work) or the
+ * input's, Float64 or --type Float32.  --grid with --segments FILE and --method
  * linear:breaklines=true grids the TIN of the constrained triangulation
  * (the segments are breaklines); either without the other is an error.
  * --contours takes --method too, linear with max_edge only (the one method
@@ -45,6 +47,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 #include <sys/resource.h>
 #include <sys/stat.h>
 #include <time.h>
@@ -55,7 +58,7 @@ static const char usage[] =
 "usage: ./tdc [-t THREADS] [-g GRID] [-l LEVELS] [--tolerance T] [-o OUT] [--stats] [--validate]\n"
 "             [--voronoi] [--segments FILE] [--max-memory MB [--tmpdir DIR]]\n"
 "             [--contours INTERVAL [--base B] [--method linear:max_edge=L]]\n"
-"             [--grid CELLSIZE [--extent X0,Y0,X1,Y1] [--method M]] INPUT\n"
+"             [--grid CELLSIZE [--extent X0,Y0,X1,Y1] [--method M] [--srs SRS] [--type T]] INPUT\n"
 "  INPUT  .bin file of little-endian float64 x,y pairs, or a text file of\n"
 "         'x y' or 'x y z' lines ('-' reads stdin)\n"
 "  -t     worker threads (0 = all online CPUs, the default)\n"
@@ -77,11 +80,19 @@ static const char usage[] =
 "         the level, then 'x y' pairs (a closed ring repeats its first point);\n"
 "         --method linear:max_edge=L: lines stop at triangles max_edge drops\n"
 "  --grid CELLSIZE  heights at the pixel centres of a grid of square cells\n"
-"         over the input's box (or --extent X0,Y0,X1,Y1); -o writes an ESRI\n"
-"         ASCII grid (.asc); --method linear|nearest|natural_neighbor with\n"
+"         over the input's box (or --extent X0,Y0,X1,Y1), from its lower left\n"
+"         corner; -o writes an ESRI ASCII grid (.asc), or a GeoTIFF when it\n"
+"         ends in .tif (tiled 256x256, DEFLATE, floating-point predictor, the\n"
+"         method's nodata; GDAL's georeferencing: origin at the upper left\n"
+"         corner, values at the pixel centres, as gdal_grid's);\n"
+"         --method linear|nearest|natural_neighbor with\n"
 "         GDAL's options (e.g. linear:radius=0:nodata=-9999; default linear);\n"
 "         with --segments FILE and --method linear:breaklines=true the\n"
 "         segments are breaklines: the TIN is the constrained triangulation\n"
+"  --srs SRS  the GeoTIFF's CRS, anything GDAL's SetFromUserInput takes\n"
+"         (EPSG:25832, WKT, a PROJ string); default the input's, else none\n"
+"  --type Float64|Float32  the GeoTIFF's values: Float64 (default, the\n"
+"         .asc's values exactly) or Float32 (half the size, rounded)\n"
 "  max_edge=L  (any method) a triangle with an edge longer than L, in x and\n"
 "         y, is dropped: no value strictly inside it (nodata), no contour\n"
 "         across it; an edge exactly L long is kept, a sample keeps its\n"
@@ -120,6 +131,8 @@ parse_int(const char *s, const char *what)
 static bool
 parse_args(int argc, char **argv, cli_args *a)
 {
+	bool		has_type = false;
+
 	memset(a, 0, sizeof(*a));
 	tdc_options_init(&a->opt);
 	a->opt.times = 1;
@@ -194,11 +207,26 @@ parse_args(int argc, char **argv, cli_args *a)
 				die(2, "--extent: XMIN < XMAX and YMIN < YMAX%s", "");
 			a->has_extent = 1;
 		}
-		else if (strcmp(s, "--method") == 0)
+		else if (strcmp(s, "--method") == 0 || strcmp(s, "--srs") == 0)
 		{
 			if (i + 1 >= argc)
 				die(2, "option %s needs a value", s);
-			a->method = argv[++i];
+			if (s[2] == 'm')
+				a->method = argv[++i];
+			else
+				a->srs = argv[++i];
+		}
+		else if (strcmp(s, "--type") == 0)
+		{
+			if (i + 1 >= argc)
+				die(2, "option %s needs a value", s);
+			if (strcasecmp(argv[++i], "Float32") == 0)
+				a->float32 = 1;
+			else if (strcasecmp(argv[i], "Float64") == 0)
+				a->float32 = 0;
+			else
+				die(2, "--type: Float64 or Float32, not %s", argv[i]);
+			has_type = true;
 		}
 		else if (strcmp(s, "-t") == 0 || strcmp(s, "-g") == 0 || strcmp(s, "-l") == 0 ||
 				 strcmp(s, "-o") == 0 || strcmp(s, "--tolerance") == 0)
@@ -255,6 +283,20 @@ parse_args(int argc, char **argv, cli_args *a)
 			die(2, "--method with breaklines=true needs the breaklines: --segments FILE%s", "");
 		if (a->segpath && !spec.breaklines)
 			die(2, "--grid with --segments takes them as breaklines: --method linear:breaklines=true%s", "");
+		if (a->float32 && (double) (float) spec.nodata != spec.nodata)
+			die(2, "--type Float32: the method's nodata is not a Float32 value (%s)",
+				a->method ? a->method : "linear");
+	}
+	if (gtiff_path(a->outpath) && !a->grid)
+		die(2, "-o %s: a GeoTIFF holds a --grid; the other outputs are text", a->outpath);
+	if ((a->srs || has_type) && !(a->grid && gtiff_path(a->outpath)))
+		die(2, "--srs and --type go with --grid and an -o ending in .tif%s", "");
+	if (a->srs)
+	{
+		char		err[1024];
+
+		if (gtiff_check_srs(a->srs, err, sizeof(err)) != 0)
+			die(2, "--srs: %s", err);
 	}
 	if (a->contours && a->method)
 	{
@@ -390,8 +432,9 @@ int
 main(int argc, char **argv)
 {
 	cli_args	a;
-	cli_input	in;
+	cli_input	in = {0};
 	oneshot		r;
+	gtiff_out  *tif;
 
 	if (!parse_args(argc, argv, &a))
 		return 0;
@@ -409,9 +452,10 @@ main(int argc, char **argv)
 	}
 	else
 		read_input(a.input, &in);
+	tif = tin_output_prepare(&a, &in);
 	oneshot_run(&a, &in, &r);
 	if (a.contours || a.grid)
-		tin_output(&a, &in, &r);
+		tin_output(&a, &in, &r, tif);
 	else
 		oneshot_write(&a, &in, &r);
 	oneshot_report(&a, &r);

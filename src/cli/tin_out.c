@@ -1,7 +1,7 @@
 /*
  * tin_out.c
  *		./tdc --contours and --grid: the TIN of the input (x y z lines) and
- *		what it is for, written as text GIS tools read.
+ *		what it is for, written as text GIS tools read, or as a GeoTIFF.
  *
  * The triangulation is the one-shot run's (oneshot.c); the heights are the
  * input's z, a site taking its first input point's (tdc.h).  Then:
@@ -14,12 +14,22 @@
  *	--grid CELLSIZE [--extent XMIN,YMIN,XMAX,YMAX] [--method M]	values at
  *		the pixel centres of a grid of square cells (tdc_tin_grid_start,
  *		GDAL's method syntax: linear, nearest, natural_neighbor and their
- *		options), written to -o as an ESRI ASCII grid (.asc), which GDAL
- *		reads (AAIGrid): ncols, nrows, the lower left corner, cellsize and
- *		NODATA_value (the method's nodata), then the rows from the top,
- *		%.17g.  The extent defaults to the input's bounding box; the grid
+ *		options).  The extent defaults to the input's bounding box; the grid
  *		covers it from its lower left corner with ceil(width / CELLSIZE)
- *		columns and ceil(height / CELLSIZE) rows.
+ *		columns and ceil(height / CELLSIZE) rows, so its upper left corner is
+ *		(XMIN, YMIN + rows CELLSIZE).  An -o ending in .tif or .tiff gets a
+ *		GeoTIFF (geotiff.c, which says its layout) with that corner as its
+ *		origin, CELLSIZE as its pixel size, the method's nodata, and the CRS
+ *		of --srs, else the input's (cli_input.srs), else none (a warning
+ *		says so); any other -o an ESRI ASCII grid (.asc), which GDAL reads
+ *		(AAIGrid): ncols, nrows, the lower left corner, cellsize and
+ *		NODATA_value (the method's nodata), then the rows from the top,
+ *		%.17g.  Both hold the same values (Float64; --type Float32 rounds
+ *		them to float in the GeoTIFF).
+ *
+ * A GeoTIFF's temporary file is made before the triangulation
+ * (tin_output_prepare), so that an -o that cannot be written, or an
+ * input CRS GDAL does not read, fails before the work.
  *
  * Both run on the engine's threads (-t), like the triangulation.  --stats
  * adds one line: "tin= contours= contour_points=" or "tin= grid= pixels=
@@ -108,8 +118,27 @@ contours(const cli_args *a, tdc_tin *tin, double tin_s)
 				nlines, npoints);
 }
 
+/* The grid g of values v to the GeoTIFF reserved as tif; dies on failure. */
 static void
-grid(const cli_args *a, const tdc_job *job, tdc_tin *tin, double tin_s)
+write_tif(const cli_args *a, const tdc_grid_spec *g, const double *v, double nodata,
+		  const char *srs, gtiff_out *tif)
+{
+	char		err[1024];
+
+	if (gtiff_open(tif, g->width, g->height, g->gt, srs, nodata, a->float32, err,
+				   sizeof(err)) != 0 ||
+		gtiff_write_rows(tif, 0, g->height, v, err, sizeof(err)) != 0)
+	{
+		gtiff_discard(tif);
+		die(1, "%s", err);
+	}
+	if (gtiff_close(tif, err, sizeof(err)) != 0)
+		die(1, "%s", err);
+}
+
+static void
+grid(const cli_args *a, const tdc_job *job, tdc_tin *tin, double tin_s, const char *srs,
+	 gtiff_out *tif)
 {
 	tdc_interp_spec spec;
 	tdc_grid_spec g;
@@ -167,7 +196,9 @@ grid(const cli_args *a, const tdc_job *job, tdc_tin *tin, double tin_s)
 	t1 = now_s();
 	for (size_t i = 0; i < g.width * g.height; i++)
 		valid += ok[i];
-	if (a->outpath)
+	if (tif)
+		write_tif(a, &g, v, spec.nodata, srs, tif);
+	else if (a->outpath)
 	{
 		FILE	   *f = open_out(a->outpath);
 
@@ -189,9 +220,43 @@ grid(const cli_args *a, const tdc_job *job, tdc_tin *tin, double tin_s)
 	free(ok);
 }
 
-/* --contours or --grid on the one-shot run's triangulation of in. */
+/*
+ * Before the run: for --grid with a GeoTIFF -o, the input's CRS checked
+ * (when --srs does not replace it) and the file's temporary name taken;
+ * NULL for any other output.
+ */
+gtiff_out *
+tin_output_prepare(const cli_args *a, const cli_input *in)
+{
+	gtiff_out  *tif;
+	char		err[1024];
+
+	if (!a->grid || !gtiff_path(a->outpath))
+		return NULL;
+	/* (GDAL loaded, or the error that says it is missing) */
+	if ((tif = gtiff_reserve(a->outpath, err, sizeof(err))) == NULL)
+		die(1, "%s", err);
+	if (a->srs == NULL && in->srs != NULL && gtiff_check_srs(in->srs, err, sizeof(err)) != 0)
+	{
+		char		msg[1400];
+
+		snprintf(msg, sizeof(msg), "%s: its CRS is not one GDAL reads (%s); give one with --srs",
+				 a->input, err);
+		gtiff_discard(tif);
+		die(1, "%s", msg);
+	}
+	if (a->srs == NULL && in->srs == NULL)
+		fprintf(stderr, "tdc: warning: %s gets no CRS: the input has none and no --srs was given\n",
+				a->outpath);
+	return tif;
+}
+
+/*
+ * --contours or --grid on the one-shot run's triangulation of in; tif is
+ * tin_output_prepare's.
+ */
 void
-tin_output(const cli_args *a, const cli_input *in, const oneshot *r)
+tin_output(const cli_args *a, const cli_input *in, const oneshot *r, gtiff_out *tif)
 {
 	tdc_tin    *tin;
 	char		err[512];
@@ -207,6 +272,6 @@ tin_output(const cli_args *a, const cli_input *in, const oneshot *r)
 	if (a->contours)
 		contours(a, tin, t1 - t0);
 	else
-		grid(a, r->job, tin, t1 - t0);
+		grid(a, r->job, tin, t1 - t0, a->srs ? a->srs : in->srs, tif);
 	tdc_tin_free(tin);
 }
