@@ -16,7 +16,7 @@
 #     every script of the tree;
 #   - every shipped base script reaches default_version through shipped
 #     upgrade scripts (tdc_delaunay: 0.1.0 through 1.0.0, 1.0.0 through
-#     1.1.0);
+#     1.1.0, 1.1.0 through 1.2.0);
 #   - the scripts of released versions are tracked files, and only
 #     default_version's install scripts are built from src/sql;
 #   - tdc_delaunay requires postgis only (not postgis_raster), and

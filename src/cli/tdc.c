@@ -38,6 +38,8 @@
  * input's, Float64 or --type Float32.  --grid with --segments FILE and --method
  * linear:breaklines=true grids the TIN of the constrained triangulation
  * (the segments are breaklines); either without the other is an error.
+ * --contours takes --method too, linear with max_edge only (the one method
+ * parser, tdc_interp_parse: the lines stop at the triangles it drops).
  *
  * main: the arguments (parse_args), the input (read_input, or for
  * --max-memory stage_input, then read_staged when the one-shot run fits),
@@ -58,7 +60,7 @@
 static const char usage[] =
 "usage: ./tdc [-t THREADS] [-g GRID] [-l LEVELS] [--tolerance T] [-o OUT] [--stats] [--validate]\n"
 "             [--voronoi] [--segments FILE] [--max-memory MB [--tmpdir DIR]]\n"
-"             [--contours INTERVAL [--base B]]\n"
+"             [--contours INTERVAL [--base B] [--method linear:max_edge=L]]\n"
 "             [--grid CELLSIZE [--extent X0,Y0,X1,Y1] [--method M] [--srs SRS] [--type T]]\n"
 "             [--class LIST] INPUT\n"
 "  INPUT  .bin file of little-endian float64 x,y pairs, .xyz.bin file of\n"
@@ -84,7 +86,8 @@ static const char usage[] =
 "         are an error (exit 1)\n"
 "  --contours INTERVAL  contour lines of the TIN of 'x y z' input at levels\n"
 "         B + k INTERVAL (--base B, default 0); -o writes one per line:\n"
-"         the level, then 'x y' pairs (a closed ring repeats its first point)\n"
+"         the level, then 'x y' pairs (a closed ring repeats its first point);\n"
+"         --method linear:max_edge=L: lines stop at triangles max_edge drops\n"
 "  --grid CELLSIZE  heights at the pixel centres of a grid of square cells\n"
 "         over the input's box (or --extent X0,Y0,X1,Y1), from its lower left\n"
 "         corner; -o writes an ESRI ASCII grid (.asc), or a GeoTIFF when it\n"
@@ -98,7 +101,11 @@ static const char usage[] =
 "  --srs SRS  the GeoTIFF's CRS, anything GDAL's SetFromUserInput takes\n"
 "         (EPSG:25832, WKT, a PROJ string); default the input's, else none\n"
 "  --type Float64|Float32  the GeoTIFF's values: Float64 (default, the\n"
-"         .asc's values exactly) or Float32 (half the size, rounded)\n";
+"         .asc's values exactly) or Float32 (half the size, rounded)\n"
+"  max_edge=L  (any method) a triangle with an edge longer than L, in x and\n"
+"         y, is dropped: no value strictly inside it (nodata), no contour\n"
+"         across it; an edge exactly L long is kept, a sample keeps its\n"
+"         height, a point on an edge of a kept triangle has a value\n";
 
 static double
 parse_double(const char *s, const char *what)
@@ -276,8 +283,10 @@ parse_args(int argc, char **argv, cli_args *a)
 		die(2, "--contours and --grid take the Delaunay TIN: not with --voronoi%s", "");
 	if (a->contours && a->segpath)
 		die(2, "--contours takes the Delaunay TIN: not with --segments%s", "");
-	if ((a->has_extent || a->method) && !a->grid)
-		die(2, "--extent and --method go with --grid%s", "");
+	if (a->has_extent && !a->grid)
+		die(2, "--extent goes with --grid%s", "");
+	if (a->method && !a->grid && !a->contours)
+		die(2, "--method goes with --grid or --contours%s", "");
 	if (a->contour_base != 0 && !a->contours)
 		die(2, "--base goes with --contours%s", "");
 	if (a->grid)
@@ -306,6 +315,15 @@ parse_args(int argc, char **argv, cli_args *a)
 
 		if (gtiff_check_srs(a->srs, err, sizeof(err)) != 0)
 			die(2, "--srs: %s", err);
+	}
+	if (a->contours && a->method)
+	{
+		tdc_interp_spec spec;
+		char		err[256];
+
+		if (tdc_interp_parse(a->method, &spec, err, sizeof(err)) != TDC_OK ||
+			tdc_tin_contours_spec_check(&spec, err, sizeof(err)) != TDC_OK)
+			die(2, "--method: %s", err);
 	}
 	return true;
 }
