@@ -33,15 +33,16 @@ DATA_built = tdc_delaunay--$(EXTVERSION).sql tdc_delaunay_raster--$(RASTER_EXTVE
 DATA = tdc_delaunay--0.1.0.sql tdc_delaunay--0.1.0--1.0.0.sql tdc_delaunay--1.0.0.sql \
 	tdc_delaunay--1.0.0--1.1.0.sql tdc_delaunay--1.1.0.sql tdc_delaunay--1.1.0--1.2.0.sql
 
-CORE_SRCS = $(sort $(wildcard src/core/*.c))
-PG_SRCS = $(sort $(wildcard src/pg/*.c))
+CORE_SRCS = $(sort $(wildcard src/core/*/*.c))
+PG_SRCS = $(sort $(wildcard src/pg/*/*.c))
 CLI_SRCS = $(sort $(wildcard src/cli/*.c))
+CORE_HDRS = $(wildcard src/core/*.h src/core/*/*.h)
 OBJS = $(CORE_SRCS:.c=.o) $(PG_SRCS:.c=.o)
 
 REGRESS = $(basename $(notdir $(sort $(wildcard sql/*.sql))))
 REGRESS_OPTS = --inputdir=. --outputdir=build/regress
 
-PG_CPPFLAGS = -Isrc/core -pthread
+PG_CPPFLAGS = -Isrc/core -Isrc/pg -pthread
 SHLIB_LINK = -pthread -lm
 EXTRA_CLEAN = tdc build
 
@@ -69,7 +70,7 @@ GDAL_SONAME ?= $(shell objdump -p "$$($(firstword $(CC_CORE)) -print-file-name=l
 GDAL_BUILD = $(GDAL_CFLAGS) -DTDC_GDAL_SONAME='"$(GDAL_SONAME)"'
 GDAL_CHECK = @[ -n "$(GDAL_SONAME)" ] || { echo "./tdc needs GDAL's headers and library: install libgdal-dev (or set GDAL_CFLAGS and GDAL_SONAME)" >&2; exit 1; }
 
-tdc: $(CLI_SRCS) $(wildcard src/cli/*.h) $(CORE_SRCS) $(wildcard src/core/*.h)
+tdc: $(CLI_SRCS) $(wildcard src/cli/*.h) $(CORE_SRCS) $(CORE_HDRS)
 	$(GDAL_CHECK)
 	$(CC_CORE) $(CORE_CFLAGS) $(GDAL_BUILD) -o $@ $(CLI_SRCS) $(CORE_SRCS) -ldl -lm
 
@@ -79,7 +80,7 @@ build/geotiff_rows: test/geotiff_rows.c src/cli/geotiff.c src/cli/cli.h
 	@mkdir -p build
 	$(CC_CORE) $(CORE_CFLAGS) $(GDAL_BUILD) -Isrc/cli -o $@ test/geotiff_rows.c src/cli/geotiff.c -ldl -lm
 
-build/test_core: $(TEST_SRCS) $(wildcard test/*.h) $(CORE_SRCS) $(wildcard src/core/*.h)
+build/test_core: $(TEST_SRCS) $(wildcard test/*.h) $(CORE_SRCS) $(CORE_HDRS)
 	@mkdir -p build
 	$(CC_CORE) $(CORE_CFLAGS) $(TEST_CFLAGS) -o $@ $(TEST_SRCS) $(CORE_SRCS) -lgmp -lm
 
@@ -116,7 +117,7 @@ build/tin_arbiter: test/tin_arbiter.c
 	@mkdir -p build
 	$(CC_CORE) $(CORE_CFLAGS) -o $@ $< -lgmp -lm
 
-build/test_core_asan: $(TEST_SRCS) $(wildcard test/*.h) $(CORE_SRCS) $(wildcard src/core/*.h)
+build/test_core_asan: $(TEST_SRCS) $(wildcard test/*.h) $(CORE_SRCS) $(CORE_HDRS)
 	@mkdir -p build
 	clang $(filter-out -O2,$(CORE_CFLAGS)) -O1 -fno-omit-frame-pointer \
 		-fsanitize=address,undefined -fno-sanitize-recover=all $(TEST_CFLAGS) -o $@ \
@@ -125,7 +126,7 @@ build/test_core_asan: $(TEST_SRCS) $(wildcard test/*.h) $(CORE_SRCS) $(wildcard 
 check-core-asan: build/test_core_asan
 	build/test_core_asan --quick
 
-build/test_core_tsan: $(TEST_SRCS) $(wildcard test/*.h) $(CORE_SRCS) $(wildcard src/core/*.h)
+build/test_core_tsan: $(TEST_SRCS) $(wildcard test/*.h) $(CORE_SRCS) $(CORE_HDRS)
 	@mkdir -p build
 	clang $(filter-out -O2,$(CORE_CFLAGS)) -O1 -fsanitize=thread $(TEST_CFLAGS) -o $@ \
 		$(TEST_SRCS) $(CORE_SRCS) -lgmp -lm
@@ -167,20 +168,19 @@ build/regress:
 # Plain `make` builds the extension (the first rule above is ./tdc).
 .DEFAULT_GOAL := all
 # Core objects inside the extension are built with the core's language level.
-src/core/%.o: src/core/%.c $(wildcard src/core/*.h)
+src/core/%.o: src/core/%.c $(CORE_HDRS)
 	$(CC) $(CFLAGS) -std=c11 -D_GNU_SOURCE -ffp-contract=off -pthread -Isrc/core -c -o $@ $<
 # PGXS does not track headers: a changed struct must rebuild every user.
-$(PG_SRCS:.c=.o): src/pg/tdc_pg.h src/pg/pg_version_compat.h src/pg/gser_format.h \
-	src/pg/fn_voronoi.h src/pg/raster_format.h src/pg/fn_raster.h src/core/tdc.h
+$(PG_SRCS:.c=.o): $(wildcard src/pg/*.h src/pg/*/*.h) src/core/tdc.h
 # tdc_delaunay_full_version() reports the PostGIS found here at build time:
 # the default_version of its control file (the library does not compile
 # against PostGIS, so nothing more precise exists), or "unknown".
 POSTGIS_BUILD_VERSION := $(shell sed -n "s/^default_version *= *'\([^']*\)'.*/\1/p" \
 	'$(shell $(PG_CONFIG) --sharedir)/extension/postgis.control' 2>/dev/null)
 # (the .bc is the JIT's bitcode of the same file)
-src/pg/version.o src/pg/version.bc: override CPPFLAGS += \
+src/pg/fn/version.o src/pg/fn/version.bc: override CPPFLAGS += \
 	-DTDC_LIB_VERSION='"$(EXTVERSION)"' -DTDC_BUILD_POSTGIS='"$(or $(POSTGIS_BUILD_VERSION),unknown)"'
-src/pg/version.o src/pg/version.bc: Makefile
+src/pg/fn/version.o src/pg/fn/version.bc: Makefile
 else
 all: tdc
 endif
@@ -210,8 +210,8 @@ FUZZ_CORE_OBJS = $(patsubst src/core/%.c,build/fuzz/core/%.o,$(CORE_SRCS))
 FUZZ_CORE_LIB = build/fuzz/core.a
 FUZZ_CORE_DEPS = $(FUZZ_CORE_LIB)
 
-build/fuzz/core/%.o: src/core/%.c $(wildcard src/core/*.h)
-	@mkdir -p build/fuzz/core
+build/fuzz/core/%.o: src/core/%.c $(CORE_HDRS)
+	@mkdir -p $(dir $@)
 	$(FUZZ_CC) $(FUZZ_CFLAGS) -std=c11 -Isrc/core -c -o $@ $<
 
 $(FUZZ_CORE_LIB): $(FUZZ_CORE_OBJS)
@@ -231,18 +231,19 @@ build/fuzz/fuzz_cdt: fuzz/fuzz_cdt.c $(FUZZ_CORE_DEPS)
 	$(FUZZ_CC) $(FUZZ_CFLAGS) -std=c11 -Isrc/core -o $@ fuzz/fuzz_cdt.c $(FUZZ_CORE_LIB) -lm
 
 # The reader and writers, and the aggregate state, each with the point buffer.
-FUZZ_GSER_SRCS = src/pg/gser_read.c src/pg/gser_write.c src/pg/pointbuf.c
+FUZZ_GSER_SRCS = src/pg/formats/gser_read.c src/pg/formats/gser_write.c src/pg/runtime/pointbuf.c
 # fuzz_state also takes the TIN aggregates' states (fuzz_state_tin.c): their
 # entry points, and what their serial, deserial and combine functions call
 # (their shared samples in tin_agg.c, the method parser in fn_raster.c,
 # which brings the raster and geometry readers and writers, and the
 # breaklines' segment list in seglist.c);
 # pg_shim_agg.c stands in for tin_run.c, run.c's wait loop and the rest.
-FUZZ_STATE_SRCS = src/pg/agg_state.c src/pg/tin_agg.c src/pg/fn_contours_agg.c src/pg/seglist.c \
-	src/pg/fn_drape_agg.c src/pg/fn_raster_agg.c src/pg/fn_raster.c src/pg/raster_read.c \
-	src/pg/raster_write.c src/pg/gser_contour.c src/pg/gser_drape.c $(FUZZ_GSER_SRCS)
+FUZZ_STATE_SRCS = $(addprefix src/pg/runtime/,agg_state.c seglist.c) \
+	$(addprefix src/pg/fn/,tin_agg.c fn_contours_agg.c fn_drape_agg.c fn_raster_agg.c fn_raster.c) \
+	$(addprefix src/pg/formats/,raster_read.c raster_write.c gser_contour.c gser_drape.c) \
+	$(FUZZ_GSER_SRCS)
 FUZZ_PG_DEPS = fuzz/pg_shim.c fuzz/pg_shim.h src/pg/tdc_pg.h src/pg/pg_version_compat.h \
-	src/pg/gser_format.h
+	src/pg/formats/gser_format.h
 
 build/fuzz/fuzz_voronoi: fuzz/fuzz_voronoi.c $(FUZZ_CORE_DEPS)
 	@mkdir -p build/fuzz
@@ -255,16 +256,16 @@ build/fuzz/fuzz_gserialized: fuzz/fuzz_gserialized.c $(FUZZ_GSER_SRCS) $(FUZZ_PG
 		fuzz/pg_shim.c $(FUZZ_GSER_SRCS) $(FUZZ_CORE_LIB) -lm
 
 # The raster reader and writer need nothing of the core.
-FUZZ_RASTER_SRCS = src/pg/raster_read.c src/pg/raster_write.c
+FUZZ_RASTER_SRCS = src/pg/formats/raster_read.c src/pg/formats/raster_write.c
 
-build/fuzz/fuzz_raster: fuzz/fuzz_raster.c $(FUZZ_RASTER_SRCS) $(FUZZ_PG_DEPS) src/pg/raster_format.h
+build/fuzz/fuzz_raster: fuzz/fuzz_raster.c $(FUZZ_RASTER_SRCS) $(FUZZ_PG_DEPS) src/pg/formats/raster_format.h
 	@mkdir -p build/fuzz
 	$(FUZZ_CC) $(FUZZ_CFLAGS) $(FUZZ_PG_CFLAGS) -Isrc/core -o $@ fuzz/fuzz_raster.c \
 		fuzz/pg_shim.c $(FUZZ_RASTER_SRCS) -lm
 
 build/fuzz/fuzz_state: fuzz/fuzz_state.c fuzz/fuzz_state_tin.c fuzz/fuzz_state.h \
 		fuzz/pg_shim_agg.c $(FUZZ_STATE_SRCS) $(FUZZ_PG_DEPS) $(FUZZ_CORE_DEPS) \
-		src/pg/raster_format.h src/pg/fn_raster.h
+		src/pg/formats/raster_format.h src/pg/fn/fn_raster.h
 	@mkdir -p build/fuzz
 	$(FUZZ_CC) $(FUZZ_CFLAGS) $(FUZZ_PG_CFLAGS) -Isrc/core -o $@ fuzz/fuzz_state.c \
 		fuzz/fuzz_state_tin.c fuzz/pg_shim.c fuzz/pg_shim_agg.c $(FUZZ_STATE_SRCS) \

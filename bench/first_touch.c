@@ -15,7 +15,7 @@
  * guest has not used for a few seconds costs more, and most of all in huge
  * pages: on the 2-core benchmark machines, 0.4-0.7 GB/s for huge pages
  * against 3-5 GB/s in 4 kB pages, which is why the engine times its first
- * huge page before it asks for more (src/core/mem.c).  The benchmarks print
+ * huge page before it asks for more (src/core/engine/mem.c).  The benchmarks print
  * these figures in their header so that a reader can tell such a machine.
  */
 #define _GNU_SOURCE

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # bench/tiled_cli_bench.sh -- ./tdc one-shot against ./tdc --max-memory (the
-# tiled run of src/core/tile_final.c) on uniform points: a program that prints
+# tiled run of src/core/tiles/tile_final.c) on uniform points: a program that prints
 # figures and asserts nothing.
 #
 # 10M uniform points (gen_points uniform, seed 42: data/bench/uniform_1e7.bin,

@@ -1,6 +1,6 @@
 /*
  * fuzz_cdt.c
- *		libFuzzer target for the constrained triangulation (src/core/cdt.c).
+ *		libFuzzer target for the constrained triangulation (src/core/cdt/cdt.c).
  *
  * Input layout (missing bytes read as 0):
  *
@@ -35,7 +35,7 @@
 #include <string.h>
 
 #include "tdc.h"
-#include "predicates.h"
+#include "engine/predicates.h"
 
 #define MAX_PTS		128
 #define MAX_SEGS	256

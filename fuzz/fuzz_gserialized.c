@@ -1,8 +1,9 @@
 /*
  * fuzz_gserialized.c
  *		libFuzzer target for the PostGIS geometry reader and writer of
- *		tdc_delaunay (src/pg/gser_read.c, gser_write.c, pointbuf.c), linked
- *		with the PostgreSQL shims of pg_shim.c and the real core.
+ *		tdc_delaunay (src/pg/formats/gser_read.c, gser_write.c, and
+ *		src/pg/runtime/pointbuf.c), linked with the PostgreSQL shims of
+ *		pg_shim.c and the real core.
  *
  * Input: one serialized geometry value without its 4-byte varlena header
  * (srid[3], flags, [extended flags], [bbox], geometry); the harness puts it

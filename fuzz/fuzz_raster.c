@@ -1,7 +1,7 @@
 /*
  * fuzz_raster.c
  *		libFuzzer target for the PostGIS raster reader and writer of
- *		tdc_delaunay (src/pg/raster_read.c, raster_write.c), linked with the
+ *		tdc_delaunay (src/pg/formats/raster_read.c, raster_write.c), linked with the
  *		PostgreSQL shims of pg_shim.c.
  *
  * Input: byte 0 picks the mode (bit 0).
@@ -53,7 +53,7 @@
 
 #include "pg_shim.h"
 #include "tdc_pg.h"
-#include "raster_format.h"
+#include "formats/raster_format.h"
 
 static void
 fail(const char *what, const char *detail)

@@ -1,7 +1,7 @@
 /*
  * fuzz_state.c
  *		libFuzzer target for the serialized ST_TDCDelaunay aggregate state
- *		(src/pg/agg_state.c: tdc_agg_state_deserialize, _serialize,
+ *		(src/pg/runtime/agg_state.c: tdc_agg_state_deserialize, _serialize,
  *		_merge), the bytes that travel between parallel workers.
  *
  * Linked with agg_state.c and pointbuf.c (and, for fuzz_state_tin.c, the

@@ -44,7 +44,7 @@
 #include <string.h>
 
 #include "tdc.h"
-#include "predicates.h"
+#include "engine/predicates.h"
 
 #define MAX_POINTS		3000
 

@@ -1,9 +1,10 @@
 /*
  * pg_shim.h
  *		Stand-ins for the few PostgreSQL backend services that the
- *		tdc_delaunay reader and writers (src/pg/gser_read.c, gser_write.c,
- *		pointbuf.c) and the aggregate state (src/pg/agg_state.c) use, so
- *		that they run inside a libFuzzer process without a server.
+ *		tdc_delaunay reader and writers (src/pg/formats/gser_read.c,
+ *		gser_write.c, src/pg/runtime/pointbuf.c) and the aggregate state
+ *		(src/pg/runtime/agg_state.c) use, so that they run inside a
+ *		libFuzzer process without a server.
  *
  * Memory: palloc and friends allocate with malloc and remember every chunk;
  * fuzz_pg_reset() frees them all, like resetting a memory context at the end

@@ -10,8 +10,8 @@
  * or final functions: those read geometries and run the engine on threads
  * through run.c's wait loop (latches, signals), which has no stand-in here.
  * So the pieces only the transition and final functions use (tin_run.c,
- * the geometry reader of toast_stream.c, and run.c's wait loop for the
- * breaklines' insertion)
+ * the geometry and sample readers of toast_stream.c, and run.c's wait
+ * loop for the breaklines' insertion)
  * raise an ERROR that the harness counts as a finding, and the helpers of
  * fn_delaunay_agg.c and signals.c that every entry point calls do what the
  * server's do in a backend that is not being signalled.

@@ -4,6 +4,11 @@
 -- compared with ST_DelaunayTriangles on this server as a set of triangles
 -- (ST_Normalize), plus the documented differences asserted explicitly.
 --
+-- Test data: the cases' inputs are those of test/fixtures/postgis-cases.txt
+-- (PostGIS: GPL-2.0-or-later tests, CC BY-SA 3.0 documentation) and
+-- geos-cases.txt (GEOS: LGPL-2.1-or-later), and keep those licences
+-- (test/fixtures/README.md); the rest of this file is the project's.
+--
 
 -- The GEOS version, as {major, minor}.
 CREATE FUNCTION tdc_geos_version() RETURNS int[]
@@ -184,7 +189,7 @@ FROM generate_series(0, 2) f;
 -- Difference: flags out of range is an error in both, with our own message.
 SELECT ST_TDCDelaunayTriangles('MULTIPOINT(0 0,1 0,0 1)', 0, 3);
 -- Curves: PostGIS strokes them for GEOS as ST_CurveToLine does with its
--- defaults, and so do we (src/pg/curves.c): the same triangles, every type of
+-- defaults, and so do we (src/pg/formats/curves.c): the same triangles, every type of
 -- curve, at top level and nested, with Z and SRID, in every output form.
 -- (n: the members as ST_Dump gives them, the triangles of a TIN included;
 -- ST_NumGeometries counts a TIN as one geometry from PostGIS 3.6 on, and

@@ -1,6 +1,6 @@
 --
 -- tdc_raster: the tdc_delaunay_raster extension; the raster reader and
--- writer (src/pg/raster_read.c, raster_write.c) checked through PostGIS's
+-- writer (src/pg/formats/raster_read.c, raster_write.c) checked through PostGIS's
 -- own raster functions; ST_TDCInterpolateRaster and the ST_TDCInterpolate
 -- aggregates against PostGIS's ST_InterpolateRaster (GDAL's gridding).
 --

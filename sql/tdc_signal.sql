@@ -1,6 +1,6 @@
 --
 -- tdc_signal: after tdc_delaunay's first call in a backend, no signal
--- handler's first thread-local access can allocate memory (src/pg/signals.c).
+-- handler's first thread-local access can allocate memory (src/pg/runtime/signals.c).
 --
 -- PostGIS's SIGINT handler writes a thread-local flag.  In a backend where no
 -- PostGIS code has touched it yet, glibc allocates the flag's block inside

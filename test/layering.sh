@@ -1,27 +1,37 @@
 #!/usr/bin/env bash
-# test/layering.sh: no two files of src/ call each other in a loop, and only
-# the job's own layer reads struct tdc_job.
+# test/layering.sh: the folders of src/ are layers that call only downward,
+# no two files call each other in a loop, and only the job's own files read
+# struct tdc_job.
 #
-# Each file of src/core, src/cli and src/pg is compiled on its own to an
+# Each file under src/core, src/cli and src/pg is compiled on its own to an
 # object; nm gives the symbols it defines and the ones it leaves undefined.
 # An undefined symbol that another src/ file defines is an edge from the user
-# to the definer.  The strongly connected components of that graph are the
+# to the definer.  Three rules, a file failing when it breaks any:
+#
+# Folders.  LAYERS below is the one place that says which folder may call
+# which: a file may call (and include from) its own folder, the folders its
+# line names (a component's name, src/core, stands for all its folders),
+# and the face of its component (src/core/tdc.h, src/pg/tdc_pg.h).  A call
+# or an include that goes anywhere else fails, with the symbol or header
+# named; so does a file in a folder the table does not name.  Includes are
+# read from the compiler's -MM list, so a static inline function of a
+# header, which leaves no symbol, is checked too.
+#
+# Loops.  The strongly connected components of the call graph are the
 # loops: a file that sits in a component with another file (a calls b, b
-# calls ... a) fails, and the loop is printed as a path.  Calls through a
-# static inline function of a header leave no symbol and are not seen; they
-# cannot make a loop between .c files either.
+# calls ... a) fails, and the loop is printed as a path.
+#
+# The job.  struct tdc_job (src/core/engine/job_int.h) is read only by the
+# job's own files, JOB_LAYER below: the ones that build a triangulation and
+# give access to it.  Every other file, among them the consumers of a
+# finished job (Voronoi, constrained, TIN, tiles) and the front ends, reads
+# a finished job through the view of src/core/engine/mesh_view.h or the
+# public API of tdc.h; one that includes job_int.h, directly or through
+# another header, fails.
 #
 # src/pg needs the server headers: they are found through PG_CONFIG (default
 # pg_config) when it is installed; without them src/core and src/cli alone
 # are checked, and the output says so.  No server is needed.
-#
-# A second rule: struct tdc_job (src/core/job.h) is read only by the job's
-# own layer, JOB_LAYER below: the files that build a triangulation and give
-# access to it.  Every other file, among them the consumers of a finished
-# job (Voronoi, constrained, tiles) and the front ends, reads a finished job
-# through the view of src/core/mesh_view.h or the public API of tdc.h; one
-# that includes job.h, directly or through another header (as the compiler's
-# -MM lists them), fails.
 #
 #   bash test/layering.sh        prints "N passed, N failed" (one per file)
 set -u
@@ -35,6 +45,23 @@ fail=0
 gdal_inc=$(pkg-config --cflags gdal 2>/dev/null || gdal-config --cflags 2>/dev/null)
 JOB_LAYER="job.c job_arena.c triangulate.c subdivide.c tolerance.c leaf.c result.c emit.c"
 
+# FOLDER  and the folders it may call (docs/design.md, "The plan"):
+# the engine calls no feature; the features and the tiles stand on the
+# engine, the TIN on the constrained insertion too; the front ends call the
+# core; in src/pg the entry points call the formats and the runtime, the
+# formats the runtime, and nothing calls an entry point.
+LAYERS="
+src/core/engine
+src/core/cdt		src/core/engine
+src/core/voronoi	src/core/engine
+src/core/tin		src/core/engine src/core/cdt
+src/core/tiles		src/core/engine
+src/cli				src/core
+src/pg/runtime		src/core
+src/pg/formats		src/pg/runtime src/core
+src/pg/fn			src/pg/formats src/pg/runtime src/core
+"
+
 dirs="src/core src/cli"
 pg_inc=""
 if command -v "$PG_CONFIG" >/dev/null 2>&1 &&
@@ -46,10 +73,11 @@ else
 fi
 
 : > "$tmp/defs"
-: > "$tmp/reads_job"
+: > "$tmp/bad"
 : > "$tmp/uses"
+: > "$tmp/incs"
 for d in $dirs; do
-	for f in "$d"/*.c; do
+	for f in $(find "$d" -name '*.c' | sort); do
 		[ -f "$f" ] || continue
 		o=$tmp/$(echo "$f" | tr / _).o
 		flags="-std=c11 -D_GNU_SOURCE -pthread -Isrc/core"
@@ -66,15 +94,18 @@ for d in $dirs; do
 			fail=$((fail + 1))
 			continue
 		fi
+		# the headers of src/ it includes, directly or not
+		# shellcheck disable=SC2086
+		$CC $flags -MM "$f" 2>/dev/null | tr ' \\' '\n\n' | grep '^src/.*\.h$' |
+			awk -v f="$f" '{ print f, $1 }' > "$tmp/inc1"
+		cat "$tmp/inc1" >> "$tmp/incs"
 		case " $JOB_LAYER " in
-			*" $(basename "$f") "*) [ "$d" = src/core ] || reads_job=check ;;
+			*" $(basename "$f") "*) [ "$(dirname "$f")" = src/core/engine ] || reads_job=check ;;
 			*) reads_job=check ;;
 		esac
-		# shellcheck disable=SC2086
-		if [ "${reads_job:-}" = check ] &&
-				$CC $flags -MM "$f" 2>/dev/null | tr ' \\' '\n\n' | grep -qx 'src/core/job.h'; then
-			echo "FAIL: $f includes src/core/job.h: outside the job's layer, read mesh_view.h or tdc.h"
-			echo "$f" >> "$tmp/reads_job"
+		if [ "${reads_job:-}" = check ] && grep -q ' src/core/engine/job_int.h$' "$tmp/inc1"; then
+			echo "FAIL: $f includes src/core/engine/job_int.h: outside the job's layer, read mesh_view.h or tdc.h"
+			echo "$f" >> "$tmp/bad"
 		fi
 		reads_job=
 		# defined: text, data, bss, read-only data (global or weak)
@@ -83,17 +114,57 @@ for d in $dirs; do
 	done
 done
 
-# edges "from to", one per pair of files
+# edges "from to symbol", one per pair of files (its first symbol)
 awk 'NR == FNR { if (!($1 in def)) def[$1] = $2; next }
-	($2 in def) && def[$2] != $1 { e = $1 " " def[$2]; if (!(e in seen)) { seen[e] = 1; print e } }' \
-	"$tmp/defs" "$tmp/uses" | sort > "$tmp/edges"
-awk '{ print $2 }' "$tmp/defs" | sort -u > "$tmp/files"
-# files that define nothing another file could call still count
-for d in $dirs; do ls "$d"/*.c; done | sort -u > "$tmp/all"
+	($2 in def) && def[$2] != $1 { e = $1 " " def[$2]; if (!(e in seen)) { seen[e] = 1; print e, $2 } }' \
+	"$tmp/defs" "$tmp/uses" | sort > "$tmp/calls"
+cut -d' ' -f1,2 "$tmp/calls" > "$tmp/edges"
+
+# The folder rule, over the calls and the includes: "from to what" lines.
+for d in $dirs; do find "$d" -name '*.c'; done | sort -u > "$tmp/all"
+{
+	awk '{ print $1, $1, "is there" }' "$tmp/all"
+	awk '{ print $1, $2, "calls " $2 " (" $3 ")" }' "$tmp/calls"
+	awk '{ print $1, $2, "includes " $2 }' "$tmp/incs"
+} | awk -v layers="$LAYERS" '
+function dir(p) { sub(/\/[^\/]*$/, "", p); return p }
+# is folder t, or a folder under t, or t itself a folder
+function under(d, t) { return d == t || index(d, t "/") == 1 }
+BEGIN {
+	n = split(layers, line, "\n")
+	for (i = 1; i <= n; i++) {
+		k = split(line[i], w, /[ \t]+/)
+		if (k == 0 || w[1] == "") continue
+		known[w[1]] = 1
+		may[w[1]] = ""
+		for (j = 2; j <= k; j++) may[w[1]] = may[w[1]] " " w[j]
+	}
+}
+{
+	from = dir($1); to = dir($2)
+	what = $0; sub(/^[^ ]+ [^ ]+ /, "", what)
+	if (!(from in known)) {
+		if (!(from in told)) {
+			told[from] = 1
+			print "FAIL: folder " from " is not in LAYERS (test/layering.sh): say what it may call"
+		}
+		print $1 > "/dev/stderr"
+		next
+	}
+	if (to == from || under(from, to))		# its own folder, or its component face
+		next
+	ok = 0
+	k = split(may[from], w, " ")
+	for (j = 1; j <= k; j++) if (under(to, w[j])) ok = 1
+	if (!ok) {
+		print "FAIL: " $1 " " what ": " from " may call " (k ? "only" may[from] : "no other folder")
+		print $1 > "/dev/stderr"
+	}
+}' 2>> "$tmp/bad"
 
 # Tarjan's strongly connected components; for each component of two or more
 # files, one loop through it found by a breadth-first search inside it.  A
-# file fails when it is in a loop or reads struct tdc_job outside its layer.
+# file fails when it is in a loop, or breaks the folder or the job rule.
 awk '
 function strong(v,    i, w) {
 	index_of[v] = idx; low[v] = idx; idx++
@@ -134,7 +205,7 @@ function loop_of(s,    q, head, tail, u, i, w, prev, path, x) {
 	return s " -> " path
 }
 FILENAME == ARGV[1] { out[$1, ++nout[$1]] = $2; next }
-FILENAME == ARGV[2] { reads_job[$1] = 1; next }
+FILENAME == ARGV[2] { bad[$1] = 1; next }
 { files[++nf] = $1 }
 END {
 	idx = 0; sp = 0; ncomp = 0
@@ -151,13 +222,13 @@ END {
 				for (j = 1; j <= nf; j++) if (comp[files[j]] == comp[f]) m = m " " files[j]
 				print "      files in the loop:" m
 			}
-		} else if (f in reads_job)
+		} else if (f in bad)
 			fail++
 		else
 			pass++
 	}
 	print pass, fail > "/dev/stderr"
-}' "$tmp/edges" "$tmp/reads_job" "$tmp/all" 2> "$tmp/counts"
+}' "$tmp/edges" "$tmp/bad" "$tmp/all" 2> "$tmp/counts"
 read -r p f < "$tmp/counts"
 pass=$((pass + p))
 fail=$((fail + f))

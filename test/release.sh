@@ -21,6 +21,8 @@
 #     default_version's install scripts are built from src/sql;
 #   - tdc_delaunay requires postgis only (not postgis_raster), and
 #     tdc_delaunay_raster requires tdc_delaunay and postgis_raster.
+# And for the package: the licence (LICENSE, META.json, debian/copyright),
+# with the licence of every fixture of test/fixtures/ stated.
 #   PG_CONFIG=... bash test/release.sh      (prints "N passed, N failed")
 set -u
 cd "$(dirname "$0")/.."
@@ -58,6 +60,58 @@ done
 	bad "the Makefile's EXTENSION is '${EXTENSIONS[*]}', not tdc_delaunay and tdc_delaunay_raster"
 meta=$(tr -d '\n\t ' <META.json)
 [[ $meta == *"\"version\":\"$PKGVERSION\""* ]] && ok || bad "META.json: no \"version\": \"$PKGVERSION\""
+# The licence: LICENSE is the PostgreSQL License, and META.json and
+# debian/copyright (its "Files: *") say so.  Test data from other projects
+# keeps its own: every data file of test/fixtures/ has its licence in the
+# table of test/fixtures/README.md and, unless it is this project's, a
+# stanza of its own in debian/copyright; every path a stanza names is a
+# file of the tree.
+[ "$(head -n 1 LICENSE 2>/dev/null)" = "PostgreSQL License" ] && ok ||
+	bad "LICENSE is missing or is not the PostgreSQL License"
+[[ $meta == *'"license":"postgresql"'* ]] && ok || bad "META.json: license is not \"postgresql\""
+# "pattern license" per path of every Files: field
+copyright_files=$(awk '
+	/^Files:/ { infiles = 1; n = 0; sub(/^Files:/, "") }
+	/^[A-Z][A-Za-z-]*:/ && !/^Files:/ { infiles = 0 }
+	infiles && /^ |^Files:|^[^ ]/ { for (i = 1; i <= NF; i++) pat[++n] = $i }
+	/^License:/ && n > 0 { sub(/^License: */, ""); for (i = 1; i <= n; i++) print pat[i], $0; n = 0 }
+	/^$/ { n = 0; infiles = 0 }' debian/copyright)
+[[ $copyright_files == *"* PostgreSQL"* ]] && ok || bad "debian/copyright: Files: * is not License: PostgreSQL"
+if git rev-parse --git-dir >/dev/null 2>&1; then
+	tracked=$(git ls-files)
+	while read -r pat _; do
+		[ "$pat" = "*" ] && continue
+		found=0
+		# (a glob: the stanza's pattern)
+		# shellcheck disable=SC2053
+		while read -r f; do [[ $f == $pat ]] && { found=1; break; }; done <<<"$tracked"
+		((found)) && ok || bad "debian/copyright names $pat, which is no file of the tree"
+	done <<<"$copyright_files"
+	# "name licence" of the table of test/fixtures/README.md, a line per name
+	fixture_rows=$(awk -F'|' '/^\| `/ {
+			lic = $(NF - 1); gsub(/^ +| +$/, "", lic)
+			n = split($2, w, "`"); for (i = 2; i <= n; i += 2) print w[i], lic }' test/fixtures/README.md)
+	while read -r f; do
+		case $f in test/fixtures/README.md | *.sh | *.py) continue ;; esac
+		lic=""
+		while read -r name l; do
+			# shellcheck disable=SC2053
+			[[ ${f#test/fixtures/} == $name ]] && { lic=$l; break; }
+		done <<<"$fixture_rows"
+		if [ -z "$lic" ]; then
+			bad "test/fixtures/README.md states no licence for $f"
+			continue
+		fi
+		ok
+		[ "$lic" = "this project's" ] && continue
+		covered=0
+		while read -r pat _; do
+			# shellcheck disable=SC2053
+			[ "$pat" != "*" ] && [[ $f == $pat ]] && { covered=1; break; }
+		done <<<"$copyright_files"
+		((covered)) && ok || bad "debian/copyright: test data $f ($lic) has no stanza of its own"
+	done < <(git ls-files test/fixtures)
+fi
 # The scripts of released versions (DATA: the older base scripts, among them
 # 1.0.0's, and every upgrade script) ship as they were released: tracked
 # files, never rebuilt from src/sql, which only makes default_version's.

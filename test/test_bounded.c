@@ -1,6 +1,6 @@
 /*
  * test_bounded.c
- *		The bounded run (tdc_bounded_run, src/core/bounded*.c) through its
+ *		The bounded run (tdc_bounded_run, src/core/tiles/bounded*.c) through its
  *		API, without the CLI: the same triangle set as one tdc_triangulate,
  *		on the caller's thread and on a job's (tdc_bounded_start), and
  *		every way it stops (the caller's cancel flag before the run, between

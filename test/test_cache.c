@@ -18,7 +18,7 @@
 
 #include "harness.h"
 #include "splitmix.h"
-#include "internal.h"
+#include "engine/engine_int.h"
 
 /* FNV-1a over the coordinates of every triangle, in the order they come. */
 static uint64_t

@@ -17,7 +17,7 @@
 
 #include "harness.h"
 #include "tdc.h"
-#include "predicates.h"
+#include "engine/predicates.h"
 
 static uint64_t rs = 0x9e3779b97f4a7c15ULL;
 

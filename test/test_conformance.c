@@ -58,7 +58,7 @@
 #include <string.h>
 
 #include "harness.h"
-#include "predicates.h"
+#include "engine/predicates.h"
 #include "tdc.h"
 
 #define MAX_EXPECTED	16

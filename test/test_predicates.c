@@ -27,7 +27,7 @@
 
 #include "harness.h"
 #include "splitmix.h"
-#include "predicates.h"
+#include "engine/predicates.h"
 
 /* ------------------------------------------------------------------------
  * Deterministic PRNG and random doubles

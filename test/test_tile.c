@@ -20,7 +20,7 @@
 
 #include "harness.h"
 #include "tdc.h"
-#include "tile_plan.h"
+#include "tiles/tile_plan.h"
 
 typedef struct tset
 {

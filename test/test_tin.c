@@ -40,7 +40,7 @@
 #include "harness.h"
 #include "splitmix.h"
 #include "tdc.h"
-#include "predicates.h"
+#include "engine/predicates.h"
 #include "tin_test.h"
 
 /* ----------------------------------------------------------------

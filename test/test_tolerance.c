@@ -29,7 +29,7 @@
 
 #include "harness.h"
 #include "splitmix.h"
-#include "predicates.h"
+#include "engine/predicates.h"
 #include "tdc.h"
 
 static uint64_t rng_state;

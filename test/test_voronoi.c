@@ -24,7 +24,7 @@
 #include <gmp.h>
 
 #include "harness.h"
-#include "predicates.h"
+#include "engine/predicates.h"
 #include "tdc.h"
 
 static uint64_t vrng_state;

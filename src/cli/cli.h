@@ -7,7 +7,7 @@
  *	las.c		INPUT as a LAS file: its header, CRS and points
  *	oneshot.c	the run with the whole input in memory, and its output
  *	tiles.c		the run of --max-memory that does not fit: the core's
- *				tdc_bounded_run (src/core/bounded*.c), its triangles as text
+ *				tdc_bounded_run (src/core/tiles/bounded*.c), its triangles as text
  *	bounded_mem.c	the process's memory around that run
  *	tmpdir.c	the temporary directory of --max-memory
  *	tin_out.c	--contours and --grid: the TIN of x y z input, written as text

@@ -27,7 +27,7 @@
  * This interface is fixed: scripts depend on it.
  *
  * --max-memory MB [--tmpdir DIR] runs here as usual when the one-shot run
- * fits; otherwise the core's tdc_bounded_run (src/core/bounded*.c, called
+ * fits; otherwise the core's tdc_bounded_run (src/core/tiles/bounded*.c, called
  * from tiles.c) triangulates the input tile by tile through files.
  *
  * --contours INTERVAL [--base B] and --grid CELLSIZE [--extent X0,Y0,X1,Y1]

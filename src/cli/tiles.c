@@ -1,7 +1,7 @@
 /*
  * tiles.c
  *		./tdc --max-memory when the one-shot run does not fit: the core's
- *		bounded run (tdc_bounded_run, src/core/bounded*.c) on the staged
+ *		bounded run (tdc_bounded_run, src/core/tiles/bounded*.c) on the staged
  *		.bin input, its triangles written as text.
  *
  * The core runs the phases and the tiles; what belongs to the process

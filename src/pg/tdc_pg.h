@@ -1,43 +1,53 @@
 /*
  * tdc_pg.h
- *		The runtime of the PostgreSQL side of tdc_delaunay: what every SQL
- *		function is built from.
+ *		The PostgreSQL side of tdc_delaunay: what every SQL function is
+ *		built from, and what its folders share.
  *
- * src/pg is a runtime plus one file set per feature.  The runtime:
+ * src/pg is three folders, each calling only the ones below it
+ * (test/layering.sh; docs/design/pg-runtime.md says why):
  *
+ * runtime/, running the core in a backend:
+ *	settings.c		_PG_init and the tdc_delaunay.* settings
  *	run.c			runs a job (and any work on it) while watching for
  *					interrupts: the one wait loop; core status to SQLSTATE;
  *					the parameter checks every function shares
- *	toast_stream.c	reads a function's geometry argument, a big TOASTed
- *					value a slice at a time (tdc_read_geometry)
- *	gser_read.c		reads PostGIS geometry values straight into a point
- *					buffer (the format is in gser_format.h)
- *	gser_write.c	writes triangulations back as geometry values
- *	curves.c		curved input: stroked by PostGIS's ST_CurveToLine for
- *					the Delaunay functions, as ST_DelaunayTriangles does
- *	pointbuf.c		the point buffer the vertices of the input collect in
- *	agg_state.c		the aggregates' state, its merging and serialized form
- *	dump_query.c	the Dump functions' query: checked, run, collected
- *	settings.c		_PG_init and the tdc_delaunay.* settings
- *	mem_cache.c		the engine's big arrays kept between runs
  *	signals.c		keeps PostGIS's cancel handler from allocating inside a
  *					signal; every SQL entry point calls tdc_signal_guard()
- *	version.c		the versions and thread count a bug report needs
+ *	mem_cache.c		the engine's big arrays kept between runs
+ *	pointbuf.c		the point buffer the vertices of the input collect in
+ *	agg_state.c		the aggregates' state, its merging and serialized form
  *	seglist.c		constraint segments from linework, and their insertion
  *					(the constrained functions and the TIN's breaklines)
- *	tin_run.c		a TIN of samples with Z, and the operations on it, waited on
+ *	tin_run.c		a TIN of the samples, and the operations on it, waited on
+ *
+ * formats/, the bytes of PostgreSQL and PostGIS values:
+ *	gser_read.c		reads PostGIS geometry values straight into a point
+ *					buffer (the format is in gser_format.h)
+ *	toast_stream.c	reads a function's geometry argument, a big TOASTed
+ *					value a slice at a time (tdc_read_geometry), and a TIN's
+ *					sample (tdc_tin_read_sample)
+ *	curves.c		curved input: stroked by PostGIS's ST_CurveToLine for
+ *					the Delaunay functions, as ST_DelaunayTriangles does
+ *	gser_write.c	writes triangulations back as geometry values
  *	gser_contour.c	contour lines written as a MULTILINESTRING Z
  *	gser_drape.c	a target geometry read as chains and written again draped
- *	pg_version_compat.h  every difference between PostgreSQL majors
+ *	raster_read.c, raster_write.c  PostGIS rasters (raster_format.h)
+ *	table_write.c	rows written straight into a table just created
+ *	dump_query.c	the Dump functions' query: checked, run, collected
  *
- * The features, each a set of thin fmgr adapters over the runtime
+ * fn/, the SQL entry points, thin fmgr adapters named after their SQL names
  * (fn_<feature>[_agg|_dump].c): fn_delaunay (ST_TDCDelaunayTriangles,
  * ST_TDCDelaunayDump), fn_delaunay_agg (ST_TDCDelaunay), fn_constrained
  * (ST_TDCConstrainedDelaunayTriangles, its Dump and aggregate), fn_voronoi
  * (ST_TDCVoronoiPolygons/Lines; fn_voronoi.h for its aggregate and Dump),
- * fn_tiled (tdc_delaunay_tiled's per-tile step and curve helper),
- * fn_contours_agg (ST_TDCContours), fn_drape_agg (ST_TDCDrape).
- * docs/design/pg-runtime.md tells why.
+ * fn_tiled (tdc_delaunay_tiled's per-tile step and curve helper, with
+ * fn_tiled_bounded and fn_tiled_region), fn_contours_agg (ST_TDCContours),
+ * fn_drape_agg (ST_TDCDrape), fn_raster and fn_raster_agg (the raster
+ * interpolation), version.c (the versions a bug report needs); and
+ * tin_agg.c, the TIN aggregates' shared samples and support functions.
+ *
+ * pg_version_compat.h, beside this header: every difference between
+ * PostgreSQL majors.
  *
  * Only the backend's main thread ever calls PostgreSQL.  The core's worker
  * threads see nothing but plain malloc'd arrays.
@@ -195,8 +205,9 @@ extern bool tdc_gser_append(TdcPointBuf *buf, const struct varlena *geom,
 extern bool tdc_gser_append_source(TdcPointBuf *buf, TdcGserSource *src,
 								   const char *fname);
 
-/* toast_stream.c: any geometry argument, TOASTed or not */
+/* toast_stream.c: any geometry argument, TOASTed or not; a TIN's sample (with Z) */
 extern bool tdc_read_geometry(TdcPointBuf *buf, Datum d, const char *fname);
+extern void tdc_tin_read_sample(TdcPointBuf *buf, Datum d, int64 row, const char *fname);
 
 /* curves.c */
 extern struct varlena *tdc_curve_to_line(Datum geom, const char *fname);
@@ -438,7 +449,6 @@ typedef struct TdcTinRun
 	size_t		max_memory;		/* the TIN's and its operations' share (0: no limit) */
 } TdcTinRun;
 
-extern void tdc_tin_read_sample(TdcPointBuf *buf, Datum d, int64 row, const char *fname);
 extern TdcTinRun *tdc_tin_run_start(const TdcPointBuf *buf, const TdcSegList *breaklines,
 									uint64 extra, const char *fname);
 extern void tdc_tin_run_wait(TdcTinRun *tr, int rc, const char *err, const char *fname);
@@ -457,22 +467,62 @@ typedef struct TdcTinAgg
 /* copies src's parameters into dst, or checks that they are dst's */
 typedef void (*TdcTinAggParams) (TdcTinAgg *dst, const TdcTinAgg *src, MemoryContext cxt);
 
+/*
+ * What one TIN aggregate's serial, deserial and combine functions need to
+ * know of it (tin_agg.c explains the shared form).  Its parameters come
+ * after the vertices: a fixed part (the set flag, a uint32 at 0, and the
+ * int64 rows at rows_at are tin_agg.c's; the rest the kind's), then
+ * var_len bytes more.
+ */
+typedef struct TdcTinAggKind
+{
+	const TdcStateFormat *fmt;	/* magic, version, the aggregate's name */
+	Size		size;			/* its state, which begins with a TdcTinAgg */
+	TdcCurves	curves;			/* how it reads a curved sample */
+	Size		fixed;			/* the parameters' fixed part, in bytes */
+	Size		rows_at;		/* where the rows lie in it */
+	TdcTinAggParams params;		/* the combine function's reconciliation */
+	/* the length of the variable part (0 when the parameters are unset) */
+	Size		(*var_len) (const TdcTinAgg *a);
+	/* the parameters into their zeroed part, but for the flag and the rows */
+	void		(*write) (const TdcTinAgg *a, char *extra);
+
+	/*
+	 * The parameters from the len bytes of extra, whose flag and rows are
+	 * read: checks them (tdc_agg_state_corrupt), sets the breaklines, and
+	 * returns their length; the segments follow.
+	 */
+	Size		(*read) (TdcTinAgg *a, const char *extra, Size len);
+} TdcTinAggKind;
+
 extern TdcTinAgg *tdc_tin_agg_new(MemoryContext cxt, Size size, TdcCurves curves);
-extern TdcTinAgg *tdc_tin_agg_combine(FunctionCallInfo fcinfo, const char *fn,
-									  const char *fname, Size size, TdcCurves curves,
-									  TdcTinAggParams params);
 extern void tdc_tin_agg_breaklines(TdcTinAgg *a, bool breaklines, MemoryContext cxt,
 								   const char *fname);
 extern void tdc_tin_agg_add(TdcTinAgg *a, Datum geom, const char *fname);
-extern void tdc_tin_agg_merge(TdcTinAgg *dst, const TdcTinAgg *src, const char *fname);
-extern char *tdc_tin_agg_extra(const TdcTinAgg *a, Size plen, Size *len);
-extern bytea *tdc_tin_agg_serialize(const TdcTinAgg *a, const TdcStateFormat *fmt,
-									char *extra, Size plen);
-extern const char *tdc_tin_agg_deserialize(TdcTinAgg *a, const bytea *in,
-										   const TdcStateFormat *fmt, TdcCurves curves,
-										   Size *extra_len);
-extern void tdc_tin_agg_read_segments(TdcTinAgg *a, const char *rest, Size len,
-									  const char *fname);
+extern Datum tdc_tin_agg_serialfn(FunctionCallInfo fcinfo, const TdcTinAggKind *k,
+								  const char *fn);
+extern Datum tdc_tin_agg_deserialfn(FunctionCallInfo fcinfo, const TdcTinAggKind *k,
+									const char *fn);
+extern Datum tdc_tin_agg_combinefn(FunctionCallInfo fcinfo, const TdcTinAggKind *k,
+								   const char *fn);
+
+/*
+ * The SQL entry points prefix_combinefn, prefix_serialfn and
+ * prefix_deserialfn of a TIN aggregate (st_tdccontours_combinefn, ...: the
+ * names its SQL scripts give), over tin_agg.c's functions for kind.  Used
+ * as a declaration, with a semicolon (as PG_FUNCTION_INFO_V1 is).
+ */
+#define TDC_TIN_AGG_SUPPORT(prefix, kind) \
+PG_FUNCTION_INFO_V1(prefix##_combinefn); \
+Datum prefix##_combinefn(PG_FUNCTION_ARGS) \
+{ return tdc_tin_agg_combinefn(fcinfo, &(kind), #prefix "_combinefn"); } \
+PG_FUNCTION_INFO_V1(prefix##_serialfn); \
+Datum prefix##_serialfn(PG_FUNCTION_ARGS) \
+{ return tdc_tin_agg_serialfn(fcinfo, &(kind), #prefix "_serialfn"); } \
+PG_FUNCTION_INFO_V1(prefix##_deserialfn); \
+Datum prefix##_deserialfn(PG_FUNCTION_ARGS) \
+{ return tdc_tin_agg_deserialfn(fcinfo, &(kind), #prefix "_deserialfn"); } \
+extern int	no_such_variable
 
 /* gser_contour.c: the contour lines of a TIN as a MULTILINESTRING Z */
 extern struct varlena *tdc_gser_contours(const tdc_tin *tin, int32 srid, uint64 room,

@@ -1,6 +1,6 @@
 -- src/sql/constrained.sql: constrained Delaunay triangulation
 -- (ST_TDCConstrainedDelaunayTriangles, ST_TDCConstrainedDelaunayDump, the
--- ST_TDCConstrainedDelaunay aggregates; C side: src/pg/fn_constrained.c)
+-- ST_TDCConstrainedDelaunay aggregates; C side: src/pg/fn/fn_constrained.c)
 
 -- ST_TDCConstrainedDelaunayTriangles: constrained Delaunay triangulation,
 -- comparable to SFCGAL's ST_ConstrainedDelaunayTriangles

@@ -1,5 +1,5 @@
 -- src/sql/delaunay.sql: Delaunay triangulation (ST_TDCDelaunayTriangles, the
--- ST_TDCDelaunay aggregates, ST_TDCDelaunayDump; C side: src/pg/fn_delaunay.c,
+-- ST_TDCDelaunay aggregates, ST_TDCDelaunayDump; C side: src/pg/fn/fn_delaunay.c,
 -- fn_delaunay_agg.c, agg_state.c, dump_query.c)
 
 -- ST_TDCDelaunayTriangles: drop-in for ST_DelaunayTriangles

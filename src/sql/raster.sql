@@ -1,6 +1,6 @@
 -- src/sql/raster.sql: interpolation of the TIN of the samples' vertices
 -- into a PostGIS raster (ST_TDCInterpolateRaster, the ST_TDCInterpolate
--- aggregates; C side: src/pg/fn_raster.c, fn_raster_agg.c, raster_read.c,
+-- aggregates; C side: src/pg/fn/fn_raster.c, fn_raster_agg.c, raster_read.c,
 -- raster_write.c)
 
 -- ST_TDCInterpolateRaster: drop-in for ST_InterpolateRaster

@@ -2,7 +2,7 @@
 -- internal functions of src/sql/tiled_internals.sql
 
 -- The procedure.  Without a tile column it makes the target and hands the
--- source to _tdc_tiled_write (src/pg/fn_tiled_bounded.c): one pass, or when
+-- source to _tdc_tiled_write (src/pg/fn/fn_tiled_bounded.c): one pass, or when
 -- that would not fit tdc_delaunay.max_memory the core's bounded run (the
 -- tiles of ./tdc --max-memory), squares of tile_size labelling the
 -- triangles.  With a tile column it runs in rounds over staging tables: pts

@@ -2,7 +2,7 @@
 -- tdc_delaunay_tiled (src/sql/tiled.sql) runs
 
 -- tdc_delaunay_tiled: the triangulation of a whole table, tile by tile, into a new table
--- (src/pg/fn_tiled.c and src/core/tile_final.c explain the per-tile step)
+-- (src/pg/fn/fn_tiled.c and src/core/tiles/tile_final.c explain the per-tile step)
 
 CREATE FUNCTION _tdc_tile_transfn(internal, geometry, int8, int8, float8[], float8[], float8[], int8, int8)
 RETURNS internal
@@ -101,10 +101,10 @@ CREATE AGGREGATE _tdc_hull(float8[]) (
 COMMENT ON AGGREGATE _tdc_hull(float8[]) IS
 'Internal, for tdc_delaunay_tiled: the convex hull of partial hulls given as {x,y,...}.';
 
--- The tiling policy of src/core/tile_plan.c, the one ./tdc --max-memory
--- follows (src/pg/fn_tiled_region.c): labels of squares, and a tile's first
+-- The tiling policy of src/core/tiles/tile_plan.c, the one ./tdc --max-memory
+-- follows (src/pg/fn/fn_tiled_region.c): labels of squares, and a tile's first
 -- known region {h, K, extra boxes...} and its growth; and the automatic
--- tiles, through the core's bounded run (src/pg/fn_tiled_bounded.c).
+-- tiles, through the core's bounded run (src/pg/fn/fn_tiled_bounded.c).
 
 CREATE FUNCTION _tdc_square_label(float8, float8, float8, float8, float8)
 RETURNS int8

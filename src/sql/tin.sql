@@ -1,6 +1,7 @@
 -- src/sql/tin.sql: TIN analysis, new in 1.1.0 (the ST_TDCContours and ST_TDCDrape
--- aggregates; C side: src/pg/fn_contours_agg.c, fn_drape_agg.c, tin_run.c, and
--- src/core/tin*.c).  tdc_delaunay--1.0.0--1.1.0.sql holds the same objects but
+-- aggregates; C side: src/pg/fn/fn_contours_agg.c, fn_drape_agg.c,
+-- src/pg/runtime/tin_run.c, and src/core/tin/tin*.c).
+-- tdc_delaunay--1.0.0--1.1.0.sql holds the same objects but
 -- ST_TDCContours(geometry, float8, float8, text), new in 1.2.0
 -- (tdc_delaunay--1.1.0--1.2.0.sql).
 

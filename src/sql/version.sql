@@ -1,4 +1,4 @@
--- src/sql/version.sql: what a bug report needs (C side: src/pg/version.c)
+-- src/sql/version.sql: what a bug report needs (C side: src/pg/fn/version.c)
 
 CREATE FUNCTION tdc_delaunay_lib_version()
 RETURNS text

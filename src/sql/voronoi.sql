@@ -1,5 +1,5 @@
 -- src/sql/voronoi.sql: Voronoi diagrams (ST_TDCVoronoiPolygons, ST_TDCVoronoiLines,
--- the ST_TDCVoronoi aggregates, ST_TDCVoronoiDump; C side: src/pg/fn_voronoi*.c)
+-- the ST_TDCVoronoi aggregates, ST_TDCVoronoiDump; C side: src/pg/fn/fn_voronoi*.c)
 
 -- Voronoi diagrams, from the same exact triangulation
 

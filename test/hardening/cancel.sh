@@ -95,7 +95,7 @@
 # (latency <= MAX_LATENCY_MS); the figures per function are printed, with
 # how many were answered within VALUE_STRICT_MS (100, the quiet machine's
 # figure: reported, not checked).  Every function reads its value a slice
-# at a time with interrupt checks (src/pg/toast_stream.c), so reading it is
+# at a time with interrupt checks (src/pg/formats/toast_stream.c), so reading it is
 # no longer a phase a timeout waits out.  VALUE_TIMEOUTS="" skips this.
 #
 # QUICK=1: 1M points, fewer signal points, 6 runs for the RSS comparison,

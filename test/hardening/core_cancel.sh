@@ -15,6 +15,6 @@ ROOT=$(cd "$HERE/../.." && pwd)
 BIN=$(mktemp "${TMPDIR:-/tmp}/tdc_core_cancel.XXXXXX")
 trap 'rm -f "$BIN"' EXIT
 "${CC_CORE:-cc}" -std=c11 -D_GNU_SOURCE -O2 -ffp-contract=off -pthread -I"$ROOT/src/core" \
-	-o "$BIN" "$HERE/core_cancel.c" "$ROOT"/src/core/*.c -lm
+	-o "$BIN" "$HERE/core_cancel.c" "$ROOT"/src/core/*/*.c -lm
 echo "== core_cancel.sh"
 "$BIN" "${1:-2000000}" "${2:-2}" "${3:-30}" "${4:-100}" "${5:-150}"
