@@ -55,6 +55,7 @@ build_tool() {
 build_helpers() {
 	command -v cc >/dev/null || die "cc not found"
 	LIBS=-lm build_tool gen_points "$ROOT/bench/gen_points.c" cc -O2 -Wall
+	LIBS=-lm build_tool gen_las "$ROOT/bench/gen_las.c" cc -O2 -Wall
 	build_tool gshhg_convert "$ROOT/bench/gshhg_convert.c" cc -O2 -Wall
 	build_tool first_touch "$ROOT/bench/first_touch.c" cc -O2 -Wall
 }

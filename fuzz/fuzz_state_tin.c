@@ -17,7 +17,8 @@
  * Each state is checked against a model of its documented format written
  * here from the comments at the top of the three files, independently of
  * their code: the Delaunay vertex part (agg_state.c), then the aggregate's
- * own part, which for ST_TDCDrape and ST_TDCInterpolate (version 2) ends
+ * own part (ST_TDCContours's, version 2, ends with the method's max_edge,
+ * a finite length or 0), which for ST_TDCDrape and ST_TDCInterpolate (version 2) ends
  * with the breaklines' segments when the method asks for breaklines
  * ('linear:breaklines=true'): pairs of uint32 vertex indices, whole pairs
  * only, both ends below the state's vertex count, and none at all for a
@@ -197,8 +198,8 @@ read_segments(Model *m, const uint8 *p, size_t rest)
 }
 
 /* ----------------------------------------------------------------
- *		ST_TDCContours: uint32 params_set, uint32 zero, float8 interval,
- *		float8 base, int64 rows
+ *		ST_TDCContours (version 2): uint32 params_set, uint32 zero,
+ *		float8 interval, float8 base, int64 rows, float8 max_edge
  * ----------------------------------------------------------------
  */
 static void
@@ -206,14 +207,15 @@ contour_extra(Model *m)
 {
 	const uint8 *e = m->extra;
 	double		interval,
-				base;
+				base,
+				max_edge;
 
-	if (m->extra_len != 32)
+	if (m->extra_len != 40)
 	{
 		m->reject |= R_CORRUPT;
 		return;
 	}
-	m->params_len = 32;
+	m->params_len = 40;
 	m->rows = (int64) u64_at(e + 24);
 	if (u32_at(e) > 1 || u32_at(e + 4) != 0 || m->rows < 0)
 	{
@@ -223,7 +225,11 @@ contour_extra(Model *m)
 	m->params_set = u32_at(e) == 1;
 	interval = f64_at(e + 8);
 	base = f64_at(e + 16);
+	max_edge = f64_at(e + 32);
 	if (m->params_set && (!(interval > 0) || !isfinite(interval) || !isfinite(base)))
+		m->reject |= R_CORRUPT;
+	/* max_edge: 0 (none) or a finite length */
+	if (m->params_set && !(max_edge >= 0 && isfinite(max_edge)))
 		m->reject |= R_CORRUPT;
 }
 
@@ -237,7 +243,8 @@ contour_same(const Model *a, const Model *b)
 {
 	/* compared as numbers, as the combine function does */
 	return f64_at(a->extra + 8) == f64_at(b->extra + 8) &&
-		f64_at(a->extra + 16) == f64_at(b->extra + 16);
+		f64_at(a->extra + 16) == f64_at(b->extra + 16) &&
+		f64_at(a->extra + 32) == f64_at(b->extra + 32);
 }
 
 /* ----------------------------------------------------------------
@@ -391,7 +398,7 @@ interp_same(const Model *a, const Model *b)
 }
 
 static const TinFormat formats[] = {
-	{0x314e4354, 1, "ST_TDCContours", st_tdccontours_serialfn, st_tdccontours_deserialfn,
+	{0x314e4354, 2, "ST_TDCContours", st_tdccontours_serialfn, st_tdccontours_deserialfn,
 	st_tdccontours_combinefn, 24, contour_extra, contour_normalize, contour_same},
 	{0x31524454, 2, "ST_TDCDrape", st_tdcdrape_serialfn, st_tdcdrape_deserialfn,
 	st_tdcdrape_combinefn, 16, drape_extra, drape_normalize, drape_same},

@@ -374,7 +374,7 @@ def main():
     # with heights, then the aggregate's own part (ST_TDCDrape's and
     # ST_TDCInterpolate's at version 2: the breaklines' segments last).
     TCN, TDR, TRI = 0x314E4354, 0x31524454, 0x31495254
-    VERSION = {TCN: 1, TDR: 2, TRI: 2}
+    VERSION = {TCN: 2, TDR: 2, TRI: 2}
     sqz = [1.0, 2.0, 3.0, 4.5]
 
     def samples(magic, pts=sq, zs=sqz, srid=4326, have_first=True, hasz=True, params=False, n=None,
@@ -385,8 +385,8 @@ def main():
                      pts=pts if have_first else [], zs=zs, n=n,
                      version=VERSION[magic] if version is None else version)
 
-    def contour(ps=1, interval=10.0, base=0.0, rows=4, zero=0):
-        return struct.pack("<IIddq", ps, zero, interval, base, rows)
+    def contour(ps=1, interval=10.0, base=0.0, rows=4, zero=0, max_edge=0.0):
+        return struct.pack("<IIddqd", ps, zero, interval, base, rows, max_edge)
 
     def varlena(b):
         return struct.pack("<I", (len(b) + 4) << 2) + b
@@ -445,6 +445,14 @@ def main():
     put("fuzz_state", st2(samples(TCN) + contour(interval=float("inf"))))
     put("fuzz_state", st2(samples(TCN) + contour(base=float("nan"))))
     put("fuzz_state", st2(samples(TCN) + contour(zero=1)))
+    # max_edge (version 2): a length, the same in both states, or corrupt
+    put("fuzz_state", st2(samples(TCN) + contour(max_edge=1.5),
+                          samples(TCN, pts=far, zs=farz) + contour(max_edge=1.5)))
+    put("fuzz_state", st2(samples(TCN) + contour(max_edge=1.5),
+                          samples(TCN, pts=far, zs=farz) + contour(max_edge=2.0)))
+    put("fuzz_state", st2(samples(TCN) + contour(max_edge=-1.0)))
+    put("fuzz_state", st2(samples(TCN) + contour(max_edge=float("nan"))))
+    put("fuzz_state", st2(samples(TCN) + contour(max_edge=float("inf"))))
     put("fuzz_state", st2(samples(TCN) + contour() + b"\0"))
     put("fuzz_state", st2(samples(TDR) + drape(method=b"nearest"),
                           samples(TDR, pts=far, zs=farz) + drape(method=b"natural_neighbor")))

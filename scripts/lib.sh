@@ -4,6 +4,7 @@
 # functions and a few variables and changes nothing until they are called.
 #
 #   tdc_ensure_packages   apt-get install what is missing (Debian/Ubuntu)
+#   tdc_ensure_node       node and npm for test/cli_las.sh (apt-get when missing)
 #   tdc_build_install     make && make install against $PG_CONFIG
 #   tdc_server_up         use the user's server (PGHOST/PGPORT/PGDATABASE set,
 #                         or TDC_USE_EXISTING=1) or start a throw-away cluster
@@ -152,6 +153,19 @@ tdc_ensure_packages() {
 	fi
 	tdc_say "Debian packages missing: ${missing[*]}"
 	tdc_apt_install "${missing[@]}"
+}
+
+# node and npm, which test/cli_las.sh needs for its loaders.gl cross-check
+# (it installs the package with npm itself).  Looked for as commands, not as
+# packages: a node from elsewhere (nodesource's nodejs carries its own npm
+# and conflicts with Debian's npm package) does as well; only when one is
+# missing are Debian's nodejs and npm installed.
+tdc_ensure_node() {
+	if command -v node >/dev/null 2>&1 && command -v npm >/dev/null 2>&1; then
+		tdc_say "node $(node --version) and npm $(npm --version 2>/dev/null): present"
+		return 0
+	fi
+	tdc_apt_install nodejs npm
 }
 
 # Build the extension and install it into $PG_CONFIG's directories.

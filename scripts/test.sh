@@ -3,7 +3,8 @@
 # (12, 13 or testing), on the release's PostgreSQL major or PG_CONFIG's.
 #
 #   1. apt-get installs the missing Debian packages (scripts/lib.sh lists
-#      them; the Citus build's and, for the matrix, debootstrap with them)
+#      them; the Citus build's and, for the matrix, debootstrap with them;
+#      nodejs and npm unless node and npm are there)
 #   2. starts the lanes, parts that run in the background one after the
 #      other, each lane beside the others and the foreground:
 #        core        make check-core, check-core-asan, check-core-tsan
@@ -335,6 +336,8 @@ if ((CITUS)) && [ -f "$citus_src/citus-13.2.2.tar.gz" ]; then
 	TDC_EXTRA_PACKAGES="${TDC_EXTRA_PACKAGES:-} $(bash test/citus/build.sh --deps)"
 fi
 run_step packages tdc_ensure_packages || true
+# test/cli_las.sh's loaders.gl cross-check (under CI it fails without them)
+run_step node tdc_ensure_node || true
 # on a fresh machine the step above learnt the major (in its subshell)
 tdc_set_major
 MAKE=(make --no-print-directory PG_CONFIG="$PG_CONFIG")

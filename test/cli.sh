@@ -44,6 +44,13 @@ $TDC -o "$tmp/b1.out" "$tmp/b.bin"; $TDC -o "$tmp/b2.out" "$tmp/b.txt"
 check ".bin equals text" "cmp -s <(sort $tmp/b1.out) <(sort $tmp/b2.out)"
 check ".bin: 3 triangles" "[ \$(wc -l < $tmp/b1.out) -eq 3 ]"
 
+# .xyz.bin input (float64 x,y,z triples) equals the same points as text 'x y z'
+printf '0 0 5\n2 0 6.5\n1 3 -7\n1 1 0.1\n0 0 99\n' > "$tmp/b3.txt"
+perl -e 'open F, "<", $ARGV[0]; while (<F>) { @a = split; print pack("d<d<d<", @a) }' "$tmp/b3.txt" > "$tmp/b3.xyz.bin"
+$TDC -o "$tmp/b31.out" "$tmp/b3.xyz.bin"; $TDC -o "$tmp/b32.out" "$tmp/b3.txt"
+check ".xyz.bin equals text x y z" "[ -s $tmp/b31.out ] && cmp -s $tmp/b31.out $tmp/b32.out && awk 'NF != 9 { exit 1 }' $tmp/b31.out"
+check ".xyz.bin: z of the first copy of (0 0)" "grep -qE '(^| )0 0 5( |\$)' $tmp/b31.out && ! grep -q 99 $tmp/b31.out"
+
 # options: same triangle set for threads / grid / levels
 perl -e 'srand(7); for (1..20000) { printf "%.17g %.17g\n", rand(1000), rand(1000) }' > "$tmp/r.txt"
 $TDC -t 1 -o "$tmp/r1.out" "$tmp/r.txt"
@@ -81,6 +88,9 @@ printf '1 2\n3 4 5\n' > "$tmp/mix.txt"; expect_error "mixed dimensions" $TDC "$t
 printf '1 2\nnan 4\n5 5\n' > "$tmp/nan.txt"; expect_error "NaN" $TDC "$tmp/nan.txt"
 printf '1 2 3 4\n' > "$tmp/four.txt"; expect_error "four columns" $TDC "$tmp/four.txt"
 head -c 17 /dev/zero > "$tmp/odd.bin"; expect_error "truncated .bin" $TDC "$tmp/odd.bin"
+head -c 40 /dev/zero > "$tmp/odd.xyz.bin"; expect_error "truncated .xyz.bin" $TDC "$tmp/odd.xyz.bin"
+check "truncated .xyz.bin: says 24 bytes" "grep -q 'odd.xyz.bin: size is not a multiple of 24 bytes' $tmp/e.err"
+expect_error "truncated .xyz.bin, --max-memory" $TDC --max-memory 10 "$tmp/odd.xyz.bin"
 
 # degenerate input: no output lines, exit 0
 printf '1 1\n2 2\n3 3\n' > "$tmp/col.txt"; $TDC -o "$tmp/col.out" "$tmp/col.txt"
@@ -161,6 +171,12 @@ z_rss=$(sed -n 's/.*peak_rss_mb=\([0-9.]*\).*/\1/p' "$tmp/z32.err")
 check "--max-memory, text with z: tiled" "grep -qE ' tiles=([2-9]|[1-9][0-9]+) ' $tmp/z32.err"
 check "--max-memory, text with z: same triangles and z" "cmp -s <(canon_d $tmp/z31.out 3) <(canon_d $tmp/z32.out 3)"
 check "--max-memory 16, text with z: peak RSS ${z_rss:-?} MB under the limit" "awk 'BEGIN { exit !(\"${z_rss:-999999}\" + 0 < 16) }'"
+# the same points as .xyz.bin through the tiles: the same triangles and z
+perl -e 'open F, "<", $ARGV[0]; while (<F>) { @a = split; print pack("d<d<d<", @a) }' "$tmp/z3.txt" > "$tmp/z3.xyz.bin"
+TDC_TILE_CHECK=1 $TDC --max-memory 16 --tmpdir "$tmp/tiles" -o "$tmp/z33.out" --stats "$tmp/z3.xyz.bin" 2> "$tmp/z33.err"
+check "--max-memory, .xyz.bin: tiled" "grep -qE ' tiles=([2-9]|[1-9][0-9]+) ' $tmp/z33.err"
+check "--max-memory, .xyz.bin: the one-shot triangles and z of the text" "cmp -s <(canon_d $tmp/z31.out 3) <(canon_d $tmp/z33.out 3)"
+check "--max-memory, .xyz.bin: temporary files removed" "[ -z \"\$(ls -A $tmp/tiles)\" ]"
 # a limit below what the run holds before its first tile (read buffers, the
 # counting grid, the halo index: some 12 MB here) is refused, not overrun
 # (it peaked at 12.6 MB under --max-memory 10 before)

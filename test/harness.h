@@ -50,6 +50,7 @@ extern void test_bounded_labels(void);
 extern void test_cdt(void);
 extern void test_tin(void);
 extern void test_tin_reference(void);
+extern void test_tin_maxedge(void);
 
 /* Set by --quick (sanitizer runs): smaller sizes. */
 extern int	tdc_test_quick;

@@ -41,18 +41,13 @@
 #include "splitmix.h"
 #include "tdc.h"
 #include "engine/predicates.h"
+#include "tin_test.h"
 
 /* ----------------------------------------------------------------
- *		helpers
+ *		helpers (those in tin_test.h are test_tin_maxedge.c's too)
  * ----------------------------------------------------------------
  */
-typedef struct tin_case
-{
-	tdc_job    *job;
-	tdc_tin    *tin;
-} tin_case;
-
-static bool
+bool
 mk(tin_case *c, const double *xy, const double *z, size_t n, int threads)
 {
 	tdc_options o;
@@ -75,7 +70,7 @@ mk(tin_case *c, const double *xy, const double *z, size_t n, int threads)
 	return true;
 }
 
-static void
+void
 rm(tin_case *c)
 {
 	tdc_tin_free(c->tin);
@@ -84,7 +79,7 @@ rm(tin_case *c)
 	c->job = NULL;
 }
 
-static tdc_interp_spec
+tdc_interp_spec
 spec_of(const char *text)
 {
 	tdc_interp_spec s;
@@ -95,7 +90,7 @@ spec_of(const char *text)
 	return s;
 }
 
-static int
+int
 run_wait(tdc_tin *tin, int rc, const char *what)
 {
 	if (rc != TDC_OK)
@@ -127,7 +122,7 @@ points(tdc_tin *tin, const char *method, const double *xy, size_t n, double *v, 
 	return run_wait(tin, tdc_tin_points_start(tin, &s, xy, n, v, ok, err, sizeof(err)), err);
 }
 
-static double
+double
 value(tdc_tin *tin, const char *method, double x, double y, int *valid)
 {
 	tdc_interp_spec s = spec_of(method);
@@ -1134,8 +1129,8 @@ out:
  */
 
 /* The length of level L in each triangle, summed: the independent count. */
-static double
-level_length(const tdc_job *job, const double *z, double L)
+double
+level_length(const tdc_job *job, const double *z, double L, double max_edge)
 {
 	tdc_iter	it = {0};
 	uint32_t	v[3];
@@ -1146,7 +1141,17 @@ level_length(const tdc_job *job, const double *z, double L)
 		long double px[2],
 					py[2];
 		int			np = 0;
+		bool		drop = false;
 
+		for (int k = 0; k < 3 && max_edge > 0; k++)
+		{
+			const double *a = tdc_site_xy(job, v[k]),
+					   *b = tdc_site_xy(job, v[(k + 1) % 3]);
+
+			drop |= (b[0] - a[0]) * (b[0] - a[0]) + (b[1] - a[1]) * (b[1] - a[1]) > max_edge * max_edge;
+		}
+		if (drop)
+			continue;
 		for (int k = 0; k < 3; k++)
 		{
 			uint32_t	a = v[k],
@@ -1272,7 +1277,7 @@ check_contours(tin_case *tc, const double *z, double interval, double base, cons
 			}
 			j++;
 		}
-		want = level_length(tc->job, z, lev);
+		want = level_length(tc->job, z, lev, 0);
 		st->len_worst = fmax(st->len_worst, fabs(len - want) / fmax(want, 1e-300));
 		st->levels++;
 		i = j;
@@ -1846,4 +1851,5 @@ test_tin(void)
 	test_breaklines_parse();
 	test_breaklines_ridge();
 	test_breaklines_nearest();
+	test_tin_maxedge();			/* test_tin_maxedge.c */
 }

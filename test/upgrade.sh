@@ -17,8 +17,9 @@
 #      every other member object (compared as sorted text, diff on failure);
 #   4. the view, the table and the materialized view give the same rows as
 #      before the update, and so does the materialized view refreshed;
-#   5. what the update added (1.1.0: ST_TDCContours and ST_TDCDrape) gives
-#      in the updated database what it gives in the fresh one;
+#   5. what the updates added (1.1.0: ST_TDCContours and ST_TDCDrape; 1.2.0:
+#      ST_TDCContours with a method, max_edge) gives in the updated database
+#      what it gives in the fresh one;
 #   6. tdc_delaunay_raster installs on the updated database, and
 #      tdc_delaunay never created postgis_raster;
 #   7. what 1.2.0 changed (tdc_delaunay_tiled with a tile column, in one C
@@ -43,7 +44,8 @@ TO=$(q postgres -c "SELECT default_version FROM pg_available_extensions WHERE na
 fresh_db "$NEW"
 q "$NEW" -c "CREATE EXTENSION tdc_delaunay CASCADE" >/dev/null
 
-# What 1.1.0 added, as text: the same in an updated and in a fresh database.
+# What 1.1.0 and 1.2.0 added, as text: the same in an updated and in a fresh
+# database.
 TIN_PROBE="
 SELECT ST_AsText(ST_TDCContours(ST_MakePoint(x, y, x * y), 1.5, 0.25))
   FROM generate_series(0, 4) x, generate_series(0, 3) y
@@ -52,7 +54,10 @@ SELECT ST_AsText(ST_TDCDrape(ST_MakePoint(x, y, x * y), 'LINESTRING(0.5 0.5, 3.5
   FROM generate_series(0, 4) x, generate_series(0, 3) y
 UNION ALL
 SELECT ST_AsText(ST_TDCDrape(ST_MakePoint(x, y, x * y), 'POINT(1.5 1.25)', 'natural_neighbor'))
-  FROM generate_series(0, 4) x, generate_series(0, 3) y"
+  FROM generate_series(0, 4) x, generate_series(0, 3) y
+UNION ALL
+SELECT ST_AsText(ST_TDCContours(ST_MakePoint(x, y, x * y), 1.5, 0.25, 'linear:max_edge=1.5'))
+  FROM generate_series(0, 4) x, generate_series(0, 3) y WHERE (x, y) <> (2, 1)"
 
 upgrade_from() {
 local FROM=$1
@@ -163,7 +168,8 @@ check "after the update the report says EXTENSION=\"$TO\"" grep -qF "EXTENSION=\
 check "... with no warning" test -z "$(grep -e WARNING -e 'needs ALTER' <<<"$out")"
 tin_old=$(q "$OLD" -c "$TIN_PROBE" 2>&1)
 tin_new=$(q "$NEW" -c "$TIN_PROBE" 2>&1)
-same "ST_TDCContours and ST_TDCDrape after the update from $FROM: as in a fresh install" "$tin_new" "$tin_old"
+same "ST_TDCContours (with a method too) and ST_TDCDrape after the update from $FROM: as in a fresh install" \
+	"$tin_new" "$tin_old"
 check "... and they drew something" grep -q "MULTILINESTRING Z ((" <<<"$tin_new"
 
 # The raster functions come as a second extension, which the update leaves

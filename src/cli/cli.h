@@ -4,6 +4,7 @@
  *
  *	tdc.c		the front end: arguments, which run, the --max-memory sizing
  *	input.c		reading INPUT and the segment file
+ *	las.c		INPUT as a LAS file: its header, CRS and points
  *	oneshot.c	the run with the whole input in memory, and its output
  *	tiles.c		the run of --max-memory that does not fit: the core's
  *				tdc_bounded_run (src/core/tiles/bounded*.c), its triangles as text
@@ -14,8 +15,8 @@
  *	geotiff.c	the GeoTIFF writer, through GDAL
  *	die.c		how ./tdc fails
  * Layered without loops: die.c at the bottom, then tmpdir.c, bounded_mem.c
- * and geotiff.c, then input.c and tiles.c, then oneshot.c and tin_out.c,
- * then tdc.c.
+ * and geotiff.c and las.c, then input.c and tiles.c, then oneshot.c and
+ * tin_out.c, then tdc.c.
  */
 #ifndef TDC_CLI_H
 #define TDC_CLI_H
@@ -49,6 +50,8 @@ typedef struct cli_args
 	const char *method;			/* --method, GDAL's syntax; NULL: linear */
 	const char *srs;			/* --srs, for a GeoTIFF -o; NULL: the input's */
 	int			float32;		/* --type Float32 (GeoTIFF); else Float64 */
+	int			has_class;		/* --class LIST (LAS input): the values kept */
+	unsigned char class_keep[256];
 } cli_args;
 
 /* The input points in memory */
@@ -57,19 +60,53 @@ typedef struct cli_input
 	size_t		n;
 	double	   *xy,
 			   *z;				/* NULL without z */
-	char	   *srs;			/* the input's CRS ("EPSG:N" or WKT), NULL if none */
+	char	   *srs;			/* the input's CRS: a LAS file's WKT or "EPSG:N"
+								 * (las.c says which); NULL when none;
+								 * malloc'd, freed by oneshot_free */
 } cli_input;
 
 /* die.c: "tdc: " and fmt with arg on stderr, then exit(code) */
 extern void die(int code, const char *fmt, const char *arg) __attribute__((noreturn));
 
+/* las.c: an open LAS file (las_open), read in batches of whole records (las_next) */
+typedef struct las_file
+{
+	const char *path;
+	FILE	   *f;
+	uint64_t	size,			/* the file's bytes */
+				point_offset,
+				n,				/* records */
+				done,			/* records read */
+				kept;			/* of them, points --class kept */
+	int			major,
+				minor,
+				format;
+	unsigned	reclen,
+				global_encoding;
+	double		scale[3],
+				offset[3];
+	char	   *srs;			/* malloc'd; NULL when none */
+	unsigned char *buf;			/* bufrecs records */
+	size_t		bufrecs;
+} las_file;
+
+extern bool is_las_path(const char *path);
+extern void las_parse_classes(const char *list, unsigned char keep[256]);
+extern void las_open(const char *path, las_file *lf);
+extern bool las_next(las_file *lf, const unsigned char *keep, double *xy, double *z, size_t max, size_t *k);
+extern void las_report(const las_file *lf);
+extern void las_close(las_file *lf);
+
 /* input.c */
 extern bool is_bin_path(const char *path);
+extern bool is_xyz_bin_path(const char *path);
 extern int	parse_line(char *line, size_t lineno, double v[3], int *dims);
-extern void read_input(const char *path, cli_input *in);
+extern void read_input(const cli_args *a, cli_input *in);
 extern double *read_bin(const char *path, size_t *n);
 extern uint32_t *read_segments(const char *path, size_t n, size_t *k);
 extern size_t text_to_bin(const char *path, int *has_z);
+extern size_t las_to_bin(const cli_args *a, char **srs);
+extern size_t xyz_bin_to_bin(const char *path);
 
 /* oneshot.c: the run over the whole input, in memory */
 typedef struct oneshot

@@ -1,15 +1,25 @@
 /*
  * input.c
- *		Reading ./tdc's INPUT: a .bin file of little-endian float64 x,y
- *		pairs, or any other file (or - for stdin) of text lines "x y" or
- *		"x y z"; and the --segments file of lines "i j".  Every error dies
- *		with the file's name or the line's number.
+ *		Reading ./tdc's INPUT: a LAS file (.las, read by las.c, its points
+ *		of the --class values), a .xyz.bin file of little-endian float64
+ *		x,y,z triples, a .bin file of float64 x,y pairs, or any other file
+ *		(or - for stdin) of text lines "x y" or "x y z"; and the --segments
+ *		file of lines "i j".  Every error dies with the file's name or the
+ *		line's number.
+ *
+ * Into memory for the one-shot run (read_input), or, for --max-memory,
+ * staged as the bounded run reads its input: x,y pairs in one file and z in
+ * another (text_to_bin, las_to_bin, xyz_bin_to_bin), in batches, so that
+ * the input is never held whole.  A .bin file of pairs is its own stage.
  */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "cli.h"
+
+/* Points per batch when staging LAS or .xyz.bin input: 768 KB of doubles */
+#define STAGE_BATCH 32768
 
 /* INPUT is read as a .bin file when its name ends in .bin */
 bool
@@ -19,6 +29,100 @@ is_bin_path(const char *path)
 				b = strlen(".bin");
 
 	return a >= b && strcmp(path + a - b, ".bin") == 0;
+}
+
+/* ... and as float64 x,y,z triples when it ends in .xyz.bin */
+bool
+is_xyz_bin_path(const char *path)
+{
+	size_t		a = strlen(path),
+				b = strlen(".xyz.bin");
+
+	return a >= b && strcmp(path + a - b, ".xyz.bin") == 0;
+}
+
+/* The size of a .xyz.bin file in triples; dies unless a whole number of them */
+static size_t
+xyz_bin_count(const char *path, FILE *f)
+{
+	long		size;
+
+	if (fseek(f, 0, SEEK_END) != 0 || (size = ftell(f)) < 0 || fseek(f, 0, SEEK_SET) != 0)
+		die(1, "cannot read %s", path);
+	if (size % 24 != 0)
+		die(1, "%s: size is not a multiple of 24 bytes (x,y,z float64 triples)", path);
+	return (size_t) size / 24;
+}
+
+/*
+ * Up to max triples of f (a multiple of 1024) into xy (pairs) and z;
+ * returns how many, 0 at the end.
+ */
+static size_t
+xyz_bin_batch(const char *path, FILE *f, double *xy, double *z, size_t max)
+{
+	double		t[3 * 1024];
+	size_t		m = 0,
+				k;
+
+	while (m < max && (k = fread(t, 24, 1024, f)) > 0)
+	{
+		for (size_t i = 0; i < k; i++, m++)
+		{
+			xy[2 * m] = t[3 * i];
+			xy[2 * m + 1] = t[3 * i + 1];
+			z[m] = t[3 * i + 2];
+		}
+	}
+	if (ferror(f))
+		die(1, "short read on %s", path);
+	return m;
+}
+
+static void
+read_xyz_bin(const char *path, cli_input *in)
+{
+	FILE	   *f = fopen(path, "rb");
+	size_t		m,
+				k = 0;
+
+	if (f == NULL)
+		die(1, "cannot open %s", path);
+	in->n = xyz_bin_count(path, f);
+	/* whole blocks of 1024: the last one may run past n */
+	in->xy = malloc(16 * (in->n + 1024));
+	in->z = malloc(8 * (in->n + 1024));
+	if (in->xy == NULL || in->z == NULL)
+		die(1, "out of memory reading %s", path);
+	while (k < in->n && (m = xyz_bin_batch(path, f, in->xy + 2 * k, in->z + k, 1024)) > 0)
+		k += m;
+	if (k != in->n)
+		die(1, "short read on %s", path);
+	fclose(f);
+}
+
+/* A LAS file into memory: the points of the --class values, its CRS */
+static void
+read_las(const cli_args *a, cli_input *in)
+{
+	las_file	lf;
+	size_t		k;
+	const unsigned char *keep = a->has_class ? a->class_keep : NULL;
+
+	las_open(a->input, &lf);
+	if (lf.n > SIZE_MAX / 16 - 1)
+		die(1, "%s: too many points for this machine", a->input);
+	in->xy = malloc(16 * (size_t) lf.n + 16);
+	in->z = malloc(8 * (size_t) lf.n + 8);
+	if (in->xy == NULL || in->z == NULL)
+		die(1, "out of memory reading %s", a->input);
+	while (las_next(&lf, keep, in->xy + 2 * lf.kept, in->z + lf.kept, SIZE_MAX, &k))
+		;
+	in->n = (size_t) lf.kept;
+	in->srs = lf.srs;
+	if (a->stats)
+		las_report(&lf);
+	las_close(&lf);
 }
 
 double *
@@ -135,12 +239,18 @@ read_text(const char *path, size_t *n, double **zout)
 	return xy;
 }
 
-/* INPUT into memory: in->xy, in->n and, for text with z, in->z */
+/* INPUT into memory: in->xy, in->n and, for input with z, in->z; for LAS in->srs */
 void
-read_input(const char *path, cli_input *in)
+read_input(const cli_args *a, cli_input *in)
 {
 	in->z = NULL;
-	in->xy = is_bin_path(path) ? read_bin(path, &in->n) : read_text(path, &in->n, &in->z);
+	in->srs = NULL;
+	if (is_las_path(a->input))
+		read_las(a, in);
+	else if (is_xyz_bin_path(a->input))
+		read_xyz_bin(a->input, in);
+	else
+		in->xy = is_bin_path(a->input) ? read_bin(a->input, &in->n) : read_text(a->input, &in->n, &in->z);
 }
 
 /* Segment file: lines "i j"; every index must be below n. */
@@ -218,5 +328,89 @@ text_to_bin(const char *path, int *has_z)
 	if (fclose(fxy) != 0 || (fz && fclose(fz) != 0))
 		die(1, "cannot write temporary files in %s", tmp_dir);
 	*has_z = fz != NULL;
+	return n;
+}
+
+/* x,y pairs and z of a batch to the staged files */
+static void
+stage_write(FILE *fxy, FILE *fz, const double *xy, const double *z, size_t k)
+{
+	if (fwrite(xy, 16, k, fxy) != k || fwrite(z, 8, k, fz) != k)
+		die(1, "cannot write temporary files in %s", tmp_dir);
+}
+
+/* Open the staged files tmp_dir/input.xy and input.z, with a batch's arrays */
+static void
+stage_open(FILE **fxy, FILE **fz, double **xy, double **z)
+{
+	*fxy = tmp_open("input.xy", "wb");
+	*fz = tmp_open("input.z", "wb");
+	*xy = malloc(16 * STAGE_BATCH);
+	*z = malloc(8 * STAGE_BATCH);
+	if (*xy == NULL || *z == NULL)
+		die(1, "out of memory staging the input in %s", tmp_dir);
+}
+
+static void
+stage_close(FILE *fxy, FILE *fz, double *xy, double *z)
+{
+	free(xy);
+	free(z);
+	if (fclose(fxy) != 0 || fclose(fz) != 0)
+		die(1, "cannot write temporary files in %s", tmp_dir);
+}
+
+/*
+ * LAS input (a->input) to tmp_dir/input.xy + input.z, the points of the
+ * --class values, in batches: returns their number, sets *srs.
+ */
+size_t
+las_to_bin(const cli_args *a, char **srs)
+{
+	las_file	lf;
+	FILE	   *fxy,
+			   *fz;
+	double	   *xy,
+			   *z;
+	size_t		k;
+
+	las_open(a->input, &lf);
+	stage_open(&fxy, &fz, &xy, &z);
+	while (las_next(&lf, a->has_class ? a->class_keep : NULL, xy, z, STAGE_BATCH, &k))
+		stage_write(fxy, fz, xy, z, k);
+	stage_close(fxy, fz, xy, z);
+	*srs = lf.srs;
+	if (a->stats)
+		las_report(&lf);
+	las_close(&lf);
+	return (size_t) lf.kept;
+}
+
+/* A .xyz.bin file to tmp_dir/input.xy + input.z, in batches: returns n */
+size_t
+xyz_bin_to_bin(const char *path)
+{
+	FILE	   *f = fopen(path, "rb"),
+			   *fxy,
+			   *fz;
+	double	   *xy,
+			   *z;
+	size_t		n,
+				k,
+				total = 0;
+
+	if (f == NULL)
+		die(1, "cannot open %s", path);
+	n = xyz_bin_count(path, f);
+	stage_open(&fxy, &fz, &xy, &z);
+	while ((k = xyz_bin_batch(path, f, xy, z, STAGE_BATCH)) > 0)
+	{
+		stage_write(fxy, fz, xy, z, k);
+		total += k;
+	}
+	stage_close(fxy, fz, xy, z);
+	fclose(f);
+	if (total != n)
+		die(1, "short read on %s", path);
 	return n;
 }

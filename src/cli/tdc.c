@@ -18,7 +18,10 @@
  * two_stripes=" follows (the last three: tdc_cdt_pass_counts).
  *
  * INPUT is a .bin file of little-endian float64 x,y pairs, or any other file
- * (or - for stdin) of text lines "x y" or "x y z".  -o writes one triangle
+ * (or - for stdin) of text lines "x y" or "x y z"; beyond the fixed
+ * interface, a .xyz.bin file of float64 x,y,z triples, or a LAS file (.las,
+ * las.c), whose points --class LIST keeps to those of the listed
+ * classification values.  -o writes one triangle
  * per line, counter-clockwise, each vertex "x y" (plus z when the input had
  * z), %.17g.  --stats prints one line of counts and phase times to stderr.
  * This interface is fixed: scripts depend on it.
@@ -35,6 +38,8 @@
  * input's, Float64 or --type Float32.  --grid with --segments FILE and --method
  * linear:breaklines=true grids the TIN of the constrained triangulation
  * (the segments are breaklines); either without the other is an error.
+ * --contours takes --method too, linear with max_edge only (the one method
+ * parser, tdc_interp_parse: the lines stop at the triangles it drops).
  *
  * main: the arguments (parse_args), the input (read_input, or for
  * --max-memory stage_input, then read_staged when the one-shot run fits),
@@ -55,16 +60,22 @@
 static const char usage[] =
 "usage: ./tdc [-t THREADS] [-g GRID] [-l LEVELS] [--tolerance T] [-o OUT] [--stats] [--validate]\n"
 "             [--voronoi] [--segments FILE] [--max-memory MB [--tmpdir DIR]]\n"
-"             [--contours INTERVAL [--base B]]\n"
-"             [--grid CELLSIZE [--extent X0,Y0,X1,Y1] [--method M] [--srs SRS] [--type T]] INPUT\n"
-"  INPUT  .bin file of little-endian float64 x,y pairs, or a text file of\n"
-"         'x y' or 'x y z' lines ('-' reads stdin)\n"
+"             [--contours INTERVAL [--base B] [--method linear:max_edge=L]]\n"
+"             [--grid CELLSIZE [--extent X0,Y0,X1,Y1] [--method M] [--srs SRS] [--type T]]\n"
+"             [--class LIST] INPUT\n"
+"  INPUT  .bin file of little-endian float64 x,y pairs, .xyz.bin file of\n"
+"         float64 x,y,z triples, a LAS file (.las: LAS 1.2 to 1.4,\n"
+"         uncompressed, point formats 0 to 10; x y z with the header's scale\n"
+"         and offset), or a text file of 'x y' or 'x y z' lines ('-' reads stdin)\n"
+"  --class LIST  LAS input: keep the points of these classification values\n"
+"         (comma-separated, 0 to 255: 2 ground, 2,9 ground and water)\n"
 "  -t     worker threads (0 = all online CPUs, the default)\n"
 "  -g     auxiliary grid size s (0 = auto)\n"
 "  -l     subdivision levels d, 2^d subsets (0 = auto, -1 = none)\n"
 "  --tolerance T  drop sites closer than T to an already kept site\n"
 "  -o     write triangles, one per line, counter-clockwise, %.17g\n"
-"  --stats  print counts and phase times (seconds) to stderr\n"
+"  --stats  print counts and phase times (seconds) to stderr; LAS input first\n"
+"         adds 'las=VERSION format= points= kept= srs=' (its CRS, or none)\n"
 "  --validate  check the result with the exact validator; exit 1 if invalid\n"
 "  --voronoi  also build the Voronoi cells; -o writes cells, one ring per line\n"
 "  --max-memory MB  keep the peak memory under MB: when the one-shot run does\n"
@@ -75,7 +86,8 @@ static const char usage[] =
 "         are an error (exit 1)\n"
 "  --contours INTERVAL  contour lines of the TIN of 'x y z' input at levels\n"
 "         B + k INTERVAL (--base B, default 0); -o writes one per line:\n"
-"         the level, then 'x y' pairs (a closed ring repeats its first point)\n"
+"         the level, then 'x y' pairs (a closed ring repeats its first point);\n"
+"         --method linear:max_edge=L: lines stop at triangles max_edge drops\n"
 "  --grid CELLSIZE  heights at the pixel centres of a grid of square cells\n"
 "         over the input's box (or --extent X0,Y0,X1,Y1), from its lower left\n"
 "         corner; -o writes an ESRI ASCII grid (.asc), or a GeoTIFF when it\n"
@@ -89,7 +101,11 @@ static const char usage[] =
 "  --srs SRS  the GeoTIFF's CRS, anything GDAL's SetFromUserInput takes\n"
 "         (EPSG:25832, WKT, a PROJ string); default the input's, else none\n"
 "  --type Float64|Float32  the GeoTIFF's values: Float64 (default, the\n"
-"         .asc's values exactly) or Float32 (half the size, rounded)\n";
+"         .asc's values exactly) or Float32 (half the size, rounded)\n"
+"  max_edge=L  (any method) a triangle with an edge longer than L, in x and\n"
+"         y, is dropped: no value strictly inside it (nodata), no contour\n"
+"         across it; an edge exactly L long is kept, a sample keeps its\n"
+"         height, a point on an edge of a kept triangle has a value\n";
 
 static double
 parse_double(const char *s, const char *what)
@@ -200,6 +216,13 @@ parse_args(int argc, char **argv, cli_args *a)
 				die(2, "--extent: XMIN < XMAX and YMIN < YMAX%s", "");
 			a->has_extent = 1;
 		}
+		else if (strcmp(s, "--class") == 0)
+		{
+			if (i + 1 >= argc)
+				die(2, "option %s needs a value", s);
+			las_parse_classes(argv[++i], a->class_keep);
+			a->has_class = 1;
+		}
 		else if (strcmp(s, "--method") == 0 || strcmp(s, "--srs") == 0)
 		{
 			if (i + 1 >= argc)
@@ -252,14 +275,18 @@ parse_args(int argc, char **argv, cli_args *a)
 	}
 	if (a->input == NULL)
 		die(2, "no INPUT given (see ./tdc --help)%s", "");
+	if (a->has_class && !is_las_path(a->input))
+		die(2, "--class goes with LAS input (a name ending in .las): %s", a->input);
 	if (a->contours && a->grid)
 		die(2, "--contours and --grid: one at a time%s", "");
 	if ((a->contours || a->grid) && a->voronoi)
 		die(2, "--contours and --grid take the Delaunay TIN: not with --voronoi%s", "");
 	if (a->contours && a->segpath)
 		die(2, "--contours takes the Delaunay TIN: not with --segments%s", "");
-	if ((a->has_extent || a->method) && !a->grid)
-		die(2, "--extent and --method go with --grid%s", "");
+	if (a->has_extent && !a->grid)
+		die(2, "--extent goes with --grid%s", "");
+	if (a->method && !a->grid && !a->contours)
+		die(2, "--method goes with --grid or --contours%s", "");
 	if (a->contour_base != 0 && !a->contours)
 		die(2, "--base goes with --contours%s", "");
 	if (a->grid)
@@ -289,22 +316,33 @@ parse_args(int argc, char **argv, cli_args *a)
 		if (gtiff_check_srs(a->srs, err, sizeof(err)) != 0)
 			die(2, "--srs: %s", err);
 	}
+	if (a->contours && a->method)
+	{
+		tdc_interp_spec spec;
+		char		err[256];
+
+		if (tdc_interp_parse(a->method, &spec, err, sizeof(err)) != TDC_OK ||
+			tdc_tin_contours_spec_check(&spec, err, sizeof(err)) != TDC_OK)
+			die(2, "--method: %s", err);
+	}
 	return true;
 }
 
-/* The input of --max-memory as a .bin file (z beside it), sized. */
+/* The input of --max-memory as a .bin file (z beside it), sized; a LAS file's CRS */
 typedef struct staged
 {
 	char		xypath[4400],
 				zpath[4400];
 	int			has_z;
 	size_t		n;
+	char	   *srs;
 } staged;
 
 /*
- * --max-memory: the input as a .bin source: a .bin INPUT as it is, text
- * converted to a temporary .bin on the way, so that it is never held as
- * text.  Makes the temporary directory, removed at exit.
+ * --max-memory: the input as a .bin source: a .bin INPUT as it is, text,
+ * LAS and .xyz.bin converted to a temporary .bin (z beside it) on the way,
+ * so that they are never held whole.  Makes the temporary directory,
+ * removed at exit.
  */
 static void
 stage_input(const cli_args *a, staged *s)
@@ -313,8 +351,16 @@ stage_input(const cli_args *a, staged *s)
 	struct stat sb;
 
 	s->has_z = 0;
+	s->srs = NULL;
 	tmp_create(base);
-	if (is_bin_path(a->input))
+	if (is_las_path(a->input) || is_xyz_bin_path(a->input))
+	{
+		s->n = is_las_path(a->input) ? las_to_bin(a, &s->srs) : xyz_bin_to_bin(a->input);
+		s->has_z = 1;
+		snprintf(s->xypath, sizeof(s->xypath), "%s/input.xy", tmp_dir);
+		snprintf(s->zpath, sizeof(s->zpath), "%s/input.z", tmp_dir);
+	}
+	else if (is_bin_path(a->input))
 	{
 		if (stat(a->input, &sb) != 0)
 			die(1, "cannot open %s", a->input);
@@ -398,6 +444,7 @@ read_staged(const staged *s, cli_input *in)
 {
 	in->xy = read_bin(s->xypath, &in->n);
 	in->z = NULL;
+	in->srs = s->srs;
 	if (s->has_z)
 	{
 		FILE	   *fz = fopen(s->zpath, "rb");
@@ -428,12 +475,13 @@ main(int argc, char **argv)
 		if (!fits(&a, &s))
 		{
 			run_in_tiles(&a, &s);
+			free(s.srs);
 			return 0;
 		}
 		read_staged(&s, &in);
 	}
 	else
-		read_input(a.input, &in);
+		read_input(&a, &in);
 	tif = tin_output_prepare(&a, &in);
 	oneshot_run(&a, &in, &r);
 	if (a.contours || a.grid)

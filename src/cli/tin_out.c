@@ -6,9 +6,11 @@
  * The triangulation is the one-shot run's (oneshot.c); the heights are the
  * input's z, a site taking its first input point's (tdc.h).  Then:
  *
- *	--contours INTERVAL [--base B]	the contour lines at B + k INTERVAL
- *		(tdc_tin_contours_start), one per line of -o: its level, then its
- *		points "x y", %.17g, a closed ring ending with its first point.
+ *	--contours INTERVAL [--base B] [--method linear:max_edge=L]	the
+ *		contour lines at B + k INTERVAL (tdc_tin_contours_start_spec), one
+ *		per line of -o: its level, then its points "x y", %.17g, a closed
+ *		ring ending with its first point; with max_edge a line stops where
+ *		a triangle with a longer edge begins.
  *	--grid CELLSIZE [--extent XMIN,YMIN,XMAX,YMAX] [--method M]	values at
  *		the pixel centres of a grid of square cells (tdc_tin_grid_start,
  *		GDAL's method syntax: linear, nearest, natural_neighbor and their
@@ -79,15 +81,18 @@ wait_op(tdc_tin *tin, int rc, const char *err)
 static void
 contours(const cli_args *a, tdc_tin *tin, double tin_s)
 {
+	tdc_interp_spec spec;
 	char		err[512];
 	double		t0 = now_s(),
 				t1;
 	size_t		npoints,
 				nlines;
 
+	if (tdc_interp_parse(a->method ? a->method : "linear", &spec, err, sizeof(err)) != TDC_OK)
+		die(2, "--method: %s", err);
 	err[0] = '\0';
-	wait_op(tin, tdc_tin_contours_start(tin, a->contour_interval, a->contour_base, err,
-										sizeof(err)), err);
+	wait_op(tin, tdc_tin_contours_start_spec(tin, a->contour_interval, a->contour_base, &spec,
+											 err, sizeof(err)), err);
 	t1 = now_s();
 	nlines = tdc_tin_contour_count(tin, &npoints);
 	if (a->outpath)

@@ -557,7 +557,29 @@ typedef struct tdc_tin tdc_tin;
  * and nodata otherwise; a point exactly on the hull's boundary is inside
  * (linear along the hull edge, for both).  Nearest takes the nearest site
  * within radius (radius1 = radius2 in GDAL's terms; 0: any distance).
+ *
+ * max_edge (> 0; 0: none) drops the triangles with an edge longer than it,
+ * for every method: a lake or a building with no sample inside is then
+ * nodata instead of long facets across it.  The lengths are in the (x, y)
+ * plane and compared exactly (the squared length against max_edge^2), so
+ * an edge exactly max_edge long is kept, on every machine alike.  A point
+ * has a value when it lies at a site (a sample keeps its height, even in
+ * the middle of dropped triangles), or when some triangle containing it,
+ * closed, keeps all its edges: a point on an edge between a kept and a
+ * dropped triangle has the edge's value, one strictly inside a dropped
+ * triangle or on an edge longer than max_edge has none.  Without any
+ * triangle (collinear sites) the segment between two neighbouring sites
+ * plays the triangle's part.  Outside the hull the radius rule above
+ * applies unchanged (radius=0 makes the outside nodata too).  The mask
+ * only decides where there is a value; the value is the method's, from
+ * all the samples.  options holds a TDC_INTERP_OPT_* bit for each option
+ * the text gave, for hosts that take only some of them.
  */
+#define TDC_INTERP_OPT_RADIUS		0x01	/* radius, radius1, radius2 or angle */
+#define TDC_INTERP_OPT_NODATA		0x02
+#define TDC_INTERP_OPT_BREAKLINES	0x04
+#define TDC_INTERP_OPT_MAX_EDGE		0x08
+
 typedef struct tdc_interp_spec
 {
 	int			method;			/* TDC_INTERP_* */
@@ -565,16 +587,21 @@ typedef struct tdc_interp_spec
 	double		nodata;			/* the value written where there is none */
 	bool		breaklines;		/* linear: the host inserts the samples' lines
 								 * as constraints (tdc_cdt_start) before the TIN */
+	double		max_edge;		/* > 0: triangles with a longer edge have no value */
+	unsigned	options;		/* TDC_INTERP_OPT_*: the options the text gave */
 } tdc_interp_spec;
 
 /*
- * Parse "linear[:radius=R][:nodata=V][:breaklines=B]",
- * "nearest[:radius1=R][:radius2=R][:angle=A][:nodata=V]" or
- * "natural_neighbor[:radius=R][:nodata=V]" (GDAL's defaults: linear radius
- * -1, nodata 0; nearest radius 0, nodata 0); "natural_neighbour" and
- * "invdist"-style names are not accepted.  B is true, false, yes, no, on,
- * off, 1 or 0 (any case; default false); the parser only records it, the
- * host acts on it by building the TIN on a constrained triangulation.
+ * Parse "linear[:radius=R][:nodata=V][:breaklines=B][:max_edge=L]",
+ * "nearest[:radius1=R][:radius2=R][:angle=A][:nodata=V][:max_edge=L]" or
+ * "natural_neighbor[:radius=R][:nodata=V][:max_edge=L]" (GDAL's defaults:
+ * linear radius -1, nodata 0; nearest radius 0, nodata 0; max_edge, not
+ * GDAL's, none); "natural_neighbour" and "invdist"-style names are not
+ * accepted.  L must be a number > 0 (infinity: none); options may come in
+ * any order, a repeated one counts its last value.  B is true, false, yes,
+ * no, on, off, 1 or 0 (any case; default false); the parser only records
+ * it, the host acts on it by building the TIN on a constrained
+ * triangulation.
  * breaklines is an option of linear only: natural neighbour coordinates
  * are defined by the Delaunay triangulation (a constrained one has no
  * empty-circle property to take them from), and the nearest sample does
@@ -675,11 +702,12 @@ extern int	tdc_tin_grid_start(tdc_tin *tin, const tdc_interp_spec *spec,
 /*
  * Contour lines at the levels base + k * interval (k any integer; each
  * level computed as that one double expression), merged into maximal
- * lines: a line ends only on the hull's boundary, and is otherwise a closed
- * ring (its first point repeated at its end).  Heights equal to a level
- * count as above it (the level lowered by an infinitesimal), so a line
- * through a sample or along an edge at the level's height appears once,
- * with no duplicate and no gap; a peak exactly at a level gives no line.
+ * lines: a line ends only on the hull's boundary (or max_edge's, below),
+ * and is otherwise a closed ring (its first point repeated at its end).
+ * Heights equal to a level count as above it (the level lowered by an
+ * infinitesimal), so a line through a sample or along an edge at the
+ * level's height appears once, with no duplicate and no gap; a peak
+ * exactly at a level gives no line.
  * Lines are oriented with the higher ground on their left (rings around
  * hills counter-clockwise; a ring starts at its point first in (x, y)
  * order), come level by level, increasing, and within a level sorted by
@@ -693,6 +721,19 @@ extern int	tdc_tin_grid_start(tdc_tin *tin, const tdc_interp_spec *spec,
  */
 extern int	tdc_tin_contours_start(tdc_tin *tin, double interval, double base,
 								   char *err, size_t errlen);
+/*
+ * The same, on the triangles spec keeps (NULL: all of them): a line stops
+ * where it would enter a triangle with an edge longer than max_edge, so it
+ * is open there, as at the hull, and a ring around a hole opens.  spec
+ * must be "linear" with no option but max_edge (breaklines=false allowed):
+ * tdc_tin_contours_spec_check says so, or TDC_EINVAL with a message, for a
+ * host to check its method before building the TIN.
+ */
+extern int	tdc_tin_contours_start_spec(tdc_tin *tin, double interval, double base,
+										const tdc_interp_spec *spec, char *err,
+										size_t errlen);
+extern int	tdc_tin_contours_spec_check(const tdc_interp_spec *spec, char *err,
+										size_t errlen);
 /* After the contours: their count and total points. */
 extern size_t tdc_tin_contour_count(const tdc_tin *tin, size_t *points);
 /* Line i: its level, its *n points (x,y interleaved), whether closed. */
@@ -713,7 +754,12 @@ extern const double *tdc_tin_contour_line(const tdc_tin *tin, size_t i, double *
  * its x, y, z, whether it has a value and whether it lies in the hull, the
  * input vertex its segment starts at and its parameter t along that
  * segment (0 at the input vertex; for interpolating M), chain after chain.  Memory grows with the crossings
- * and is counted against max_memory.
+ * and is counted against max_memory.  With max_edge every vertex, input or
+ * crossing, has a value by the rule above (valid); and with linear, gap
+ * marks a vertex whose piece of line to the next output vertex has no
+ * value: it runs through a triangle with an edge longer than max_edge, or
+ * along an edge none of whose triangles is kept, though both its ends may
+ * lie on kept triangles.
  */
 typedef struct tdc_drape_vertex
 {
@@ -724,7 +770,8 @@ typedef struct tdc_drape_vertex
 	uint32_t	src;			/* input vertex (index into xy) */
 	uint8_t		valid;			/* 1: z is the method's value; 0: z = nodata */
 	uint8_t		inside;			/* 1: in the closed convex hull of the sites */
-	uint16_t	pad;
+	uint8_t		gap;			/* 1: max_edge drops the way to the next vertex */
+	uint8_t		pad;
 } tdc_drape_vertex;
 
 extern int	tdc_tin_drape_start(tdc_tin *tin, const tdc_interp_spec *spec,

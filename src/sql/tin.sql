@@ -1,7 +1,9 @@
 -- src/sql/tin.sql: TIN analysis, new in 1.1.0 (the ST_TDCContours and ST_TDCDrape
 -- aggregates; C side: src/pg/fn/fn_contours_agg.c, fn_drape_agg.c,
 -- src/pg/runtime/tin_run.c, and src/core/tin/tin*.c).
--- tdc_delaunay--1.0.0--1.1.0.sql holds the same objects.
+-- tdc_delaunay--1.0.0--1.1.0.sql holds the same objects but
+-- ST_TDCContours(geometry, float8, float8, text), new in 1.2.0
+-- (tdc_delaunay--1.1.0--1.2.0.sql).
 
 -- ST_TDCContours: contour lines of the TIN of all rows' vertices (heights from Z)
 
@@ -20,6 +22,14 @@ LANGUAGE C IMMUTABLE PARALLEL SAFE;
 
 COMMENT ON FUNCTION st_tdccontours_transfn(internal, geometry, float8, float8) IS
 'Internal: transition function of ST_TDCContours(geometry, float8, float8): collects the samples'' vertices with Z.';
+
+CREATE FUNCTION st_tdccontours_transfn(internal, geometry, float8, float8, text)
+RETURNS internal
+AS 'MODULE_PATHNAME', 'st_tdccontours_transfn'
+LANGUAGE C IMMUTABLE PARALLEL SAFE;
+
+COMMENT ON FUNCTION st_tdccontours_transfn(internal, geometry, float8, float8, text) IS
+'Internal: transition function of ST_TDCContours(geometry, float8, float8, text): collects the samples'' vertices with Z.';
 
 CREATE FUNCTION st_tdccontours_combinefn(internal, internal)
 RETURNS internal
@@ -86,6 +96,22 @@ CREATE AGGREGATE ST_TDCContours(geometry, float8, float8) (
 COMMENT ON AGGREGATE ST_TDCContours(geometry, float8, float8) IS
 'Contour lines at the levels base + k * interval of the TIN of the vertices of all input geometries (heights from Z), '
 'as one MULTILINESTRING Z; interval and base must be the same in every row.';
+
+CREATE AGGREGATE ST_TDCContours(geometry, float8, float8, text) (
+	SFUNC = st_tdccontours_transfn,
+	STYPE = internal,
+	FINALFUNC = st_tdccontours_finalfn,
+	COMBINEFUNC = st_tdccontours_combinefn,
+	SERIALFUNC = st_tdccontours_serialfn,
+	DESERIALFUNC = st_tdccontours_deserialfn,
+	PARALLEL = SAFE
+);
+
+COMMENT ON AGGREGATE ST_TDCContours(geometry, float8, float8, text) IS
+'Contour lines at the levels base + k * interval of the TIN of the vertices of all input geometries (heights from Z), '
+'as one MULTILINESTRING Z, on the triangles the method keeps: ''linear'' (all), or ''linear:max_edge=L'', which leaves '
+'out the triangles with an edge longer than L (lines stop where they begin); interval, base and method must be the '
+'same in every row.';
 
 -- ST_TDCDrape: a target geometry with Z from the TIN of all rows' vertices
 

@@ -53,10 +53,18 @@
  * twice), and the lines of a level are sorted by their points.  So the
  * lines are the same, bit for bit, for any thread count, level by level.
  *
+ * max_edge (tdc_tin_contours_start_spec): a first pass marks the triangles
+ * the mask drops (an edge longer than max_edge, tin_interp.c's exact
+ * rule), which then have no segment, and a line that would step into one
+ * stops on the edge between, as it stops on a hull edge: the kept region's
+ * boundary ends lines the way the hull does, and a ring around a hole
+ * opens there.  Without the option there is no pass and no mark to test.
+ *
  * Memory: 8 bytes of offset per triangle, 5 per segment (its place in the
- * level lists and its mark), the histograms (at most 16 M counters), and
- * the lines: 16 bytes a point, at most two points per segment, and 32 a
- * line, all charged against max_memory before they are taken.
+ * level lists and its mark), the histograms (at most 16 M counters), with
+ * max_edge one bit per triangle, and the lines: 16 bytes a point, at most
+ * two points per segment, and 32 a line, all charged against max_memory
+ * before they are taken.
  */
 #include <stdio.h>
 #include <string.h>
@@ -90,6 +98,8 @@ typedef struct contour_op
 {
 	double		interval,
 				base;
+	double		max_edge;		/* > 0: the mask's (tdc_interp_spec) */
+	uint64_t   *drop;			/* with max_edge: bit t set when triangle t is dropped */
 	int64_t		k0;				/* the lowest level any triangle crosses */
 	size_t		nlevels;
 	size_t		ntask;			/* triangle ranges */
@@ -142,6 +152,13 @@ k_not_above(const contour_op *op, double z)
 	return k_above(op, z) - 1;
 }
 
+/* Does max_edge drop triangle t (never without the option)? */
+static inline bool
+dropped(const contour_op *op, size_t t)
+{
+	return op->drop != NULL && ((op->drop[t >> 6] >> (t & 63)) & 1);
+}
+
 static inline void
 tri_levels(const tdc_tin *tin, const contour_op *op, size_t t, int64_t *klo, int64_t *khi)
 {
@@ -153,6 +170,13 @@ tri_levels(const tdc_tin *tin, const contour_op *op, size_t t, int64_t *klo, int
 				lo = fmin(za, fmin(zb, zc)),
 				hi = fmax(za, fmax(zb, zc));
 
+	if (dropped(op, t))
+	{
+		/* no level: no segment */
+		*klo = 1;
+		*khi = 0;
+		return;
+	}
 	*klo = k_above(op, lo);
 	*khi = k_not_above(op, hi);
 }
@@ -161,6 +185,24 @@ tri_levels(const tdc_tin *tin, const contour_op *op, size_t t, int64_t *klo, int
  *		counting
  * ----------------------------------------------------------------
  */
+
+/* max_edge: the range's dropped triangles (TRI_PER_TASK whole words). */
+static void
+drop_task(void *arg, size_t r, int worker)
+{
+	tdc_tin    *tin = arg;
+	contour_op *op = tin->op_state;
+	size_t		lo = r * TRI_PER_TASK,
+				hi = lo + TRI_PER_TASK < tin->ntri ? lo + TRI_PER_TASK : tin->ntri;
+
+	if (tin_cancelled(tin))
+		return;
+	memset(op->drop + lo / 64, 0, (hi - lo + 63) / 64 * sizeof(uint64_t));
+	for (size_t t = lo; t < hi; t++)
+		if (!tin_face_kept(tin, tin->tri_he[t], op->max_edge))
+			op->drop[t >> 6] |= (uint64_t) 1 << (t & 63);
+}
+
 static void
 count_task(void *arg, size_t r, int worker)
 {
@@ -452,7 +494,7 @@ trace(tdc_tin *tin, contour_op *op, level_out *o, size_t t0, int64_t k)
 		if (!out_point(tin, o, p))
 			return false;
 		next = up ^ 1u;
-		if (tin_outer(tin, next))
+		if (tin_outer(tin, next) || dropped(op, tin->he_tri[next]))
 			break;
 		t = tin->he_tri[next];
 		if (t == t0)
@@ -469,7 +511,7 @@ trace(tdc_tin *tin, contour_op *op, level_out *o, size_t t0, int64_t k)
 		/* backward from t0, then [forward, backward] turned into [backward reversed, forward] */
 		back_from = o->n;
 		tri_edges(tin, t0, L, &down, &up);
-		while (!tin_outer(tin, down ^ 1u))
+		while (!tin_outer(tin, down ^ 1u) && !dropped(op, tin->he_tri[down ^ 1u]))
 		{
 			t = tin->he_tri[down ^ 1u];
 			*mark_of(tin, op, t, k) = 1;
@@ -564,11 +606,13 @@ free_fixed(tdc_tin *tin, contour_op *op)
 	tdc_big_free(tin->cache, op->off);
 	tdc_big_free(tin->cache, op->list);
 	tdc_big_free(tin->cache, op->mark);
+	free(op->drop);
 	free(op->hist);
 	free(op->lev_start);
 	op->off = NULL;
 	op->list = NULL;
 	op->mark = NULL;
+	op->drop = NULL;
 	op->hist = NULL;
 	op->lev_start = NULL;
 }
@@ -613,6 +657,21 @@ contour_run(tdc_tin *tin)
 		return TDC_EINVAL;
 	}
 	op->nlevels = (size_t) (k1 - op->k0 + 1);
+
+	/* the triangles max_edge drops, before anything counts their segments */
+	if (op->max_edge > 0)
+	{
+		need = (tin->ntri + 63) / 64 * sizeof(uint64_t);
+		if (!tin_charge(tin, need, "the contours' dropped triangles"))
+			return TDC_EMEMLIMIT;
+		op->charged += need;
+		op->drop = malloc(need);
+		if (op->drop == NULL)
+			goto oom;
+		tdc_pool_for(tin_pool(tin), nr, drop_task, tin);
+		if (tin_cancelled(tin))
+			return TDC_ECANCELED;
+	}
 
 	/* segments per triangle, then their offsets */
 	need = (tin->ntri + nr + 1) * sizeof(uint64_t);
@@ -705,8 +764,13 @@ contour_run(tdc_tin *tin)
 		{
 			level_out  *o = &op->out[l];
 
-			/* a level's lines in the order of their points, not of the mesh's numbering */
-			qsort_r(o->lines, o->nlines, sizeof(contour_line), cmp_line, o);
+			/*
+			 * a level's lines in the order of their points, not of the
+			 * mesh's numbering (a level may have none: max_edge dropped its
+			 * triangles, or a peak at the level; then no array either)
+			 */
+			if (o->nlines > 1)
+				qsort_r(o->lines, o->nlines, sizeof(contour_line), cmp_line, o);
 			for (size_t i = 0; i < o->nlines; i++)
 			{
 				contour_line *ln = &o->lines[i];
@@ -760,8 +824,39 @@ contour_free(tdc_tin *tin)
 int
 tdc_tin_contours_start(tdc_tin *tin, double interval, double base, char *err, size_t errlen)
 {
-	contour_op *op;
+	return tdc_tin_contours_start_spec(tin, interval, base, NULL, err, errlen);
+}
 
+int
+tdc_tin_contours_spec_check(const tdc_interp_spec *spec, char *err, size_t errlen)
+{
+#define FAIL(code, ...) do { if (err && errlen) snprintf(err, errlen, __VA_ARGS__); return (code); } while (0)
+	if (spec == NULL)
+		return TDC_OK;
+	if (spec->method != TDC_INTERP_LINEAR)
+		FAIL(TDC_EINVAL, "contour lines are those of the linear surface: the method must be linear, not %s",
+			 spec->method == TDC_INTERP_NEAREST ? "nearest" :
+			 spec->method == TDC_INTERP_NATURAL ? "natural_neighbor" : "an unknown one");
+	if (spec->breaklines)
+		FAIL(TDC_EINVAL, "contour lines take the Delaunay TIN: the option breaklines is not taken here");
+	if (spec->options & ~(TDC_INTERP_OPT_MAX_EDGE | TDC_INTERP_OPT_BREAKLINES))
+		FAIL(TDC_EINVAL, "contour lines take only the option max_edge: %s concerns values outside the triangles",
+			 (spec->options & TDC_INTERP_OPT_RADIUS) ? "radius" : "nodata");
+	if (!(spec->max_edge >= 0))
+		FAIL(TDC_EINVAL, "max_edge must be a length > 0, or 0 for none");
+	return TDC_OK;
+#undef FAIL
+}
+
+int
+tdc_tin_contours_start_spec(tdc_tin *tin, double interval, double base,
+							const tdc_interp_spec *spec, char *err, size_t errlen)
+{
+	contour_op *op;
+	int			rc = tdc_tin_contours_spec_check(spec, err, errlen);
+
+	if (rc != TDC_OK)
+		return rc;
 #define FAIL(code, ...) do { if (err && errlen) snprintf(err, errlen, __VA_ARGS__); return (code); } while (0)
 	if (!(interval > 0) || !isfinite(interval))
 		FAIL(TDC_EINVAL, "the contour interval must be a finite number > 0, not %g", interval);
@@ -772,6 +867,7 @@ tdc_tin_contours_start(tdc_tin *tin, double interval, double base, char *err, si
 		FAIL(TDC_ENOMEM, "out of memory");
 	op->interval = interval;
 	op->base = base;
+	op->max_edge = spec != NULL ? spec->max_edge : 0;
 	if (tin->built && tin->nsites > 0 && tin->ntri > 0)
 	{
 		/*

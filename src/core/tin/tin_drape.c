@@ -35,6 +35,14 @@
  * both inside the hull gets no crossing; its ends get what the method gives
  * them outside (the host decides whether that is an error).
  *
+ * max_edge.  Every vertex gets its value by the mask's rule (tin_interp.c):
+ * an input vertex through tin_value_at, a crossing of an edge when the edge
+ * is kept from one side, a site always.  The pieces between them matter
+ * too, since the draped line is linear across the triangle it passes: a
+ * piece through a dropped triangle, or along an edge no kept triangle
+ * holds, has no value though both its ends may, and the vertex it starts
+ * from is marked (gap).  Without the option the walk tests nothing.
+ *
  * The input vertices are shared out among the pool's threads in ranges of
  * 4096, whatever chains they belong to (a long line is cut into several
  * ranges); each range writes its own list, charged against max_memory as
@@ -81,6 +89,7 @@ typedef struct walker
 			   *q;
 	uint32_t	src;
 	size_t		steps;
+	double		max_edge;		/* > 0: mark pieces and crossings it drops */
 } walker;
 
 static inline size_t
@@ -119,6 +128,7 @@ push(walker *w, double x, double y, double z, double t, int valid, bool inside)
 	o->v[o->n].src = w->src;
 	o->v[o->n].valid = (uint8_t) valid;
 	o->v[o->n].inside = inside;
+	o->v[o->n].gap = 0;
 	o->v[o->n].pad = 0;
 	o->n++;
 	return true;
@@ -137,6 +147,22 @@ clamp01(double u)
 	return !(u > 0) ? 0 : u > 1 ? 1 : u;
 }
 
+/* max_edge: the piece from the last vertex pushed on has no value. */
+static inline void
+mark_gap(walker *w)
+{
+	w->out->v[w->out->n - 1].gap = 1;
+}
+
+/* max_edge: is a point strictly inside the edge h (of a triangle) kept? */
+static bool
+edge_kept(const walker *w, uint32_t h)
+{
+	tin_loc		l = {LOC_EDGE, h, tin_org(w->tin, h), tin_dest(w->tin, h)};
+
+	return tin_loc_kept(w->tin, &l, w->max_edge);
+}
+
 /* Site v as a crossing of p -> q. */
 static bool
 push_site(walker *w, uint32_t v)
@@ -151,19 +177,22 @@ push_site(walker *w, uint32_t v)
 	return push(w, pv[0], pv[1], w->tin->sz[v], clamp01(t), 1, true);
 }
 
-/* The proper crossing of p -> q with edge x-y. */
+/* The proper crossing of p -> q with edge h (x-y). */
 static bool
-push_crossing(walker *w, uint32_t x, uint32_t y)
+push_crossing(walker *w, uint32_t h)
 {
 	const tdc_tin *tin = w->tin;
 	const double *a,
 			   *b;
+	uint32_t	x = tin_org(tin, h),
+				y = tin_dest(tin, h);
 	double		oa,
 				ob,
 				u,
 				sp,
 				sq,
 				t;
+	int			valid = w->max_edge > 0 ? edge_kept(w, h) : 1;
 
 	if (tdc_lex_less(tin_pt(tin, y), tin_pt(tin, x)))
 	{
@@ -181,7 +210,7 @@ push_crossing(walker *w, uint32_t x, uint32_t y)
 	sq = area(a, b, w->q);
 	t = clamp01(sp / (sp - sq));
 	return push(w, a[0] + u * (b[0] - a[0]), a[1] + u * (b[1] - a[1]),
-				tin->sz[x] + u * (tin->sz[y] - tin->sz[x]), t, 1, true);
+				tin->sz[x] + u * (tin->sz[y] - tin->sz[x]), t, valid, true);
 }
 
 /* Is w ahead of v on the line p -> q (both on it)? */
@@ -235,6 +264,9 @@ walk_face(walker *w, uint32_t h)
 		double		s[3];
 		bool		moved = false;
 
+		/* the segment runs through this triangle's interior */
+		if (w->max_edge > 0 && !tin_face_kept(tin, h, w->max_edge))
+			mark_gap(w);
 		if (q_in_face(tin, h, w->q))
 			return true;
 		e[0] = h;
@@ -252,7 +284,7 @@ walk_face(walker *w, uint32_t h)
 
 			if (s[k] < 0 && s[n] > 0)
 			{
-				if (!push_crossing(w, v[k], v[n]))
+				if (!push_crossing(w, e[k]))
 					return false;
 				h = e[k] ^ 1u;
 				moved = true;
@@ -315,6 +347,9 @@ walk_vertex(walker *w, uint32_t v)
 		{
 			const double *pw = tin_pt(tin, next_v);
 
+			/* along the edge h = v -> next_v */
+			if (w->max_edge > 0 && !edge_kept(w, h))
+				mark_gap(w);
 			/* q on the edge, or at its end: the segment ends there */
 			if (!ahead(w, pw, w->q))
 				return true;
@@ -326,10 +361,12 @@ walk_vertex(walker *w, uint32_t v)
 		{
 			uint32_t	wx = tin_lnext(tin, face);	/* the edge w -> x facing v */
 
+			if (w->max_edge > 0 && !tin_face_kept(tin, face, w->max_edge))
+				mark_gap(w);
 			if (tdc_orient2d(tin_pt(tin, tin_org(tin, wx)), tin_pt(tin, tin_dest(tin, wx)),
 							 w->q) >= 0)
 				return true;	/* q in the triangle */
-			if (!push_crossing(w, tin_org(tin, wx), tin_dest(tin, wx)))
+			if (!push_crossing(w, wx))
 				return false;
 			return walk_face(w, wx ^ 1u);
 		}
@@ -340,21 +377,55 @@ walk_vertex(walker *w, uint32_t v)
 	}
 }
 
+/*
+ * Collinear sites, max_edge: is the piece a-b of the line (no site strictly
+ * between) on a segment between neighbouring sites longer than it?  The
+ * segment starts at the last site not after the piece's first end.
+ */
+static bool
+line_piece_long(const walker *w, const double *a, const double *b)
+{
+	const tdc_tin *tin = w->tin;
+	const double *m = tdc_lex_less(a, b) ? a : b;
+	size_t		lo = 0,
+				hi = tin->nline - 1;
+
+	while (lo < hi)
+	{
+		size_t		mid = lo + (hi - lo + 1) / 2;
+
+		if (tdc_lex_less(m, tin_pt(tin, tin->line[mid])))
+			hi = mid - 1;
+		else
+			lo = mid;
+	}
+	return lo + 1 < tin->nline && tin_edge_long(tin, tin->line[lo], tin->line[lo + 1], w->max_edge);
+}
+
 /* Collinear sites: the sites strictly between p and q. */
 static bool
 walk_line(walker *w)
 {
 	const tdc_tin *tin = w->tin;
 	bool		fwd = tdc_lex_less(w->p, w->q);
+	const double *from = w->p;
 
 	for (size_t k = 0; k < tin->nline; k++)
 	{
 		size_t		i = fwd ? k : tin->nline - 1 - k;
 		const double *s = tin_pt(tin, tin->line[i]);
 
-		if (ahead(w, w->p, s) && ahead(w, s, w->q) && !push_site(w, tin->line[i]))
-			return false;
+		if (ahead(w, w->p, s) && ahead(w, s, w->q))
+		{
+			if (w->max_edge > 0 && line_piece_long(w, from, s))
+				mark_gap(w);
+			if (!push_site(w, tin->line[i]))
+				return false;
+			from = s;
+		}
 	}
+	if (w->max_edge > 0 && line_piece_long(w, from, w->q))
+		mark_gap(w);
 	return true;
 }
 
@@ -385,6 +456,8 @@ walk_segment(walker *w, const tin_loc *lp)
 					/* along the edge: to its end ahead, unless q comes first */
 					uint32_t	e = ahead(w, a, b) ? lp->b : lp->a;
 
+					if (w->max_edge > 0 && !tin_loc_kept(tin, lp, w->max_edge))
+						mark_gap(w);
 					if (!ahead(w, tin_pt(tin, e), w->q))
 						return true;
 					if (!push_site(w, e))
@@ -416,7 +489,7 @@ drape_task(void *arg, size_t k, int worker)
 	tdc_tin    *tin = arg;
 	drape_op   *op = tin->op_state;
 	tin_scratch *sc = &op->scratch[worker];
-	walker		w = {tin, &op->lists[k], NULL, NULL, 0, 0};
+	walker		w = {tin, &op->lists[k], NULL, NULL, 0, 0, op->spec.max_edge};
 	uint32_t	hint = TDC_NIL;
 	size_t		nv = op->nchains > 0 ? op->chain_end[op->nchains - 1] : 0,
 				lo = k * VERTICES_PER_TASK,

@@ -243,6 +243,14 @@ extern int	tin_natural(const tdc_tin *tin, tin_scratch *sc, const double *q,
 extern int	tin_value_at(const tdc_tin *tin, const tdc_interp_spec *spec,
 						 tin_scratch *sc, const double *q, uint32_t *hint,
 						 double *z, tin_loc *where);
+/*
+ * tin_interp.c, max_edge (> 0): is edge a-b longer, exactly?  Does it keep
+ * the triangle left of h?  Does it keep a triangle whose closure holds the
+ * point located at lp (LOC_FACE or LOC_EDGE)?
+ */
+extern bool tin_edge_long(const tdc_tin *tin, uint32_t a, uint32_t b, double max_edge);
+extern bool tin_face_kept(const tdc_tin *tin, uint32_t h, double max_edge);
+extern bool tin_loc_kept(const tdc_tin *tin, const tin_loc *lp, double max_edge);
 /* tin_interp.c: can spec run on tin (false with err)? */
 extern bool tin_spec_ok(const tdc_tin *tin, const tdc_interp_spec *spec, char *err,
 						size_t errlen);

@@ -28,6 +28,22 @@
  * option silently ignored.  On a constrained TIN natural neighbour is
  * refused at the operation's start (tin_spec_ok).
  *
+ * max_edge.  Not GDAL's either: LAStools' blast2dem and others leave out
+ * the triangles with an edge longer than a limit, so that a lake or a
+ * building with no return inside is nodata instead of long facets across
+ * it.  Any method takes it, as a mask over the TIN's triangles: where the
+ * mask keeps a point the value is the method's, from all the samples; a
+ * point strictly inside a dropped triangle has none.  A point on an edge
+ * or at a site lies in several closed triangles; the rule a GIS user
+ * expects is that a hole is nodata and a measurement is not lost, so a
+ * point has a value when some triangle containing it is kept, and a site
+ * always has its own height (an isolated sample in a lake keeps it).  An
+ * edge is long when its squared length in the (x, y) plane exceeds
+ * max_edge^2, exactly (tin_edge_long), so an edge exactly max_edge long is
+ * kept and the mask is the same on every machine.  The hull and the radius
+ * rule outside it do not change.  The check runs only with the option, on
+ * a located point, and costs three to six exact distance comparisons.
+ *
  * Many points.  A list of points is cut into chunks, a grid into rows,
  * shared out among the pool's threads; each walks from the triangle of its
  * previous point, which for a grid is the neighbouring pixel's, so the walk
@@ -148,6 +164,7 @@ tdc_interp_parse(const char *text, tdc_interp_spec *spec, char *err, size_t errl
 			if (!parse_bool(eq + 1, vlen, &spec->breaklines))
 				FAIL("option \"breaklines\": \"%.*s\" is not a boolean (true or false)",
 					 (int) (vlen < 64 ? vlen : 64), eq + 1);
+			spec->options |= TDC_INTERP_OPT_BREAKLINES;
 			continue;
 		}
 		if (!parse_number(eq + 1, olen - (size_t) (eq + 1 - opt), &v))
@@ -157,6 +174,14 @@ tdc_interp_parse(const char *text, tdc_interp_spec *spec, char *err, size_t errl
 #define IS(name) ((size_t) (eq - opt) == strlen(name) && strncasecmp(opt, name, strlen(name)) == 0)
 		if (IS("nodata"))
 			spec->nodata = v;
+		else if (IS("max_edge"))
+		{
+			if (!(v > 0))
+				FAIL("option \"max_edge\" must be a length > 0, not %g", v);
+			spec->max_edge = v;
+			spec->options |= TDC_INTERP_OPT_MAX_EDGE;
+			continue;
+		}
 		else if (!nearest && IS("radius"))
 			spec->radius = v;
 		else if (nearest && IS("radius"))
@@ -170,8 +195,10 @@ tdc_interp_parse(const char *text, tdc_interp_spec *spec, char *err, size_t errl
 		else
 			FAIL("unknown option \"%.*s\" of %s (%s)", (int) (eq - opt), opt,
 				 nearest ? "nearest" : spec->method == TDC_INTERP_LINEAR ? "linear" : "natural_neighbor",
-				 nearest ? "radius1, radius2, radius, angle, nodata" :
-				 spec->method == TDC_INTERP_LINEAR ? "radius, nodata, breaklines" : "radius, nodata");
+				 nearest ? "radius1, radius2, radius, angle, nodata, max_edge" :
+				 spec->method == TDC_INTERP_LINEAR ? "radius, nodata, breaklines, max_edge" :
+				 "radius, nodata, max_edge");
+		spec->options |= IS("nodata") ? TDC_INTERP_OPT_NODATA : TDC_INTERP_OPT_RADIUS;
 #undef IS
 	}
 	if (nearest)
@@ -191,6 +218,16 @@ tdc_interp_parse(const char *text, tdc_interp_spec *spec, char *err, size_t errl
 	/* below the exact comparison's range: the smallest in it */
 	if (spec->radius > 0 && spec->radius < 0x1p-252)
 		spec->radius = 0x1p-252;
+	/*
+	 * max_edge the same way: beyond 2^201 no edge between coordinates of
+	 * magnitude at most TDC_COORD_MAX (< 2^200) is longer, so none; below
+	 * 2^-252 every edge is (a nonzero difference of such coordinates is at
+	 * least 2^-251), as with the smallest length in the exact range.
+	 */
+	if (spec->max_edge > 0x1p201)
+		spec->max_edge = 0;
+	if (spec->max_edge > 0 && spec->max_edge < 0x1p-252)
+		spec->max_edge = 0x1p-252;
 	return TDC_OK;
 #undef FAIL
 }
@@ -219,6 +256,61 @@ within_radius(const tdc_tin *tin, const tdc_interp_spec *spec, const double *q, 
 	if (spec->radius == 0)
 		return false;
 	return tdc_sqdist_cmp(q, tin_pt(tin, s), r, o) <= 0;
+}
+
+/*
+ * max_edge.  An edge is long when its squared length exceeds max_edge^2,
+ * decided exactly by tdc_sqdist_cmp against the segment (0, 0)-(max_edge,
+ * 0), as within_radius decides the radius: the same on every machine, and
+ * the same from both triangles beside the edge (the difference of its ends
+ * is negated, exactly, from the other side).
+ */
+bool
+tin_edge_long(const tdc_tin *tin, uint32_t a, uint32_t b, double max_edge)
+{
+	double		l[2] = {max_edge, 0},
+				o[2] = {0, 0};
+
+	return tdc_sqdist_cmp(tin_pt(tin, a), tin_pt(tin, b), l, o) > 0;
+}
+
+/* Does max_edge keep the triangle left of h (no edge of it longer)? */
+bool
+tin_face_kept(const tdc_tin *tin, uint32_t h, double max_edge)
+{
+	for (int k = 0; k < 3; k++, h = tin_lnext(tin, h))
+		if (tin_edge_long(tin, tin_org(tin, h), tin_dest(tin, h), max_edge))
+			return false;
+	return true;
+}
+
+/*
+ * Does max_edge keep some triangle whose closure holds the point located
+ * at lp, strictly inside a triangle or an edge?  An edge: it must not be
+ * long itself, and one of the triangles beside it must keep its two other
+ * edges; a segment between collinear sites (h NIL) stands alone.
+ */
+bool
+tin_loc_kept(const tdc_tin *tin, const tin_loc *lp, double max_edge)
+{
+	uint32_t	h = lp->h;
+
+	if (lp->kind == LOC_FACE)
+		return tin_face_kept(tin, h, max_edge);
+	if (tin_edge_long(tin, lp->a, lp->b, max_edge))
+		return false;
+	if (h == TDC_NIL)
+		return true;
+	for (int side = 0; side < 2; side++, h ^= 1u)
+	{
+		uint32_t	h1 = tin_lnext(tin, h);
+
+		if (!tin_outer(tin, h) &&
+			!tin_edge_long(tin, tin_org(tin, h1), tin_dest(tin, h1), max_edge) &&
+			!tin_edge_long(tin, tin_dest(tin, h1), tin_dest(tin, tin_lnext(tin, h1)), max_edge))
+			return true;
+	}
+	return false;
 }
 
 /*
@@ -252,8 +344,11 @@ tin_value_at(const tdc_tin *tin, const tdc_interp_spec *spec, tin_scratch *sc,
 		case LOC_OUTSIDE:
 			if (spec->method != TDC_INTERP_NEAREST && spec->radius == 0)
 				return 0;
-			/* fall through */
+			break;
 		default:
+			/* strictly inside a triangle or an edge: max_edge may drop it */
+			if (spec->max_edge > 0 && !tin_loc_kept(tin, lp, spec->max_edge))
+				return 0;
 			break;
 	}
 	if (spec->method == TDC_INTERP_NEAREST || lp->kind == LOC_OUTSIDE)
@@ -458,7 +553,7 @@ bool
 tin_spec_ok(const tdc_tin *tin, const tdc_interp_spec *spec, char *err, size_t errlen)
 {
 	if (spec == NULL || spec->method < TDC_INTERP_LINEAR || spec->method > TDC_INTERP_NATURAL ||
-		isnan(spec->radius))
+		isnan(spec->radius) || !(spec->max_edge >= 0))
 	{
 		if (err && errlen)
 			snprintf(err, errlen, "bad interpolation method");

@@ -3,34 +3,46 @@
  *		The ST_TDCContours aggregates: contour lines of the TIN of all rows'
  *		vertices, at the levels base + k * interval, as one MULTILINESTRING Z.
  *
+ * ST_TDCContours(geom, interval, base, method) (1.2.0) draws them on the
+ * triangles the method keeps: 'linear', or 'linear:max_edge=L', which
+ * drops the triangles with an edge longer than L (tdc.h), so that a lake
+ * or a building with no sample inside gets no contour across it: a line
+ * stops where it would enter such a triangle.  The one method parser
+ * (tdc_interp_parse) reads it, as for ST_TDCDrape and the raster
+ * functions, and tdc_tin_contours_spec_check refuses other methods and
+ * options (nothing else concerns contours).
+ *
  * The state is the samples every TIN aggregate keeps (tin_agg.c), plus the
- * interval and the base, which must be the same in every row.  Rows
- * whose geometry, interval or base is NULL are skipped; an EMPTY sample is
- * skipped too.  Under a parallel plan a worker's state travels in the
- * Delaunay state's serialized form under magic "TCN1", followed by
+ * interval, the base and max_edge (0 without the method or the option),
+ * which must be the same in every row.  Rows whose geometry, interval,
+ * base or method is NULL are skipped; an EMPTY sample is skipped too.
+ * Under a parallel plan a worker's state travels in the Delaunay state's
+ * serialized form under magic "TCN1", version 2, followed by
  *
  *		uint32 params_set (0 or 1), uint32 zero, float8 interval,
- *		float8 base, int64 rows
+ *		float8 base, int64 rows, float8 max_edge (finite, >= 0)
  *
  * The lines are the core's (tin_contour.c: merged into maximal lines,
- * closed where they do not end on the hull, a level at a sample's height
- * counted once), written by gser_contour.c with the samples' SRID.
+ * closed where they do not end on the hull or on a dropped triangle, a
+ * level at a sample's height counted once), written by gser_contour.c with
+ * the samples' SRID.
  */
 #include "postgres.h"
 
 #include <math.h>
 
 #include "fmgr.h"
+#include "utils/builtins.h"
 #include "utils/memutils.h"
 
 #include "tdc_pg.h"
 
 #define CONTOUR_NAME		"ST_TDCContours"
-#define CONTOUR_EXTRA		32
+#define CONTOUR_EXTRA		40
 
 static const TdcStateFormat contour_format = {
 	0x314e4354,					/* "TCN1" little-endian */
-	1, CONTOUR_NAME,
+	2, CONTOUR_NAME,
 	"Disable parallel aggregation for this query (SET max_parallel_workers_per_gather = 0).",
 	-1
 };
@@ -40,6 +52,7 @@ typedef struct ContourState
 	TdcTinAgg	s;				/* the samples (tin_agg.c) */
 	double		interval;
 	double		level0;			/* the base level */
+	double		max_edge;		/* the method's, 0: none */
 } ContourState;
 
 static ContourState *
@@ -61,14 +74,33 @@ check_levels(double interval, double base)
 				 errmsg("%s: base must be a finite number, not %g", CONTOUR_NAME, base)));
 }
 
+/* The method: 'linear' with max_edge only; its max_edge (0: none). */
+static double
+contour_method(const char *method)
+{
+	tdc_interp_spec spec;
+	char		err[256];
+
+	err[0] = '\0';
+	if (tdc_interp_parse(method, &spec, err, sizeof(err)) != TDC_OK ||
+		tdc_tin_contours_spec_check(&spec, err, sizeof(err)) != TDC_OK)
+		ereport(ERROR,
+				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
+				 errmsg("%s: invalid method \"%s\"", CONTOUR_NAME, method),
+				 err[0] ? errdetail("%s.", err) : 0,
+				 errhint("Use 'linear', or 'linear:max_edge=L' to leave out the triangles with an edge longer than L.")));
+	return spec.max_edge;
+}
+
 static void
-contour_params(ContourState *st, double interval, double base)
+contour_params(ContourState *st, double interval, double base, double max_edge)
 {
 	if (!st->s.params_set)
 	{
 		st->s.params_set = true;
 		st->interval = interval;
 		st->level0 = base;
+		st->max_edge = max_edge;
 		return;
 	}
 	if (st->interval != interval || st->level0 != base)
@@ -76,12 +108,17 @@ contour_params(ContourState *st, double interval, double base)
 				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
 				 errmsg("%s: interval and base must be the same for all rows (%g, %g versus %g, %g)",
 						CONTOUR_NAME, st->interval, st->level0, interval, base)));
+	if (st->max_edge != max_edge)
+		ereport(ERROR,
+				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
+				 errmsg("%s: the method must be the same for all rows (max_edge %g versus %g)",
+						CONTOUR_NAME, st->max_edge, max_edge)));
 }
 
 PG_FUNCTION_INFO_V1(st_tdccontours_transfn);
 
 /*
- * st_tdccontours_transfn(internal, geometry, float8 [, float8])
+ * st_tdccontours_transfn(internal, geometry, float8 [, float8 [, text]])
  */
 Datum
 st_tdccontours_transfn(PG_FUNCTION_ARGS)
@@ -89,10 +126,12 @@ st_tdccontours_transfn(PG_FUNCTION_ARGS)
 	MemoryContext aggcxt = tdc_agg_context(fcinfo, "st_tdccontours_transfn");
 	ContourState *st = PG_ARGISNULL(0) ? NULL : (ContourState *) PG_GETARG_POINTER(0);
 	double		interval,
-				base = 0;
+				base = 0,
+				max_edge = 0;
 
 	tdc_signal_guard();
-	if (PG_ARGISNULL(1) || PG_ARGISNULL(2) || (PG_NARGS() > 3 && PG_ARGISNULL(3)))
+	if (PG_ARGISNULL(1) || PG_ARGISNULL(2) || (PG_NARGS() > 3 && PG_ARGISNULL(3)) ||
+		(PG_NARGS() > 4 && PG_ARGISNULL(4)))
 	{
 		if (st == NULL)
 			PG_RETURN_NULL();
@@ -102,9 +141,11 @@ st_tdccontours_transfn(PG_FUNCTION_ARGS)
 	if (PG_NARGS() > 3)
 		base = PG_GETARG_FLOAT8(3);
 	check_levels(interval, base);
+	if (PG_NARGS() > 4)
+		max_edge = contour_method(text_to_cstring(PG_GETARG_TEXT_PP(4)));
 	if (st == NULL)
 		st = contour_state_new(aggcxt);
-	contour_params(st, interval, base);
+	contour_params(st, interval, base, max_edge);
 	tdc_tin_agg_add(&st->s, PG_GETARG_DATUM(1), CONTOUR_NAME);
 	PG_RETURN_POINTER(st);
 }
@@ -114,10 +155,10 @@ contour_combine_params(TdcTinAgg *dst, const TdcTinAgg *src, MemoryContext cxt)
 {
 	const ContourState *b = (const ContourState *) src;
 
-	contour_params((ContourState *) dst, b->interval, b->level0);
+	contour_params((ContourState *) dst, b->interval, b->level0, b->max_edge);
 }
 
-/* The parameters: uint32 params_set, uint32 zero, interval, base, rows. */
+/* The parameters: uint32 params_set, uint32 zero, interval, base, rows, max_edge. */
 static Size
 contour_var_len(const TdcTinAgg *a)
 {
@@ -131,6 +172,7 @@ contour_write(const TdcTinAgg *a, char *extra)
 
 	memcpy(extra + 8, &st->interval, 8);
 	memcpy(extra + 16, &st->level0, 8);
+	memcpy(extra + 32, &st->max_edge, 8);
 }
 
 static Size
@@ -142,10 +184,13 @@ contour_read(TdcTinAgg *a, const char *extra, Size len)
 	memcpy(&zero, extra + 4, 4);
 	memcpy(&st->interval, extra + 8, 8);
 	memcpy(&st->level0, extra + 16, 8);
+	memcpy(&st->max_edge, extra + 32, 8);
 	if (zero != 0)
 		tdc_agg_state_corrupt(CONTOUR_NAME, "bad parameter flags");
 	if (st->s.params_set && (!(st->interval > 0) || isinf(st->interval) || !isfinite(st->level0)))
 		tdc_agg_state_corrupt(CONTOUR_NAME, "bad interval or base");
+	if (st->s.params_set && !(st->max_edge >= 0 && st->max_edge < INFINITY))
+		tdc_agg_state_corrupt(CONTOUR_NAME, "bad max_edge");
 	return CONTOUR_EXTRA;
 }
 
@@ -165,6 +210,7 @@ st_tdccontours_finalfn(PG_FUNCTION_ARGS)
 	ContourState *st;
 	TdcTinRun  *tr;
 	TdcPointBuf *pts;
+	tdc_interp_spec spec;
 	struct varlena *out;
 	char		err[256];
 	int			rc;
@@ -181,7 +227,10 @@ st_tdccontours_finalfn(PG_FUNCTION_ARGS)
 	pts = &st->s.base->pts;
 	tr = tdc_tin_run_start(pts, NULL, 0, CONTOUR_NAME);
 	err[0] = '\0';
-	rc = tdc_tin_contours_start(tr->tin, st->interval, st->level0, err, sizeof(err));
+	memset(&spec, 0, sizeof(spec));
+	spec.method = TDC_INTERP_LINEAR;
+	spec.max_edge = st->max_edge;
+	rc = tdc_tin_contours_start_spec(tr->tin, st->interval, st->level0, &spec, err, sizeof(err));
 	tdc_tin_run_wait(tr, rc, err, CONTOUR_NAME);
 	if (limit > 0)
 	{

@@ -16,7 +16,14 @@
  * GDAL options; it takes 'linear:breaklines=true', which makes the
  * samples' linestrings and polygon rings hard breaklines of the TIN
  * (tin_run.c), kept from the first row on beside the vertices and
- * combined with them.
+ * combined with them, and max_edge=L with any method, which drops the
+ * triangles with an edge longer than L (tdc.h) and extends the rule: a
+ * vertex where no kept triangle holds it (strictly inside a dropped one)
+ * is an ERROR naming it, like one outside the hull, and with 'linear' so
+ * is a segment running through a dropped triangle, naming the point where
+ * it enters it: the draped line would cross the hole on facets the option
+ * asked to leave out.  'nearest' and 'natural_neighbor' give heights at the
+ * vertices only, so only the vertices are checked there.
  *
  * The state is the samples every TIN aggregate keeps (tin_agg.c), plus the
  * method and the target, which must be the same in every row (a target
@@ -71,33 +78,25 @@ drape_state_new(MemoryContext cxt)
 	return (DrapeState *) tdc_tin_agg_new(cxt, sizeof(DrapeState), TDC_CURVES_STROKE);
 }
 
-/* Does the method have an option other than breaklines (GDAL's radius, nodata)? */
-static bool
-has_gdal_option(const char *method)
-{
-	for (const char *p = strchr(method, ':'); p != NULL; p = strchr(p + 1, ':'))
-		if (pg_strncasecmp(p + 1, "breaklines=", 11) != 0)
-			return true;
-	return false;
-}
-
 /*
  * The method, checked: a name of tdc_interp_parse's, with no option but
- * linear's breaklines.
+ * linear's breaklines and max_edge (not GDAL's radius or nodata).
  */
 static void
 check_method(const char *method, tdc_interp_spec *spec)
 {
 	char		err[256];
-	bool		gdal_option = strlen(method) <= METHOD_MAX && has_gdal_option(method);
+	bool		parsed,
+				gdal_option;
 
 	err[0] = '\0';
-	if (strlen(method) > METHOD_MAX || gdal_option ||
-		tdc_interp_parse(method, spec, err, sizeof(err)) != TDC_OK)
+	parsed = strlen(method) <= METHOD_MAX && tdc_interp_parse(method, spec, err, sizeof(err)) == TDC_OK;
+	gdal_option = parsed && (spec->options & (TDC_INTERP_OPT_RADIUS | TDC_INTERP_OPT_NODATA));
+	if (!parsed || gdal_option)
 		ereport(ERROR,
 				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
 				 errmsg("%s: invalid method \"%s\"", DRAPE_NAME, method),
-				 gdal_option ? errdetail("%s takes no options but linear's breaklines: every vertex of the target must lie in the samples' convex hull.",
+				 gdal_option ? errdetail("%s takes no options but linear's breaklines and max_edge: every vertex of the target must lie in the samples' convex hull.",
 										 DRAPE_NAME) : (err[0] ? errdetail("%s.", err) : 0),
 				 errhint("Use 'linear', 'linear:breaklines=true', 'nearest' or 'natural_neighbor'.")));
 	/*
@@ -266,6 +265,34 @@ static const TdcTinAggKind drape_kind = {
 /* st_tdcdrape_combinefn, _serialfn and _deserialfn */
 TDC_TIN_AGG_SUPPORT(st_tdcdrape, drape_kind);
 
+/*
+ * max_edge: every draped vertex must have a value, and with linear every
+ * piece between two of them (tdc_tin_drape_result's valid and gap): the
+ * first that has none is an ERROR naming where.
+ */
+static void
+drape_check_max_edge(const tdc_drape_vertex *v, size_t nv, double max_edge)
+{
+	for (size_t i = 0; i < nv; i++)
+	{
+		if (!v[i].valid)
+			ereport(ERROR,
+					(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
+					 errmsg("%s: %s (%.17g %.17g) of the target lies in no triangle that max_edge %g keeps",
+							DRAPE_NAME, v[i].t == 0 ? "vertex" : "point", v[i].x, v[i].y, max_edge),
+					 errdetail("Every triangle around it has an edge longer than %g.", max_edge),
+					 errhint("Raise max_edge, or clip the target to the kept triangles first.")));
+		if (v[i].gap)
+			ereport(ERROR,
+					(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
+					 errmsg("%s: the target runs from (%.17g %.17g) across a triangle that max_edge %g drops",
+							DRAPE_NAME, v[i].x, v[i].y, max_edge),
+					 errdetail("The triangle has an edge longer than %g: the draped line would cross it on the facets max_edge leaves out.",
+							   max_edge),
+					 errhint("Raise max_edge, or clip the target to the kept triangles first.")));
+	}
+}
+
 PG_FUNCTION_INFO_V1(st_tdcdrape_finalfn);
 
 Datum
@@ -315,6 +342,8 @@ st_tdcdrape_finalfn(PG_FUNCTION_ARGS)
 					 errmsg("%s: vertex (%.17g %.17g) of the target lies outside the convex hull of the %llu sample vertices",
 							DRAPE_NAME, v[i].x, v[i].y, (unsigned long long) pts->n),
 					 errhint("Clip the target to the samples' hull first, with ST_Intersection(target, ST_ConvexHull(ST_Collect(samples))).")));
+	if (spec.max_edge > 0)
+		drape_check_max_edge(v, nv, spec.max_edge);
 	if (limit > 0)
 	{
 		uint64		used = tdc_pointbuf_bytes(pts) + tr->run->engine_bytes +

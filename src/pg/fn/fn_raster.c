@@ -21,11 +21,15 @@
  * the triangulation as ST_TDCConstrainedDelaunay inserts its lines, so the
  * surface follows ridges and streams (crossing lines are an ERROR, curves
  * refused); nearest and natural_neighbor refuse it (tdc_interp_parse).
+ * Another, ':max_edge=L' with any method, drops the triangles with an edge
+ * longer than L (tdc.h): their pixels are empty, a lake or a roof with no
+ * sample stays a hole.
  *
  * The result band.  Its pixel type is the template band's; values are
  * stored as PostGIS's own raster functions store them (raster_write.c:
  * clamped, integers truncated).  It always has a nodata value, which
- * pixels without a value get (outside the hull beyond the method's radius):
+ * pixels without a value get (outside the hull beyond the method's radius,
+ * or in a triangle max_edge drops):
  *	1. the method's nodata option, when the text gives one;
  *	2. else the template band's nodata value, when it has one;
  *	3. else the method's default nodata, GDAL's 0.
@@ -84,7 +88,7 @@ tdc_raster_method(const char *method, tdc_interp_spec *spec, const char *fname)
 				 errmsg("%s: invalid method \"%s\"", fname, method),
 				 err[0] ? errdetail("%s.", err) : 0,
 				 errhint("Use GDAL's syntax: 'linear', 'nearest' or 'natural_neighbor', "
-						 "with options such as 'linear:radius=0:nodata=-9999'.")));
+						 "with options such as 'linear:radius=0:nodata=-9999' or 'linear:max_edge=50'.")));
 }
 
 /*
