@@ -23,9 +23,10 @@ MODULE_big = tdc_delaunay
 # The install script of this version is made from one file per feature, in
 # this order (the rule is below); older base scripts (0.1.0, 1.0.0 as it was
 # built from src/sql before tin.sql, and 1.1.0 as it was built before
-# ST_TDCContours took a method) and the upgrade scripts ship as they were
-# released, and test/release.sh checks that the library still has every C
-# function any of them names.
+# ST_TDCContours took a method and tdc_delaunay_tiled a tile column in one C
+# function) and the upgrade scripts ship as they were released, and
+# test/release.sh checks that the library still has every C function any of
+# them names.
 SQL_SRCS = $(addprefix src/sql/,header.sql delaunay.sql diagnostics.sql voronoi.sql \
 	tiled_internals.sql tiled.sql constrained.sql tin.sql version.sql)
 RASTER_SQL_SRCS = $(addprefix src/sql/,raster_header.sql raster.sql)

@@ -9,7 +9,11 @@
 #     that it runs in tiles (BENCH_TSQL_LIMITS: 40 MB for 1e6, 400 MB for 1e7)
 #     and with the default settings (one pass), beside the Dump, and at 1e6
 #     PostGIS's ST_DelaunayTriangles (at 1e7 its one GEOMETRYCOLLECTION would
-#     pass the 1 GB limit of a value);
+#     pass the 1 GB limit of a value); and with a tile column of 16 tiles
+#     (t, a 4 x 4 grid of squares of 250) under the same limit, its peak
+#     against the limit plus shared_buffers, and once its triangles against
+#     the Dump's (each as its vertices from the smallest, with
+#     multiplicity);
 #   clusters64 2e6: gen_points clusters64 2000000 42 (64 Gaussian clusters of
 #     widths 0.1 to 20), the procedure under 60 MB beside the Dump, and once
 #     the two targets' triangle sets compared (ST_Normalize, EXCEPT ALL).
@@ -69,7 +73,8 @@ for i in "${!SIZES[@]}"; do
 	n=$(n_of "${SIZES[$i]}")
 	log "loading $n uniform points"
 	q -c "SELECT setseed(0.5);
-		CREATE TABLE u_$i AS SELECT ST_MakePoint(random() * 1000, random() * 1000) AS geom FROM generate_series(1, $n);" \
+		CREATE TABLE u_$i AS SELECT geom, (floor(ST_X(geom) / 250) * 4 + floor(ST_Y(geom) / 250))::int AS t
+		  FROM (SELECT ST_MakePoint(random() * 1000, random() * 1000) AS geom FROM generate_series(1, $n)) s;" \
 		-c "VACUUM ANALYZE u_$i" >/dev/null
 done
 if [ -n "$CLU" ]; then
@@ -103,9 +108,10 @@ echo "kinds alternate, $REPS rounds; medians; ratio = procedure / CREATE TABLE A
 
 # case NAME TABLE LIMIT [postgis]: the rounds of one table
 bench_case() {
-	local name=$1 tab=$2 limit=$3 pg=${4:-} r kind stmt pre res
+	local name=$1 tab=$2 limit=$3 pg=${4:-} tilecol=${5:-} r kind stmt pre res
 	local kinds="dump tiled onepass"
 	[ -n "$pg" ] && kinds="$kinds postgis"
+	[ -n "$tilecol" ] && kinds="$kinds tilecol"
 	echo
 	echo "== $name ($(q -c "SELECT to_char(count(*), 'FM999,999,999') FROM $tab") points), procedure under tdc_delaunay.max_memory = $limit MB"
 	for r in $(seq 1 "$REPS"); do
@@ -117,11 +123,14 @@ bench_case() {
 				tiled) pre="SET tdc_delaunay.max_memory = $limit"
 					stmt="CALL tdc_delaunay_tiled('$tab', 'out_tiled')" ;;
 				onepass) stmt="CALL tdc_delaunay_tiled('$tab', 'out_onepass')" ;;
+				tilecol) pre="SET tdc_delaunay.max_memory = $limit"
+					stmt="CALL tdc_delaunay_tiled('$tab', 'out_tilecol', tile_column => 't')" ;;
 				postgis) stmt="CREATE TABLE out_postgis AS SELECT (ST_Dump(ST_DelaunayTriangles(ST_Collect(geom)))).geom FROM $tab" ;;
 			esac
 			res=$(run "$pre" "$stmt")
 			echo "$name,$kind,$r,${res% *},${res#* }" >> "$RUNS"
 			[ "$kind" = tiled ] && cp "$WORK/notice" "$WORK/notice_tiled"
+			[ "$kind" = tilecol ] && cp "$WORK/notice" "$WORK/notice_tilecol"
 		done
 	done
 	printf '%-26s %10s %10s %12s %10s\n' run wall_s peak_mb triangles ratio
@@ -137,6 +146,7 @@ bench_case() {
 			tiled) label="tdc_delaunay_tiled, tiles" ;;
 			onepass) label="tdc_delaunay_tiled, 1 pass" ;;
 			postgis) label="PostGIS (CTAS, ST_Dump)" ;;
+			tilecol) label="tdc_delaunay_tiled, column" ;;
 		esac
 		printf '%-26s %10.2f %10.1f %12s %9.2fx\n' "$label" "$med" "$peak" "$(thousands "$ntri")" \
 			"$(echo "$med / $dmed" | bc -l)"
@@ -146,12 +156,42 @@ bench_case() {
 		END { for (r in t) if (d[r] > 0) print t[r] / d[r] }' "$RUNS" | median | awk '{ printf "%.2fx", $1 }')"
 	echo "  the procedure's NOTICE (last run):"
 	sed 's/^/    /' "$WORK/notice_tiled"
+	[ -n "$tilecol" ] && tile_column_report "$name" "$tab" "$limit"
+	return 0
+}
+
+# The run with the tile column: its ratio, its peak against the limit plus
+# shared_buffers (VmHWM counts the shared buffers the backend touched), its
+# NOTICE, and its triangles against the Dump's: each triangle as its
+# vertices from the smallest on (both write them counter-clockwise), an
+# order-free fingerprint of the set (count, sum of hashes) on each side.
+tile_column_report() {
+	local name=$1 tab=$2 limit=$3 sb peak
+	echo "  median of the per-round ratios, tile column / Dump: $(awk -F, -v c="$name" '
+		$1 == c && $2 == "dump" { d[$3] = $4 } $1 == c && $2 == "tilecol" { t[$3] = $4 }
+		END { for (r in t) if (d[r] > 0) print t[r] / d[r] }' "$RUNS" | median | awk '{ printf "%.2fx", $1 }')"
+	sb=$(q -c "SELECT pg_size_bytes(current_setting('shared_buffers')) / 1048576")
+	peak=$(awk -F, -v c="$name" '$1 == c && $2 == "tilecol" { printf "%.1f\n", $5 / 1024 }' "$RUNS" | sort -n | tail -1)
+	echo "  tile column: highest peak of the rounds $peak MB; max_memory + shared_buffers = $limit + $sb MB:" \
+		"$(awk -v p="$peak" -v l="$((limit + sb))" 'BEGIN { print (p <= l ? "within" : "OVER") }')"
+	echo "  tile column: $(q -c "SELECT count(DISTINCT tile) FROM out_tilecol") tiles; the NOTICE (last run):"
+	sed 's/^/    /' "$WORK/notice_tilecol"
+	local key="CASE WHEN (x1, y1) <= (x2, y2) AND (x1, y1) <= (x3, y3) THEN ARRAY[x1, y1, x2, y2, x3, y3]
+					WHEN (x2, y2) <= (x3, y3) THEN ARRAY[x2, y2, x3, y3, x1, y1] ELSE ARRAY[x3, y3, x1, y1, x2, y2] END"
+	local corners="SELECT ST_X(ST_PointN(r, 1)) AS x1, ST_Y(ST_PointN(r, 1)) AS y1, ST_X(ST_PointN(r, 2)) AS x2,
+					ST_Y(ST_PointN(r, 2)) AS y2, ST_X(ST_PointN(r, 3)) AS x3, ST_Y(ST_PointN(r, 3)) AS y3
+				   FROM TABLE, ST_ExteriorRing(geom) r"
+	local fp="SELECT count(*) || ' ' || sum(hashtextextended(($key)::text, 0)::numeric) FROM ($corners) c"
+	local a b
+	a=$(q -c "${fp//TABLE/out_tilecol}")
+	b=$(q -c "${fp//TABLE/out_dump}")
+	echo "  tile column against the Dump (count, fingerprint): $a / $b: $([ "$a" = "$b" ] && echo same || echo DIFFER)"
 }
 
 for i in "${!SIZES[@]}"; do
 	pg=
 	[ "$(n_of "${SIZES[$i]}")" -le 1000000 ] && pg=postgis
-	bench_case "uniform ${SIZES[$i]}" "u_$i" "${LIMITS[$i]}" $pg
+	bench_case "uniform ${SIZES[$i]}" "u_$i" "${LIMITS[$i]}" "$pg" tilecol
 done
 if [ -n "$CLU" ]; then
 	bench_case "clusters64 $CLU" c "$CLIMIT"

@@ -64,7 +64,8 @@ tri_hash(const double *a, const double *b, const double *c)
 }
 
 static int
-emit_sum(void *arg, int tile, const double *q, const double *qz, const size_t *tri, size_t ntri)
+emit_sum(void *arg, int tile, const double *q, const double *qz, const int64_t *ql, const size_t *tri,
+		 size_t ntri)
 {
 	tri_sum    *s = arg;
 

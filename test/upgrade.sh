@@ -21,7 +21,10 @@
 #      ST_TDCContours with a method, max_edge) gives in the updated database
 #      what it gives in the fresh one;
 #   6. tdc_delaunay_raster installs on the updated database, and
-#      tdc_delaunay never created postgis_raster.
+#      tdc_delaunay never created postgis_raster;
+#   7. what 1.2.0 changed (tdc_delaunay_tiled with a tile column, in one C
+#      function) gives in the updated database what it gives in the fresh
+#      one.
 #
 #   PGHOST=... PGPORT=... PGUSER=... bash test/upgrade.sh
 # Needs a superuser (scripts/test.sh: its throw-away cluster); makes and
@@ -184,6 +187,20 @@ same "ST_TDCInterpolateRaster on the database updated from $FROM" "32BF 2" "$(q 
 	SELECT ST_BandPixelType(r), ST_Value(r, 1, 1, 1) FROM ST_TDCInterpolateRaster(
 		'MULTIPOINT Z (0 0 2, 10 0 2, 0 10 2)', 'linear',
 		ST_AddBand(ST_MakeEmptyRaster(5, 5, 0, 10, 2, -2, 0, 0, 0), '32BF'::text, 0::float8, -1::float8)) r")"
+
+# 1.2.0: a tile column labels the triangles of the one C function
+local tiled_probe="DROP TABLE IF EXISTS tcol, tcol_tri;
+	CREATE TABLE tcol AS
+		SELECT ST_MakePoint((i % 550) * 7919 % 1009 / 10.0, (i % 550) * 104729 % 997 / 10.0) AS geom,
+			   'tile ' || (i % 5) AS t
+		  FROM generate_series(1, 600) i;
+	CALL tdc_delaunay_tiled('tcol', 'tcol_tri', tile_column => 't');"
+local tiled_rows="SELECT tile, id >> 32, ST_AsText(ST_Normalize(geom)) FROM tcol_tri ORDER BY 1, 2, 3"
+q "$OLD" -c "SET client_min_messages = warning" -c "$tiled_probe" >/dev/null
+q "$NEW" -c "SET client_min_messages = warning" -c "$tiled_probe" >/dev/null
+same "tdc_delaunay_tiled with a tile column after the update from $FROM: as in a fresh install" \
+	"$(digest "$NEW" "$tiled_rows")" "$(digest "$OLD" "$tiled_rows")"
+same "... with its triangles" 1 "$(q "$NEW" -c "SELECT (count(*) > 1000)::int FROM tcol_tri")"
 }
 
 for from in "${FROMS[@]}"; do

@@ -26,11 +26,13 @@ typedef struct tiles_out
 } tiles_out;
 
 static int
-emit_text(void *arg, int tile, const double *q, const double *qz, const size_t *tri, size_t ntri)
+emit_text(void *arg, int tile, const double *q, const double *qz, const int64_t *ql,
+		  const size_t *tri, size_t ntri)
 {
 	FILE	   *out = ((tiles_out *) arg)->out;
 
 	(void) tile;
+	(void) ql;
 
 	for (size_t j = 0; out && j < ntri; j++)
 	{

@@ -224,6 +224,16 @@ extern size_t tdc_site_input(const tdc_job *job, uint32_t site);
 extern uint32_t tdc_input_site(const tdc_job *job, size_t i);
 
 /*
+ * label[] holds a label per input point (n of them): for every site, the
+ * least label among the input points that became that site goes to the
+ * slot of its first point, label[tdc_site_input(site)]; the other slots
+ * keep their own.  A site's copies may carry different labels (a tiled
+ * caller's tiles: the least owns the site).  Without a tolerance (a point
+ * a tolerance dropped is not counted); no allocation.
+ */
+extern void tdc_least_labels(const tdc_job *job, int64_t *label);
+
+/*
  * Iterate triangles: initialise it->pos = 0, then call until it returns 0.
  * v receives three site ids in counter-clockwise order.
  */
@@ -814,6 +824,8 @@ typedef struct tdc_bounded_params
 {
 	const char *xypath;			/* n x,y pairs of doubles, in this machine's byte order */
 	const char *zpath;			/* NULL, or n z doubles beside them (passed to emit) */
+	const char *lpath;			/* NULL, or n int64 labels beside them (passed to emit,
+								 * each site's least: tdc_least_labels) */
 	size_t		n;
 	const tdc_options *opt;		/* the engine's options; tolerance must be 0 */
 	size_t		limit;			/* bytes the caller's process may hold at its peak */
@@ -825,13 +837,14 @@ typedef struct tdc_bounded_params
 	/*
 	 * The triangles of final tile number tile (from 0, in the plan's
 	 * order, each tile at most once): ntri triangles, 3 indices each,
-	 * counter-clockwise, into q (x,y pairs) and qz (z, or NULL without
-	 * zpath), valid during the call.  Nonzero stops the run: a negative
-	 * TDC_ code is returned as it is, anything else as TDC_EINVAL.  NULL:
-	 * not emitted.
+	 * counter-clockwise, into q (x,y pairs), qz (z, or NULL without
+	 * zpath) and ql (NULL without lpath: for a vertex, the least label of
+	 * the input points at its coordinates), valid during the call.
+	 * Nonzero stops the run: a negative TDC_ code is returned as it is,
+	 * anything else as TDC_EINVAL.  NULL: not emitted.
 	 */
 	int			(*emit) (void *arg, int tile, const double *q, const double *qz,
-						 const size_t *tri, size_t ntri);
+						 const int64_t *ql, const size_t *tri, size_t ntri);
 	/*
 	 * Optional memory hooks.  settle: hand the free heap back (always, or
 	 * only when the process nears the limit: the caller's policy), called

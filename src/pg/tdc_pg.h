@@ -19,6 +19,7 @@
  *	seglist.c		constraint segments from linework, and their insertion
  *					(the constrained functions and the TIN's breaklines)
  *	tin_run.c		a TIN of the samples, and the operations on it, waited on
+ *	tile_values.c	a tile column's values of any ordered type as dense labels
  *
  * formats/, the bytes of PostgreSQL and PostGIS values:
  *	gser_read.c		reads PostGIS geometry values straight into a point
@@ -407,6 +408,26 @@ extern void tdc_dump_collect(TdcPointBuf *buf, TdcIdBuf *ids, const char *query,
 							 Oid geomoid, const char *fname,
 							 TdcDumpRowFn row_fn, void *row_arg);
 
+/* A row's tag, the query's second column, and what the column is. */
+typedef struct TdcDumpTag
+{
+	Datum		value;
+	bool		isnull;
+	Oid			typid;
+	int32		typmod;
+	const char *name;
+} TdcDumpTag;
+
+/* What a tagged collection calls: once with the tag column (or NULL), then per row. */
+typedef struct TdcDumpTagOps
+{
+	void		(*columns) (void *arg, const TdcDumpTag *tag);
+	void		(*row) (void *arg, uint64 first, const TdcDumpTag *tag);
+} TdcDumpTagOps;
+
+extern void tdc_dump_collect_tagged(TdcPointBuf *buf, const char *query, Oid geomoid,
+									const char *fname, const TdcDumpTagOps *ops, void *arg);
+
 /*
  * seglist.c: segments as pairs of vertex indices into buf, taken from the
  * chains the reader reports (every linestring and polygon ring) once
@@ -560,6 +581,8 @@ typedef struct TdcTableWriter
 	struct BulkInsertStateData *bistate;
 	CommandId	cid;
 	Oid			geomoid;		/* the geom column's type */
+	Oid			tiletype;		/* the tile column's type and typmod */
+	int32		tiletypmod;
 	int			dim;
 	int32		srid;
 	uint64		rows;
@@ -567,8 +590,44 @@ typedef struct TdcTableWriter
 
 extern void tdc_table_writer_open(TdcTableWriter *tw, Oid relid, const char *fname);
 extern void tdc_table_writer_shape(TdcTableWriter *tw, int dim, int32 srid, const char *fname);
-extern void tdc_table_writer_put(TdcTableWriter *tw, int64 id, int64 tile, const double *v);
+extern void tdc_table_writer_put(TdcTableWriter *tw, int64 id, Datum tile, const double *v);
 extern void tdc_table_writer_close(TdcTableWriter *tw);
+
+/*
+ * tile_values.c: the values of a tile column as dense labels, numbered as
+ * first seen, then ranked 1.. in the type's order (equal values one rank).
+ */
+struct tvhash_hash;
+struct SortSupportData;
+typedef struct TdcTileValues
+{
+	MemoryContext cxt;
+	Oid			typid;
+	int32		typmod;
+	int16		typlen;
+	bool		typbyval;
+	Oid			lt_opr;			/* the type's default btree "<" */
+	Oid			collation;		/* the type's */
+	struct tvhash_hash *hash;	/* value -> number */
+	Datum	   *values;			/* number -> value (a copy in cxt) */
+	uint32		n,
+				cap;
+	bool		have_last;		/* the last value looked up, for runs of rows in one tile */
+	Datum		last;
+	uint32		last_number;
+	uint64		bytes;			/* what all of it holds, for the memory checks */
+	/* after tdc_tile_values_rank */
+	struct SortSupportData *sort;
+	uint32	   *rank;			/* number -> rank from 1 */
+	Datum	   *by_rank;		/* rank -> value */
+	int64	   *count;			/* rank -> rows written so far (the caller's) */
+	uint32		nranks;
+} TdcTileValues;
+
+extern void tdc_tile_values_init(TdcTileValues *tv, MemoryContext cxt, Oid typid, int32 typmod,
+								 const char *column, const char *fname);
+extern uint32 tdc_tile_values_number(TdcTileValues *tv, Datum d);
+extern void tdc_tile_values_rank(TdcTileValues *tv, const char *fname);
 
 /* The tiled procedure's name in messages (fn_tiled*.c). */
 #define TILED_FNAME		"tdc_delaunay_tiled"

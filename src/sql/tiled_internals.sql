@@ -141,8 +141,9 @@ LANGUAGE C VOLATILE PARALLEL UNSAFE
 COST 10000;
 
 COMMENT ON FUNCTION _tdc_tiled_write(text, regclass, float8) IS
-'Internal, for tdc_delaunay_tiled: the Delaunay triangles of the query''s vertices (one geometry column, as '
-'ST_TDCDelaunayDump takes it) written into target, a table (id bigint, tile bigint, geom geometry) created in this '
+'Internal, for tdc_delaunay_tiled: the Delaunay triangles of the query''s vertices (its geometry column, as '
+'ST_TDCDelaunayDump takes it) written into target, a table (id bigint, tile, geom geometry) created in this '
 'transaction: in one pass when it fits tdc_delaunay.max_memory, else tile by tile through the core''s bounded run, '
-'as ./tdc --max-memory runs it; with tile_size, each triangle''s tile is the square holding its smallest vertex. '
-'Returns the rows written.';
+'as ./tdc --max-memory runs it. Each triangle''s tile: with a second column in the query (a tile column, of the '
+'type of target''s tile), the value owning its smallest vertex (the least among the vertex''s copies); with '
+'tile_size, the square holding that vertex; else bigint from the run. Returns the rows written.';

@@ -17,6 +17,8 @@
 #    with the source, its triangles are those of ST_TDCDelaunayDump, each
 #    once, and (auto_explain on the coordinator) the per-tile INSERT ...
 #    SELECT ran as a pushed-down Citus plan (no "pull to coordinator");
+#    and the same points in a plain table of the coordinator give the same
+#    triangles, tiles and id ranks through the one C function;
 # 4. an error inside a tile leaves no target behind, on any node.
 # Prints "N passed, M failed".  Needs root or the rights to install Citus into
 # PostgreSQL's directories (the build alone does not).
@@ -171,6 +173,23 @@ if [ -n "${na:-}" ] && [ "$na" = "$nb" ] && [ "$ab" = 0 ] && [ "$ba" = 0 ] && { 
 	ok "same triangle set as ST_TDCDelaunayDump ($na triangles, ids unique)"
 else
 	bad "triangle sets differ (tiled, dump, only tiled, only dump, ids unique: $cmp)"
+fi
+
+# the same points in a plain table of the coordinator: the one C function
+# of plain PostgreSQL, whose tiles only label; the same triangles, tiles and
+# id ranks as the rounds on the workers
+cmp=$(q coord -c "CREATE TABLE pts_local AS SELECT * FROM pts;
+	CALL tdc_delaunay_tiled('pts_local', 'tri_local', tile_column => 'tile');
+	CREATE TEMP TABLE a AS SELECT ST_AsEWKB(ST_Normalize(geom)) AS g, tile, id >> 32 AS r FROM tri;
+	CREATE TEMP TABLE b AS SELECT ST_AsEWKB(ST_Normalize(geom)) AS g, tile, id >> 32 AS r FROM tri_local;
+	SELECT (SELECT count(*) FROM b) || ' ' ||
+		   (SELECT count(*) FROM (SELECT * FROM a EXCEPT ALL SELECT * FROM b) x) || ' ' ||
+		   (SELECT count(*) FROM (SELECT * FROM b EXCEPT ALL SELECT * FROM a) x);" 2>&1 | tail -1)
+read -r nl ab ba <<<"$cmp"
+if [ -n "${nl:-}" ] && [ "$ab" = 0 ] && [ "$ba" = 0 ] && ((nl > 0)); then
+	ok "a plain table on the coordinator: the same (triangle, tile, id rank) as the rounds ($nl triangles)"
+else
+	bad "plain table against the rounds (triangles, only in the rounds, only in the plain run: $cmp)"
 fi
 
 # the per-tile statement's plan on the coordinator

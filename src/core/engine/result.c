@@ -164,6 +164,26 @@ tdc_input_site(const tdc_job *job, size_t i)
 	return map == NULL ? UINT32_MAX : map[i];
 }
 
+/*
+ * Each site's least label into the slot of its first point (tdc.h): one
+ * pass over the positions, each a point that became a site (site_of names
+ * the site, idx the points), so no input map is built.  The first point's
+ * slot is read and written only for its own site, so the pass needs no
+ * copy of the labels.
+ */
+void
+tdc_least_labels(const tdc_job *job, int64_t *label)
+{
+	for (size_t p = 0; p < job->nin; p++)
+	{
+		size_t		first = job->idx[job->site_of[p]];
+		int64_t		l = label[job->idx[p]];
+
+		if (l < label[first])
+			label[first] = l;
+	}
+}
+
 void
 tdc_job_view(const tdc_job *job, tdc_mesh_view *out)
 {

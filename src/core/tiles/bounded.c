@@ -47,6 +47,12 @@
  * rerun, and are added as far as the budget holds them, nearest first
  * (bounded_tile.c).
  *
+ * Beside the coordinates, every file carries a point's z and the caller's
+ * label when the caller gives them (zpath, lpath; REC_L in bounded.h): a
+ * final tile's emit gets each vertex's z from its first copy in the input
+ * and its label as the least of its copies' (tdc_least_labels), which is
+ * how tdc_delaunay_tiled labels triangles by the tiles of a tile column.
+ *
  * The process around the run is the caller's: what it holds beside the
  * tiles comes in as `outside`, its heap policy and its peak through the
  * settle and peak callbacks (./tdc: src/cli/bounded_mem.c).  Nothing here
@@ -293,10 +299,11 @@ int
 tdc_bounded_run(const tdc_bounded_params *p, tdc_bounded_stats *st, char *err, size_t errlen)
 {
 	bounded_run r = {
-		.p = p, .xypath = p->xypath, .zpath = p->zpath, .dir = p->tmpdir,
+		.p = p, .xypath = p->xypath, .zpath = p->zpath, .lpath = p->lpath, .dir = p->tmpdir,
 		.lname = p->limit_name ? p->limit_name : "--max-memory",
 		.n = p->n, .opt = p->opt, .limit = p->limit, .st = st,
-		.has_z = p->zpath != NULL, .w = p->zpath != NULL ? 3 : 2
+		.has_z = p->zpath != NULL, .has_l = p->lpath != NULL,
+		.w = 2 + (p->zpath != NULL) + (p->lpath != NULL)
 	};
 
 	memset(st, 0, sizeof(*st));
@@ -307,7 +314,8 @@ tdc_bounded_run(const tdc_bounded_params *p, tdc_bounded_stats *st, char *err, s
 	r.budget = r.limit > r.outside ? r.limit - r.outside : 0;
 	if (p->xypath == NULL || p->tmpdir == NULL || p->opt == NULL)
 		tdc_bd_fail(&r.e, TDC_EINVAL, "tdc_bounded_run: xypath, tmpdir and opt are required");
-	else if (too_short(&r, p->xypath, 16) || (p->zpath && too_short(&r, p->zpath, 8)))
+	else if (too_short(&r, p->xypath, 16) || (p->zpath && too_short(&r, p->zpath, 8)) ||
+			 (p->lpath && too_short(&r, p->lpath, 8)))
 		;						/* r.e says which */
 	else if (p->opt->tolerance > 0)
 		tdc_bd_fail(&r.e, TDC_EINVAL, "a tolerance cannot be used when the input is tiled "

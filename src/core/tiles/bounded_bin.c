@@ -240,17 +240,19 @@ bin_range(void *arg)
 			   *band_idx = r->band_idx;
 	bool		use_halo = r->use_halo;
 
-	if (tdc_bd_source_open(&src, r->xypath, r->zpath, &b->e, r->p->cancel) == TDC_OK)
+	if (tdc_bd_source_open(&src, r->xypath, r->zpath, r->lpath, &b->e, r->p->cancel) == TDC_OK)
 		tdc_bd_source_range(&src, b->from, b->count);
 	while ((k = tdc_bd_source_read(&src)) > 0)
 		for (size_t i = 0; i < k; i++)
 		{
-			double		rec[4] = {src.xy[2 * i], src.xy[2 * i + 1], src.z ? src.z[i] : 0, 0};
+			double		rec[5] = {src.xy[2 * i], src.xy[2 * i + 1], src.z ? src.z[i] : 0, 0, 0};
 			int			cell = tdc_tp_cell_of(rec[1], grid[1], sy, ycut) * TDC_TP_GRID +
 				tdc_tp_cell_of(rec[0], grid[0], sx, xcut),
 						t = cell_tile[cell];
 			double	   *bb = b->bb + 4 * t;
 
+			if (src.l)
+				rec_set_label(rec, REC_L(r), src.l[i]);
 			if (rec[0] < bb[0])
 				bb[0] = rec[0];
 			if (rec[0] > bb[2])

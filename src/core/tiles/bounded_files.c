@@ -56,9 +56,9 @@ tdc_bd_canceled(const volatile int *cancel)
 	return cancel != NULL && __atomic_load_n(cancel, __ATOMIC_RELAXED) != 0;
 }
 
-/* s->xy (and s->z) of CHUNK points; reads from the start of the file. */
+/* s->xy (and s->z, s->l) of CHUNK points; reads from the start of the files. */
 int
-tdc_bd_source_open(source *s, const char *xypath, const char *zpath, bd_err *e,
+tdc_bd_source_open(source *s, const char *xypath, const char *zpath, const char *lpath, bd_err *e,
 				   const volatile int *cancel)
 {
 	memset(s, 0, sizeof(*s));
@@ -66,14 +66,17 @@ tdc_bd_source_open(source *s, const char *xypath, const char *zpath, bd_err *e,
 	s->cancel = cancel;
 	s->fxy = fopen(xypath, "rb");
 	s->fz = zpath ? fopen(zpath, "rb") : NULL;
-	if (s->fxy == NULL || (zpath && s->fz == NULL))
+	s->fl = lpath ? fopen(lpath, "rb") : NULL;
+	if (s->fxy == NULL || (zpath && s->fz == NULL) || (lpath && s->fl == NULL))
 	{
 		tdc_bd_source_close(s);
-		return tdc_bd_fail(e, TDC_EIO, "cannot open %s", xypath);
+		return tdc_bd_fail(e, TDC_EIO, "cannot open %s",
+						   s->fxy == NULL ? xypath : zpath && s->fz == NULL ? zpath : lpath);
 	}
 	s->xy = malloc(16 * (size_t) CHUNK);
 	s->z = zpath ? malloc(8 * (size_t) CHUNK) : NULL;
-	if (s->xy == NULL || (zpath && s->z == NULL))
+	s->l = lpath ? malloc(8 * (size_t) CHUNK) : NULL;
+	if (s->xy == NULL || (zpath && s->z == NULL) || (lpath && s->l == NULL))
 	{
 		tdc_bd_source_close(s);
 		return tdc_bd_nomem(e);
@@ -87,7 +90,8 @@ int
 tdc_bd_source_range(source *s, size_t from, size_t count)
 {
 	if (fseeko(s->fxy, (off_t) from * 16, SEEK_SET) != 0 ||
-		(s->fz && fseeko(s->fz, (off_t) from * 8, SEEK_SET) != 0))
+		(s->fz && fseeko(s->fz, (off_t) from * 8, SEEK_SET) != 0) ||
+		(s->fl && fseeko(s->fl, (off_t) from * 8, SEEK_SET) != 0))
 	{
 		s->left = 0;
 		return tdc_bd_fail(s->e, TDC_EIO, "cannot seek in the input");
@@ -120,6 +124,11 @@ tdc_bd_source_read(source *s)
 		tdc_bd_fail(s->e, TDC_EIO, "short read on the temporary z file");
 		return 0;
 	}
+	if (s->fl && fread(s->l, 8, k, s->fl) != k)
+	{
+		tdc_bd_fail(s->e, TDC_EIO, "short read on the temporary label file");
+		return 0;
+	}
 	return k;
 }
 
@@ -130,10 +139,14 @@ tdc_bd_source_close(source *s)
 		fclose(s->fxy);
 	if (s->fz)
 		fclose(s->fz);
+	if (s->fl)
+		fclose(s->fl);
 	free(s->xy);
 	free(s->z);
-	s->fxy = s->fz = NULL;
+	free(s->l);
+	s->fxy = s->fz = s->fl = NULL;
 	s->xy = s->z = NULL;
+	s->l = NULL;
 }
 
 /*

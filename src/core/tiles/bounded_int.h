@@ -38,19 +38,43 @@ typedef struct bd_err
 
 /*
  * Bytes a point costs a tile run beside the engine and the finality check
- * (tdc_tp_tile_bytes): its coordinates, its label, its z.
+ * (tdc_tp_tile_bytes): its coordinates, its tile, its z, the caller's label.
  */
-#define POINT_BYTES(r)	((size_t) (16 + 8 + ((r)->has_z ? 8 : 0)))
+#define POINT_BYTES(r)	((size_t) (16 + 8 + ((r)->has_z ? 8 : 0) + ((r)->has_l ? 8 : 0)))
+
+/*
+ * A point's record in the run's files: x, y, then z with a z file, then the
+ * caller's label with a label file (its int64 bits in a double's slot,
+ * copied, never converted); a halo record adds its tile's number.
+ */
+#define REC_L(r)		(2 + (r)->has_z)
+
+static inline void
+rec_set_label(double *rec, int at, int64_t l)
+{
+	memcpy(rec + at, &l, sizeof(l));
+}
+
+static inline int64_t
+rec_label(const double *rec, int at)
+{
+	int64_t		l;
+
+	memcpy(&l, rec + at, sizeof(l));
+	return l;
+}
 
 #define CHUNK		(1 << 16)	/* points per read of the source */
 
-/* Reads the .bin source (and z) in chunks: the caller's loop. */
+/* Reads the .bin source (and z, and the labels) in chunks: the caller's loop. */
 typedef struct source
 {
 	FILE	   *fxy,
-			   *fz;
+			   *fz,
+			   *fl;
 	double	   *xy,
 			   *z;
+	int64_t    *l;
 	size_t		left;			/* points still to read */
 	bd_err	   *e;				/* a read error or the cancel flag: 0 points, e set */
 	const volatile int *cancel;
@@ -89,7 +113,8 @@ typedef struct bounded_run
 	/* the call's */
 	const tdc_bounded_params *p;
 	const char *xypath,
-			   *zpath;			/* the .bin source, and z beside it or NULL */
+			   *zpath,			/* the .bin source, and z beside it or NULL */
+			   *lpath;			/* and the caller's labels beside it or NULL */
 	const char *dir;			/* the caller's temporary directory */
 	const char *lname;			/* the limit's name in messages */
 	size_t		n;
@@ -100,7 +125,8 @@ typedef struct bounded_run
 	tdc_bounded_stats *st;
 	bd_err		e;				/* the run's first error */
 	int			has_z,
-				w;				/* doubles per point record: 2, or 3 with z */
+				has_l,
+				w;				/* doubles per point record: 2, 3 with z or labels, 4 with both */
 
 	/* pass 1 */
 	double		bb[4];			/* the points' exact box */
@@ -184,8 +210,8 @@ extern int	tdc_bd_fail(bd_err *e, int code, const char *fmt,...)
 			__attribute__((format(printf, 3, 4)));
 extern int	tdc_bd_nomem(bd_err *e);
 extern bool tdc_bd_canceled(const volatile int *cancel);
-extern int	tdc_bd_source_open(source *s, const char *xypath, const char *zpath, bd_err *e,
-							   const volatile int *cancel);
+extern int	tdc_bd_source_open(source *s, const char *xypath, const char *zpath, const char *lpath,
+							   bd_err *e, const volatile int *cancel);
 extern int	tdc_bd_source_range(source *s, size_t from, size_t count);
 extern size_t tdc_bd_source_read(source *s);
 extern void tdc_bd_source_close(source *s);

@@ -174,7 +174,7 @@ scan_range(void *arg)
 	sw->bad = false;
 	sw->hull = NULL;
 	sw->nhull = 0;
-	if (tdc_bd_source_open(&src, sw->xypath, NULL, &sw->e, sw->cancel) != TDC_OK)
+	if (tdc_bd_source_open(&src, sw->xypath, NULL, NULL, &sw->e, sw->cancel) != TDC_OK)
 		return NULL;
 	tdc_bd_source_range(&src, sw->from, sw->count);
 	while ((k = tdc_bd_source_read(&src)) > 0)
@@ -322,7 +322,7 @@ tdc_bd_scan_count(bounded_run *r)
 	source		src;
 	size_t		k;
 
-	if (tdc_bd_source_open(&src, r->xypath, NULL, &r->e, r->p->cancel) != TDC_OK)
+	if (tdc_bd_source_open(&src, r->xypath, NULL, NULL, &r->e, r->p->cancel) != TDC_OK)
 		return r->e.code;
 	while ((k = tdc_bd_source_read(&src)) > 0)
 		for (size_t i = 0; i < k; i++)
@@ -359,7 +359,7 @@ tdc_bd_dense_spot(bounded_run *r, int cell, size_t limit, double spot[2], size_t
 	*copies = 0;
 	if (pts == NULL)
 		return tdc_bd_nomem(&r->e);
-	if (tdc_bd_source_open(&src, r->xypath, NULL, &r->e, r->p->cancel) != TDC_OK)
+	if (tdc_bd_source_open(&src, r->xypath, NULL, NULL, &r->e, r->p->cancel) != TDC_OK)
 	{
 		free(pts);
 		return r->e.code;
@@ -388,7 +388,7 @@ tdc_bd_dense_spot(bounded_run *r, int cell, size_t limit, double spot[2], size_t
 	free(pts);
 	if (best < 2 || r->e.code != TDC_OK)
 		return r->e.code;
-	if (tdc_bd_source_open(&src, r->xypath, NULL, &r->e, r->p->cancel) != TDC_OK)
+	if (tdc_bd_source_open(&src, r->xypath, NULL, NULL, &r->e, r->p->cancel) != TDC_OK)
 		return r->e.code;
 	while ((k = tdc_bd_source_read(&src)) > 0)
 		for (size_t i = 0; i < k; i++)

@@ -25,23 +25,28 @@
 /* How often a tile's engine run looks at the caller's cancel flag. */
 #define ENGINE_POLL_MS		10
 
-/* A tile run's points: coordinates, z (or NULL) and each one's label. */
+/*
+ * A tile run's points: coordinates, z (or NULL), each one's tile, and the
+ * caller's label of each (or NULL).
+ */
 typedef struct tile_points
 {
 	size_t		m;
 	double	   *q,
 			   *qz;
-	int64_t    *ql;
+	int64_t    *ql,
+			   *qc;
 } tile_points;
 
 static int
-points_alloc(bounded_run *r, tile_points *p, size_t m, int has_z)
+points_alloc(bounded_run *r, tile_points *p, size_t m)
 {
 	p->m = m;
 	p->q = malloc(16 * m + 16);
 	p->ql = malloc(8 * m + 8);
-	p->qz = has_z ? malloc(8 * m + 8) : NULL;
-	if (!p->q || !p->ql || (has_z && !p->qz))
+	p->qz = r->has_z ? malloc(8 * m + 8) : NULL;
+	p->qc = r->has_l ? malloc(8 * m + 8) : NULL;
+	if (!p->q || !p->ql || (r->has_z && !p->qz) || (r->has_l && !p->qc))
 		return tdc_bd_nomem(&r->e);
 	return TDC_OK;
 }
@@ -52,8 +57,21 @@ points_free(tile_points *p)
 	free(p->q);
 	free(p->ql);
 	free(p->qz);
+	free(p->qc);
 	p->q = p->qz = NULL;
-	p->ql = NULL;
+	p->ql = p->qc = NULL;
+}
+
+/* Point at of p from a record of the run's files (x, y, then z and the label as the run has them). */
+static inline void
+point_from_rec(const bounded_run *r, tile_points *p, size_t at, const double *rec)
+{
+	p->q[2 * at] = rec[0];
+	p->q[2 * at + 1] = rec[1];
+	if (p->qz)
+		p->qz[at] = rec[2];
+	if (p->qc)
+		p->qc[at] = rec_label(rec, REC_L(r));
 }
 
 /*
@@ -124,9 +142,9 @@ gather_first(bounded_run *r, int t, const double *K, size_t nextra, tile_points 
 				 ti->count, K[0], K[1], K[2], K[3], m);
 		r->p->trace(r->p->arg, line);
 	}
-	if (points_alloc(r, p, m, r->has_z) != TDC_OK)
+	if (points_alloc(r, p, m) != TDC_OK)
 		return r->e.code;
-	if (!r->has_z)
+	if (w == 2)
 	{
 		if (tdc_bd_read_all(r->dir, &r->e, r->sorted[t] ? "cell" : "tile", t,
 							r->sorted[t] ? 1 : r->nparts, p->q, ti->count, 2) != TDC_OK)
@@ -136,13 +154,9 @@ gather_first(bounded_run *r, int t, const double *K, size_t nextra, tile_points 
 	{
 		if (tile_open(r, &f, t) != TDC_OK)
 			return r->e.code;
-		while ((got = tdc_bd_mr_read(&f, rec, 24, 4096)) > 0)
+		while ((got = tdc_bd_mr_read(&f, rec, 8 * (size_t) w, 4096 * 4 / w)) > 0)
 			for (size_t i = 0; i < got && at < ti->count; i++, at++)
-			{
-				p->q[2 * at] = rec[3 * i];
-				p->q[2 * at + 1] = rec[3 * i + 1];
-				p->qz[at] = rec[3 * i + 2];
-			}
+				point_from_rec(r, p, at, rec + w * i);
 		tdc_bd_mr_close(&f);
 		if (r->e.code != TDC_OK)
 			return r->e.code;
@@ -159,10 +173,7 @@ gather_first(bounded_run *r, int t, const double *K, size_t nextra, tile_points 
 		{
 			const double *h = rec + (w + 1) * i;
 
-			p->q[2 * at] = h[0];
-			p->q[2 * at + 1] = h[1];
-			if (p->qz)
-				p->qz[at] = h[2];
+			point_from_rec(r, p, at, h);
 			p->ql[at] = (int64_t) h[w];
 		}
 	tdc_bd_mr_close(&f);
@@ -234,10 +245,7 @@ take_points(void *arg, const double *rec, size_t got)
 			continue;
 		if (a->p)
 		{
-			a->p->q[2 * a->m] = q[0];
-			a->p->q[2 * a->m + 1] = q[1];
-			if (a->p->qz)
-				a->p->qz[a->m] = q[2];
+			point_from_rec(r, a->p, a->m, q);
 			a->p->ql[a->m] = a->s;
 		}
 		a->m++;
@@ -322,7 +330,7 @@ gather_region(bounded_run *r, int t, double K[4], const double Kmin[4], size_t n
 						   "the region it must know, about %zu MB, more than %s %zu: the data is too "
 						   "clustered around this tile for the limit", t, r->nt, r->tiles[t].count, m,
 						   (run_need(r, m) >> 20) + 1, r->lname, r->limit >> 20);
-	if (points_alloc(r, p, m, r->has_z) != TDC_OK)
+	if (points_alloc(r, p, m) != TDC_OK)
 		return r->e.code;
 	region_points(r, t, K, nextra, p);
 	return r->e.code;
@@ -472,7 +480,7 @@ tile_write(bounded_run *r, int t, const tile_points *p, const tdc_tile_result *r
 {
 	int			rc;
 
-	if (r->p->emit && (rc = r->p->emit(r->p->arg, t, p->q, p->qz, res->tri, res->ntri)) != 0)
+	if (r->p->emit && (rc = r->p->emit(r->p->arg, t, p->q, p->qz, p->qc, res->tri, res->ntri)) != 0)
 		return tdc_bd_fail(&r->e, rc < 0 ? rc : TDC_EINVAL, "the triangles of tile %d of %d were "
 						   "not taken (the caller's emit returned %d)", t, r->nt, rc);
 	r->st->ntri += res->ntri;
@@ -560,6 +568,9 @@ tdc_bd_tile_run(bounded_run *r, int t)
 			return r->e.code;
 		}
 		t0 = now_s();
+		/* each vertex's label: the least of its copies', while the job still names them */
+		if (res.final && p.qc)
+			tdc_least_labels(job, p.qc);
 		tile_account(r, job);
 		if (res.final)
 		{

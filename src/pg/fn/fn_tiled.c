@@ -1,9 +1,12 @@
 /*
  * fn_tiled.c
- *		The per-tile step of tdc_delaunay_tiled (src/sql/tiled.sql):
- *		an aggregate that triangulates one tile with its halo and keeps the
- *		tile's final triangles (src/core/tiles/tile_final.c), and a set-returning
- *		function that unnests its result into POLYGON rows.
+ *		The per-tile step of tdc_delaunay_tiled's rounds on Citus
+ *		(src/sql/tiled.sql): an aggregate that triangulates one tile with
+ *		its halo and keeps the tile's final triangles
+ *		(src/core/tiles/tile_final.c), and a set-returning function that
+ *		unnests its result into POLYGON rows.  (On plain PostgreSQL a tile
+ *		column only labels the triangles of one C function,
+ *		fn_tiled_bounded.c.)
  *
  * Why an aggregate.  The procedure's per-tile work must be one statement
  * that Citus can push down to the workers when the tables are distributed
@@ -16,12 +19,7 @@
  *		 LATERAL _tdc_tile_triangles(s.r) t
  *
  * A GROUP BY on the distribution column runs whole on the shard that holds
- * the group, so the points and the triangles stay on the worker.  On plain
- * PostgreSQL the procedure runs the statement one tile at a time, so a
- * backend holds one tile and its halo: the tile's halo is a partition of
- * its own, and _tdc_tile_triangles is called in the select list, where its
- * rows (one per call) stream into the INSERT rather than being collected
- * in a tuplestore first.
+ * the group, so the points and the triangles stay on the worker.
  *
  * The aggregate's result is a bytea in the format below, not a geometry
  * collection, because a tile that is not final yet must report the box it
@@ -453,11 +451,11 @@ PG_FUNCTION_INFO_V1(_tdc_tile_triangles);
  * final one row k = 0 holding the box it needs as a POLYGON
  * (xmin ymin, xmax ymin, xmax ymax, xmin ymax, xmin ymin).
  *
- * One row per call: called in a select list (ProjectSet), as the plain
- * PostgreSQL procedure does, the rows go straight to the INSERT, where a
- * materialized set of a tile's million triangles was written to a
- * tuplestore, spilled to disk past work_mem, and read back.  (In FROM, as
- * on Citus, the executor collects the rows itself.)
+ * One row per call: called in a select list (ProjectSet) the rows go
+ * straight to an INSERT, where a materialized set of a tile's million
+ * triangles would be written to a tuplestore, spilled to disk past
+ * work_mem, and read back.  (In FROM, as the rounds on Citus call it, the
+ * executor collects the rows itself.)
  */
 Datum
 _tdc_tile_triangles(PG_FUNCTION_ARGS)

@@ -1,13 +1,14 @@
 /*
  * fn_tiled_bounded.c
- *		tdc_delaunay_tiled without a tile column: the query's vertices
+ *		tdc_delaunay_tiled on plain PostgreSQL: the query's vertices
  *		triangulated in one pass, or tile by tile through the core's bounded
  *		run, and written straight into the target: _tdc_tiled_write.
  *
- * The procedure creates the target (id bigint, tile bigint, geom
- * geometry(Polygon[Z], srid)) and calls this function once.  It reads the
- * query's geometry column the way ST_TDCDelaunayDump reads it (dump_query.c:
- * a cursor in batches, curves stroked, the SRID and dimensions checked).
+ * The procedure creates the target (id bigint, tile bigint or of the tile
+ * column's type, geom geometry(Polygon[Z], srid)) and calls this function
+ * once.  It reads the query's geometry column the way ST_TDCDelaunayDump
+ * reads it (dump_query.c: a cursor in batches, curves stroked, the SRID and
+ * dimensions checked), and the tile column beside it when there is one.
  * While the vertices and the engine's estimate for them fit
  * tdc_delaunay.max_memory they stay in memory, and the triangulation is one
  * tdc_run, as the Dump's.  Past that they are appended, a chunk at a time, to
@@ -30,6 +31,22 @@
  * vertex, tdc_tp_owner_vertex: the square a run tiled by the squares would
  * keep it in.
  *
+ * With a tile column the triangle's tile is the tile that owns its smallest
+ * vertex, a vertex being owned by the least tile value among its copies:
+ * the tile a run of the user's tiles with their halos keeps it in (the
+ * rounds of SQL statements on Citus, tile_final.c's stars).  Each row's
+ * value becomes a number as it is read (tile_values.c), the vertex's label
+ * beside its coordinates, in memory or in a file like them; once every
+ * value is seen the numbers become ranks in the type's order, a file of
+ * them rewritten, and the core hands each vertex of a triangle the least
+ * rank of its copies (tdc_least_labels; in the bounded run the labels ride
+ * in its files).  The ids have the rounds' form, rank * 2^32 + k, k counting
+ * the tile's triangles from 1 in the order they come out (the rounds
+ * counted them in the order of the tile's own mesh).  The memory the
+ * labels take, 8 bytes a vertex and the distinct values, counts against
+ * the limit like the coordinates.  So the user's tiles only name the
+ * triangles: the work is bounded by the core's plan, whatever their sizes.
+ *
  * The files live in a directory of this backend under the temporary
  * tablespace's pgsql_tmp (removed by the server at restart if a crash left
  * it), made when the first chunk goes to disk and removed with everything
@@ -46,6 +63,7 @@
 #include <unistd.h>
 
 #include "catalog/pg_tablespace_d.h"
+#include "catalog/pg_type_d.h"
 #include "commands/tablespace.h"
 #include "miscadmin.h"
 #include "portability/instr_time.h"
@@ -76,12 +94,17 @@ typedef struct BoundedRun
 	char		dir[MAXPGPATH];	/* "" until made */
 	char		xypath[MAXPGPATH],
 				zpath[MAXPGPATH],
+				lpath[MAXPGPATH],	/* the vertices' ranks, for the run */
+				lrawpath[MAXPGPATH],	/* their value numbers, as read */
 				tripath[MAXPGPATH];
 	FILE	   *fxy,
 			   *fz,
+			   *fl,
+			   *fin,			/* a staged file read back */
 			   *ftri;
 	uint64		n;				/* vertices staged */
 	bool		hasz;
+	bool		hasl;			/* labels: a tile column */
 	int			dim;
 	tdc_bounded_job *job;
 	int			write_errno;	/* emit: the errno of a failed write (run's thread) */
@@ -120,11 +143,15 @@ bounded_run_release(void *arg)
 	}
 	close_file(&br->fxy);
 	close_file(&br->fz);
+	close_file(&br->fl);
+	close_file(&br->fin);
 	close_file(&br->ftri);
 	if (br->dir[0] != '\0')
 	{
 		(void) unlink(br->xypath);
 		(void) unlink(br->zpath);
+		(void) unlink(br->lpath);
+		(void) unlink(br->lrawpath);
 		(void) unlink(br->tripath);
 		/* the run removes its own files; anything else is a leftover */
 		(void) rmdir(br->dir);
@@ -159,6 +186,8 @@ make_run_dir(BoundedRun *br, const char *fname)
 	}
 	snprintf(br->xypath, sizeof(br->xypath), "%s/input.xy", br->dir);
 	snprintf(br->zpath, sizeof(br->zpath), "%s/input.z", br->dir);
+	snprintf(br->lpath, sizeof(br->lpath), "%s/input.l", br->dir);
+	snprintf(br->lrawpath, sizeof(br->lrawpath), "%s/input.v", br->dir);
 	snprintf(br->tripath, sizeof(br->tripath), "%s/triangles", br->dir);
 }
 
@@ -191,6 +220,14 @@ typedef struct StageArg
 {
 	BoundedRun *br;
 	TdcPointBuf *buf;
+	TdcTableWriter *tw;
+	MemoryContext cxt;			/* the call's */
+	bool		tagged;			/* the query has a tile column */
+	double		size;			/* tile_size, 0 without: not with a tile column */
+	TdcTileValues *tv;			/* its values, from the first row with a vertex */
+	const char *tile_name;
+	int64	   *lab;			/* each vertex of buf: its value's number, later its rank */
+	uint64		lab_cap;
 	const tdc_options *opt;
 	uint64		limit;			/* bytes; 0: none */
 	bool		to_files;		/* past one pass: every chunk goes to the files */
@@ -200,12 +237,34 @@ typedef struct StageArg
 	const char *fname;
 } StageArg;
 
-/* Whether n vertices and the engine's run on them fit the limit (the Dump's check). */
+/* The bytes the labels of n vertices take in memory, grown by doubling as the buffer grows. */
+static uint64
+labels_bytes_after(uint64 n)
+{
+	uint64		cap = 16;
+
+	while (cap < n)
+		cap *= 2;
+	return cap * sizeof(int64);
+}
+
+/* What the tile values hold: counted beside the vertices. */
+static uint64
+tile_values_bytes(const StageArg *sa)
+{
+	return sa->tv ? sa->tv->bytes : 0;
+}
+
+/*
+ * Whether n vertices and the engine's run on them fit the limit (the
+ * Dump's check), with their labels and the tile values when tagged.
+ */
 static bool
 one_pass_fits(const StageArg *sa, uint64 n)
 {
 	return sa->limit == 0 ||
-		tdc_pointbuf_bytes_after(n, sa->buf->hasz) + tdc_estimate_memory((size_t) n, sa->opt) <= sa->limit;
+		tdc_pointbuf_bytes_after(n, sa->buf->hasz) + (sa->tagged ? labels_bytes_after(n) : 0) +
+		tile_values_bytes(sa) + tdc_estimate_memory((size_t) n, sa->opt) <= sa->limit;
 }
 
 /* The collected vertices appended to the files, and the buffer emptied. */
@@ -222,10 +281,14 @@ stage_flush(StageArg *sa)
 		br->fxy = open_file(br->xypath, "wb", sa->fname);
 		if (br->hasz)
 			br->fz = open_file(br->zpath, "wb", sa->fname);
+		if (br->hasl)
+			br->fl = open_file(br->lrawpath, "wb", sa->fname);
 	}
 	write_all(br->fxy, buf->xy, 2 * sizeof(double), (size_t) buf->n, br->xypath, sa->fname);
 	if (br->hasz)
 		write_all(br->fz, buf->z, sizeof(double), (size_t) buf->n, br->zpath, sa->fname);
+	if (br->hasl)
+		write_all(br->fl, sa->lab, sizeof(int64), (size_t) buf->n, br->lrawpath, sa->fname);
 	br->n += buf->n;
 	buf->n = 0;
 }
@@ -242,6 +305,7 @@ stage_to_files(StageArg *sa)
 	TdcPointBuf *buf = sa->buf;
 
 	sa->br->hasz = buf->hasz;
+	sa->br->hasl = sa->tagged;
 	sa->br->dim = buf->hasz ? 3 : 2;
 	make_run_dir(sa->br, sa->fname);
 	sa->to_files = true;
@@ -251,6 +315,8 @@ stage_to_files(StageArg *sa)
 	buf->xy = buf->z = NULL;
 	buf->n = buf->cap = 0;
 	buf->side_bytes = 0;
+	sa->lab = NULL;
+	sa->lab_cap = 0;
 }
 
 /*
@@ -284,6 +350,83 @@ stage_row(void *arg, uint64 first)
 		stage_flush(sa);
 }
 
+/*
+ * Once the query runs (tdc_dump_collect_tagged's columns): whether it has a
+ * tile column, whose type must be the target's tile column's, else the
+ * target's must be bigint.
+ */
+static void
+stage_columns(void *arg, const TdcDumpTag *tag)
+{
+	StageArg   *sa = (StageArg *) arg;
+	TdcTableWriter *tw = sa->tw;
+
+	if (tag == NULL)
+	{
+		if (tw->tiletype != INT8OID)
+			ereport(ERROR,
+					(errcode(ERRCODE_DATATYPE_MISMATCH),
+					 errmsg("%s: the target's tile column is of type %s, not bigint, and the query has no tile column",
+							sa->fname, format_type_be(tw->tiletype))));
+		return;
+	}
+	if (sa->size > 0)
+		ereport(ERROR,
+				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
+				 errmsg("%s: give tile_column or tile_size, not both", sa->fname)));
+	if (tag->typid != tw->tiletype || (tw->tiletypmod != -1 && tw->tiletypmod != tag->typmod))
+		ereport(ERROR,
+				(errcode(ERRCODE_DATATYPE_MISMATCH),
+				 errmsg("%s: the target's tile column is of type %s, the query's tile column \"%s\" of type %s",
+						sa->fname, format_type_with_typemod(tw->tiletype, tw->tiletypmod),
+						tag->name, format_type_with_typemod(tag->typid, tag->typmod))));
+	sa->tagged = true;
+	sa->tile_name = MemoryContextStrdup(sa->cxt, tag->name);
+	sa->tv = MemoryContextAlloc(sa->cxt, sizeof(TdcTileValues));
+	tdc_tile_values_init(sa->tv, AllocSetContextCreate(sa->cxt, "tdc_delaunay_tiled tile values",
+													   ALLOCSET_DEFAULT_SIZES),
+						 tag->typid, tag->typmod, sa->tile_name, sa->fname);
+}
+
+/*
+ * After each row (tdc_dump_collect_tagged's row): with a tile column, the
+ * number of the row's tile value for each of its vertices; then stage_row.
+ * A row without a vertex (an empty geometry) names no tile; a row with one
+ * must have a tile.
+ */
+static void
+stage_tagged_row(void *arg, uint64 first, const TdcDumpTag *tag)
+{
+	StageArg   *sa = (StageArg *) arg;
+	TdcPointBuf *buf = sa->buf;
+	uint32		number;
+
+	if (tag != NULL && buf->n > first)
+	{
+		if (tag->isnull)
+			ereport(ERROR,
+					(errcode(ERRCODE_NULL_VALUE_NOT_ALLOWED),
+					 errmsg("%s: tile column \"%s\" is NULL for a row with a geometry", sa->fname, sa->tile_name)));
+		number = tdc_tile_values_number(sa->tv, tag->value);
+		/* the labels, as many as the buffer has room for vertices, beside them */
+		if (buf->n > sa->lab_cap)
+		{
+			uint64		cap = Max(buf->cap, 1024);
+
+			tdc_pointbuf_side_grow(buf, sa->lab_cap * sizeof(int64), cap * sizeof(int64),
+								   "their tiles", sa->fname);
+			sa->lab = sa->lab == NULL ? MemoryContextAllocHuge(buf->cxt, cap * sizeof(int64)) :
+				repalloc_huge(sa->lab, cap * sizeof(int64));
+			sa->lab_cap = cap;
+		}
+		for (uint64 i = first; i < buf->n; i++)
+			sa->lab[i] = number;
+	}
+	stage_row(arg, first);
+}
+
+static const TdcDumpTagOps stage_ops = {stage_columns, stage_tagged_row};
+
 static void
 finish_file(FILE **f, const char *path, const char *fname)
 {
@@ -298,11 +441,13 @@ finish_file(FILE **f, const char *path, const char *fname)
 
 /*
  * The run's emit, on its thread: a final tile's triangles to the
- * triangles file as coordinates.  No PostgreSQL call here; a failed write
+ * triangles file as coordinates, each after its label with labels (the
+ * rank of its smallest vertex).  No PostgreSQL call here; a failed write
  * keeps its errno for the backend's message and stops the run.
  */
 static int
-emit_triangles(void *arg, int tile, const double *q, const double *qz, const size_t *tri, size_t ntri)
+emit_triangles(void *arg, int tile, const double *q, const double *qz, const int64_t *ql,
+			   const size_t *tri, size_t ntri)
 {
 	BoundedRun *br = (BoundedRun *) arg;
 	TileRecord	rec = {tile, (int64) ntri};
@@ -321,6 +466,13 @@ emit_triangles(void *arg, int tile, const double *q, const double *qz, const siz
 			v[dim * k + 1] = q[2 * i + 1];
 			if (qz)
 				v[dim * k + 2] = qz[i];
+		}
+		if (br->hasl)
+		{
+			int64		l = ql[tri[3 * j + tdc_tp_owner_vertex(v, v + dim, v + 2 * dim)]];
+
+			if (fwrite(&l, sizeof(l), 1, br->ftri) != 1)
+				goto fail;
 		}
 		if (fwrite(v, sizeof(double), 3 * dim, br->ftri) != (size_t) (3 * dim))
 			goto fail;
@@ -352,13 +504,25 @@ row_tile(const double *v, int dim, const double origin[2], double size, int64 ti
 	return tdc_tiled_square_label(o[0], o[1], origin, size);
 }
 
-/* The bounded run's triangles file into the target: ids (t + 1) * 2^32 + k. */
+/* A row of a triangle of tile column rank r: the rank's value, id r * 2^32 + its count. */
+static inline void
+put_ranked(TdcTableWriter *tw, TdcTileValues *tv, int64 r, const double *v)
+{
+	Assert(r >= 1 && r <= tv->nranks);
+	tdc_table_writer_put(tw, (r << 32) + ++tv->count[r], tv->by_rank[r], v);
+}
+
+/*
+ * The bounded run's triangles file into the target: ids (t + 1) * 2^32 + k,
+ * or with a tile column (tv) the rank's.
+ */
 static void
-write_rows_from_file(BoundedRun *br, TdcTableWriter *tw, const double origin[2], double size,
-					 const char *fname)
+write_rows_from_file(BoundedRun *br, TdcTableWriter *tw, TdcTileValues *tv, const double origin[2],
+					 double size, const char *fname)
 {
 	double		v[9];
 	TileRecord	rec;
+	int64		r;
 
 	br->ftri = open_file(br->tripath, "rb", fname);
 	while (fread(&rec, sizeof(rec), 1, br->ftri) == 1)
@@ -367,8 +531,14 @@ write_rows_from_file(BoundedRun *br, TdcTableWriter *tw, const double origin[2],
 
 		for (int64 k = 1; k <= rec.ntri; k++)
 		{
+			if (br->hasl)
+				read_all(br->ftri, &r, sizeof(r), br->tripath, fname);
 			read_all(br->ftri, v, sizeof(double) * 3 * br->dim, br->tripath, fname);
-			tdc_table_writer_put(tw, (label << 32) + k, row_tile(v, br->dim, origin, size, label), v);
+			if (br->hasl)
+				put_ranked(tw, tv, r, v);
+			else
+				tdc_table_writer_put(tw, (label << 32) + k,
+									 Int64GetDatum(row_tile(v, br->dim, origin, size, label)), v);
 		}
 	}
 	if (ferror(br->ftri))
@@ -378,10 +548,14 @@ write_rows_from_file(BoundedRun *br, TdcTableWriter *tw, const double origin[2],
 	close_file(&br->ftri);
 }
 
-/* One pass's triangles into the target: ids 2^32 + k, tile 0, in the Dump's order. */
+/*
+ * One pass's triangles into the target: ids 2^32 + k, tile 0, in the
+ * Dump's order; or with a tile column (tv, lab the vertices' ranks) the
+ * rank of each triangle's smallest vertex, the least of its copies'.
+ */
 static void
-write_rows_from_job(const TdcRun *run, const TdcPointBuf *buf, TdcTableWriter *tw,
-					const double origin[2], double size)
+write_rows_from_job(const TdcRun *run, const TdcPointBuf *buf, TdcTableWriter *tw, TdcTileValues *tv,
+					int64 *lab, const double origin[2], double size)
 {
 	int			dim = buf->hasz ? 3 : 2;
 	tdc_iter	it = {0};
@@ -389,6 +563,8 @@ write_rows_from_job(const TdcRun *run, const TdcPointBuf *buf, TdcTableWriter *t
 	double		v[9];
 	int64		k = 0;
 
+	if (tv)
+		tdc_least_labels(run->job, lab);
 	while (tdc_next_triangle(run->job, &it, t))
 	{
 		for (int j = 0; j < 3; j++)
@@ -400,8 +576,40 @@ write_rows_from_job(const TdcRun *run, const TdcPointBuf *buf, TdcTableWriter *t
 			if (dim == 3)
 				v[dim * j + 2] = buf->z[tdc_site_input(run->job, t[j])];
 		}
-		tdc_table_writer_put(tw, ((int64) 1 << 32) + ++k, row_tile(v, dim, origin, size, 0), v);
+		if (tv)
+			put_ranked(tw, tv, lab[tdc_site_input(run->job, t[tdc_tp_owner_vertex(v, v + dim, v + 2 * dim)])], v);
+		else
+			tdc_table_writer_put(tw, ((int64) 1 << 32) + ++k, Int64GetDatum(row_tile(v, dim, origin, size, 0)), v);
 	}
+}
+
+/*
+ * The staged file of value numbers rewritten as ranks (tv->rank), a chunk
+ * at a time, for the run; the numbers' file removed.
+ */
+static void
+rank_label_file(BoundedRun *br, const TdcTileValues *tv, const char *fname)
+{
+	int64	   *chunk = palloc(STAGE_CHUNK * sizeof(int64));
+	size_t		got;
+
+	br->fin = open_file(br->lrawpath, "rb", fname);
+	br->fl = open_file(br->lpath, "wb", fname);
+	while ((got = fread(chunk, sizeof(int64), STAGE_CHUNK, br->fin)) > 0)
+	{
+		for (size_t i = 0; i < got; i++)
+			chunk[i] = tv->rank[chunk[i]];
+		write_all(br->fl, chunk, sizeof(int64), got, br->lpath, fname);
+		CHECK_FOR_INTERRUPTS();
+	}
+	if (ferror(br->fin))
+		ereport(ERROR,
+				(errcode_for_file_access(),
+				 errmsg("%s: could not read file \"%s\": %m", fname, br->lrawpath)));
+	close_file(&br->fin);
+	(void) unlink(br->lrawpath);
+	finish_file(&br->fl, br->lpath, fname);
+	pfree(chunk);
 }
 
 /* The bounded run on the staged files, waited on with interrupts watched. */
@@ -417,6 +625,7 @@ run_tiles(BoundedRun *br, const tdc_options *opt, uint64 limit_mb, const char *s
 	memset(&p, 0, sizeof(p));
 	p.xypath = br->xypath;
 	p.zpath = br->hasz ? br->zpath : NULL;
+	p.lpath = br->hasl ? br->lpath : NULL;
 	p.n = (size_t) br->n;
 	p.opt = opt;
 	p.limit = (size_t) (limit_mb << 20);
@@ -451,10 +660,11 @@ PG_FUNCTION_INFO_V1(_tdc_tiled_write);
 
 /*
  * _tdc_tiled_write(query text, target regclass, tile_size float8) RETURNS int8
- * The Delaunay triangles of the query's vertices (its one geometry column,
- * as ST_TDCDelaunayDump takes it) into target, which the caller created in
- * this transaction (table_write.c); tile_size NULL: no squares.  Returns
- * the rows written; see the top of this file.  Internal to
+ * The Delaunay triangles of the query's vertices (its geometry column, as
+ * ST_TDCDelaunayDump takes it) into target, which the caller created in
+ * this transaction (table_write.c); tile_size NULL: no squares.  A second
+ * column of the query is the tile column, of the type of the target's.
+ * Returns the rows written; see the top of this file.  Internal to
  * tdc_delaunay_tiled.
  */
 Datum
@@ -480,6 +690,7 @@ _tdc_tiled_write(PG_FUNCTION_ARGS)
 				tiles_s,
 				rows_s;
 	uint64		npts;
+	char	   *labelled = NULL;	/* how the triangles are labelled, for the NOTICE */
 
 	tdc_signal_guard();
 	if (PG_ARGISNULL(0) || PG_ARGISNULL(1))
@@ -518,13 +729,19 @@ _tdc_tiled_write(PG_FUNCTION_ARGS)
 	memset(&sa, 0, sizeof(sa));
 	sa.br = br;
 	sa.buf = &buf;
+	sa.tw = &tw;
+	sa.cxt = cxt;
+	sa.size = size;
 	sa.opt = &opt;
 	sa.limit = limit_mb << 20;
 	sa.next_check = STAGE_CHUNK;
 	sa.lo[0] = sa.lo[1] = INFINITY;
 	sa.hi[0] = sa.hi[1] = -INFINITY;
 	sa.fname = fname;
-	tdc_dump_collect(&buf, NULL, query, tw.geomoid, fname, stage_row, &sa);
+	tdc_dump_collect_tagged(&buf, query, tw.geomoid, fname, &stage_ops, &sa);
+	/* the values in their order: the labels become ranks */
+	if (sa.tagged)
+		tdc_tile_values_rank(sa.tv, fname);
 	if (!sa.to_files && buf.n > 0 && !one_pass_fits(&sa, buf.n))
 		stage_to_files(&sa);
 	if (sa.to_files)
@@ -532,7 +749,13 @@ _tdc_tiled_write(PG_FUNCTION_ARGS)
 		stage_flush(&sa);
 		finish_file(&br->fxy, br->xypath, fname);
 		finish_file(&br->fz, br->zpath, fname);
+		finish_file(&br->fl, br->lrawpath, fname);
+		if (sa.tagged)
+			rank_label_file(br, sa.tv, fname);
 	}
+	else if (sa.tagged)
+		for (uint64 i = 0; i < buf.n; i++)
+			sa.lab[i] = sa.tv->rank[sa.lab[i]];
 	npts = sa.to_files ? br->n : buf.n;
 	read_s = tdc_ms_since(t0) / 1000;
 	if (npts > 0)
@@ -540,6 +763,11 @@ _tdc_tiled_write(PG_FUNCTION_ARGS)
 	/* squares too small for the data are refused before the work */
 	if (npts > 0 && size > 0)
 		(void) tdc_tiled_square_label(sa.hi[0], sa.hi[1], sa.lo, size);
+	if (size > 0)
+		labelled = psprintf(" (labelled by squares of tile_size %.17g)", size);
+	else if (sa.tagged)
+		labelled = psprintf(" (labelled by the %u value%s of tile column \"%s\")", sa.tv->nranks,
+							sa.tv->nranks == 1 ? "" : "s", sa.tile_name);
 
 	if (!sa.to_files)
 	{
@@ -550,11 +778,12 @@ _tdc_tiled_write(PG_FUNCTION_ARGS)
 		INSTR_TIME_SET_CURRENT(t0);
 		if (npts > 0)
 		{
-			run = tdc_run(&buf, 0, 0, fname);
+			/* (the tile values are beside the run, as its result would be) */
+			run = tdc_run(&buf, 0, tile_values_bytes(&sa), fname);
 			tiles_s = tdc_ms_since(t0) / 1000;
 			phase = "writing the rows";
 			INSTR_TIME_SET_CURRENT(t0);
-			write_rows_from_job(run, &buf, &tw, sa.lo, size);
+			write_rows_from_job(run, &buf, &tw, sa.tv, sa.lab, sa.lo, size);
 			rows_s = tdc_ms_since(t0) / 1000;
 			CHECK_FOR_INTERRUPTS();
 			tdc_run_free(run);
@@ -567,7 +796,7 @@ _tdc_tiled_write(PG_FUNCTION_ARGS)
 		ereport(NOTICE,
 				(errmsg("%s: %llu triangles from %llu points%s, in one pass", fname,
 						(unsigned long long) tw.rows, (unsigned long long) npts,
-						size > 0 ? psprintf(" (labelled by squares of tile_size %.17g)", size) : " in 1 tile"),
+						labelled ? labelled : " in 1 tile"),
 				 tdc_guc_stats ? errdetail("Phases in seconds: read %.3f, triangulate %.3f, rows %.3f.",
 										   read_s, tiles_s, rows_s) : 0));
 		PG_RETURN_INT64((int64) tw.rows);
@@ -576,13 +805,13 @@ _tdc_tiled_write(PG_FUNCTION_ARGS)
 	/* the tiles, on the run's thread, while this one watches its interrupts */
 	phase = "running the tiles";
 	INSTR_TIME_SET_CURRENT(t0);
-	/* the staging buffer, still allocated, is beside the run */
-	run_tiles(br, &opt, limit_mb, setting, tdc_pointbuf_bytes(&buf), &st, fname);
+	/* the staging buffer, still allocated, and the tile values are beside the run */
+	run_tiles(br, &opt, limit_mb, setting, tdc_pointbuf_bytes(&buf) + tile_values_bytes(&sa), &st, fname);
 	tiles_s = tdc_ms_since(t0) / 1000;
 
 	phase = "writing the rows";
 	INSTR_TIME_SET_CURRENT(t0);
-	write_rows_from_file(br, &tw, sa.lo, size, fname);
+	write_rows_from_file(br, &tw, sa.tv, sa.lo, size, fname);
 	rows_s = tdc_ms_since(t0) / 1000;
 	tdc_table_writer_close(&tw);
 	bounded_run_release(br);
@@ -592,7 +821,7 @@ _tdc_tiled_write(PG_FUNCTION_ARGS)
 			(errmsg("%s: %llu triangles from %llu points%s in %d tile%s under %s = %llu MB, "
 					"%zu tile run%s, %zu halo points",
 					fname, (unsigned long long) tw.rows, (unsigned long long) npts,
-					size > 0 ? psprintf(" (labelled by squares of tile_size %.17g)", size) : "",
+					labelled ? labelled : "",
 					st.tiles, st.tiles == 1 ? "" : "s", setting, (unsigned long long) limit_mb,
 					st.runs, st.runs == 1 ? "" : "s", st.halo),
 			 errdetail("Phases in seconds: read %.3f, scan %.3f, bin %.3f, gather %.3f, engine %.3f, "

@@ -2,7 +2,9 @@
  * dump_query.c
  *		The query of a Dump function (ST_TDCDelaunayDump, ST_TDCVoronoiDump):
  *		refuse it unless it only reads, run it, and collect the vertices of
- *		its geometry column, with the id of each vertex's row when asked.
+ *		its geometry column, with the id of each vertex's row when asked,
+ *		or each row's tag (tdc_delaunay_tiled's tile column), when the query
+ *		has one, for a callback.
  *
  * The query runs through SPI as the calling user (the Dump functions are
  * not SECURITY DEFINER), read-only, behind a cursor fetched in batches of
@@ -104,16 +106,22 @@ idbuf_fill(TdcIdBuf *ids, Size upto, int64 id, MemoryContext cxt,
 
 /*
  * Check the query's columns: (geometry) without ids, (integer id, geometry)
- * with them.  Returns the id column's base type (InvalidOid without ids).
+ * with them; with tags (geometry) or (geometry, tag of any type).  Returns
+ * the id column's base type (InvalidOid without ids).
  */
 static Oid
-dump_check_columns(TupleDesc desc, bool with_ids, Oid geomoid,
+dump_check_columns(TupleDesc desc, bool with_ids, bool with_tags, Oid geomoid,
 				   const char *fname)
 {
 	Oid			idtype = InvalidOid;
 	int			gcol = with_ids ? 1 : 0;
 
-	if (desc == NULL || desc->natts != (with_ids ? 2 : 1))
+	if (with_tags && (desc == NULL || desc->natts < 1 || desc->natts > 2))
+		ereport(ERROR,
+				(errcode(ERRCODE_DATATYPE_MISMATCH),
+				 errmsg("%s: the query must return (geom geometry) or (geom geometry, tile), it returns %d columns",
+						fname, desc ? desc->natts : 0)));
+	if (desc == NULL || (!with_tags && desc->natts != (with_ids ? 2 : 1)))
 	{
 		if (with_ids)
 			ereport(ERROR,
@@ -157,7 +165,7 @@ dump_check_columns(TupleDesc desc, bool with_ids, Oid geomoid,
 static void
 dump_collect(TdcPointBuf *buf, TdcIdBuf *ids, const char *query,
 			 Oid geomoid, const char *fname, TdcDumpRowFn row_fn,
-			 void *row_arg)
+			 void *row_arg, const TdcDumpTagOps *tag_ops)
 {
 	ErrorContextCallback errcb;
 	DumpContext dc;
@@ -166,6 +174,8 @@ dump_collect(TdcPointBuf *buf, TdcIdBuf *ids, const char *query,
 	Oid			idtype;
 	int			gcol = ids ? 2 : 1;
 	MemoryContext outer = CurrentMemoryContext;
+	TdcDumpTag	tag = {0};
+	TdcDumpTag *tagp = NULL;
 
 	dc.fname = fname;
 	dc.query = query;
@@ -188,7 +198,18 @@ dump_collect(TdcPointBuf *buf, TdcIdBuf *ids, const char *query,
 	dump_check_read_only(plan, fname);
 	/* read-only: SPI refuses anything that would write, as a second guard */
 	portal = SPI_cursor_open(NULL, plan, NULL, NULL, true);
-	idtype = dump_check_columns(portal->tupDesc, ids != NULL, geomoid, fname);
+	idtype = dump_check_columns(portal->tupDesc, ids != NULL, tag_ops != NULL, geomoid, fname);
+	if (tag_ops && portal->tupDesc->natts == 2)
+	{
+		Form_pg_attribute att = TupleDescAttr(portal->tupDesc, 1);
+
+		tagp = &tag;
+		tag.typid = att->atttypid;
+		tag.typmod = att->atttypmod;
+		tag.name = pstrdup(NameStr(att->attname));
+	}
+	if (tag_ops)
+		tag_ops->columns(row_arg, tagp);
 
 	for (;;)
 	{
@@ -221,6 +242,11 @@ dump_collect(TdcPointBuf *buf, TdcIdBuf *ids, const char *query,
 			}
 			first = buf->n;
 			(void) tdc_read_geometry(buf, g, fname);
+			if (tagp)
+				tag.value = SPI_getbinval(SPI_tuptable->vals[i], SPI_tuptable->tupdesc, 2,
+										  &tag.isnull);
+			if (tag_ops)
+				tag_ops->row(row_arg, first, tagp);
 			if (row_fn)
 				row_fn(row_arg, first);
 			if (ids)
@@ -243,16 +269,16 @@ dump_collect(TdcPointBuf *buf, TdcIdBuf *ids, const char *query,
  * function, operator or type was not found gets a HINT that says so (after
  * the hint it had, if any); it keeps its code, message and CONTEXT.
  */
-void
-tdc_dump_collect(TdcPointBuf *buf, TdcIdBuf *ids, const char *query,
-				 Oid geomoid, const char *fname, TdcDumpRowFn row_fn,
-				 void *row_arg)
+static void
+dump_collect_hinted(TdcPointBuf *buf, TdcIdBuf *ids, const char *query,
+					Oid geomoid, const char *fname, TdcDumpRowFn row_fn,
+					void *row_arg, const TdcDumpTagOps *tag_ops)
 {
 	MemoryContext outer = CurrentMemoryContext;
 
 	PG_TRY();
 	{
-		dump_collect(buf, ids, query, geomoid, fname, row_fn, row_arg);
+		dump_collect(buf, ids, query, geomoid, fname, row_fn, row_arg, tag_ops);
 	}
 	PG_CATCH();
 	{
@@ -275,4 +301,26 @@ tdc_dump_collect(TdcPointBuf *buf, TdcIdBuf *ids, const char *query,
 		ReThrowError(edata);
 	}
 	PG_END_TRY();
+}
+
+void
+tdc_dump_collect(TdcPointBuf *buf, TdcIdBuf *ids, const char *query,
+				 Oid geomoid, const char *fname, TdcDumpRowFn row_fn,
+				 void *row_arg)
+{
+	dump_collect_hinted(buf, ids, query, geomoid, fname, row_fn, row_arg, NULL);
+}
+
+/*
+ * The same for a query of (geometry) or (geometry, tag of any type): once
+ * the query runs, ops->columns learns which (the tag column, or NULL), and
+ * ops->row sees each row after its vertices were appended, the first at
+ * index "first", with its tag (NULL without a tag column; NULL geometries
+ * are skipped, NULL tags are not).
+ */
+void
+tdc_dump_collect_tagged(TdcPointBuf *buf, const char *query, Oid geomoid,
+						const char *fname, const TdcDumpTagOps *ops, void *arg)
+{
+	dump_collect_hinted(buf, NULL, query, geomoid, fname, NULL, arg, ops);
 }

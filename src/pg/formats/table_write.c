@@ -1,7 +1,8 @@
 /*
  * table_write.c
  *		Rows of triangles written straight into a table the caller's
- *		transaction just created: (id bigint, tile bigint, geom geometry).
+ *		transaction just created: (id bigint, tile, geom geometry), the
+ *		tile of the caller's type (bigint, or a tile column's).
  *
  * tdc_delaunay_tiled writes millions of rows into its new target.  Through
  * SQL that cost twice: CREATE TABLE AS of a set-returning function first
@@ -74,9 +75,8 @@ check_target(Relation rel, const char *fname)
 		why = "it is not owned by the current user";
 	else if (desc->natts != 3 ||
 			 TupleDescAttr(desc, 0)->atttypid != INT8OID ||
-			 TupleDescAttr(desc, 1)->atttypid != INT8OID ||
 			 !is_geometry(TupleDescAttr(desc, 2)->atttypid))
-		why = "its columns are not (id bigint, tile bigint, geom geometry)";
+		why = "its columns are not (id bigint, tile, geom geometry)";
 	else if (rel->rd_rel->relhasindex || rel->rd_rel->relhastriggers || rel->rd_rel->relrowsecurity ||
 			 rel->rd_rel->relhasrules || (desc->constr != NULL && (desc->constr->num_check > 0 ||
 																 desc->constr->has_not_null ||
@@ -90,16 +90,22 @@ check_target(Relation rel, const char *fname)
 
 /*
  * Open the target (RowExclusiveLock, kept to the end of the transaction),
- * checked; tw->geomoid is its geometry type.  Rows come after
- * tdc_table_writer_shape.
+ * checked; tw->geomoid is its geometry type, tw->tiletype and tiletypmod
+ * its tile column's, which the caller checks against its tiles' before the
+ * first row.  Rows come after tdc_table_writer_shape.
  */
 void
 tdc_table_writer_open(TdcTableWriter *tw, Oid relid, const char *fname)
 {
+	TupleDesc	desc;
+
 	memset(tw, 0, sizeof(*tw));
 	tw->rel = table_open(relid, RowExclusiveLock);
 	check_target(tw->rel, fname);
-	tw->geomoid = TupleDescAttr(RelationGetDescr(tw->rel), 2)->atttypid;
+	desc = RelationGetDescr(tw->rel);
+	tw->geomoid = TupleDescAttr(desc, 2)->atttypid;
+	tw->tiletype = TupleDescAttr(desc, 1)->atttypid;
+	tw->tiletypmod = TupleDescAttr(desc, 1)->atttypmod;
 }
 
 /*
@@ -165,9 +171,13 @@ flush_batch(TdcTableWriter *tw)
 	CHECK_FOR_INTERRUPTS();
 }
 
-/* One row: the triangle of the three vertices at v (dim doubles each). */
+/*
+ * One row: the triangle of the three vertices at v (dim doubles each), its
+ * tile a value of the tile column's type that stays valid until the
+ * writer is closed.
+ */
 void
-tdc_table_writer_put(TdcTableWriter *tw, int64 id, int64 tile, const double *v)
+tdc_table_writer_put(TdcTableWriter *tw, int64 id, Datum tile, const double *v)
 {
 	TupleTableSlot *slot = tw->slots[tw->nbatch];
 	struct varlena *g = tw->geoms[tw->nbatch];
@@ -175,7 +185,7 @@ tdc_table_writer_put(TdcTableWriter *tw, int64 id, int64 tile, const double *v)
 	/* the tuples are formed when the batch goes in: each row has its own value */
 	tdc_gser_write_triangle_coords(g, v, tw->dim, tw->srid);
 	slot->tts_values[0] = Int64GetDatum(id);
-	slot->tts_values[1] = Int64GetDatum(tile);
+	slot->tts_values[1] = tile;
 	slot->tts_values[2] = PointerGetDatum(g);
 	slot->tts_isnull[0] = slot->tts_isnull[1] = slot->tts_isnull[2] = false;
 	ExecStoreVirtualTuple(slot);
