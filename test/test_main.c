@@ -35,6 +35,7 @@ main(int argc, char **argv)
 			setvbuf(stdout, NULL, _IOLBF, 0);
 			test_bounded();
 			test_bounded_labels();
+			test_raster_tiles();
 			printf("%ld passed, %ld failed\n", tdc_test_passed, tdc_test_failed);
 			return tdc_test_failed ? 1 : 0;
 		}
@@ -68,6 +69,7 @@ main(int argc, char **argv)
 	printf("tile: %ld passed, %ld failed so far\n", tdc_test_passed, tdc_test_failed);
 	test_bounded();
 	test_bounded_labels();
+	test_raster_tiles();
 	printf("bounded: %ld passed, %ld failed so far\n", tdc_test_passed, tdc_test_failed);
 	test_cdt();
 	printf("cdt: %ld passed, %ld failed so far\n", tdc_test_passed, tdc_test_failed);

@@ -59,6 +59,12 @@ resident_bytes(void)
  * heap kept from here on.
  */
 size_t
+heap_resident(void)
+{
+	return resident_bytes();
+}
+
+size_t
 heap_start(void)
 {
 	size_t		base = resident_bytes();

@@ -130,6 +130,8 @@ extern void oneshot_free(oneshot *r, cli_input *in);
 typedef struct gtiff_out gtiff_out;
 extern bool gtiff_path(const char *path);	/* ends in .tif or .tiff, any case */
 extern int	gtiff_check_srs(const char *srs, char *err, size_t errlen);
+/* bytes of GDAL's block cache while a GeoTIFF is written (geotiff.c caps it) */
+#define GTIFF_CACHE_BYTES	((size_t) 16 << 20)
 /* the temporary file beside path, now; removed at exit unless closed */
 extern gtiff_out *gtiff_reserve(const char *path, char *err, size_t errlen);
 extern int	gtiff_open(gtiff_out *g, size_t width, size_t height, const double gt[6],
@@ -145,15 +147,25 @@ extern void gtiff_discard(gtiff_out *g);
 /* tin_out.c: --contours or --grid on the one-shot triangulation */
 extern gtiff_out *tin_output_prepare(const cli_args *a, const cli_input *in);
 extern void tin_output(const cli_args *a, const cli_input *in, const oneshot *r, gtiff_out *tif);
+extern int	grid_geometry(const cli_args *a, const double data_box[4], tdc_grid_spec *g,
+						  double box[4], char *err, size_t errlen);
+extern void asc_header(FILE *f, const tdc_grid_spec *g, const double box[4], double nodata);
+extern void asc_rows(FILE *f, const double *v, size_t width, size_t nrows);
+
+/* grid_tiles.c: --grid in tiles */
+extern void grid_in_tiles(const cli_args *a, const char *xypath, const char *zpath, size_t n,
+						  const char *srs, gtiff_out *tif);
 
 /* tmpdir.c: the temporary directory of --max-memory, removed at exit */
 extern char tmp_dir[4096];
+extern volatile int cli_cancel;	/* a signal came: the run in tiles stops */
 extern void tmp_create(const char *base);
 extern void tmp_cleanup(void);
 extern FILE *tmp_open(const char *name, const char *mode);
 
 /* bounded_mem.c: the process's memory around a run in tiles */
 extern size_t heap_start(void);
+extern size_t heap_resident(void);	/* resident bytes now, 0 where unknown */
 extern void heap_settle(size_t limit, bool always);
 extern size_t heap_peak(void);
 

@@ -91,7 +91,7 @@
 #endif
 
 #define GTIFF_TILE	256
-#define GTIFF_CACHE	((GIntBig) 16 << 20)
+#define GTIFF_CACHE	((GIntBig) GTIFF_CACHE_BYTES)
 
 /* GDAL's entry points used here, loaded by gdal_load */
 #define GDAL_ENTRY_POINTS(X) \

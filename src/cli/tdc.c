@@ -40,6 +40,9 @@
  * (the segments are breaklines); either without the other is an error.
  * --contours takes --method too, linear with max_edge only (the one method
  * parser, tdc_interp_parse: the lines stop at the triangles it drops).
+ * --grid with --max-memory, when the one-shot run (the TIN and the grid's
+ * values included) does not fit, rasterises the tiles' final triangles as
+ * they come (grid_tiles.c): the same pixels, linear only.
  *
  * main: the arguments (parse_args), the input (read_input, or for
  * --max-memory stage_input, then read_staged when the one-shot run fits),
@@ -47,6 +50,7 @@
  */
 #include <errno.h>
 #include <math.h>
+#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -97,7 +101,9 @@ static const char usage[] =
 "         --method linear|nearest|natural_neighbor with\n"
 "         GDAL's options (e.g. linear:radius=0:nodata=-9999; default linear);\n"
 "         with --segments FILE and --method linear:breaklines=true the\n"
-"         segments are breaklines: the TIN is the constrained triangulation\n"
+"         segments are breaklines: the TIN is the constrained triangulation;\n"
+"         with --max-memory, when it does not fit, in tiles (linear only):\n"
+"         the same pixels, the peak under MB\n"
 "  --srs SRS  the GeoTIFF's CRS, anything GDAL's SetFromUserInput takes\n"
 "         (EPSG:25832, WKT, a PROJ string); default the input's, else none\n"
 "  --type Float64|Float32  the GeoTIFF's values: Float64 (default, the\n"
@@ -377,14 +383,71 @@ stage_input(const cli_args *a, staged *s)
 	}
 }
 
-/* Whether the one-shot run of the staged input fits in --max-memory. */
+/* The box of the staged points (they fit in memory: read in chunks all the same). */
+static void
+staged_box(const staged *s, double box[4])
+{
+	FILE	   *f = fopen(s->xypath, "rb");
+	double		buf[2 * 4096];
+	size_t		k;
+	bool		any = false;
+
+	if (f == NULL)
+		die(1, "cannot open %s", s->xypath);
+	while ((k = fread(buf, 16, 4096, f)) > 0)
+		for (size_t i = 0; i < k; i++)
+		{
+			double		x = buf[2 * i],
+						y = buf[2 * i + 1];
+
+			if (!any)
+			{
+				box[0] = box[2] = x;
+				box[1] = box[3] = y;
+				any = true;
+			}
+			box[0] = x < box[0] ? x : box[0];
+			box[2] = x > box[2] ? x : box[2];
+			box[1] = y < box[1] ? y : box[1];
+			box[3] = y > box[3] ? y : box[3];
+		}
+	fclose(f);
+}
+
+/*
+ * Whether the one-shot run of the staged input fits in --max-memory: the
+ * engine, the input, what the process holds now (at least 8 MB; GDAL's
+ * libraries when a GeoTIFF is to be written, loaded by then) and, for a
+ * GeoTIFF, GDAL's block cache.
+ */
 static bool
-fits(const cli_args *a, const staged *s)
+fits(const cli_args *a, const staged *s, bool tif)
 {
 	size_t		budget = (size_t) a->max_mb << 20,
+				base = heap_resident(),
 				need;
 
-	need = tdc_estimate_memory(s->n, &a->opt) + s->n * (16 + (s->has_z ? 12 : 0)) + ((size_t) 8 << 20);
+	if (base < ((size_t) 8 << 20))
+		base = (size_t) 8 << 20;
+	need = tdc_estimate_memory(s->n, &a->opt) + s->n * (16 + (s->has_z ? 12 : 0)) + base +
+		(tif ? GTIFF_CACHE_BYTES : 0);
+	if (need > budget)
+		return false;
+	if (a->grid)
+	{
+		/* the TIN, and the grid's values and flags (9 bytes a pixel) over the extent or the box */
+		tdc_grid_spec g;
+		double		data_box[4] = {0, 0, 0, 0},
+					box[4];
+		char		err[256];
+
+		if (!a->has_extent)
+			staged_box(s, data_box);
+		need += tdc_tin_memory(s->n);
+		if (grid_geometry(a, data_box, &g, box, err, sizeof(err)) != 0)
+			die(1, "%s", err);
+		need += 9 * g.width * g.height;
+	}
 	return need <= budget;
 }
 
@@ -394,7 +457,7 @@ fits(const cli_args *a, const staged *s)
  * in memory are refused.
  */
 static void
-run_in_tiles(const cli_args *a, const staged *s)
+run_in_tiles(const cli_args *a, const staged *s, gtiff_out *tif)
 {
 	tdc_bounded_stats st;
 	FILE	   *f = NULL;
@@ -409,8 +472,14 @@ run_in_tiles(const cli_args *a, const staged *s)
 		die(1, "--voronoi needs the whole triangulation in memory; %s", "raise --max-memory");
 	if (a->segpath)
 		die(1, "--segments needs the whole triangulation in memory; %s", "raise --max-memory");
-	if (a->contours || a->grid)
-		die(1, "--contours and --grid need the whole TIN in memory; %s", "raise --max-memory");
+	if (a->contours)
+		die(1, "--contours needs the whole TIN in memory (contours in tiles are not written yet); %s",
+			"raise --max-memory");
+	if (a->grid)
+	{
+		grid_in_tiles(a, s->xypath, s->has_z ? s->zpath : NULL, s->n, a->srs ? a->srs : s->srs, tif);
+		return;
+	}
 	if (a->outpath)
 	{
 		f = strcmp(a->outpath, "-") == 0 ? stdout : fopen(a->outpath, "w");
@@ -455,6 +524,8 @@ read_staged(const staged *s, cli_input *in)
 		fclose(fz);
 	}
 	tmp_cleanup();
+	if (cli_cancel)
+		raise(cli_cancel);		/* it came while the input was staged */
 }
 
 int
@@ -472,17 +543,23 @@ main(int argc, char **argv)
 		staged		s;
 
 		stage_input(&a, &s);
-		if (!fits(&a, &s))
+		/* a grid's GeoTIFF: GDAL loaded now, so that the limit counts it */
+		in.n = s.n;
+		in.srs = s.srs;
+		tif = tin_output_prepare(&a, &in);
+		if (!fits(&a, &s, tif != NULL))
 		{
-			run_in_tiles(&a, &s);
+			run_in_tiles(&a, &s, tif);
 			free(s.srs);
 			return 0;
 		}
 		read_staged(&s, &in);
 	}
 	else
+	{
 		read_input(&a, &in);
-	tif = tin_output_prepare(&a, &in);
+		tif = tin_output_prepare(&a, &in);
+	}
 	oneshot_run(&a, &in, &r);
 	if (a.contours || a.grid)
 		tin_output(&a, &in, &r, tif);

@@ -86,7 +86,8 @@ run_bounded(const char *xypath, const char *zpath, size_t n, const tdc_options *
 	tdc_bounded_params p = {
 		.xypath = xypath, .zpath = zpath, .n = n, .opt = opt, .limit = limit,
 		.tmpdir = tmp_dir, .limit_name = "--max-memory",
-		.emit = emit_text, .settle = settle, .peak = peak, .arg = &to
+		.emit = emit_text, .settle = settle, .peak = peak, .arg = &to,
+		.cancel = &cli_cancel
 	};
 	char		err[1024];
 

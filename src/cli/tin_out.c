@@ -136,6 +136,62 @@ write_tif(const cli_args *a, const tdc_grid_spec *g, const double *v, double nod
 		die(1, "%s", err);
 }
 
+/*
+ * The grid's geometry (the header's paragraph above) from the extent, or
+ * the box of the input's points; -1 with err when it has too many pixels.
+ */
+int
+grid_geometry(const cli_args *a, const double data_box[4], tdc_grid_spec *g, double box[4],
+			  char *err, size_t errlen)
+{
+	double		cs = a->grid_cell,
+				w,
+				h;
+
+	memcpy(box, a->has_extent ? a->extent : data_box, 4 * sizeof(double));
+	w = ceil((box[2] - box[0]) / cs);
+	h = ceil((box[3] - box[1]) / cs);
+	if (!(w >= 1))
+		w = 1;
+	if (!(h >= 1))
+		h = 1;
+	if (w * h > 4e9)
+	{
+		snprintf(err, errlen, "--grid: %s pixels are too many", w * h > 1e18 ? "more than 1e18" : "over 4e9");
+		return -1;
+	}
+	g->width = (size_t) w;
+	g->height = (size_t) h;
+	g->gt[0] = box[0];
+	g->gt[1] = cs;
+	g->gt[2] = 0;
+	g->gt[3] = box[1] + h * cs;
+	g->gt[4] = 0;
+	g->gt[5] = -cs;
+	return 0;
+}
+
+/* An ESRI ASCII grid's header: g's size, box's lower left corner, the cell size, nodata. */
+void
+asc_header(FILE *f, const tdc_grid_spec *g, const double box[4], double nodata)
+{
+	fprintf(f, "ncols        %zu\nnrows        %zu\nxllcorner    %.17g\nyllcorner    %.17g\n"
+			"cellsize     %.17g\nNODATA_value %.17g\n", g->width, g->height, box[0], box[1], g->gt[1],
+			nodata);
+}
+
+/* nrows rows of width values, top down, %.17g. */
+void
+asc_rows(FILE *f, const double *v, size_t width, size_t nrows)
+{
+	for (size_t r = 0; r < nrows; r++)
+	{
+		for (size_t c = 0; c < width; c++)
+			fprintf(f, c ? " %.17g" : "%.17g", v[r * width + c]);
+		fputc('\n', f);
+	}
+}
+
 static void
 grid(const cli_args *a, const tdc_job *job, tdc_tin *tin, double tin_s, const char *srs,
 	 gtiff_out *tif)
@@ -144,9 +200,7 @@ grid(const cli_args *a, const tdc_job *job, tdc_tin *tin, double tin_s, const ch
 	tdc_grid_spec g;
 	char		err[512];
 	double		box[4],
-				cs = a->grid_cell,
-				w,
-				h,
+				data_box[4] = {0, 0, 0, 0},
 				t0,
 				t1;
 	double	   *v;
@@ -155,37 +209,21 @@ grid(const cli_args *a, const tdc_job *job, tdc_tin *tin, double tin_s, const ch
 
 	if (tdc_interp_parse(a->method ? a->method : "linear", &spec, err, sizeof(err)) != TDC_OK)
 		die(2, "--method: %s", err);
-	if (a->has_extent)
-		memcpy(box, a->extent, sizeof(box));
-	else if (tdc_num_sites(job) > 0)
+	if (!a->has_extent && tdc_num_sites(job) > 0)
 	{
 		double		lo[2],
 					hi[2];
 
 		tdc_site_extent(job, lo, hi);
-		box[0] = lo[0];
-		box[1] = lo[1];
-		box[2] = hi[0];
-		box[3] = hi[1];
+		data_box[0] = lo[0];
+		data_box[1] = lo[1];
+		data_box[2] = hi[0];
+		data_box[3] = hi[1];
 	}
-	else
+	else if (!a->has_extent)
 		die(1, "--grid needs an --extent when the input has no point%s", "");
-	w = ceil((box[2] - box[0]) / cs);
-	h = ceil((box[3] - box[1]) / cs);
-	if (!(w >= 1))
-		w = 1;
-	if (!(h >= 1))
-		h = 1;
-	if (w * h > 4e9)
-		die(1, "--grid: %s pixels are too many", w * h > 1e18 ? "more than 1e18" : "over 4e9");
-	g.width = (size_t) w;
-	g.height = (size_t) h;
-	g.gt[0] = box[0];
-	g.gt[1] = cs;
-	g.gt[2] = 0;
-	g.gt[3] = box[1] + h * cs;
-	g.gt[4] = 0;
-	g.gt[5] = -cs;
+	if (grid_geometry(a, data_box, &g, box, err, sizeof(err)) != 0)
+		die(1, "%s", err);
 	v = malloc(g.width * g.height * sizeof(double) + 8);
 	ok = malloc(g.width * g.height + 1);
 	if (v == NULL || ok == NULL)
@@ -202,15 +240,8 @@ grid(const cli_args *a, const tdc_job *job, tdc_tin *tin, double tin_s, const ch
 	{
 		FILE	   *f = open_out(a->outpath);
 
-		fprintf(f, "ncols        %zu\nnrows        %zu\nxllcorner    %.17g\nyllcorner    %.17g\n"
-				"cellsize     %.17g\nNODATA_value %.17g\n", g.width, g.height, box[0], box[1], cs,
-				spec.nodata);
-		for (size_t r = 0; r < g.height; r++)
-		{
-			for (size_t c = 0; c < g.width; c++)
-				fprintf(f, c ? " %.17g" : "%.17g", v[r * g.width + c]);
-			fputc('\n', f);
-		}
+		asc_header(f, &g, box, spec.nodata);
+		asc_rows(f, v, g.width, g.height);
 		close_out(f, a->outpath);
 	}
 	if (a->stats)

@@ -10,18 +10,45 @@
  * one global.
  */
 #include <dirent.h>
+#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 #include <unistd.h>
 
 #include "cli.h"
 
 char		tmp_dir[4096];
 
-/* tmp_dir := a new directory under base; removed at exit */
+/*
+ * SIGINT, SIGTERM or SIGHUP while the directory exists: the first sets
+ * cli_cancel, which the run in tiles polls (tdc_bounded_params.cancel)
+ * and ends with "canceled", so that the exit removes the directory and
+ * what is in it (a handler cannot: readdir is not async-signal-safe); a
+ * second one ends the process at once.
+ */
+volatile int cli_cancel;
+static const int tmp_sigs[] = {SIGINT, SIGTERM, SIGHUP};
+
+static void
+on_signal(int sig)
+{
+	if (cli_cancel)
+	{
+		signal(sig, SIG_DFL);
+		raise(sig);
+		return;
+	}
+	cli_cancel = sig;
+}
+
+/* tmp_dir := a new directory under base; removed at exit, and after a signal */
 void
 tmp_create(const char *base)
 {
+	struct sigaction sa,
+				old;
+
 	snprintf(tmp_dir, sizeof(tmp_dir), "%s/tdc.XXXXXX", base);
 	if (mkdtemp(tmp_dir) == NULL)
 	{
@@ -29,6 +56,12 @@ tmp_create(const char *base)
 		die(1, "cannot create a temporary directory in %s", base);
 	}
 	atexit(tmp_cleanup);
+	memset(&sa, 0, sizeof(sa));
+	sa.sa_handler = on_signal;
+	sigemptyset(&sa.sa_mask);
+	for (int i = 0; i < 3; i++)
+		if (sigaction(tmp_sigs[i], NULL, &old) == 0 && old.sa_handler == SIG_DFL)
+			sigaction(tmp_sigs[i], &sa, NULL);
 }
 
 void
@@ -54,6 +87,14 @@ tmp_cleanup(void)
 	}
 	rmdir(tmp_dir);
 	tmp_dir[0] = '\0';
+	/* no directory, no handler: a signal ends the process again (the caller raises one that came) */
+	for (int i = 0; i < 3; i++)
+	{
+		struct sigaction old;
+
+		if (sigaction(tmp_sigs[i], NULL, &old) == 0 && old.sa_handler == on_signal)
+			signal(tmp_sigs[i], SIG_DFL);
+	}
 }
 
 FILE *

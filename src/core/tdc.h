@@ -846,6 +846,17 @@ typedef struct tdc_bounded_params
 	int			(*emit) (void *arg, int tile, const double *q, const double *qz,
 						 const int64_t *ql, const size_t *tri, size_t ntri);
 	/*
+	 * Optional, before emit: called once after the first pass, before the
+	 * plan, with the points' exact box (xmin, ymin, xmax, ymax) and their
+	 * convex hull (nhull x,y pairs, counter-clockwise, collinear vertices
+	 * dropped), both valid during the call.  *hold (0 on entry): the bytes
+	 * the caller will hold beside the tiles from then on (an output's
+	 * buffers, say), taken off the tiles' budget before the plan.  Nonzero
+	 * stops the run, as emit's does.
+	 */
+	int			(*begin) (void *arg, const double box[4], const double *hull, size_t nhull,
+						  size_t *hold);
+	/*
 	 * Optional memory hooks.  settle: hand the free heap back (always, or
 	 * only when the process nears the limit: the caller's policy), called
 	 * after binning with always and after every tile run without.  peak:
@@ -898,5 +909,38 @@ extern const char *tdc_bounded_error(const tdc_bounded_job *job);
 /* valid once tdc_bounded_wait returned TDC_OK */
 extern const tdc_bounded_stats *tdc_bounded_stats_of(const tdc_bounded_job *job);
 extern void tdc_bounded_free(tdc_bounded_job *job);
+
+/* --- A grid from a bounded run's triangles (terrain/raster.c) --- */
+
+/*
+ * The grid of tdc_tin_grid_start, computed from the final triangles a
+ * bounded run emits tile by tile instead of from a whole TIN, with the
+ * same values to the bit: linear only (its value at a pixel is decided by
+ * the triangle or edge or site that holds the pixel's centre; nearest and
+ * natural neighbour need neighbourhoods that cross tiles: TDC_EINVAL).
+ * The values wait in a temporary file of the grid's size (8 bytes a pixel,
+ * sparse: never written pixels take no disk) and come out by rows.
+ *
+ * begin: from the bounded run's begin callback (the hull is copied).  g
+ * must be north-up (gt[2] = gt[4] = 0, gt[1] > 0, gt[5] < 0).  *hold: the
+ * bytes the grid holds from then on (the buffers; add them to the run's).
+ * tile: a final tile's triangles, from the run's emit (q, qz, tri as
+ * there).  rows: after the run, rows y0 .. y0 + nrows - 1 (top down) into
+ * v (nrows * width doubles), *valid += the pixels with a value; the first
+ * call loads the sites the pixels outside the hull may take (those on the
+ * hull, and the corners of the triangles whose circumcentre lies outside
+ * it: some per hull edge), which must fit in
+ * max_bytes (TDC_EMEMLIMIT otherwise).  free: the file removed.
+ */
+typedef struct tdc_raster tdc_raster;
+
+extern int	tdc_raster_begin(const tdc_interp_spec *spec, const tdc_grid_spec *g,
+							 const double *hull, size_t nhull, const char *tmpdir,
+							 tdc_raster **r, size_t *hold, char *err, size_t errlen);
+extern int	tdc_raster_tile(tdc_raster *r, const double *q, const double *qz,
+							const size_t *tri, size_t ntri, char *err, size_t errlen);
+extern int	tdc_raster_rows(tdc_raster *r, size_t y0, size_t nrows, double *v, size_t *valid,
+							size_t max_bytes, char *err, size_t errlen);
+extern void tdc_raster_free(tdc_raster *r);
 
 #endif							/* TDC_H */

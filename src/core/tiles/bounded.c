@@ -246,6 +246,29 @@ too_short(bounded_run *r, const char *path, size_t size)
 	return false;
 }
 
+/*
+ * The caller's begin, with the box and the hull of the first pass: what it
+ * will hold beside the tiles comes off their budget before the plan, and
+ * a limit it leaves nothing of is an error.
+ */
+static int
+begin_output(bounded_run *r)
+{
+	size_t		hold = 0;
+	int			rc = r->p->begin(r->p->arg, r->bb, r->hull, r->nhull, &hold);
+
+	if (rc != 0)
+		return tdc_bd_fail(&r->e, rc < 0 ? rc : TDC_EINVAL, "the output could not begin "
+						   "(the caller's begin returned %d)", rc);
+	r->outside += hold;
+	if (r->outside >= r->limit)
+		return tdc_bd_fail(&r->e, TDC_EMEMLIMIT, "%s %zu is below the %zu MB the process and "
+						   "the output's buffers hold beside the tiles; raise it",
+						   r->lname, r->limit >> 20, (r->outside >> 20) + 1);
+	r->budget = r->limit - r->outside;
+	return TDC_OK;
+}
+
 /* The phases in order; the first error stops them. */
 static int
 run_phases(bounded_run *r)
@@ -256,6 +279,9 @@ run_phases(bounded_run *r)
 	t0 = now_s();
 	/* the points' box and hull; the cells counted when the grid is known */
 	if (tdc_bd_scan_input(r) != TDC_OK)
+		return r->e.code;
+	/* the caller's output, sized by the box, holds its buffers from here on */
+	if (r->p->begin && begin_output(r) != TDC_OK)
 		return r->e.code;
 	/* every cell in one tile, every tile at most tile_max points */
 	if (plan(r) != TDC_OK)

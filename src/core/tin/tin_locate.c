@@ -54,6 +54,7 @@
 #include <string.h>
 
 #include "tin_int.h"
+#include "tin_lerp.h"
 
 static inline double
 orient(const double *a, const double *b, const double *c)
@@ -466,83 +467,29 @@ tin_nearest(const tdc_tin *tin, const double *q, const tin_loc *loc)
  * ----------------------------------------------------------------
  */
 
-/* Linear along edge a-b at q (on it), from the end first in (x, y) order. */
+/* Linear along edge a-b at q (on it), from the end first in (x, y) order (tin_lerp.c). */
 double
 tin_lerp_edge(const tdc_tin *tin, uint32_t a, uint32_t b, const double *q)
 {
-	const double *p0,
-			   *p1;
-	double		dx,
-				dy,
-				u,
-				z0,
-				z1;
-
-	if (tdc_lex_less(tin_pt(tin, b), tin_pt(tin, a)))
-	{
-		uint32_t	t = a;
-
-		a = b;
-		b = t;
-	}
-	p0 = tin_pt(tin, a);
-	p1 = tin_pt(tin, b);
-	z0 = tin->sz[a];
-	z1 = tin->sz[b];
-	dx = p1[0] - p0[0];
-	dy = p1[1] - p0[1];
-	u = ((q[0] - p0[0]) * dx + (q[1] - p0[1]) * dy) / (dx * dx + dy * dy);
-	if (!(u > 0))
-		u = 0;
-	if (u > 1)
-		u = 1;
-	return z0 + u * (z1 - z0);
+	return tin_lerp_xy(tin_pt(tin, a), tin->sz[a], tin_pt(tin, b), tin->sz[b], q);
 }
 
-/* Linear in the triangle left of h at q (inside it), from its first vertex. */
+/* Linear in the triangle left of h at q (inside it), from its first vertex (tin_lerp.c). */
 double
 tin_linear_face(const tdc_tin *tin, uint32_t h, const double *q)
 {
-	uint32_t	v[3],
-				a,
-				b,
-				c;
-	const double *pa,
-			   *pb,
-			   *pc;
-	double		ux,
-				uy,
-				vx,
-				vy,
-				wx,
-				wy,
-				det,
-				s,
-				t;
-	int			k = 0;
+	uint32_t	v[3];
+	const double *p[3];
+	double		z[3];
 
 	v[0] = tin_org(tin, h);
 	h = tin_lnext(tin, h);
 	v[1] = tin_org(tin, h);
 	v[2] = tin_dest(tin, h);
-	if (tdc_lex_less(tin_pt(tin, v[1]), tin_pt(tin, v[k])))
-		k = 1;
-	if (tdc_lex_less(tin_pt(tin, v[2]), tin_pt(tin, v[k])))
-		k = 2;
-	a = v[k];
-	b = v[(k + 1) % 3];
-	c = v[(k + 2) % 3];
-	pa = tin_pt(tin, a);
-	pb = tin_pt(tin, b);
-	pc = tin_pt(tin, c);
-	ux = pb[0] - pa[0];
-	uy = pb[1] - pa[1];
-	vx = pc[0] - pa[0];
-	vy = pc[1] - pa[1];
-	wx = q[0] - pa[0];
-	wy = q[1] - pa[1];
-	det = ux * vy - uy * vx;
-	s = (wx * vy - wy * vx) / det;
-	t = (ux * wy - uy * wx) / det;
-	return tin->sz[a] + s * (tin->sz[b] - tin->sz[a]) + t * (tin->sz[c] - tin->sz[a]);
+	for (int k = 0; k < 3; k++)
+	{
+		p[k] = tin_pt(tin, v[k]);
+		z[k] = tin->sz[v[k]];
+	}
+	return tin_face_xy(p, z, q);
 }
