@@ -282,7 +282,7 @@ MPWG_DEF=$(sql -c "SELECT reset_val FROM pg_settings WHERE name = 'max_parallel_
 
 echo "dataset,statement,settings,plan,pcs_median_ms,ng_median_ms,pcs_runs,ng_runs,pcs_min_ms,pcs_max_ms,ng_min_ms,ng_max_ms,bytes,triangles,sfcgal_over_this_pcs,sfcgal_over_this_ng,this_over_unconstrained_pcs,this_over_unconstrained_ng,triangles_as_sfcgal,failure" > "$CSV"
 {
-	echo "- server: $PG_VER, PostGIS $PGIS_VER, $SFCGAL_VER, tdc_delaunay $TDC_VER (git $(git -C "$ROOT" rev-parse --short HEAD 2>/dev/null || echo '?')$(git -C "$ROOT" diff --quiet HEAD 2>/dev/null || echo ', with uncommitted changes'); $SO: $SO_START)"
+	echo "- server: $PG_VER, PostGIS $PGIS_VER, $SFCGAL_VER, tdc_delaunay $TDC_VER (git $(git -C "$ROOT" rev-parse --short HEAD 2>/dev/null || echo '?')$(git -C "$ROOT" diff --quiet HEAD -- src bench 2>/dev/null || echo ', with uncommitted changes in src/ or bench/'); $SO: $SO_START)"
 	if [ "$SO_START" != "$SO_END" ]; then
 		echo "- **WARNING: tdc_delaunay.so was replaced during the run ($SO_START -> $SO_END): the figures mix two builds; run again.**"
 	fi
