@@ -230,7 +230,7 @@ build_buckets(void)
 	}
 	bw = fmax(x1 - bx0, 1e-300);
 	bh = fmax(y1 - by0, 1e-300);
-	nb = (int) fmax(1, fmin(256, sqrt((double) ns / 2)));
+	nb = (int) fmax(1, fmin(2048, sqrt((double) ns / 2)));	/* a few samples a bucket up to 1e7 */
 	cnt = calloc((size_t) nb * nb + 1, sizeof(size_t));
 	bstart = calloc((size_t) nb * nb + 1, sizeof(size_t));
 	bitem = malloc(ns * sizeof(size_t));
