@@ -156,6 +156,9 @@ extern void asc_rows(FILE *f, const double *v, size_t width, size_t nrows);
 extern void grid_in_tiles(const cli_args *a, const char *xypath, const char *zpath, size_t n,
 						  const char *srs, gtiff_out *tif);
 
+/* contours_tiles.c: --contours in tiles */
+extern void contours_in_tiles(const cli_args *a, const char *xypath, const char *zpath, size_t n);
+
 /* tmpdir.c: the temporary directory of --max-memory, removed at exit */
 extern char tmp_dir[4096];
 extern volatile int cli_cancel;	/* a signal came: the run in tiles stops */

@@ -473,8 +473,10 @@ run_in_tiles(const cli_args *a, const staged *s, gtiff_out *tif)
 	if (a->segpath)
 		die(1, "--segments needs the whole triangulation in memory; %s", "raise --max-memory");
 	if (a->contours)
-		die(1, "--contours needs the whole TIN in memory (contours in tiles are not written yet); %s",
-			"raise --max-memory");
+	{
+		contours_in_tiles(a, s->xypath, s->has_z ? s->zpath : NULL, s->n);
+		return;
+	}
 	if (a->grid)
 	{
 		grid_in_tiles(a, s->xypath, s->has_z ? s->zpath : NULL, s->n, a->srs ? a->srs : s->srs, tif);

@@ -69,11 +69,12 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "tin_cut.h"
 #include "tin_int.h"
 
 #define TRI_PER_TASK	65536
 #define HIST_MAX		((size_t) 16 << 20)		/* counters of the level histograms */
-#define MAX_LEVELS		((int64_t) 1 << 31)
+#define MAX_LEVELS		TIN_MAX_LEVELS
 
 typedef struct contour_line
 {
@@ -123,26 +124,14 @@ typedef struct contour_op
 static inline double
 level_of(const contour_op *op, int64_t k)
 {
-	return op->base + (double) k * op->interval;
+	return tin_level(op->base, op->interval, k);
 }
 
 /* The lowest k with L_k > z. */
-static int64_t
+static inline int64_t
 k_above(const contour_op *op, double z)
 {
-	double		f = floor((z - op->base) / op->interval);
-	int64_t		k;
-
-	if (f < -(double) MAX_LEVELS * 4)
-		f = -(double) MAX_LEVELS * 4;
-	if (f > (double) MAX_LEVELS * 4)
-		f = (double) MAX_LEVELS * 4;
-	k = (int64_t) f;
-	while (level_of(op, k) <= z)
-		k++;
-	while (level_of(op, k - 1) > z)
-		k--;
-	return k;
+	return tin_k_above(op->base, op->interval, z);
 }
 
 /* The highest k with L_k <= z. */
@@ -310,39 +299,14 @@ group_place_task(void *arg, size_t g, int worker)
  * ----------------------------------------------------------------
  */
 
-/* The crossing of edge h at level L (its ends on either side). */
-static void
+/* The crossing of edge h at level L (its ends on either side): tin_cut.c's. */
+static inline void
 crossing(const tdc_tin *tin, uint32_t h, double L, double *p)
 {
 	uint32_t	a = tin_org(tin, h),
 				b = tin_dest(tin, h);
-	const double *pa,
-			   *pb;
-	double		za,
-				zb,
-				t;
 
-	/* b: the end below, a: the end above */
-	if (tin->sz[a] < L)
-	{
-		uint32_t	s = a;
-
-		a = b;
-		b = s;
-	}
-	pa = tin_pt(tin, a);
-	pb = tin_pt(tin, b);
-	za = tin->sz[a];
-	zb = tin->sz[b];
-	if (za == L)
-	{
-		p[0] = pa[0];
-		p[1] = pa[1];
-		return;
-	}
-	t = (L - zb) / (za - zb);
-	p[0] = pb[0] + t * (pa[0] - pb[0]);
-	p[1] = pb[1] + t * (pa[1] - pb[1]);
+	tin_cut_xy(tin_pt(tin, a), tin->sz[a], tin_pt(tin, b), tin->sz[b], L, p);
 }
 
 /* The down and up edges of triangle t at level L (it is crossed). */
@@ -870,24 +834,11 @@ tdc_tin_contours_start_spec(tdc_tin *tin, double interval, double base,
 	op->max_edge = spec != NULL ? spec->max_edge : 0;
 	if (tin->built && tin->nsites > 0 && tin->ntri > 0)
 	{
-		/*
-		 * Every level between the heights must be a double of its own:
-		 * L_k = fl(base + fl(k interval)) is off by at most eps (|k
-		 * interval| + |L_k|), so an interval above 4 eps times the largest
-		 * such term keeps consecutive levels apart.
-		 */
-		double		k0 = floor((tin->zmin - base) / interval) - 1,
-					k1 = floor((tin->zmax - base) / interval) + 1,
-					a = fmax(fabs(k0) * interval + fabs(base + k0 * interval),
-							 fabs(k1) * interval + fabs(base + k1 * interval));
-
-		if (!(fabs(k1 - k0) < (double) MAX_LEVELS) || !(interval > 0x1p-50 * a))
+		/* every level between the heights must be a double of its own (tin_cut.c) */
+		if ((rc = tin_levels_check(interval, base, tin->zmin, tin->zmax, err, errlen)) != TDC_OK)
 		{
 			free(op);
-			FAIL(TDC_EINVAL, "the contour interval %g is too small for heights from %g to %g (base %g): "
-				 "%s", interval, tin->zmin, tin->zmax, base,
-				 !(fabs(k1 - k0) < (double) MAX_LEVELS) ? "more than 2^31 levels" :
-				 "consecutive levels would round to the same number");
+			return rc;
 		}
 	}
 #undef FAIL
