@@ -18,8 +18,8 @@
  * take are loaded then, within what the limit leaves.
  *
  * Linear only: a nearest or natural neighbour value may depend on sites
- * that no one tile proves complete (the core refuses, with the reason),
- * and --contours in tiles is not written yet.
+ * that no one tile proves complete (the core refuses, with the reason).
+ * --contours in tiles is contours_tiles.c.
  */
 #include <math.h>
 #include <stdlib.h>

@@ -42,7 +42,9 @@
  * parser, tdc_interp_parse: the lines stop at the triangles it drops).
  * --grid with --max-memory, when the one-shot run (the TIN and the grid's
  * values included) does not fit, rasterises the tiles' final triangles as
- * they come (grid_tiles.c): the same pixels, linear only.
+ * they come (grid_tiles.c): the same pixels, linear only; --contours
+ * likewise cuts them into pieces of lines, joined after the last tile
+ * (contours_tiles.c): the same lines.
  *
  * main: the arguments (parse_args), the input (read_input, or for
  * --max-memory stage_input, then read_staged when the one-shot run fits),
@@ -433,6 +435,8 @@ fits(const cli_args *a, const staged *s, bool tif)
 		(tif ? GTIFF_CACHE_BYTES : 0);
 	if (need > budget)
 		return false;
+	if (a->contours)
+		need += tdc_tin_memory(s->n);	/* the TIN; the lines are charged as they come */
 	if (a->grid)
 	{
 		/* the TIN, and the grid's values and flags (9 bytes a pixel) over the extent or the box */
