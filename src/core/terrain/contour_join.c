@@ -115,13 +115,7 @@ cmp_line_level(const void *x, const void *y)
 	return a->k < b->k ? -1 : a->k > b->k ? 1 : a->head < b->head ? -1 : a->head > b->head;
 }
 
-static inline int
-cmp_pt(const double *a, const double *b)
-{
-	return a[0] < b[0] ? -1 : a[0] > b[0] ? 1 : a[1] < b[1] ? -1 : a[1] > b[1] ? 1 : 0;
-}
-
-/* Two lines of a level by their points, in (x, y) order, then by length (tin_contour.c's order). */
+/* Two lines of a level by their points (tin_contour.c's order, tin_cut.c's comparison). */
 static int
 cmp_line_pts(const void *x, const void *y, void *arg)
 {
@@ -129,54 +123,7 @@ cmp_line_pts(const void *x, const void *y, void *arg)
 	const ct_line *a = x,
 			   *b = y;
 
-	for (size_t i = 0; i < a->n && i < b->n; i++)
-	{
-		int			c = cmp_pt(xy + 2 * (a->first + i), xy + 2 * (b->first + i));
-
-		if (c != 0)
-			return c;
-	}
-	return a->n < b->n ? -1 : a->n > b->n ? 1 : 0;
-}
-
-static void
-reverse_pts(double *xy, size_t i, size_t j)
-{
-	for (; i + 1 < j; i++, j--)
-	{
-		double		x = xy[2 * i],
-					y = xy[2 * i + 1];
-
-		xy[2 * i] = xy[2 * (j - 1)];
-		xy[2 * i + 1] = xy[2 * (j - 1) + 1];
-		xy[2 * (j - 1)] = x;
-		xy[2 * (j - 1) + 1] = y;
-	}
-}
-
-/* A ring of m points (its closing repeat after them) turned to its rotation first in (x, y) order. */
-static void
-canon_ring(double *xy, size_t m)
-{
-	size_t		best = 0;
-
-	for (size_t r = 1; r < m; r++)
-	{
-		int			c = cmp_pt(xy + 2 * r, xy + 2 * best);
-
-		for (size_t i = 1; c == 0 && i < m; i++)
-			c = cmp_pt(xy + 2 * ((r + i) % m), xy + 2 * ((best + i) % m));
-		if (c < 0)
-			best = r;
-	}
-	if (best == 0)
-		return;
-	/* a rotation in place: three reversals */
-	reverse_pts(xy, 0, best);
-	reverse_pts(xy, best, m);
-	reverse_pts(xy, 0, m);
-	xy[2 * m] = xy[0];
-	xy[2 * m + 1] = xy[1];
+	return tin_line_cmp(xy + 2 * a->first, a->n, xy + 2 * b->first, b->n);
 }
 
 static int
@@ -272,7 +219,7 @@ do_level(tdc_contour_tiles *c, ct_join *j, ct_line *line, size_t nl, size_t max_
 			continue;
 		}
 		if (ln->closed)
-			canon_ring(xy + 2 * start, ln->n - 1);
+			tin_ring_canon(xy + 2 * start, ln->n - 1);
 		line[kept++] = *ln;
 	}
 	if (rc == TDC_OK && kept > 1)

@@ -379,53 +379,6 @@ out_reverse(level_out *o, size_t i, size_t j)
 	}
 }
 
-static inline int
-cmp_pt(const double *a, const double *b)
-{
-	return a[0] < b[0] ? -1 : a[0] > b[0] ? 1 : a[1] < b[1] ? -1 : a[1] > b[1] ? 1 : 0;
-}
-
-/*
- * A closed ring of m points plus its closing repeat at xy: turned to start
- * at the rotation whose point sequence is first in (x, y) order, so that a
- * ring starts where it would whatever triangle it was found from.  Returns
- * false when out of memory (tmp, m points).
- */
-static bool
-canon_ring(tdc_tin *tin, double *xy, size_t m)
-{
-	size_t		best = 0;
-	double	   *tmp;
-
-	for (size_t r = 1; r < m; r++)
-	{
-		int			c = cmp_pt(xy + 2 * r, xy + 2 * best);
-
-		for (size_t i = 1; c == 0 && i < m; i++)
-			c = cmp_pt(xy + 2 * ((r + i) % m), xy + 2 * ((best + i) % m));
-		if (c < 0)
-			best = r;
-	}
-	if (best == 0)
-		return true;
-	tmp = malloc(m * 2 * sizeof(double));
-	if (tmp == NULL)
-	{
-		tin_fail(tin, TDC_ENOMEM, "out of memory for the contour lines");
-		return false;
-	}
-	for (size_t i = 0; i < m; i++)
-	{
-		tmp[2 * i] = xy[2 * ((best + i) % m)];
-		tmp[2 * i + 1] = xy[2 * ((best + i) % m) + 1];
-	}
-	memcpy(xy, tmp, m * 2 * sizeof(double));
-	xy[2 * m] = xy[0];
-	xy[2 * m + 1] = xy[1];
-	free(tmp);
-	return true;
-}
-
 /*
  * The line through segment (t, k), which is not taken: appended to o.
  * Returns false on failure (the TIN failed) or cancel.
@@ -513,8 +466,8 @@ trace(tdc_tin *tin, contour_op *op, level_out *o, size_t t0, int64_t k)
 			o->n = start;
 			return true;
 		}
-		if (closed && !canon_ring(tin, o->xy + 2 * start, n - 1))
-			return false;
+		if (closed)
+			tin_ring_canon(o->xy + 2 * start, n - 1);
 	}
 	if (o->nlines == o->lcap)
 	{
@@ -589,14 +542,7 @@ cmp_line(const void *x, const void *y, void *arg)
 	const contour_line *a = x,
 			   *b = y;
 
-	for (size_t i = 0; i < a->n && i < b->n; i++)
-	{
-		int			c = cmp_pt(o->xy + 2 * (a->first + i), o->xy + 2 * (b->first + i));
-
-		if (c != 0)
-			return c;
-	}
-	return a->n < b->n ? -1 : a->n > b->n ? 1 : 0;
+	return tin_line_cmp(o->xy + 2 * a->first, a->n, o->xy + 2 * b->first, b->n);
 }
 
 static int

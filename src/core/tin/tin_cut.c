@@ -1,6 +1,6 @@
 /*
  * tin_cut.c
- *		Contour levels and crossings (tin_cut.h).
+ *		Contour levels, crossings, and the order of lines (tin_cut.h).
  *
  * Plain floating point, so the order of the operations is part of the
  * result: the whole TIN's contours and a bounded run's agree to the bit
@@ -60,6 +60,60 @@ tin_cut_xy(const double *p0, double z0, const double *p1, double z1, double L, d
 	t = (L - zb) / (za - zb);
 	c[0] = pb[0] + t * (pa[0] - pb[0]);
 	c[1] = pb[1] + t * (pa[1] - pb[1]);
+}
+
+/* Reverse the points [i, j). */
+static void
+reverse_pts(double *xy, size_t i, size_t j)
+{
+	for (; i + 1 < j; i++, j--)
+	{
+		double		x = xy[2 * i],
+					y = xy[2 * i + 1];
+
+		xy[2 * i] = xy[2 * (j - 1)];
+		xy[2 * i + 1] = xy[2 * (j - 1) + 1];
+		xy[2 * (j - 1)] = x;
+		xy[2 * (j - 1) + 1] = y;
+	}
+}
+
+void
+tin_ring_canon(double *xy, size_t m)
+{
+	size_t		best = 0;
+
+	/* should the ring pass a point twice, the first rotation of the least sequence */
+	for (size_t r = 1; r < m; r++)
+	{
+		int			c = tin_pt_cmp(xy + 2 * r, xy + 2 * best);
+
+		for (size_t i = 1; c == 0 && i < m; i++)
+			c = tin_pt_cmp(xy + 2 * ((r + i) % m), xy + 2 * ((best + i) % m));
+		if (c < 0)
+			best = r;
+	}
+	if (best == 0)
+		return;
+	/* the rotation in place, by three reversals: no scratch to allocate */
+	reverse_pts(xy, 0, best);
+	reverse_pts(xy, best, m);
+	reverse_pts(xy, 0, m);
+	xy[2 * m] = xy[0];
+	xy[2 * m + 1] = xy[1];
+}
+
+int
+tin_line_cmp(const double *a, size_t na, const double *b, size_t nb)
+{
+	for (size_t i = 0; i < na && i < nb; i++)
+	{
+		int			c = tin_pt_cmp(a + 2 * i, b + 2 * i);
+
+		if (c != 0)
+			return c;
+	}
+	return na < nb ? -1 : na > nb ? 1 : 0;
 }
 
 int

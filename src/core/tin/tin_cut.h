@@ -32,6 +32,23 @@ extern int64_t tin_k_above(double base, double interval, double z);
 extern void tin_cut_xy(const double *p0, double z0, const double *p1, double z1, double L,
 					   double *c);
 
+/* Two points in (x, y) order: -1, 0 or 1. */
+static inline int
+tin_pt_cmp(const double *a, const double *b)
+{
+	return a[0] < b[0] ? -1 : a[0] > b[0] ? 1 : a[1] < b[1] ? -1 : a[1] > b[1] ? 1 : 0;
+}
+
+/*
+ * A ring of m points (x,y pairs), its closing repeat after them, turned in
+ * place to start at the rotation whose points come first in (x, y) order,
+ * so that it starts where it would whatever triangle it was found from.
+ */
+extern void tin_ring_canon(double *xy, size_t m);
+
+/* Two lines (na and nb points) by their points in (x, y) order, then the shorter first. */
+extern int	tin_line_cmp(const double *a, size_t na, const double *b, size_t nb);
+
 /*
  * The check that every level between zmin and zmax is a double of its own
  * and that there are at most 2^31 of them: TDC_OK, or TDC_EINVAL with the
