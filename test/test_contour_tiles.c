@@ -18,7 +18,8 @@
  *	- "clusters": dense spots in a sparse field, tiles of unequal sizes;
  *	- every case in at least 8 tiles (the run's stats say), nothing left in
  *	  the directory; an interval too small for the heights refused with
- *	  the one-shot's message.
+ *	  the one-shot's message; a join, or a level's lines, that would not
+ *	  fit in what the limit leaves refused with the numbers.
  * Comparing counts alone would pass with a wrong ring start or a wrong
  * join; every point of every line is compared.
  */
@@ -208,8 +209,8 @@ whole_lines(const ctt_case *c, const ctt_state *s, int threads, ctt_lines *out, 
 
 /* The lines in tiles; the return code, the message in err, the tiles in *tiles. */
 static int
-tiled_lines(const ctt_case *c, ctt_state *s, const char *dir, int threads, ctt_lines *out,
-			int *tiles, char *err, size_t errlen)
+tiled_lines(const ctt_case *c, ctt_state *s, const char *dir, int threads, size_t max_bytes,
+			ctt_lines *out, int *tiles, char *err, size_t errlen)
 {
 	char		xyp[4200],
 				zp[4200];
@@ -242,7 +243,7 @@ tiled_lines(const ctt_case *c, ctt_state *s, const char *dir, int threads, ctt_l
 	rc = tdc_bounded_run(&p, &st, err, errlen);
 	*tiles = st.tiles;
 	if (rc == TDC_OK)
-		rc = tdc_contour_tiles_lines(s->ct, (size_t) 64 << 20, add_line, out, NULL, &nl, &np,
+		rc = tdc_contour_tiles_lines(s->ct, max_bytes, add_line, out, NULL, &nl, &np,
 									 err, errlen);
 	if (rc == TDC_OK)
 		CHECK(nl == out->nlines && np == out->npts, "contours in tiles %s: counted %zu lines "
@@ -269,7 +270,7 @@ compare(const ctt_case *c, double interval, double base, const char *method, con
 	CHECK(tdc_interp_parse(method, &s.spec, err, sizeof(err)) == TDC_OK, "contours: parse %s", method);
 	rc = whole_lines(c, &s, threads, &a, err, sizeof(err));
 	CHECK(rc == TDC_OK, "contours %s: the whole TIN's: %d %s", c->name, rc, err);
-	rc = tiled_lines(c, &s, dir, threads, &b, &tiles, err, sizeof(err));
+	rc = tiled_lines(c, &s, dir, threads, (size_t) 64 << 20, &b, &tiles, err, sizeof(err));
 	CHECK(rc == TDC_OK, "contours %s: in tiles: %d %s", c->name, rc, err);
 	CHECK(tiles >= 8, "contours %s %s: %d tiles, at least 8 expected", c->name, method, tiles);
 	CHECK(a.nlines > 10, "contours %s %s every %g: only %zu lines", c->name, method, interval,
@@ -344,10 +345,40 @@ test_contour_tiles(void)
 
 		tdc_interp_parse("linear", &s.spec, e1, sizeof(e1));
 		r1 = whole_lines(&c, &s, 2, &a, e1, sizeof(e1));
-		r2 = tiled_lines(&c, &s, dir, 2, &b, &tiles, e2, sizeof(e2));
+		r2 = tiled_lines(&c, &s, dir, 2, (size_t) 64 << 20, &b, &tiles, e2, sizeof(e2));
 		CHECK(r1 == TDC_EINVAL && r2 == TDC_EINVAL && strcmp(e1, e2) == 0 && b.nlines == 0,
 			  "contours: a tiny interval: %d '%s' in tiles, %d '%s' whole", r2, e2, r1, e1);
 		CHECK(files_in(dir) == 0, "contours: a tiny interval: files left in %s", dir);
+		lines_free(&a);
+		lines_free(&b);
+	}
+
+	/*
+	 * Too little memory left for the join (4 kB), then for a level's lines:
+	 * one level (0.5 between heights of -50 to 51), half its points' bytes
+	 * (a chain holds far more than 12 points, so the join itself fits).
+	 */
+	for (int k = 0; k < 2; k++)
+	{
+		ctt_state	s = {.interval = k == 0 ? 5 : 100, .base = k == 0 ? 0 : 0.5};
+		ctt_lines	a = {0},
+					b = {0};
+		char		e[1024];
+		int			tiles,
+					rc;
+		size_t		budget = 4096;
+
+		tdc_interp_parse("linear", &s.spec, e, sizeof(e));
+		if (k == 1)
+		{
+			rc = tiled_lines(&c, &s, dir, 2, (size_t) 64 << 20, &a, &tiles, e, sizeof(e));
+			CHECK(rc == TDC_OK && a.nlines > 0, "contours: one level: %d %s", rc, e);
+			budget = a.npts * 8;
+		}
+		rc = tiled_lines(&c, &s, dir, 2, budget, &b, &tiles, e, sizeof(e));
+		CHECK(rc == TDC_EMEMLIMIT && strstr(e, k == 0 ? "contour chains needs" : "for one level's") &&
+			  strstr(e, "raise it") != NULL, "contours: a join in %zu bytes: %d '%s'", budget, rc, e);
+		CHECK(files_in(dir) == 0, "contours: a join short of memory: files left in %s", dir);
 		lines_free(&a);
 		lines_free(&b);
 	}

@@ -27,7 +27,7 @@
  * point by point in (x, y) order, then the shorter first), the levels
  * increasing.
  *
- * Memory.  The chain records (88 bytes each, plus 9 of indexes) and then
+ * Memory.  The chain records (88 bytes each, plus 41 of indexes and line) and then
  * one level's points at a time must fit in max_bytes: else TDC_EMEMLIMIT
  * with the numbers.  The points are read back from the points file chain
  * by chain, level by level.
