@@ -387,7 +387,7 @@ expect_error "--grid with an elliptic nearest" $TDC --grid 1 --method nearest:ra
 expect_error "--grid 0" $TDC --grid 0 "$tmp/zx.txt"
 expect_error "--extent without --grid" $TDC --extent 0,0,1,1 "$tmp/zx.txt"
 expect_error "--grid with a bad extent" $TDC --grid 1 --extent 1,0,0,1 "$tmp/zx.txt"
-expect_error "--max-memory with --contours" $TDC --max-memory 10 --contours 1 "$tmp/big.bin"
+expect_error "--max-memory with --contours of x y input" $TDC --max-memory 10 --contours 1 "$tmp/big.bin"
 
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ]

@@ -11,9 +11,9 @@
 #     lake and the buildings' holes, max_edge, the LAS file's CRS;
 #   - the GSHHG coastline of Stockholm (test/fixtures): real clustered
 #     data, under a tight limit;
-#   - the refusals (nearest, natural neighbour, contours in tiles, input
-#     without heights), each one line, with no -o written and nothing left
-#     in --tmpdir; SIGINT in the middle leaves no file behind.
+#   - the refusals (nearest, natural neighbour, input without heights),
+#     each one line, with no -o written and nothing left in --tmpdir;
+#     SIGINT in the middle leaves no file behind.
 #   bash test/cli_grid_tiles.sh        (prints "N passed, N failed")
 set -u
 cd "$(dirname "$0")/.."
@@ -110,7 +110,6 @@ refuse() {	# name pattern args...
 }
 refuse "nearest in tiles" "linear: a nearest or natural neighbour" --grid 4 --method nearest
 refuse "natural neighbour in tiles" "linear: a nearest or natural neighbour" --grid 4 --method natural_neighbor
-refuse "contours in tiles" "contours in tiles are not written yet" --contours 5
 awk '{ print $1, $2 }' "$tmp/hills.txt" > "$tmp/flat.txt"
 rm -f "$tmp/r.out"
 $TDC --max-memory 18 --tmpdir "$tmp/t" --grid 4 -o "$tmp/r.out" "$tmp/flat.txt" > /dev/null 2> "$tmp/r.err"

@@ -48,6 +48,7 @@ extern void test_tile(void);
 extern void test_bounded(void);
 extern void test_bounded_labels(void);
 extern void test_raster_tiles(void);
+extern void test_contour_tiles(void);
 extern void test_cdt(void);
 extern void test_tin(void);
 extern void test_tin_reference(void);

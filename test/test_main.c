@@ -36,6 +36,7 @@ main(int argc, char **argv)
 			test_bounded();
 			test_bounded_labels();
 			test_raster_tiles();
+			test_contour_tiles();
 			printf("%ld passed, %ld failed\n", tdc_test_passed, tdc_test_failed);
 			return tdc_test_failed ? 1 : 0;
 		}
@@ -70,6 +71,7 @@ main(int argc, char **argv)
 	test_bounded();
 	test_bounded_labels();
 	test_raster_tiles();
+	test_contour_tiles();
 	printf("bounded: %ld passed, %ld failed so far\n", tdc_test_passed, tdc_test_failed);
 	test_cdt();
 	printf("cdt: %ld passed, %ld failed so far\n", tdc_test_passed, tdc_test_failed);

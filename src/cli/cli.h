@@ -12,11 +12,14 @@
  *	tmpdir.c	the temporary directory of --max-memory
  *	tin_out.c	--contours and --grid: the TIN of x y z input, written as text
  *				or (geotiff.c) as a GeoTIFF
+ *	grid_tiles.c	--grid in tiles: the run's triangles rasterised (terrain/raster.c)
+ *	contours_tiles.c	--contours in tiles: the run's triangles cut into lines
+ *				(terrain/contour_tiles.c), joined after it
  *	geotiff.c	the GeoTIFF writer, through GDAL
  *	die.c		how ./tdc fails
  * Layered without loops: die.c at the bottom, then tmpdir.c, bounded_mem.c
  * and geotiff.c and las.c, then input.c and tiles.c, then oneshot.c and
- * tin_out.c, then tdc.c.
+ * tin_out.c, then grid_tiles.c and contours_tiles.c, then tdc.c.
  */
 #ifndef TDC_CLI_H
 #define TDC_CLI_H
@@ -156,6 +159,9 @@ extern void asc_rows(FILE *f, const double *v, size_t width, size_t nrows);
 extern void grid_in_tiles(const cli_args *a, const char *xypath, const char *zpath, size_t n,
 						  const char *srs, gtiff_out *tif);
 
+/* contours_tiles.c: --contours in tiles */
+extern void contours_in_tiles(const cli_args *a, const char *xypath, const char *zpath, size_t n);
+
 /* tmpdir.c: the temporary directory of --max-memory, removed at exit */
 extern char tmp_dir[4096];
 extern volatile int cli_cancel;	/* a signal came: the run in tiles stops */
@@ -168,6 +174,9 @@ extern size_t heap_start(void);
 extern size_t heap_resident(void);	/* resident bytes now, 0 where unknown */
 extern void heap_settle(size_t limit, bool always);
 extern size_t heap_peak(void);
+
+/* tiles.c: --stats' line of a run in tiles that writes a product (grid, contours) */
+extern void tiles_stats_line(const tdc_bounded_stats *st, double total);
 
 /* tiles.c: the run in tiles (tdc_bounded_run), its triangles to out (when not NULL) */
 extern void run_bounded(const char *xypath, const char *zpath, size_t n, const tdc_options *opt,

@@ -18,13 +18,12 @@
  * take are loaded then, within what the limit leaves.
  *
  * Linear only: a nearest or natural neighbour value may depend on sites
- * that no one tile proves complete (the core refuses, with the reason),
- * and --contours in tiles is not written yet.
+ * that no one tile proves complete (the core refuses, with the reason).
+ * --contours in tiles is contours_tiles.c.
  */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/resource.h>
 #include <time.h>
 
 #include "cli.h"
@@ -204,14 +203,7 @@ grid_in_tiles(const cli_args *a, const char *xypath, const char *zpath, size_t n
 	tdc_raster_free(gt.ras);
 	if (a->stats)
 	{
-		struct rusage ru;
-
-		getrusage(RUSAGE_SELF, &ru);
-		fprintf(stderr, "n=%zu unique=%zu triangles=%zu tiles=%d halo_points=%zu tile_runs=%zu "
-				"scan=%.6f bin=%.6f gather=%.6f engine=%.6f finish=%.6f write=%.6f total=%.6f "
-				"peak_rss_mb=%.1f\n", st.n, st.unique, st.ntri, st.tiles, st.halo, st.runs,
-				st.scan, st.bin, st.gather, st.engine, st.finish, st.write, t1 - t0,
-				ru.ru_maxrss / 1024.0);
+		tiles_stats_line(&st, t1 - t0);
 		fprintf(stderr, "grid=%.6f pixels=%zu valid=%zu\n", t2 - t1, gt.g.width * gt.g.height, valid);
 	}
 }

@@ -42,7 +42,9 @@
  * parser, tdc_interp_parse: the lines stop at the triangles it drops).
  * --grid with --max-memory, when the one-shot run (the TIN and the grid's
  * values included) does not fit, rasterises the tiles' final triangles as
- * they come (grid_tiles.c): the same pixels, linear only.
+ * they come (grid_tiles.c): the same pixels, linear only; --contours
+ * likewise cuts them into pieces of lines, joined after the last tile
+ * (contours_tiles.c): the same lines.
  *
  * main: the arguments (parse_args), the input (read_input, or for
  * --max-memory stage_input, then read_staged when the one-shot run fits),
@@ -91,7 +93,8 @@ static const char usage[] =
 "  --contours INTERVAL  contour lines of the TIN of 'x y z' input at levels\n"
 "         B + k INTERVAL (--base B, default 0); -o writes one per line:\n"
 "         the level, then 'x y' pairs (a closed ring repeats its first point);\n"
-"         --method linear:max_edge=L: lines stop at triangles max_edge drops\n"
+"         --method linear:max_edge=L: lines stop at triangles max_edge drops;\n"
+"         with --max-memory, when it does not fit, in tiles: the same lines\n"
 "  --grid CELLSIZE  heights at the pixel centres of a grid of square cells\n"
 "         over the input's box (or --extent X0,Y0,X1,Y1), from its lower left\n"
 "         corner; -o writes an ESRI ASCII grid (.asc), or a GeoTIFF when it\n"
@@ -433,6 +436,8 @@ fits(const cli_args *a, const staged *s, bool tif)
 		(tif ? GTIFF_CACHE_BYTES : 0);
 	if (need > budget)
 		return false;
+	if (a->contours)
+		need += tdc_tin_memory(s->n);	/* the TIN; the lines are charged as they come */
 	if (a->grid)
 	{
 		/* the TIN, and the grid's values and flags (9 bytes a pixel) over the extent or the box */
@@ -473,8 +478,10 @@ run_in_tiles(const cli_args *a, const staged *s, gtiff_out *tif)
 	if (a->segpath)
 		die(1, "--segments needs the whole triangulation in memory; %s", "raise --max-memory");
 	if (a->contours)
-		die(1, "--contours needs the whole TIN in memory (contours in tiles are not written yet); %s",
-			"raise --max-memory");
+	{
+		contours_in_tiles(a, s->xypath, s->has_z ? s->zpath : NULL, s->n);
+		return;
+	}
 	if (a->grid)
 	{
 		grid_in_tiles(a, s->xypath, s->has_z ? s->zpath : NULL, s->n, a->srs ? a->srs : s->srs, tif);

@@ -16,6 +16,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 
+#include <sys/resource.h>
+
 #include "cli.h"
 
 /* What the callbacks share. */
@@ -71,6 +73,23 @@ peak(void *arg)
 {
 	(void) arg;
 	return heap_peak();
+}
+
+/*
+ * The first --stats line of a grid or contours in tiles: the run's counts
+ * and phases, total its wall seconds, and the process's peak so far.
+ */
+void
+tiles_stats_line(const tdc_bounded_stats *st, double total)
+{
+	struct rusage ru;
+
+	getrusage(RUSAGE_SELF, &ru);
+	fprintf(stderr, "n=%zu unique=%zu triangles=%zu tiles=%d halo_points=%zu tile_runs=%zu "
+			"scan=%.6f bin=%.6f gather=%.6f engine=%.6f finish=%.6f write=%.6f total=%.6f "
+			"peak_rss_mb=%.1f\n", st->n, st->unique, st->ntri, st->tiles, st->halo, st->runs,
+			st->scan, st->bin, st->gather, st->engine, st->finish, st->write, total,
+			ru.ru_maxrss / 1024.0);
 }
 
 /*

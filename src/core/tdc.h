@@ -943,4 +943,38 @@ extern int	tdc_raster_rows(tdc_raster *r, size_t y0, size_t nrows, double *v, si
 							size_t max_bytes, char *err, size_t errlen);
 extern void tdc_raster_free(tdc_raster *r);
 
+/* --- Contour lines from a bounded run's triangles (terrain/contour_tiles.c) --- */
+
+/*
+ * The lines of tdc_tin_contours_start_spec, made from the final triangles
+ * a bounded run emits tile by tile instead of from a whole TIN: the same
+ * lines, the same points bit for bit, in the same order (levels
+ * increasing, a level's lines by their points).  Each tile's pieces of
+ * lines wait in two temporary files (removed from the directory at once,
+ * gone when freed); after the run they are joined.
+ *
+ * begin: interval, base and spec (NULL, or linear with max_edge only) as
+ * for tdc_tin_contours_start_spec; *hold: the bytes held from then on
+ * beside the tiles (add them to the run's).  tile: a final tile's
+ * triangles, from the run's emit.  lines: after the run, calls fn for
+ * each line in order (xy: n x,y pairs, valid during the call; a ring's
+ * last point repeats its first); nonzero from fn stops it (returned as a
+ * TDC_ code as emit's is).  The join and one level's lines must fit in
+ * max_bytes: TDC_EMEMLIMIT with the numbers otherwise.  cancel (NULL or a
+ * flag) is polled between levels.
+ */
+typedef struct tdc_contour_tiles tdc_contour_tiles;
+typedef int (*tdc_contour_line_fn) (void *arg, double level, const double *xy, size_t n,
+									bool closed);
+
+extern int	tdc_contour_tiles_begin(double interval, double base, const tdc_interp_spec *spec,
+									const char *tmpdir, tdc_contour_tiles **c, size_t *hold,
+									char *err, size_t errlen);
+extern int	tdc_contour_tiles_tile(tdc_contour_tiles *c, const double *q, const double *qz,
+								   const size_t *tri, size_t ntri, char *err, size_t errlen);
+extern int	tdc_contour_tiles_lines(tdc_contour_tiles *c, size_t max_bytes, tdc_contour_line_fn fn,
+									void *arg, const volatile int *cancel, size_t *nlines,
+									size_t *npoints, char *err, size_t errlen);
+extern void tdc_contour_tiles_free(tdc_contour_tiles *c);
+
 #endif							/* TDC_H */

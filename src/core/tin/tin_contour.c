@@ -69,11 +69,12 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "tin_cut.h"
 #include "tin_int.h"
 
 #define TRI_PER_TASK	65536
 #define HIST_MAX		((size_t) 16 << 20)		/* counters of the level histograms */
-#define MAX_LEVELS		((int64_t) 1 << 31)
+#define MAX_LEVELS		TIN_MAX_LEVELS
 
 typedef struct contour_line
 {
@@ -123,26 +124,14 @@ typedef struct contour_op
 static inline double
 level_of(const contour_op *op, int64_t k)
 {
-	return op->base + (double) k * op->interval;
+	return tin_level(op->base, op->interval, k);
 }
 
 /* The lowest k with L_k > z. */
-static int64_t
+static inline int64_t
 k_above(const contour_op *op, double z)
 {
-	double		f = floor((z - op->base) / op->interval);
-	int64_t		k;
-
-	if (f < -(double) MAX_LEVELS * 4)
-		f = -(double) MAX_LEVELS * 4;
-	if (f > (double) MAX_LEVELS * 4)
-		f = (double) MAX_LEVELS * 4;
-	k = (int64_t) f;
-	while (level_of(op, k) <= z)
-		k++;
-	while (level_of(op, k - 1) > z)
-		k--;
-	return k;
+	return tin_k_above(op->base, op->interval, z);
 }
 
 /* The highest k with L_k <= z. */
@@ -310,39 +299,14 @@ group_place_task(void *arg, size_t g, int worker)
  * ----------------------------------------------------------------
  */
 
-/* The crossing of edge h at level L (its ends on either side). */
-static void
+/* The crossing of edge h at level L (its ends on either side): tin_cut.c's. */
+static inline void
 crossing(const tdc_tin *tin, uint32_t h, double L, double *p)
 {
 	uint32_t	a = tin_org(tin, h),
 				b = tin_dest(tin, h);
-	const double *pa,
-			   *pb;
-	double		za,
-				zb,
-				t;
 
-	/* b: the end below, a: the end above */
-	if (tin->sz[a] < L)
-	{
-		uint32_t	s = a;
-
-		a = b;
-		b = s;
-	}
-	pa = tin_pt(tin, a);
-	pb = tin_pt(tin, b);
-	za = tin->sz[a];
-	zb = tin->sz[b];
-	if (za == L)
-	{
-		p[0] = pa[0];
-		p[1] = pa[1];
-		return;
-	}
-	t = (L - zb) / (za - zb);
-	p[0] = pb[0] + t * (pa[0] - pb[0]);
-	p[1] = pb[1] + t * (pa[1] - pb[1]);
+	tin_cut_xy(tin_pt(tin, a), tin->sz[a], tin_pt(tin, b), tin->sz[b], L, p);
 }
 
 /* The down and up edges of triangle t at level L (it is crossed). */
@@ -413,53 +377,6 @@ out_reverse(level_out *o, size_t i, size_t j)
 		o->xy[2 * j] = x;
 		o->xy[2 * j + 1] = y;
 	}
-}
-
-static inline int
-cmp_pt(const double *a, const double *b)
-{
-	return a[0] < b[0] ? -1 : a[0] > b[0] ? 1 : a[1] < b[1] ? -1 : a[1] > b[1] ? 1 : 0;
-}
-
-/*
- * A closed ring of m points plus its closing repeat at xy: turned to start
- * at the rotation whose point sequence is first in (x, y) order, so that a
- * ring starts where it would whatever triangle it was found from.  Returns
- * false when out of memory (tmp, m points).
- */
-static bool
-canon_ring(tdc_tin *tin, double *xy, size_t m)
-{
-	size_t		best = 0;
-	double	   *tmp;
-
-	for (size_t r = 1; r < m; r++)
-	{
-		int			c = cmp_pt(xy + 2 * r, xy + 2 * best);
-
-		for (size_t i = 1; c == 0 && i < m; i++)
-			c = cmp_pt(xy + 2 * ((r + i) % m), xy + 2 * ((best + i) % m));
-		if (c < 0)
-			best = r;
-	}
-	if (best == 0)
-		return true;
-	tmp = malloc(m * 2 * sizeof(double));
-	if (tmp == NULL)
-	{
-		tin_fail(tin, TDC_ENOMEM, "out of memory for the contour lines");
-		return false;
-	}
-	for (size_t i = 0; i < m; i++)
-	{
-		tmp[2 * i] = xy[2 * ((best + i) % m)];
-		tmp[2 * i + 1] = xy[2 * ((best + i) % m) + 1];
-	}
-	memcpy(xy, tmp, m * 2 * sizeof(double));
-	xy[2 * m] = xy[0];
-	xy[2 * m + 1] = xy[1];
-	free(tmp);
-	return true;
 }
 
 /*
@@ -549,8 +466,8 @@ trace(tdc_tin *tin, contour_op *op, level_out *o, size_t t0, int64_t k)
 			o->n = start;
 			return true;
 		}
-		if (closed && !canon_ring(tin, o->xy + 2 * start, n - 1))
-			return false;
+		if (closed)
+			tin_ring_canon(o->xy + 2 * start, n - 1);
 	}
 	if (o->nlines == o->lcap)
 	{
@@ -625,14 +542,7 @@ cmp_line(const void *x, const void *y, void *arg)
 	const contour_line *a = x,
 			   *b = y;
 
-	for (size_t i = 0; i < a->n && i < b->n; i++)
-	{
-		int			c = cmp_pt(o->xy + 2 * (a->first + i), o->xy + 2 * (b->first + i));
-
-		if (c != 0)
-			return c;
-	}
-	return a->n < b->n ? -1 : a->n > b->n ? 1 : 0;
+	return tin_line_cmp(o->xy + 2 * a->first, a->n, o->xy + 2 * b->first, b->n);
 }
 
 static int
@@ -870,24 +780,11 @@ tdc_tin_contours_start_spec(tdc_tin *tin, double interval, double base,
 	op->max_edge = spec != NULL ? spec->max_edge : 0;
 	if (tin->built && tin->nsites > 0 && tin->ntri > 0)
 	{
-		/*
-		 * Every level between the heights must be a double of its own:
-		 * L_k = fl(base + fl(k interval)) is off by at most eps (|k
-		 * interval| + |L_k|), so an interval above 4 eps times the largest
-		 * such term keeps consecutive levels apart.
-		 */
-		double		k0 = floor((tin->zmin - base) / interval) - 1,
-					k1 = floor((tin->zmax - base) / interval) + 1,
-					a = fmax(fabs(k0) * interval + fabs(base + k0 * interval),
-							 fabs(k1) * interval + fabs(base + k1 * interval));
-
-		if (!(fabs(k1 - k0) < (double) MAX_LEVELS) || !(interval > 0x1p-50 * a))
+		/* every level between the heights must be a double of its own (tin_cut.c) */
+		if ((rc = tin_levels_check(interval, base, tin->zmin, tin->zmax, err, errlen)) != TDC_OK)
 		{
 			free(op);
-			FAIL(TDC_EINVAL, "the contour interval %g is too small for heights from %g to %g (base %g): "
-				 "%s", interval, tin->zmin, tin->zmax, base,
-				 !(fabs(k1 - k0) < (double) MAX_LEVELS) ? "more than 2^31 levels" :
-				 "consecutive levels would round to the same number");
+			return rc;
 		}
 	}
 #undef FAIL
