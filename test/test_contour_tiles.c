@@ -33,6 +33,7 @@
 #include "harness.h"
 #include "splitmix.h"
 #include "tdc.h"
+#include "tiles_test.h"
 
 typedef struct ctt_case
 {
@@ -65,12 +66,6 @@ typedef struct ctt_state
 	tdc_contour_tiles *ct;
 	char		err[512];
 } ctt_state;
-
-static double
-u01(uint64_t *s)
-{
-	return tdc_splitmix64(s) / 18446744073709551616.0;
-}
 
 static int
 add_line(void *arg, double level, const double *xy, size_t n, bool closed)
@@ -129,41 +124,6 @@ ctt_emit(void *arg, int tile, const double *q, const double *qz, const int64_t *
 	(void) tile;
 	(void) ql;
 	return tdc_contour_tiles_tile(s->ct, q, qz, tri, ntri, s->err, sizeof(s->err));
-}
-
-static int
-files_in(const char *dir)
-{
-	DIR		   *d = opendir(dir);
-	struct dirent *e;
-	int			k = 0;
-
-	if (d == NULL)
-		return -1;
-	while ((e = readdir(d)) != NULL)
-		if (e->d_name[0] != '.' && strncmp(e->d_name, "input", 5) != 0)
-			k++;
-	closedir(d);
-	return k;
-}
-
-static bool
-stage(const ctt_case *c, const char *dir)
-{
-	char		p[4200];
-	FILE	   *f;
-	bool		ok;
-
-	snprintf(p, sizeof(p), "%s/input.xy", dir);
-	if ((f = fopen(p, "wb")) == NULL)
-		return false;
-	ok = fwrite(c->xy, 16, c->n, f) == c->n;
-	ok = (fclose(f) == 0) && ok;
-	snprintf(p, sizeof(p), "%s/input.z", dir);
-	if ((f = fopen(p, "wb")) == NULL)
-		return false;
-	ok = fwrite(c->z, 8, c->n, f) == c->n && ok;
-	return (fclose(f) == 0) && ok;
 }
 
 /* The whole TIN's lines; the return code, the message in err. */
@@ -298,7 +258,7 @@ compare(const ctt_case *c, double interval, double base, const char *method, con
 			  bad ? b.level[first] : 0, bad ? b.n[first] : 0, bad && b.closed[first] ? ", a ring" : "",
 			  bad ? a.level[first] : 0, bad ? a.n[first] : 0, bad && a.closed[first] ? ", a ring" : "");
 	}
-	CHECK(files_in(dir) == 0, "contours %s %s: files left in %s", c->name, method, dir);
+	CHECK(tiles_files_in(dir) == 0, "contours %s %s: files left in %s", c->name, method, dir);
 	lines_free(&a);
 	lines_free(&b);
 }
@@ -323,12 +283,12 @@ test_contour_tiles(void)
 	c.n = n;
 	for (size_t i = 0; i < n; i++)
 	{
-		c.xy[2 * i] = 1000 * u01(&seed);
-		c.xy[2 * i + 1] = 1000 * u01(&seed);
-		c.z[i] = 50 * sin(c.xy[2 * i] / 90) * cos(c.xy[2 * i + 1] / 70) + u01(&seed);
+		c.xy[2 * i] = 1000 * tiles_u01(&seed);
+		c.xy[2 * i + 1] = 1000 * tiles_u01(&seed);
+		c.z[i] = 50 * sin(c.xy[2 * i] / 90) * cos(c.xy[2 * i + 1] / 70) + tiles_u01(&seed);
 	}
 	c.limit_mb = 14;
-	CHECK(stage(&c, dir), "contours: cannot stage %s", c.name);
+	CHECK(tiles_stage(dir, c.xy, c.z, c.n), "contours: cannot stage %s", c.name);
 	compare(&c, 5, 0, "linear", dir, 2);
 	compare(&c, 1.25, 0.3, "linear", dir, 2);
 	compare(&c, 2, 0, "linear:max_edge=6", dir, 2);
@@ -350,7 +310,7 @@ test_contour_tiles(void)
 		r2 = tiled_lines(&c, &s, dir, 2, (size_t) 64 << 20, &b, &tiles, e2, sizeof(e2));
 		CHECK(r1 == TDC_EINVAL && r2 == TDC_EINVAL && strcmp(e1, e2) == 0 && b.nlines == 0,
 			  "contours: a tiny interval: %d '%s' in tiles, %d '%s' whole", r2, e2, r1, e1);
-		CHECK(files_in(dir) == 0, "contours: a tiny interval: files left in %s", dir);
+		CHECK(tiles_files_in(dir) == 0, "contours: a tiny interval: files left in %s", dir);
 		lines_free(&a);
 		lines_free(&b);
 	}
@@ -380,7 +340,7 @@ test_contour_tiles(void)
 		rc = tiled_lines(&c, &s, dir, 2, budget, &b, &tiles, e, sizeof(e));
 		CHECK(rc == TDC_EMEMLIMIT && strstr(e, k == 0 ? "contour chains needs" : "for one level's") &&
 			  strstr(e, "raise it") != NULL, "contours: a join in %zu bytes: %d '%s'", budget, rc, e);
-		CHECK(files_in(dir) == 0, "contours: a join short of memory: files left in %s", dir);
+		CHECK(tiles_files_in(dir) == 0, "contours: a join short of memory: files left in %s", dir);
 		lines_free(&a);
 		lines_free(&b);
 	}
@@ -392,7 +352,7 @@ test_contour_tiles(void)
 		c.xy[2 * i] += 500000;
 		c.xy[2 * i + 1] += 4000000;
 	}
-	CHECK(stage(&c, dir), "contours: cannot stage %s", c.name);
+	CHECK(tiles_stage(dir, c.xy, c.z, c.n), "contours: cannot stage %s", c.name);
 	compare(&c, 2.5, 0, "linear", dir, 2);
 	compare(&c, 2.5, 0, "linear:max_edge=5", dir, 2);
 
@@ -405,18 +365,18 @@ test_contour_tiles(void)
 
 		if (i % 10 < 7)
 		{
-			c.xy[2 * i] = cx + 20 * (u01(&seed) - 0.5) * (u01(&seed) + 0.1);
-			c.xy[2 * i + 1] = cy + 20 * (u01(&seed) - 0.5) * (u01(&seed) + 0.1);
+			c.xy[2 * i] = cx + 20 * (tiles_u01(&seed) - 0.5) * (tiles_u01(&seed) + 0.1);
+			c.xy[2 * i + 1] = cy + 20 * (tiles_u01(&seed) - 0.5) * (tiles_u01(&seed) + 0.1);
 		}
 		else
 		{
-			c.xy[2 * i] = 1000 * u01(&seed);
-			c.xy[2 * i + 1] = 1000 * u01(&seed);
+			c.xy[2 * i] = 1000 * tiles_u01(&seed);
+			c.xy[2 * i + 1] = 1000 * tiles_u01(&seed);
 		}
-		c.z[i] = 20 * sin(c.xy[2 * i] / 40) + c.xy[2 * i + 1] * 0.02 + u01(&seed);
+		c.z[i] = 20 * sin(c.xy[2 * i] / 40) + c.xy[2 * i + 1] * 0.02 + tiles_u01(&seed);
 	}
 	c.limit_mb = 20;			/* reruns of tiles among the clusters need more than 14 */
-	CHECK(stage(&c, dir), "contours: cannot stage %s", c.name);
+	CHECK(tiles_stage(dir, c.xy, c.z, c.n), "contours: cannot stage %s", c.name);
 	compare(&c, 1, 0, "linear", dir, 2);
 	compare(&c, 1, 0, "linear:max_edge=8", dir, 2);
 
@@ -442,7 +402,7 @@ test_contour_tiles(void)
 			}
 		c.n = k;
 		c.limit_mb = 14;
-		CHECK(stage(&c, dir), "contours: cannot stage %s", c.name);
+		CHECK(tiles_stage(dir, c.xy, c.z, c.n), "contours: cannot stage %s", c.name);
 		compare(&c, 1, 0, "linear", dir, 2);
 		compare(&c, 2, 1, "linear", dir, 2);
 		compare(&c, 1, 0, "linear:max_edge=1.5", dir, 2);

@@ -36,6 +36,7 @@
 #include "harness.h"
 #include "splitmix.h"
 #include "tdc.h"
+#include "tiles_test.h"
 
 typedef struct rt_case
 {
@@ -58,8 +59,8 @@ typedef struct rt_state
 	int			begins;
 } rt_state;
 
-static double
-u01(uint64_t *s)
+double
+tiles_u01(uint64_t *s)
 {
 	return tdc_splitmix64(s) / 18446744073709551616.0;
 }
@@ -86,8 +87,8 @@ rt_emit(void *arg, int tile, const double *q, const double *qz, const int64_t *q
 	return tdc_raster_tile(s->ras, q, qz, tri, ntri, s->err, sizeof(s->err));
 }
 
-static int
-files_in(const char *dir)
+int
+tiles_files_in(const char *dir)
 {
 	DIR		   *d = opendir(dir);
 	struct dirent *e;
@@ -268,21 +269,21 @@ compare(const rt_case *c, const char *method, const char *dir, int threads)
 		CHECK(valid1 > 0 && valid1 < s.g.width * s.g.height * 2, "raster %s %s: %zu valid",
 			  c->name, method, valid1);
 	}
-	CHECK(files_in(dir) == 0, "raster %s %s: files left in %s", c->name, method, dir);
+	CHECK(tiles_files_in(dir) == 0, "raster %s %s: files left in %s", c->name, method, dir);
 	free(v1);
 	free(v2);
 }
 
-static bool
-stage(const rt_case *c, const char *dir)
+bool
+tiles_stage(const char *dir, const double *xy, const double *z, size_t n)
 {
 	char		p[4200];
 
 	snprintf(p, sizeof(p), "%s/input.xy", dir);
-	if (write_file(p, c->xy, 2 * c->n) != 0)
+	if (write_file(p, xy, 2 * n) != 0)
 		return false;
 	snprintf(p, sizeof(p), "%s/input.z", dir);
-	return write_file(p, c->z, c->n) == 0;
+	return write_file(p, z, n) == 0;
 }
 
 /* The refusals, each with its message and nothing left behind. */
@@ -305,7 +306,7 @@ refusals(rt_case *c, const char *dir)
 	v = tiled_grid(c, &s, dir, 2, &valid, &tiles, &rc, err, sizeof(err));
 	CHECK(v == NULL && rc == TDC_EINVAL && strstr(err, "linear only") != NULL,
 		  "raster: natural neighbour in tiles: %d %s", rc, err);
-	CHECK(files_in(dir) == 0, "raster: refusals: files left in %s", dir);
+	CHECK(tiles_files_in(dir) == 0, "raster: refusals: files left in %s", dir);
 }
 
 void
@@ -332,9 +333,9 @@ test_raster_tiles(void)
 	c.z = malloc(8 * n);
 	for (size_t i = 0; i < n; i++)
 	{
-		c.xy[2 * i] = 1000 * u01(&seed);
-		c.xy[2 * i + 1] = 1000 * u01(&seed);
-		c.z[i] = 50 * sin(c.xy[2 * i] / 90) * cos(c.xy[2 * i + 1] / 70) + u01(&seed);
+		c.xy[2 * i] = 1000 * tiles_u01(&seed);
+		c.xy[2 * i + 1] = 1000 * tiles_u01(&seed);
+		c.z[i] = 50 * sin(c.xy[2 * i] / 90) * cos(c.xy[2 * i + 1] / 70) + tiles_u01(&seed);
 	}
 	c.extent[0] = -40.3;
 	c.extent[1] = -35.1;
@@ -342,7 +343,7 @@ test_raster_tiles(void)
 	c.extent[3] = 1031.9;
 	c.cell = 2.5;
 	c.limit_mb = 14;
-	CHECK(stage(&c, dir), "raster: cannot stage %s", c.name);
+	CHECK(tiles_stage(dir, c.xy, c.z, c.n), "raster: cannot stage %s", c.name);
 	for (size_t m = 0; m < sizeof(methods) / sizeof(methods[0]); m++)
 		compare(&c, methods[m], dir, 2);
 	compare(&c, "linear", dir, 1);
@@ -360,7 +361,7 @@ test_raster_tiles(void)
 	c.extent[2] = 501000 + 9;
 	c.extent[3] = 4001000 - 2;
 	c.cell = 1.75;
-	CHECK(stage(&c, dir), "raster: cannot stage %s", c.name);
+	CHECK(tiles_stage(dir, c.xy, c.z, c.n), "raster: cannot stage %s", c.name);
 	compare(&c, "linear", dir, 2);
 	compare(&c, "linear:max_edge=5:radius=20", dir, 2);
 
@@ -368,8 +369,8 @@ test_raster_tiles(void)
 	c.name = "diamond";
 	for (size_t i = 0; i < n; i++)
 	{
-		double		u = 1000 * u01(&seed),
-					v = 1000 * u01(&seed);
+		double		u = 1000 * tiles_u01(&seed),
+					v = 1000 * tiles_u01(&seed);
 
 		c.xy[2 * i] = 500000 + (u + v) / 2;
 		c.xy[2 * i + 1] = 4000000 + (u - v) / 2;
@@ -380,7 +381,7 @@ test_raster_tiles(void)
 	c.extent[2] = 501000 + 13;
 	c.extent[3] = 4000000 + 515;
 	c.cell = 2.25;
-	CHECK(stage(&c, dir), "raster: cannot stage %s", c.name);
+	CHECK(tiles_stage(dir, c.xy, c.z, c.n), "raster: cannot stage %s", c.name);
 	compare(&c, "linear", dir, 2);
 	compare(&c, "linear:radius=40:max_edge=7", dir, 2);
 
@@ -393,15 +394,15 @@ test_raster_tiles(void)
 
 		if (i % 10 < 7)
 		{
-			c.xy[2 * i] = cx + 20 * (u01(&seed) - 0.5) * (u01(&seed) + 0.1);
-			c.xy[2 * i + 1] = cy + 20 * (u01(&seed) - 0.5) * (u01(&seed) + 0.1);
+			c.xy[2 * i] = cx + 20 * (tiles_u01(&seed) - 0.5) * (tiles_u01(&seed) + 0.1);
+			c.xy[2 * i + 1] = cy + 20 * (tiles_u01(&seed) - 0.5) * (tiles_u01(&seed) + 0.1);
 		}
 		else
 		{
-			c.xy[2 * i] = 1000 * u01(&seed);
-			c.xy[2 * i + 1] = 1000 * u01(&seed);
+			c.xy[2 * i] = 1000 * tiles_u01(&seed);
+			c.xy[2 * i + 1] = 1000 * tiles_u01(&seed);
 		}
-		c.z[i] = c.xy[2 * i] * 0.01 + c.xy[2 * i + 1] * 0.02 + u01(&seed);
+		c.z[i] = c.xy[2 * i] * 0.01 + c.xy[2 * i + 1] * 0.02 + tiles_u01(&seed);
 	}
 	c.extent[0] = 0;
 	c.extent[1] = 0;
@@ -409,7 +410,7 @@ test_raster_tiles(void)
 	c.extent[3] = 1000;
 	c.cell = 1.5;
 	c.limit_mb = 20;			/* reruns of tiles among the clusters need more than 14 */
-	CHECK(stage(&c, dir), "raster: cannot stage %s", c.name);
+	CHECK(tiles_stage(dir, c.xy, c.z, c.n), "raster: cannot stage %s", c.name);
 	compare(&c, "linear", dir, 2);
 	compare(&c, "linear:max_edge=8", dir, 2);
 
@@ -440,7 +441,7 @@ test_raster_tiles(void)
 		c.extent[3] = (double) side - 1 + 0.25 + 2;
 		c.cell = 0.5;
 		c.limit_mb = 14;
-		CHECK(stage(&c, dir), "raster: cannot stage %s", c.name);
+		CHECK(tiles_stage(dir, c.xy, c.z, c.n), "raster: cannot stage %s", c.name);
 		compare(&c, "linear", dir, 2);
 		compare(&c, "linear:max_edge=1.5", dir, 2);
 		compare(&c, "linear:max_edge=1.5:radius=0", dir, 2);
@@ -468,13 +469,13 @@ test_raster_tiles(void)
 		c.extent[3] = 1998;
 		c.cell = 10;
 		c.limit_mb = 64;
-		CHECK(stage(&c, dir), "raster: cannot stage %s", c.name);
+		CHECK(tiles_stage(dir, c.xy, c.z, c.n), "raster: cannot stage %s", c.name);
 		grid_of(&c, &s.g);
 		tdc_interp_parse("linear", &s.spec, err, sizeof(err));
 		CHECK(tiled_grid(&c, &s, dir, 2, &valid, &tiles, &rc, err, sizeof(err)) == NULL &&
 			  rc == TDC_EINVAL && strstr(err, "on one line") != NULL,
 			  "raster: collinear: %d %s", rc, err);
-		CHECK(files_in(dir) == 0, "raster: collinear: files left in %s", dir);
+		CHECK(tiles_files_in(dir) == 0, "raster: collinear: files left in %s", dir);
 	}
 
 	{

@@ -53,22 +53,26 @@ resident_bytes(void)
 	return (size_t) resident * (size_t) sysconf(_SC_PAGESIZE);
 }
 
-/*
- * At the start of the run: what the process holds (its resident size;
- * where unknown, 2 MB, what ./tdc holds on three points: 1.8 MB); the
- * heap kept from here on.
- */
+/* the limit of the process's one run in tiles, for heap_settle */
+static size_t heap_limit;
+
 size_t
 heap_resident(void)
 {
 	return resident_bytes();
 }
 
+/*
+ * At the start of the run: what the process holds (its resident size;
+ * where unknown, 2 MB, what ./tdc holds on three points: 1.8 MB); the
+ * heap kept from here on, and settled against limit.
+ */
 size_t
-heap_start(void)
+heap_start(size_t limit)
 {
 	size_t		base = resident_bytes();
 
+	heap_limit = limit;
 #ifdef __GLIBC__
 	mallopt(M_MMAP_MAX, 0);
 	mallopt(M_TRIM_THRESHOLD, INT32_MAX);
@@ -77,28 +81,28 @@ heap_start(void)
 }
 
 /*
- * For the settle callback: the free heap handed back always, or when the
- * process holds more than 3/4 of the limit.  Where the resident size is
- * unknown, always.
+ * The run's settle callback (arg unused): the free heap handed back
+ * always, or when the process holds more than 3/4 of heap_start's limit.
+ * Where the resident size is unknown, always.
  */
 void
-heap_settle(size_t limit, bool always)
+heap_settle(void *arg, bool always)
 {
+	(void) arg;
 #ifdef __GLIBC__
 	size_t		now;
 
-	if (!always && (now = resident_bytes()) != 0 && now <= limit / 4 * 3)
+	if (!always && (now = resident_bytes()) != 0 && now <= heap_limit / 4 * 3)
 		return;
 	(void) malloc_trim(0);
 #else
-	(void) limit;
 	(void) always;
 #endif
 }
 
-/* For the peak callback: the process's peak resident bytes so far, 0 where unknown. */
+/* The run's peak callback (arg unused): the process's peak resident bytes so far, 0 where unknown. */
 size_t
-heap_peak(void)
+heap_peak(void *arg)
 {
 	struct rusage ru;
 

@@ -170,10 +170,11 @@ extern void tmp_cleanup(void);
 extern FILE *tmp_open(const char *name, const char *mode);
 
 /* bounded_mem.c: the process's memory around a run in tiles */
-extern size_t heap_start(void);
+extern size_t heap_start(size_t limit);
 extern size_t heap_resident(void);	/* resident bytes now, 0 where unknown */
-extern void heap_settle(size_t limit, bool always);
-extern size_t heap_peak(void);
+/* the settle and peak callbacks of tdc_bounded_params (arg unused) */
+extern void heap_settle(void *arg, bool always);
+extern size_t heap_peak(void *arg);
 
 /* tiles.c: --stats' line of a run in tiles that writes a product (grid, contours) */
 extern void tiles_stats_line(const tdc_bounded_stats *st, double total);

@@ -63,19 +63,6 @@ emit(void *arg, int tile, const double *q, const double *qz, const int64_t *ql,
 	return tdc_contour_tiles_tile(ct->ct, q, qz, tri, ntri, ct->err, sizeof(ct->err));
 }
 
-static void
-settle(void *arg, bool always)
-{
-	heap_settle((size_t) ((contours_tiles *) arg)->a->max_mb << 20, always);
-}
-
-static size_t
-peak(void *arg)
-{
-	(void) arg;
-	return heap_peak();
-}
-
 /* One line, as tin_out.c writes it: the level, then its points, %.17g. */
 static int
 line_out(void *arg, double level, const double *xy, size_t n, bool closed)
@@ -119,7 +106,7 @@ contours_in_tiles(const cli_args *a, const char *xypath, const char *zpath, size
 	tdc_bounded_params p = {
 		.xypath = xypath, .zpath = zpath, .n = n, .opt = &a->opt, .limit = limit,
 		.tmpdir = tmp_dir, .limit_name = "--max-memory",
-		.begin = begin, .emit = emit, .settle = settle, .peak = peak, .arg = &ct,
+		.begin = begin, .emit = emit, .settle = heap_settle, .peak = heap_peak, .arg = &ct,
 		.cancel = &cli_cancel
 	};
 	tdc_bounded_stats st;
@@ -134,7 +121,7 @@ contours_in_tiles(const cli_args *a, const char *xypath, const char *zpath, size
 		die(1, "--contours needs heights: 'x y z' text, LAS or .xyz.bin input%s", "");
 	if (tdc_interp_parse(a->method ? a->method : "linear", &ct.spec, err, sizeof(err)) != TDC_OK)
 		die(2, "--method: %s", err);
-	p.outside = start = heap_start();
+	p.outside = start = heap_start(limit);
 	t0 = now_s();
 	if (tdc_bounded_run(&p, &st, err, sizeof(err)) != TDC_OK)
 	{

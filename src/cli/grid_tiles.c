@@ -78,19 +78,6 @@ emit(void *arg, int tile, const double *q, const double *qz, const int64_t *ql,
 	return tdc_raster_tile(gt->ras, q, qz, tri, ntri, gt->err, sizeof(gt->err));
 }
 
-static void
-settle(void *arg, bool always)
-{
-	heap_settle((size_t) ((grid_tiles *) arg)->a->max_mb << 20, always);
-}
-
-static size_t
-peak(void *arg)
-{
-	(void) arg;
-	return heap_peak();
-}
-
 /* The grid's rows, from the raster to the .asc or the GeoTIFF; dies on errors. */
 static size_t
 write_rows(grid_tiles *gt, const char *srs, gtiff_out *tif, size_t left)
@@ -167,7 +154,7 @@ grid_in_tiles(const cli_args *a, const char *xypath, const char *zpath, size_t n
 	tdc_bounded_params p = {
 		.xypath = xypath, .zpath = zpath, .n = n, .opt = &a->opt, .limit = limit,
 		.tmpdir = tmp_dir, .limit_name = "--max-memory",
-		.begin = begin, .emit = emit, .settle = settle, .peak = peak, .arg = &gt,
+		.begin = begin, .emit = emit, .settle = heap_settle, .peak = heap_peak, .arg = &gt,
 		.cancel = &cli_cancel
 	};
 	tdc_bounded_stats st;
@@ -185,7 +172,7 @@ grid_in_tiles(const cli_args *a, const char *xypath, const char *zpath, size_t n
 			"depend on sites no one tile holds; raise --max-memory for %s", a->method);
 	if (n == 0)
 		die(1, "--grid needs an --extent when the input has no point%s", "");
-	p.outside = start = heap_start();
+	p.outside = start = heap_start(limit);
 	t0 = now_s();
 	if (tdc_bounded_run(&p, &st, err, sizeof(err)) != TDC_OK)
 	{

@@ -24,7 +24,6 @@
 typedef struct tiles_out
 {
 	FILE	   *out;			/* NULL: no -o */
-	size_t		limit;			/* --max-memory, bytes */
 } tiles_out;
 
 static int
@@ -54,25 +53,12 @@ emit_text(void *arg, int tile, const double *q, const double *qz, const int64_t 
 	return 0;
 }
 
-static void
-settle(void *arg, bool always)
-{
-	heap_settle(((tiles_out *) arg)->limit, always);
-}
-
 /* TDC_TILE_DEBUG=1: each tile run's region on stderr */
 static void
 trace(void *arg, const char *line)
 {
 	(void) arg;
 	fprintf(stderr, "%s\n", line);
-}
-
-static size_t
-peak(void *arg)
-{
-	(void) arg;
-	return heap_peak();
 }
 
 /*
@@ -101,11 +87,11 @@ void
 run_bounded(const char *xypath, const char *zpath, size_t n, const tdc_options *opt,
 			size_t limit, FILE *out, tdc_bounded_stats *st)
 {
-	tiles_out	to = {out, limit};
+	tiles_out	to = {out};
 	tdc_bounded_params p = {
 		.xypath = xypath, .zpath = zpath, .n = n, .opt = opt, .limit = limit,
 		.tmpdir = tmp_dir, .limit_name = "--max-memory",
-		.emit = emit_text, .settle = settle, .peak = peak, .arg = &to,
+		.emit = emit_text, .settle = heap_settle, .peak = heap_peak, .arg = &to,
 		.cancel = &cli_cancel
 	};
 	char		err[1024];
@@ -114,7 +100,7 @@ run_bounded(const char *xypath, const char *zpath, size_t n, const tdc_options *
 	p.check_files = getenv("TDC_TILE_CHECK") != NULL;
 	p.trace = getenv("TDC_TILE_DEBUG") ? trace : NULL;
 	/* the heap kept between tiles; what the process holds beside them off the limit */
-	p.outside = heap_start();
+	p.outside = heap_start(limit);
 	if (tdc_bounded_run(&p, st, err, sizeof(err)) != TDC_OK)
 		die(1, "%s", err);
 }
