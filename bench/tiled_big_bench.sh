@@ -85,15 +85,18 @@ run() {
 	read -r wall cpu rss < <(awk '{ printf "%s %.1f %.1f\n", $1, $2 + $3, $4 / 1024 }' "$WORK/time")
 	TRI=$(kv "$WORK/stats" triangles)
 	UNIQ=$(kv "$WORK/stats" unique)
-	printf '%-22s wall %9.1f s (%5.1f min)  cpu %9.1f s  peak RSS %8.1f MB  triangles %s  distinct points %s' \
-		"$name" "$wall" "$(awk -v w="$wall" 'BEGIN { print w / 60 }')" "$cpu" "$rss" "$TRI" "$UNIQ"
+	printf '%-22s wall %9.1f s (%5.1f min)  cpu %9.1f s (cpu/wall %.2f)  peak RSS %8.1f MB  triangles %s  distinct points %s' \
+		"$name" "$wall" "$(awk -v w="$wall" 'BEGIN { print w / 60 }')" "$cpu" \
+		"$(awk -v c="$cpu" -v w="$wall" 'BEGIN { print (w > 0 ? c / w : 0) }')" "$rss" "$TRI" "$UNIQ"
 	if [ "$limit" != 0 ]; then
 		printf '  tiles %s, runs %s, halo points %s; %s the limit\n' "$(kv "$WORK/stats" tiles)" \
 			"$(kv "$WORK/stats" tile_runs)" "$(kv "$WORK/stats" halo_points)" \
 			"$(awk -v r="$rss" -v l="$limit" 'BEGIN { print (r <= l ? "within" : "OVER") }')"
-		printf '  phases (wall s): scan %s, bin %s, gather %s, engine %s, finish %s\n' "$(kv "$WORK/stats" scan)" \
-			"$(kv "$WORK/stats" bin)" "$(kv "$WORK/stats" gather)" "$(kv "$WORK/stats" engine)" \
-			"$(kv "$WORK/stats" finish)"
+		printf '  phases (wall s): scan %s, bin %s, tiles %s on %s workers\n' "$(kv "$WORK/stats" scan)" \
+			"$(kv "$WORK/stats" bin)" "$(kv "$WORK/stats" tiles_wall)" "$(kv "$WORK/stats" workers)"
+		printf '  in the tiles (s, summed over the workers): gather %s, engine %s, finish %s, write %s, waiting for memory %s\n' \
+			"$(kv "$WORK/stats" gather)" "$(kv "$WORK/stats" engine)" "$(kv "$WORK/stats" finish)" \
+			"$(kv "$WORK/stats" write)" "$(kv "$WORK/stats" wait)"
 	else
 		echo
 	fi

@@ -131,6 +131,16 @@ check "--max-memory: stats has tiles= (>1) and halo_points=" "grep -qE ' tiles=(
 check "--max-memory: same triangle set as one-shot" "cmp -s <(canon_d $tmp/big1.out 2) <(canon_d $tmp/big2.out 2)"
 check "--max-memory: same triangle count" "[ \$(wc -l < $tmp/big1.out) -eq \$(wc -l < $tmp/big2.out) ]"
 check "--max-memory: temporary files removed" "[ -z \"\$(ls -A $tmp/tiles)\" ]"
+# without -o the tiles' order shows nowhere: two run at a time (two threads),
+# in the same limit, with the same counts
+TDC_TILE_CHECK=1 $TDC --max-memory 24 -t 2 --tmpdir "$tmp/tiles" --stats "$tmp/big.bin" 2> "$tmp/big3.err"
+check "--max-memory, no -o: exit 0" "[ $? -eq 0 ]"
+w_rss=$(sed -n 's/.*peak_rss_mb=\([0-9.]*\).*/\1/p' "$tmp/big3.err")
+check "--max-memory, no -o: two tile workers" "grep -q ' workers=2 ' $tmp/big3.err"
+check "--max-memory, no -o: peak RSS $w_rss MB under 24" "awk 'BEGIN { exit !($w_rss < 24) }'"
+check "--max-memory, no -o: the one-shot's triangle and site counts" \
+	"[ \"\$(grep -oE '^n=[0-9]+ unique=[0-9]+ triangles=[0-9]+' $tmp/big1.err)\" = \"\$(grep -oE '^n=[0-9]+ unique=[0-9]+ triangles=[0-9]+' $tmp/big3.err)\" ]"
+check "--max-memory, no -o: temporary files removed" "[ -z \"\$(ls -A $tmp/tiles)\" ]"
 
 # an integer lattice over [0, 512]: the fine grid's cells are 1 wide, so
 # points lie on cell sides, tile sides, and the sides of the first known

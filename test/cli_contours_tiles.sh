@@ -40,6 +40,12 @@ contour_case() {
 	tiles=$(stat_of "$tmp/til.err" tiles)
 	peak=$(stat_of "$tmp/til.err" peak_rss_mb)
 	check "$name: in tiles ($tiles, at least $mintiles)" "[ -n '$tiles' ] && [ '$tiles' -ge $mintiles ]"
+	# tiles two at a time where the case asks for it (want_workers=2: two
+	# threads and a budget that dwarfs a second worker's scratch), else one
+	local workers want=${want_workers:-1}
+	workers=$(stat_of "$tmp/til.err" workers)
+	[ "$(nproc)" -ge 2 ] || want=1
+	check "$name: $workers tile workers ($want expected)" "[ '$workers' = $want ]"
 	check "$name: peak RSS $peak MB under --max-memory $limit" "awk 'BEGIN { exit !(\"$peak\" + 0 > 0 && \"$peak\" + 0 < $limit) }'"
 	check "$name: the same counts in --stats" \
 		"[ \"\$(grep -oE 'lines=[0-9]+ contour_points=[0-9]+' $tmp/one.err)\" = \"\$(grep -oE 'lines=[0-9]+ contour_points=[0-9]+' $tmp/til.err)\" ]"
@@ -54,6 +60,10 @@ contour_case "hills, every 5" 18 12 "$tmp/hills.txt" --contours 5
 contour_case "hills, every 0.5 from 0.25" 18 12 "$tmp/hills.txt" --contours 0.5 --base 0.25
 contour_case "hills, max_edge=9" 18 12 "$tmp/hills.txt" --contours 2 --method linear:max_edge=9
 contour_case "hills, 1 thread" 18 12 "$tmp/hills.txt" -t 1 --contours 3
+# two tiles at once (src/core/tiles/bounded_share.c): the same lines, under the limit
+want_workers=2
+contour_case "hills, two tiles at once" 30 8 "$tmp/hills.txt" --contours 3
+want_workers=
 
 # Synthetic LiDAR: the ground (class 2) of 250 m x 250 m at 10 points a square metre
 cc -O2 -o "$tmp/gen_las" bench/gen_las.c -lm || bad "cannot build bench/gen_las.c"

@@ -11,7 +11,8 @@
 #     lake and the buildings' holes, max_edge, the LAS file's CRS;
 #   - the GSHHG coastline of Stockholm (test/fixtures): real clustered
 #     data, under a tight limit;
-#   - the refusals (nearest, natural neighbour, input without heights),
+#   - nearest: beyond the data, a radius, max_edge, the coastline;
+#   - the refusals (natural neighbour, input without heights),
 #     each one line, with no -o written and nothing left in --tmpdir;
 #     SIGINT in the middle leaves no file behind.
 #   bash test/cli_grid_tiles.sh        (prints "N passed, N failed")
@@ -50,6 +51,12 @@ grid_case() {
 	tiles=$(stat_of "$tmp/til.err" tiles)
 	peak=$(stat_of "$tmp/til.err" peak_rss_mb)
 	check "$name: in tiles ($tiles, at least $mintiles)" "[ -n '$tiles' ] && [ '$tiles' -ge $mintiles ]"
+	# tiles two at a time where the case asks for it (want_workers=2: two
+	# threads and a budget that dwarfs a second worker's scratch), else one
+	local workers want=${want_workers:-1}
+	workers=$(stat_of "$tmp/til.err" workers)
+	[ "$(nproc)" -ge 2 ] || want=1
+	check "$name: $workers tile workers ($want expected)" "[ '$workers' = $want ]"
 	check "$name: peak RSS $peak MB under --max-memory $limit" "awk 'BEGIN { exit !(\"$peak\" + 0 > 0 && \"$peak\" + 0 < $limit) }'"
 	check "$name: the same valid pixels" \
 		"[ \"\$(grep -oE 'pixels=[0-9]+ valid=[0-9]+' $tmp/one.err)\" = \"\$(grep -oE 'pixels=[0-9]+ valid=[0-9]+' $tmp/til.err)\" ]"
@@ -72,6 +79,15 @@ grid_case "hills, radius=0" 18 20 "$tmp/hills.txt" --grid 4 --extent -60.5,-33.2
 grid_case "hills, radius=25:nodata=-9999" 18 20 "$tmp/hills.txt" --grid 4 --extent -60.5,-33.25,2047,2031.5 --method linear:radius=25:nodata=-9999
 grid_case "hills, max_edge=9" 18 20 "$tmp/hills.txt" --grid 3 --method linear:max_edge=9:nodata=-9999
 grid_case "hills, 1 thread" 18 20 "$tmp/hills.txt" -t 1 --grid 5
+# two tiles at once (src/core/tiles/bounded_share.c): the same pixels, under the limit
+want_workers=2
+grid_case "hills, two tiles at once" 30 8 "$tmp/hills.txt" --grid 4 --extent -60.5,-33.25,2047,2031.5
+grid_case "hills, two tiles at once, nearest" 30 8 "$tmp/hills.txt" --grid 4 --extent -60.5,-33.25,2047,2031.5 --method nearest
+want_workers=
+# nearest: the site nearest each centre, from the triangles around it (raster_nearest.c)
+grid_case "hills, nearest, extent beyond the data" 18 20 "$tmp/hills.txt" --grid 4 --extent -60.5,-33.25,2047,2031.5 --method nearest
+grid_case "hills, nearest:radius1=3:radius2=3" 18 20 "$tmp/hills.txt" --grid 4 --extent -60.5,-33.25,2047,2031.5 --method nearest:radius1=3:radius2=3:nodata=-9999
+grid_case "hills, nearest:max_edge=9" 18 20 "$tmp/hills.txt" --grid 3 --method nearest:max_edge=9:nodata=-9999
 if ((have_gdal)); then
 	# GDAL's libraries (some 40 MB resident) and its block cache count against the limit
 	grid_case "hills, GeoTIFF Float32" 70 20 "$tmp/hills.txt" --grid 2 --tif --type Float32 --srs EPSG:25832
@@ -82,6 +98,7 @@ cc -O2 -o "$tmp/gen_las" bench/gen_las.c -lm || bad "cannot build bench/gen_las.
 "$tmp/gen_las" -s 11 250 "$tmp/site.las" 2> /dev/null
 if ((have_gdal)); then
 	grid_case "LiDAR ground to a 1 m DEM" 70 20 "$tmp/site.las" --class 2 --grid 1 --tif
+	want_workers=2 grid_case "LiDAR ground, nearest, max_edge=5" 80 20 "$tmp/site.las" --class 2 --grid 1 --method nearest:max_edge=5:nodata=-9999 --tif
 	grid_case "LiDAR ground, max_edge=5" 70 20 "$tmp/site.las" --class 2 --grid 0.5 --method linear:max_edge=5:nodata=-9999 --tif
 	check "LiDAR: the DEM has the LAS file's CRS (EPSG:32632)" "gdalinfo $tmp/til.tif | grep -q 'ID\\[\"EPSG\",32632\\]'"
 else
@@ -97,6 +114,7 @@ perl -e 'local $/; $_ = <>; while (/\(([^()]+)\)/g) { my @p = map { [split / /] 
 	awk '!seen[$1 " " $2]++ { printf "%s %s %.6f\n", $1, $2, 10 * sin($1 * 40) + 5 * cos($2 * 60) }' > "$tmp/coast.txt"
 grid_case "GSHHG Stockholm, a tight limit" 16 20 "$tmp/coast.txt" --grid 0.001
 grid_case "GSHHG Stockholm, max_edge=0.01" 16 20 "$tmp/coast.txt" --grid 0.001 --method linear:max_edge=0.01:nodata=-9999
+grid_case "GSHHG Stockholm, nearest" 20 12 "$tmp/coast.txt" --grid 0.001 --method nearest
 
 # Refusals: one line each, no -o, nothing left in --tmpdir
 refuse() {	# name pattern args...
@@ -108,8 +126,7 @@ refuse() {	# name pattern args...
 	check "$name: no -o written" "[ ! -e $tmp/r.out ]"
 	check "$name: --tmpdir left empty" "[ -z \"\$(ls -A $tmp/t)\" ]"
 }
-refuse "nearest in tiles" "linear: a nearest or natural neighbour" --grid 4 --method nearest
-refuse "natural neighbour in tiles" "linear: a nearest or natural neighbour" --grid 4 --method natural_neighbor
+refuse "natural neighbour in tiles" "linear or nearest: a natural neighbour" --grid 4 --method natural_neighbor
 awk '{ print $1, $2 }' "$tmp/hills.txt" > "$tmp/flat.txt"
 rm -f "$tmp/r.out"
 $TDC --max-memory 18 --tmpdir "$tmp/t" --grid 4 -o "$tmp/r.out" "$tmp/flat.txt" > /dev/null 2> "$tmp/r.err"

@@ -28,6 +28,8 @@
 #include "splitmix.h"
 #include "tdc.h"
 
+#define TILES_KEPT	512
+
 /* What emit gathers, and how it misbehaves when asked to. */
 typedef struct tri_sum
 {
@@ -39,6 +41,8 @@ typedef struct tri_sum
 	volatile int cancel;
 	volatile int *cancel_at_trace;	/* set at the first trace line */
 	size_t		traced_points;	/* the first trace line's points */
+	uint64_t	tile_hash[TILES_KEPT];	/* per tile (the first TILES_KEPT) */
+	size_t		tile_ntri[TILES_KEPT];
 } tri_sum;
 
 static uint64_t
@@ -69,12 +73,19 @@ emit_sum(void *arg, int tile, const double *q, const double *qz, const int64_t *
 {
 	tri_sum    *s = arg;
 
-	(void) tile;
 	s->calls++;
 	if (s->refuse_at > 0 && (int) s->calls == s->refuse_at)
 		return 7;
 	for (size_t j = 0; j < ntri; j++)
-		s->hash += tri_hash(q + 2 * tri[3 * j], q + 2 * tri[3 * j + 1], q + 2 * tri[3 * j + 2]);
+	{
+		uint64_t	h = tri_hash(q + 2 * tri[3 * j], q + 2 * tri[3 * j + 1], q + 2 * tri[3 * j + 2]);
+
+		s->hash += h;
+		if (tile >= 0 && tile < TILES_KEPT)
+			s->tile_hash[tile] += h;
+	}
+	if (tile >= 0 && tile < TILES_KEPT)
+		s->tile_ntri[tile] += ntri;
 	s->ntri += ntri;
 	if (s->cancel_at_first)
 		*s->cancel_at_first = 1;
@@ -224,6 +235,71 @@ test_bounded(void)
 	CHECK(st.n == n && st.unique == sites, "bounded: stats n %zu unique %zu, one-shot %zu sites",
 		  st.n, st.unique, sites);
 	CHECK(others_in(dir, "input.bin") == 0, "bounded: files left in %s", dir);
+	CHECK(st.workers == 1, "bounded: %d tile workers in the plan's order, 1 expected", st.workers);
+
+	/*
+	 * In any order: two tiles at a time on two threads (each reserving its
+	 * share of the limit, the other waiting while it does not fit), and
+	 * every tile the same triangles as in the plan's order; with one
+	 * engine thread, one worker.  A limit tight enough that two tiles'
+	 * models do not always fit at once, so the reservations wait.
+	 */
+	{
+		tdc_bounded_params q = p;
+		tdc_options two = opt;
+		tri_sum		ordered,	/* one thread: one worker, in the plan's order */
+					any;
+		tdc_bounded_stats st1;
+		bool		same = true;
+
+		two.threads = 1;
+		q.opt = &two;
+		q.any_order = true;
+		/* a limit with room for a second worker's scratch, still several tiles */
+		q.limit = (size_t) 40 << 20;
+		memset(&ordered, 0, sizeof(ordered));
+		rc = run(&q, &ordered, &st1, err, sizeof(err));
+		CHECK(rc == TDC_OK && st1.workers == 1 && ordered.hash == one.hash,
+			  "bounded: any order, 1 thread: %d, %d workers, same set %d %s", rc, st1.workers,
+			  ordered.hash == one.hash, err);
+		two.threads = 2;
+		memset(&any, 0, sizeof(any));
+		rc = run(&q, &any, &st, err, sizeof(err));
+		CHECK(rc == TDC_OK, "bounded: any order: %d %s", rc, err);
+		CHECK(st.workers == 2, "bounded: any order: %d tile workers, 2 expected", st.workers);
+		CHECK(any.ntri == one.ntri && any.hash == one.hash && st.unique == sites,
+			  "bounded: any order: %zu triangles (one-shot %zu), same set %d", any.ntri, one.ntri,
+			  any.hash == one.hash);
+		CHECK(st.tiles_wall > 0 && st.tiles_wall <= st.gather + st.engine + st.finish + st.write + st.wait + 1,
+			  "bounded: any order: tiles' wall %g s beside the workers' %g s", st.tiles_wall,
+			  st.gather + st.engine + st.finish + st.write + st.wait);
+		for (int t = 0; t < st.tiles && t < TILES_KEPT; t++)
+			same = same && any.tile_hash[t] == ordered.tile_hash[t] &&
+				any.tile_ntri[t] == ordered.tile_ntri[t];
+		CHECK(st.tiles == st1.tiles && st.tiles >= 3 && same, "bounded: any order: %d tiles (1 thread %d), "
+			  "each the same triangles %d", st.tiles, st1.tiles, same);
+		CHECK(others_in(dir, "input.bin") == 0, "bounded: any order: files left in %s", dir);
+
+		/* a cancel in the first emit: nothing emitted after it, by either worker */
+		memset(&any, 0, sizeof(any));
+		any.cancel_at_first = &any.cancel;
+		q.cancel = &any.cancel;
+		q.check_files = false;
+		rc = run(&q, &any, &st, err, sizeof(err));
+		CHECK(rc == TDC_ECANCELED && any.calls == 1 && strcmp(err, "canceled") == 0,
+			  "bounded: any order, cancel after a tile: %d (%zu calls) %s", rc, any.calls, err);
+		CHECK(others_in(dir, "input.bin") == 0, "bounded: any order, cancel: files left");
+		q.cancel = NULL;
+
+		/* emit refusing a tile: the run's error, whichever worker met it */
+		memset(&any, 0, sizeof(any));
+		any.refuse_at = 3;
+		rc = run(&q, &any, &st, err, sizeof(err));
+		CHECK(rc == TDC_EINVAL && strstr(err, "emit returned 7") != NULL && any.calls == 3,
+			  "bounded: any order, emit refuses: %d (%zu calls) %s", rc, any.calls, err);
+		CHECK(others_in(dir, "input.bin") == 0, "bounded: any order, emit refuses: files left");
+
+	}
 	p.check_files = false;
 
 	/* canceled before it starts */

@@ -42,6 +42,7 @@ typedef struct ctt_case
 			   *z;
 	size_t		n;
 	size_t		limit_mb;
+	int			workers;		/* 2: two tile workers expected with 2 threads (0: one or two) */
 } ctt_case;
 
 /* The lines, as either side gives them: levels, lengths, closings, all points. */
@@ -196,12 +197,18 @@ tiled_lines(const ctt_case *c, ctt_state *s, const char *dir, int threads, size_
 	p.begin = ctt_begin;
 	p.emit = ctt_emit;
 	p.arg = s;
+	/* as ./tdc: the output does not depend on the tiles' order, so two run at once */
+	p.any_order = true;
 	s->dir = dir;
 	s->ct = NULL;
 	s->err[0] = '\0';
 	err[0] = '\0';
 	rc = tdc_bounded_run(&p, &st, err, errlen);
 	*tiles = st.tiles;
+	/* one worker with one thread; two where the case makes room for them (else one or two) */
+	CHECK(rc != TDC_OK || (threads < 2 ? st.workers == 1 : c->workers == 2 ? st.workers == 2 :
+						   st.workers >= 1 && st.workers <= 2),
+		  "contours %s in tiles: %d workers with %d threads", c->name, st.workers, threads);
 	if (rc == TDC_OK)
 		rc = tdc_contour_tiles_lines(s->ct, max_bytes, add_line, out, NULL, &nl, &np,
 									 err, errlen);
@@ -233,8 +240,8 @@ compare(const ctt_case *c, double interval, double base, const char *method, con
 	rc = tiled_lines(c, &s, dir, threads, (size_t) 64 << 20, &b, &tiles, err, sizeof(err));
 	CHECK(rc == TDC_OK, "contours %s: in tiles: %d %s", c->name, rc, err);
 	/* the sanitizers' --quick inputs are smaller: fewer tiles */
-	CHECK(tiles >= (tdc_test_quick ? 3 : 8), "contours %s %s: %d tiles, at least %d expected", c->name, method,
-		  tiles, tdc_test_quick ? 3 : 8);
+	CHECK(tiles >= (tdc_test_quick || c->workers > 1 ? 3 : 8), "contours %s %s: %d tiles, at least %d expected",
+		  c->name, method, tiles, tdc_test_quick || c->workers > 1 ? 3 : 8);
 	CHECK(a.nlines > 10, "contours %s %s every %g: only %zu lines", c->name, method, interval,
 		  a.nlines);
 	CHECK(a.nlines == b.nlines && a.npts == b.npts, "contours %s %s every %g from %g (%d threads): "
@@ -293,6 +300,12 @@ test_contour_tiles(void)
 	compare(&c, 1.25, 0.3, "linear", dir, 2);
 	compare(&c, 2, 0, "linear:max_edge=6", dir, 2);
 	compare(&c, 5, 0, "linear", dir, 1);
+	/* room for a second worker's scratch: two tiles at once (bounded_share.c) */
+	c.limit_mb = tdc_test_quick ? 24 : 40;
+	c.workers = 2;
+	compare(&c, 2, 0, "linear", dir, 2);
+	c.limit_mb = 14;
+	c.workers = 0;
 
 	/* an interval too small for the heights: the one-shot's refusal */
 	{

@@ -20,9 +20,13 @@
  *	  (fringe.c: a test of the triangles' circumdisks against the hull's
  *	  box alone would miss the samples those pixels take);
  *	- "clusters": dense spots in a sparse field, so tiles differ in size;
- *	- the same grid with 1 and 2 threads; many tiles (the stats say);
- *	- the refusals: nearest and natural neighbour, a collinear input, each
- *	  with its message; no file left in the directory.
+ *	- nearest (raster_nearest.c) on each: the site each triangle offers
+ *	  around it, with its radius and max_edge's mask; on the lattice,
+ *	  centres equidistant from several sites take the first in (x, y);
+ *	- the same grid with 1 and 2 threads (two tiles at once); many tiles
+ *	  (the stats say);
+ *	- the refusals: natural neighbour, a collinear input, each with its
+ *	  message; no file left in the directory.
  * A check that compared a few values, or that the grid merely has the
  * right size, would pass with a wrong edge rule; every pixel is compared.
  */
@@ -47,6 +51,7 @@ typedef struct rt_case
 	double		extent[4];
 	double		cell;
 	size_t		limit_mb;
+	int			workers;		/* 2: two tile workers expected with 2 threads (0: one or two) */
 } rt_case;
 
 typedef struct rt_state
@@ -178,11 +183,14 @@ tiled_grid(const rt_case *c, rt_state *s, const char *dir, int threads, size_t *
 	p.zpath = zp;
 	p.n = c->n;
 	p.opt = &opt;
-	p.limit = c->limit_mb << 20;
+	/* nearest's window of offers (4 MB of 32-byte records) beside linear's 2 MB */
+	p.limit = (c->limit_mb + (s->spec.method == TDC_INTERP_NEAREST ? 4 : 0)) << 20;
 	p.tmpdir = dir;
 	p.begin = rt_begin;
 	p.emit = rt_emit;
 	p.arg = s;
+	/* as ./tdc: the output does not depend on the tiles' order, so two run at once */
+	p.any_order = true;
 	s->dir = dir;
 	s->ras = NULL;
 	s->err[0] = '\0';
@@ -190,6 +198,10 @@ tiled_grid(const rt_case *c, rt_state *s, const char *dir, int threads, size_t *
 	err[0] = '\0';
 	rc = tdc_bounded_run(&p, &st, err, errlen);
 	*tiles = st.tiles;
+	/* one worker with one thread; two where the case makes room for them (else one or two) */
+	CHECK(rc != TDC_OK || (threads < 2 ? st.workers == 1 : c->workers == 2 ? st.workers == 2 :
+						   st.workers >= 1 && st.workers <= 2),
+		  "raster %s in tiles: %d workers with %d threads", c->name, st.workers, threads);
 	if (rc == TDC_OK)
 	{
 		v = malloc(8 * s->g.width * s->g.height);
@@ -264,8 +276,8 @@ compare(const rt_case *c, const char *method, const char *dir, int threads)
 		CHECK(valid1 == valid2, "raster %s %s: %zu pixels with a value in tiles, %zu whole",
 			  c->name, method, valid2, valid1);
 		/* the sanitizers' --quick inputs are a third the size: fewer tiles */
-		CHECK(tiles >= (tdc_test_quick ? 3 : 8), "raster %s %s: %d tiles, at least %d expected", c->name, method,
-			  tiles, tdc_test_quick ? 3 : 8);
+		CHECK(tiles >= (tdc_test_quick || c->workers > 1 ? 3 : 8), "raster %s %s: %d tiles, at least %d expected",
+			  c->name, method, tiles, tdc_test_quick || c->workers > 1 ? 3 : 8);
 		CHECK(valid1 > 0 && valid1 < s.g.width * s.g.height * 2, "raster %s %s: %zu valid",
 			  c->name, method, valid1);
 	}
@@ -298,13 +310,9 @@ refusals(rt_case *c, const char *dir)
 	double	   *v;
 
 	grid_of(c, &s.g);
-	tdc_interp_parse("nearest", &s.spec, err, sizeof(err));
-	v = tiled_grid(c, &s, dir, 2, &valid, &tiles, &rc, err, sizeof(err));
-	CHECK(v == NULL && rc == TDC_EINVAL && strstr(err, "linear only") != NULL,
-		  "raster: nearest in tiles: %d %s", rc, err);
 	tdc_interp_parse("natural_neighbor", &s.spec, err, sizeof(err));
 	v = tiled_grid(c, &s, dir, 2, &valid, &tiles, &rc, err, sizeof(err));
-	CHECK(v == NULL && rc == TDC_EINVAL && strstr(err, "linear only") != NULL,
+	CHECK(v == NULL && rc == TDC_EINVAL && strstr(err, "linear or nearest") != NULL,
 		  "raster: natural neighbour in tiles: %d %s", rc, err);
 	CHECK(tiles_files_in(dir) == 0, "raster: refusals: files left in %s", dir);
 }
@@ -319,7 +327,8 @@ test_raster_tiles(void)
 	rt_case		c;
 	static const char *const methods[] = {
 		"linear", "linear:radius=0", "linear:radius=30:nodata=-9999", "linear:max_edge=6",
-		"linear:max_edge=4:radius=12"
+		"linear:max_edge=4:radius=12", "nearest", "nearest:radius1=3:radius2=3:nodata=-9999",
+		"nearest:max_edge=6"
 	};
 
 	snprintf(dir, sizeof(dir), "%s/tdc_test_raster.XXXXXX", base);
@@ -327,6 +336,7 @@ test_raster_tiles(void)
 
 	/* uniform samples, a smooth surface, the extent beyond the box */
 	memset(&c, 0, sizeof(c));
+	c.workers = 0;				/* a tight limit may leave no room for a second worker */
 	c.name = "uniform";
 	c.n = n;
 	c.xy = malloc(16 * n);
@@ -347,7 +357,15 @@ test_raster_tiles(void)
 	for (size_t m = 0; m < sizeof(methods) / sizeof(methods[0]); m++)
 		compare(&c, methods[m], dir, 2);
 	compare(&c, "linear", dir, 1);
+	compare(&c, "nearest", dir, 1);
 	refusals(&c, dir);
+	/* room for a second worker's scratch: two tiles at once (bounded_share.c) */
+	c.limit_mb = tdc_test_quick ? 24 : 40;
+	c.workers = 2;
+	compare(&c, "linear", dir, 2);
+	compare(&c, "nearest:max_edge=6", dir, 2);
+	c.limit_mb = 14;
+	c.workers = 0;
 
 	/* the projected offset */
 	c.name = "projected offset";
@@ -364,6 +382,7 @@ test_raster_tiles(void)
 	CHECK(tiles_stage(dir, c.xy, c.z, c.n), "raster: cannot stage %s", c.name);
 	compare(&c, "linear", dir, 2);
 	compare(&c, "linear:max_edge=5:radius=20", dir, 2);
+	compare(&c, "nearest", dir, 2);
 
 	/* a diamond: the hull's sides are slanted, so the corners' pixels lie far outside it */
 	c.name = "diamond";
@@ -384,6 +403,7 @@ test_raster_tiles(void)
 	CHECK(tiles_stage(dir, c.xy, c.z, c.n), "raster: cannot stage %s", c.name);
 	compare(&c, "linear", dir, 2);
 	compare(&c, "linear:radius=40:max_edge=7", dir, 2);
+	compare(&c, "nearest:max_edge=7", dir, 2);
 
 	/* clusters in a sparse field */
 	c.name = "clusters";
@@ -413,6 +433,7 @@ test_raster_tiles(void)
 	CHECK(tiles_stage(dir, c.xy, c.z, c.n), "raster: cannot stage %s", c.name);
 	compare(&c, "linear", dir, 2);
 	compare(&c, "linear:max_edge=8", dir, 2);
+	compare(&c, "nearest", dir, 2);
 
 	/* the lattice on the pixels, with a lake */
 	{
@@ -445,6 +466,8 @@ test_raster_tiles(void)
 		compare(&c, "linear", dir, 2);
 		compare(&c, "linear:max_edge=1.5", dir, 2);
 		compare(&c, "linear:max_edge=1.5:radius=0", dir, 2);
+		compare(&c, "nearest", dir, 2);
+		compare(&c, "nearest:max_edge=1.5", dir, 2);
 	}
 
 	/* a collinear input: refused, with its reason */

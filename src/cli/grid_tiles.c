@@ -17,8 +17,8 @@
  * tiles' memory is free again; the sites that pixels outside the hull may
  * take are loaded then, within what the limit leaves.
  *
- * Linear only: a nearest or natural neighbour value may depend on sites
- * that no one tile proves complete (the core refuses, with the reason).
+ * Linear and nearest: a natural neighbour value may depend on sites that
+ * no one tile proves complete (refused, with the reason).
  * --contours in tiles is contours_tiles.c.
  */
 #include <math.h>
@@ -155,7 +155,7 @@ grid_in_tiles(const cli_args *a, const char *xypath, const char *zpath, size_t n
 		.xypath = xypath, .zpath = zpath, .n = n, .opt = &a->opt, .limit = limit,
 		.tmpdir = tmp_dir, .limit_name = "--max-memory",
 		.begin = begin, .emit = emit, .settle = heap_settle, .peak = heap_peak, .arg = &gt,
-		.cancel = &cli_cancel
+		.cancel = &cli_cancel, .any_order = true
 	};
 	tdc_bounded_stats st;
 	char		err[1024];
@@ -167,8 +167,8 @@ grid_in_tiles(const cli_args *a, const char *xypath, const char *zpath, size_t n
 		die(1, "--grid needs heights: 'x y z' text, LAS or .xyz.bin input%s", "");
 	if (tdc_interp_parse(a->method ? a->method : "linear", &gt.spec, err, sizeof(err)) != TDC_OK)
 		die(2, "--method: %s", err);
-	if (gt.spec.method != TDC_INTERP_LINEAR)
-		die(1, "--grid in tiles takes --method linear: a nearest or natural neighbour value may "
+	if (gt.spec.method == TDC_INTERP_NATURAL)
+		die(1, "--grid in tiles takes --method linear or nearest: a natural neighbour value may "
 			"depend on sites no one tile holds; raise --max-memory for %s", a->method);
 	if (n == 0)
 		die(1, "--grid needs an --extent when the input has no point%s", "");

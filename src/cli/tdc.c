@@ -505,12 +505,12 @@ run_in_tiles(const cli_args *a, const staged *s, gtiff_out *tif)
 
 		getrusage(RUSAGE_SELF, &ru);
 		fprintf(stderr,
-				"n=%zu unique=%zu triangles=%zu threads=%d sort=%.6f subdivide=%.6f leaves=%.6f merge=%.6f total=%.6f peak_rss_mb=%.1f tiles=%d halo_points=%zu tile_runs=%zu reread_points=%zu scan=%.6f bin=%.6f gather=%.6f engine=%.6f finish=%.6f write=%.6f\n",
+				"n=%zu unique=%zu triangles=%zu threads=%d sort=%.6f subdivide=%.6f leaves=%.6f merge=%.6f total=%.6f peak_rss_mb=%.1f tiles=%d halo_points=%zu tile_runs=%zu reread_points=%zu scan=%.6f bin=%.6f gather=%.6f engine=%.6f finish=%.6f write=%.6f workers=%d wait=%.6f tiles_wall=%.6f\n",
 				st.n, st.unique, st.ntri, st.threads, st.t.sort, st.t.subdivide,
 				st.t.leaves, st.t.merge,
 				(t1.tv_sec - t0.tv_sec) + (t1.tv_nsec - t0.tv_nsec) * 1e-9,
 				ru.ru_maxrss / 1024.0, st.tiles, st.halo, st.runs, st.reread,
-				st.scan, st.bin, st.gather, st.engine, st.finish, st.write);
+				st.scan, st.bin, st.gather, st.engine, st.finish, st.write, st.workers, st.wait, st.tiles_wall);
 	}
 }
 

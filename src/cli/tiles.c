@@ -72,10 +72,10 @@ tiles_stats_line(const tdc_bounded_stats *st, double total)
 
 	getrusage(RUSAGE_SELF, &ru);
 	fprintf(stderr, "n=%zu unique=%zu triangles=%zu tiles=%d halo_points=%zu tile_runs=%zu "
-			"scan=%.6f bin=%.6f gather=%.6f engine=%.6f finish=%.6f write=%.6f total=%.6f "
-			"peak_rss_mb=%.1f\n", st->n, st->unique, st->ntri, st->tiles, st->halo, st->runs,
-			st->scan, st->bin, st->gather, st->engine, st->finish, st->write, total,
-			ru.ru_maxrss / 1024.0);
+			"scan=%.6f bin=%.6f gather=%.6f engine=%.6f finish=%.6f write=%.6f workers=%d wait=%.6f "
+			"tiles_wall=%.6f total=%.6f peak_rss_mb=%.1f\n", st->n, st->unique, st->ntri, st->tiles,
+			st->halo, st->runs, st->scan, st->bin, st->gather, st->engine, st->finish, st->write,
+			st->workers, st->wait, st->tiles_wall, total, ru.ru_maxrss / 1024.0);
 }
 
 /*
@@ -99,6 +99,8 @@ run_bounded(const char *xypath, const char *zpath, size_t n, const tdc_options *
 	/* TDC_TILE_CHECK=1 (test/cli.sh): each first run's files checked against its region */
 	p.check_files = getenv("TDC_TILE_CHECK") != NULL;
 	p.trace = getenv("TDC_TILE_DEBUG") ? trace : NULL;
+	/* without -o the order of the tiles shows nowhere: two at a time */
+	p.any_order = out == NULL;
 	/* the heap kept between tiles; what the process holds beside them off the limit */
 	p.outside = heap_start(limit);
 	if (tdc_bounded_run(&p, st, err, sizeof(err)) != TDC_OK)

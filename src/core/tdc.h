@@ -797,9 +797,12 @@ extern size_t tdc_tin_drape_result(const tdc_tin *tin, const tdc_drape_vertex **
  * tile that would not fit is an error, never a silent overrun.
  *
  * Runs on the caller's thread (with one more thread for each of the two
- * passes over the input) and calls every callback from it.  Never exits:
- * an error returns its code with a message, after freeing what the run
- * allocated and removing the files it created.
+ * passes over the input) and calls every callback from it, unless the
+ * caller takes the tiles in any order (any_order below): then up to two
+ * tiles run at once, on threads of the run, which call emit, settle and
+ * trace one call at a time.  Never exits: an error returns its code with
+ * a message, after freeing what the run allocated and removing the files
+ * it created.
  */
 typedef struct tdc_bounded_stats
 {
@@ -810,14 +813,18 @@ typedef struct tdc_bounded_stats
 				runs,			/* tile runs, reruns included */
 				reread;			/* records reruns read from other tiles' files */
 	int			tiles,			/* tiles of the plan */
-				threads;		/* worker threads of the engine's last run */
+				threads,		/* worker threads of the engine's last run */
+				workers;		/* tiles that could run at once (1, or 2 with any_order) */
 	tdc_times	t;				/* the engine's phases, summed over the runs */
 	double		scan,			/* wall seconds: box, hull and counts */
 				bin,			/* the points to the tile files */
+				tiles_wall,		/* every tile, from the first run to the last emit */
+				/* seconds summed over the tile workers (each a wall time): */
 				gather,			/* each tile's points read back */
 				engine,			/* tdc_triangulate */
 				finish,			/* tdc_tile_finish */
-				write;			/* emit, and the frees after a run */
+				write,			/* emit, and the frees after a run */
+				wait;			/* a worker waiting for the other's memory */
 } tdc_bounded_stats;
 
 typedef struct tdc_bounded_params
@@ -873,6 +880,17 @@ typedef struct tdc_bounded_params
 	 */
 	void		(*trace) (void *arg, const char *line);
 	bool		check_files;
+
+	/*
+	 * The caller takes the final tiles in any order (a raster or a line
+	 * set that does not depend on it): tiles then run two at a time on the
+	 * run's threads, each within a share of the limit it reserves for the
+	 * run, and emit is called as each finishes, one call at a time.  The
+	 * tiles and their triangles are the same; only their order changes.
+	 * false: in the plan's order, one tile at a time (its engine on every
+	 * thread).
+	 */
+	bool		any_order;
 	void	   *arg;			/* passed to the callbacks */
 	/*
 	 * NULL, or a flag another thread may set to nonzero: polled between

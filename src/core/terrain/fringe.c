@@ -198,8 +198,21 @@ fr_on_hull(const fringe *f, const double *q)
 	return tdc_orient2d(h + 2 * lo, h + 2 * hi, q) == 0;
 }
 
+/* Is q inside the hull or on it (exact; the cells first)? */
 bool
-fr_centre_outside(const fringe *f, const double *a, const double *b, const double *c)
+fr_inside_fast(const fringe *f, const double *q)
+{
+	return fr_deep(f, q) || fr_inside(f, q);
+}
+
+/*
+ * The circumcentre of triangle a, b, c in floating point, o, and a bound e
+ * on its error in each coordinate, far above the rounding; false for a
+ * sliver, whose centre is ill-conditioned (o and e not set).
+ */
+bool
+fr_centre_box(const fringe *f, const double *a, const double *b, const double *c, double o[2],
+			  double *e)
 {
 	double		bx = b[0] - a[0],
 				by = b[1] - a[1],
@@ -210,19 +223,33 @@ fr_centre_outside(const fringe *f, const double *a, const double *b, const doubl
 				l2 = fmax(fmax(b2, c2), (cx - bx) * (cx - bx) + (cy - by) * (cy - by)),
 				d = 2 * (bx * cy - by * cx),
 				ux,
-				uy,
-				e,
-				o[2];
+				uy;
 
-	/* a sliver's centre is ill-conditioned: take it */
+	/* a sliver's centre is ill-conditioned */
 	if (!(fabs(d) > 1e-6 * l2))
-		return true;
+		return false;
 	ux = (cy * b2 - by * c2) / d;
 	uy = (bx * c2 - cx * b2) / d;
 	/* the error box: far above the rounding of u (relative 1e-9 at this conditioning) */
-	e = 1e-6 * (sqrt(ux * ux + uy * uy) + sqrt(l2)) + f->delta;
+	*e = 1e-6 * (sqrt(ux * ux + uy * uy) + sqrt(l2)) + f->delta;
 	o[0] = a[0] + ux;
 	o[1] = a[1] + uy;
+	return true;
+}
+
+/*
+ * Does the circumcentre of triangle a, b, c lie outside the hull, or may
+ * it (its error box is not inside, or it is ill-conditioned)?
+ */
+bool
+fr_centre_outside(const fringe *f, const double *a, const double *b, const double *c)
+{
+	double		o[2],
+				e;
+
+	/* a sliver's centre is ill-conditioned: take it */
+	if (!fr_centre_box(f, a, b, c, o, &e))
+		return true;
 	if (e < 0.5 * fmin(f->cw, f->ch) && fr_deep(f, o))
 		return false;			/* the box lies in the cell's block, inside */
 	for (int k = 0; k < 4; k++)
@@ -356,8 +383,8 @@ fr_load(fringe *f, size_t max_bytes, char *err, size_t errlen)
 }
 
 /* Is s nearer to q than best, or as near and first in (x, y) order (exactly)? */
-static bool
-better(const double *q, const double *s, const double *best)
+bool
+fr_better(const double *q, const double *s, const double *best)
 {
 	int			c;
 
@@ -391,7 +418,7 @@ kd_near(const double *s, size_t lo, size_t hi, int axis, const double *q, const 
 	if (hi <= lo)
 		return;
 	mid = lo + (hi - lo) / 2;
-	if (better(q, s + 3 * mid, *best))
+	if (fr_better(q, s + 3 * mid, *best))
 	{
 		*best = s + 3 * mid;
 		*bd = fdist2(q, *best);

@@ -42,7 +42,11 @@ extern int	fr_init(fringe *f, const double *hull, size_t nhull, const char *dir,
 					char *err, size_t errlen);
 extern bool fr_inside(const fringe *f, const double *q);
 extern bool fr_on_hull(const fringe *f, const double *q);
+extern bool fr_inside_fast(const fringe *f, const double *q);
+extern bool fr_centre_box(const fringe *f, const double *a, const double *b, const double *c,
+						  double o[2], double *e);
 extern bool fr_centre_outside(const fringe *f, const double *a, const double *b, const double *c);
+extern bool fr_better(const double *q, const double *s, const double *best);
 extern int	fr_add(fringe *f, const double *p, double z, char *err, size_t errlen);
 extern int	fr_load(fringe *f, size_t max_bytes, char *err, size_t errlen);
 extern const double *fr_nearest(const fringe *f, const double *q);

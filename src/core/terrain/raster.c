@@ -44,32 +44,13 @@
 #include <unistd.h>
 
 #include "engine/predicates.h"
-#include "fringe.h"
-#include "tdc.h"
+#include "raster_int.h"
 #include "tin/tin_lerp.h"
 
 #define SENT		UINT64_C(0x7ff4a1b2c3d4e5f6)	/* a signalling NaN's bits */
 #define WIN_MIN		((size_t) 2 << 20)	/* bytes of a tile's window, at least */
 
-struct tdc_raster
-{
-	tdc_interp_spec spec;
-	tdc_grid_spec g;
-	char		path[4200];
-	int			fd;
-	uint64_t   *win;			/* a window of rows, wincap pixels */
-	size_t		wincap;
-	double		slack;			/* in pixels: above the rounding of a centre's column or row */
-	fringe		fr;
-};
 
-static int
-fail(char *err, size_t errlen, int code, const char *fmt, const char *arg)
-{
-	if (err && errlen)
-		snprintf(err, errlen, fmt, arg);
-	return code;
-}
 
 static bool
 coord_ok(double c)
@@ -79,16 +60,6 @@ coord_ok(double c)
 	return c == 0 || (a >= TDC_COORD_MIN && a <= TDC_COORD_MAX);
 }
 
-/* Pixel (col, row)'s centre, the very expression of the whole TIN's grid (tin_interp.c). */
-static inline void
-centre(const double *gt, size_t col, size_t row, double *q)
-{
-	double		fy = (double) row + 0.5,
-				fx = (double) col + 0.5;
-
-	q[0] = gt[0] + fx * gt[1] + fy * gt[2];
-	q[1] = gt[3] + fx * gt[4] + fy * gt[5];
-}
 
 int
 tdc_raster_begin(const tdc_interp_spec *spec, const tdc_grid_spec *g, const double *hull,
@@ -101,43 +72,47 @@ tdc_raster_begin(const tdc_interp_spec *spec, const tdc_grid_spec *g, const doub
 
 	*out = NULL;
 	*hold = 0;
-	if (spec->method != TDC_INTERP_LINEAR || spec->breaklines)
-		return fail(err, errlen, TDC_EINVAL, "%s", "a grid in tiles takes linear only: a nearest "
-					"or natural neighbour value may depend on sites of other tiles, and breaklines "
+	if ((spec->method != TDC_INTERP_LINEAR && spec->method != TDC_INTERP_NEAREST) || spec->breaklines)
+		return tdc_rs_fail(err, errlen, TDC_EINVAL, "%s", "a grid in tiles takes linear or nearest: a "
+					"natural neighbour value may depend on sites of other tiles, and breaklines "
 					"need the whole constrained triangulation");
 	if (!(g->gt[1] > 0 && g->gt[5] < 0 && g->gt[2] == 0 && g->gt[4] == 0) ||
-		g->width == 0 || g->height == 0 || g->width > SIZE_MAX / 8 / g->height)
-		return fail(err, errlen, TDC_EINVAL, "%s", "a grid in tiles must be north-up, with pixels");
+		g->width == 0 || g->height == 0 || g->width > SIZE_MAX / 32 / g->height ||
+		g->height > UINT32_MAX || g->width > UINT32_MAX)
+		return tdc_rs_fail(err, errlen, TDC_EINVAL, "%s", "a grid in tiles must be north-up, with pixels");
 	for (int k = 0; k < 4; k++)
 	{
-		centre(g->gt, k & 1 ? g->width - 1 : 0, k & 2 ? g->height - 1 : 0, q);
+		rs_centre(g->gt, k & 1 ? g->width - 1 : 0, k & 2 ? g->height - 1 : 0, q);
 		if (!coord_ok(q[0]) || !coord_ok(q[1]))
 		{
 			char		c[80];
 
 			snprintf(c, sizeof(c), "(%.17g %.17g)", q[0], q[1]);
-			return fail(err, errlen, TDC_EINVAL, "the pixel centre %s is out of the exact "
+			return tdc_rs_fail(err, errlen, TDC_EINVAL, "the pixel centre %s is out of the exact "
 						"range of coordinates", c);
 		}
 	}
 	if (nhull < 3)
-		return fail(err, errlen, TDC_EINVAL, "%s", "the points are one site or on one line: "
+		return tdc_rs_fail(err, errlen, TDC_EINVAL, "%s", "the points are one site or on one line: "
 					"they have no triangle to grid in tiles");
 	if ((r = calloc(1, sizeof(*r))) == NULL)
-		return fail(err, errlen, TDC_ENOMEM, "%s", "out of memory");
+		return tdc_rs_fail(err, errlen, TDC_ENOMEM, "%s", "out of memory");
 	r->fd = -1;
 	r->spec = *spec;
 	r->g = *g;
 	r->slack = 1e-6 + 8 * DBL_EPSILON * ((fabs(g->gt[0]) + fabs(g->gt[3])) / g->gt[1] +
 										 (double) g->width + (double) g->height);
-	r->wincap = WIN_MIN / 8 > 16 * g->width ? WIN_MIN / 8 : 16 * g->width;
-	r->win = malloc(8 * r->wincap);
-	if (r->win == NULL)
+	/* linear's window (nearest has its own, raster_nearest.c) */
+	r->wincap = spec->method != TDC_INTERP_LINEAR ? 0 :
+		WIN_MIN / 8 > 16 * g->width ? WIN_MIN / 8 : 16 * g->width;
+	r->win = r->wincap > 0 ? malloc(8 * r->wincap) : NULL;
+	if (r->wincap > 0 && r->win == NULL)
 	{
 		free(r);
-		return fail(err, errlen, TDC_ENOMEM, "%s", "out of memory for the grid's window");
+		return tdc_rs_fail(err, errlen, TDC_ENOMEM, "%s", "out of memory for the grid's window");
 	}
-	if ((rc = fr_init(&r->fr, hull, nhull, tmpdir, err, errlen)) != TDC_OK)
+	if ((rc = fr_init(&r->fr, hull, nhull, tmpdir, err, errlen)) != TDC_OK ||
+		(spec->method == TDC_INTERP_NEAREST && (rc = tdc_rn_begin(r, err, errlen)) != TDC_OK))
 	{
 		tdc_raster_free(r);
 		return rc;
@@ -147,29 +122,21 @@ tdc_raster_begin(const tdc_interp_spec *spec, const tdc_grid_spec *g, const doub
 	if (r->fd < 0)
 	{
 		r->path[0] = '\0';
-		rc = fail(err, errlen, TDC_EIO, "cannot create %s/raster", tmpdir);
+		rc = tdc_rs_fail(err, errlen, TDC_EIO, "cannot create %s/raster", tmpdir);
 		tdc_raster_free(r);
 		return rc;
 	}
-	if (ftruncate(r->fd, (off_t) (8 * g->width * g->height)) != 0)
+	if (ftruncate(r->fd, (off_t) (RS_REC(r) * g->width * g->height)) != 0)
 	{
-		rc = fail(err, errlen, TDC_EIO, "cannot size the grid's temporary file %s", r->path);
+		rc = tdc_rs_fail(err, errlen, TDC_EIO, "cannot size the grid's temporary file %s", r->path);
 		tdc_raster_free(r);
 		return rc;
 	}
 	*out = r;
-	*hold = sizeof(*r) + 8 * r->wincap + FR_HOLD(nhull);
+	*hold = sizeof(*r) + 8 * r->wincap + FR_HOLD(nhull) + tdc_rn_hold(r);
 	return TDC_OK;
 }
 
-static bool
-edge_long(const double *a, const double *b, double max_edge)
-{
-	double		l[2] = {max_edge, 0},
-				o[2] = {0, 0};
-
-	return tdc_sqdist_cmp(a, b, l, o) > 0;
-}
 
 static inline void
 put(uint64_t *w, double v)
@@ -223,7 +190,7 @@ tri_pixels(const tdc_raster *r, const double *const p[3], const double z[3], boo
 						zk = -1;
 			uint64_t   *w = win + (row - w0) * wcols + (col - c0);
 
-			centre(gt, col, row, q);
+			rs_centre(gt, col, row, q);
 			for (int k = 0; k < 3; k++)
 			{
 				o[k] = tdc_orient2d(p[k], p[(k + 1) % 3], q);
@@ -272,7 +239,7 @@ win_flush(tdc_raster *r, size_t w0, size_t w1, size_t c0, size_t wcols, char *er
 				w[b] ^= SENT;
 			if (pwrite(r->fd, w + a, 8 * (b - a), (off_t) (8 * (row * r->g.width + c0 + a))) !=
 				(ssize_t) (8 * (b - a)))
-				return fail(err, errlen, TDC_EIO, "cannot write the grid's temporary file %s",
+				return tdc_rs_fail(err, errlen, TDC_EIO, "cannot write the grid's temporary file %s",
 							r->path);
 			a = b;
 		}
@@ -301,6 +268,8 @@ tdc_raster_tile(tdc_raster *r, const double *q, const double *qz, const size_t *
 
 	if (ntri == 0)
 		return TDC_OK;
+	if (r->spec.method == TDC_INTERP_NEAREST)
+		return tdc_rn_tile(r, q, qz, tri, ntri, err, errlen);
 	/* the fringe's sites, and the tile's box */
 	for (size_t t = 0; t < ntri; t++)
 	{
@@ -353,7 +322,7 @@ tdc_raster_tile(tdc_raster *r, const double *q, const double *qz, const size_t *
 			bool		kept = true;
 
 			for (int k = 0; r->spec.max_edge > 0 && k < 3 && kept; k++)
-				kept = !edge_long(p[k], p[(k + 1) % 3], r->spec.max_edge);
+				kept = !tdc_rs_edge_long(p[k], p[(k + 1) % 3], r->spec.max_edge);
 			tri_pixels(r, p, z, kept, w0, w1, c0, wcols, r->win);
 		}
 		if ((rc = win_flush(r, w0, w1, c0, wcols, err, errlen)) != TDC_OK)
@@ -370,16 +339,18 @@ tdc_raster_rows(tdc_raster *r, size_t y0, size_t nrows, double *v, size_t *valid
 				n = w * nrows;
 	int			rc;
 
-	if (r->spec.radius != 0 && (rc = fr_load(&r->fr, max_bytes, err, errlen)) != TDC_OK)
+	if (RS_FRINGE(r) && (rc = fr_load(&r->fr, max_bytes, err, errlen)) != TDC_OK)
 		return rc;
 	if (y0 + nrows > r->g.height)
-		return fail(err, errlen, TDC_EINVAL, "%s", "rows beyond the grid");
+		return tdc_rs_fail(err, errlen, TDC_EINVAL, "%s", "rows beyond the grid");
+	if (r->spec.method == TDC_INTERP_NEAREST)
+		return tdc_rn_rows(r, y0, nrows, v, valid, err, errlen);
 	for (size_t got = 0; got < 8 * n;)
 	{
 		ssize_t		k = pread(r->fd, (char *) v + got, 8 * n - got, (off_t) (8 * y0 * w + got));
 
 		if (k <= 0)
-			return fail(err, errlen, TDC_EIO, "cannot read the grid's temporary file %s", r->path);
+			return tdc_rs_fail(err, errlen, TDC_EIO, "cannot read the grid's temporary file %s", r->path);
 		got += (size_t) k;
 	}
 	for (size_t i = 0; i < n; i++)
@@ -398,7 +369,7 @@ tdc_raster_rows(tdc_raster *r, size_t y0, size_t nrows, double *v, size_t *valid
 		}
 		/* no triangle held this centre: nodata inside the hull, the nearest site outside */
 		v[i] = r->spec.nodata;
-		centre(r->g.gt, i % w, y0 + i / w, q);
+		rs_centre(r->g.gt, i % w, y0 + i / w, q);
 		if (r->spec.radius == 0 || fr_inside(&r->fr, q))
 			continue;
 		if ((s = fr_nearest(&r->fr, q)) == NULL)
@@ -428,5 +399,6 @@ tdc_raster_free(tdc_raster *r)
 		unlink(r->path);
 	fr_free(&r->fr);
 	free(r->win);
+	tdc_rn_free(r);
 	free(r);
 }

@@ -28,7 +28,10 @@
  *			halves of the input on two threads, each with its own files,
  *			read back one after the other (bounded_bin.c);
  *	tiles	each tile run until final, its triangles emitted
- *			(bounded_tile.c).
+ *			(bounded_tile.c): in the plan's order one at a time, or, when
+ *			the caller takes them in any order, two at a time on two
+ *			workers that share the budget by reservations (bounded_share.c
+ *			says how, and why that cannot deadlock).
  * A point's cell is decided exactly against the doubles of the cell sides,
  * so a tile's points lie in its cells' box, and its first known region is
  * fixed before binning: K = that box plus a halo of 8 mean point spacings
@@ -60,6 +63,7 @@
  * bounded_int.h), which frees the run's arrays and removes its files.
  */
 #include <math.h>
+#include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
@@ -247,6 +251,23 @@ too_short(bounded_run *r, const char *path, size_t size)
 }
 
 /*
+ * Bytes the process holds beside the tiles from now on (the output's
+ * buffers, a second tile worker's scratch), off the tiles' budget; a limit
+ * they leave nothing of is an error.
+ */
+static int
+hold_outside(bounded_run *r, size_t bytes)
+{
+	r->outside += bytes;
+	if (r->outside >= r->limit)
+		return tdc_bd_fail(&r->e, TDC_EMEMLIMIT, "%s %zu is below the %zu MB the process and "
+						   "the output's buffers hold beside the tiles; raise it",
+						   r->lname, r->limit >> 20, (r->outside >> 20) + 1);
+	r->budget = r->limit - r->outside;
+	return TDC_OK;
+}
+
+/*
  * The caller's begin, with the box and the hull of the first pass: what it
  * will hold beside the tiles comes off their budget before the plan, and
  * a limit it leaves nothing of is an error.
@@ -260,13 +281,137 @@ begin_output(bounded_run *r)
 	if (rc != 0)
 		return tdc_bd_fail(&r->e, rc < 0 ? rc : TDC_EINVAL, "the output could not begin "
 						   "(the caller's begin returned %d)", rc);
-	r->outside += hold;
-	if (r->outside >= r->limit)
-		return tdc_bd_fail(&r->e, TDC_EMEMLIMIT, "%s %zu is below the %zu MB the process and "
-						   "the output's buffers hold beside the tiles; raise it",
-						   r->lname, r->limit >> 20, (r->outside >> 20) + 1);
-	r->budget = r->limit - r->outside;
-	return TDC_OK;
+	return hold_outside(r, hold);
+}
+
+/* A worker: tiles claimed in the plan's order, each run until final. */
+static void *
+tile_worker(void *arg)
+{
+	bounded_run *w = arg;
+	int			t;
+
+	while ((t = tdc_bd_claim(w)) >= 0)
+	{
+		int			rc = tdc_bd_tile_run(w, t);
+
+		tdc_bd_release(w);
+		if (rc != TDC_OK)
+			break;
+	}
+	if (w->e.code != TDC_OK)
+		tdc_bd_stop(w);
+	tdc_bd_leave(w);
+	return NULL;
+}
+
+/* A worker's own scratch for a tile's region (the first worker's is r's). */
+static bool
+worker_scratch(bounded_run *w)
+{
+	size_t		cells = (size_t) TDC_TP_GRID * TDC_TP_GRID;
+
+	w->cellst = malloc(cells);
+	w->added = calloc(cells, 1);
+	w->added_list = NULL;
+	w->nadded = w->added_cap = 0;
+	w->hcells = malloc(sizeof(uint32_t) * TDC_TP_HULL_CELLS);
+	w->extra = malloc(32 * (w->nhull + 1));
+	w->inband = calloc(w->nhull + 1, 1);
+	w->xs = malloc(sizeof(double *) * (w->nhull + 1));
+	return w->cellst && w->added && w->hcells && w->extra && w->inband && w->xs;
+}
+
+static void
+worker_scratch_free(bounded_run *w)
+{
+	free(w->cellst);
+	free(w->added);
+	free(w->added_list);
+	free(w->hcells);
+	free(w->extra);
+	free(w->inband);
+	free(w->xs);
+}
+
+/* One worker's counts added to the run's. */
+static void
+add_stats(tdc_bounded_stats *st, const tdc_bounded_stats *w)
+{
+	st->unique += w->unique;
+	st->ntri += w->ntri;
+	st->halo += w->halo;
+	st->runs += w->runs;
+	st->reread += w->reread;
+	st->threads = w->threads > st->threads ? w->threads : st->threads;
+	st->t.sort += w->t.sort;
+	st->t.subdivide += w->t.subdivide;
+	st->t.leaves += w->t.leaves;
+	st->t.merge += w->t.merge;
+	st->gather += w->gather;
+	st->engine += w->engine;
+	st->finish += w->finish;
+	st->write += w->write;
+	st->wait += w->wait;
+}
+
+/*
+ * The tiles, on tdc_bd_workers(r) workers (bounded_share.c): the first on
+ * this thread, a second on a thread of its own.  Each works on a copy of
+ * r with its own scratch, error and counts; r->e gets the first error.
+ * A second worker that cannot start leaves the tiles to the first.
+ */
+static void
+run_tiles(bounded_run *r)
+{
+	int			nw = tdc_bd_workers(r);
+	bounded_run w[2];
+	tdc_bounded_stats wst[2];
+	pthread_t	th;
+	bool		started = false;
+
+	r->sh = tdc_bd_share_new(r, nw);
+	if (r->sh == NULL)
+	{
+		tdc_bd_nomem(&r->e);
+		return;
+	}
+	memset(wst, 0, sizeof(wst));
+	for (int i = 0; i < nw; i++)
+	{
+		w[i] = *r;
+		w[i].st = &wst[i];
+		memset(&w[i].e, 0, sizeof(w[i].e));
+		w[i].wopt = *r->p->opt;
+		w[i].opt = &w[i].wopt;
+		w[i].held = 0;
+	}
+	if (nw > 1)
+	{
+		if (!worker_scratch(&w[1]))
+			nw = 1;				/* the first worker takes every tile */
+		else
+			started = pthread_create(&th, NULL, tile_worker, &w[1]) == 0;
+		if (!started)
+		{
+			tdc_bd_leave(&w[1]);
+			nw = 1;
+		}
+	}
+	r->st->workers = nw;
+	tile_worker(&w[0]);
+	if (started)
+		pthread_join(th, NULL);
+	if (tdc_bd_share_error(r->sh)->code != TDC_OK)
+		r->e = *tdc_bd_share_error(r->sh);
+	for (int i = 0; i < (started ? 2 : 1); i++)
+		add_stats(r->st, &wst[i]);
+	/* the first worker's list may have moved when it grew */
+	r->added_list = w[0].added_list;
+	if (tdc_bd_workers(r) > 1)
+		worker_scratch_free(&w[1]);
+	tdc_bd_share_free(r->sh);
+	r->sh = NULL;
 }
 
 /* The phases in order; the first error stops them. */
@@ -283,6 +428,17 @@ run_phases(bounded_run *r)
 	/* the caller's output, sized by the box, holds its buffers from here on */
 	if (r->p->begin && begin_output(r) != TDC_OK)
 		return r->e.code;
+	/*
+	 * A second tile worker's scratch, whenever the caller takes any order
+	 * and the budget dwarfs it (so the plan is the same for any thread
+	 * count; under a tight limit the tiles run one at a time).
+	 */
+	if (r->p->any_order && tdc_bd_worker_bytes(r) * 8 <= r->budget)
+	{
+		if (hold_outside(r, tdc_bd_worker_bytes(r)) != TDC_OK)
+			return r->e.code;
+		r->two = true;
+	}
 	/* every cell in one tile, every tile at most tile_max points */
 	if (plan(r) != TDC_OK)
 		return r->e.code;
@@ -305,14 +461,10 @@ run_phases(bounded_run *r)
 		return tdc_bd_nomem(&r->e);
 
 	/* every global triangle emitted once, by the tile that owns it */
-	for (int t = 0; t < r->nt; t++)
-	{
-		if (tdc_bd_canceled(r->p->cancel))
-			return tdc_bd_fail(&r->e, TDC_ECANCELED, "canceled");
-		if (tdc_bd_tile_run(r, t) != TDC_OK)
-			return r->e.code;
-	}
-	return TDC_OK;
+	t0 = now_s();
+	run_tiles(r);
+	st->tiles_wall = now_s() - t0;
+	return r->e.code;
 }
 
 /*

@@ -44,14 +44,17 @@ sort_tile(bounded_run *r, int s)
 				ncell = (size_t) cw * (size_t) (ti->r1 - ti->r0),
 				at = 0,
 				got;
-	double	   *out = malloc(8 * (size_t) w * n + 8),
+	double	   *out = NULL,
 				rec[4 * 1024];
-	uint32_t   *next = malloc(4 * ncell + 4),
-			   *end = malloc(4 * ncell + 4);
+	uint32_t   *next = NULL,
+			   *end = NULL;
 	mreader		m;
 	FILE	   *f;
 	bool		short_write;
 
+	out = malloc(8 * (size_t) w * n + 8);
+	next = malloc(4 * ncell + 4);
+	end = malloc(4 * ncell + 4);
 	if (!out || !next || !end)
 	{
 		tdc_bd_nomem(&r->e);
@@ -131,6 +134,41 @@ done:
 	return r->e.code;
 }
 
+/* The bytes sort_tile holds for tile s. */
+static size_t
+sort_bytes(const bounded_run *r, int s)
+{
+	const tdc_tp_tile *ti = &r->tiles[s];
+
+	return 8 * (size_t) r->w * ti->count + 8 * (size_t) (ti->c1 - ti->c0) * (ti->r1 - ti->r0) + 16;
+}
+
+/*
+ * Tile s's file in cell order, rewritten now if no worker did it before.
+ * Its bytes are reserved first, before its file lock: this worker holds
+ * nothing here (a rerun's count), and a worker waiting for memory must
+ * not hold a lock the other one, holding memory, may wait for.
+ */
+static int
+sort_once(bounded_run *r, int s)
+{
+	bool		sorted;
+
+	tdc_bd_file_lock(r, s, false);
+	sorted = r->sorted[s];
+	tdc_bd_file_unlock(r, s);
+	if (sorted)
+		return TDC_OK;
+	if (tdc_bd_reserve(r, sort_bytes(r, s)) != TDC_OK)
+		return r->e.code;
+	tdc_bd_file_lock(r, s, true);
+	if (!r->sorted[s])
+		sort_tile(r, s);
+	tdc_bd_file_unlock(r, s);
+	tdc_bd_release(r);
+	return r->e.code;
+}
+
 /*
  * Does cell c (of tile s's rectangle) hold a point the region may take:
  * does its closed box meet K or one of the nx boxes of r->xs, or was it
@@ -175,20 +213,22 @@ tdc_bd_region_records(bounded_run *r, int s, bool whole, const double *K, size_t
 
 	if (whole || !r->use_cells)
 	{
-		if (tile_open(r, &f, s) != TDC_OK)
-			return r->e.code;
-		while ((got = tdc_bd_mr_read(&f, buf, 8 * (size_t) w, cap)) > 0)
+		tdc_bd_file_lock(r, s, false);
+		if (tile_open(r, &f, s) == TDC_OK)
 		{
-			take(arg, buf, got);
-			if (!whole)
-				r->st->reread += got;
+			while ((got = tdc_bd_mr_read(&f, buf, 8 * (size_t) w, cap)) > 0)
+			{
+				take(arg, buf, got);
+				if (!whole)
+					r->st->reread += got;
+			}
+			tdc_bd_mr_close(&f);
 		}
-		tdc_bd_mr_close(&f);
+		tdc_bd_file_unlock(r, s);
 		return r->e.code;
 	}
-	if (!r->sorted[s] && sort_tile(r, s) != TDC_OK)
-		return r->e.code;
-	if (tdc_bd_mr_open(&f, r->dir, &r->e, "cell", s, 1) != TDC_OK)
+	/* rewritten once, by whichever worker needs it first; never undone, so read unlocked */
+	if (sort_once(r, s) != TDC_OK || tdc_bd_mr_open(&f, r->dir, &r->e, "cell", s, 1) != TDC_OK)
 		return r->e.code;
 	for (int j = ti->r0; j < ti->r1; j++)
 	{

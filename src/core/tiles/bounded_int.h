@@ -11,8 +11,9 @@
  *	bounded_bin.c		pass 2: every point to its tile's file and halos
  *	bounded_cells.c		a tile's file in cell order, for the reruns
  *	bounded_tile.c		a tile's runs until final, and its triangles out
- * Layered without loops: bounded_files.c at the bottom, then the phases,
- * then bounded.c.
+ *	bounded_share.c		what the tile workers share: memory, files, output
+ * Layered without loops: bounded_files.c and bounded_share.c at the
+ * bottom, then the phases, then bounded.c (which runs the tile workers).
  *
  * Errors: every function that can fail returns TDC_OK or an error code and
  * leaves the first error's code and message in a bd_err, which unwinds to
@@ -104,9 +105,13 @@ typedef struct mreader
 	bd_err	   *e;
 } mreader;
 
+struct bd_share;					/* bounded_share.c: what the tile workers share */
+
 /*
  * The state of one run, filled phase by phase (bounded.c says which phase
- * fills what).
+ * fills what).  Each tile worker has a copy (bounded.c): the shared
+ * arrays read-only, its own scratch for a tile's region, its own error
+ * and counts.
  */
 typedef struct bounded_run
 {
@@ -170,8 +175,32 @@ typedef struct bounded_run
 	size_t	   *halo_count;		/* each tile's halo file's points */
 
 	/* the tiles */
-	uint8_t    *sorted;			/* per tile: its file is in cell order (bounded_cells.c) */
+	uint8_t    *sorted;			/* per tile: its file is in cell order (bounded_cells.c);
+								 * read and set under the tile's file lock */
+	bool		two;			/* a second tile worker's scratch is held */
+	struct bd_share *sh;		/* the workers' memory, file locks and output (NULL
+								 * before the tiles) */
+	size_t		held;			/* bytes this worker reserved (tdc_bd_reserve) */
+	tdc_options wopt;			/* a worker's engine options (opt points here) */
 } bounded_run;
+
+/* bounded_share.c */
+extern int	tdc_bd_workers(const bounded_run *r);
+extern size_t tdc_bd_worker_bytes(const bounded_run *r);
+extern struct bd_share *tdc_bd_share_new(const bounded_run *r, int nworkers);
+extern void tdc_bd_share_free(struct bd_share *sh);
+extern const bd_err *tdc_bd_share_error(const struct bd_share *sh);
+extern int	tdc_bd_claim(bounded_run *r);
+extern void tdc_bd_leave(bounded_run *r);
+extern void tdc_bd_stop(bounded_run *r);
+extern bool tdc_bd_stopped(const bounded_run *r);
+extern int	tdc_bd_reserve(bounded_run *r, size_t bytes);
+extern void tdc_bd_release(bounded_run *r);
+extern void tdc_bd_run_threads(bounded_run *r);
+extern void tdc_bd_file_lock(const bounded_run *r, int s, bool write);
+extern void tdc_bd_file_unlock(const bounded_run *r, int s);
+extern void tdc_bd_out_lock(const bounded_run *r);
+extern void tdc_bd_out_unlock(const bounded_run *r);
 
 /*
  * Tile t's first known region, as the policy makes it from its cell box:
@@ -268,7 +297,11 @@ static inline void
 heap_settle(const bounded_run *r, bool always)
 {
 	if (r->p->settle)
+	{
+		tdc_bd_out_lock(r);
 		r->p->settle(r->p->arg, always);
+		tdc_bd_out_unlock(r);
+	}
 }
 
 /* bounded_bin.c */
@@ -282,5 +315,6 @@ extern int	tdc_bd_region_records(bounded_run *r, int s, bool whole, const double
 
 /* bounded_tile.c */
 extern int	tdc_bd_tile_run(bounded_run *r, int t);
+
 
 #endif							/* TDC_BOUNDED_INT_H */

@@ -74,6 +74,25 @@ point_from_rec(const bounded_run *r, tile_points *p, size_t at, const double *re
 		p->qc[at] = rec_label(rec, REC_L(r));
 }
 
+/* The caller's trace of a tile run, when it has one (one worker at a time). */
+static void
+trace_run(const bounded_run *r, int t, const double *K, size_t nadded, size_t m)
+{
+	char		line[240];
+
+	if (r->p->trace == NULL)
+		return;
+	if (nadded == (size_t) -1)
+		snprintf(line, sizeof(line), "tile %d/%d: own %zu, K %g %g %g %g: %zu points", t, r->nt,
+				 r->tiles[t].count, K[0], K[1], K[2], K[3], m);
+	else
+		snprintf(line, sizeof(line), "tile %d/%d: own %zu, K %g %g %g %g, %zu cells added: %zu points",
+				 t, r->nt, r->tiles[t].count, K[0], K[1], K[2], K[3], nadded, m);
+	tdc_bd_out_lock(r);
+	r->p->trace(r->p->arg, line);
+	tdc_bd_out_unlock(r);
+}
+
 /*
  * check_files (tests, TDC_TILE_CHECK=1 for ./tdc): the points inside K, an extra box or an added
  * cell (the hull cells), counted from every tile file, for checking a
@@ -94,8 +113,12 @@ count_known(bounded_run *r, const double *K, size_t nextra)
 
 		if (r->tiles[s].count == 0)
 			continue;
+		tdc_bd_file_lock(r, s, false);
 		if (tile_open(r, &f, s) != TDC_OK)
+		{
+			tdc_bd_file_unlock(r, s);
 			return 0;
+		}
 		while ((got = tdc_bd_mr_read(&f, rec, 8 * (size_t) w, 1024)) > 0)
 			for (size_t i = 0; i < got; i++)
 			{
@@ -113,6 +136,7 @@ count_known(bounded_run *r, const double *K, size_t nextra)
 				m += in;
 			}
 		tdc_bd_mr_close(&f);
+		tdc_bd_file_unlock(r, s);
 	}
 	return m;
 }
@@ -134,35 +158,27 @@ gather_first(bounded_run *r, int t, const double *K, size_t nextra, tile_points 
 	mreader		f;
 	double		rec[4 * 4096];
 
-	if (r->p->trace)
-	{
-		char		line[200];
-
-		snprintf(line, sizeof(line), "tile %d/%d: own %zu, K %g %g %g %g: %zu points", t, r->nt,
-				 ti->count, K[0], K[1], K[2], K[3], m);
-		r->p->trace(r->p->arg, line);
-	}
-	if (points_alloc(r, p, m) != TDC_OK)
+	trace_run(r, t, K, (size_t) -1, m);
+	if (tdc_bd_reserve(r, tdc_tp_tile_bytes(m, r->opt, POINT_BYTES(r))) != TDC_OK ||
+		points_alloc(r, p, m) != TDC_OK)
 		return r->e.code;
+	/* the other worker may rewrite this file in cell order meanwhile */
+	tdc_bd_file_lock(r, t, false);
 	if (w == 2)
+		tdc_bd_read_all(r->dir, &r->e, r->sorted[t] ? "cell" : "tile", t,
+						r->sorted[t] ? 1 : r->nparts, p->q, ti->count, 2);
+	else if (tile_open(r, &f, t) == TDC_OK)
 	{
-		if (tdc_bd_read_all(r->dir, &r->e, r->sorted[t] ? "cell" : "tile", t,
-							r->sorted[t] ? 1 : r->nparts, p->q, ti->count, 2) != TDC_OK)
-			return r->e.code;
-	}
-	else
-	{
-		if (tile_open(r, &f, t) != TDC_OK)
-			return r->e.code;
 		while ((got = tdc_bd_mr_read(&f, rec, 8 * (size_t) w, 4096 * 4 / w)) > 0)
 			for (size_t i = 0; i < got && at < ti->count; i++, at++)
 				point_from_rec(r, p, at, rec + w * i);
 		tdc_bd_mr_close(&f);
-		if (r->e.code != TDC_OK)
-			return r->e.code;
-		if (at != ti->count)
-			return tdc_bd_fail(&r->e, TDC_EIO, "short read on a temporary file in %s", r->dir);
+		if (r->e.code == TDC_OK && at != ti->count)
+			tdc_bd_fail(&r->e, TDC_EIO, "short read on a temporary file in %s", r->dir);
 	}
+	tdc_bd_file_unlock(r, t);
+	if (r->e.code != TDC_OK)
+		return r->e.code;
 	for (size_t i = 0; i < ti->count; i++)
 		p->ql[i] = t;
 	at = ti->count;
@@ -311,14 +327,7 @@ gather_region(bounded_run *r, int t, double K[4], const double Kmin[4], size_t n
 		m = region_points(r, t, K, nextra, NULL);
 		if (r->e.code != TDC_OK)
 			return r->e.code;
-		if (r->p->trace)
-		{
-			char		line[200];
-
-			snprintf(line, sizeof(line), "tile %d/%d: own %zu, K %g %g %g %g, %zu cells added: %zu points",
-					 t, r->nt, r->tiles[t].count, K[0], K[1], K[2], K[3], r->nadded, m);
-			r->p->trace(r->p->arg, line);
-		}
+		trace_run(r, t, K, r->nadded, m);
 		if (tdc_tp_tile_bytes(m, r->opt, POINT_BYTES(r)) > r->budget && shrinks < 4 &&
 			memcmp(K, Kmin, 4 * sizeof(double)) != 0)
 			tdc_tp_shrink_known(K, Kmin, shrinks);
@@ -330,7 +339,9 @@ gather_region(bounded_run *r, int t, double K[4], const double Kmin[4], size_t n
 						   "the region it must know, about %zu MB, more than %s %zu: the data is too "
 						   "clustered around this tile for the limit", t, r->nt, r->tiles[t].count, m,
 						   (run_need(r, m) >> 20) + 1, r->lname, r->limit >> 20);
-	if (points_alloc(r, p, m) != TDC_OK)
+	/* every file this copies from was rewritten by the count above, if it needed to be */
+	if (tdc_bd_reserve(r, tdc_tp_tile_bytes(m, r->opt, POINT_BYTES(r))) != TDC_OK ||
+		points_alloc(r, p, m) != TDC_OK)
 		return r->e.code;
 	region_points(r, t, K, nextra, p);
 	return r->e.code;
@@ -430,7 +441,7 @@ tile_engine(bounded_run *r, const tile_points *p, const tdc_tile_spec *spec, tdc
 	/* a big tile's engine runs for seconds: the caller's cancel reaches it */
 	for (;;)
 	{
-		if (tdc_bd_canceled(r->p->cancel))
+		if (tdc_bd_stopped(r))
 			tdc_job_cancel(*job);
 		if ((rc = tdc_job_wait(*job, ENGINE_POLL_MS)) != TDC_RUNNING)
 			break;
@@ -465,12 +476,16 @@ tile_account(bounded_run *r, tdc_job *job)
 	tdc_job_free(job);
 }
 
-/* A run's result and points freed, and the heap handed back if it nears the limit. */
+/*
+ * A run's result and points freed, its reservation given back, and the
+ * heap handed back if it nears the limit.
+ */
 static void
 run_done(bounded_run *r, tdc_tile_result *res, tile_points *p)
 {
 	tdc_tile_result_free(res);
 	points_free(p);
+	tdc_bd_release(r);
 	heap_settle(r, false);
 }
 
@@ -480,9 +495,26 @@ tile_write(bounded_run *r, int t, const tile_points *p, const tdc_tile_result *r
 {
 	int			rc;
 
-	if (r->p->emit && (rc = r->p->emit(r->p->arg, t, p->q, p->qz, p->qc, res->tri, res->ntri)) != 0)
-		return tdc_bd_fail(&r->e, rc < 0 ? rc : TDC_EINVAL, "the triangles of tile %d of %d were "
-						   "not taken (the caller's emit returned %d)", t, r->nt, rc);
+	if (r->p->emit)
+	{
+		/*
+		 * Nothing is emitted once the run stops (the other worker's error,
+		 * a cancel), and a refusal stops it before the other emits again.
+		 */
+		tdc_bd_out_lock(r);
+		if (tdc_bd_stopped(r))
+			tdc_bd_fail(&r->e, TDC_ECANCELED, "canceled");
+		else if ((rc = r->p->emit(r->p->arg, t, p->q, p->qz, p->qc, res->tri, res->ntri)) != 0)
+		{
+			tdc_bd_fail(&r->e, rc < 0 ? rc : TDC_EINVAL, "the triangles of tile %d of %d were "
+						"not taken (the caller's emit returned %d)", t, r->nt, rc);
+			if (r->sh != NULL)
+				tdc_bd_stop(r);
+		}
+		tdc_bd_out_unlock(r);
+		if (r->e.code != TDC_OK)
+			return r->e.code;
+	}
 	r->st->ntri += res->ntri;
 	r->st->unique += res->own_sites;
 	r->st->halo += p->m - r->tiles[t].count;
@@ -537,8 +569,10 @@ tdc_bd_tile_run(bounded_run *r, int t)
 		tdc_job    *job;
 		double		t0 = now_s();
 
-		if (tdc_bd_canceled(r->p->cancel))
+		if (tdc_bd_stopped(r))
 			return tdc_bd_fail(&r->e, TDC_ECANCELED, "canceled");
+		/* the engine's threads, before its memory is reckoned */
+		tdc_bd_run_threads(r);
 		if (first && tdc_tp_tile_bytes(ti->count + r->halo_count[t], r->opt, POINT_BYTES(r)) > r->budget)
 			first = false;
 		if (first)

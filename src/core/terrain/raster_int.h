@@ -1,0 +1,79 @@
+/*
+ * raster_int.h
+ *		A grid from a bounded run's final triangles (tdc_raster_*, tdc.h):
+ *		what raster.c (linear, and the API) and raster_nearest.c (nearest)
+ *		share.  Private to terrain/.
+ */
+#ifndef TDC_TERRAIN_RASTER_INT_H
+#define TDC_TERRAIN_RASTER_INT_H
+
+#include <stdint.h>
+#include <stdio.h>
+
+#include "engine/predicates.h"
+#include "fringe.h"
+#include "tdc.h"
+
+struct tdc_raster
+{
+	tdc_interp_spec spec;
+	tdc_grid_spec g;
+	char		path[4200];
+	int			fd;				/* the pixels' file: RS_REC(r) bytes a pixel */
+	uint64_t   *win;			/* linear: a window of rows, wincap pixels */
+	size_t		wincap;
+	double		slack;			/* in pixels: above the rounding of a centre's column or row */
+	fringe		fr;
+
+	/* nearest (raster_nearest.c) */
+	double	   *nwin;			/* a window of pixel records, nwincap of them */
+	size_t		nwincap;
+	uint32_t   *span;			/* per row: the hull's first and last column (2 each), widened */
+	double		deep;			/* how far a strip beyond an edge may need to reach */
+};
+
+/* bytes a pixel's record takes in the file: linear's value, or nearest's offer */
+#define RS_REC(r)		((r)->spec.method == TDC_INTERP_NEAREST ? (size_t) 32 : (size_t) 8)
+/* do the pixels outside the hull take the fringe's nearest site (nearest's radius is never 0)? */
+#define RS_FRINGE(r)	((r)->spec.radius != 0)
+
+/* Pixel (col, row)'s centre, the very expression of the whole TIN's grid (tin_interp.c). */
+static inline void
+rs_centre(const double *gt, size_t col, size_t row, double *q)
+{
+	double		fy = (double) row + 0.5,
+				fx = (double) col + 0.5;
+
+	q[0] = gt[0] + fx * gt[1] + fy * gt[2];
+	q[1] = gt[3] + fx * gt[4] + fy * gt[5];
+}
+
+/* An error's code, with its message (fmt with one string argument) in err. */
+static inline int
+tdc_rs_fail(char *err, size_t errlen, int code, const char *fmt, const char *arg)
+{
+	if (err && errlen)
+		snprintf(err, errlen, fmt, arg);
+	return code;
+}
+
+/* Is a -> b longer than max_edge (exactly, as tin_interp.c decides it)? */
+static inline bool
+tdc_rs_edge_long(const double *a, const double *b, double max_edge)
+{
+	double		l[2] = {max_edge, 0},
+				o[2] = {0, 0};
+
+	return tdc_sqdist_cmp(a, b, l, o) > 0;
+}
+
+/* raster_nearest.c */
+extern int	tdc_rn_begin(struct tdc_raster *r, char *err, size_t errlen);
+extern size_t tdc_rn_hold(const struct tdc_raster *r);
+extern int	tdc_rn_tile(struct tdc_raster *r, const double *q, const double *qz, const size_t *tri,
+						size_t ntri, char *err, size_t errlen);
+extern int	tdc_rn_rows(struct tdc_raster *r, size_t y0, size_t nrows, double *v, size_t *valid,
+						char *err, size_t errlen);
+extern void tdc_rn_free(struct tdc_raster *r);
+
+#endif							/* TDC_TERRAIN_RASTER_INT_H */

@@ -1,0 +1,600 @@
+/*
+ * raster_nearest.c
+ *		The nearest site's height on a grid from the final triangles of a
+ *		bounded run (tdc_raster_*, method nearest): the whole TIN's grid, to
+ *		the bit, in the memory of one tile.
+ *
+ * The site nearest to a pixel centre q is not always a corner of the
+ * triangle that holds q, and the whole TIN finds it by a walk
+ * (tin_nearest).  A bounded run has only its tiles.  But it is a corner of
+ * a triangle near q, in this sense: q lies in the Voronoi cell of its
+ * nearest site s, and (for q inside the hull) in the region
+ *		R_T = conv(T and its circumcentre c_T)
+ * of some Delaunay triangle T around s.  Proof: the circumcentres of the
+ * triangles around s cut its cell into kites s c c' of consecutive
+ * triangles T, T' (sharing the edge s u, whose midpoint is m; c and c' lie
+ * on the bisector of s u).  Such a kite lies in s c m and s m c' together,
+ * or in the larger of the two when m is not between c and c'.  And s c m
+ * lies in R_T: when c is inside T, s, c and m are in T; when it is beyond
+ * an edge (the longest, opposite T's obtuse angle), R_T is the convex
+ * quadrilateral of T and c, which holds s, c and m.  Where s is on the
+ * hull, the unbounded rest of its cell meets the hull only in s c m of the
+ * hull edge's triangle.  So when every triangle offers the pixels of R_T
+ * the nearest of its three corners, and each pixel keeps the nearest offer
+ * (exact distance comparisons, ties to the site first in (x, y) order:
+ * tin_nearest's rule), every pixel inside the hull ends with its nearest
+ * site, whatever the tiles and their order.  Outside the hull the fringe
+ * gives it (fringe.c), as for linear.
+ *
+ * A superset of R_T serves as well (an offer that is not nearest loses),
+ * so R_T is covered in floating point with room to spare: T and the box
+ * of c_T's error (fr_centre_box), row by row, widened by a column each
+ * way and clipped to the hull's span of each row (widened too).  A sliver,
+ * whose centre is ill-conditioned, offers T and, beyond each edge whose
+ * opposite angle may be obtuse (a dot product's sign, with its rounding),
+ * a strip as wide as the edge, reaching past the hull's box: c_T lies on
+ * the edge's bisector, so R_T's part beyond the edge is in that strip.
+ *
+ * max_edge masks as it does linear: a pixel has a value when it is at a
+ * site or some closed triangle holding it keeps its edges (the same exact
+ * orientations as raster.c's), and the value is the nearest site's.
+ *
+ * The offers wait in a file of 32 bytes a pixel (the site's x, y and
+ * height, and flags: an offer came, the mask holds it), sparse like
+ * linear's; a tile reads the rows its triangles reach into a window, in
+ * pieces when they do not fit, updates them and writes back the rows it
+ * changed.  Rows come out after the run (tdc_rn_rows).
+ */
+#include <float.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "engine/predicates.h"
+#include "raster_int.h"
+
+#define NWIN_MIN	((size_t) 4 << 20)	/* bytes of a tile's window of records, at least */
+#define F_OFFER		1				/* a record's flags: a site was offered */
+#define F_MASK		2				/* a kept triangle (or a site) holds the centre */
+#define PIECE_MAX	7				/* points of a piece of R_T's cover */
+
+/* A convex piece of the region a triangle offers its corners to. */
+typedef struct piece
+{
+	double		v[PIECE_MAX][2];
+	int			n;
+	double		box[4];			/* xmin, ymin, xmax, ymax */
+} piece;
+
+static int
+rn_io(char *err, size_t errlen, const char *what, const struct tdc_raster *r)
+{
+	return tdc_rs_fail(err, errlen, TDC_EIO, what, r->path);
+}
+
+int
+tdc_rn_begin(struct tdc_raster *r, char *err, size_t errlen)
+{
+	const double *gt = r->g.gt,
+			   *h = r->fr.hull;
+	size_t		width = r->g.width,
+				height = r->g.height,
+				nh = r->fr.nhull;
+	double		sl = r->slack + 1;
+
+	r->nwincap = NWIN_MIN / 32 > 16 * width ? NWIN_MIN / 32 : 16 * width;
+	r->nwin = malloc(32 * r->nwincap);
+	r->span = malloc(2 * sizeof(uint32_t) * height);
+	if (r->nwin == NULL || r->span == NULL)
+		return tdc_rs_fail(err, errlen, TDC_ENOMEM, "%s", "out of memory for the grid's window");
+	/* past the hull's box from anywhere in it */
+	r->deep = 2 * (r->fr.box[2] - r->fr.box[0] + r->fr.box[3] - r->fr.box[1]) + 1;
+	for (size_t row = 0; row < height; row++)
+	{
+		r->span[2 * row] = UINT32_MAX;
+		r->span[2 * row + 1] = 0;
+	}
+
+	/*
+	 * Each row's span of the hull, from each edge's crossing of the row's
+	 * centre line (its ends where the line passes beside it within the
+	 * slack), widened by a column and the rounding: a superset.
+	 */
+	for (size_t i = 0; i < nh; i++)
+	{
+		const double *a = h + 2 * i,
+				   *b = h + 2 * ((i + 1) % nh);
+		double		ylo = fmin(a[1], b[1]),
+					yhi = fmax(a[1], b[1]),
+					f0 = floor((yhi - gt[3]) / gt[5] - 0.5 - sl),
+					f1 = ceil((ylo - gt[3]) / gt[5] - 0.5 + sl);
+		size_t		ra,
+					rb;
+
+		if (f1 < 0 || f0 >= (double) height)
+			continue;
+		ra = f0 > 0 ? (size_t) f0 : 0;
+		rb = f1 < (double) (height - 1) ? (size_t) f1 : height - 1;
+		for (size_t row = ra; row <= rb; row++)
+		{
+			double		y = gt[3] + ((double) row + 0.5) * gt[5],
+						t = b[1] != a[1] ? (y - a[1]) / (b[1] - a[1]) : 0,
+						xs[2];
+
+			t = fmin(fmax(t, 0), 1);
+			xs[0] = a[0] + t * (b[0] - a[0]);
+			xs[1] = b[1] != a[1] ? xs[0] : b[0];
+			for (int k = 0; k < 2; k++)
+			{
+				double		c0 = floor((xs[k] - gt[0]) / gt[1] - 0.5 - sl),
+							c1 = ceil((xs[k] - gt[0]) / gt[1] - 0.5 + sl);
+				uint32_t	lo = c0 <= 0 ? 0 : c0 >= (double) width ? (uint32_t) width : (uint32_t) c0,
+							hi = c1 <= 0 ? 0 : c1 >= (double) (width - 1) ? (uint32_t) (width - 1) : (uint32_t) c1;
+
+				if (c1 < 0 || c0 > (double) (width - 1))
+					continue;
+				r->span[2 * row] = lo < r->span[2 * row] ? lo : r->span[2 * row];
+				r->span[2 * row + 1] = hi > r->span[2 * row + 1] ? hi : r->span[2 * row + 1];
+			}
+		}
+	}
+	return TDC_OK;
+}
+
+size_t
+tdc_rn_hold(const struct tdc_raster *r)
+{
+	if (r->spec.method != TDC_INTERP_NEAREST)
+		return 0;
+	return 32 * r->nwincap + 2 * sizeof(uint32_t) * r->g.height;
+}
+
+void
+tdc_rn_free(struct tdc_raster *r)
+{
+	free(r->nwin);
+	free(r->span);
+	r->nwin = NULL;
+	r->span = NULL;
+}
+
+static void
+piece_box(piece *pc)
+{
+	pc->box[0] = pc->box[2] = pc->v[0][0];
+	pc->box[1] = pc->box[3] = pc->v[0][1];
+	for (int k = 1; k < pc->n; k++)
+	{
+		pc->box[0] = fmin(pc->box[0], pc->v[k][0]);
+		pc->box[2] = fmax(pc->box[2], pc->v[k][0]);
+		pc->box[1] = fmin(pc->box[1], pc->v[k][1]);
+		pc->box[3] = fmax(pc->box[3], pc->v[k][1]);
+	}
+}
+
+/*
+ * The pieces that cover R_T for triangle p (counter-clockwise): one, T
+ * with the box of its circumcentre's error, or for a sliver T and a strip
+ * beyond each edge whose opposite angle may be obtuse.  Returns their
+ * number (at most 4).
+ */
+static int
+pieces_of(const struct tdc_raster *r, const double *const p[3], piece pc[4])
+{
+	double		o[2],
+				e;
+	int			np = 1;
+
+	for (int k = 0; k < 3; k++)
+	{
+		pc[0].v[k][0] = p[k][0];
+		pc[0].v[k][1] = p[k][1];
+	}
+	pc[0].n = 3;
+	if (fr_centre_box(&r->fr, p[0], p[1], p[2], o, &e))
+	{
+		for (int k = 0; k < 4; k++)
+		{
+			pc[0].v[3 + k][0] = o[0] + (k & 1 ? e : -e);
+			pc[0].v[3 + k][1] = o[1] + (k & 2 ? e : -e);
+		}
+		pc[0].n = 7;
+		piece_box(&pc[0]);
+		return 1;
+	}
+	piece_box(&pc[0]);
+	for (int k = 0; k < 3; k++)
+	{
+		const double *a = p[k],
+				   *b = p[(k + 1) % 3],
+				   *c = p[(k + 2) % 3];
+		double		ux = a[0] - c[0],
+					uy = a[1] - c[1],
+					vx = b[0] - c[0],
+					vy = b[1] - c[1],
+					dot = ux * vx + uy * vy,
+					bound = 16 * DBL_EPSILON * (fabs(ux) + fabs(uy)) * (fabs(vx) + fabs(vy)),
+					ex = b[0] - a[0],
+					ey = b[1] - a[1],
+					len = sqrt(ex * ex + ey * ey),
+					nx,
+					ny;
+
+		/* the angle at c is surely acute: the centre is on c's side of a b */
+		if (dot > bound || !(len > 0))
+			continue;
+		/* the right of a -> b is away from c (counter-clockwise) */
+		nx = ey / len * r->deep;
+		ny = -ex / len * r->deep;
+		pc[np].v[0][0] = a[0];
+		pc[np].v[0][1] = a[1];
+		pc[np].v[1][0] = b[0];
+		pc[np].v[1][1] = b[1];
+		pc[np].v[2][0] = b[0] + nx;
+		pc[np].v[2][1] = b[1] + ny;
+		pc[np].v[3][0] = a[0] + nx;
+		pc[np].v[3][1] = a[1] + ny;
+		pc[np].n = 4;
+		piece_box(&pc[np]);
+		np++;
+	}
+	return np;
+}
+
+/* The columns whose centres may lie in [xl, xr], widened by the slack and a column; false: none. */
+static bool
+x_cols(const struct tdc_raster *r, double xl, double xr, size_t *ca, size_t *cb)
+{
+	const double *gt = r->g.gt;
+	double		sl = r->slack + 1,
+				f0,
+				f1;
+
+	f0 = floor((xl - gt[0]) / gt[1] - 0.5 - sl);
+	f1 = ceil((xr - gt[0]) / gt[1] - 0.5 + sl);
+	if (f1 < 0 || f0 > (double) (r->g.width - 1))
+		return false;
+	*ca = f0 > 0 ? (size_t) f0 : 0;
+	*cb = f1 < (double) (r->g.width - 1) ? (size_t) f1 : r->g.width - 1;
+	return true;
+}
+
+/*
+ * The columns of row y that a piece may cover: the span of its points'
+ * convex hull on the line (every pair's segment crossing it), widened by
+ * the slack and a column.  false: none.
+ */
+static bool
+piece_cols(const struct tdc_raster *r, const piece *pc, double y, size_t *ca, size_t *cb)
+{
+	double		xl = INFINITY,
+				xr = -INFINITY;
+
+	for (int i = 0; i < pc->n; i++)
+		for (int j = i; j < pc->n; j++)
+		{
+			const double *a = pc->v[i],
+					   *b = pc->v[j];
+			double		x;
+
+			if (y < fmin(a[1], b[1]) || y > fmax(a[1], b[1]))
+				continue;
+			x = a[1] != b[1] ? a[0] + fmin(fmax((y - a[1]) / (b[1] - a[1]), 0), 1) * (b[0] - a[0]) : a[0];
+			xl = fmin(xl, a[1] != b[1] ? x : fmin(a[0], b[0]));
+			xr = fmax(xr, a[1] != b[1] ? x : fmax(a[0], b[0]));
+		}
+	return xl <= xr && x_cols(r, xl, xr, ca, cb);
+}
+
+/* A piece's rows, [*ra, *rb] (widened by the slack and a row); false: none in the grid. */
+static bool
+box_rows(const struct tdc_raster *r, const double *box, size_t *ra, size_t *rb)
+{
+	const double *gt = r->g.gt;
+	double		sl = r->slack + 1,
+				f0 = floor((box[3] - gt[3]) / gt[5] - 0.5 - sl),
+				f1 = ceil((box[1] - gt[3]) / gt[5] - 0.5 + sl);
+
+	if (f1 < 0 || f0 > (double) (r->g.height - 1))
+		return false;
+	*ra = f0 > 0 ? (size_t) f0 : 0;
+	*rb = f1 < (double) (r->g.height - 1) ? (size_t) f1 : r->g.height - 1;
+	return true;
+}
+
+/*
+ * The nearest of a triangle's corners offered to the pixels of a piece in
+ * the window's rows [w0, w1) and columns [c0, c0 + wcols), within the
+ * hull's spans; dirty marks the rows changed.
+ */
+static void
+offer_piece(struct tdc_raster *r, const piece *pc, const double *const p[3], const double z[3],
+			size_t w0, size_t w1, size_t c0, size_t wcols, uint8_t *dirty)
+{
+	size_t		ra,
+				rb;
+
+	if (!box_rows(r, pc->box, &ra, &rb) || rb < w0 || ra >= w1)
+		return;
+	ra = ra > w0 ? ra : w0;
+	rb = rb < w1 - 1 ? rb : w1 - 1;
+	for (size_t row = ra; row <= rb; row++)
+	{
+		size_t		ca,
+					cb,
+					hlo = r->span[2 * row],
+					hhi = r->span[2 * row + 1];
+		double		y = r->g.gt[3] + ((double) row + 0.5) * r->g.gt[5];
+
+		if (hlo > hhi || !piece_cols(r, pc, y, &ca, &cb))
+			continue;
+		ca = ca > hlo ? ca : hlo;
+		cb = cb < hhi ? cb : hhi;
+		ca = ca > c0 ? ca : c0;
+		cb = cb < c0 + wcols - 1 ? cb : c0 + wcols - 1;
+		for (size_t col = ca; col <= cb; col++)
+		{
+			double		q[2],
+					   *rec = r->nwin + 4 * ((row - w0) * wcols + (col - c0));
+			int			best = 0;
+
+			rs_centre(r->g.gt, col, row, q);
+			for (int k = 1; k < 3; k++)
+				if (fr_better(q, p[k], p[best]))
+					best = k;
+			if (((int) rec[3] & F_OFFER) && !fr_better(q, p[best], rec))
+				continue;
+			rec[0] = p[best][0];
+			rec[1] = p[best][1];
+			rec[2] = z[best];
+			rec[3] = (double) ((int) rec[3] | F_OFFER);
+			dirty[row - w0] = 1;
+		}
+	}
+}
+
+/*
+ * max_edge's mask: the centres triangle p holds, closed, as raster.c's
+ * tri_pixels finds them; kept (no long edge) marks them all, else only
+ * those at its corners.
+ */
+static void
+mask_tri(struct tdc_raster *r, const double *const p[3], bool kept, size_t w0, size_t w1,
+		 size_t c0, size_t wcols, uint8_t *dirty)
+{
+	piece		t = {.n = 3};
+	size_t		ra,
+				rb;
+
+	for (int k = 0; k < 3; k++)
+	{
+		t.v[k][0] = p[k][0];
+		t.v[k][1] = p[k][1];
+	}
+	piece_box(&t);
+	if (!box_rows(r, t.box, &ra, &rb) || rb < w0 || ra >= w1)
+		return;
+	ra = ra > w0 ? ra : w0;
+	rb = rb < w1 - 1 ? rb : w1 - 1;
+	for (size_t row = ra; row <= rb; row++)
+	{
+		size_t		ca,
+					cb;
+		double		y = r->g.gt[3] + ((double) row + 0.5) * r->g.gt[5];
+
+		if (!piece_cols(r, &t, y, &ca, &cb))
+			continue;
+		ca = ca > c0 ? ca : c0;
+		cb = cb < c0 + wcols - 1 ? cb : c0 + wcols - 1;
+		for (size_t col = ca; col <= cb; col++)
+		{
+			double		q[2],
+					   *rec = r->nwin + 4 * ((row - w0) * wcols + (col - c0));
+			int			zeros = 0;
+			bool		out = false;
+
+			rs_centre(r->g.gt, col, row, q);
+			for (int k = 0; k < 3 && !out; k++)
+			{
+				double		o = tdc_orient2d(p[k], p[(k + 1) % 3], q);
+
+				out = o < 0;
+				zeros += o == 0;
+			}
+			if (out || (!kept && zeros < 2))
+				continue;
+			if (!((int) rec[3] & F_MASK))
+			{
+				rec[3] = (double) ((int) rec[3] | F_MASK);
+				dirty[row - w0] = 1;
+			}
+		}
+	}
+}
+
+/* Rows [w0, w1), columns [c0, c0 + wcols) of the file into the window. */
+static int
+win_read(struct tdc_raster *r, size_t w0, size_t w1, size_t c0, size_t wcols, char *err, size_t errlen)
+{
+	for (size_t row = w0; row < w1; row++)
+	{
+		char	   *dst = (char *) (r->nwin + 4 * (row - w0) * wcols);
+		size_t		n = 32 * wcols;
+		off_t		at = (off_t) (32 * (row * r->g.width + c0));
+
+		for (size_t got = 0; got < n;)
+		{
+			ssize_t		k = pread(r->fd, dst + got, n - got, at + (off_t) got);
+
+			if (k <= 0)
+				return rn_io(err, errlen, "cannot read the grid's temporary file %s", r);
+			got += (size_t) k;
+		}
+	}
+	return TDC_OK;
+}
+
+/* The window's changed rows back to the file. */
+static int
+win_write(struct tdc_raster *r, size_t w0, size_t w1, size_t c0, size_t wcols, const uint8_t *dirty,
+		  char *err, size_t errlen)
+{
+	for (size_t row = w0; row < w1; row++)
+	{
+		size_t		n = 32 * wcols;
+
+		if (dirty[row - w0] &&
+			pwrite(r->fd, r->nwin + 4 * (row - w0) * wcols, n, (off_t) (32 * (row * r->g.width + c0))) !=
+			(ssize_t) n)
+			return rn_io(err, errlen, "cannot write the grid's temporary file %s", r);
+	}
+	return TDC_OK;
+}
+
+int
+tdc_rn_tile(struct tdc_raster *r, const double *q, const double *qz, const size_t *tri, size_t ntri,
+			char *err, size_t errlen)
+{
+	double		box[4] = {INFINITY, INFINITY, -INFINITY, -INFINITY};
+	size_t		r0,
+				r1,
+				c0 = SIZE_MAX,
+				c1 = 0,
+				wcols,
+				wrows;
+	uint8_t    *dirty;
+	int			rc = TDC_OK;
+
+	/* the fringe's sites, and the box of the pieces (within the hull's) */
+	for (size_t t = 0; t < ntri; t++)
+	{
+		const size_t *v = tri + 3 * t;
+		const double *p[3] = {q + 2 * v[0], q + 2 * v[1], q + 2 * v[2]};
+		bool		all = fr_centre_outside(&r->fr, p[0], p[1], p[2]);
+		piece		pc[4];
+		int			np = pieces_of(r, p, pc);
+
+		for (int k = 0; k < 3; k++)
+			if ((all || fr_on_hull(&r->fr, p[k])) &&
+				(rc = fr_add(&r->fr, p[k], qz[v[k]], err, errlen)) != TDC_OK)
+				return rc;
+		for (int i = 0; i < np; i++)
+		{
+			box[0] = fmin(box[0], fmax(pc[i].box[0], r->fr.box[0]));
+			box[1] = fmin(box[1], fmax(pc[i].box[1], r->fr.box[1]));
+			box[2] = fmax(box[2], fmin(pc[i].box[2], r->fr.box[2]));
+			box[3] = fmax(box[3], fmin(pc[i].box[3], r->fr.box[3]));
+		}
+	}
+	if (!box_rows(r, box, &r0, &r1))
+		return TDC_OK;
+	for (size_t row = r0; row <= r1; row++)
+		if (r->span[2 * row] <= r->span[2 * row + 1])
+		{
+			c0 = r->span[2 * row] < c0 ? r->span[2 * row] : c0;
+			c1 = r->span[2 * row + 1] > c1 ? r->span[2 * row + 1] : c1;
+		}
+	{
+		size_t		ba,
+					bb;
+
+		/* the hull's columns in those rows, within the box's */
+		if (c0 > c1 || !x_cols(r, fmin(box[0], box[2]), fmax(box[0], box[2]), &ba, &bb))
+			return TDC_OK;
+		c0 = c0 > ba ? c0 : ba;
+		c1 = c1 < bb ? c1 : bb;
+		if (c0 > c1)
+			return TDC_OK;
+	}
+	wcols = c1 - c0 + 1;
+	wrows = r->nwincap / wcols;	/* at least 16: the window holds 16 rows of the grid */
+	dirty = malloc(wrows);
+	if (dirty == NULL)
+		return tdc_rs_fail(err, errlen, TDC_ENOMEM, "%s", "out of memory");
+	for (size_t w0 = r0; w0 <= r1 && rc == TDC_OK; w0 += wrows)
+	{
+		size_t		w1 = w0 + wrows <= r1 + 1 ? w0 + wrows : r1 + 1;
+
+		memset(dirty, 0, wrows);
+		if ((rc = win_read(r, w0, w1, c0, wcols, err, errlen)) != TDC_OK)
+			break;
+		for (size_t t = 0; t < ntri; t++)
+		{
+			const size_t *v = tri + 3 * t;
+			const double *p[3] = {q + 2 * v[0], q + 2 * v[1], q + 2 * v[2]};
+			double		z[3] = {qz[v[0]], qz[v[1]], qz[v[2]]};
+			piece		pc[4];
+			int			np = pieces_of(r, p, pc);
+
+			for (int i = 0; i < np; i++)
+				offer_piece(r, &pc[i], p, z, w0, w1, c0, wcols, dirty);
+			if (r->spec.max_edge > 0)
+			{
+				bool		kept = true;
+
+				for (int k = 0; k < 3 && kept; k++)
+					kept = !tdc_rs_edge_long(p[k], p[(k + 1) % 3], r->spec.max_edge);
+				mask_tri(r, p, kept, w0, w1, c0, wcols, dirty);
+			}
+		}
+		rc = win_write(r, w0, w1, c0, wcols, dirty, err, errlen);
+	}
+	free(dirty);
+	return rc;
+}
+
+/* Is site s within the radius of q (tin_interp.c's rule: < 0 any distance; nearest's is never 0)? */
+static bool
+within(const struct tdc_raster *r, const double *q, const double *s)
+{
+	double		rr[2] = {r->spec.radius, 0},
+				o[2] = {0, 0};
+
+	if (r->spec.radius < 0)
+		return true;
+	return r->spec.radius > 0 && tdc_sqdist_cmp(q, s, rr, o) <= 0;
+}
+
+int
+tdc_rn_rows(struct tdc_raster *r, size_t y0, size_t nrows, double *v, size_t *valid, char *err,
+			size_t errlen)
+{
+	size_t		w = r->g.width;
+	int			rc;
+
+	for (size_t row = y0; row < y0 + nrows; row++)
+	{
+		double	   *out = v + (row - y0) * w;
+
+		if ((rc = win_read(r, row, row + 1, 0, w, err, errlen)) != TDC_OK)
+			return rc;
+		for (size_t col = 0; col < w; col++)
+		{
+			const double *rec = r->nwin + 4 * col,
+					   *s;
+			int			flags = (int) rec[3];
+			double		q[2];
+
+			out[col] = r->spec.nodata;
+			rs_centre(r->g.gt, col, row, q);
+			if (fr_inside_fast(&r->fr, q))
+			{
+				/* inside the hull: the nearest offer, where the mask holds the centre */
+				if (r->spec.max_edge > 0 && !(flags & F_MASK))
+					continue;
+				if (!(flags & F_OFFER))
+					return tdc_rs_fail(err, errlen, TDC_EINVAL, "%s", "internal error: a pixel "
+									   "inside the hull was offered no site");
+				s = rec;
+			}
+			else if ((s = fr_nearest(&r->fr, q)) == NULL)
+				continue;
+			if (!within(r, q, s))
+				continue;
+			out[col] = s[2];
+			(*valid)++;
+		}
+	}
+	return TDC_OK;
+}
