@@ -18,7 +18,7 @@
 # reads and writes rasters in their stored format without linking PostGIS.
 EXTENSION = tdc_delaunay tdc_delaunay_raster
 EXTVERSION = 1.2.0
-RASTER_EXTVERSION = 1.1.0
+RASTER_EXTVERSION = 1.2.0
 MODULE_big = tdc_delaunay
 # The install script of this version is made from one file per feature, in
 # this order (the rule is below); older base scripts (0.1.0, 1.0.0 as it was
@@ -29,10 +29,11 @@ MODULE_big = tdc_delaunay
 # them names.
 SQL_SRCS = $(addprefix src/sql/,header.sql delaunay.sql diagnostics.sql voronoi.sql \
 	tiled_internals.sql tiled.sql constrained.sql tin.sql version.sql)
-RASTER_SQL_SRCS = $(addprefix src/sql/,raster_header.sql raster.sql)
+RASTER_SQL_SRCS = $(addprefix src/sql/,raster_header.sql raster.sql raster_tiled.sql)
 DATA_built = tdc_delaunay--$(EXTVERSION).sql tdc_delaunay_raster--$(RASTER_EXTVERSION).sql
 DATA = tdc_delaunay--0.1.0.sql tdc_delaunay--0.1.0--1.0.0.sql tdc_delaunay--1.0.0.sql \
-	tdc_delaunay--1.0.0--1.1.0.sql tdc_delaunay--1.1.0.sql tdc_delaunay--1.1.0--1.2.0.sql
+	tdc_delaunay--1.0.0--1.1.0.sql tdc_delaunay--1.1.0.sql tdc_delaunay--1.1.0--1.2.0.sql \
+	tdc_delaunay_raster--1.1.0.sql tdc_delaunay_raster--1.1.0--1.2.0.sql
 
 CORE_SRCS = $(sort $(wildcard src/core/*/*.c))
 PG_SRCS = $(sort $(wildcard src/pg/*/*.c))

@@ -66,8 +66,8 @@
 #define INTERPOLATE_RASTER_NAME	"ST_TDCInterpolateRaster"
 
 /* Does the method's text give a nodata option ("...:nodata=V...")? */
-static bool
-method_sets_nodata(const char *method)
+bool
+tdc_raster_method_sets_nodata(const char *method)
 {
 	for (const char *p = strchr(method, ':'); p != NULL; p = strchr(p + 1, ':'))
 		if (pg_strncasecmp(p + 1, "nodata=", 7) == 0)
@@ -117,7 +117,7 @@ tdc_raster_interpolate(const TdcPointBuf *pts, const TdcSegList *breaklines,
 	int			rc;
 
 	tdc_raster_method(method, &spec, fname);
-	if (method_sets_nodata(method) || !tmpl->b.hasnodata)
+	if (tdc_raster_method_sets_nodata(method) || !tmpl->b.hasnodata)
 		nodata = spec.nodata;
 	else
 		nodata = tmpl->b.nodata;

@@ -11,6 +11,7 @@
 
 extern void tdc_raster_method(const char *method, tdc_interp_spec *spec,
 							  const char *fname);
+extern bool tdc_raster_method_sets_nodata(const char *method);
 extern bool tdc_raster_breaklines(const tdc_interp_spec *spec, TdcSegList *l,
 								  MemoryContext cxt, TdcPointBuf *pts,
 								  const char *fname);

@@ -73,10 +73,8 @@
 
 #include "tdc_pg.h"
 #include "tiles/tile_plan.h"
+#include "fn/tiled_stage.h"
 
-
-/* Vertices collected before they are appended to the files: 1.5 MB of xy. */
-#define STAGE_CHUNK			65536
 
 /* Rows written between two interrupt checks (a power of two). */
 #define ROWS_POLL			65536
@@ -88,30 +86,6 @@ typedef struct TileRecord
 	int64		ntri;
 } TileRecord;
 
-/* Everything a run holds outside PostgreSQL's memory, freed by the callback. */
-typedef struct BoundedRun
-{
-	char		dir[MAXPGPATH];	/* "" until made */
-	char		xypath[MAXPGPATH],
-				zpath[MAXPGPATH],
-				lpath[MAXPGPATH],	/* the vertices' ranks, for the run */
-				lrawpath[MAXPGPATH],	/* their value numbers, as read */
-				tripath[MAXPGPATH];
-	FILE	   *fxy,
-			   *fz,
-			   *fl,
-			   *fin,			/* a staged file read back */
-			   *ftri;
-	uint64		n;				/* vertices staged */
-	bool		hasz;
-	bool		hasl;			/* labels: a tile column */
-	int			dim;
-	tdc_bounded_job *job;
-	int			write_errno;	/* emit: the errno of a failed write (run's thread) */
-	MemoryContextCallback cb;
-} BoundedRun;
-
-TDC_WORK_OPS(bounded_ops, tdc_bounded_job, tdc_bounded, "tiled triangulation");
 
 /* The phase an error or a cancel came in, for its CONTEXT line. */
 static void
@@ -120,235 +94,6 @@ phase_context(void *arg)
 	errcontext("%s: %s", TILED_FNAME, *(const char **) arg);
 }
 
-static void
-close_file(FILE **f)
-{
-	if (*f != NULL)
-	{
-		fclose(*f);
-		*f = NULL;
-	}
-}
-
-/* The run freed (canceled and joined), the files closed, the directory removed. */
-static void
-bounded_run_release(void *arg)
-{
-	BoundedRun *br = (BoundedRun *) arg;
-
-	if (br->job != NULL)
-	{
-		tdc_bounded_free(br->job);
-		br->job = NULL;
-	}
-	close_file(&br->fxy);
-	close_file(&br->fz);
-	close_file(&br->fl);
-	close_file(&br->fin);
-	close_file(&br->ftri);
-	if (br->dir[0] != '\0')
-	{
-		(void) unlink(br->xypath);
-		(void) unlink(br->zpath);
-		(void) unlink(br->lpath);
-		(void) unlink(br->lrawpath);
-		(void) unlink(br->tripath);
-		/* the run removes its own files; anything else is a leftover */
-		(void) rmdir(br->dir);
-		br->dir[0] = '\0';
-	}
-}
-
-/* This backend's directory under the temporary tablespace's pgsql_tmp. */
-static void
-make_run_dir(BoundedRun *br, const char *fname)
-{
-	char		base[MAXPGPATH];
-	Oid			tblspc;
-
-	PrepareTempTablespaces();
-	tblspc = GetNextTempTableSpace();
-	TempTablespacePath(base, OidIsValid(tblspc) ? tblspc : DEFAULTTABLESPACE_OID);
-	if (MakePGDirectory(base) != 0 && errno != EEXIST)
-		ereport(ERROR,
-				(errcode_for_file_access(),
-				 errmsg("%s: could not create directory \"%s\": %m", fname, base)));
-	snprintf(br->dir, sizeof(br->dir), "%s/%s%d.tdc.XXXXXX", base, PG_TEMP_FILE_PREFIX, MyProcPid);
-	if (mkdtemp(br->dir) == NULL)
-	{
-		int			save = errno;
-
-		br->dir[0] = '\0';
-		errno = save;
-		ereport(ERROR,
-				(errcode_for_file_access(),
-				 errmsg("%s: could not create a temporary directory in \"%s\": %m", fname, base)));
-	}
-	snprintf(br->xypath, sizeof(br->xypath), "%s/input.xy", br->dir);
-	snprintf(br->zpath, sizeof(br->zpath), "%s/input.z", br->dir);
-	snprintf(br->lpath, sizeof(br->lpath), "%s/input.l", br->dir);
-	snprintf(br->lrawpath, sizeof(br->lrawpath), "%s/input.v", br->dir);
-	snprintf(br->tripath, sizeof(br->tripath), "%s/triangles", br->dir);
-}
-
-static FILE *
-open_file(const char *path, const char *mode, const char *fname)
-{
-	FILE	   *f = fopen(path, mode);
-
-	if (f == NULL)
-		ereport(ERROR,
-				(errcode_for_file_access(),
-				 errmsg("%s: could not open file \"%s\": %m", fname, path)));
-	return f;
-}
-
-static void
-write_all(FILE *f, const void *p, size_t size, size_t count, const char *path, const char *fname)
-{
-	if (count > 0 && fwrite(p, size, count, f) != count)
-		ereport(ERROR,
-				(errcode_for_file_access(),
-				 errmsg("%s: could not write file \"%s\": %m", fname, path)));
-}
-
-/*
- * What the staging row callback needs: where the vertices go, and whether
- * they still fit one pass.
- */
-typedef struct StageArg
-{
-	BoundedRun *br;
-	TdcPointBuf *buf;
-	TdcTableWriter *tw;
-	MemoryContext cxt;			/* the call's */
-	bool		tagged;			/* the query has a tile column */
-	double		size;			/* tile_size, 0 without: not with a tile column */
-	TdcTileValues *tv;			/* its values, from the first row with a vertex */
-	const char *tile_name;
-	int64	   *lab;			/* each vertex of buf: its value's number, later its rank */
-	uint64		lab_cap;
-	const tdc_options *opt;
-	uint64		limit;			/* bytes; 0: none */
-	bool		to_files;		/* past one pass: every chunk goes to the files */
-	uint64		next_check;		/* vertex count at which the fit is checked again */
-	double		lo[2],			/* the vertices' box so far */
-				hi[2];
-	const char *fname;
-} StageArg;
-
-/* The bytes the labels of n vertices take in memory, grown by doubling as the buffer grows. */
-static uint64
-labels_bytes_after(uint64 n)
-{
-	uint64		cap = 16;
-
-	while (cap < n)
-		cap *= 2;
-	return cap * sizeof(int64);
-}
-
-/* What the tile values hold: counted beside the vertices. */
-static uint64
-tile_values_bytes(const StageArg *sa)
-{
-	return sa->tv ? sa->tv->bytes : 0;
-}
-
-/*
- * Whether n vertices and the engine's run on them fit the limit (the
- * Dump's check), with their labels and the tile values when tagged.
- */
-static bool
-one_pass_fits(const StageArg *sa, uint64 n)
-{
-	return sa->limit == 0 ||
-		tdc_pointbuf_bytes_after(n, sa->buf->hasz) + (sa->tagged ? labels_bytes_after(n) : 0) +
-		tile_values_bytes(sa) + tdc_estimate_memory((size_t) n, sa->opt) <= sa->limit;
-}
-
-/* The collected vertices appended to the files, and the buffer emptied. */
-static void
-stage_flush(StageArg *sa)
-{
-	BoundedRun *br = sa->br;
-	TdcPointBuf *buf = sa->buf;
-
-	if (buf->n == 0)
-		return;
-	if (br->fxy == NULL)
-	{
-		br->fxy = open_file(br->xypath, "wb", sa->fname);
-		if (br->hasz)
-			br->fz = open_file(br->zpath, "wb", sa->fname);
-		if (br->hasl)
-			br->fl = open_file(br->lrawpath, "wb", sa->fname);
-	}
-	write_all(br->fxy, buf->xy, 2 * sizeof(double), (size_t) buf->n, br->xypath, sa->fname);
-	if (br->hasz)
-		write_all(br->fz, buf->z, sizeof(double), (size_t) buf->n, br->zpath, sa->fname);
-	if (br->hasl)
-		write_all(br->fl, sa->lab, sizeof(int64), (size_t) buf->n, br->lrawpath, sa->fname);
-	br->n += buf->n;
-	buf->n = 0;
-}
-
-/*
- * One pass no longer fits: the directory made, the buffer's vertices to the
- * files, and its arrays given back.  The buffer has a context of its own
- * (made for it in _tdc_tiled_write), so resetting that context frees its
- * arrays and unmaps its mappings; the SRID and dimensions stay.
- */
-static void
-stage_to_files(StageArg *sa)
-{
-	TdcPointBuf *buf = sa->buf;
-
-	sa->br->hasz = buf->hasz;
-	sa->br->hasl = sa->tagged;
-	sa->br->dim = buf->hasz ? 3 : 2;
-	make_run_dir(sa->br, sa->fname);
-	sa->to_files = true;
-	stage_flush(sa);
-	MemoryContextReset(buf->cxt);
-	buf->map = NULL;
-	buf->xy = buf->z = NULL;
-	buf->n = buf->cap = 0;
-	buf->side_bytes = 0;
-	sa->lab = NULL;
-	sa->lab_cap = 0;
-}
-
-/*
- * After each row (tdc_dump_collect's row_fn): its vertices' corner, and
- * every STAGE_CHUNK vertices, once one pass no longer fits, the buffer to
- * the files.  The first switch gives the buffer's big arrays back.
- */
-static void
-stage_row(void *arg, uint64 first)
-{
-	StageArg   *sa = (StageArg *) arg;
-	TdcPointBuf *buf = sa->buf;
-
-	for (uint64 i = first; i < buf->n; i++)
-	{
-		sa->lo[0] = Min(sa->lo[0], buf->xy[2 * i]);
-		sa->lo[1] = Min(sa->lo[1], buf->xy[2 * i + 1]);
-		sa->hi[0] = Max(sa->hi[0], buf->xy[2 * i]);
-		sa->hi[1] = Max(sa->hi[1], buf->xy[2 * i + 1]);
-	}
-	if (!sa->to_files)
-	{
-		if (buf->n < sa->next_check)
-			return;
-		sa->next_check = buf->n + STAGE_CHUNK;
-		if (!one_pass_fits(sa, buf->n))
-			stage_to_files(sa);
-		return;
-	}
-	if (buf->n >= STAGE_CHUNK)
-		stage_flush(sa);
-}
 
 /*
  * Once the query runs (tdc_dump_collect_tagged's columns): whether it has a
@@ -390,7 +135,7 @@ stage_columns(void *arg, const TdcDumpTag *tag)
 
 /*
  * After each row (tdc_dump_collect_tagged's row): with a tile column, the
- * number of the row's tile value for each of its vertices; then stage_row.
+ * number of the row's tile value for each of its vertices; then tdc_stage_row.
  * A row without a vertex (an empty geometry) names no tile; a row with one
  * must have a tile.
  */
@@ -422,22 +167,11 @@ stage_tagged_row(void *arg, uint64 first, const TdcDumpTag *tag)
 		for (uint64 i = first; i < buf->n; i++)
 			sa->lab[i] = number;
 	}
-	stage_row(arg, first);
+	tdc_stage_row(arg, first);
 }
 
 static const TdcDumpTagOps stage_ops = {stage_columns, stage_tagged_row};
 
-static void
-finish_file(FILE **f, const char *path, const char *fname)
-{
-	FILE	   *g = *f;
-
-	*f = NULL;
-	if (g != NULL && fclose(g) != 0)
-		ereport(ERROR,
-				(errcode_for_file_access(),
-				 errmsg("%s: could not write file \"%s\": %m", fname, path)));
-}
 
 /*
  * The run's emit, on its thread: a final tile's triangles to the
@@ -524,7 +258,7 @@ write_rows_from_file(BoundedRun *br, TdcTableWriter *tw, TdcTileValues *tv, cons
 	TileRecord	rec;
 	int64		r;
 
-	br->ftri = open_file(br->tripath, "rb", fname);
+	br->ftri = tdc_stage_open(br->tripath, "rb", fname);
 	while (fread(&rec, sizeof(rec), 1, br->ftri) == 1)
 	{
 		int64		label = rec.tile + 1;
@@ -545,7 +279,7 @@ write_rows_from_file(BoundedRun *br, TdcTableWriter *tw, TdcTileValues *tv, cons
 		ereport(ERROR,
 				(errcode_for_file_access(),
 				 errmsg("%s: could not read file \"%s\": %m", fname, br->tripath)));
-	close_file(&br->ftri);
+	tdc_stage_close(&br->ftri);
 }
 
 /*
@@ -593,67 +327,38 @@ rank_label_file(BoundedRun *br, const TdcTileValues *tv, const char *fname)
 	int64	   *chunk = palloc(STAGE_CHUNK * sizeof(int64));
 	size_t		got;
 
-	br->fin = open_file(br->lrawpath, "rb", fname);
-	br->fl = open_file(br->lpath, "wb", fname);
+	br->fin = tdc_stage_open(br->lrawpath, "rb", fname);
+	br->fl = tdc_stage_open(br->lpath, "wb", fname);
 	while ((got = fread(chunk, sizeof(int64), STAGE_CHUNK, br->fin)) > 0)
 	{
 		for (size_t i = 0; i < got; i++)
 			chunk[i] = tv->rank[chunk[i]];
-		write_all(br->fl, chunk, sizeof(int64), got, br->lpath, fname);
+		tdc_stage_write(br->fl, chunk, sizeof(int64), got, br->lpath, fname);
 		CHECK_FOR_INTERRUPTS();
 	}
 	if (ferror(br->fin))
 		ereport(ERROR,
 				(errcode_for_file_access(),
 				 errmsg("%s: could not read file \"%s\": %m", fname, br->lrawpath)));
-	close_file(&br->fin);
+	tdc_stage_close(&br->fin);
 	(void) unlink(br->lrawpath);
-	finish_file(&br->fl, br->lpath, fname);
+	tdc_stage_finish(&br->fl, br->lpath, fname);
 	pfree(chunk);
 }
 
-/* The bounded run on the staged files, waited on with interrupts watched. */
+/* The bounded run on the staged files, its triangles to the triangles file. */
 static void
 run_tiles(BoundedRun *br, const tdc_options *opt, uint64 limit_mb, const char *setting,
 		  uint64 outside, tdc_bounded_stats *st, const char *fname)
 {
 	tdc_bounded_params p;
-	char		err[640];
-	int			rc;
 
-	br->ftri = open_file(br->tripath, "wb", fname);
+	br->ftri = tdc_stage_open(br->tripath, "wb", fname);
 	memset(&p, 0, sizeof(p));
-	p.xypath = br->xypath;
-	p.zpath = br->hasz ? br->zpath : NULL;
-	p.lpath = br->hasl ? br->lpath : NULL;
-	p.n = (size_t) br->n;
-	p.opt = opt;
-	p.limit = (size_t) (limit_mb << 20);
-	p.outside = (size_t) outside;
-	p.tmpdir = br->dir;
-	p.limit_name = setting;
 	p.emit = emit_triangles;
 	p.arg = br;
-	rc = tdc_bounded_start(&p, &br->job, err, sizeof(err));
-	if (rc != TDC_OK)
-		tdc_report_status(rc, err, fname);
-	rc = tdc_wait_work(br->job, &bounded_ops, fname);
-	if (rc != TDC_OK)
-	{
-		if (br->write_errno != 0)
-		{
-			errno = br->write_errno;
-			ereport(ERROR,
-					(errcode_for_file_access(),
-					 errmsg("%s: could not write file \"%s\": %m", fname, br->tripath)));
-		}
-		snprintf(err, sizeof(err), "%s", tdc_bounded_error(br->job));
-		tdc_report_status(rc, err, fname);
-	}
-	*st = *tdc_bounded_stats_of(br->job);
-	tdc_bounded_free(br->job);
-	br->job = NULL;
-	finish_file(&br->ftri, br->tripath, fname);
+	tdc_stage_run(br, &p, opt, limit_mb, setting, outside, "tiled triangulation", NULL, st, fname);
+	tdc_stage_finish(&br->ftri, br->tripath, fname);
 }
 
 PG_FUNCTION_INFO_V1(_tdc_tiled_write);
@@ -711,7 +416,7 @@ _tdc_tiled_write(PG_FUNCTION_ARGS)
 
 	/* the files go with this call's memory, whatever ends it */
 	br = MemoryContextAllocZero(cxt, sizeof(BoundedRun));
-	br->cb.func = bounded_run_release;
+	br->cb.func = tdc_stage_release;
 	br->cb.arg = br;
 	MemoryContextRegisterResetCallback(cxt, &br->cb);
 	errcb.callback = phase_context;
@@ -742,14 +447,14 @@ _tdc_tiled_write(PG_FUNCTION_ARGS)
 	/* the values in their order: the labels become ranks */
 	if (sa.tagged)
 		tdc_tile_values_rank(sa.tv, fname);
-	if (!sa.to_files && buf.n > 0 && !one_pass_fits(&sa, buf.n))
-		stage_to_files(&sa);
+	if (!sa.to_files && buf.n > 0 && !tdc_stage_fits(&sa, buf.n))
+		tdc_stage_to_files(&sa);
 	if (sa.to_files)
 	{
-		stage_flush(&sa);
-		finish_file(&br->fxy, br->xypath, fname);
-		finish_file(&br->fz, br->zpath, fname);
-		finish_file(&br->fl, br->lrawpath, fname);
+		tdc_stage_flush(&sa);
+		tdc_stage_finish(&br->fxy, br->xypath, fname);
+		tdc_stage_finish(&br->fz, br->zpath, fname);
+		tdc_stage_finish(&br->fl, br->lrawpath, fname);
 		if (sa.tagged)
 			rank_label_file(br, sa.tv, fname);
 	}
@@ -779,7 +484,7 @@ _tdc_tiled_write(PG_FUNCTION_ARGS)
 		if (npts > 0)
 		{
 			/* (the tile values are beside the run, as its result would be) */
-			run = tdc_run(&buf, 0, tile_values_bytes(&sa), fname);
+			run = tdc_run(&buf, 0, tdc_stage_values_bytes(&sa), fname);
 			tiles_s = tdc_ms_since(t0) / 1000;
 			phase = "writing the rows";
 			INSTR_TIME_SET_CURRENT(t0);
@@ -806,7 +511,7 @@ _tdc_tiled_write(PG_FUNCTION_ARGS)
 	phase = "running the tiles";
 	INSTR_TIME_SET_CURRENT(t0);
 	/* the staging buffer, still allocated, and the tile values are beside the run */
-	run_tiles(br, &opt, limit_mb, setting, tdc_pointbuf_bytes(&buf) + tile_values_bytes(&sa), &st, fname);
+	run_tiles(br, &opt, limit_mb, setting, tdc_pointbuf_bytes(&buf) + tdc_stage_values_bytes(&sa), &st, fname);
 	tiles_s = tdc_ms_since(t0) / 1000;
 
 	phase = "writing the rows";
@@ -814,7 +519,7 @@ _tdc_tiled_write(PG_FUNCTION_ARGS)
 	write_rows_from_file(br, &tw, sa.tv, sa.lo, size, fname);
 	rows_s = tdc_ms_since(t0) / 1000;
 	tdc_table_writer_close(&tw);
-	bounded_run_release(br);
+	tdc_stage_release(br);
 	error_context_stack = errcb.previous;
 
 	ereport(NOTICE,
