@@ -28,7 +28,7 @@ MODULE_big = tdc_delaunay
 # test/release.sh checks that the library still has every C function any of
 # them names.
 SQL_SRCS = $(addprefix src/sql/,header.sql delaunay.sql diagnostics.sql voronoi.sql \
-	tiled_internals.sql tiled.sql constrained.sql tin.sql version.sql)
+	tiled_internals.sql tiled.sql constrained.sql tin.sql contours_tiled.sql version.sql)
 RASTER_SQL_SRCS = $(addprefix src/sql/,raster_header.sql raster.sql raster_tiled.sql)
 DATA_built = tdc_delaunay--$(EXTVERSION).sql tdc_delaunay_raster--$(RASTER_EXTVERSION).sql
 DATA = tdc_delaunay--0.1.0.sql tdc_delaunay--0.1.0--1.0.0.sql tdc_delaunay--1.0.0.sql \

@@ -1,0 +1,96 @@
+-- src/sql/contours_tiled.sql: tdc_contours_tiled, the contour lines of a
+-- table's samples into a table (C side: src/pg/fn/fn_contours_tiled.c)
+
+CREATE FUNCTION _tdc_contours_tiled_write(query text, target regclass, "interval" float8, base float8,
+										  geom_type regtype)
+RETURNS bigint
+AS 'MODULE_PATHNAME', '_tdc_contours_tiled_write'
+LANGUAGE C VOLATILE PARALLEL UNSAFE
+COST 10000;
+
+COMMENT ON FUNCTION _tdc_contours_tiled_write(text, regclass, float8, float8, regtype) IS
+'Internal, for tdc_contours_tiled: the contour lines at base + k * interval of the TIN of the query''s vertices '
+'(its geometry column, of type geom_type) written into target (id bigint, level float8, geom geometry(LineStringZ)), '
+'one row per line: in one pass when it fits tdc_delaunay.max_memory, else tile by tile through the core''s bounded run. '
+'Returns the lines written.';
+
+-- The procedure: the arguments checked, the target made with the first
+-- row's SRID, and the work done by _tdc_contours_tiled_write in one call,
+-- in the caller's transaction: an error or a cancel leaves no target.
+CREATE PROCEDURE tdc_contours_tiled(source text, target text, geom_column text, "interval" float8,
+									base float8 DEFAULT 0)
+LANGUAGE plpgsql
+-- the source is read in its order, as ST_TDCContours reads it (the first
+-- copy of a duplicate gives its Z)
+SET synchronize_seqscans = off
+AS $proc$
+DECLARE
+	fn constant text := 'tdc_contours_tiled';
+	src regclass;
+	gtyp oid;
+	gtypname name;
+	srid int;
+	tparts text[];
+	tschema text;
+	tname text;
+	qtarget text;
+BEGIN
+	IF source IS NULL OR target IS NULL OR geom_column IS NULL THEN
+		RAISE EXCEPTION '%: source, target and geom_column must not be NULL', fn
+			USING ERRCODE = 'null_value_not_allowed';
+	END IF;
+	IF NOT ("interval" > 0 AND "interval" < 'infinity'::float8) THEN
+		RAISE EXCEPTION '%: interval must be a finite number > 0, not %', fn, coalesce("interval"::text, 'NULL')
+			USING ERRCODE = 'invalid_parameter_value';
+	END IF;
+	IF NOT (base > '-infinity'::float8 AND base < 'infinity'::float8) THEN
+		RAISE EXCEPTION '%: base must be a finite number, not %', fn, coalesce(base::text, 'NULL')
+			USING ERRCODE = 'invalid_parameter_value';
+	END IF;
+	src := to_regclass(source);
+	IF src IS NULL THEN
+		RAISE EXCEPTION '%: source "%" does not exist', fn, source
+			USING ERRCODE = 'undefined_table';
+	END IF;
+	SELECT a.atttypid, t.typname INTO gtyp, gtypname
+	  FROM pg_attribute a JOIN pg_type t ON t.oid = a.atttypid
+	 WHERE a.attrelid = src AND a.attname = geom_column AND a.attnum > 0 AND NOT a.attisdropped;
+	IF NOT FOUND THEN
+		RAISE EXCEPTION '%: column "%" of relation % does not exist', fn, geom_column, src
+			USING ERRCODE = 'undefined_column';
+	END IF;
+	IF gtypname <> 'geometry' THEN
+		RAISE EXCEPTION '%: column "%" of relation % is of type %, not geometry', fn, geom_column, src, gtypname
+			USING ERRCODE = 'datatype_mismatch';
+	END IF;
+	-- the target: never overwritten
+	tparts := parse_ident(target);
+	IF cardinality(tparts) = 1 THEN
+		tschema := current_schema();
+		tname := tparts[1];
+	ELSIF cardinality(tparts) = 2 THEN
+		tschema := tparts[1];
+		tname := tparts[2];
+	ELSE
+		RAISE EXCEPTION '%: target "%" is not a table name', fn, target
+			USING ERRCODE = 'invalid_name';
+	END IF;
+	qtarget := format('%I.%I', tschema, tname);
+	IF to_regclass(qtarget) IS NOT NULL THEN
+		RAISE EXCEPTION '%: target % already exists', fn, qtarget
+			USING ERRCODE = 'duplicate_table', HINT = 'Drop it or choose another name; it is never overwritten.';
+	END IF;
+	EXECUTE format('SELECT ST_SRID(s.%1$I) FROM %2$s s WHERE s.%1$I IS NOT NULL LIMIT 1', geom_column, src)
+	   INTO srid;
+	EXECUTE format('CREATE TABLE %s (id bigint, level float8, geom %s(LineStringZ, %s))', qtarget,
+				   gtyp::regtype, coalesce(srid, 0));
+	PERFORM _tdc_contours_tiled_write(format('SELECT %I FROM %s', geom_column, src), qtarget::regclass,
+									  "interval", base, gtyp::regtype);
+END
+$proc$;
+
+COMMENT ON PROCEDURE tdc_contours_tiled(text, text, text, float8, float8) IS
+'Contour lines at the levels base + k * interval of the TIN of the vertices of source.geom_column (heights from Z) '
+'into a new table target(id bigint, level float8, geom geometry(LineStringZ, srid)), one row per line, id 1.. in '
+'the order of ST_TDCContours''s lines (levels increasing), each its level as Z: the lines of ST_TDCContours, in one '
+'pass or, when that would not fit tdc_delaunay.max_memory, through the core''s bounded run.';
