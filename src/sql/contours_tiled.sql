@@ -39,11 +39,11 @@ BEGIN
 		RAISE EXCEPTION '%: source, target and geom_column must not be NULL', fn
 			USING ERRCODE = 'null_value_not_allowed';
 	END IF;
-	IF NOT ("interval" > 0 AND "interval" < 'infinity'::float8) THEN
+	IF "interval" IS NULL OR NOT ("interval" > 0 AND "interval" < 'infinity'::float8) THEN
 		RAISE EXCEPTION '%: interval must be a finite number > 0, not %', fn, coalesce("interval"::text, 'NULL')
 			USING ERRCODE = 'invalid_parameter_value';
 	END IF;
-	IF NOT (base > '-infinity'::float8 AND base < 'infinity'::float8) THEN
+	IF base IS NULL OR NOT (base > '-infinity'::float8 AND base < 'infinity'::float8) THEN
 		RAISE EXCEPTION '%: base must be a finite number, not %', fn, coalesce(base::text, 'NULL')
 			USING ERRCODE = 'invalid_parameter_value';
 	END IF;
