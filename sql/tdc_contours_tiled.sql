@@ -74,6 +74,8 @@ CREATE TABLE ct_flat AS SELECT ST_MakePoint(i, i * i % 7) AS geom FROM generate_
 CALL tdc_contours_tiled('ct_flat', 'ct_bad', 'geom', 1);
 \set VERBOSITY default
 SELECT to_regclass('ct_bad') IS NULL AS no_target_left;
+-- nor any file: the runs' directories under pgsql_tmp are gone
+SELECT count(*) AS tmp_left FROM pg_ls_dir('base/pgsql_tmp', true, false) f WHERE f LIKE 'pgsql_tmp%.tdc.%';
 
 DROP TABLE ct_small, ct_c9, ct_flat, ct_small_lines, ct_c9_lines;
 DROP FUNCTION ct_check(regclass, text, float8, float8);

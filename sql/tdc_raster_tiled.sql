@@ -191,6 +191,8 @@ CREATE TABLE rt_flat AS SELECT ST_MakePoint(i, i * i % 7) AS geom FROM generate_
 CALL tdc_interpolate_tiled('rt_flat', 'rt_bad', 'geom', ST_MakeEmptyRaster(10, 10, 0, 10, 1, -1, 0, 0, 0));
 \set VERBOSITY default
 SELECT to_regclass('rt_bad') IS NULL AS no_target_left;
+-- nor any file: the runs' directories under pgsql_tmp are gone
+SELECT count(*) AS tmp_left FROM pg_ls_dir('base/pgsql_tmp', true, false) f WHERE f LIKE 'pgsql_tmp%.tdc.%';
 
 DROP TABLE rt_small, rt_c9, rt_gshhg, rt_flat, rt_small_lin, rt_small_nn, rt_small_near, rt_small_one, rt_small_skew,
 	rt_c9_32, rt_c9_64, rt_c9_near, rt_gshhg_cov;

@@ -69,18 +69,24 @@ typedef struct ContourRun
 	MemoryContextCallback cb;
 } ContourRun;
 
-/* On any end of the call: the run joined and its files gone, then the pieces. */
+/* On any end of the call: the run joined, the pieces freed, the files and the directory gone. */
 static void
 contour_run_release(void *arg)
 {
 	ContourRun *cr = (ContourRun *) arg;
 
-	tdc_stage_release(cr->br);
+	/* the run's thread uses the pieces: it goes first; their files before the directory */
+	if (cr->br->job != NULL)
+	{
+		tdc_bounded_free(cr->br->job);
+		cr->br->job = NULL;
+	}
 	if (cr->ct != NULL)
 	{
 		tdc_contour_tiles_free(cr->ct);
 		cr->ct = NULL;
 	}
+	tdc_stage_release(cr->br);
 }
 
 /* The run's begin, on its thread: the core's line pieces, their buffers held. */

@@ -78,18 +78,24 @@ typedef struct Coverage
 	MemoryContextCallback cb;
 } Coverage;
 
-/* On any end of the call: the run joined and its files gone, then the raster. */
+/* On any end of the call: the run joined, the raster freed, the files and the directory gone. */
 static void
 coverage_release(void *arg)
 {
 	Coverage   *cov = (Coverage *) arg;
 
-	tdc_stage_release(cov->br);
+	/* the run's thread uses the raster: it goes first; the raster's file before the directory */
+	if (cov->br->job != NULL)
+	{
+		tdc_bounded_free(cov->br->job);
+		cov->br->job = NULL;
+	}
 	if (cov->ras != NULL)
 	{
 		tdc_raster_free(cov->ras);
 		cov->ras = NULL;
 	}
+	tdc_stage_release(cov->br);
 }
 
 /* The bytes a band of rows, a tile's buffers and its raster value take. */
