@@ -21,7 +21,8 @@
 #      ST_TDCContours with a method, max_edge) gives in the updated database
 #      what it gives in the fresh one;
 #   6. tdc_delaunay_raster installs on the updated database, and
-#      tdc_delaunay never created postgis_raster;
+#      tdc_delaunay never created postgis_raster; its 1.1.0 updated to its
+#      default version has a fresh install's routines;
 #   7. what 1.2.0 changed (tdc_delaunay_tiled with a tile column, in one C
 #      function) gives in the updated database what it gives in the fresh
 #      one.
@@ -147,8 +148,8 @@ q "$OLD" -c "$CATALOGUE" >"$DB_WORK/updated.txt"
 q "$NEW" -c "$CATALOGUE" >"$DB_WORK/fresh.txt"
 nfun=$(grep -c ' RETURNS ' "$DB_WORK/fresh.txt" || true)
 nagg=$(grep -c '^aggregate ' "$DB_WORK/fresh.txt" || true)
-check "a fresh install has functions, aggregates and a procedure ($nfun routines, $nagg aggregates)" \
-	test "$nfun" -gt 40 -a "$nagg" -ge 8 -a "$(grep -c ' kind p ' "$DB_WORK/fresh.txt")" = 1
+check "a fresh install has functions, aggregates and two procedures ($nfun routines, $nagg aggregates)" \
+	test "$nfun" -gt 40 -a "$nagg" -ge 8 -a "$(grep -c ' kind p ' "$DB_WORK/fresh.txt")" = 2
 if diff -u "$DB_WORK/fresh.txt" "$DB_WORK/updated.txt" >"$DB_WORK/catalogue.diff"; then
 	pass "the updated catalogue equals a fresh $TO install ($(wc -l <"$DB_WORK/fresh.txt") lines)"
 else
@@ -187,6 +188,20 @@ same "ST_TDCInterpolateRaster on the database updated from $FROM" "32BF 2" "$(q 
 	SELECT ST_BandPixelType(r), ST_Value(r, 1, 1, 1) FROM ST_TDCInterpolateRaster(
 		'MULTIPOINT Z (0 0 2, 10 0 2, 0 10 2)', 'linear',
 		ST_AddBand(ST_MakeEmptyRaster(5, 5, 0, 10, 2, -2, 0, 0, 0), '32BF'::text, 0::float8, -1::float8)) r")"
+# tdc_delaunay_raster 1.1.0 updated to its default version (1.2.0 adds
+# tdc_interpolate_tiled) equals a fresh install of it, routine by routine.
+local raster_cat="SELECT format('%s kind %s vol %s par %s strict %s cost %s config %s src %s comment %s',
+		p.oid::regprocedure, p.prokind, p.provolatile, p.proparallel, p.proisstrict, p.procost, p.proconfig,
+		md5(p.prosrc), md5(coalesce(obj_description(p.oid, 'pg_proc'), '')))
+	  FROM pg_depend d JOIN pg_extension e ON e.oid = d.refobjid AND e.extname = 'tdc_delaunay_raster'
+	  JOIN pg_proc p ON p.oid = d.objid
+	 WHERE d.deptype = 'e' AND d.classid = 'pg_proc'::regclass ORDER BY 1"
+check "tdc_delaunay_raster 1.1.0 updated on the database updated from $FROM" \
+	q "$OLD" -c "SET client_min_messages = warning" -c "DROP EXTENSION tdc_delaunay_raster" \
+	-c "CREATE EXTENSION tdc_delaunay_raster VERSION '1.1.0'" -c "ALTER EXTENSION tdc_delaunay_raster UPDATE"
+q "$NEW" -c "SET client_min_messages = warning" -c "CREATE EXTENSION IF NOT EXISTS tdc_delaunay_raster CASCADE" >/dev/null
+same "... its routines equal a fresh install's" "$(q "$NEW" -c "$raster_cat")" "$(q "$OLD" -c "$raster_cat")"
+check "... with tdc_interpolate_tiled" grep -q "^tdc_interpolate_tiled(" <<<"$(q "$OLD" -c "$raster_cat")"
 
 # 1.2.0: a tile column labels the triangles of the one C function
 local tiled_probe="DROP TABLE IF EXISTS tcol, tcol_tri;
