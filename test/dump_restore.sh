@@ -10,7 +10,8 @@
 # over the Dump functions restore because their queries are
 # schema-qualified (public.pts).  The last part shows where an unqualified
 # query fails (on restore before 17, at CREATE from 17 on), and that its
-# error carries the HINT that says what to do.
+# error carries the HINT that says what to do.  And GDAL reads a raster
+# coverage of tdc_interpolate_tiled as one raster.
 #
 #   PGHOST=... PGPORT=... PGUSER=... bash test/dump_restore.sh
 # Needs a superuser (scripts/test.sh: its throw-away cluster); makes and
@@ -113,4 +114,34 @@ check "... with the HINT to schema-qualify the query" grep -q 'HINT: .*Schema-qu
 check "... and the CONTEXT naming the query" grep -q 'query of ST_TDCDelaunayDump: select geom from pts' "$DB_WORK/bad.log"
 echo "  ($what said:)"
 grep -E 'ERROR|HINT|CONTEXT|errors ignored' "$DB_WORK/bad.log" | sed 's/^/        /'
+# A raster coverage of tdc_interpolate_tiled (tdc_delaunay_raster) is what
+# GDAL's PostGISRaster driver, as QGIS uses it, reads as one raster: with
+# the raster constraints added, mode=2 gives the template's size and
+# geotransform (tiles of 64 x 50 that do not divide 331 x 290).
+echo "== a coverage of tdc_interpolate_tiled read by GDAL (mode=2)"
+q "$SRC" >/dev/null <<'SQL'
+SET client_min_messages = warning;
+CREATE EXTENSION IF NOT EXISTS tdc_delaunay_raster CASCADE;
+CREATE TABLE cov_pts AS
+	SELECT ST_MakePoint(x, y, sin(x / 7) * 10 + cos(y / 5) * 5) AS geom
+	  FROM (SELECT (i * 7919 % 2311) / 10.0 AS x, (i * 104729 % 2003) / 10.0 AS y FROM generate_series(1, 3000) i) s;
+CALL tdc_interpolate_tiled('cov_pts', 'cov', 'geom', ST_MakeEmptyRaster(331, 290, -20.5, 230.25, 0.75, -0.5, 0, 0, 3006),
+						   'linear', '32BF', -9999, 64, 50);
+SELECT AddRasterConstraints('cov', 'rast');
+SQL
+if command -v gdalinfo >/dev/null; then
+	gdalinfo -json "PG:host=${PGHOST:-} port=${PGPORT:-5432} user=${PGUSER:-$USER} dbname=$SRC table=cov mode=2" \
+		>"$DB_WORK/cov.json" 2>"$DB_WORK/cov.err" || true
+	same "gdalinfo reads the coverage as one raster: size and geotransform" \
+		"331 290 -20.5 0.75 0 230.25 0 -0.5" \
+		"$(python3 -c 'import json, sys; d = json.load(open(sys.argv[1])); print(*d["size"], *("%.17g" % v for v in d["geoTransform"]))' \
+			"$DB_WORK/cov.json" 2>&1 || cat "$DB_WORK/cov.err")"
+	check "... with one band of Float32 and the tiles' nodata" python3 -c '
+import json, sys
+d = json.load(open(sys.argv[1]))
+b = d["bands"]
+sys.exit(not (len(b) == 1 and b[0]["type"] == "Float32" and b[0]["noDataValue"] == -9999))' "$DB_WORK/cov.json"
+else
+	fail "gdalinfo is installed (gdal-bin)"
+fi
 db_finish
