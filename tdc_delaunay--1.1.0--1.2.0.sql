@@ -6,9 +6,10 @@
 -- 1.2.0 adds ST_TDCContours(geometry, float8, float8, text), whose method
 -- ('linear' or 'linear:max_edge=L') leaves out the triangles with an edge
 -- longer than L, and its transition function, as src/sql/tin.sql has them;
--- and replaces tdc_delaunay_tiled (below).  Every other object of 1.1.0
--- stays as it was (test/upgrade.sh compares the catalogue with a fresh 1.2.0
--- install).
+-- and replaces tdc_delaunay_tiled (below, with the checks it shares with
+-- tdc_contours_tiled: _tdc_tiled_geometry, _tdc_tiled_target).  Every other
+-- object of 1.1.0 stays as it was (test/upgrade.sh compares the catalogue
+-- with a fresh 1.2.0 install).
 
 CREATE FUNCTION st_tdccontours_transfn(internal, geometry, float8, float8, text)
 RETURNS internal
@@ -49,6 +50,67 @@ COMMENT ON FUNCTION _tdc_tiled_write(text, regclass, float8) IS
 'type of target''s tile), the value owning its smallest vertex (the least among the vertex''s copies); with '
 'tile_size, the square holding that vertex; else bigint from the run. Returns the rows written.';
 
+-- The checks every tiled procedure makes (tdc_delaunay_tiled, tdc_contours_tiled,
+-- and tdc_interpolate_tiled of tdc_delaunay_raster), their errors in the
+-- caller's name fn.
+CREATE FUNCTION _tdc_tiled_geometry(fn text, source regclass, geom_column text)
+RETURNS regtype
+LANGUAGE plpgsql STABLE
+AS $fn$
+DECLARE
+	gtyp oid;
+	gtypname name;
+BEGIN
+	SELECT a.atttypid, t.typname INTO gtyp, gtypname
+	  FROM pg_attribute a JOIN pg_type t ON t.oid = a.atttypid
+	 WHERE a.attrelid = source AND a.attname = geom_column AND a.attnum > 0 AND NOT a.attisdropped;
+	IF NOT FOUND THEN
+		RAISE EXCEPTION '%: column "%" of relation % does not exist', fn, geom_column, source
+			USING ERRCODE = 'undefined_column';
+	END IF;
+	IF gtypname <> 'geometry' THEN
+		RAISE EXCEPTION '%: column "%" of relation % is of type %, not geometry', fn, geom_column, source, gtypname
+			USING ERRCODE = 'datatype_mismatch';
+	END IF;
+	RETURN gtyp;
+END
+$fn$;
+
+COMMENT ON FUNCTION _tdc_tiled_geometry(text, regclass, text) IS
+'Internal, for the tiled procedures: the type of source.geom_column, which must exist and be a geometry (errors in the name fn).';
+
+CREATE FUNCTION _tdc_tiled_target(fn text, target text)
+RETURNS text[]
+LANGUAGE plpgsql STABLE
+AS $fn$
+DECLARE
+	tparts text[] := parse_ident(target);
+	tschema text;
+	tname text;
+BEGIN
+	IF cardinality(tparts) = 1 THEN
+		tschema := current_schema();
+		tname := tparts[1];
+	ELSIF cardinality(tparts) = 2 THEN
+		tschema := tparts[1];
+		tname := tparts[2];
+	ELSE
+		RAISE EXCEPTION '%: target "%" is not a table name', fn, target
+			USING ERRCODE = 'invalid_name';
+	END IF;
+	-- never overwritten
+	IF to_regclass(format('%I.%I', tschema, tname)) IS NOT NULL THEN
+		RAISE EXCEPTION '%: target %.% already exists', fn, quote_ident(tschema), quote_ident(tname)
+			USING ERRCODE = 'duplicate_table', HINT = 'Drop it or choose another name; it is never overwritten.';
+	END IF;
+	RETURN ARRAY[tschema, tname];
+END
+$fn$;
+
+COMMENT ON FUNCTION _tdc_tiled_target(text, text) IS
+'Internal, for the tiled procedures: {schema, name} of the new table target (a name, or schema.name), which must not '
+'exist yet (errors in the name fn).';
+
 CREATE OR REPLACE PROCEDURE tdc_delaunay_tiled(source regclass, target text, geom_column name DEFAULT 'geom',
 									tile_column name DEFAULT NULL, tile_size float8 DEFAULT NULL)
 LANGUAGE plpgsql
@@ -63,7 +125,6 @@ SET synchronize_seqscans = off
 AS $proc$
 DECLARE
 	fn constant text := 'tdc_delaunay_tiled';
-	gtyp name;
 	ttype text := 'bigint';
 	tv text;					-- SQL of a vertex's tile value
 	stroked text;				-- SQL of a row's geometry with its arcs stroked
@@ -87,17 +148,7 @@ DECLARE
 	tile_box text;
 BEGIN
 	-- the geometry column
-	SELECT t.typname INTO gtyp
-	  FROM pg_attribute a JOIN pg_type t ON t.oid = a.atttypid
-	 WHERE a.attrelid = source AND a.attname = geom_column AND a.attnum > 0 AND NOT a.attisdropped;
-	IF NOT FOUND THEN
-		RAISE EXCEPTION '%: column "%" of relation % does not exist', fn, geom_column, source
-			USING ERRCODE = 'undefined_column';
-	END IF;
-	IF gtyp <> 'geometry' THEN
-		RAISE EXCEPTION '%: column "%" of relation % is of type %, not geometry', fn, geom_column, source, gtyp
-			USING ERRCODE = 'datatype_mismatch';
-	END IF;
+	PERFORM _tdc_tiled_geometry(fn, source, geom_column);
 	-- the tiles
 	IF tile_column IS NOT NULL THEN
 		SELECT format_type(a.atttypid, a.atttypmod) INTO ttype
@@ -116,22 +167,10 @@ BEGIN
 			USING ERRCODE = 'invalid_parameter_value';
 	END IF;
 	-- the target: never overwritten
-	tparts := parse_ident(target);
-	IF cardinality(tparts) = 1 THEN
-		tschema := current_schema();
-		tname := tparts[1];
-	ELSIF cardinality(tparts) = 2 THEN
-		tschema := tparts[1];
-		tname := tparts[2];
-	ELSE
-		RAISE EXCEPTION '%: target "%" is not a table name', fn, target
-			USING ERRCODE = 'invalid_name';
-	END IF;
+	tparts := _tdc_tiled_target(fn, target);
+	tschema := tparts[1];
+	tname := tparts[2];
 	qtarget := format('%I.%I', tschema, tname);
-	IF to_regclass(qtarget) IS NOT NULL THEN
-		RAISE EXCEPTION '%: target % already exists', fn, qtarget
-			USING ERRCODE = 'duplicate_table', HINT = 'Drop it or choose another name; it is never overwritten.';
-	END IF;
 	-- Citus: source distributed by hash of tile_column
 	IF tile_column IS NOT NULL AND to_regclass('pg_catalog.pg_dist_partition') IS NOT NULL THEN
 		EXECUTE 'SELECT EXISTS (SELECT 1 FROM pg_dist_partition WHERE logicalrelid = $1 AND partmethod = ''h''
@@ -377,12 +416,9 @@ AS $proc$
 DECLARE
 	fn constant text := 'tdc_contours_tiled';
 	src regclass;
-	gtyp oid;
-	gtypname name;
+	gtyp regtype;
 	srid int;
 	tparts text[];
-	tschema text;
-	tname text;
 	qtarget text;
 BEGIN
 	IF source IS NULL OR target IS NULL OR geom_column IS NULL THEN
@@ -402,40 +438,16 @@ BEGIN
 		RAISE EXCEPTION '%: source "%" does not exist', fn, source
 			USING ERRCODE = 'undefined_table';
 	END IF;
-	SELECT a.atttypid, t.typname INTO gtyp, gtypname
-	  FROM pg_attribute a JOIN pg_type t ON t.oid = a.atttypid
-	 WHERE a.attrelid = src AND a.attname = geom_column AND a.attnum > 0 AND NOT a.attisdropped;
-	IF NOT FOUND THEN
-		RAISE EXCEPTION '%: column "%" of relation % does not exist', fn, geom_column, src
-			USING ERRCODE = 'undefined_column';
-	END IF;
-	IF gtypname <> 'geometry' THEN
-		RAISE EXCEPTION '%: column "%" of relation % is of type %, not geometry', fn, geom_column, src, gtypname
-			USING ERRCODE = 'datatype_mismatch';
-	END IF;
+	gtyp := _tdc_tiled_geometry(fn, src, geom_column);
 	-- the target: never overwritten
-	tparts := parse_ident(target);
-	IF cardinality(tparts) = 1 THEN
-		tschema := current_schema();
-		tname := tparts[1];
-	ELSIF cardinality(tparts) = 2 THEN
-		tschema := tparts[1];
-		tname := tparts[2];
-	ELSE
-		RAISE EXCEPTION '%: target "%" is not a table name', fn, target
-			USING ERRCODE = 'invalid_name';
-	END IF;
-	qtarget := format('%I.%I', tschema, tname);
-	IF to_regclass(qtarget) IS NOT NULL THEN
-		RAISE EXCEPTION '%: target % already exists', fn, qtarget
-			USING ERRCODE = 'duplicate_table', HINT = 'Drop it or choose another name; it is never overwritten.';
-	END IF;
+	tparts := _tdc_tiled_target(fn, target);
+	qtarget := format('%I.%I', tparts[1], tparts[2]);
 	EXECUTE format('SELECT ST_SRID(s.%1$I) FROM %2$s s WHERE s.%1$I IS NOT NULL LIMIT 1', geom_column, src)
 	   INTO srid;
 	EXECUTE format('CREATE TABLE %s (id bigint, level float8, geom %s(LineStringZ, %s))', qtarget,
-				   gtyp::regtype, coalesce(srid, 0));
+				   gtyp, coalesce(srid, 0));
 	PERFORM _tdc_contours_tiled_write(format('SELECT %I FROM %s', geom_column, src), qtarget::regclass,
-									  "interval", base, gtyp::regtype);
+									  "interval", base, gtyp);
 END
 $proc$;
 

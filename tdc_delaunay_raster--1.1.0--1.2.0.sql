@@ -6,7 +6,6 @@
 -- 1.2.0 adds the procedure tdc_interpolate_tiled and its internal function,
 -- as src/sql/raster_tiled.sql has them; every object of 1.1.0 stays as it was.
 
-
 CREATE FUNCTION _tdc_interpolate_tiled_write(query text, target regclass, gt float8[], width int4,
 											 height int4, srid int4, method text, pixel_type text,
 											 nodata float8, tile_width int4, tile_height int4,
@@ -38,12 +37,9 @@ AS $proc$
 DECLARE
 	fn constant text := 'tdc_interpolate_tiled';
 	src regclass;
-	gtyp oid;
-	gtypname name;
+	gtyp regtype;
 	md record;
 	tparts text[];
-	tschema text;
-	tname text;
 	qtarget text;
 BEGIN
 	IF source IS NULL OR target IS NULL OR geom_column IS NULL OR method IS NULL THEN
@@ -55,17 +51,7 @@ BEGIN
 		RAISE EXCEPTION '%: source "%" does not exist', fn, source
 			USING ERRCODE = 'undefined_table';
 	END IF;
-	SELECT a.atttypid, t.typname INTO gtyp, gtypname
-	  FROM pg_attribute a JOIN pg_type t ON t.oid = a.atttypid
-	 WHERE a.attrelid = src AND a.attname = geom_column AND a.attnum > 0 AND NOT a.attisdropped;
-	IF NOT FOUND THEN
-		RAISE EXCEPTION '%: column "%" of relation % does not exist', fn, geom_column, src
-			USING ERRCODE = 'undefined_column';
-	END IF;
-	IF gtypname <> 'geometry' THEN
-		RAISE EXCEPTION '%: column "%" of relation % is of type %, not geometry', fn, geom_column, src, gtypname
-			USING ERRCODE = 'datatype_mismatch';
-	END IF;
+	gtyp := _tdc_tiled_geometry(fn, src, geom_column);
 	-- the template: the grid's geometry, without bands
 	IF template IS NULL THEN
 		RAISE EXCEPTION '%: template must not be NULL', fn
@@ -99,27 +85,13 @@ BEGIN
 			USING ERRCODE = 'invalid_parameter_value';
 	END IF;
 	-- the target: never overwritten
-	tparts := parse_ident(target);
-	IF cardinality(tparts) = 1 THEN
-		tschema := current_schema();
-		tname := tparts[1];
-	ELSIF cardinality(tparts) = 2 THEN
-		tschema := tparts[1];
-		tname := tparts[2];
-	ELSE
-		RAISE EXCEPTION '%: target "%" is not a table name', fn, target
-			USING ERRCODE = 'invalid_name';
-	END IF;
-	qtarget := format('%I.%I', tschema, tname);
-	IF to_regclass(qtarget) IS NOT NULL THEN
-		RAISE EXCEPTION '%: target % already exists', fn, qtarget
-			USING ERRCODE = 'duplicate_table', HINT = 'Drop it or choose another name; it is never overwritten.';
-	END IF;
+	tparts := _tdc_tiled_target(fn, target);
+	qtarget := format('%I.%I', tparts[1], tparts[2]);
 	EXECUTE format('CREATE TABLE %s (rid bigint, rast %s)', qtarget, pg_typeof(template));
 	PERFORM _tdc_interpolate_tiled_write(format('SELECT %I FROM %s', geom_column, src), qtarget::regclass,
 										 ARRAY[md.upperleftx, md.scalex, md.skewx, md.upperlefty, md.skewy, md.scaley],
 										 md.width, md.height, md.srid, method, upper(pixel_type), nodata,
-										 tile_width, tile_height, gtyp::regtype);
+										 tile_width, tile_height, gtyp);
 END
 $proc$;
 

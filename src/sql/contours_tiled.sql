@@ -27,12 +27,9 @@ AS $proc$
 DECLARE
 	fn constant text := 'tdc_contours_tiled';
 	src regclass;
-	gtyp oid;
-	gtypname name;
+	gtyp regtype;
 	srid int;
 	tparts text[];
-	tschema text;
-	tname text;
 	qtarget text;
 BEGIN
 	IF source IS NULL OR target IS NULL OR geom_column IS NULL THEN
@@ -52,40 +49,16 @@ BEGIN
 		RAISE EXCEPTION '%: source "%" does not exist', fn, source
 			USING ERRCODE = 'undefined_table';
 	END IF;
-	SELECT a.atttypid, t.typname INTO gtyp, gtypname
-	  FROM pg_attribute a JOIN pg_type t ON t.oid = a.atttypid
-	 WHERE a.attrelid = src AND a.attname = geom_column AND a.attnum > 0 AND NOT a.attisdropped;
-	IF NOT FOUND THEN
-		RAISE EXCEPTION '%: column "%" of relation % does not exist', fn, geom_column, src
-			USING ERRCODE = 'undefined_column';
-	END IF;
-	IF gtypname <> 'geometry' THEN
-		RAISE EXCEPTION '%: column "%" of relation % is of type %, not geometry', fn, geom_column, src, gtypname
-			USING ERRCODE = 'datatype_mismatch';
-	END IF;
+	gtyp := _tdc_tiled_geometry(fn, src, geom_column);
 	-- the target: never overwritten
-	tparts := parse_ident(target);
-	IF cardinality(tparts) = 1 THEN
-		tschema := current_schema();
-		tname := tparts[1];
-	ELSIF cardinality(tparts) = 2 THEN
-		tschema := tparts[1];
-		tname := tparts[2];
-	ELSE
-		RAISE EXCEPTION '%: target "%" is not a table name', fn, target
-			USING ERRCODE = 'invalid_name';
-	END IF;
-	qtarget := format('%I.%I', tschema, tname);
-	IF to_regclass(qtarget) IS NOT NULL THEN
-		RAISE EXCEPTION '%: target % already exists', fn, qtarget
-			USING ERRCODE = 'duplicate_table', HINT = 'Drop it or choose another name; it is never overwritten.';
-	END IF;
+	tparts := _tdc_tiled_target(fn, target);
+	qtarget := format('%I.%I', tparts[1], tparts[2]);
 	EXECUTE format('SELECT ST_SRID(s.%1$I) FROM %2$s s WHERE s.%1$I IS NOT NULL LIMIT 1', geom_column, src)
 	   INTO srid;
 	EXECUTE format('CREATE TABLE %s (id bigint, level float8, geom %s(LineStringZ, %s))', qtarget,
-				   gtyp::regtype, coalesce(srid, 0));
+				   gtyp, coalesce(srid, 0));
 	PERFORM _tdc_contours_tiled_write(format('SELECT %I FROM %s', geom_column, src), qtarget::regclass,
-									  "interval", base, gtyp::regtype);
+									  "interval", base, gtyp);
 END
 $proc$;
 

@@ -34,7 +34,6 @@ SET synchronize_seqscans = off
 AS $proc$
 DECLARE
 	fn constant text := 'tdc_delaunay_tiled';
-	gtyp name;
 	ttype text := 'bigint';
 	tv text;					-- SQL of a vertex's tile value
 	stroked text;				-- SQL of a row's geometry with its arcs stroked
@@ -58,17 +57,7 @@ DECLARE
 	tile_box text;
 BEGIN
 	-- the geometry column
-	SELECT t.typname INTO gtyp
-	  FROM pg_attribute a JOIN pg_type t ON t.oid = a.atttypid
-	 WHERE a.attrelid = source AND a.attname = geom_column AND a.attnum > 0 AND NOT a.attisdropped;
-	IF NOT FOUND THEN
-		RAISE EXCEPTION '%: column "%" of relation % does not exist', fn, geom_column, source
-			USING ERRCODE = 'undefined_column';
-	END IF;
-	IF gtyp <> 'geometry' THEN
-		RAISE EXCEPTION '%: column "%" of relation % is of type %, not geometry', fn, geom_column, source, gtyp
-			USING ERRCODE = 'datatype_mismatch';
-	END IF;
+	PERFORM _tdc_tiled_geometry(fn, source, geom_column);
 	-- the tiles
 	IF tile_column IS NOT NULL THEN
 		SELECT format_type(a.atttypid, a.atttypmod) INTO ttype
@@ -87,22 +76,10 @@ BEGIN
 			USING ERRCODE = 'invalid_parameter_value';
 	END IF;
 	-- the target: never overwritten
-	tparts := parse_ident(target);
-	IF cardinality(tparts) = 1 THEN
-		tschema := current_schema();
-		tname := tparts[1];
-	ELSIF cardinality(tparts) = 2 THEN
-		tschema := tparts[1];
-		tname := tparts[2];
-	ELSE
-		RAISE EXCEPTION '%: target "%" is not a table name', fn, target
-			USING ERRCODE = 'invalid_name';
-	END IF;
+	tparts := _tdc_tiled_target(fn, target);
+	tschema := tparts[1];
+	tname := tparts[2];
 	qtarget := format('%I.%I', tschema, tname);
-	IF to_regclass(qtarget) IS NOT NULL THEN
-		RAISE EXCEPTION '%: target % already exists', fn, qtarget
-			USING ERRCODE = 'duplicate_table', HINT = 'Drop it or choose another name; it is never overwritten.';
-	END IF;
 	-- Citus: source distributed by hash of tile_column
 	IF tile_column IS NOT NULL AND to_regclass('pg_catalog.pg_dist_partition') IS NOT NULL THEN
 		EXECUTE 'SELECT EXISTS (SELECT 1 FROM pg_dist_partition WHERE logicalrelid = $1 AND partmethod = ''h''

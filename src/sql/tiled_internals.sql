@@ -147,3 +147,64 @@ COMMENT ON FUNCTION _tdc_tiled_write(text, regclass, float8) IS
 'as ./tdc --max-memory runs it. Each triangle''s tile: with a second column in the query (a tile column, of the '
 'type of target''s tile), the value owning its smallest vertex (the least among the vertex''s copies); with '
 'tile_size, the square holding that vertex; else bigint from the run. Returns the rows written.';
+
+-- The checks every tiled procedure makes (tdc_delaunay_tiled, tdc_contours_tiled,
+-- and tdc_interpolate_tiled of tdc_delaunay_raster), their errors in the
+-- caller's name fn.
+CREATE FUNCTION _tdc_tiled_geometry(fn text, source regclass, geom_column text)
+RETURNS regtype
+LANGUAGE plpgsql STABLE
+AS $fn$
+DECLARE
+	gtyp oid;
+	gtypname name;
+BEGIN
+	SELECT a.atttypid, t.typname INTO gtyp, gtypname
+	  FROM pg_attribute a JOIN pg_type t ON t.oid = a.atttypid
+	 WHERE a.attrelid = source AND a.attname = geom_column AND a.attnum > 0 AND NOT a.attisdropped;
+	IF NOT FOUND THEN
+		RAISE EXCEPTION '%: column "%" of relation % does not exist', fn, geom_column, source
+			USING ERRCODE = 'undefined_column';
+	END IF;
+	IF gtypname <> 'geometry' THEN
+		RAISE EXCEPTION '%: column "%" of relation % is of type %, not geometry', fn, geom_column, source, gtypname
+			USING ERRCODE = 'datatype_mismatch';
+	END IF;
+	RETURN gtyp;
+END
+$fn$;
+
+COMMENT ON FUNCTION _tdc_tiled_geometry(text, regclass, text) IS
+'Internal, for the tiled procedures: the type of source.geom_column, which must exist and be a geometry (errors in the name fn).';
+
+CREATE FUNCTION _tdc_tiled_target(fn text, target text)
+RETURNS text[]
+LANGUAGE plpgsql STABLE
+AS $fn$
+DECLARE
+	tparts text[] := parse_ident(target);
+	tschema text;
+	tname text;
+BEGIN
+	IF cardinality(tparts) = 1 THEN
+		tschema := current_schema();
+		tname := tparts[1];
+	ELSIF cardinality(tparts) = 2 THEN
+		tschema := tparts[1];
+		tname := tparts[2];
+	ELSE
+		RAISE EXCEPTION '%: target "%" is not a table name', fn, target
+			USING ERRCODE = 'invalid_name';
+	END IF;
+	-- never overwritten
+	IF to_regclass(format('%I.%I', tschema, tname)) IS NOT NULL THEN
+		RAISE EXCEPTION '%: target %.% already exists', fn, quote_ident(tschema), quote_ident(tname)
+			USING ERRCODE = 'duplicate_table', HINT = 'Drop it or choose another name; it is never overwritten.';
+	END IF;
+	RETURN ARRAY[tschema, tname];
+END
+$fn$;
+
+COMMENT ON FUNCTION _tdc_tiled_target(text, text) IS
+'Internal, for the tiled procedures: {schema, name} of the new table target (a name, or schema.name), which must not '
+'exist yet (errors in the name fn).';

@@ -76,11 +76,7 @@ contour_run_release(void *arg)
 	ContourRun *cr = (ContourRun *) arg;
 
 	/* the run's thread uses the pieces: it goes first; their files before the directory */
-	if (cr->br->job != NULL)
-	{
-		tdc_bounded_free(cr->br->job);
-		cr->br->job = NULL;
-	}
+	tdc_stage_stop(cr->br);
 	if (cr->ct != NULL)
 	{
 		tdc_contour_tiles_free(cr->ct);
@@ -286,27 +282,10 @@ _tdc_contours_tiled_write(PG_FUNCTION_ARGS)
 
 	tdc_pointbuf_init(&buf, AllocSetContextCreate(cxt, "tdc_contours_tiled samples", ALLOCSET_DEFAULT_SIZES));
 	buf.curves = TDC_CURVES_STROKE;
-	memset(&sa, 0, sizeof(sa));
-	sa.br = br;
-	sa.buf = &buf;
-	sa.cxt = cxt;
-	sa.opt = &opt;
-	sa.limit = limit_mb << 20;
-	sa.next_check = STAGE_CHUNK;
-	sa.lo[0] = sa.lo[1] = INFINITY;
-	sa.hi[0] = sa.hi[1] = -INFINITY;
+	tdc_stage_init(&sa, br, &buf, cxt, &opt, limit_mb, fname);
 	sa.tin = true;
-	sa.fname = fname;
 	tdc_dump_collect(&buf, NULL, query, PG_GETARG_OID(4), fname, tdc_stage_row, &sa);
-	if (!sa.to_files && buf.n > 0 && !tdc_stage_fits(&sa, buf.n))
-		tdc_stage_to_files(&sa);
-	if (sa.to_files)
-	{
-		tdc_stage_flush(&sa);
-		tdc_stage_finish(&br->fxy, br->xypath, fname);
-		tdc_stage_finish(&br->fz, br->zpath, fname);
-	}
-	npts = sa.to_files ? br->n : buf.n;
+	npts = tdc_stage_done(&sa);
 	cr->srid = buf.srid;
 	if (npts > 0 && !buf.hasz)
 		ereport(ERROR,
@@ -373,13 +352,7 @@ _tdc_contours_tiled_write(PG_FUNCTION_ARGS)
 									 contour_line_out, br, NULL, &nlines, &np, cr->err, sizeof(cr->err));
 		if (rc != TDC_OK)
 		{
-			if (br->write_errno != 0)
-			{
-				errno = br->write_errno;
-				ereport(ERROR,
-						(errcode_for_file_access(),
-						 errmsg("%s: could not write file \"%s\": %m", fname, br->tripath)));
-			}
+			tdc_stage_write_error(br, fname);
 			tdc_report_status(rc, cr->err, fname);
 		}
 		tdc_stage_finish(&br->ftri, br->tripath, fname);

@@ -85,11 +85,7 @@ coverage_release(void *arg)
 	Coverage   *cov = (Coverage *) arg;
 
 	/* the run's thread uses the raster: it goes first; the raster's file before the directory */
-	if (cov->br->job != NULL)
-	{
-		tdc_bounded_free(cov->br->job);
-		cov->br->job = NULL;
-	}
+	tdc_stage_stop(cov->br);
 	if (cov->ras != NULL)
 	{
 		tdc_raster_free(cov->ras);
@@ -295,29 +291,12 @@ _tdc_interpolate_tiled_write(PG_FUNCTION_ARGS)
 	npix = (Size) cov->width * cov->height;
 	tdc_pointbuf_init(&buf, AllocSetContextCreate(cxt, "tdc_interpolate_tiled samples", ALLOCSET_DEFAULT_SIZES));
 	buf.curves = TDC_CURVES_VERTICES;
-	memset(&sa, 0, sizeof(sa));
-	sa.br = br;
-	sa.buf = &buf;
-	sa.cxt = cxt;
-	sa.opt = &opt;
-	sa.limit = limit_mb << 20;
-	sa.next_check = STAGE_CHUNK;
-	sa.lo[0] = sa.lo[1] = INFINITY;
-	sa.hi[0] = sa.hi[1] = -INFINITY;
+	tdc_stage_init(&sa, br, &buf, cxt, &opt, limit_mb, fname);
 	/* one pass holds the TIN, the grid's values and mask, and a tile */
 	sa.tin = true;
 	sa.beside = (uint64) npix * (sizeof(double) + 1) + coverage_buffers(cov, false);
-	sa.fname = fname;
 	tdc_dump_collect(&buf, NULL, query, PG_GETARG_OID(11), fname, tdc_stage_row, &sa);
-	if (!sa.to_files && buf.n > 0 && !tdc_stage_fits(&sa, buf.n))
-		tdc_stage_to_files(&sa);
-	if (sa.to_files)
-	{
-		tdc_stage_flush(&sa);
-		tdc_stage_finish(&br->fxy, br->xypath, fname);
-		tdc_stage_finish(&br->fz, br->zpath, fname);
-	}
-	npts = sa.to_files ? br->n : buf.n;
+	npts = tdc_stage_done(&sa);
 	if (npts > 0 && !buf.hasz)
 		ereport(ERROR,
 				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),

@@ -431,37 +431,19 @@ _tdc_tiled_write(PG_FUNCTION_ARGS)
 	INSTR_TIME_SET_CURRENT(t0);
 	tdc_pointbuf_init(&buf, AllocSetContextCreate(cxt, "tdc_delaunay_tiled vertices", ALLOCSET_DEFAULT_SIZES));
 	buf.curves = TDC_CURVES_STROKE;
-	memset(&sa, 0, sizeof(sa));
-	sa.br = br;
-	sa.buf = &buf;
+	tdc_stage_init(&sa, br, &buf, cxt, &opt, limit_mb, fname);
 	sa.tw = &tw;
-	sa.cxt = cxt;
 	sa.size = size;
-	sa.opt = &opt;
-	sa.limit = limit_mb << 20;
-	sa.next_check = STAGE_CHUNK;
-	sa.lo[0] = sa.lo[1] = INFINITY;
-	sa.hi[0] = sa.hi[1] = -INFINITY;
-	sa.fname = fname;
 	tdc_dump_collect_tagged(&buf, query, tw.geomoid, fname, &stage_ops, &sa);
 	/* the values in their order: the labels become ranks */
 	if (sa.tagged)
 		tdc_tile_values_rank(sa.tv, fname);
-	if (!sa.to_files && buf.n > 0 && !tdc_stage_fits(&sa, buf.n))
-		tdc_stage_to_files(&sa);
-	if (sa.to_files)
-	{
-		tdc_stage_flush(&sa);
-		tdc_stage_finish(&br->fxy, br->xypath, fname);
-		tdc_stage_finish(&br->fz, br->zpath, fname);
-		tdc_stage_finish(&br->fl, br->lrawpath, fname);
-		if (sa.tagged)
-			rank_label_file(br, sa.tv, fname);
-	}
+	npts = tdc_stage_done(&sa);
+	if (sa.to_files && sa.tagged)
+		rank_label_file(br, sa.tv, fname);
 	else if (sa.tagged)
 		for (uint64 i = 0; i < buf.n; i++)
 			sa.lab[i] = sa.tv->rank[sa.lab[i]];
-	npts = sa.to_files ? br->n : buf.n;
 	read_s = tdc_ms_since(t0) / 1000;
 	if (npts > 0)
 		tdc_table_writer_shape(&tw, buf.hasz ? 3 : 2, buf.srid, fname);

@@ -52,11 +52,7 @@ tdc_stage_release(void *arg)
 {
 	BoundedRun *br = (BoundedRun *) arg;
 
-	if (br->job != NULL)
-	{
-		tdc_bounded_free(br->job);
-		br->job = NULL;
-	}
+	tdc_stage_stop(br);
 	tdc_stage_close(&br->fxy);
 	tdc_stage_close(&br->fz);
 	tdc_stage_close(&br->fl);
@@ -289,17 +285,77 @@ tdc_stage_run(BoundedRun *br, tdc_bounded_params *p, const tdc_options *opt, uin
 	rc = tdc_wait_work(br->job, &ops, fname);
 	if (rc != TDC_OK)
 	{
-		if (br->write_errno != 0)
-		{
-			errno = br->write_errno;
-			ereport(ERROR,
-					(errcode_for_file_access(),
-					 errmsg("%s: could not write file \"%s\": %m", fname, br->tripath)));
-		}
+		tdc_stage_write_error(br, fname);
 		snprintf(err, sizeof(err), "%s", cb_err && cb_err[0] ? cb_err : tdc_bounded_error(br->job));
 		tdc_report_status(rc, err, fname);
 	}
 	*st = *tdc_bounded_stats_of(br->job);
 	tdc_bounded_free(br->job);
 	br->job = NULL;
+}
+
+/*
+ * The staging of a call set up: sa for the row callback (tdc_stage_row),
+ * br the call's run (zeroed, its release registered by the caller), buf
+ * the point buffer, limit_mb the limit in MB (0: none).
+ */
+void
+tdc_stage_init(StageArg *sa, BoundedRun *br, TdcPointBuf *buf, MemoryContext cxt,
+			   const tdc_options *opt, uint64 limit_mb, const char *fname)
+{
+	memset(sa, 0, sizeof(*sa));
+	sa->br = br;
+	sa->buf = buf;
+	sa->cxt = cxt;
+	sa->opt = opt;
+	sa->limit = limit_mb << 20;
+	sa->next_check = STAGE_CHUNK;
+	sa->lo[0] = sa->lo[1] = INFINITY;
+	sa->hi[0] = sa->hi[1] = -INFINITY;
+	sa->fname = fname;
+}
+
+/*
+ * After the source is read: to the files if one pass does not fit the
+ * whole of it, and then the files completed and closed.  Returns the
+ * vertices read.
+ */
+uint64
+tdc_stage_done(StageArg *sa)
+{
+	BoundedRun *br = sa->br;
+
+	if (!sa->to_files && sa->buf->n > 0 && !tdc_stage_fits(sa, sa->buf->n))
+		tdc_stage_to_files(sa);
+	if (!sa->to_files)
+		return sa->buf->n;
+	tdc_stage_flush(sa);
+	tdc_stage_finish(&br->fxy, br->xypath, sa->fname);
+	tdc_stage_finish(&br->fz, br->zpath, sa->fname);
+	tdc_stage_finish(&br->fl, br->lrawpath, sa->fname);
+	return br->n;
+}
+
+/* The run stopped and joined (before what its callbacks use is freed). */
+void
+tdc_stage_stop(BoundedRun *br)
+{
+	if (br->job != NULL)
+	{
+		tdc_bounded_free(br->job);
+		br->job = NULL;
+	}
+}
+
+/* An ERROR for a failed write of br->tripath (br->write_errno), if there was one. */
+void
+tdc_stage_write_error(BoundedRun *br, const char *fname)
+{
+	if (br->write_errno != 0)
+	{
+		errno = br->write_errno;
+		ereport(ERROR,
+				(errcode_for_file_access(),
+				 errmsg("%s: could not write file \"%s\": %m", fname, br->tripath)));
+	}
 }

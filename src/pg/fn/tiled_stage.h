@@ -79,6 +79,11 @@ extern bool tdc_stage_fits(const StageArg *sa, uint64 n);
 extern void tdc_stage_flush(StageArg *sa);
 extern void tdc_stage_to_files(StageArg *sa);
 extern void tdc_stage_row(void *arg, uint64 first);
+extern void tdc_stage_init(StageArg *sa, BoundedRun *br, TdcPointBuf *buf, MemoryContext cxt,
+						   const tdc_options *opt, uint64 limit_mb, const char *fname);
+extern uint64 tdc_stage_done(StageArg *sa);
+extern void tdc_stage_stop(BoundedRun *br);
+extern void tdc_stage_write_error(BoundedRun *br, const char *fname);
 extern void tdc_stage_run(BoundedRun *br, tdc_bounded_params *p, const tdc_options *opt,
 						  uint64 limit_mb, const char *setting, uint64 outside, const char *what,
 						  const char *cb_err, tdc_bounded_stats *st, const char *fname);
