@@ -72,6 +72,12 @@ CALL tdc_contours_tiled('ct_nosuch', 'ct_bad', 'geom', 1);
 CALL tdc_contours_tiled('ct_small', 'ct_bad', 'nosuch', 1);
 CREATE TABLE ct_flat AS SELECT ST_MakePoint(i, i * i % 7) AS geom FROM generate_series(1, 10) i;
 CALL tdc_contours_tiled('ct_flat', 'ct_bad', 'geom', 1);
+-- a cancel (here a statement timeout) stops it, in the read or the run
+SET tdc_delaunay.max_memory = 16;
+SET statement_timeout = '300ms';
+CALL tdc_contours_tiled('ct_c9', 'ct_bad', 'geom', 1.25);
+RESET statement_timeout;
+RESET tdc_delaunay.max_memory;
 \set VERBOSITY default
 SELECT to_regclass('ct_bad') IS NULL AS no_target_left;
 -- nor any file: the runs' directories under pgsql_tmp are gone

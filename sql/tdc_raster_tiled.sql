@@ -182,6 +182,10 @@ CALL tdc_interpolate_tiled('rt_small', 'rt_bad', 'nosuch', ST_MakeEmptyRaster(10
 SET tdc_delaunay.max_memory = 16;
 CALL tdc_interpolate_tiled('rt_c9', 'rt_bad', 'geom', ST_MakeEmptyRaster(100, 100, -20, 230, 3, -3, 0, 0, 0), 'natural_neighbor');
 CALL tdc_interpolate_tiled('rt_c9', 'rt_bad', 'geom', ST_MakeEmptyRaster(100, 100, -20, 230, 3, -3, 0.5, 0, 0));
+-- a cancel (here a statement timeout) stops it, in the read or the run
+SET statement_timeout = '300ms';
+CALL tdc_interpolate_tiled('rt_c9', 'rt_bad', 'geom', ST_MakeEmptyRaster(331, 290, -20, 230, 1.0, -1.0, 0, 0, 3006));
+RESET statement_timeout;
 RESET tdc_delaunay.max_memory;
 \set VERBOSITY default
 SELECT to_regclass('rt_bad') IS NULL AS no_target_left;
