@@ -341,6 +341,26 @@ _tdc_interpolate_tiled_write(PG_FUNCTION_ARGS)
 		PG_RETURN_INT64((int64) cov->rows);
 	}
 
+	/* in tiles: what the core's bounded raster cannot do is refused before the run */
+	if (cov->spec.method != TDC_INTERP_LINEAR && cov->spec.method != TDC_INTERP_NEAREST)
+		ereport(ERROR,
+				(errcode(ERRCODE_PROGRAM_LIMIT_EXCEEDED),
+				 errmsg("%s: method \"%s\" needs one pass, and one pass of %llu samples and a %u x %u grid "
+						"does not fit %s = %llu MB", fname, method, (unsigned long long) npts,
+						cov->width, cov->height, setting, (unsigned long long) limit_mb),
+				 errdetail("In tiles only linear and nearest are computed: a natural neighbour value may "
+						   "depend on sites of other tiles."),
+				 errhint("Raise %s, or interpolate with linear or nearest.", setting)));
+	if (!(cov->gt[1] > 0 && cov->gt[5] < 0 && cov->gt[2] == 0 && cov->gt[4] == 0))
+		ereport(ERROR,
+				(errcode(ERRCODE_PROGRAM_LIMIT_EXCEEDED),
+				 errmsg("%s: a skewed, rotated or flipped template needs one pass, and one pass of %llu "
+						"samples and a %u x %u grid does not fit %s = %llu MB", fname,
+						(unsigned long long) npts, cov->width, cov->height, setting,
+						(unsigned long long) limit_mb),
+				 errdetail("In tiles the grid must be north-up: scale x > 0, scale y < 0, no skew."),
+				 errhint("Raise %s, or give a north-up template.", setting)));
+
 	/* in tiles: the run on its thread rasterises, then the bands come out */
 	{
 		tdc_bounded_params p;
