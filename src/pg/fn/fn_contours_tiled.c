@@ -62,6 +62,7 @@ typedef struct ContourRun
 	SPIPlanPtr	plan;
 	Oid			recv,			/* the geometry type's binary input */
 				ioparam;
+	MemoryContext row_cxt;		/* a row's allocations, reset after each */
 	bytea	   *wkb;			/* a line's EWKB, grown as needed */
 	uint64		wkb_cap;
 	uint64		rows;
@@ -136,6 +137,7 @@ put_line(ContourRun *cr, double level, const double *xy, size_t n)
 	uint32		type = 2 | 0x80000000 | 0x20000000;	/* LINESTRING, Z, SRID (EWKB) */
 	uint32		npts = (uint32) n;
 	Datum		args[3];
+	MemoryContext old;
 	int			rc;
 
 	if (size > MaxAllocSize)
@@ -166,6 +168,8 @@ put_line(ContourRun *cr, double level, const double *xy, size_t n)
 	}
 	args[0] = Int64GetDatum((int64) cr->rows + 1);
 	args[1] = Float8GetDatum(level);
+	/* what the input function and the insert allocate goes with the row */
+	old = MemoryContextSwitchTo(cr->row_cxt);
 	{
 		StringInfoData si;
 
@@ -179,6 +183,8 @@ put_line(ContourRun *cr, double level, const double *xy, size_t n)
 	rc = SPI_execute_plan(cr->plan, args, NULL, false, 0);
 	if (rc != SPI_OK_INSERT)
 		elog(ERROR, "%s: inserting a line failed: %s", CT_FNAME, SPI_result_code_string(rc));
+	MemoryContextSwitchTo(old);
+	MemoryContextReset(cr->row_cxt);
 	cr->rows++;
 }
 
@@ -294,6 +300,7 @@ _tdc_contours_tiled_write(PG_FUNCTION_ARGS)
 				 errhint("Every sample needs a height: make the samples XYZ.")));
 	cr->wkb_cap = 1024;
 	cr->wkb = MemoryContextAlloc(cxt, cr->wkb_cap);
+	cr->row_cxt = AllocSetContextCreate(cxt, "tdc_contours_tiled row", ALLOCSET_DEFAULT_SIZES);
 
 	if (!sa.to_files)
 	{

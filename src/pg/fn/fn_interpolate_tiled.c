@@ -73,6 +73,7 @@ typedef struct Coverage
 	double	   *tilev;			/* a tile's values, th * tw */
 	uint8	   *tileok;			/* and their mask */
 	SPIPlanPtr	plan;
+	MemoryContext row_cxt;		/* a tile's allocations, reset after each */
 	uint64		rows;
 	char		err[1024];		/* a callback's failure, said in full */
 	MemoryContextCallback cb;
@@ -153,6 +154,7 @@ write_band(Coverage *cov, const double *v, const uint8 *valid, uint32 r0, uint32
 		TdcRasterWriter w;
 		uint32		cw = Min(cov->tw, cov->width - c0);
 		Datum		args[2];
+		MemoryContext old;
 		int			rc;
 
 		for (uint32 r = 0; r < nrows; r++)
@@ -171,6 +173,8 @@ write_band(Coverage *cov, const double *v, const uint8 *valid, uint32 r0, uint32
 		info.gt[3] = cov->gt[3] + c0 * cov->gt[4] + r0 * cov->gt[5];
 		info.gt[4] = cov->gt[4];
 		info.gt[5] = cov->gt[5];
+		/* the tile's value and what the insert allocates go with the row */
+		old = MemoryContextSwitchTo(cov->row_cxt);
 		tdc_raster_alloc(&info, cov->pixtype, cov->nodata, COV_FNAME, &w);
 		tdc_raster_fill(&w, cov->tilev, valid ? cov->tileok : NULL);
 		args[0] = Int64GetDatum((int64) (r0 / cov->th) * ncols + c0 / cov->tw + 1);
@@ -178,7 +182,8 @@ write_band(Coverage *cov, const double *v, const uint8 *valid, uint32 r0, uint32
 		rc = SPI_execute_plan(cov->plan, args, NULL, false, 0);
 		if (rc != SPI_OK_INSERT)
 			elog(ERROR, "%s: inserting a tile failed: %s", COV_FNAME, SPI_result_code_string(rc));
-		pfree(w.value);
+		MemoryContextSwitchTo(old);
+		MemoryContextReset(cov->row_cxt);
 		cov->rows++;
 	}
 }
@@ -305,6 +310,7 @@ _tdc_interpolate_tiled_write(PG_FUNCTION_ARGS)
 
 	cov->tilev = MemoryContextAllocHuge(cxt, (Size) cov->tw * cov->th * sizeof(double));
 	cov->tileok = MemoryContextAllocHuge(cxt, (Size) cov->tw * cov->th);
+	cov->row_cxt = AllocSetContextCreate(cxt, "tdc_interpolate_tiled tile", ALLOCSET_DEFAULT_SIZES);
 	if (!sa.to_files)
 	{
 		/* one pass: the whole grid as ST_TDCInterpolate computes it */
