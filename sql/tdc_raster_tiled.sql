@@ -163,6 +163,19 @@ CALL tdc_interpolate_tiled('rt_gshhg', 'rt_gshhg_cov', 'geom',
 SELECT * FROM cov_check('rt_gshhg_cov', 'rt_gshhg', ST_MakeEmptyRaster(230, 150, 18.1, 59.6, 0.004, -0.0025, 0, 0, 4326),
 						'linear', '32BF', -9999, 64, 64);
 SELECT * FROM cov_constraints('rt_gshhg_cov');
+-- and through the core's bounded run: a 2000 x 1500 grid of 9 bytes a
+-- pixel does not fit 20 MB with them in one pass (one run tile: the set
+-- is small)
+SET tdc_delaunay.max_memory = 20;
+SET client_min_messages = notice;
+\set VERBOSITY terse
+CALL tdc_interpolate_tiled('rt_gshhg', 'rt_gshhg_big', 'geom',
+						   ST_MakeEmptyRaster(2000, 1500, 18.1, 59.6, 0.00045, -0.00025, 0, 0, 4326), 'linear', '32BF', -9999, 256, 64);
+\set VERBOSITY default
+SET client_min_messages = warning;
+RESET tdc_delaunay.max_memory;
+SELECT * FROM cov_check('rt_gshhg_big', 'rt_gshhg', ST_MakeEmptyRaster(2000, 1500, 18.1, 59.6, 0.00045, -0.00025, 0, 0, 4326),
+						'linear', '32BF', -9999, 256, 64);
 
 -- Refusals: each a clear error, and none leaves its target.
 \set VERBOSITY terse
@@ -199,7 +212,7 @@ SELECT to_regclass('rt_bad') IS NULL AS no_target_left;
 SELECT count(*) AS tmp_left FROM pg_ls_dir('base/pgsql_tmp', true, false) f WHERE f LIKE 'pgsql_tmp%.tdc.%';
 
 DROP TABLE rt_small, rt_c9, rt_gshhg, rt_flat, rt_small_lin, rt_small_nn, rt_small_near, rt_small_one, rt_small_skew,
-	rt_c9_32, rt_c9_64, rt_c9_near, rt_gshhg_cov;
+	rt_c9_32, rt_c9_64, rt_c9_near, rt_gshhg_cov, rt_gshhg_big;
 DROP FUNCTION cov_check(regclass, text, raster, text, text, float8, int, int);
 DROP FUNCTION cov_constraints(name);
 RESET tdc_delaunay.threads;
