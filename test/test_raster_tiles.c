@@ -7,7 +7,8 @@
  *	- uniform samples on a smooth surface, the grid's extent beyond their
  *	  box on every side: pixels inside (faces), and outside the hull the
  *	  nearest site at any distance (linear's default), within a radius,
- *	  or none (radius=0); nodata=-9999; max_edge;
+ *	  or none (radius=0); nodata=-9999; max_edge; and a "window" of them,
+ *	  narrower than their box, whose rows cross the hull beside the grid;
  *	- "lattice on the pixels": samples on a unit lattice with pixels of
  *	  0.5 whose centres fall on sites, on the edges of the lattice (its
  *	  sides and, half of them, its diagonals) and inside triangles, with a
@@ -358,6 +359,16 @@ test_raster_tiles(void)
 		compare(&c, methods[m], dir, 2);
 	compare(&c, "linear", dir, 1);
 	compare(&c, "nearest", dir, 1);
+	/* a window inside the samples' box: every row's hull crossings lie beside the grid */
+	c.name = "window";
+	c.extent[0] = 300.3;
+	c.extent[2] = 700.9;
+	compare(&c, "linear", dir, 2);
+	compare(&c, "nearest", dir, 2);
+	compare(&c, "nearest:max_edge=6", dir, 2);
+	c.name = "uniform";
+	c.extent[0] = -40.3;
+	c.extent[2] = 1044.7;
 	refusals(&c, dir);
 	/* room for a second worker's scratch: two tiles at once (bounded_share.c) */
 	c.limit_mb = tdc_test_quick ? 24 : 40;

@@ -129,11 +129,15 @@ tdc_rn_begin(struct tdc_raster *r, char *err, size_t errlen)
 			{
 				double		c0 = floor((xs[k] - gt[0]) / gt[1] - 0.5 - sl),
 							c1 = ceil((xs[k] - gt[0]) / gt[1] - 0.5 + sl);
-				uint32_t	lo = c0 <= 0 ? 0 : c0 >= (double) width ? (uint32_t) width : (uint32_t) c0,
+
+				/*
+				 * A crossing beside the grid stretches the row's span to
+				 * the grid's side (clamped, not skipped: a hull wider than
+				 * the grid spans the whole row between its crossings).
+				 */
+				uint32_t	lo = c0 <= 0 ? 0 : c0 >= (double) (width - 1) ? (uint32_t) (width - 1) : (uint32_t) c0,
 							hi = c1 <= 0 ? 0 : c1 >= (double) (width - 1) ? (uint32_t) (width - 1) : (uint32_t) c1;
 
-				if (c1 < 0 || c0 > (double) (width - 1))
-					continue;
 				r->span[2 * row] = lo < r->span[2 * row] ? lo : r->span[2 * row];
 				r->span[2 * row + 1] = hi > r->span[2 * row + 1] ? hi : r->span[2 * row + 1];
 			}
