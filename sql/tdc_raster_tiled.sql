@@ -174,8 +174,17 @@ CALL tdc_interpolate_tiled('rt_gshhg', 'rt_gshhg_big', 'geom',
 \set VERBOSITY default
 SET client_min_messages = warning;
 RESET tdc_delaunay.max_memory;
-SELECT * FROM cov_check('rt_gshhg_big', 'rt_gshhg', ST_MakeEmptyRaster(2000, 1500, 18.1, 59.6, 0.00045, -0.00025, 0, 0, 4326),
-						'linear', '32BF', -9999, 256, 64);
+-- nearest too, on a window narrower than the shoreline (its rows cross the
+-- hull beside the grid)
+SET tdc_delaunay.max_memory = 20;
+CALL tdc_interpolate_tiled('rt_gshhg', 'rt_gshhg_near', 'geom',
+						   ST_MakeEmptyRaster(1800, 1700, 18.3, 59.6, 0.0004, -0.00022, 0, 0, 4326), 'nearest', '32BF', -9999, 256, 64);
+RESET tdc_delaunay.max_memory;
+SELECT 'linear' AS method, * FROM cov_check('rt_gshhg_big', 'rt_gshhg', ST_MakeEmptyRaster(2000, 1500, 18.1, 59.6, 0.00045, -0.00025, 0, 0, 4326),
+											'linear', '32BF', -9999, 256, 64)
+UNION ALL
+SELECT 'nearest', * FROM cov_check('rt_gshhg_near', 'rt_gshhg', ST_MakeEmptyRaster(1800, 1700, 18.3, 59.6, 0.0004, -0.00022, 0, 0, 4326),
+								   'nearest', '32BF', -9999, 256, 64);
 
 -- Refusals: each a clear error, and none leaves its target.
 \set VERBOSITY terse
@@ -212,7 +221,7 @@ SELECT to_regclass('rt_bad') IS NULL AS no_target_left;
 SELECT count(*) AS tmp_left FROM pg_ls_dir('base/pgsql_tmp', true, false) f WHERE f LIKE 'pgsql_tmp%.tdc.%';
 
 DROP TABLE rt_small, rt_c9, rt_gshhg, rt_flat, rt_small_lin, rt_small_nn, rt_small_near, rt_small_one, rt_small_skew,
-	rt_c9_32, rt_c9_64, rt_c9_near, rt_gshhg_cov, rt_gshhg_big;
+	rt_c9_32, rt_c9_64, rt_c9_near, rt_gshhg_cov, rt_gshhg_big, rt_gshhg_near;
 DROP FUNCTION cov_check(regclass, text, raster, text, text, float8, int, int);
 DROP FUNCTION cov_constraints(name);
 RESET tdc_delaunay.threads;
