@@ -103,6 +103,13 @@ pc_error(int rc, const char *err, uint32 pcid, const char *fname)
 					 errmsg("%s: input has a non-finite coordinate (NaN or Infinity)", fname),
 					 errdetail("In a pcpatch of pcid %u: %s.", pcid, err)));
 			break;
+		case TDC_PC_ERR_TRUNCATED:
+			ereport(ERROR,
+					(errcode(ERRCODE_DATA_CORRUPTED),
+					 errmsg("%s: truncated pcpatch of pcid %u: %s", fname, pcid, err),
+					 errhint("The value is shorter than its header says; PC_AsText(pa) shows what pgpointcloud "
+							 "reads of it.")));
+			break;
 		default:
 			ereport(ERROR,
 					(errcode(ERRCODE_DATA_CORRUPTED),
