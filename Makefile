@@ -206,15 +206,15 @@ endif
 # Fuzzing (fuzz/README.md): libFuzzer targets built with clang,
 # -fsanitize=fuzzer,address,undefined.
 #
-#   make fuzz                       build build/fuzz/fuzz_{core,gserialized,state,voronoi,cdt,raster}
+#   make fuzz                       build build/fuzz/fuzz_{core,gserialized,state,voronoi,cdt,raster,pcpatch}
 #   make fuzz-run [FUZZ_SECONDS=60] run each from its seed corpus, summary line
 #
 # The PostgreSQL-side targets compile src/pg sources against the server
 # headers with the shims in fuzz/pg_shim.c (no server needed).
 FUZZ_SECONDS ?= 60
 FUZZ_CC ?= clang
-FUZZ_TARGETS = fuzz_core fuzz_gserialized fuzz_state fuzz_voronoi fuzz_cdt fuzz_raster
-FUZZ_RUN_TARGETS = fuzz_core fuzz_gserialized fuzz_state fuzz_voronoi fuzz_cdt fuzz_raster
+FUZZ_TARGETS = fuzz_core fuzz_gserialized fuzz_state fuzz_voronoi fuzz_cdt fuzz_raster fuzz_pcpatch
+FUZZ_RUN_TARGETS = fuzz_core fuzz_gserialized fuzz_state fuzz_voronoi fuzz_cdt fuzz_raster fuzz_pcpatch
 FUZZ_CFLAGS = -g -O1 -fno-omit-frame-pointer -D_GNU_SOURCE -ffp-contract=off \
 	-pthread -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined \
 	-Wall -Wno-unused-parameter -Wno-missing-field-initializers
@@ -279,6 +279,13 @@ build/fuzz/fuzz_raster: fuzz/fuzz_raster.c $(FUZZ_RASTER_SRCS) $(FUZZ_PG_DEPS) s
 	@mkdir -p build/fuzz
 	$(FUZZ_CC) $(FUZZ_CFLAGS) $(FUZZ_PG_CFLAGS) -Isrc/core -o $@ fuzz/fuzz_raster.c \
 		fuzz/pg_shim.c $(FUZZ_RASTER_SRCS) -lm
+
+# The pcpatch reader is pure C: no shims, no core; zlib for its blocks.
+FUZZ_PCPATCH_SRCS = src/pg/formats/pcpatch_read.c src/pg/formats/pcpatch_schema.c
+
+build/fuzz/fuzz_pcpatch: fuzz/fuzz_pcpatch.c $(FUZZ_PCPATCH_SRCS) src/pg/formats/pcpatch_format.h
+	@mkdir -p build/fuzz
+	$(FUZZ_CC) $(FUZZ_CFLAGS) -std=c11 -Isrc/pg -o $@ fuzz/fuzz_pcpatch.c $(FUZZ_PCPATCH_SRCS) -lz -lm
 
 build/fuzz/fuzz_state: fuzz/fuzz_state.c fuzz/fuzz_state_tin.c fuzz/fuzz_state.h \
 		fuzz/pg_shim_agg.c $(FUZZ_STATE_SRCS) $(FUZZ_PG_DEPS) $(FUZZ_CORE_DEPS) \

@@ -161,6 +161,13 @@ SELECT f.pcid,
 	(SELECT md5(ST_AsBinary(ST_TDCInterpolate(pa, ST_AddBand(ST_MakeEmptyRaster(37, 29, 500000, 6000060, 2.2, -2.1, 0, 0, 2154), '64BF'::text), 'linear', 1, 'Classification=2' ORDER BY p))) FROM pat WHERE pcid = f.pcid) =
 	(SELECT md5(ST_AsBinary(ST_TDCInterpolate(g, ST_AddBand(ST_MakeEmptyRaster(37, 29, 500000, 6000060, 2.2, -2.1, 0, 0, 2154), '64BF'::text), 'linear', 1 ORDER BY p, k))) FROM pts WHERE pcid = f.pcid AND cls = 2) AS interpolate_class2
 FROM (VALUES (1), (2)) f(pcid) ORDER BY 1;
+-- a filter on a coordinate itself (Y, run-length in format 1)
+SELECT f.pcid,
+	(SELECT ST_AsEWKB(ST_TDCDelaunay(pa, 0, 0, 'Y=6000000,6000006.5,6000026.75' ORDER BY p)) FROM pat WHERE pcid = f.pcid) =
+	(SELECT ST_AsEWKB(ST_TDCDelaunay(g, 0, 0 ORDER BY p, k)) FROM pts
+	 WHERE pcid = f.pcid AND ST_Y(g) IN (6000000, 6000006.5, 6000026.75)) AS delaunay_y,
+	(SELECT count(*) FROM pts WHERE pcid = f.pcid AND ST_Y(g) IN (6000000, 6000006.5, 6000026.75)) AS points_kept
+FROM (VALUES (1), (2), (3)) f(pcid) ORDER BY 1;
 SELECT ST_NumGeometries(ST_TDCDelaunay(pa, 0, 0, 'Classification=2')) AS class2_triangles FROM pat WHERE pcid = 1;
 -- a filter that keeps nothing: no vertex, as for no row
 SELECT ST_AsText(ST_TDCDelaunay(pa, 0, 0, 'Classification=7')) AS no_point FROM pat WHERE pcid = 1;

@@ -264,7 +264,7 @@ typedef struct TdcAggState
 	bool		params_set;
 	double		tolerance;
 	int32		flags;
-	struct TdcPcSource *pc;		/* pcpatch rows: their format (pc_source.c) */
+	struct TdcPcSource *pc;		/* pcpatch rows: their format (pcpatch_source.c) */
 } TdcAggState;
 
 extern TdcAggState *tdc_agg_state_new(MemoryContext cxt);
@@ -275,7 +275,7 @@ extern bytea *tdc_agg_state_serialize(const TdcAggState *st);
 extern TdcAggState *tdc_agg_state_deserialize(const bytea *in,
 											  MemoryContext cxt);
 
-/* pc_source.c: pgpointcloud patches into a point buffer (its X, Y, Z) */
+/* formats/pcpatch_source.c: pgpointcloud patches into a point buffer (its X, Y, Z) */
 extern void tdc_pc_read_patch(TdcAggState *st, Datum patch, text *filter, const char *fname);
 extern text *tdc_pc_filter_arg(FunctionCallInfo fcinfo, int geometry_nargs);
 

@@ -117,7 +117,7 @@ contour_params(ContourState *st, double interval, double base, double max_edge)
 
 /*
  * st_tdccontours_transfn(internal, geometry, float8 [, float8 [, text]]), and with patch
- * st_tdccontours_pc_transfn(internal, pcpatch, float8 [, float8 [, text [, text filter]]]) (pc_source.c;
+ * st_tdccontours_pc_transfn(internal, pcpatch, float8 [, float8 [, text [, text filter]]]) (pcpatch_source.c;
  * a NULL filter is no filter)
  */
 static Datum

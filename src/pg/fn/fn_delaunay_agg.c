@@ -68,7 +68,7 @@ tdc_agg_arg_is_constant(FunctionCallInfo fcinfo, int argno)
 /*
  * st_tdcdelaunay_transfn(internal, geometry [, float8, int4]), and with
  * patch st_tdcdelaunay_pc_transfn(internal, pcpatch [, float8, int4 [,
- * text filter]]) (pc_source.c)
+ * text filter]]) (pcpatch_source.c)
  */
 static Datum
 delaunay_trans(FunctionCallInfo fcinfo, bool patch)

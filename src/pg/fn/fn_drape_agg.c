@@ -147,7 +147,7 @@ drape_params(DrapeState *st, MemoryContext cxt, const char *method,
 
 /*
  * st_tdcdrape_transfn(internal, geometry, geometry [, text]), and with patch
- * st_tdcdrape_pc_transfn(internal, pcpatch, geometry [, text [, text filter]]) (pc_source.c;
+ * st_tdcdrape_pc_transfn(internal, pcpatch, geometry [, text [, text filter]]) (pcpatch_source.c;
  * a NULL filter is no filter)
  */
 static Datum

@@ -164,7 +164,7 @@ same_value_as_last(InterpState *st, Datum d)
 
 /*
  * st_tdcinterpolate_transfn(internal, geometry, raster [, text [, int4]]), and with patch
- * st_tdcinterpolate_pc_transfn(internal, pcpatch, raster [, text [, int4 [, text filter]]]) (pc_source.c;
+ * st_tdcinterpolate_pc_transfn(internal, pcpatch, raster [, text [, int4 [, text filter]]]) (pcpatch_source.c;
  * a NULL filter is no filter)
  */
 static Datum

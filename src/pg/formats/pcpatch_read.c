@@ -278,6 +278,8 @@ decode_block(int comp, const uint8_t *data, size_t size, const TdcPcDim *d,
 				size_t		want = (size_t) n * w;
 				bool		ok;
 
+				if (want == 0)
+					return TDC_PC_OK;	/* nothing to inflate into */
 				memset(&zs, 0, sizeof(zs));
 				if (inflateInit(&zs) != Z_OK)
 					return fail(err, errlen, TDC_PC_ERR_CORRUPT, "zlib could not start");
@@ -392,6 +394,10 @@ tdc_pc_patch_decode(const uint8_t *buf, size_t len, const TdcPcSchema *s,
 				rc = decode_block(comp, buf + pos, size, &s->dims[d], n, out, zbuf, err, errlen);
 				if (rc != TDC_PC_OK)
 					return rc;
+				/* a filter on X, Y or Z itself reads their values */
+				if (filtering && d == f->dim && out.base != fv)
+					for (uint32_t i = 0; i < n; i++)
+						fv[i] = out.base[i * out.stride];
 			}
 			else if (comp > TDC_PC_DIM_ZLIB)
 				return fail(err, errlen, TDC_PC_ERR_COMPRESSION,

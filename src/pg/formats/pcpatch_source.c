@@ -1,5 +1,5 @@
 /*
- * pc_source.c
+ * pcpatch_source.c
  *		pgpointcloud patches as the input of the aggregates: each patch's
  *		X, Y and Z appended to the state's point buffer, as the geometry
  *		path appends a geometry's vertices.
