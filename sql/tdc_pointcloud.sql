@@ -13,6 +13,9 @@
 SET client_min_messages = warning;
 -- tdc_delaunay was created (tdc_basic) without pgpointcloud...
 SELECT count(*) AS pointcloud_installed FROM pg_extension WHERE extname = 'pointcloud';
+-- (the raster extensions are dropped at the end if this test made them:
+-- tdc_raster, later, checks that tdc_delaunay needed no postgis_raster)
+SELECT count(*) = 0 AS raster_was_absent FROM pg_extension WHERE extname = 'postgis_raster' \gset
 CREATE EXTENSION IF NOT EXISTS postgis_raster;
 CREATE EXTENSION IF NOT EXISTS tdc_delaunay_raster;
 -- ...which tdc_delaunay_pointcloud needs.
@@ -213,3 +216,12 @@ SELECT ST_TDCDelaunay(pa) FROM pat WHERE pcid = 2;
 DROP FUNCTION tdc_pc_raw(pcpatch, bytea), tdc_pc_mk(bytea, bytea), tdc_pc_schema(text, text),
 	tdc_pc_dim(int, text, text, float8, float8);
 DELETE FROM pointcloud_formats WHERE pcid BETWEEN 1 AND 6;
+DROP TABLE pat, pts, src, dims_int;
+DROP EXTENSION tdc_delaunay_pointcloud;
+DROP EXTENSION pointcloud;
+\if :raster_was_absent
+DROP EXTENSION tdc_delaunay_raster;
+DROP EXTENSION postgis_raster;
+\endif
+SELECT count(*) AS left_behind FROM pg_extension
+WHERE extname IN ('pointcloud', 'tdc_delaunay_pointcloud', 'tdc_delaunay_raster', 'postgis_raster');
