@@ -84,6 +84,8 @@ typedef struct TdcPcHeader
 #define TDC_PC_HEADER_BYTES		48	/* size, pcid, compression, npoints, bounds */
 
 /* pcpatch_schema.c */
+extern int	tdc_pc_fail(char *err, size_t errlen, int code, const char *fmt,...)
+			__attribute__((format(printf, 4, 5)));
 extern int	tdc_pc_schema_parse(const char *xml, size_t len, TdcPcSchema *s,
 								char *err, size_t errlen);
 extern int	tdc_pc_filter_parse(const char *text, const TdcPcSchema *s,

@@ -39,7 +39,6 @@
  * released before returning.
  */
 #include <math.h>
-#include <stdarg.h>
 #include <stdbool.h>
 #include <stdio.h>
 #include <string.h>
@@ -48,30 +47,13 @@
 
 #include "formats/pcpatch_format.h"
 
-static int
-fail(char *err, size_t errlen, int code, const char *fmt,...)
-__attribute__((format(printf, 4, 5)));
-
-static int
-fail(char *err, size_t errlen, int code, const char *fmt,...)
-{
-	va_list		ap;
-
-	if (errlen > 0)
-	{
-		va_start(ap, fmt);
-		vsnprintf(err, errlen, fmt, ap);
-		va_end(ap);
-	}
-	return code;
-}
 
 int
 tdc_pc_patch_header(const uint8_t *buf, size_t len, TdcPcHeader *h,
 					char *err, size_t errlen)
 {
 	if (len < TDC_PC_HEADER_BYTES)
-		return fail(err, errlen, TDC_PC_ERR_TRUNCATED,
+		return tdc_pc_fail(err, errlen, TDC_PC_ERR_TRUNCATED,
 					"%zu bytes, shorter than a patch header (%d)", len, TDC_PC_HEADER_BYTES);
 	memcpy(&h->pcid, buf + 4, 4);
 	memcpy(&h->compression, buf + 8, 4);
@@ -193,7 +175,7 @@ decode_block(int comp, const uint8_t *data, size_t size, const TdcPcDim *d,
 	{
 		case TDC_PC_DIM_NONE:
 			if (size != (size_t) n * w)
-				return fail(err, errlen, TDC_PC_ERR_CORRUPT,
+				return tdc_pc_fail(err, errlen, TDC_PC_ERR_CORRUPT,
 							"dimension \"%s\": %zu bytes for %u uncompressed values",
 							d->name, size, n);
 			for (uint32_t i = 0; i < n; i++)
@@ -210,11 +192,11 @@ decode_block(int comp, const uint8_t *data, size_t size, const TdcPcDim *d,
 					double		v;
 
 					if (size - pos < 1 + w)
-						return fail(err, errlen, TDC_PC_ERR_CORRUPT,
+						return tdc_pc_fail(err, errlen, TDC_PC_ERR_CORRUPT,
 									"dimension \"%s\": a run-length block ends inside a run", d->name);
 					count = data[pos];
 					if (count > n - i)
-						return fail(err, errlen, TDC_PC_ERR_CORRUPT,
+						return tdc_pc_fail(err, errlen, TDC_PC_ERR_CORRUPT,
 									"dimension \"%s\": runs of more than %u values", d->name, n);
 					v = scaled(d, load_word(data + pos + 1, d->size));
 					for (uint8_t k = 0; k < count; k++)
@@ -222,7 +204,7 @@ decode_block(int comp, const uint8_t *data, size_t size, const TdcPcDim *d,
 					pos += 1 + w;
 				}
 				if (i != n)
-					return fail(err, errlen, TDC_PC_ERR_CORRUPT,
+					return tdc_pc_fail(err, errlen, TDC_PC_ERR_CORRUPT,
 								"dimension \"%s\": runs of %u values, not %u", d->name, i, n);
 				return TDC_PC_OK;
 			}
@@ -235,17 +217,17 @@ decode_block(int comp, const uint8_t *data, size_t size, const TdcPcDim *d,
 				uint64_t	bitpos = 0;
 
 				if (size < 2 * w)
-					return fail(err, errlen, TDC_PC_ERR_CORRUPT,
+					return tdc_pc_fail(err, errlen, TDC_PC_ERR_CORRUPT,
 								"dimension \"%s\": a significant-bits block without its header", d->name);
 				nbits = load_word(data, d->size);
 				common = load_word(data + w, d->size);
 				if (nbits > bits)
-					return fail(err, errlen, TDC_PC_ERR_CORRUPT,
+					return tdc_pc_fail(err, errlen, TDC_PC_ERR_CORRUPT,
 								"dimension \"%s\": %llu significant bits in a %u-bit value",
 								d->name, (unsigned long long) nbits, bits);
 				need = ((uint64_t) nbits * n + bits - 1) / bits * w;
 				if (need > size - 2 * w)
-					return fail(err, errlen, TDC_PC_ERR_CORRUPT,
+					return tdc_pc_fail(err, errlen, TDC_PC_ERR_CORRUPT,
 								"dimension \"%s\": %zu bytes for %u values of %llu bits",
 								d->name, size, n, (unsigned long long) nbits);
 				data += 2 * w;
@@ -282,7 +264,7 @@ decode_block(int comp, const uint8_t *data, size_t size, const TdcPcDim *d,
 					return TDC_PC_OK;	/* nothing to inflate into */
 				memset(&zs, 0, sizeof(zs));
 				if (inflateInit(&zs) != Z_OK)
-					return fail(err, errlen, TDC_PC_ERR_CORRUPT, "zlib could not start");
+					return tdc_pc_fail(err, errlen, TDC_PC_ERR_CORRUPT, "zlib could not start");
 				zs.next_in = (Bytef *) data;
 				zs.avail_in = (uInt) size;
 				zs.next_out = zbuf;
@@ -291,7 +273,7 @@ decode_block(int comp, const uint8_t *data, size_t size, const TdcPcDim *d,
 				ok = rc == Z_STREAM_END && zs.avail_out == 0;
 				inflateEnd(&zs);
 				if (!ok)
-					return fail(err, errlen, TDC_PC_ERR_CORRUPT,
+					return tdc_pc_fail(err, errlen, TDC_PC_ERR_CORRUPT,
 								"dimension \"%s\": the zlib stream does not hold %u values",
 								d->name, n);
 				for (uint32_t i = 0; i < n; i++)
@@ -299,7 +281,7 @@ decode_block(int comp, const uint8_t *data, size_t size, const TdcPcDim *d,
 				return TDC_PC_OK;
 			}
 	}
-	return fail(err, errlen, TDC_PC_ERR_COMPRESSION,
+	return tdc_pc_fail(err, errlen, TDC_PC_ERR_COMPRESSION,
 				"dimension \"%s\": unknown dimension compression %d", d->name, comp);
 }
 
@@ -328,13 +310,13 @@ tdc_pc_patch_decode(const uint8_t *buf, size_t len, const TdcPcSchema *s,
 		return rc;
 	n = h.npoints;
 	if (h.compression == TDC_PC_LAZ)
-		return fail(err, errlen, TDC_PC_ERR_LAZ, "a LAZ-compressed patch");
+		return tdc_pc_fail(err, errlen, TDC_PC_ERR_LAZ, "a LAZ-compressed patch");
 	if (h.compression != TDC_PC_NONE && h.compression != TDC_PC_DIMENSIONAL)
-		return fail(err, errlen, TDC_PC_ERR_COMPRESSION,
+		return tdc_pc_fail(err, errlen, TDC_PC_ERR_COMPRESSION,
 					"unknown patch compression %u", h.compression);
 	pos = TDC_PC_HEADER_BYTES;
 	if (len - pos < stats)
-		return fail(err, errlen, TDC_PC_ERR_TRUNCATED,
+		return tdc_pc_fail(err, errlen, TDC_PC_ERR_TRUNCATED,
 					"%zu bytes, too short for the patch statistics", len);
 	pos += stats;
 	/* the filter's values go after the zlib buffer's n values */
@@ -344,7 +326,7 @@ tdc_pc_patch_decode(const uint8_t *buf, size_t len, const TdcPcSchema *s,
 	if (h.compression == TDC_PC_NONE)
 	{
 		if ((len - pos) / s->point_size < n)
-			return fail(err, errlen, TDC_PC_ERR_TRUNCATED,
+			return tdc_pc_fail(err, errlen, TDC_PC_ERR_TRUNCATED,
 						"%zu bytes, too short for %u points of %zu bytes", len, n, s->point_size);
 		for (uint32_t i = 0; i < n; i++)
 		{
@@ -373,13 +355,13 @@ tdc_pc_patch_decode(const uint8_t *buf, size_t len, const TdcPcSchema *s,
 			Out			out = {NULL, 1};
 
 			if (len - pos < 5)
-				return fail(err, errlen, TDC_PC_ERR_TRUNCATED,
+				return tdc_pc_fail(err, errlen, TDC_PC_ERR_TRUNCATED,
 							"the patch ends before dimension \"%s\"", s->dims[d].name);
 			comp = buf[pos];
 			memcpy(&size, buf + pos + 1, 4);
 			pos += 5;
 			if (len - pos < size)
-				return fail(err, errlen, TDC_PC_ERR_TRUNCATED,
+				return tdc_pc_fail(err, errlen, TDC_PC_ERR_TRUNCATED,
 							"the patch ends inside dimension \"%s\"", s->dims[d].name);
 			if (d == s->x)
 				out = (Out) {xy, 2};
@@ -400,7 +382,7 @@ tdc_pc_patch_decode(const uint8_t *buf, size_t len, const TdcPcSchema *s,
 						fv[i] = out.base[i * out.stride];
 			}
 			else if (comp > TDC_PC_DIM_ZLIB)
-				return fail(err, errlen, TDC_PC_ERR_COMPRESSION,
+				return tdc_pc_fail(err, errlen, TDC_PC_ERR_COMPRESSION,
 							"dimension \"%s\": unknown dimension compression %d",
 							s->dims[d].name, comp);
 			pos += size;
@@ -424,7 +406,7 @@ tdc_pc_patch_decode(const uint8_t *buf, size_t len, const TdcPcSchema *s,
 					continue;
 			}
 			if (!isfinite(xy[2 * i]) || !isfinite(xy[2 * i + 1]) || !isfinite(z[i]))
-				return fail(err, errlen, TDC_PC_ERR_NONFINITE,
+				return tdc_pc_fail(err, errlen, TDC_PC_ERR_NONFINITE,
 							"point %u has a coordinate that is not finite", i + 1);
 			xy[2 * k] = xy[2 * i];
 			xy[2 * k + 1] = xy[2 * i + 1];

@@ -50,12 +50,9 @@ typedef struct Scan
 	size_t		errlen;
 } Scan;
 
-static int
-fail(char *err, size_t errlen, int code, const char *fmt,...)
-__attribute__((format(printf, 4, 5)));
-
-static int
-fail(char *err, size_t errlen, int code, const char *fmt,...)
+/* The error code, with its message in err (both files' errors go through here). */
+int
+tdc_pc_fail(char *err, size_t errlen, int code, const char *fmt,...)
 {
 	va_list		ap;
 
@@ -236,24 +233,24 @@ tdc_pc_schema_parse(const char *xml, size_t len, TdcPcSchema *sch,
 		if (*s.p != '<')
 		{
 			if (depth == 0 && !isspace((unsigned char) *s.p))
-				return fail(err, errlen, TDC_PC_ERR_SCHEMA, "text outside the root element");
+				return tdc_pc_fail(err, errlen, TDC_PC_ERR_SCHEMA, "text outside the root element");
 			s.p++;
 			continue;
 		}
 		if (starts(&s, "<!--"))
 		{
 			if (!skip_past(&s, "-->"))
-				return fail(err, errlen, TDC_PC_ERR_SCHEMA, "an unterminated comment");
+				return tdc_pc_fail(err, errlen, TDC_PC_ERR_SCHEMA, "an unterminated comment");
 			continue;
 		}
 		if (starts(&s, "<?"))
 		{
 			if (seen_root || !starts(&s, "<?xml") || !skip_past(&s, "?>"))
-				return fail(err, errlen, TDC_PC_ERR_SCHEMA, "a processing instruction");
+				return tdc_pc_fail(err, errlen, TDC_PC_ERR_SCHEMA, "a processing instruction");
 			continue;
 		}
 		if (starts(&s, "<!"))
-			return fail(err, errlen, TDC_PC_ERR_SCHEMA, "a DOCTYPE or CDATA section");
+			return tdc_pc_fail(err, errlen, TDC_PC_ERR_SCHEMA, "a DOCTYPE or CDATA section");
 		if (starts(&s, "</"))
 		{
 			char		name[TEXT_MAX],
@@ -263,11 +260,11 @@ tdc_pc_schema_parse(const char *xml, size_t len, TdcPcSchema *sch,
 			s.p += 2;
 			if (!scan_name(&s, name, sizeof(name)) || depth == 0 ||
 				strcmp(name, path[depth - 1]) != 0)
-				return fail(err, errlen, TDC_PC_ERR_SCHEMA, "unbalanced tags");
+				return tdc_pc_fail(err, errlen, TDC_PC_ERR_SCHEMA, "unbalanced tags");
 			while (s.p < s.end && isspace((unsigned char) *s.p))
 				s.p++;
 			if (s.p >= s.end || *s.p != '>')
-				return fail(err, errlen, TDC_PC_ERR_SCHEMA, "an unterminated closing tag");
+				return tdc_pc_fail(err, errlen, TDC_PC_ERR_SCHEMA, "an unterminated closing tag");
 			s.p++;
 			/* the text of a leaf we read */
 			if (depth == 3 && strcmp(path[1], "dimension") == 0 && text_start != NULL)
@@ -279,12 +276,12 @@ tdc_pc_schema_parse(const char *xml, size_t len, TdcPcSchema *sch,
 					strcmp(field, "offset") == 0)
 				{
 					if (!decode_text(text_start, tend, text, sizeof(text)))
-						return fail(err, errlen, TDC_PC_ERR_SCHEMA,
+						return tdc_pc_fail(err, errlen, TDC_PC_ERR_SCHEMA,
 									"the <%s> of a dimension is not plain text", field);
 					if (strcmp(field, "name") == 0)
 					{
 						if (text[0] == '\0' || strlen(text) >= TDC_PC_NAME_MAX)
-							return fail(err, errlen, TDC_PC_ERR_SCHEMA,
+							return tdc_pc_fail(err, errlen, TDC_PC_ERR_SCHEMA,
 										"a dimension name is empty or longer than %d bytes",
 										TDC_PC_NAME_MAX - 1);
 						strcpy(cur.d.name, text);
@@ -294,7 +291,7 @@ tdc_pc_schema_parse(const char *xml, size_t len, TdcPcSchema *sch,
 					{
 						cur.d.interp = interp_of(text, &cur.d.size);
 						if (cur.d.interp == 0)
-							return fail(err, errlen, TDC_PC_ERR_SCHEMA,
+							return tdc_pc_fail(err, errlen, TDC_PC_ERR_SCHEMA,
 										"unknown interpretation \"%s\"", text);
 						cur.has_interp = true;
 					}
@@ -305,20 +302,20 @@ tdc_pc_schema_parse(const char *xml, size_t len, TdcPcSchema *sch,
 						cur.position = strtol(text, &e, 10);
 						if (*e != '\0' || e == text || cur.position < 1 ||
 							cur.position > TDC_PC_MAX_DIMS)
-							return fail(err, errlen, TDC_PC_ERR_SCHEMA,
+							return tdc_pc_fail(err, errlen, TDC_PC_ERR_SCHEMA,
 										"a position \"%s\" not between 1 and %d", text,
 										TDC_PC_MAX_DIMS);
 					}
 					else if (strcmp(field, "scale") == 0)
 					{
 						if (!parse_double(text, &cur.d.scale) || cur.d.scale == 0)
-							return fail(err, errlen, TDC_PC_ERR_SCHEMA,
+							return tdc_pc_fail(err, errlen, TDC_PC_ERR_SCHEMA,
 										"a scale \"%s\" that is not a finite non-zero number", text);
 					}
 					else if (strcmp(field, "offset") == 0)
 					{
 						if (!parse_double(text, &cur.d.offset))
-							return fail(err, errlen, TDC_PC_ERR_SCHEMA,
+							return tdc_pc_fail(err, errlen, TDC_PC_ERR_SCHEMA,
 										"an offset \"%s\" that is not a finite number", text);
 					}
 				}
@@ -328,7 +325,7 @@ tdc_pc_schema_parse(const char *xml, size_t len, TdcPcSchema *sch,
 					 text_start != NULL)
 			{
 				if (!decode_text(text_start, tend, text, sizeof(text)))
-					return fail(err, errlen, TDC_PC_ERR_SCHEMA, "the compression is not plain text");
+					return tdc_pc_fail(err, errlen, TDC_PC_ERR_SCHEMA, "the compression is not plain text");
 				if (strcasecmp(text, "none") == 0)
 					sch->compression = TDC_PC_NONE;
 				else if (strcasecmp(text, "dimensional") == 0)
@@ -336,10 +333,10 @@ tdc_pc_schema_parse(const char *xml, size_t len, TdcPcSchema *sch,
 				else if (strcasecmp(text, "laz") == 0)
 					sch->compression = TDC_PC_LAZ;
 				else
-					return fail(err, errlen, TDC_PC_ERR_COMPRESSION,
+					return tdc_pc_fail(err, errlen, TDC_PC_ERR_COMPRESSION,
 								"unknown compression \"%s\"", text);
 				if (have_compression)
-					return fail(err, errlen, TDC_PC_ERR_SCHEMA, "two compressions");
+					return tdc_pc_fail(err, errlen, TDC_PC_ERR_SCHEMA, "two compressions");
 				have_compression = true;
 			}
 			else if (depth == 2 && strcmp(path[1], "dimension") == 0)
@@ -348,11 +345,11 @@ tdc_pc_schema_parse(const char *xml, size_t len, TdcPcSchema *sch,
 				TdcPcDim   *d;
 
 				if (!cur.has_name || !cur.has_interp || cur.position == 0)
-					return fail(err, errlen, TDC_PC_ERR_SCHEMA,
+					return tdc_pc_fail(err, errlen, TDC_PC_ERR_SCHEMA,
 								"a dimension without a name, an interpretation or a position");
 				d = &sch->dims[cur.position - 1];
 				if (d->interp != 0)
-					return fail(err, errlen, TDC_PC_ERR_SCHEMA,
+					return tdc_pc_fail(err, errlen, TDC_PC_ERR_SCHEMA,
 								"position %ld given twice", cur.position);
 				*d = cur.d;
 				sch->ndims++;
@@ -368,13 +365,13 @@ tdc_pc_schema_parse(const char *xml, size_t len, TdcPcSchema *sch,
 
 			s.p++;
 			if (!scan_name(&s, name, sizeof(name)))
-				return fail(err, errlen, TDC_PC_ERR_SCHEMA, "a tag without a name");
+				return tdc_pc_fail(err, errlen, TDC_PC_ERR_SCHEMA, "a tag without a name");
 			if (depth == XML_MAX_DEPTH)
-				return fail(err, errlen, TDC_PC_ERR_SCHEMA, "elements nested too deep");
+				return tdc_pc_fail(err, errlen, TDC_PC_ERR_SCHEMA, "elements nested too deep");
 			if (depth == 0)
 			{
 				if (seen_root || strcmp(name, "PointCloudSchema") != 0)
-					return fail(err, errlen, TDC_PC_ERR_SCHEMA,
+					return tdc_pc_fail(err, errlen, TDC_PC_ERR_SCHEMA,
 								"the root element is not a single <PointCloudSchema>");
 				seen_root = true;
 			}
@@ -396,7 +393,7 @@ tdc_pc_schema_parse(const char *xml, size_t len, TdcPcSchema *sch,
 				while (s.p < s.end && isspace((unsigned char) *s.p))
 					s.p++;
 				if (s.p >= s.end)
-					return fail(err, errlen, TDC_PC_ERR_SCHEMA, "an unterminated tag");
+					return tdc_pc_fail(err, errlen, TDC_PC_ERR_SCHEMA, "an unterminated tag");
 				if (*s.p == '>')
 				{
 					s.p++;
@@ -409,18 +406,18 @@ tdc_pc_schema_parse(const char *xml, size_t len, TdcPcSchema *sch,
 					break;
 				}
 				if (!scan_name(&s, an, sizeof(an)) || s.p >= s.end || *s.p != '=')
-					return fail(err, errlen, TDC_PC_ERR_SCHEMA, "a malformed attribute");
+					return tdc_pc_fail(err, errlen, TDC_PC_ERR_SCHEMA, "a malformed attribute");
 				s.p++;
 				if (s.p >= s.end || (*s.p != '"' && *s.p != '\''))
-					return fail(err, errlen, TDC_PC_ERR_SCHEMA, "an unquoted attribute");
+					return tdc_pc_fail(err, errlen, TDC_PC_ERR_SCHEMA, "an unquoted attribute");
 				q = *s.p++;
 				vb = s.p;
 				while (s.p < s.end && *s.p != q)
 					s.p++;
 				if (s.p >= s.end)
-					return fail(err, errlen, TDC_PC_ERR_SCHEMA, "an unterminated attribute");
+					return tdc_pc_fail(err, errlen, TDC_PC_ERR_SCHEMA, "an unterminated attribute");
 				if (!decode_text(vb, s.p, av, sizeof(av)))
-					return fail(err, errlen, TDC_PC_ERR_SCHEMA, "an attribute that is not plain text");
+					return tdc_pc_fail(err, errlen, TDC_PC_ERR_SCHEMA, "an attribute that is not plain text");
 				s.p++;
 				if (depth == 2 && strcmp(name, "Metadata") == 0 && strcmp(an, "name") == 0)
 					strcpy(attr_name, av);
@@ -428,7 +425,7 @@ tdc_pc_schema_parse(const char *xml, size_t len, TdcPcSchema *sch,
 			if (empty)
 			{
 				if (depth == 1 && strcmp(name, "dimension") == 0)
-					return fail(err, errlen, TDC_PC_ERR_SCHEMA, "an empty dimension");
+					return tdc_pc_fail(err, errlen, TDC_PC_ERR_SCHEMA, "an empty dimension");
 				continue;
 			}
 			strcpy(path[depth], name);
@@ -437,16 +434,16 @@ tdc_pc_schema_parse(const char *xml, size_t len, TdcPcSchema *sch,
 		}
 	}
 	if (!seen_root || depth != 0)
-		return fail(err, errlen, TDC_PC_ERR_SCHEMA, "no complete <PointCloudSchema> element");
+		return tdc_pc_fail(err, errlen, TDC_PC_ERR_SCHEMA, "no complete <PointCloudSchema> element");
 	if (sch->ndims == 0)
-		return fail(err, errlen, TDC_PC_ERR_SCHEMA, "no dimension");
+		return tdc_pc_fail(err, errlen, TDC_PC_ERR_SCHEMA, "no dimension");
 	/* positions 1..ndims, each once (the count of placed ones is ndims) */
 	for (int i = 0; i < sch->ndims; i++)
 	{
 		TdcPcDim   *d = &sch->dims[i];
 
 		if (d->interp == 0)
-			return fail(err, errlen, TDC_PC_ERR_SCHEMA, "no dimension at position %d", i + 1);
+			return tdc_pc_fail(err, errlen, TDC_PC_ERR_SCHEMA, "no dimension at position %d", i + 1);
 		d->offset_bytes = sch->point_size;
 		sch->point_size += (size_t) d->size;
 		if (strcasecmp(d->name, "X") == 0 || strcasecmp(d->name, "Longitude") == 0 ||
@@ -460,7 +457,7 @@ tdc_pc_schema_parse(const char *xml, size_t len, TdcPcSchema *sch,
 			sch->z = i;
 	}
 	if (sch->x < 0 || sch->y < 0 || sch->z < 0)
-		return fail(err, errlen, TDC_PC_ERR_NOXYZ, "the schema has no %s dimension",
+		return tdc_pc_fail(err, errlen, TDC_PC_ERR_NOXYZ, "the schema has no %s dimension",
 					sch->x < 0 ? "X" : sch->y < 0 ? "Y" : "Z");
 	return TDC_PC_OK;
 }
@@ -485,14 +482,14 @@ tdc_pc_filter_parse(const char *text, const TdcPcSchema *s, TdcPcFilter *f,
 		return TDC_PC_OK;
 	eq = strchr(text, '=');
 	if (eq == NULL)
-		return fail(err, errlen, TDC_PC_ERR_FILTER, "no \"=\": write dimension=value[,value...]");
+		return tdc_pc_fail(err, errlen, TDC_PC_ERR_FILTER, "no \"=\": write dimension=value[,value...]");
 	while (text < eq && isspace((unsigned char) *text))
 		text++;
 	n = (size_t) (eq - text);
 	while (n > 0 && isspace((unsigned char) text[n - 1]))
 		n--;
 	if (n == 0 || n >= sizeof(name))
-		return fail(err, errlen, TDC_PC_ERR_FILTER, "no dimension name before \"=\"");
+		return tdc_pc_fail(err, errlen, TDC_PC_ERR_FILTER, "no dimension name before \"=\"");
 	memcpy(name, text, n);
 	name[n] = '\0';
 	for (int i = 0; i < s->ndims; i++)
@@ -502,7 +499,7 @@ tdc_pc_filter_parse(const char *text, const TdcPcSchema *s, TdcPcFilter *f,
 			break;
 		}
 	if (f->dim < 0)
-		return fail(err, errlen, TDC_PC_ERR_FILTER, "the schema has no dimension \"%s\"", name);
+		return tdc_pc_fail(err, errlen, TDC_PC_ERR_FILTER, "the schema has no dimension \"%s\"", name);
 	p = eq + 1;
 	for (;;)
 	{
@@ -513,9 +510,9 @@ tdc_pc_filter_parse(const char *text, const TdcPcSchema *s, TdcPcFilter *f,
 			p++;
 		v = strtod(p, &end);
 		if (end == p || !isfinite(v))
-			return fail(err, errlen, TDC_PC_ERR_FILTER, "a value that is not a finite number");
+			return tdc_pc_fail(err, errlen, TDC_PC_ERR_FILTER, "a value that is not a finite number");
 		if (f->nvals == TDC_PC_FILTER_MAX)
-			return fail(err, errlen, TDC_PC_ERR_FILTER, "more than %d values", TDC_PC_FILTER_MAX);
+			return tdc_pc_fail(err, errlen, TDC_PC_ERR_FILTER, "more than %d values", TDC_PC_FILTER_MAX);
 		f->vals[f->nvals++] = v;
 		p = end;
 		while (isspace((unsigned char) *p))
@@ -523,7 +520,7 @@ tdc_pc_filter_parse(const char *text, const TdcPcSchema *s, TdcPcFilter *f,
 		if (*p == '\0')
 			break;
 		if (*p != ',')
-			return fail(err, errlen, TDC_PC_ERR_FILTER, "values must be separated by \",\"");
+			return tdc_pc_fail(err, errlen, TDC_PC_ERR_FILTER, "values must be separated by \",\"");
 		p++;
 	}
 	return TDC_PC_OK;
