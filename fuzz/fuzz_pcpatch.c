@@ -33,7 +33,10 @@
  * Mode 2, raw bytes: byte 1 picks one of the round-trip schemas (the
  * first form of mode 1), the rest is a patch without its varlena header
  * (the harness adds it into an exactly sized buffer).  The decoder accepts
- * it or returns a code; never a crash or a read outside the value.  Header
+ * it or returns a code; never a crash or a read outside the value; and
+ * tdc_pc_patch_check, which the caller runs before it reserves memory for
+ * the header's count, accepts every patch the decoder reads (mode 1: every
+ * patch the model writes).  Header
  * point counts above 4096 are skipped (the caller reserves memory for
  * them under tdc_delaunay.max_memory first).
  */
@@ -452,6 +455,11 @@ mode_roundtrip(In *in)
 	u = (uint32_t) n;
 	memcpy(patch + 12, &u, 4);
 
+	if (tdc_pc_patch_check(patch, len, &s, err, sizeof(err)) != TDC_PC_OK)
+	{
+		fprintf(stderr, "%s\n", err);
+		fail("the layout check refused a valid patch");
+	}
 	rc = tdc_pc_patch_decode(patch, len, &s, &f, xy, z, scratch, &kept, err, sizeof(err));
 	for (int i = 0; i < n; i++)
 	{
@@ -505,6 +513,7 @@ mode_raw(In *in)
 	double	   *xy,
 			   *z;
 	void	   *scratch;
+	int			rc;
 
 	model_from(in, &m);
 	xml = model_xml(&m);
@@ -526,9 +535,15 @@ mode_raw(In *in)
 	xy = malloc(sizeof(double) * 2 * (h.npoints + 1));
 	z = malloc(sizeof(double) * (h.npoints + 1));
 	scratch = malloc(tdc_pc_scratch_bytes(&s, h.npoints) + 1);
-	(void) tdc_pc_patch_decode(patch, len, &s, &f, xy, z, scratch, &kept, err, sizeof(err));
+	rc = tdc_pc_patch_decode(patch, len, &s, &f, xy, z, scratch, &kept, err, sizeof(err));
 	if (kept > h.npoints)
 		fail("kept more points than the patch has");
+	/* the check the caller makes first is never stricter than the decoder */
+	if (rc == TDC_PC_OK && tdc_pc_patch_check(patch, len, &s, err, sizeof(err)) != TDC_PC_OK)
+	{
+		fprintf(stderr, "%s\n", err);
+		fail("the layout check refused a patch the decoder reads");
+	}
 	free(scratch);
 	free(z);
 	free(xy);

@@ -201,8 +201,13 @@ SELECT ST_TDCDelaunay(tdc_pc_mk(substr(tdc_pc_raw(pa, ''), 1, 60), '')) FROM pat
 SELECT ST_TDCDelaunay(tdc_pc_mk(substr(tdc_pc_raw(pa, ''), 1, 44 + 3 * 13 + 59 * 13), ''))
 FROM pat WHERE pcid = 2 AND p = 0;
 SELECT ST_TDCDelaunay(tdc_pc_mk(substr(tdc_pc_raw(pa, ''), 1, 44 + 3 * 13 + 20), '')) FROM pat WHERE pcid = 1 AND p = 0;
+-- a point count the bytes cannot hold (10^9): refused before room is made for it
+SELECT ST_TDCDelaunay(tdc_pc_mk(overlay(tdc_pc_raw(pa, '') PLACING '\x00ca9a3b'::bytea FROM 9), ''))
+FROM pat WHERE pcid = 1 AND p = 0;
+SELECT ST_TDCDelaunay(tdc_pc_mk(overlay(tdc_pc_raw(pa, '') PLACING '\x00ca9a3b'::bytea FROM 9), ''))
+FROM pat WHERE pcid = 2 AND p = 0;
 -- a run-length block whose runs do not add up (Y: the second dimension)
-SELECT ST_TDCDelaunay(tdc_pc_mk(overlay(b PLACING '\x05'::bytea FROM 45 + 39 + 5 + get_byte(b, 44 + 39 + 1) + 5), ''))
+SELECT ST_TDCDelaunay(tdc_pc_mk(overlay(b PLACING '\x50'::bytea FROM 45 + 39 + 5 + get_byte(b, 44 + 39 + 1) + 5), ''))
 FROM (SELECT tdc_pc_raw(pa, '') b FROM pat WHERE pcid = 1 AND p = 0) s;
 -- a pcid that is not in pointcloud_formats
 SELECT ST_TDCDelaunay(tdc_pc_mk(overlay(tdc_pc_raw(pa, '') PLACING '\x63000000'::bytea FROM 1), ''))

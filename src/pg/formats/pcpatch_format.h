@@ -94,6 +94,8 @@ extern int	tdc_pc_filter_parse(const char *text, const TdcPcSchema *s,
 /* pcpatch_read.c */
 extern int	tdc_pc_patch_header(const uint8_t *buf, size_t len, TdcPcHeader *h,
 								char *err, size_t errlen);
+extern int	tdc_pc_patch_check(const uint8_t *buf, size_t len, const TdcPcSchema *s,
+							   char *err, size_t errlen);
 extern size_t tdc_pc_scratch_bytes(const TdcPcSchema *s, uint32_t npoints);
 extern int	tdc_pc_patch_decode(const uint8_t *buf, size_t len, const TdcPcSchema *s,
 								const TdcPcFilter *f, double *xy, double *z,

@@ -61,6 +61,100 @@ tdc_pc_patch_header(const uint8_t *buf, size_t len, TdcPcHeader *h,
 	return TDC_PC_OK;
 }
 
+/*
+ * Before the caller sets aside room for the header's point count: does
+ * the layout leave room for that many points?  Uncompressed: the bytes
+ * must hold them.  Dimensional: every block must fit in the value, and
+ * those of X, Y and Z may not hold fewer than npoints (a run-length block's counts are
+ * summed; significant bits with b > 0 bits hold at most 8 bits a byte; a
+ * zlib stream inflates at most 1032 times, deflate's limit).  Only a
+ * block of significant bits with no unique bit, or an empty patch, holds
+ * any count.  So a forged count is refused as the truncation it is,
+ * before memory is taken for it; tdc_pc_patch_decode checks the rest.
+ */
+int
+tdc_pc_patch_check(const uint8_t *buf, size_t len, const TdcPcSchema *s,
+				   char *err, size_t errlen)
+{
+	TdcPcHeader h;
+	int			rc;
+	size_t		pos = TDC_PC_HEADER_BYTES;
+	uint64_t	n;
+
+	if ((rc = tdc_pc_patch_header(buf, len, &h, err, errlen)) != TDC_PC_OK)
+		return rc;
+	n = h.npoints;
+	if (h.compression == TDC_PC_LAZ)
+		return tdc_pc_fail(err, errlen, TDC_PC_ERR_LAZ, "a LAZ-compressed patch");
+	if (h.compression != TDC_PC_NONE && h.compression != TDC_PC_DIMENSIONAL)
+		return tdc_pc_fail(err, errlen, TDC_PC_ERR_COMPRESSION,
+						   "unknown patch compression %u", h.compression);
+	if (len - pos < 3 * s->point_size)
+		return tdc_pc_fail(err, errlen, TDC_PC_ERR_TRUNCATED,
+						   "%zu bytes, too short for the patch statistics", len);
+	pos += 3 * s->point_size;
+	if (h.compression == TDC_PC_NONE)
+	{
+		if ((len - pos) / s->point_size < n)
+			return tdc_pc_fail(err, errlen, TDC_PC_ERR_TRUNCATED,
+							   "%zu bytes, too short for %u points of %zu bytes",
+							   len, h.npoints, s->point_size);
+		return TDC_PC_OK;
+	}
+	for (int d = 0; d < s->ndims; d++)
+	{
+		const TdcPcDim *dim = &s->dims[d];
+		uint64_t	w = (uint64_t) dim->size,
+					most = UINT64_MAX;
+		uint32_t	size;
+		const uint8_t *b;
+
+		if (len - pos < 5)
+			return tdc_pc_fail(err, errlen, TDC_PC_ERR_TRUNCATED,
+							   "the patch ends before dimension \"%s\"", dim->name);
+		memcpy(&size, buf + pos + 1, 4);
+		b = buf + pos + 5;
+		if (len - pos - 5 < size)
+			return tdc_pc_fail(err, errlen, TDC_PC_ERR_TRUNCATED,
+							   "the patch ends inside dimension \"%s\"", dim->name);
+		switch (buf[pos])
+		{
+			case TDC_PC_DIM_NONE:
+				most = size / w;
+				break;
+			case TDC_PC_DIM_RLE:
+				most = 0;
+				for (uint64_t k = 0; k + 1 + w <= size; k += 1 + w)
+					most += b[k];
+				break;
+			case TDC_PC_DIM_SIGBITS:
+				if (size >= 2 * w)
+				{
+					uint64_t	nbits = 0;
+
+					memcpy(&nbits, b, (size_t) w);	/* the low bytes */
+					if (nbits > 0)
+						most = (size - 2 * w) * 8 / nbits;
+				}
+				break;
+			case TDC_PC_DIM_ZLIB:
+				most = ((uint64_t) size * 1032 + 64) / w;
+				break;
+			default:
+				return tdc_pc_fail(err, errlen, TDC_PC_ERR_COMPRESSION,
+								   "dimension \"%s\": unknown dimension compression %d",
+								   dim->name, buf[pos]);
+		}
+		/* X, Y and Z are what the decoder must fill (it reads no other block's bytes) */
+		if (most < n && (d == s->x || d == s->y || d == s->z))
+			return tdc_pc_fail(err, errlen, TDC_PC_ERR_TRUNCATED,
+							   "dimension \"%s\" cannot hold the %u points the header says",
+							   dim->name, h.npoints);
+		pos += 5 + (size_t) size;
+	}
+	return TDC_PC_OK;
+}
+
 /* The filter's values, then one dimension's raw values out of zlib. */
 size_t
 tdc_pc_scratch_bytes(const TdcPcSchema *s, uint32_t npoints)

@@ -20,9 +20,11 @@
  * that this check covers every row.
  *
  * The bytes are decoded by pcpatch_read.c (pure C, fuzzed); this file maps
- * its codes to errors with hints.  The buffer grows before decoding, under
- * tdc_delaunay.max_memory, by the header's point count, and the decoded
- * points go straight into it; only the filtered ones count.
+ * its codes to errors with hints.  Once the layout is found able to hold
+ * the header's point count (tdc_pc_patch_check), the buffer grows by it
+ * under tdc_delaunay.max_memory and the decoded points go straight into
+ * it (only the filtered ones stay); the decoder's scratch (16 bytes a
+ * point of the patch) counts against the limit while it lives.
  */
 #include "postgres.h"
 
@@ -202,7 +204,8 @@ tdc_pc_read_patch(TdcAggState *st, Datum patch, text *filter, const char *fname)
 	TdcPcHeader h;
 	char		err[256];
 	int			rc;
-	size_t		kept;
+	size_t		kept,
+				sbytes;
 	void	   *scratch;
 
 	err[0] = '\0';
@@ -239,14 +242,22 @@ tdc_pc_read_patch(TdcAggState *st, Datum patch, text *filter, const char *fname)
 				 errmsg("%s: the pcpatch filter must be the same for all rows", fname)));
 
 	tdc_pointbuf_check_meta(buf, src->srid, true, fname);
+	/* a count the bytes cannot hold is refused before room is made for it */
+	rc = tdc_pc_patch_check((const uint8_t *) v, VARSIZE(v), &src->schema, err, sizeof(err));
+	if (rc != TDC_PC_OK)
+		pc_error(rc, err, h.pcid, fname);
 	if (h.npoints == 0)
 		return;
 	tdc_pointbuf_reserve(buf, h.npoints, fname);
-	scratch = palloc_extended(tdc_pc_scratch_bytes(&src->schema, h.npoints), MCXT_ALLOC_HUGE);
+	/* the scratch counts against the limit while it lives */
+	sbytes = tdc_pc_scratch_bytes(&src->schema, h.npoints);
+	tdc_pointbuf_side_grow(buf, 0, sbytes, "a patch's decoding buffer", fname);
+	scratch = palloc_extended(sbytes, MCXT_ALLOC_HUGE);
 	rc = tdc_pc_patch_decode((const uint8_t *) v, VARSIZE(v), &src->schema, &src->filter,
 							 buf->xy + 2 * buf->n, buf->z + buf->n, scratch, &kept,
 							 err, sizeof(err));
 	pfree(scratch);
+	tdc_pointbuf_side_grow(buf, sbytes, 0, "a patch's decoding buffer", fname);
 	if (rc != TDC_PC_OK)
 		pc_error(rc, err, h.pcid, fname);
 	buf->n += kept;
