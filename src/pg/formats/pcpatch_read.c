@@ -33,7 +33,10 @@
  * computes it, so that PC_Get and this reader give the same double.
  *
  * Every length is checked before it is read: the fuzz target
- * (fuzz/fuzz_pcpatch.c) feeds this file arbitrary bytes.  The caller gives
+ * (fuzz/fuzz_pcpatch.c) feeds this file arbitrary bytes.  The header's
+ * point count is a uint32 the caller would reserve memory for, so
+ * tdc_pc_patch_check first bounds it by what the X, Y and Z blocks can
+ * hold, and a forged count is refused as a truncation.  The caller gives
  * the output arrays (npoints places each) and a scratch area of
  * tdc_pc_scratch_bytes; nothing here allocates but zlib's stream state,
  * released before returning.
@@ -62,6 +65,31 @@ tdc_pc_patch_header(const uint8_t *buf, size_t len, TdcPcHeader *h,
 }
 
 /*
+ * What both passes begin with: the header, a compression we read, and the
+ * statistics (three uncompressed points) skipped; *pos is where the points
+ * begin.
+ */
+static int
+patch_start(const uint8_t *buf, size_t len, const TdcPcSchema *s, TdcPcHeader *h,
+			size_t *pos, char *err, size_t errlen)
+{
+	int			rc;
+
+	if ((rc = tdc_pc_patch_header(buf, len, h, err, errlen)) != TDC_PC_OK)
+		return rc;
+	if (h->compression == TDC_PC_LAZ)
+		return tdc_pc_fail(err, errlen, TDC_PC_ERR_LAZ, "a LAZ-compressed patch");
+	if (h->compression != TDC_PC_NONE && h->compression != TDC_PC_DIMENSIONAL)
+		return tdc_pc_fail(err, errlen, TDC_PC_ERR_COMPRESSION,
+						   "unknown patch compression %u", h->compression);
+	if (len - TDC_PC_HEADER_BYTES < 3 * s->point_size)
+		return tdc_pc_fail(err, errlen, TDC_PC_ERR_TRUNCATED,
+						   "%zu bytes, too short for the patch statistics", len);
+	*pos = TDC_PC_HEADER_BYTES + 3 * s->point_size;
+	return TDC_PC_OK;
+}
+
+/*
  * Before the caller sets aside room for the header's point count: does
  * the layout leave room for that many points?  Uncompressed: the bytes
  * must hold them.  Dimensional: every block must fit in the value, and
@@ -78,21 +106,12 @@ tdc_pc_patch_check(const uint8_t *buf, size_t len, const TdcPcSchema *s,
 {
 	TdcPcHeader h;
 	int			rc;
-	size_t		pos = TDC_PC_HEADER_BYTES;
+	size_t		pos = 0;
 	uint64_t	n;
 
-	if ((rc = tdc_pc_patch_header(buf, len, &h, err, errlen)) != TDC_PC_OK)
+	if ((rc = patch_start(buf, len, s, &h, &pos, err, errlen)) != TDC_PC_OK)
 		return rc;
 	n = h.npoints;
-	if (h.compression == TDC_PC_LAZ)
-		return tdc_pc_fail(err, errlen, TDC_PC_ERR_LAZ, "a LAZ-compressed patch");
-	if (h.compression != TDC_PC_NONE && h.compression != TDC_PC_DIMENSIONAL)
-		return tdc_pc_fail(err, errlen, TDC_PC_ERR_COMPRESSION,
-						   "unknown patch compression %u", h.compression);
-	if (len - pos < 3 * s->point_size)
-		return tdc_pc_fail(err, errlen, TDC_PC_ERR_TRUNCATED,
-						   "%zu bytes, too short for the patch statistics", len);
-	pos += 3 * s->point_size;
 	if (h.compression == TDC_PC_NONE)
 	{
 		if ((len - pos) / s->point_size < n)
@@ -392,27 +411,16 @@ tdc_pc_patch_decode(const uint8_t *buf, size_t len, const TdcPcSchema *s,
 {
 	TdcPcHeader h;
 	int			rc;
-	size_t		stats = 3 * s->point_size;
-	size_t		pos;
+	size_t		pos = 0;
 	uint32_t	n;
 	double	   *fv = (double *) scratch;
-	uint8_t    *zbuf = (uint8_t *) scratch + 0;
+	uint8_t    *zbuf = (uint8_t *) scratch;
 	bool		filtering = f != NULL && f->dim >= 0;
 
 	*nkept = 0;
-	if ((rc = tdc_pc_patch_header(buf, len, &h, err, errlen)) != TDC_PC_OK)
+	if ((rc = patch_start(buf, len, s, &h, &pos, err, errlen)) != TDC_PC_OK)
 		return rc;
 	n = h.npoints;
-	if (h.compression == TDC_PC_LAZ)
-		return tdc_pc_fail(err, errlen, TDC_PC_ERR_LAZ, "a LAZ-compressed patch");
-	if (h.compression != TDC_PC_NONE && h.compression != TDC_PC_DIMENSIONAL)
-		return tdc_pc_fail(err, errlen, TDC_PC_ERR_COMPRESSION,
-					"unknown patch compression %u", h.compression);
-	pos = TDC_PC_HEADER_BYTES;
-	if (len - pos < stats)
-		return tdc_pc_fail(err, errlen, TDC_PC_ERR_TRUNCATED,
-					"%zu bytes, too short for the patch statistics", len);
-	pos += stats;
 	/* the filter's values go after the zlib buffer's n values */
 	if (filtering)
 		fv = (double *) scratch + n;
