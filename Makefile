@@ -12,13 +12,16 @@
 #   make bench                  benchmarks (bench/run.sh)
 #   make bench-tin              the TIN benchmark alone (bench/tin_bench.sh, issue 29)
 
-# Two extensions from one library: tdc_delaunay (needs postgis) and
-# tdc_delaunay_raster (needs tdc_delaunay and postgis_raster), so that
-# CREATE EXTENSION tdc_delaunay never needs postgis_raster.  The library
-# reads and writes rasters in their stored format without linking PostGIS.
-EXTENSION = tdc_delaunay tdc_delaunay_raster
+# Three extensions from one library: tdc_delaunay (needs postgis),
+# tdc_delaunay_raster (needs tdc_delaunay and postgis_raster) and
+# tdc_delaunay_pointcloud (needs pgpointcloud and tdc_delaunay_raster), so
+# that CREATE EXTENSION tdc_delaunay never needs postgis_raster or
+# pgpointcloud.  The library reads and writes rasters, and reads pcpatch
+# values, in their stored formats without linking PostGIS or pgpointcloud.
+EXTENSION = tdc_delaunay tdc_delaunay_raster tdc_delaunay_pointcloud
 EXTVERSION = 1.2.0
 RASTER_EXTVERSION = 1.2.0
+POINTCLOUD_EXTVERSION = 1.2.0
 MODULE_big = tdc_delaunay
 # The install script of this version is made from one file per feature, in
 # this order (the rule is below); older base scripts (0.1.0, 1.0.0 as it was
@@ -30,7 +33,9 @@ MODULE_big = tdc_delaunay
 SQL_SRCS = $(addprefix src/sql/,header.sql delaunay.sql diagnostics.sql voronoi.sql \
 	tiled_internals.sql tiled.sql constrained.sql tin.sql contours_tiled.sql version.sql)
 RASTER_SQL_SRCS = $(addprefix src/sql/,raster_header.sql raster.sql raster_tiled.sql)
-DATA_built = tdc_delaunay--$(EXTVERSION).sql tdc_delaunay_raster--$(RASTER_EXTVERSION).sql
+POINTCLOUD_SQL_SRCS = src/sql/pointcloud.sql
+DATA_built = tdc_delaunay--$(EXTVERSION).sql tdc_delaunay_raster--$(RASTER_EXTVERSION).sql \
+	tdc_delaunay_pointcloud--$(POINTCLOUD_EXTVERSION).sql
 DATA = tdc_delaunay--0.1.0.sql tdc_delaunay--0.1.0--1.0.0.sql tdc_delaunay--1.0.0.sql \
 	tdc_delaunay--1.0.0--1.1.0.sql tdc_delaunay--1.1.0.sql tdc_delaunay--1.1.0--1.2.0.sql \
 	tdc_delaunay_raster--1.1.0.sql tdc_delaunay_raster--1.1.0--1.2.0.sql
@@ -41,11 +46,16 @@ CLI_SRCS = $(sort $(wildcard src/cli/*.c))
 CORE_HDRS = $(wildcard src/core/*.h src/core/*/*.h)
 OBJS = $(CORE_SRCS:.c=.o) $(PG_SRCS:.c=.o)
 
-REGRESS = $(basename $(notdir $(sort $(wildcard sql/*.sql))))
+# tdc_pointcloud needs pgpointcloud on the server: it runs only where the
+# server has pointcloud's control file (pg_config's sharedir), and the
+# suite says when it is left out (scripts/test.sh).
+PC_INSTALLED = $(wildcard $(shell $(PG_CONFIG) --sharedir 2>/dev/null)/extension/pointcloud.control)
+REGRESS = $(filter-out $(if $(PC_INSTALLED),,tdc_pointcloud),$(basename $(notdir $(sort $(wildcard sql/*.sql)))))
 REGRESS_OPTS = --inputdir=. --outputdir=build/regress
 
 PG_CPPFLAGS = -Isrc/core -Isrc/pg -pthread
-SHLIB_LINK = -pthread -lm
+# zlib: the dimensional pcpatch compression of that name (pcpatch_read.c)
+SHLIB_LINK = -pthread -lm -lz
 EXTRA_CLEAN = tdc build
 
 # Exact predicates: never -ffast-math, -Ofast or -ffp-contract=fast.
@@ -148,6 +158,10 @@ tdc_delaunay_raster--$(RASTER_EXTVERSION).sql: $(RASTER_SQL_SRCS)
 	awk 'FNR == 1 && NR > 1 { print "" } { print }' $^ > $@.tmp
 	mv $@.tmp $@
 
+tdc_delaunay_pointcloud--$(POINTCLOUD_EXTVERSION).sql: $(POINTCLOUD_SQL_SRCS)
+	awk 'FNR == 1 && NR > 1 { print "" } { print }' $^ > $@.tmp
+	mv $@.tmp $@
+
 demo:
 	bash scripts/demo.sh
 
@@ -179,6 +193,8 @@ $(PG_SRCS:.c=.o): $(wildcard src/pg/*.h src/pg/*/*.h) src/core/tdc.h
 # against PostGIS, so nothing more precise exists), or "unknown".
 POSTGIS_BUILD_VERSION := $(shell sed -n "s/^default_version *= *'\([^']*\)'.*/\1/p" \
 	'$(shell $(PG_CONFIG) --sharedir)/extension/postgis.control' 2>/dev/null)
+# The pcpatch reader scales values as pgpointcloud does, in two roundings.
+src/pg/formats/pcpatch_read.o: override CFLAGS += -ffp-contract=off
 # (the .bc is the JIT's bitcode of the same file)
 src/pg/fn/version.o src/pg/fn/version.bc: override CPPFLAGS += \
 	-DTDC_LIB_VERSION='"$(EXTVERSION)"' -DTDC_BUILD_POSTGIS='"$(or $(POSTGIS_BUILD_VERSION),unknown)"'
@@ -191,15 +207,15 @@ endif
 # Fuzzing (fuzz/README.md): libFuzzer targets built with clang,
 # -fsanitize=fuzzer,address,undefined.
 #
-#   make fuzz                       build build/fuzz/fuzz_{core,gserialized,state,voronoi,cdt,raster}
+#   make fuzz                       build build/fuzz/fuzz_{core,gserialized,state,voronoi,cdt,raster,pcpatch}
 #   make fuzz-run [FUZZ_SECONDS=60] run each from its seed corpus, summary line
 #
 # The PostgreSQL-side targets compile src/pg sources against the server
 # headers with the shims in fuzz/pg_shim.c (no server needed).
 FUZZ_SECONDS ?= 60
 FUZZ_CC ?= clang
-FUZZ_TARGETS = fuzz_core fuzz_gserialized fuzz_state fuzz_voronoi fuzz_cdt fuzz_raster
-FUZZ_RUN_TARGETS = fuzz_core fuzz_gserialized fuzz_state fuzz_voronoi fuzz_cdt fuzz_raster
+FUZZ_TARGETS = fuzz_core fuzz_gserialized fuzz_state fuzz_voronoi fuzz_cdt fuzz_raster fuzz_pcpatch
+FUZZ_RUN_TARGETS = fuzz_core fuzz_gserialized fuzz_state fuzz_voronoi fuzz_cdt fuzz_raster fuzz_pcpatch
 FUZZ_CFLAGS = -g -O1 -fno-omit-frame-pointer -D_GNU_SOURCE -ffp-contract=off \
 	-pthread -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined \
 	-Wall -Wno-unused-parameter -Wno-missing-field-initializers
@@ -264,6 +280,13 @@ build/fuzz/fuzz_raster: fuzz/fuzz_raster.c $(FUZZ_RASTER_SRCS) $(FUZZ_PG_DEPS) s
 	@mkdir -p build/fuzz
 	$(FUZZ_CC) $(FUZZ_CFLAGS) $(FUZZ_PG_CFLAGS) -Isrc/core -o $@ fuzz/fuzz_raster.c \
 		fuzz/pg_shim.c $(FUZZ_RASTER_SRCS) -lm
+
+# The pcpatch reader is pure C: no shims, no core; zlib for its blocks.
+FUZZ_PCPATCH_SRCS = src/pg/formats/pcpatch_read.c src/pg/formats/pcpatch_schema.c
+
+build/fuzz/fuzz_pcpatch: fuzz/fuzz_pcpatch.c $(FUZZ_PCPATCH_SRCS) src/pg/formats/pcpatch_format.h
+	@mkdir -p build/fuzz
+	$(FUZZ_CC) $(FUZZ_CFLAGS) -std=c11 -Isrc/pg -o $@ fuzz/fuzz_pcpatch.c $(FUZZ_PCPATCH_SRCS) -lz -lm
 
 build/fuzz/fuzz_state: fuzz/fuzz_state.c fuzz/fuzz_state_tin.c fuzz/fuzz_state.h \
 		fuzz/pg_shim_agg.c $(FUZZ_STATE_SRCS) $(FUZZ_PG_DEPS) $(FUZZ_CORE_DEPS) \

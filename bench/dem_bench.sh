@@ -231,14 +231,15 @@ tc=$(grep "^tiles_$largest " "$RUNS" | awk '{ print $3 }' | median)
 trss=$(grep "^tiles_$largest " "$RUNS" | awk '{ print $4 }' | median)
 tiles=$(grep -oE ' tiles=[0-9]+' "$WORK/tiles_stats.txt" | cut -d= -f2)
 runs=$(grep -oE ' tile_runs=[0-9]+' "$WORK/tiles_stats.txt" | cut -d= -f2)
+workers=$(grep -oE ' workers=[0-9]+' "$WORK/tiles_stats.txt" | cut -d= -f2)
 raw "$WORK/one_$largest.tif" "$WORK/one.raw"
 raw "$WORK/til_$largest.tif" "$WORK/til.raw"
 same=$(cmp -s "$WORK/one.raw" "$WORK/til.raw" && echo "the same pixels, byte for byte" || echo "PIXELS DIFFER")
 {
 	printf '\nThe %s ground points in tiles (--max-memory %s) against one pass, the same 1 m grid, linear:max_edge=5:nodata=-9999:\n\n' "$(thousands "${NPTS[$largest]}")" "$LIMIT"
-	printf '| run | wall | CPU | peak RSS | tiles / runs |\n|---|--:|--:|--:|--:|\n'
-	printf '| one pass | %s s | %s s | %s MB | |\n' "$o" "$oc" "$orss"
-	printf '| `--max-memory %s` | %s s | %s s | %s MB | %s / %s |\n' "$LIMIT" "$t" "$tc" "$trss" "$tiles" "$runs"
+	printf '| run | wall | CPU | peak RSS | tiles / runs | tiles at once |\n|---|--:|--:|--:|--:|--:|\n'
+	printf '| one pass | %s s | %s s | %s MB | | |\n' "$o" "$oc" "$orss"
+	printf '| `--max-memory %s` | %s s | %s s | %s MB | %s / %s | %s |\n' "$LIMIT" "$t" "$tc" "$trss" "$tiles" "$runs" "${workers:-1}"
 	printf '\nTiles against one pass: %s.\n' "$same"
 } >> "$TXT"
 if [ -n "$BIG_SIDE" ]; then

@@ -10,8 +10,8 @@
  * or final functions: those read geometries and run the engine on threads
  * through run.c's wait loop (latches, signals), which has no stand-in here.
  * So the pieces only the transition and final functions use (tin_run.c,
- * the geometry and sample readers of toast_stream.c, and run.c's wait
- * loop for the breaklines' insertion)
+ * the geometry and sample readers of toast_stream.c, the pcpatch reader
+ * of pcpatch_source.c, and run.c's wait loop for the breaklines' insertion)
  * raise an ERROR that the harness counts as a finding, and the helpers of
  * fn_delaunay_agg.c and signals.c that every entry point calls do what the
  * server's do in a backend that is not being signalled.
@@ -79,6 +79,19 @@ void
 tdc_tin_read_sample(TdcPointBuf *buf, Datum d, int64 row, const char *fname)
 {
 	not_here("tdc_tin_read_sample");
+}
+
+/* pcpatch_source.c: the pcpatch transition functions' reader */
+void
+tdc_pc_read_patch(TdcAggState *st, Datum patch, text *filter, const char *fname)
+{
+	not_here("tdc_pc_read_patch");
+}
+
+text *
+tdc_pc_filter_arg(FunctionCallInfo fcinfo, int geometry_nargs)
+{
+	not_here("tdc_pc_filter_arg");
 }
 
 TdcTinRun *

@@ -2,7 +2,7 @@
 # fuzz/run.sh: run libFuzzer targets for a while each (`make fuzz-run`).
 #
 #   bash fuzz/run.sh [TARGET...]      default: fuzz_core fuzz_gserialized fuzz_state
-#                                     fuzz_voronoi fuzz_cdt fuzz_raster
+#                                     fuzz_voronoi fuzz_cdt fuzz_raster fuzz_pcpatch
 #
 #   FUZZ_SECONDS=60     -max_total_time per target
 #   FUZZ_ARGS=...       extra libFuzzer flags (e.g. -seed=1 -jobs=2)
@@ -21,7 +21,7 @@ cd "$(dirname "${BASH_SOURCE[0]}")/.."
 SECONDS_PER=${FUZZ_SECONDS:-60}
 read -r -a EXTRA <<<"${FUZZ_ARGS:-}"
 if (($# == 0)); then
-	set -- fuzz_core fuzz_gserialized fuzz_state fuzz_voronoi fuzz_cdt fuzz_raster
+	set -- fuzz_core fuzz_gserialized fuzz_state fuzz_voronoi fuzz_cdt fuzz_raster fuzz_pcpatch
 fi
 
 passed=0

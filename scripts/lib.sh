@@ -67,6 +67,8 @@ tdc_set_major() {
 		${TDC_PG_MAJOR:+postgresql-$TDC_PG_MAJOR}				# the server, initdb, pg_ctl, psql
 		${TDC_PG_MAJOR:+postgresql-server-dev-$TDC_PG_MAJOR}	# headers, pg_config, PGXS and pg_regress
 		${TDC_PG_MAJOR:+postgresql-$TDC_PG_MAJOR-postgis-3}	# PostGIS 3 (the geometry type, ST_DelaunayTriangles)
+		${TDC_PG_MAJOR:+postgresql-$TDC_PG_MAJOR-pointcloud}	# pgpointcloud, for tdc_delaunay_pointcloud and its test (tdc_pointcloud)
+		zlib1g-dev								# zlib: the pcpatch reader's zlib-compressed dimensions (src/pg/formats/pcpatch_read.c)
 		build-essential							# gcc, make, libc headers
 		libgdal-dev								# ./tdc's GeoTIFF output: GDAL's headers and library (src/cli/geotiff.c)
 		gdal-bin								# test/cli_geotiff.sh: gdalinfo, gdal_translate, gdal_grid read the GeoTIFFs back

@@ -155,6 +155,7 @@ for EXT in "${EXTENSIONS[@]}"; do
 	case $EXT in
 		tdc_delaunay) want=postgis ;;
 		tdc_delaunay_raster) want=tdc_delaunay,postgis_raster ;;
+		tdc_delaunay_pointcloud) want=pointcloud,tdc_delaunay,tdc_delaunay_raster ;;
 		*) want=$requires ;;
 	esac
 	[ "$requires" = "$want" ] && ok || bad "$EXT.control requires '$requires', not '$want'"

@@ -933,11 +933,14 @@ extern void tdc_bounded_free(tdc_bounded_job *job);
 /*
  * The grid of tdc_tin_grid_start, computed from the final triangles a
  * bounded run emits tile by tile instead of from a whole TIN, with the
- * same values to the bit: linear only (its value at a pixel is decided by
- * the triangle or edge or site that holds the pixel's centre; nearest and
- * natural neighbour need neighbourhoods that cross tiles: TDC_EINVAL).
- * The values wait in a temporary file of the grid's size (8 bytes a pixel,
- * sparse: never written pixels take no disk) and come out by rows.
+ * same values to the bit: linear (its value at a pixel is decided by the
+ * triangle or edge or site that holds the pixel's centre) and nearest (the
+ * nearest site is a corner of a triangle whose region with its
+ * circumcentre holds the centre: terrain/raster_nearest.c); natural
+ * neighbour needs neighbourhoods that cross tiles: TDC_EINVAL.  The values
+ * wait in a temporary file of the grid's size (8 bytes a pixel, 32 for
+ * nearest; sparse: never written pixels take no disk) and come out by
+ * rows; the tiles may come in any order.
  *
  * begin: from the bounded run's begin callback (the hull is copied).  g
  * must be north-up (gt[2] = gt[4] = 0, gt[1] > 0, gt[5] < 0).  *hold: the

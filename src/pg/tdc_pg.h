@@ -264,6 +264,7 @@ typedef struct TdcAggState
 	bool		params_set;
 	double		tolerance;
 	int32		flags;
+	struct TdcPcSource *pc;		/* pcpatch rows: their format (pcpatch_source.c) */
 } TdcAggState;
 
 extern TdcAggState *tdc_agg_state_new(MemoryContext cxt);
@@ -273,6 +274,10 @@ extern void tdc_agg_state_merge(TdcAggState *dst, const TdcAggState *src);
 extern bytea *tdc_agg_state_serialize(const TdcAggState *st);
 extern TdcAggState *tdc_agg_state_deserialize(const bytea *in,
 											  MemoryContext cxt);
+
+/* formats/pcpatch_source.c: pgpointcloud patches into a point buffer (its X, Y, Z) */
+extern void tdc_pc_read_patch(TdcAggState *st, Datum patch, text *filter, const char *fname);
+extern text *tdc_pc_filter_arg(FunctionCallInfo fcinfo, int geometry_nargs);
 
 /*
  * The serialized form of an aggregate whose state holds a TdcAggState plus
@@ -520,6 +525,7 @@ extern TdcTinAgg *tdc_tin_agg_new(MemoryContext cxt, Size size, TdcCurves curves
 extern void tdc_tin_agg_breaklines(TdcTinAgg *a, bool breaklines, MemoryContext cxt,
 								   const char *fname);
 extern void tdc_tin_agg_add(TdcTinAgg *a, Datum geom, const char *fname);
+extern void tdc_tin_agg_add_patch(TdcTinAgg *a, Datum patch, text *filter, const char *fname);
 extern Datum tdc_tin_agg_serialfn(FunctionCallInfo fcinfo, const TdcTinAggKind *k,
 								  const char *fn);
 extern Datum tdc_tin_agg_deserialfn(FunctionCallInfo fcinfo, const TdcTinAggKind *k,

@@ -8,11 +8,12 @@
 # pg_createcluster NN test --start, CREATE EXTENSION tdc_delaunay CASCADE, a
 # triangulation whose triangle count and area are known exactly, CREATE
 # EXTENSION tdc_delaunay_raster CASCADE (postgis_raster with it) and an
-# interpolation whose every pixel is known exactly, the installed
+# interpolation whose every pixel is known exactly, postgresql-NN-pointcloud
+# and CREATE EXTENSION tdc_delaunay_pointcloud CASCADE, the installed
 # tdc-delaunay (--help, and debian/tests/tdc-smoke), and the pg_regress suite against
 # the installed files as autopkgtest's installcheck runs it (debian/tests/
 # installcheck: pg_buildext installcheck, in a pg_virtualenv cluster; every
-# test of sql/, tdc_raster and tdc_raster_gdal included).
+# test of sql/, tdc_raster, tdc_raster_gdal and tdc_pointcloud included).
 # Prints "package: N passed, N failed" last, with the time of each phase.
 #
 # SUITE defaults to this machine's own (/etc/os-release); the packages must
@@ -119,6 +120,18 @@ inside() {
 		ok "ST_TDCInterpolateRaster of the plane z = 2x + 3y + 1: 10 x 10 64BF pixels from 3.5 to 48.5, sum 2600; ST_TDCInterpolate the same"
 	else
 		bad "ST_TDCInterpolateRaster of the plane z = 2x + 3y + 1: expected \"10 10 64BF 100 2600 3.5 48.5 t\", got: $out"
+	fi
+	# The third extension, with pgpointcloud, which the package only
+	# suggests: installed by name from the mirror, as a user who wants it
+	# would.  The installcheck below then runs tdc_pointcloud too.
+	t=$SECONDS
+	out="apt-get install failed (/var/tmp/apt.log)"
+	if apt-get install -y -q --no-install-recommends "postgresql-$major-pointcloud" </dev/null >>/var/tmp/apt.log 2>&1 &&
+		out=$(sql -d pkgtest -c 'SET client_min_messages = warning' -c 'CREATE EXTENSION tdc_delaunay_pointcloud CASCADE' \
+			-c "SELECT string_agg(extname || ' ' || extversion, ', ' ORDER BY extname) FROM pg_extension WHERE extname <> 'plpgsql'" 2>&1); then
+		ok "apt-get install postgresql-$major-pointcloud; CREATE EXTENSION tdc_delaunay_pointcloud CASCADE ($((SECONDS - t)) s): $out"
+	else
+		bad "postgresql-$major-pointcloud and CREATE EXTENSION tdc_delaunay_pointcloud CASCADE: $out"
 	fi
 	as_pg pg_dropcluster --stop "$major" test
 

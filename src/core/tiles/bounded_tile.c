@@ -419,6 +419,48 @@ add_cells_fit(bounded_run *r, int t, uint32_t *cells, size_t ncells, size_t m)
 }
 
 /*
+ * To a rerun's region (nextra extra boxes so far, returned with those
+ * added): the bands of the hull edges that meet the box need the check
+ * asked for, each when it holds few points (as the first region's,
+ * tdc_tp_fit_bands), and all of them only when, with the m points the run
+ * holds, they leave a quarter of a run's most (tdc_tp_run_max) for the
+ * cells: under a tight limit the cells alone, as before.  A request along
+ * the border comes from slivers under a long hull edge, whose circles
+ * reach inside C along the neighbouring edges too, as thin lenses: the
+ * cells the check names reach only a few rings past the nearest, so
+ * without the bands such a tile ran again and again along the side
+ * (border tiles of 3e8 uniform points, up to six times).
+ */
+static bool
+band_wanted(const bounded_run *r, size_t i, const double need[4], size_t limit, size_t *k)
+{
+	return !r->inband[i] && tdc_tp_box_meets(r->bands + 4 * i, need) &&
+		(*k = tdc_tp_box_count(r->ps, &r->grid, r->bands + 4 * i)) <= limit;
+}
+
+static size_t
+add_bands(bounded_run *r, int t, const double need[4], size_t m, size_t nextra)
+{
+	size_t		limit = r->tiles[t].count / 8 > 1000 ? r->tiles[t].count / 8 : 1000,
+				room = tdc_tp_run_max(r->n, r->opt, POINT_BYTES(r), r->budget) / 4 * 3,
+				pts = m,
+				k;
+
+	for (size_t i = 0; r->nhull > 1 && i < r->nhull; i++)
+		if (band_wanted(r, i, need, limit, &k))
+			pts += k;
+	if (pts > room)
+		return nextra;
+	for (size_t i = 0; r->nhull > 1 && i < r->nhull; i++)
+		if (band_wanted(r, i, need, limit, &k))
+		{
+			r->inband[i] = 1;
+			memcpy(r->extra + 4 * nextra++, r->bands + 4 * i, 32);
+		}
+	return nextra;
+}
+
+/*
  * One run of the engine on a tile's points, then the finality check: res
  * holds the tile's triangles (res->final) or the box it needs.  *job: the
  * job, for tile_account (NULL when the engine failed); free res in any
@@ -619,9 +661,11 @@ tdc_bd_tile_run(bounded_run *r, int t)
 		{
 			/*
 			 * the same K with the cells the check named, as many as fit;
-			 * the next request reaches twice as far past the nearest cell
+			 * the next request reaches twice as far past the nearest cell;
+			 * and the bands of the hull edges the request meets
 			 */
 			tg.rings = fmin(2 * tg.rings, TDC_TP_RINGS_MAX);
+			spec.nextra = nextra = add_bands(r, t, res.need, p.m, nextra);
 			if (add_cells_fit(r, t, res.need_cells, res.nneed_cells, p.m) == 0)
 			{
 				if (r->e.code == TDC_OK)

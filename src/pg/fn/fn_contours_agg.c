@@ -115,13 +115,13 @@ contour_params(ContourState *st, double interval, double base, double max_edge)
 						CONTOUR_NAME, st->max_edge, max_edge)));
 }
 
-PG_FUNCTION_INFO_V1(st_tdccontours_transfn);
-
 /*
- * st_tdccontours_transfn(internal, geometry, float8 [, float8 [, text]])
+ * st_tdccontours_transfn(internal, geometry, float8 [, float8 [, text]]), and with patch
+ * st_tdccontours_pc_transfn(internal, pcpatch, float8 [, float8 [, text [, text filter]]]) (pcpatch_source.c;
+ * a NULL filter is no filter)
  */
-Datum
-st_tdccontours_transfn(PG_FUNCTION_ARGS)
+static Datum
+contours_trans(FunctionCallInfo fcinfo, bool patch)
 {
 	MemoryContext aggcxt = tdc_agg_context(fcinfo, "st_tdccontours_transfn");
 	ContourState *st = PG_ARGISNULL(0) ? NULL : (ContourState *) PG_GETARG_POINTER(0);
@@ -146,8 +146,27 @@ st_tdccontours_transfn(PG_FUNCTION_ARGS)
 	if (st == NULL)
 		st = contour_state_new(aggcxt);
 	contour_params(st, interval, base, max_edge);
-	tdc_tin_agg_add(&st->s, PG_GETARG_DATUM(1), CONTOUR_NAME);
+	if (patch)
+		tdc_tin_agg_add_patch(&st->s, PG_GETARG_DATUM(1), tdc_pc_filter_arg(fcinfo, 5), CONTOUR_NAME);
+	else
+		tdc_tin_agg_add(&st->s, PG_GETARG_DATUM(1), CONTOUR_NAME);
 	PG_RETURN_POINTER(st);
+}
+
+PG_FUNCTION_INFO_V1(st_tdccontours_transfn);
+
+Datum
+st_tdccontours_transfn(PG_FUNCTION_ARGS)
+{
+	return contours_trans(fcinfo, false);
+}
+
+PG_FUNCTION_INFO_V1(st_tdccontours_pc_transfn);
+
+Datum
+st_tdccontours_pc_transfn(PG_FUNCTION_ARGS)
+{
+	return contours_trans(fcinfo, true);
 }
 
 static void

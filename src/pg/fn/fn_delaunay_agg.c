@@ -65,13 +65,13 @@ tdc_agg_arg_is_constant(FunctionCallInfo fcinfo, int argno)
  * ----------------------------------------------------------------
  */
 
-PG_FUNCTION_INFO_V1(st_tdcdelaunay_transfn);
-
 /*
- * st_tdcdelaunay_transfn(internal, geometry [, float8, int4])
+ * st_tdcdelaunay_transfn(internal, geometry [, float8, int4]), and with
+ * patch st_tdcdelaunay_pc_transfn(internal, pcpatch [, float8, int4 [,
+ * text filter]]) (pcpatch_source.c)
  */
-Datum
-st_tdcdelaunay_transfn(PG_FUNCTION_ARGS)
+static Datum
+delaunay_trans(FunctionCallInfo fcinfo, bool patch)
 {
 	MemoryContext aggcxt = tdc_agg_context(fcinfo, "st_tdcdelaunay_transfn");
 	TdcAggState *st = PG_ARGISNULL(0) ? NULL :
@@ -98,13 +98,32 @@ st_tdcdelaunay_transfn(PG_FUNCTION_ARGS)
 	}
 	tdc_agg_state_set_params(st, tolerance, flags);
 
-	(void) tdc_read_geometry(&st->pts, PG_GETARG_DATUM(1), TDC_AGG_NAME);
+	if (patch)
+		tdc_pc_read_patch(st, PG_GETARG_DATUM(1), tdc_pc_filter_arg(fcinfo, 4), TDC_AGG_NAME);
+	else
+		(void) tdc_read_geometry(&st->pts, PG_GETARG_DATUM(1), TDC_AGG_NAME);
 	PG_RETURN_POINTER(st);
 
 skip:
 	if (st == NULL)
 		PG_RETURN_NULL();
 	PG_RETURN_POINTER(st);
+}
+
+PG_FUNCTION_INFO_V1(st_tdcdelaunay_transfn);
+
+Datum
+st_tdcdelaunay_transfn(PG_FUNCTION_ARGS)
+{
+	return delaunay_trans(fcinfo, false);
+}
+
+PG_FUNCTION_INFO_V1(st_tdcdelaunay_pc_transfn);
+
+Datum
+st_tdcdelaunay_pc_transfn(PG_FUNCTION_ARGS)
+{
+	return delaunay_trans(fcinfo, true);
 }
 
 PG_FUNCTION_INFO_V1(st_tdcdelaunay_combinefn);

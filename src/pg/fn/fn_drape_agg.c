@@ -145,13 +145,13 @@ drape_params(DrapeState *st, MemoryContext cxt, const char *method,
 				 errhint("Drape one target per aggregate, or collect the targets first with ST_Collect.")));
 }
 
-PG_FUNCTION_INFO_V1(st_tdcdrape_transfn);
-
 /*
- * st_tdcdrape_transfn(internal, geometry, geometry [, text])
+ * st_tdcdrape_transfn(internal, geometry, geometry [, text]), and with patch
+ * st_tdcdrape_pc_transfn(internal, pcpatch, geometry [, text [, text filter]]) (pcpatch_source.c;
+ * a NULL filter is no filter)
  */
-Datum
-st_tdcdrape_transfn(PG_FUNCTION_ARGS)
+static Datum
+drape_trans(FunctionCallInfo fcinfo, bool patch)
 {
 	MemoryContext aggcxt = tdc_agg_context(fcinfo, "st_tdcdrape_transfn");
 	DrapeState *st = PG_ARGISNULL(0) ? NULL : (DrapeState *) PG_GETARG_POINTER(0);
@@ -186,8 +186,27 @@ st_tdcdrape_transfn(PG_FUNCTION_ARGS)
 		}
 		drape_params(st, aggcxt, method, target, VARSIZE_ANY(target));
 	}
-	tdc_tin_agg_add(&st->s, PG_GETARG_DATUM(1), DRAPE_NAME);
+	if (patch)
+		tdc_tin_agg_add_patch(&st->s, PG_GETARG_DATUM(1), tdc_pc_filter_arg(fcinfo, 4), DRAPE_NAME);
+	else
+		tdc_tin_agg_add(&st->s, PG_GETARG_DATUM(1), DRAPE_NAME);
 	PG_RETURN_POINTER(st);
+}
+
+PG_FUNCTION_INFO_V1(st_tdcdrape_transfn);
+
+Datum
+st_tdcdrape_transfn(PG_FUNCTION_ARGS)
+{
+	return drape_trans(fcinfo, false);
+}
+
+PG_FUNCTION_INFO_V1(st_tdcdrape_pc_transfn);
+
+Datum
+st_tdcdrape_pc_transfn(PG_FUNCTION_ARGS)
+{
+	return drape_trans(fcinfo, true);
 }
 
 static void

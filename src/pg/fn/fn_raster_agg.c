@@ -162,13 +162,13 @@ same_value_as_last(InterpState *st, Datum d)
 	return false;
 }
 
-PG_FUNCTION_INFO_V1(st_tdcinterpolate_transfn);
-
 /*
- * st_tdcinterpolate_transfn(internal, geometry, raster [, text [, int4]])
+ * st_tdcinterpolate_transfn(internal, geometry, raster [, text [, int4]]), and with patch
+ * st_tdcinterpolate_pc_transfn(internal, pcpatch, raster [, text [, int4 [, text filter]]]) (pcpatch_source.c;
+ * a NULL filter is no filter)
  */
-Datum
-st_tdcinterpolate_transfn(PG_FUNCTION_ARGS)
+static Datum
+interp_trans(FunctionCallInfo fcinfo, bool patch)
 {
 	MemoryContext aggcxt = tdc_agg_context(fcinfo, "st_tdcinterpolate_transfn");
 	InterpState *st = PG_ARGISNULL(0) ? NULL : (InterpState *) PG_GETARG_POINTER(0);
@@ -176,7 +176,7 @@ st_tdcinterpolate_transfn(PG_FUNCTION_ARGS)
 	int32		band = 1;
 
 	tdc_signal_guard();
-	for (int i = 1; i < PG_NARGS(); i++)
+	for (int i = 1; i < Min(PG_NARGS(), 5); i++)
 		if (PG_ARGISNULL(i))
 		{
 			if (st == NULL)
@@ -216,8 +216,27 @@ st_tdcinterpolate_transfn(PG_FUNCTION_ARGS)
 	else
 		interp_params(st, aggcxt, method, band, NULL);
 
-	tdc_tin_agg_add(&st->s, PG_GETARG_DATUM(1), INTERP_NAME);
+	if (patch)
+		tdc_tin_agg_add_patch(&st->s, PG_GETARG_DATUM(1), tdc_pc_filter_arg(fcinfo, 5), INTERP_NAME);
+	else
+		tdc_tin_agg_add(&st->s, PG_GETARG_DATUM(1), INTERP_NAME);
 	PG_RETURN_POINTER(st);
+}
+
+PG_FUNCTION_INFO_V1(st_tdcinterpolate_transfn);
+
+Datum
+st_tdcinterpolate_transfn(PG_FUNCTION_ARGS)
+{
+	return interp_trans(fcinfo, false);
+}
+
+PG_FUNCTION_INFO_V1(st_tdcinterpolate_pc_transfn);
+
+Datum
+st_tdcinterpolate_pc_transfn(PG_FUNCTION_ARGS)
+{
+	return interp_trans(fcinfo, true);
 }
 
 static void

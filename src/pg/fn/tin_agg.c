@@ -82,6 +82,22 @@ tdc_tin_agg_add(TdcTinAgg *a, Datum geom, const char *fname)
 		tdc_seg_flush(&a->segs);
 }
 
+/*
+ * One more non-NULL row of the pcpatch overloads: its points (those that
+ * pass the filter).  A patch has no linework, so breaklines are refused.
+ */
+void
+tdc_tin_agg_add_patch(TdcTinAgg *a, Datum patch, text *filter, const char *fname)
+{
+	if (a->breaklines)
+		ereport(ERROR,
+				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
+				 errmsg("%s: breaklines=true needs linework, and a pcpatch has none", fname),
+				 errhint("Drop breaklines=true from the method, or give the breaklines as geometries.")));
+	a->rows++;
+	tdc_pc_read_patch(a->base, patch, filter, fname);
+}
+
 /* src's samples after dst's; the caller has made their parameters agree. */
 static void
 tin_agg_merge(TdcTinAgg *dst, const TdcTinAgg *src, const char *fname)
