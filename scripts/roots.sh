@@ -251,8 +251,11 @@ tdc_root_prepare() {	# SUITE [--no-pg]
 	fi
 	cp /etc/resolv.conf "$dir/etc/resolv.conf"
 	pkgs="${TDC_ROOT_PACKAGES:-}"
-	[ -n "$nopg" ] || pkgs="postgresql-common $pkgs"
+	# zlib's headers: the pcpatch reader (src/pg/formats/pcpatch_read.c) inflates zlib dimensions
+	[ -n "$nopg" ] || pkgs="postgresql-common zlib1g-dev $pkgs"
+	# (the major's packages below, pgpointcloud among them, are named in the marker too)
 	local wanted=$pkgs
+	[ -n "$nopg" ] || wanted="$wanted +major: server, dev, postgis-3, pointcloud"
 	if [ ! -f "$dir/.tdc-packages" ] || [ "$(cat "$dir/.tdc-packages")" != "$wanted" ]; then
 		tdc_say "apt-get in the $suite root: ${pkgs:-(update only)}"
 		cat /proc/sys/kernel/random/boot_id >"$dir/.tdc-installing"
@@ -267,7 +270,8 @@ tdc_root_prepare() {	# SUITE [--no-pg]
 				"$dir/etc/postgresql-common/createcluster.conf"
 			major=$(tdc_apt_default_major tdc_root_chroot "$dir")
 			[ -n "$major" ] || tdc_die "apt in the $suite root knows no \"postgresql\" package to take the major from"
-			pkgs="$pkgs postgresql-$major postgresql-server-dev-$major postgresql-$major-postgis-3 make gcc"
+			pkgs="$pkgs postgresql-$major postgresql-server-dev-$major postgresql-$major-postgis-3"
+			pkgs="$pkgs postgresql-$major-pointcloud make gcc"
 		fi
 		# shellcheck disable=SC2086  # a list of package names
 		[ -z "${pkgs// /}" ] || tdc_root_apt "$dir" install $pkgs >>"$dir.apt.log" 2>&1 ||
