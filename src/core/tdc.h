@@ -882,13 +882,10 @@ typedef struct tdc_bounded_params
 	bool		check_files;
 
 	/*
-	 * The caller takes the final tiles in any order (a raster or a line
-	 * set that does not depend on it): tiles then run two at a time on the
-	 * run's threads, each within a share of the limit it reserves for the
-	 * run, and emit is called as each finishes, one call at a time.  The
-	 * tiles and their triangles are the same; only their order changes.
-	 * false: in the plan's order, one tile at a time (its engine on every
-	 * thread).
+	 * The caller takes the final tiles in any order: two may run at once
+	 * (bounded_share.c), emit called as each finishes, one call at a time;
+	 * the tiles and triangles are the same.  false: the plan's order, one
+	 * tile at a time.
 	 */
 	bool		any_order;
 	void	   *arg;			/* passed to the callbacks */
