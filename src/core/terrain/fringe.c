@@ -86,6 +86,8 @@ fr_init(fringe *f, const double *hull, size_t nhull, const char *dir, char *err,
 	f->delta = 1e-9 * diam + 64 * DBL_EPSILON * maxabs;
 	f->cw = (f->box[2] - f->box[0]) / FR_CELLS;
 	f->ch = (f->box[3] - f->box[1]) / FR_CELLS;
+	f->icw = 1 / f->cw;
+	f->ich = 1 / f->ch;
 	/* a corner of the grid inside the hull, exactly; a cell, when its four are */
 	corner = malloc((FR_CELLS + 1) * (FR_CELLS + 1));
 	if (corner == NULL)
@@ -161,12 +163,16 @@ fr_inside(const fringe *f, const double *q)
 	return tdc_orient2d(h + 2 * lo, h + 2 * hi, q) >= 0;
 }
 
-/* Is q strictly inside the hull by its cell (false: the exact tests must say)? */
+/*
+ * Is q strictly inside the hull by its cell (false: the exact tests must
+ * say)?  A deep cell's neighbours are inside the hull, so a q that rounding
+ * puts in the cell beside its own is still strictly inside.
+ */
 static inline bool
 fr_deep(const fringe *f, const double *q)
 {
-	double		fi = floor((q[0] - f->box[0]) / f->cw),
-				fj = floor((q[1] - f->box[1]) / f->ch);
+	double		fi = floor((q[0] - f->box[0]) * f->icw),
+				fj = floor((q[1] - f->box[1]) * f->ich);
 
 	return fi >= 0 && fj >= 0 && fi < FR_CELLS && fj < FR_CELLS &&
 		f->deep[(size_t) fj * FR_CELLS + (size_t) fi];

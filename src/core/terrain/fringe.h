@@ -21,6 +21,8 @@ typedef struct fringe
 	double		box[4];			/* the hull's box */
 	double		cw,
 				ch,				/* an inner cell's width and height */
+				icw,
+				ich,			/* 1 / cw, 1 / ch (a cell off by one in rounding is still deep's) */
 				delta;			/* beside a circumcentre's error bound: the coordinates' rounding */
 	uint8_t		deep[FR_CELLS * FR_CELLS];	/* 1: the cell and its 8 neighbours lie inside the hull */
 

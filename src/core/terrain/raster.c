@@ -100,6 +100,8 @@ tdc_raster_begin(const tdc_interp_spec *spec, const tdc_grid_spec *g, const doub
 	r->fd = -1;
 	r->spec = *spec;
 	r->g = *g;
+	r->inv[0] = 1 / g->gt[1];
+	r->inv[1] = 1 / g->gt[5];
 	r->slack = 1e-6 + 8 * DBL_EPSILON * ((fabs(g->gt[0]) + fabs(g->gt[3])) / g->gt[1] +
 										 (double) g->width + (double) g->height);
 	/* linear's window (nearest has its own, raster_nearest.c) */
@@ -147,36 +149,42 @@ put(uint64_t *w, double v)
 /*
  * The pixels of one triangle (p counter-clockwise) in the window's rows
  * [w0, w1) (columns [c0, c0 + wcols)): each centre it holds, closed, gets
- * its value; kept: max_edge keeps it (none of its edges is long), else only
+ * its value when max_edge keeps it (none of its edges is long), else only
  * a centre at one of its sites gets a value, the site's.  The columns and
  * rows are those whose centres lie in its box, found in floating point and
- * widened by far more than the rounding of that (a millionth of a pixel,
- * more where the coordinates dwarf the pixels); the exact tests decide.  A
- * triangle of dense samples holds no centre at all most often, and costs
- * four divisions.
+ * widened by slack, far more than the rounding of that (a millionth of a
+ * pixel, more where the coordinates dwarf the pixels: the tile's, from its
+ * largest coordinates); the exact tests decide.  A triangle of dense
+ * samples holds no centre at all most often: its range of columns or rows
+ * is then empty (the first column is the ceiling of the box's left side in
+ * centres, not its floor), and it costs four products and no orientation
+ * test.
  */
 static void
-tri_pixels(const tdc_raster *r, const double *const p[3], const double z[3], bool kept,
+tri_pixels(const tdc_raster *r, const double *const p[3], const double z[3], double slack,
 		   size_t w0, size_t w1, size_t c0, size_t wcols, uint64_t *win)
 {
+	bool		kept = true;
 	const double *gt = r->g.gt;
 	double		xmin = fmin(fmin(p[0][0], p[1][0]), p[2][0]),
 				xmax = fmax(fmax(p[0][0], p[1][0]), p[2][0]),
 				ymin = fmin(fmin(p[0][1], p[1][1]), p[2][1]),
-				ymax = fmax(fmax(p[0][1], p[1][1]), p[2][1]),
-				slack = r->slack + 8 * DBL_EPSILON * (fmax(fabs(xmin), fabs(xmax)) +
-													  fmax(fabs(ymin), fabs(ymax))) / gt[1];
-	double		fc0 = floor((xmin - gt[0]) / gt[1] - 0.5 - slack),
-				fc1 = ceil((xmax - gt[0]) / gt[1] - 0.5 + slack),
-				fr0 = floor((ymax - gt[3]) / gt[5] - 0.5 - slack),
-				fr1 = ceil((ymin - gt[3]) / gt[5] - 0.5 + slack);
+				ymax = fmax(fmax(p[0][1], p[1][1]), p[2][1]);
+	double		fc0 = ceil((xmin - gt[0]) * r->inv[0] - 0.5 - slack),
+				fc1 = floor((xmax - gt[0]) * r->inv[0] - 0.5 + slack),
+				fr0 = ceil((ymax - gt[3]) * r->inv[1] - 0.5 - slack),
+				fr1 = floor((ymin - gt[3]) * r->inv[1] - 0.5 + slack);
 	size_t		ca,
 				cb,
 				ra,
 				rb;
 
-	if (fc1 < (double) c0 || fc0 >= (double) (c0 + wcols) || fr1 < (double) w0 || fr0 >= (double) w1)
+	if (fc0 > fc1 || fr0 > fr1 ||
+		fc1 < (double) c0 || fc0 >= (double) (c0 + wcols) || fr1 < (double) w0 || fr0 >= (double) w1)
 		return;
+	/* max_edge, only for a triangle that may hold a centre */
+	for (int k = 0; r->spec.max_edge > 0 && k < 3 && kept; k++)
+		kept = !tdc_rs_edge_long(p[k], p[(k + 1) % 3], r->spec.max_edge);
 	ca = fc0 > (double) c0 ? (size_t) fc0 : c0;
 	cb = fc1 < (double) (c0 + wcols - 1) ? (size_t) fc1 : c0 + wcols - 1;
 	ra = fr0 > (double) w0 ? (size_t) fr0 : w0;
@@ -257,6 +265,7 @@ tdc_raster_tile(tdc_raster *r, const double *q, const double *qz, const size_t *
 				ymin = INFINITY,
 				ymax = -INFINITY,
 				slack,
+				tslack,
 				f;
 	size_t		c0,
 				c1,
@@ -294,6 +303,7 @@ tdc_raster_tile(tdc_raster *r, const double *q, const double *qz, const size_t *
 		}
 	}
 	/* the tile's columns and rows, more each way than its box needs (tri_pixels' slack and one) */
+	tslack = r->slack + 8 * DBL_EPSILON * (fmax(fabs(xmin), fabs(xmax)) + fmax(fabs(ymin), fabs(ymax))) / gt[1];
 	slack = 3 + 8 * DBL_EPSILON * (fabs(gt[0]) + fabs(gt[3]) + fmax(fabs(xmin), fabs(xmax)) +
 								   fmax(fabs(ymin), fabs(ymax))) / gt[1];
 	f = floor((xmin - gt[0]) / gt[1] - slack);
@@ -319,11 +329,8 @@ tdc_raster_tile(tdc_raster *r, const double *q, const double *qz, const size_t *
 			const size_t *v = tri + 3 * t;
 			const double *p[3] = {q + 2 * v[0], q + 2 * v[1], q + 2 * v[2]};
 			double		z[3] = {qz[v[0]], qz[v[1]], qz[v[2]]};
-			bool		kept = true;
 
-			for (int k = 0; r->spec.max_edge > 0 && k < 3 && kept; k++)
-				kept = !tdc_rs_edge_long(p[k], p[(k + 1) % 3], r->spec.max_edge);
-			tri_pixels(r, p, z, kept, w0, w1, c0, wcols, r->win);
+			tri_pixels(r, p, z, tslack, w0, w1, c0, wcols, r->win);
 		}
 		if ((rc = win_flush(r, w0, w1, c0, wcols, err, errlen)) != TDC_OK)
 			return rc;

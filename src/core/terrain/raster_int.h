@@ -23,6 +23,7 @@ struct tdc_raster
 	uint64_t   *win;			/* linear: a window of rows, wincap pixels */
 	size_t		wincap;
 	double		slack;			/* in pixels: above the rounding of a centre's column or row */
+	double		inv[2];			/* 1 / gt[1], 1 / gt[5]: a triangle's columns and rows */
 	fringe		fr;
 
 	/* nearest (raster_nearest.c) */
