@@ -241,8 +241,9 @@ PG_FUNCTION_INFO_V1(_tdc_contours_tiled_write);
 
 /*
  * _tdc_contours_tiled_write(query text, target regclass, interval float8,
- *		base float8, geom_type regtype) RETURNS int8
- * The lines written; see the top of this file.  Internal to
+ *		base float8, geom_type regtype [, filter text]) RETURNS int8
+ * The lines written; see the top of this file.  With filter (the form
+ * tdc_delaunay_pointcloud declares) the column holds pcpatch values.  Internal to
  * tdc_contours_tiled, which checked the arguments.
  */
 Datum
@@ -264,7 +265,7 @@ _tdc_contours_tiled_write(PG_FUNCTION_ARGS)
 
 	tdc_signal_guard();
 	for (int i = 0; i < PG_NARGS(); i++)
-		if (PG_ARGISNULL(i))
+		if (PG_ARGISNULL(i) && i != 5)
 			ereport(ERROR,
 					(errcode(ERRCODE_NULL_VALUE_NOT_ALLOWED),
 					 errmsg("%s: argument %d must not be NULL", fname, i + 1)));
@@ -290,7 +291,8 @@ _tdc_contours_tiled_write(PG_FUNCTION_ARGS)
 	buf.curves = TDC_CURVES_STROKE;
 	tdc_stage_init(&sa, br, &buf, cxt, &opt, limit_mb, fname);
 	sa.tin = true;
-	tdc_dump_collect(&buf, NULL, query, PG_GETARG_OID(4), fname, tdc_stage_row, &sa);
+	tdc_dump_collect_pc(&buf, query, PG_GETARG_OID(4), tdc_stage_pc_column(fcinfo, 5, cxt), fname,
+						tdc_stage_row, &sa);
 	npts = tdc_stage_done(&sa);
 	cr->srid = buf.srid;
 	if (npts > 0 && !buf.hasz)

@@ -221,9 +221,12 @@ PG_FUNCTION_INFO_V1(_tdc_interpolate_tiled_write);
 /*
  * _tdc_interpolate_tiled_write(query text, target regclass, gt float8[],
  *		width int4, height int4, srid int4, method text, pixel_type text,
- *		nodata float8, tile_width int4, tile_height int4) RETURNS int8
+ *		nodata float8, tile_width int4, tile_height int4, geom_type regtype
+ *		[, filter text]) RETURNS int8
  * The tiles written; see the top of this file.  nodata NULL: the method's
- * (as a template band without a nodata value).  Internal to
+ * (as a template band without a nodata value).  With filter (the form
+ * tdc_delaunay_pointcloud declares) the column holds pcpatch values, the
+ * filter NULL or 'dimension=value[,...]'.  Internal to
  * tdc_interpolate_tiled, which checked the arguments it reports on.
  */
 Datum
@@ -249,7 +252,7 @@ _tdc_interpolate_tiled_write(PG_FUNCTION_ARGS)
 
 	tdc_signal_guard();
 	for (int i = 0; i < PG_NARGS(); i++)
-		if (PG_ARGISNULL(i) && i != 8)
+		if (PG_ARGISNULL(i) && i != 8 && i != 12)
 			ereport(ERROR,
 					(errcode(ERRCODE_NULL_VALUE_NOT_ALLOWED),
 					 errmsg("%s: argument %d must not be NULL", fname, i + 1)));
@@ -300,7 +303,8 @@ _tdc_interpolate_tiled_write(PG_FUNCTION_ARGS)
 	/* one pass holds the TIN, the grid's values and mask, and a tile */
 	sa.tin = true;
 	sa.beside = (uint64) npix * (sizeof(double) + 1) + coverage_buffers(cov, false);
-	tdc_dump_collect(&buf, NULL, query, PG_GETARG_OID(11), fname, tdc_stage_row, &sa);
+	tdc_dump_collect_pc(&buf, query, PG_GETARG_OID(11), tdc_stage_pc_column(fcinfo, 12, cxt), fname,
+						tdc_stage_row, &sa);
 	npts = tdc_stage_done(&sa);
 	if (npts > 0 && !buf.hasz)
 		ereport(ERROR,

@@ -84,6 +84,7 @@ extern void tdc_stage_init(StageArg *sa, BoundedRun *br, TdcPointBuf *buf, Memor
 extern uint64 tdc_stage_done(StageArg *sa);
 extern void tdc_stage_stop(BoundedRun *br);
 extern void tdc_stage_write_error(BoundedRun *br, const char *fname);
+extern TdcPcColumn *tdc_stage_pc_column(FunctionCallInfo fcinfo, int geometry_nargs, MemoryContext cxt);
 extern void tdc_stage_run(BoundedRun *br, tdc_bounded_params *p, const tdc_options *opt,
 						  uint64 limit_mb, const char *setting, uint64 outside, const char *what,
 						  const char *cb_err, tdc_bounded_stats *st, const char *fname);

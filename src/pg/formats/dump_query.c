@@ -164,7 +164,7 @@ dump_check_columns(TupleDesc desc, bool with_ids, bool with_tags, Oid geomoid,
  */
 static void
 dump_collect(TdcPointBuf *buf, TdcIdBuf *ids, const char *query,
-			 Oid geomoid, const char *fname, TdcDumpRowFn row_fn,
+			 Oid geomoid, TdcPcColumn *pc, const char *fname, TdcDumpRowFn row_fn,
 			 void *row_arg, const TdcDumpTagOps *tag_ops)
 {
 	ErrorContextCallback errcb;
@@ -241,7 +241,10 @@ dump_collect(TdcPointBuf *buf, TdcIdBuf *ids, const char *query,
 					(int64) DatumGetInt16(d);
 			}
 			first = buf->n;
-			(void) tdc_read_geometry(buf, g, fname);
+			if (pc)
+				tdc_pc_append_patch(buf, &pc->src, pc->cxt, g, pc->filter, "column", fname);
+			else
+				(void) tdc_read_geometry(buf, g, fname);
 			if (tagp)
 				tag.value = SPI_getbinval(SPI_tuptable->vals[i], SPI_tuptable->tupdesc, 2,
 										  &tag.isnull);
@@ -271,14 +274,14 @@ dump_collect(TdcPointBuf *buf, TdcIdBuf *ids, const char *query,
  */
 static void
 dump_collect_hinted(TdcPointBuf *buf, TdcIdBuf *ids, const char *query,
-					Oid geomoid, const char *fname, TdcDumpRowFn row_fn,
+					Oid geomoid, TdcPcColumn *pc, const char *fname, TdcDumpRowFn row_fn,
 					void *row_arg, const TdcDumpTagOps *tag_ops)
 {
 	MemoryContext outer = CurrentMemoryContext;
 
 	PG_TRY();
 	{
-		dump_collect(buf, ids, query, geomoid, fname, row_fn, row_arg, tag_ops);
+		dump_collect(buf, ids, query, geomoid, pc, fname, row_fn, row_arg, tag_ops);
 	}
 	PG_CATCH();
 	{
@@ -308,7 +311,7 @@ tdc_dump_collect(TdcPointBuf *buf, TdcIdBuf *ids, const char *query,
 				 Oid geomoid, const char *fname, TdcDumpRowFn row_fn,
 				 void *row_arg)
 {
-	dump_collect_hinted(buf, ids, query, geomoid, fname, row_fn, row_arg, NULL);
+	dump_collect_hinted(buf, ids, query, geomoid, NULL, fname, row_fn, row_arg, NULL);
 }
 
 /*
@@ -322,5 +325,26 @@ void
 tdc_dump_collect_tagged(TdcPointBuf *buf, const char *query, Oid geomoid,
 						const char *fname, const TdcDumpTagOps *ops, void *arg)
 {
-	dump_collect_hinted(buf, NULL, query, geomoid, fname, NULL, arg, ops);
+	dump_collect_hinted(buf, NULL, query, geomoid, NULL, fname, NULL, arg, ops);
+}
+
+/*
+ * The same two for a query whose column (of type coltype) holds
+ * pgpointcloud patches: each patch's X, Y, Z (those the filter keeps) are
+ * appended as a geometry's vertices would be (pcpatch_source.c).  Only the
+ * tiled procedures' internal functions of tdc_delaunay_pointcloud come
+ * here, so tdc_delaunay alone never reads a patch.
+ */
+void
+tdc_dump_collect_pc(TdcPointBuf *buf, const char *query, Oid coltype, TdcPcColumn *pc,
+					const char *fname, TdcDumpRowFn row_fn, void *row_arg)
+{
+	dump_collect_hinted(buf, NULL, query, coltype, pc, fname, row_fn, row_arg, NULL);
+}
+
+void
+tdc_dump_collect_tagged_pc(TdcPointBuf *buf, const char *query, Oid coltype, TdcPcColumn *pc,
+						   const char *fname, const TdcDumpTagOps *ops, void *arg)
+{
+	dump_collect_hinted(buf, NULL, query, coltype, pc, fname, NULL, arg, ops);
 }
