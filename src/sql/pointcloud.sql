@@ -6,7 +6,10 @@
 -- ST_TDCInterpolate.  Their transition functions read the patches' X, Y
 -- and Z natively (uncompressed and dimensional patches) into the state of
 -- the geometry aggregates, whose final functions they share, so the results
--- are those of the geometry path on the same points, byte for byte.
+-- are those of the geometry path on the same points, byte for byte.  And the
+-- pcpatch forms of the internal functions of the tiled procedures
+-- (tdc_delaunay_tiled, tdc_contours_tiled, tdc_interpolate_tiled), at the
+-- end.
 -- ST_TDCInterpolate returns a raster: this extension requires
 -- tdc_delaunay_raster (and so postgis_raster) for it.
 --
@@ -16,6 +19,13 @@
 --
 -- No combine function: the pcpatch aggregates are not split into parallel
 -- partial states, so that the one-pcid-per-aggregate check covers every row.
+--
+-- Each signature is spelled out, its transition function, aggregate and
+-- comments: SQL has no statement that declares an aggregate for several
+-- signatures, and a DO block that generated them would hide each object
+-- and its C symbol from this script (test/release.sh checks every
+-- 'MODULE_PATHNAME', 'symbol' of the scripts against the library, and
+-- the catalogue a reader greps is the script).
 
 -- complain if script is sourced in psql, rather than via CREATE EXTENSION
 \echo Use "CREATE EXTENSION tdc_delaunay_pointcloud" to load this file. \quit

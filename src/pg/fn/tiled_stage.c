@@ -383,3 +383,45 @@ tdc_stage_pc_column(FunctionCallInfo fcinfo, int geometry_nargs, MemoryContext c
 		MemoryContextStrdup(cxt, text_to_cstring(PG_GETARG_TEXT_PP(geometry_nargs)));
 	return pc;
 }
+
+/* The consumer's run set up in cxt: its BoundedRun made, its release registered. */
+void
+tdc_stage_consumer_init(StageConsumer *sc, MemoryContext cxt, StageTileFn tile, void (*free_obj) (void *obj))
+{
+	sc->br = MemoryContextAllocZero(cxt, sizeof(BoundedRun));
+	sc->obj = NULL;
+	sc->tile = tile;
+	sc->free_obj = free_obj;
+	sc->err[0] = '\0';
+	sc->cb.func = tdc_stage_consumer_release;
+	sc->cb.arg = sc;
+	MemoryContextRegisterResetCallback(cxt, &sc->cb);
+}
+
+/* The run's emit, on its thread: a final tile's triangles to the consumer. */
+int
+tdc_stage_consumer_emit(void *arg, int tile, const double *q, const double *qz, const int64_t *ql,
+						const size_t *tri, size_t ntri)
+{
+	StageConsumer *sc = (StageConsumer *) arg;
+
+	(void) tile;
+	(void) ql;
+	return sc->tile(sc->obj, q, qz, tri, ntri, sc->err, sizeof(sc->err));
+}
+
+/* On any end of the call: the run joined, the consumer freed, the files and the directory gone. */
+void
+tdc_stage_consumer_release(void *arg)
+{
+	StageConsumer *sc = (StageConsumer *) arg;
+
+	/* the run's thread uses the consumer: it goes first; the consumer's files before the directory */
+	tdc_stage_stop(sc->br);
+	if (sc->obj != NULL)
+	{
+		sc->free_obj(sc->obj);
+		sc->obj = NULL;
+	}
+	tdc_stage_release(sc->br);
+}

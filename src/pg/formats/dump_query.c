@@ -4,7 +4,8 @@
  *		refuse it unless it only reads, run it, and collect the vertices of
  *		its geometry column, with the id of each vertex's row when asked,
  *		or each row's tag (tdc_delaunay_tiled's tile column), when the query
- *		has one, for a callback.
+ *		has one, for a callback; or, for the tiled procedures over a pcpatch
+ *		column, the X, Y, Z of its patches (tdc_dump_collect_pc).
  *
  * The query runs through SPI as the calling user (the Dump functions are
  * not SECURITY DEFINER), read-only, behind a cursor fetched in batches of

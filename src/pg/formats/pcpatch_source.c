@@ -19,6 +19,11 @@
  * pcpatch aggregates have no combine function (no partial aggregation), so
  * that this check covers every row.
  *
+ * The tiled procedures read a pcpatch column through the same function
+ * (tdc_pc_append_patch, from dump_query.c), their format kept in the call
+ * rather than in a state, only when called through the forms of their
+ * internal functions that tdc_delaunay_pointcloud declares.
+ *
  * The bytes are decoded by pcpatch_read.c (pure C, fuzzed); this file maps
  * its codes to errors with hints.  Once the layout is found able to hold
  * the header's point count (tdc_pc_patch_check), the buffer grows by it
