@@ -46,11 +46,11 @@ CLI_SRCS = $(sort $(wildcard src/cli/*.c))
 CORE_HDRS = $(wildcard src/core/*.h src/core/*/*.h)
 OBJS = $(CORE_SRCS:.c=.o) $(PG_SRCS:.c=.o)
 
-# tdc_pointcloud needs pgpointcloud on the server: it runs only where the
-# server has pointcloud's control file (pg_config's sharedir), and the
-# suite says when it is left out (scripts/test.sh).
+# tdc_pointcloud and tdc_pointcloud_tiled need pgpointcloud on the server:
+# they run only where the server has pointcloud's control file (pg_config's
+# sharedir), and the suite says when they are left out (scripts/test.sh).
 PC_INSTALLED = $(wildcard $(shell $(PG_CONFIG) --sharedir 2>/dev/null)/extension/pointcloud.control)
-REGRESS = $(filter-out $(if $(PC_INSTALLED),,tdc_pointcloud),$(basename $(notdir $(sort $(wildcard sql/*.sql)))))
+REGRESS = $(filter-out $(if $(PC_INSTALLED),,tdc_pointcloud tdc_pointcloud_tiled),$(basename $(notdir $(sort $(wildcard sql/*.sql)))))
 REGRESS_OPTS = --inputdir=. --outputdir=build/regress
 
 PG_CPPFLAGS = -Isrc/core -Isrc/pg -pthread

@@ -53,13 +53,14 @@ COMMENT ON FUNCTION _tdc_tiled_write(text, regclass, float8) IS
 -- The checks every tiled procedure makes (tdc_delaunay_tiled, tdc_contours_tiled,
 -- and tdc_interpolate_tiled of tdc_delaunay_raster), their errors in the
 -- caller's name fn.
-CREATE FUNCTION _tdc_tiled_geometry(fn text, source regclass, geom_column text)
+CREATE FUNCTION _tdc_tiled_geometry(fn text, source regclass, geom_column text, filter text)
 RETURNS regtype
 LANGUAGE plpgsql STABLE
 AS $fn$
 DECLARE
 	gtyp oid;
 	gtypname name;
+	typext name;
 BEGIN
 	SELECT a.atttypid, t.typname INTO gtyp, gtypname
 	  FROM pg_attribute a JOIN pg_type t ON t.oid = a.atttypid
@@ -68,16 +69,39 @@ BEGIN
 		RAISE EXCEPTION '%: column "%" of relation % does not exist', fn, geom_column, source
 			USING ERRCODE = 'undefined_column';
 	END IF;
+	-- a pcpatch column: pgpointcloud's type, read through tdc_delaunay_pointcloud
+	SELECT e.extname INTO typext
+	  FROM pg_depend d JOIN pg_extension e ON e.oid = d.refobjid
+	 WHERE d.classid = 'pg_type'::regclass AND d.objid = gtyp AND d.refclassid = 'pg_extension'::regclass
+	   AND d.deptype = 'e';
+	IF gtypname = 'pcpatch' AND typext = 'pointcloud' THEN
+		IF NOT EXISTS (SELECT 1 FROM pg_extension WHERE extname = 'tdc_delaunay_pointcloud') THEN
+			RAISE EXCEPTION '%: column "%" of relation % is a pcpatch column, and extension tdc_delaunay_pointcloud is not installed',
+				fn, geom_column, source
+				USING ERRCODE = 'feature_not_supported',
+					  HINT = 'CREATE EXTENSION tdc_delaunay_pointcloud reads pgpointcloud patches.';
+		END IF;
+		RETURN gtyp;
+	END IF;
 	IF gtypname <> 'geometry' THEN
-		RAISE EXCEPTION '%: column "%" of relation % is of type %, not geometry', fn, geom_column, source, gtypname
+		RAISE EXCEPTION '%: column "%" of relation % is of type %, not geometry or pcpatch', fn, geom_column, source,
+			gtypname
 			USING ERRCODE = 'datatype_mismatch';
+	END IF;
+	IF filter IS NOT NULL THEN
+		RAISE EXCEPTION '%: a filter is for a pcpatch column; column "%" of relation % is a geometry', fn, geom_column,
+			source
+			USING ERRCODE = 'invalid_parameter_value',
+				  HINT = 'Select the rows with a WHERE clause in a view, and give the view as the source.';
 	END IF;
 	RETURN gtyp;
 END
 $fn$;
 
-COMMENT ON FUNCTION _tdc_tiled_geometry(text, regclass, text) IS
-'Internal, for the tiled procedures: the type of source.geom_column, which must exist and be a geometry (errors in the name fn).';
+COMMENT ON FUNCTION _tdc_tiled_geometry(text, regclass, text, text) IS
+'Internal, for the tiled procedures: the type of source.geom_column, which must exist and be a geometry, or a '
+'pgpointcloud pcpatch when tdc_delaunay_pointcloud is installed; a filter (not NULL) only with a pcpatch column '
+'(errors in the name fn).';
 
 CREATE FUNCTION _tdc_tiled_target(fn text, target text)
 RETURNS text[]
@@ -111,8 +135,11 @@ COMMENT ON FUNCTION _tdc_tiled_target(text, text) IS
 'Internal, for the tiled procedures: {schema, name} of the new table target (a name, or schema.name), which must not '
 'exist yet (errors in the name fn).';
 
-CREATE OR REPLACE PROCEDURE tdc_delaunay_tiled(source regclass, target text, geom_column name DEFAULT 'geom',
-									tile_column name DEFAULT NULL, tile_size float8 DEFAULT NULL)
+-- 1.2.0 adds its last argument, filter: the procedure of 1.1.0 goes first
+DROP PROCEDURE tdc_delaunay_tiled(regclass, text, name, name, float8);
+CREATE PROCEDURE tdc_delaunay_tiled(source regclass, target text, geom_column name DEFAULT 'geom',
+									tile_column name DEFAULT NULL, tile_size float8 DEFAULT NULL,
+									filter text DEFAULT NULL)
 LANGUAGE plpgsql
 -- a tile's statement is estimated at millions of rows, and compiling it
 -- cost a second per tile; boxes and the hull pass through the statements'
@@ -125,6 +152,8 @@ SET synchronize_seqscans = off
 AS $proc$
 DECLARE
 	fn constant text := 'tdc_delaunay_tiled';
+	gtyp regtype;
+	pc boolean;
 	ttype text := 'bigint';
 	tv text;					-- SQL of a vertex's tile value
 	stroked text;				-- SQL of a row's geometry with its arcs stroked
@@ -147,8 +176,9 @@ DECLARE
 	tile_sql text;
 	tile_box text;
 BEGIN
-	-- the geometry column
-	PERFORM _tdc_tiled_geometry(fn, source, geom_column);
+	-- the geometry column, or a pcpatch column (tdc_delaunay_pointcloud)
+	gtyp := _tdc_tiled_geometry(fn, source, geom_column, filter);
+	pc := (SELECT t.typname = 'pcpatch' FROM pg_type t WHERE t.oid = gtyp);
 	-- the tiles
 	IF tile_column IS NOT NULL THEN
 		SELECT format_type(a.atttypid, a.atttypmod) INTO ttype
@@ -176,6 +206,12 @@ BEGIN
 		EXECUTE 'SELECT EXISTS (SELECT 1 FROM pg_dist_partition WHERE logicalrelid = $1 AND partmethod = ''h''
 					AND column_to_column_name(logicalrelid, partkey) = $2)'
 		   INTO citus USING source, tile_column;
+	END IF;
+	IF citus AND pc THEN
+		RAISE EXCEPTION '%: a pcpatch column is not read by the rounds on Citus workers', fn
+			USING ERRCODE = 'feature_not_supported',
+				  HINT = 'Call tdc_delaunay_tiled without tile_column: the coordinator reads the patches, in tiles '
+						 'that fit tdc_delaunay.max_memory.';
 	END IF;
 	IF citus THEN
 		-- The staging tables are written and then read by other statements of
@@ -207,15 +243,26 @@ BEGIN
 	-- squares of tile_size label it with the square holding that vertex,
 	-- column * 2^32 + row counted from the vertices' lower left corner
 	-- (_tdc_square_label).
-	IF NOT citus THEN
+	IF NOT citus AND pc THEN
+		-- patches: X, Y and Z, the SRID of the first patch's format
+		srid_lo := _tdc_pc_column_srid(source, geom_column);
+		zm_lo := 2;
+	ELSIF NOT citus THEN
 		EXECUTE format('SELECT ST_SRID(s.%1$I), ST_Zmflag(s.%1$I) FROM %2$s s WHERE s.%1$I IS NOT NULL LIMIT 1',
 					   geom_column, source)
 		   INTO srid_lo, zm_lo;
+	END IF;
+	IF NOT citus THEN
 		EXECUTE format('CREATE TABLE %s (id bigint, tile %s, geom geometry(%s, %s))', qtarget, ttype,
 					   CASE WHEN zm_lo IN (2, 3) THEN 'PolygonZ' ELSE 'Polygon' END, coalesce(srid_lo, 0));
-		PERFORM _tdc_tiled_write(CASE WHEN tile_column IS NULL THEN format('SELECT %I FROM %s', geom_column, source)
-									  ELSE format('SELECT %I, %I FROM %s', geom_column, tile_column, source) END,
-								 qtarget::regclass, tile_size);
+		tile_sql := CASE WHEN tile_column IS NULL THEN format('SELECT %I FROM %s', geom_column, source)
+						 ELSE format('SELECT %I, %I FROM %s', geom_column, tile_column, source) END;
+		IF pc THEN
+			-- the pcpatch form of the internal function (tdc_delaunay_pointcloud)
+			PERFORM _tdc_tiled_write(tile_sql, qtarget::regclass, tile_size, gtyp, filter);
+		ELSE
+			PERFORM _tdc_tiled_write(tile_sql, qtarget::regclass, tile_size);
+		END IF;
 		RETURN;
 	END IF;
 
@@ -377,8 +424,9 @@ BEGIN
 END
 $proc$;
 
-COMMENT ON PROCEDURE tdc_delaunay_tiled(regclass, text, name, name, float8) IS
-'Triangulates the vertices of source.geom_column (duplicates merged, Z of the first copy, one SRID) '
+COMMENT ON PROCEDURE tdc_delaunay_tiled(regclass, text, name, name, float8, text) IS
+'Triangulates the vertices of source.geom_column (duplicates merged, Z of the first copy, one SRID; a pcpatch column '
+'with tdc_delaunay_pointcloud: its points'' X, Y, Z, those the filter ''dimension=value[,...]'' keeps, not on Citus) '
 'into a new table target(id bigint, tile, geom geometry(Polygon)): the same triangles as ST_TDCDelaunayDump, each once, '
 'in one pass or, when that would not fit tdc_delaunay.max_memory, in tiles split by counts, as ./tdc --max-memory plans '
 'and runs them. Each triangle''s tile: with tile_column, the value (of its type) of the tile owning the triangle''s '
@@ -407,7 +455,7 @@ COMMENT ON FUNCTION _tdc_contours_tiled_write(text, regclass, float8, float8, re
 -- row's SRID, and the work done by _tdc_contours_tiled_write in one call,
 -- in the caller's transaction: an error or a cancel leaves no target.
 CREATE PROCEDURE tdc_contours_tiled(source text, target text, geom_column text, "interval" float8,
-									base float8 DEFAULT 0)
+									base float8 DEFAULT 0, filter text DEFAULT NULL)
 LANGUAGE plpgsql
 -- the source is read in its order, as ST_TDCContours reads it (the first
 -- copy of a duplicate gives its Z)
@@ -417,6 +465,7 @@ DECLARE
 	fn constant text := 'tdc_contours_tiled';
 	src regclass;
 	gtyp regtype;
+	pc boolean;
 	srid int;
 	tparts text[];
 	qtarget text;
@@ -438,21 +487,34 @@ BEGIN
 		RAISE EXCEPTION '%: source "%" does not exist', fn, source
 			USING ERRCODE = 'undefined_table';
 	END IF;
-	gtyp := _tdc_tiled_geometry(fn, src, geom_column);
+	gtyp := _tdc_tiled_geometry(fn, src, geom_column, filter);
+	pc := (SELECT t.typname = 'pcpatch' FROM pg_type t WHERE t.oid = gtyp);
 	-- the target: never overwritten
 	tparts := _tdc_tiled_target(fn, target);
 	qtarget := format('%I.%I', tparts[1], tparts[2]);
-	EXECUTE format('SELECT ST_SRID(s.%1$I) FROM %2$s s WHERE s.%1$I IS NOT NULL LIMIT 1', geom_column, src)
-	   INTO srid;
+	IF pc THEN
+		-- the first patch's format (tdc_delaunay_pointcloud)
+		srid := _tdc_pc_column_srid(src, geom_column);
+	ELSE
+		EXECUTE format('SELECT ST_SRID(s.%1$I) FROM %2$s s WHERE s.%1$I IS NOT NULL LIMIT 1', geom_column, src)
+		   INTO srid;
+	END IF;
 	EXECUTE format('CREATE TABLE %s (id bigint, level float8, geom %s(LineStringZ, %s))', qtarget,
-				   gtyp, coalesce(srid, 0));
-	PERFORM _tdc_contours_tiled_write(format('SELECT %I FROM %s', geom_column, src), qtarget::regclass,
-									  "interval", base, gtyp);
+				   CASE WHEN pc THEN 'geometry'::regtype ELSE gtyp END, coalesce(srid, 0));
+	IF pc THEN
+		-- the pcpatch form of the internal function (tdc_delaunay_pointcloud)
+		PERFORM _tdc_contours_tiled_write(format('SELECT %I FROM %s', geom_column, src), qtarget::regclass,
+										  "interval", base, gtyp, filter);
+	ELSE
+		PERFORM _tdc_contours_tiled_write(format('SELECT %I FROM %s', geom_column, src), qtarget::regclass,
+										  "interval", base, gtyp);
+	END IF;
 END
 $proc$;
 
-COMMENT ON PROCEDURE tdc_contours_tiled(text, text, text, float8, float8) IS
-'Contour lines at the levels base + k * interval of the TIN of the vertices of source.geom_column (heights from Z) '
+COMMENT ON PROCEDURE tdc_contours_tiled(text, text, text, float8, float8, text) IS
+'Contour lines at the levels base + k * interval of the TIN of the vertices of source.geom_column (heights from Z; '
+'a pcpatch column with tdc_delaunay_pointcloud: its points'' X, Y, Z, those the filter ''dimension=value[,...]'' keeps) '
 'into a new table target(id bigint, level float8, geom geometry(LineStringZ, srid)), one row per line, id 1.. in '
 'the order of ST_TDCContours''s lines (levels increasing), each its level as Z: the lines of ST_TDCContours, in one '
 'pass or, when that would not fit tdc_delaunay.max_memory, through the core''s bounded run.';

@@ -28,7 +28,7 @@ COMMENT ON FUNCTION _tdc_interpolate_tiled_write(text, regclass, float8[], int4,
 CREATE PROCEDURE tdc_interpolate_tiled(source text, target text, geom_column text, template raster,
 									   method text DEFAULT 'linear', pixel_type text DEFAULT '32BF',
 									   nodata float8 DEFAULT -9999, tile_width int DEFAULT 256,
-									   tile_height int DEFAULT 256)
+									   tile_height int DEFAULT 256, filter text DEFAULT NULL)
 LANGUAGE plpgsql
 -- the source is read in its order, as ST_TDCInterpolate reads it (the
 -- first copy of a duplicate gives its Z)
@@ -51,7 +51,7 @@ BEGIN
 		RAISE EXCEPTION '%: source "%" does not exist', fn, source
 			USING ERRCODE = 'undefined_table';
 	END IF;
-	gtyp := _tdc_tiled_geometry(fn, src, geom_column);
+	gtyp := _tdc_tiled_geometry(fn, src, geom_column, filter);
 	-- the template: the grid's geometry, without bands
 	IF template IS NULL THEN
 		RAISE EXCEPTION '%: template must not be NULL', fn
@@ -88,15 +88,26 @@ BEGIN
 	tparts := _tdc_tiled_target(fn, target);
 	qtarget := format('%I.%I', tparts[1], tparts[2]);
 	EXECUTE format('CREATE TABLE %s (rid bigint, rast %s)', qtarget, pg_typeof(template));
-	PERFORM _tdc_interpolate_tiled_write(format('SELECT %I FROM %s', geom_column, src), qtarget::regclass,
-										 ARRAY[md.upperleftx, md.scalex, md.skewx, md.upperlefty, md.skewy, md.scaley],
-										 md.width, md.height, md.srid, method, upper(pixel_type), nodata,
-										 tile_width, tile_height, gtyp);
+	IF (SELECT t.typname = 'pcpatch' FROM pg_type t WHERE t.oid = gtyp) THEN
+		-- the pcpatch form of the internal function (tdc_delaunay_pointcloud)
+		PERFORM _tdc_interpolate_tiled_write(format('SELECT %I FROM %s', geom_column, src), qtarget::regclass,
+											 ARRAY[md.upperleftx, md.scalex, md.skewx, md.upperlefty, md.skewy,
+												   md.scaley],
+											 md.width, md.height, md.srid, method, upper(pixel_type), nodata,
+											 tile_width, tile_height, gtyp, filter);
+	ELSE
+		PERFORM _tdc_interpolate_tiled_write(format('SELECT %I FROM %s', geom_column, src), qtarget::regclass,
+											 ARRAY[md.upperleftx, md.scalex, md.skewx, md.upperlefty, md.skewy,
+												   md.scaley],
+											 md.width, md.height, md.srid, method, upper(pixel_type), nodata,
+											 tile_width, tile_height, gtyp);
+	END IF;
 END
 $proc$;
 
-COMMENT ON PROCEDURE tdc_interpolate_tiled(text, text, text, raster, text, text, float8, int, int) IS
-'Interpolates the Z of the vertices of source.geom_column at the pixel centres of the band-less template''s grid '
+COMMENT ON PROCEDURE tdc_interpolate_tiled(text, text, text, raster, text, text, float8, int, int, text) IS
+'Interpolates the Z of the vertices of source.geom_column (a pcpatch column with tdc_delaunay_pointcloud: its '
+'points'' X, Y, Z, those the filter ''dimension=value[,...]'' keeps) at the pixel centres of the band-less template''s grid '
 'with a method (''linear'', ''nearest'', ''natural_neighbor'', GDAL''s options) into a new table target(rid bigint, '
 'rast raster), a coverage of tiles of tile_width x tile_height pixels as raster2pgsql -t writes (rid 1.. row by row, '
 'the last column and row cut to fit), one band of pixel_type with nodata: each tile equals the same window of '

@@ -430,10 +430,11 @@ fi
 
 if ((built && server)); then
 	mkdir -p build/regress
-	# tdc_pointcloud runs only where pgpointcloud is installed (the Makefile
-	# looks for its control file): say so when it is left out
+	# tdc_pointcloud and tdc_pointcloud_tiled run only where pgpointcloud is
+	# installed (the Makefile looks for its control file): say so when they
+	# are left out
 	if [ ! -e "$("${PG_CONFIG:-pg_config}" --sharedir 2>/dev/null)/extension/pointcloud.control" ]; then
-		echo "pg_regress: pgpointcloud (postgresql-${TDC_PG_MAJOR:-NN}-pointcloud) is not installed: tdc_pointcloud left out"
+		echo "pg_regress: pgpointcloud (postgresql-${TDC_PG_MAJOR:-NN}-pointcloud) is not installed: tdc_pointcloud and tdc_pointcloud_tiled left out"
 	fi
 	rm -f build/regress/tdc_raster_arbiter.txt build/regress/tdc_tin_jacksboro.txt
 	run_part pg_regress regress "${MAKE[@]}" installcheck

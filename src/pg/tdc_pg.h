@@ -277,6 +277,8 @@ extern TdcAggState *tdc_agg_state_deserialize(const bytea *in,
 
 /* formats/pcpatch_source.c: pgpointcloud patches into a point buffer (its X, Y, Z) */
 extern void tdc_pc_read_patch(TdcAggState *st, Datum patch, text *filter, const char *fname);
+extern void tdc_pc_append_patch(TdcPointBuf *buf, struct TdcPcSource **srcp, MemoryContext cxt,
+								Datum patch, const char *ftext, const char *what, const char *fname);
 extern text *tdc_pc_filter_arg(FunctionCallInfo fcinfo, int geometry_nargs);
 
 /*
@@ -432,6 +434,23 @@ typedef struct TdcDumpTagOps
 
 extern void tdc_dump_collect_tagged(TdcPointBuf *buf, const char *query, Oid geomoid,
 									const char *fname, const TdcDumpTagOps *ops, void *arg);
+
+/*
+ * A query's column of pgpointcloud patches (a tiled procedure's pcpatch
+ * source): the filter ('dimension=value[,...]', NULL: none), and the
+ * format the first patch fixes, allocated in cxt.
+ */
+typedef struct TdcPcColumn
+{
+	const char *filter;
+	MemoryContext cxt;
+	struct TdcPcSource *src;
+} TdcPcColumn;
+
+extern void tdc_dump_collect_pc(TdcPointBuf *buf, const char *query, Oid coltype, TdcPcColumn *pc,
+								const char *fname, TdcDumpRowFn row_fn, void *row_arg);
+extern void tdc_dump_collect_tagged_pc(TdcPointBuf *buf, const char *query, Oid coltype, TdcPcColumn *pc,
+									   const char *fname, const TdcDumpTagOps *ops, void *arg);
 
 /*
  * seglist.c: segments as pairs of vertex indices into buf, taken from the

@@ -6,7 +6,10 @@
 -- ST_TDCInterpolate.  Their transition functions read the patches' X, Y
 -- and Z natively (uncompressed and dimensional patches) into the state of
 -- the geometry aggregates, whose final functions they share, so the results
--- are those of the geometry path on the same points, byte for byte.
+-- are those of the geometry path on the same points, byte for byte.  And the
+-- pcpatch forms of the internal functions of the tiled procedures
+-- (tdc_delaunay_tiled, tdc_contours_tiled, tdc_interpolate_tiled), at the
+-- end.
 -- ST_TDCInterpolate returns a raster: this extension requires
 -- tdc_delaunay_raster (and so postgis_raster) for it.
 --
@@ -16,6 +19,13 @@
 --
 -- No combine function: the pcpatch aggregates are not split into parallel
 -- partial states, so that the one-pcid-per-aggregate check covers every row.
+--
+-- Each signature is spelled out, its transition function, aggregate and
+-- comments: SQL has no statement that declares an aggregate for several
+-- signatures, and a DO block that generated them would hide each object
+-- and its C symbol from this script (test/release.sh checks every
+-- 'MODULE_PATHNAME', 'symbol' of the scripts against the library, and
+-- the catalogue a reader greps is the script).
 
 -- complain if script is sourced in psql, rather than via CREATE EXTENSION
 \echo Use "CREATE EXTENSION tdc_delaunay_pointcloud" to load this file. \quit
@@ -274,3 +284,69 @@ CREATE AGGREGATE ST_TDCInterpolate(pcpatch, raster, text, int4, text) (
 
 COMMENT ON AGGREGATE ST_TDCInterpolate(pcpatch, raster, text, int4, text) IS
 'interpolation of the patches points at the pixel centres of the template raster, as ST_TDCInterpolate(geometry, raster, text, int4) gives on the same points; the last argument filters the points: ''dimension=value[,value...]''.';
+
+-- The tiled procedures over a pcpatch column.  tdc_delaunay_tiled,
+-- tdc_contours_tiled (tdc_delaunay) and tdc_interpolate_tiled
+-- (tdc_delaunay_raster) take a pcpatch column as their geom_column when this
+-- extension is installed, and a last argument filter
+-- ('dimension=value[,value...]', NULL: none).  They call these forms of
+-- their internal functions, which exist only here: the C functions read the
+-- patches (the same reader as the aggregates) only when called with the
+-- extra filter argument, so tdc_delaunay alone never reads a patch.
+
+CREATE FUNCTION _tdc_pc_column_srid(source regclass, geom_column text)
+RETURNS int4
+LANGUAGE plpgsql STABLE
+AS $fn$
+DECLARE
+	nsp name;
+	srid int4;
+BEGIN
+	SELECT n.nspname INTO nsp
+	  FROM pg_extension e JOIN pg_namespace n ON n.oid = e.extnamespace
+	 WHERE e.extname = 'pointcloud';
+	EXECUTE format('SELECT f.srid FROM %1$I.pointcloud_formats f
+					 WHERE f.pcid = (SELECT %1$I.PC_PCId(s.%3$I) FROM %2$s s WHERE s.%3$I IS NOT NULL LIMIT 1)',
+				   nsp, source, geom_column)
+	   INTO srid;
+	RETURN srid;
+END
+$fn$;
+
+COMMENT ON FUNCTION _tdc_pc_column_srid(regclass, text) IS
+'Internal, for the tiled procedures: the SRID in pointcloud_formats of the first patch of source.geom_column '
+'(NULL when it has none); the reader refuses patches of another pcid later.';
+
+CREATE FUNCTION _tdc_interpolate_tiled_write(query text, target regclass, gt float8[], width int4,
+											 height int4, srid int4, method text, pixel_type text,
+											 nodata float8, tile_width int4, tile_height int4,
+											 geom_type regtype, filter text)
+RETURNS bigint
+AS 'MODULE_PATHNAME', '_tdc_interpolate_tiled_write'
+LANGUAGE C VOLATILE PARALLEL UNSAFE
+COST 10000;
+
+COMMENT ON FUNCTION _tdc_interpolate_tiled_write(text, regclass, float8[], int4, int4, int4, text, text, float8, int4, int4, regtype, text) IS
+'Internal, for tdc_interpolate_tiled over a pcpatch column: as the form without filter, the samples the X, Y, Z of '
+'the patches'' points that filter (''dimension=value[,...]'', NULL: all) keeps.';
+
+CREATE FUNCTION _tdc_contours_tiled_write(query text, target regclass, "interval" float8, base float8,
+										  geom_type regtype, filter text)
+RETURNS bigint
+AS 'MODULE_PATHNAME', '_tdc_contours_tiled_write'
+LANGUAGE C VOLATILE PARALLEL UNSAFE
+COST 10000;
+
+COMMENT ON FUNCTION _tdc_contours_tiled_write(text, regclass, float8, float8, regtype, text) IS
+'Internal, for tdc_contours_tiled over a pcpatch column: as the form without filter, the samples the X, Y, Z of '
+'the patches'' points that filter (''dimension=value[,...]'', NULL: all) keeps.';
+
+CREATE FUNCTION _tdc_tiled_write(query text, target regclass, tile_size float8, geom_type regtype, filter text)
+RETURNS bigint
+AS 'MODULE_PATHNAME', '_tdc_tiled_write'
+LANGUAGE C VOLATILE PARALLEL UNSAFE
+COST 10000;
+
+COMMENT ON FUNCTION _tdc_tiled_write(text, regclass, float8, regtype, text) IS
+'Internal, for tdc_delaunay_tiled over a pcpatch column: as the form without filter, the vertices the X, Y, Z of '
+'the patches'' points that filter (''dimension=value[,...]'', NULL: all) keeps.';

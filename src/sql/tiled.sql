@@ -21,7 +21,8 @@
 -- round reruns it with a larger K.  Everything happens in the caller's
 -- transaction: an error or a cancel leaves no target behind.
 CREATE PROCEDURE tdc_delaunay_tiled(source regclass, target text, geom_column name DEFAULT 'geom',
-									tile_column name DEFAULT NULL, tile_size float8 DEFAULT NULL)
+									tile_column name DEFAULT NULL, tile_size float8 DEFAULT NULL,
+									filter text DEFAULT NULL)
 LANGUAGE plpgsql
 -- a tile's statement is estimated at millions of rows, and compiling it
 -- cost a second per tile; boxes and the hull pass through the statements'
@@ -34,6 +35,8 @@ SET synchronize_seqscans = off
 AS $proc$
 DECLARE
 	fn constant text := 'tdc_delaunay_tiled';
+	gtyp regtype;
+	pc boolean;
 	ttype text := 'bigint';
 	tv text;					-- SQL of a vertex's tile value
 	stroked text;				-- SQL of a row's geometry with its arcs stroked
@@ -56,8 +59,9 @@ DECLARE
 	tile_sql text;
 	tile_box text;
 BEGIN
-	-- the geometry column
-	PERFORM _tdc_tiled_geometry(fn, source, geom_column);
+	-- the geometry column, or a pcpatch column (tdc_delaunay_pointcloud)
+	gtyp := _tdc_tiled_geometry(fn, source, geom_column, filter);
+	pc := (SELECT t.typname = 'pcpatch' FROM pg_type t WHERE t.oid = gtyp);
 	-- the tiles
 	IF tile_column IS NOT NULL THEN
 		SELECT format_type(a.atttypid, a.atttypmod) INTO ttype
@@ -85,6 +89,12 @@ BEGIN
 		EXECUTE 'SELECT EXISTS (SELECT 1 FROM pg_dist_partition WHERE logicalrelid = $1 AND partmethod = ''h''
 					AND column_to_column_name(logicalrelid, partkey) = $2)'
 		   INTO citus USING source, tile_column;
+	END IF;
+	IF citus AND pc THEN
+		RAISE EXCEPTION '%: a pcpatch column is not read by the rounds on Citus workers', fn
+			USING ERRCODE = 'feature_not_supported',
+				  HINT = 'Call tdc_delaunay_tiled without tile_column: the coordinator reads the patches, in tiles '
+						 'that fit tdc_delaunay.max_memory.';
 	END IF;
 	IF citus THEN
 		-- The staging tables are written and then read by other statements of
@@ -116,15 +126,26 @@ BEGIN
 	-- squares of tile_size label it with the square holding that vertex,
 	-- column * 2^32 + row counted from the vertices' lower left corner
 	-- (_tdc_square_label).
-	IF NOT citus THEN
+	IF NOT citus AND pc THEN
+		-- patches: X, Y and Z, the SRID of the first patch's format
+		srid_lo := _tdc_pc_column_srid(source, geom_column);
+		zm_lo := 2;
+	ELSIF NOT citus THEN
 		EXECUTE format('SELECT ST_SRID(s.%1$I), ST_Zmflag(s.%1$I) FROM %2$s s WHERE s.%1$I IS NOT NULL LIMIT 1',
 					   geom_column, source)
 		   INTO srid_lo, zm_lo;
+	END IF;
+	IF NOT citus THEN
 		EXECUTE format('CREATE TABLE %s (id bigint, tile %s, geom geometry(%s, %s))', qtarget, ttype,
 					   CASE WHEN zm_lo IN (2, 3) THEN 'PolygonZ' ELSE 'Polygon' END, coalesce(srid_lo, 0));
-		PERFORM _tdc_tiled_write(CASE WHEN tile_column IS NULL THEN format('SELECT %I FROM %s', geom_column, source)
-									  ELSE format('SELECT %I, %I FROM %s', geom_column, tile_column, source) END,
-								 qtarget::regclass, tile_size);
+		tile_sql := CASE WHEN tile_column IS NULL THEN format('SELECT %I FROM %s', geom_column, source)
+						 ELSE format('SELECT %I, %I FROM %s', geom_column, tile_column, source) END;
+		IF pc THEN
+			-- the pcpatch form of the internal function (tdc_delaunay_pointcloud)
+			PERFORM _tdc_tiled_write(tile_sql, qtarget::regclass, tile_size, gtyp, filter);
+		ELSE
+			PERFORM _tdc_tiled_write(tile_sql, qtarget::regclass, tile_size);
+		END IF;
 		RETURN;
 	END IF;
 
@@ -286,8 +307,9 @@ BEGIN
 END
 $proc$;
 
-COMMENT ON PROCEDURE tdc_delaunay_tiled(regclass, text, name, name, float8) IS
-'Triangulates the vertices of source.geom_column (duplicates merged, Z of the first copy, one SRID) '
+COMMENT ON PROCEDURE tdc_delaunay_tiled(regclass, text, name, name, float8, text) IS
+'Triangulates the vertices of source.geom_column (duplicates merged, Z of the first copy, one SRID; a pcpatch column '
+'with tdc_delaunay_pointcloud: its points'' X, Y, Z, those the filter ''dimension=value[,...]'' keeps, not on Citus) '
 'into a new table target(id bigint, tile, geom geometry(Polygon)): the same triangles as ST_TDCDelaunayDump, each once, '
 'in one pass or, when that would not fit tdc_delaunay.max_memory, in tiles split by counts, as ./tdc --max-memory plans '
 'and runs them. Each triangle''s tile: with tile_column, the value (of its type) of the tile owning the triangle''s '

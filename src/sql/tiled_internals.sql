@@ -151,13 +151,14 @@ COMMENT ON FUNCTION _tdc_tiled_write(text, regclass, float8) IS
 -- The checks every tiled procedure makes (tdc_delaunay_tiled, tdc_contours_tiled,
 -- and tdc_interpolate_tiled of tdc_delaunay_raster), their errors in the
 -- caller's name fn.
-CREATE FUNCTION _tdc_tiled_geometry(fn text, source regclass, geom_column text)
+CREATE FUNCTION _tdc_tiled_geometry(fn text, source regclass, geom_column text, filter text)
 RETURNS regtype
 LANGUAGE plpgsql STABLE
 AS $fn$
 DECLARE
 	gtyp oid;
 	gtypname name;
+	typext name;
 BEGIN
 	SELECT a.atttypid, t.typname INTO gtyp, gtypname
 	  FROM pg_attribute a JOIN pg_type t ON t.oid = a.atttypid
@@ -166,16 +167,39 @@ BEGIN
 		RAISE EXCEPTION '%: column "%" of relation % does not exist', fn, geom_column, source
 			USING ERRCODE = 'undefined_column';
 	END IF;
+	-- a pcpatch column: pgpointcloud's type, read through tdc_delaunay_pointcloud
+	SELECT e.extname INTO typext
+	  FROM pg_depend d JOIN pg_extension e ON e.oid = d.refobjid
+	 WHERE d.classid = 'pg_type'::regclass AND d.objid = gtyp AND d.refclassid = 'pg_extension'::regclass
+	   AND d.deptype = 'e';
+	IF gtypname = 'pcpatch' AND typext = 'pointcloud' THEN
+		IF NOT EXISTS (SELECT 1 FROM pg_extension WHERE extname = 'tdc_delaunay_pointcloud') THEN
+			RAISE EXCEPTION '%: column "%" of relation % is a pcpatch column, and extension tdc_delaunay_pointcloud is not installed',
+				fn, geom_column, source
+				USING ERRCODE = 'feature_not_supported',
+					  HINT = 'CREATE EXTENSION tdc_delaunay_pointcloud reads pgpointcloud patches.';
+		END IF;
+		RETURN gtyp;
+	END IF;
 	IF gtypname <> 'geometry' THEN
-		RAISE EXCEPTION '%: column "%" of relation % is of type %, not geometry', fn, geom_column, source, gtypname
+		RAISE EXCEPTION '%: column "%" of relation % is of type %, not geometry or pcpatch', fn, geom_column, source,
+			gtypname
 			USING ERRCODE = 'datatype_mismatch';
+	END IF;
+	IF filter IS NOT NULL THEN
+		RAISE EXCEPTION '%: a filter is for a pcpatch column; column "%" of relation % is a geometry', fn, geom_column,
+			source
+			USING ERRCODE = 'invalid_parameter_value',
+				  HINT = 'Select the rows with a WHERE clause in a view, and give the view as the source.';
 	END IF;
 	RETURN gtyp;
 END
 $fn$;
 
-COMMENT ON FUNCTION _tdc_tiled_geometry(text, regclass, text) IS
-'Internal, for the tiled procedures: the type of source.geom_column, which must exist and be a geometry (errors in the name fn).';
+COMMENT ON FUNCTION _tdc_tiled_geometry(text, regclass, text, text) IS
+'Internal, for the tiled procedures: the type of source.geom_column, which must exist and be a geometry, or a '
+'pgpointcloud pcpatch when tdc_delaunay_pointcloud is installed; a filter (not NULL) only with a pcpatch column '
+'(errors in the name fn).';
 
 CREATE FUNCTION _tdc_tiled_target(fn text, target text)
 RETURNS text[]

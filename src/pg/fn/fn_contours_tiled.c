@@ -53,8 +53,7 @@ typedef struct LineRecord
 
 typedef struct ContourRun
 {
-	BoundedRun *br;
-	tdc_contour_tiles *ct;
+	StageConsumer sc;			/* first: the run's arg; its consumer the line pieces */
 	double		interval,
 				base;
 	tdc_interp_spec spec;
@@ -66,24 +65,20 @@ typedef struct ContourRun
 	bytea	   *wkb;			/* a line's EWKB, grown as needed */
 	uint64		wkb_cap;
 	uint64		rows;
-	char		err[1024];		/* a callback's failure, said in full */
-	MemoryContextCallback cb;
 } ContourRun;
 
-/* On any end of the call: the run joined, the pieces freed, the files and the directory gone. */
-static void
-contour_run_release(void *arg)
+/* The consumer's callbacks (tdc_stage_consumer_init): the core's line pieces. */
+static int
+contour_tile(void *obj, const double *q, const double *qz, const size_t *tri, size_t ntri, char *err,
+			 size_t errlen)
 {
-	ContourRun *cr = (ContourRun *) arg;
+	return tdc_contour_tiles_tile((tdc_contour_tiles *) obj, q, qz, tri, ntri, err, errlen);
+}
 
-	/* the run's thread uses the pieces: it goes first; their files before the directory */
-	tdc_stage_stop(cr->br);
-	if (cr->ct != NULL)
-	{
-		tdc_contour_tiles_free(cr->ct);
-		cr->ct = NULL;
-	}
-	tdc_stage_release(cr->br);
+static void
+contour_free(void *obj)
+{
+	tdc_contour_tiles_free((tdc_contour_tiles *) obj);
 }
 
 /* The run's begin, on its thread: the core's line pieces, their buffers held. */
@@ -91,24 +86,16 @@ static int
 contour_begin(void *arg, const double box[4], const double *hull, size_t nhull, size_t *hold)
 {
 	ContourRun *cr = (ContourRun *) arg;
+	tdc_contour_tiles *ct = NULL;
+	int			rc;
 
 	(void) box;
 	(void) hull;
 	(void) nhull;
-	return tdc_contour_tiles_begin(cr->interval, cr->base, &cr->spec, cr->br->dir, &cr->ct, hold,
-								   cr->err, sizeof(cr->err));
-}
-
-/* The run's emit, on its thread: a final tile's triangles cut into pieces. */
-static int
-contour_emit(void *arg, int tile, const double *q, const double *qz, const int64_t *ql,
-			 const size_t *tri, size_t ntri)
-{
-	ContourRun *cr = (ContourRun *) arg;
-
-	(void) tile;
-	(void) ql;
-	return tdc_contour_tiles_tile(cr->ct, q, qz, tri, ntri, cr->err, sizeof(cr->err));
+	rc = tdc_contour_tiles_begin(cr->interval, cr->base, &cr->spec, cr->sc.br->dir, &ct, hold,
+								 cr->sc.err, sizeof(cr->sc.err));
+	cr->sc.obj = ct;
+	return rc;
 }
 
 /* The join's callback, inside the core: a line appended to the lines file. */
@@ -210,7 +197,7 @@ prepare_insert(ContourRun *cr, Oid target)
 static void
 write_lines_from_file(ContourRun *cr, const char *fname)
 {
-	BoundedRun *br = cr->br;
+	BoundedRun *br = cr->sc.br;
 	LineRecord	rec;
 	double	   *xy = NULL;
 	uint64		cap = 0;
@@ -241,8 +228,9 @@ PG_FUNCTION_INFO_V1(_tdc_contours_tiled_write);
 
 /*
  * _tdc_contours_tiled_write(query text, target regclass, interval float8,
- *		base float8, geom_type regtype) RETURNS int8
- * The lines written; see the top of this file.  Internal to
+ *		base float8, geom_type regtype [, filter text]) RETURNS int8
+ * The lines written; see the top of this file.  With filter (the form
+ * tdc_delaunay_pointcloud declares) the column holds pcpatch values.  Internal to
  * tdc_contours_tiled, which checked the arguments.
  */
 Datum
@@ -264,7 +252,7 @@ _tdc_contours_tiled_write(PG_FUNCTION_ARGS)
 
 	tdc_signal_guard();
 	for (int i = 0; i < PG_NARGS(); i++)
-		if (PG_ARGISNULL(i))
+		if (PG_ARGISNULL(i) && i != 5)
 			ereport(ERROR,
 					(errcode(ERRCODE_NULL_VALUE_NOT_ALLOWED),
 					 errmsg("%s: argument %d must not be NULL", fname, i + 1)));
@@ -281,16 +269,15 @@ _tdc_contours_tiled_write(PG_FUNCTION_ARGS)
 	cr->spec.method = TDC_INTERP_LINEAR;
 	tdc_session_options(&opt);
 
-	br = cr->br = MemoryContextAllocZero(cxt, sizeof(BoundedRun));
-	cr->cb.func = contour_run_release;
-	cr->cb.arg = cr;
-	MemoryContextRegisterResetCallback(cxt, &cr->cb);
+	tdc_stage_consumer_init(&cr->sc, cxt, contour_tile, contour_free);
+	br = cr->sc.br;
 
 	tdc_pointbuf_init(&buf, AllocSetContextCreate(cxt, "tdc_contours_tiled samples", ALLOCSET_DEFAULT_SIZES));
 	buf.curves = TDC_CURVES_STROKE;
 	tdc_stage_init(&sa, br, &buf, cxt, &opt, limit_mb, fname);
 	sa.tin = true;
-	tdc_dump_collect(&buf, NULL, query, PG_GETARG_OID(4), fname, tdc_stage_row, &sa);
+	tdc_dump_collect_pc(&buf, query, PG_GETARG_OID(4), tdc_stage_pc_column(fcinfo, 5, cxt), fname,
+						tdc_stage_row, &sa);
 	npts = tdc_stage_done(&sa);
 	cr->srid = buf.srid;
 	if (npts > 0 && !buf.hasz)
@@ -345,30 +332,30 @@ _tdc_contours_tiled_write(PG_FUNCTION_ARGS)
 
 		memset(&p, 0, sizeof(p));
 		p.begin = contour_begin;
-		p.emit = contour_emit;
+		p.emit = tdc_stage_consumer_emit;
 		p.arg = cr;
 		p.any_order = true;
 		tdc_stage_run(br, &p, &opt, limit_mb, setting, tdc_pointbuf_bytes(&buf), "tiled contours",
-					  cr->err, &st, fname);
+					  cr->sc.err, &st, fname);
 		/* the join gets what the limit leaves beside the staging buffer and a margin */
 		held = tdc_pointbuf_bytes(&buf) + ((uint64) 8 << 20);
 		snprintf(br->tripath, sizeof(br->tripath), "%s/lines", br->dir);
 		br->ftri = tdc_stage_open(br->tripath, "wb", fname);
-		cr->err[0] = '\0';
-		rc = tdc_contour_tiles_lines(cr->ct, (size_t) (sa.limit > held ? sa.limit - held : 0),
-									 contour_line_out, br, NULL, &nlines, &np, cr->err, sizeof(cr->err));
+		cr->sc.err[0] = '\0';
+		rc = tdc_contour_tiles_lines((tdc_contour_tiles *) cr->sc.obj, (size_t) (sa.limit > held ? sa.limit - held : 0),
+									 contour_line_out, br, NULL, &nlines, &np, cr->sc.err, sizeof(cr->sc.err));
 		if (rc != TDC_OK)
 		{
 			tdc_stage_write_error(br, fname);
-			tdc_report_status(rc, cr->err, fname);
+			tdc_report_status(rc, cr->sc.err, fname);
 		}
 		tdc_stage_finish(&br->ftri, br->tripath, fname);
-		tdc_contour_tiles_free(cr->ct);
-		cr->ct = NULL;
+		contour_free(cr->sc.obj);
+		cr->sc.obj = NULL;
 		prepare_insert(cr, target);
 		write_lines_from_file(cr, fname);
 		SPI_finish();
-		contour_run_release(cr);
+		tdc_stage_consumer_release(&cr->sc);
 	}
 	ereport(NOTICE,
 			(errmsg("%s: %llu lines from %llu points in %d run tile%s under %s = %llu MB, "

@@ -59,6 +59,7 @@
 /* The coverage being written, and what the run's callbacks share. */
 typedef struct Coverage
 {
+	StageConsumer sc;			/* first: the run's arg; its consumer the raster */
 	double		gt[6];
 	uint32		width,
 				height,
@@ -68,31 +69,25 @@ typedef struct Coverage
 	int			pixtype;
 	double		nodata;			/* as given; as stored: tdc_raster_nodata_value */
 	tdc_interp_spec spec;
-	tdc_raster *ras;			/* the bounded run's grid */
-	BoundedRun *br;
 	double	   *tilev;			/* a tile's values, th * tw */
 	uint8	   *tileok;			/* and their mask */
 	SPIPlanPtr	plan;
 	MemoryContext row_cxt;		/* a tile's allocations, reset after each */
 	uint64		rows;
-	char		err[1024];		/* a callback's failure, said in full */
-	MemoryContextCallback cb;
 } Coverage;
 
-/* On any end of the call: the run joined, the raster freed, the files and the directory gone. */
-static void
-coverage_release(void *arg)
+/* The consumer's callbacks (tdc_stage_consumer_init): the core's raster. */
+static int
+coverage_tile(void *obj, const double *q, const double *qz, const size_t *tri, size_t ntri, char *err,
+			  size_t errlen)
 {
-	Coverage   *cov = (Coverage *) arg;
+	return tdc_raster_tile((tdc_raster *) obj, q, qz, tri, ntri, err, errlen);
+}
 
-	/* the run's thread uses the raster: it goes first; the raster's file before the directory */
-	tdc_stage_stop(cov->br);
-	if (cov->ras != NULL)
-	{
-		tdc_raster_free(cov->ras);
-		cov->ras = NULL;
-	}
-	tdc_stage_release(cov->br);
+static void
+coverage_free(void *obj)
+{
+	tdc_raster_free((tdc_raster *) obj);
 }
 
 /* The bytes a band of rows, a tile's buffers and its raster value take. */
@@ -111,6 +106,7 @@ coverage_begin(void *arg, const double box[4], const double *hull, size_t nhull,
 {
 	Coverage   *cov = (Coverage *) arg;
 	tdc_grid_spec g;
+	tdc_raster *ras = NULL;
 	size_t		h = 0;
 	int			rc;
 
@@ -118,24 +114,13 @@ coverage_begin(void *arg, const double box[4], const double *hull, size_t nhull,
 	memcpy(g.gt, cov->gt, sizeof(g.gt));
 	g.width = cov->width;
 	g.height = cov->height;
-	rc = tdc_raster_begin(&cov->spec, &g, hull, nhull, cov->br->dir, &cov->ras, &h,
-						  cov->err, sizeof(cov->err));
+	rc = tdc_raster_begin(&cov->spec, &g, hull, nhull, cov->sc.br->dir, &ras, &h,
+						  cov->sc.err, sizeof(cov->sc.err));
+	cov->sc.obj = ras;
 	if (rc != TDC_OK)
 		return rc;
 	*hold = h + (size_t) coverage_buffers(cov, true);
 	return TDC_OK;
-}
-
-/* The run's emit, on its thread: a final tile's triangles rasterised. */
-static int
-coverage_emit(void *arg, int tile, const double *q, const double *qz, const int64_t *ql,
-			  const size_t *tri, size_t ntri)
-{
-	Coverage   *cov = (Coverage *) arg;
-
-	(void) tile;
-	(void) ql;
-	return tdc_raster_tile(cov->ras, q, qz, tri, ntri, cov->err, sizeof(cov->err));
 }
 
 /*
@@ -221,9 +206,12 @@ PG_FUNCTION_INFO_V1(_tdc_interpolate_tiled_write);
 /*
  * _tdc_interpolate_tiled_write(query text, target regclass, gt float8[],
  *		width int4, height int4, srid int4, method text, pixel_type text,
- *		nodata float8, tile_width int4, tile_height int4) RETURNS int8
+ *		nodata float8, tile_width int4, tile_height int4, geom_type regtype
+ *		[, filter text]) RETURNS int8
  * The tiles written; see the top of this file.  nodata NULL: the method's
- * (as a template band without a nodata value).  Internal to
+ * (as a template band without a nodata value).  With filter (the form
+ * tdc_delaunay_pointcloud declares) the column holds pcpatch values, the
+ * filter NULL or 'dimension=value[,...]'.  Internal to
  * tdc_interpolate_tiled, which checked the arguments it reports on.
  */
 Datum
@@ -249,7 +237,7 @@ _tdc_interpolate_tiled_write(PG_FUNCTION_ARGS)
 
 	tdc_signal_guard();
 	for (int i = 0; i < PG_NARGS(); i++)
-		if (PG_ARGISNULL(i) && i != 8)
+		if (PG_ARGISNULL(i) && i != 8 && i != 12)
 			ereport(ERROR,
 					(errcode(ERRCODE_NULL_VALUE_NOT_ALLOWED),
 					 errmsg("%s: argument %d must not be NULL", fname, i + 1)));
@@ -287,10 +275,8 @@ _tdc_interpolate_tiled_write(PG_FUNCTION_ARGS)
 	tdc_session_options(&opt);
 
 	/* the files and the raster go with this call's memory, whatever ends it */
-	br = cov->br = MemoryContextAllocZero(cxt, sizeof(BoundedRun));
-	cov->cb.func = coverage_release;
-	cov->cb.arg = cov;
-	MemoryContextRegisterResetCallback(cxt, &cov->cb);
+	tdc_stage_consumer_init(&cov->sc, cxt, coverage_tile, coverage_free);
+	br = cov->sc.br;
 
 	/* the samples: in memory while one pass fits, then to the files */
 	npix = (Size) cov->width * cov->height;
@@ -300,7 +286,8 @@ _tdc_interpolate_tiled_write(PG_FUNCTION_ARGS)
 	/* one pass holds the TIN, the grid's values and mask, and a tile */
 	sa.tin = true;
 	sa.beside = (uint64) npix * (sizeof(double) + 1) + coverage_buffers(cov, false);
-	tdc_dump_collect(&buf, NULL, query, PG_GETARG_OID(11), fname, tdc_stage_row, &sa);
+	tdc_dump_collect_pc(&buf, query, PG_GETARG_OID(11), tdc_stage_pc_column(fcinfo, 12, cxt), fname,
+						tdc_stage_row, &sa);
 	npts = tdc_stage_done(&sa);
 	if (npts > 0 && !buf.hasz)
 		ereport(ERROR,
@@ -376,12 +363,12 @@ _tdc_interpolate_tiled_write(PG_FUNCTION_ARGS)
 
 		memset(&p, 0, sizeof(p));
 		p.begin = coverage_begin;
-		p.emit = coverage_emit;
+		p.emit = tdc_stage_consumer_emit;
 		p.arg = cov;
 		p.any_order = true;
 		/* the staging buffer, still allocated, is beside the run */
 		tdc_stage_run(br, &p, &opt, limit_mb, setting, tdc_pointbuf_bytes(&buf), "tiled interpolation",
-					  cov->err, &st, fname);
+					  cov->sc.err, &st, fname);
 		tiles = st.tiles;
 		/* what the limit leaves beside our buffers is the fringe's, in the first band */
 		held = tdc_pointbuf_bytes(&buf) + coverage_buffers(cov, true) + ((uint64) 8 << 20);
@@ -395,15 +382,15 @@ _tdc_interpolate_tiled_write(PG_FUNCTION_ARGS)
 			int			rc;
 
 			CHECK_FOR_INTERRUPTS();
-			cov->err[0] = '\0';
-			rc = tdc_raster_rows(cov->ras, r0, n, band, &nvalid,
-								 (size_t) (sa.limit > held ? sa.limit - held : 0), cov->err, sizeof(cov->err));
+			cov->sc.err[0] = '\0';
+			rc = tdc_raster_rows((tdc_raster *) cov->sc.obj, r0, n, band, &nvalid,
+								 (size_t) (sa.limit > held ? sa.limit - held : 0), cov->sc.err, sizeof(cov->sc.err));
 			if (rc != TDC_OK)
-				tdc_report_status(rc, cov->err, fname);
+				tdc_report_status(rc, cov->sc.err, fname);
 			write_band(cov, band, NULL, r0, n);
 		}
 		SPI_finish();
-		coverage_release(cov);
+		tdc_stage_consumer_release(&cov->sc);
 	}
 	ereport(NOTICE,
 			(errmsg("%s: %llu tiles of %u x %u pixels from %llu points in %d run tile%s under %s = %llu MB, "

@@ -364,9 +364,12 @@ run_tiles(BoundedRun *br, const tdc_options *opt, uint64 limit_mb, const char *s
 PG_FUNCTION_INFO_V1(_tdc_tiled_write);
 
 /*
- * _tdc_tiled_write(query text, target regclass, tile_size float8) RETURNS int8
+ * _tdc_tiled_write(query text, target regclass, tile_size float8
+ *		[, geom_type regtype, filter text]) RETURNS int8
  * The Delaunay triangles of the query's vertices (its geometry column, as
- * ST_TDCDelaunayDump takes it) into target, which the caller created in
+ * ST_TDCDelaunayDump takes it; in the form tdc_delaunay_pointcloud
+ * declares, its pcpatch column of type geom_type, the points the filter
+ * keeps) into target, which the caller created in
  * this transaction (table_write.c); tile_size NULL: no squares.  A second
  * column of the query is the tile column, of the type of the target's.
  * Returns the rows written; see the top of this file.  Internal to
@@ -434,7 +437,12 @@ _tdc_tiled_write(PG_FUNCTION_ARGS)
 	tdc_stage_init(&sa, br, &buf, cxt, &opt, limit_mb, fname);
 	sa.tw = &tw;
 	sa.size = size;
-	tdc_dump_collect_tagged(&buf, query, tw.geomoid, fname, &stage_ops, &sa);
+	if (PG_NARGS() > 3)
+		/* the pcpatch form (tdc_delaunay_pointcloud): geom_type, filter */
+		tdc_dump_collect_tagged_pc(&buf, query, PG_GETARG_OID(3), tdc_stage_pc_column(fcinfo, 4, cxt), fname,
+								   &stage_ops, &sa);
+	else
+		tdc_dump_collect_tagged(&buf, query, tw.geomoid, fname, &stage_ops, &sa);
 	/* the values in their order: the labels become ranks */
 	if (sa.tagged)
 		tdc_tile_values_rank(sa.tv, fname);

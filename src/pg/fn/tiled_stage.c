@@ -5,7 +5,9 @@
  *
  * The procedures (tdc_delaunay_tiled, tdc_interpolate_tiled,
  * tdc_contours_tiled) read their source the way the Dump reads it
- * (dump_query.c), into a point buffer.  Every STAGE_CHUNK vertices the
+ * (dump_query.c), into a point buffer: a geometry column, or a pcpatch
+ * column through the pointcloud extension's forms of their internal
+ * functions (tdc_stage_pc_column).  Every STAGE_CHUNK vertices the
  * row callback checks whether the vertices, the engine's estimate for
  * them, and what the caller will hold beside one pass (a TIN, a grid, the
  * tile column's labels) still fit tdc_delaunay.max_memory; the first time
@@ -29,6 +31,7 @@
 #include "commands/tablespace.h"
 #include "miscadmin.h"
 #include "storage/fd.h"
+#include "utils/builtins.h"
 #include "utils/memutils.h"
 
 #include "tdc_pg.h"
@@ -358,4 +361,67 @@ tdc_stage_write_error(BoundedRun *br, const char *fname)
 				(errcode_for_file_access(),
 				 errmsg("%s: could not write file \"%s\": %m", fname, br->tripath)));
 	}
+}
+
+/*
+ * The source column of a tiled procedure's call: NULL for geometries; for
+ * pgpointcloud patches, the pcpatch reader's state with the filter.  The
+ * internal functions' pcpatch forms, declared only by
+ * tdc_delaunay_pointcloud, take one argument more than the geometry forms
+ * (geometry_nargs): the filter, NULL for none.
+ */
+TdcPcColumn *
+tdc_stage_pc_column(FunctionCallInfo fcinfo, int geometry_nargs, MemoryContext cxt)
+{
+	TdcPcColumn *pc;
+
+	if (PG_NARGS() <= geometry_nargs)
+		return NULL;
+	pc = MemoryContextAllocZero(cxt, sizeof(TdcPcColumn));
+	pc->cxt = cxt;
+	pc->filter = PG_ARGISNULL(geometry_nargs) ? NULL :
+		MemoryContextStrdup(cxt, text_to_cstring(PG_GETARG_TEXT_PP(geometry_nargs)));
+	return pc;
+}
+
+/* The consumer's run set up in cxt: its BoundedRun made, its release registered. */
+void
+tdc_stage_consumer_init(StageConsumer *sc, MemoryContext cxt, StageTileFn tile, void (*free_obj) (void *obj))
+{
+	sc->br = MemoryContextAllocZero(cxt, sizeof(BoundedRun));
+	sc->obj = NULL;
+	sc->tile = tile;
+	sc->free_obj = free_obj;
+	sc->err[0] = '\0';
+	sc->cb.func = tdc_stage_consumer_release;
+	sc->cb.arg = sc;
+	MemoryContextRegisterResetCallback(cxt, &sc->cb);
+}
+
+/* The run's emit, on its thread: a final tile's triangles to the consumer. */
+int
+tdc_stage_consumer_emit(void *arg, int tile, const double *q, const double *qz, const int64_t *ql,
+						const size_t *tri, size_t ntri)
+{
+	StageConsumer *sc = (StageConsumer *) arg;
+
+	(void) tile;
+	(void) ql;
+	return sc->tile(sc->obj, q, qz, tri, ntri, sc->err, sizeof(sc->err));
+}
+
+/* On any end of the call: the run joined, the consumer freed, the files and the directory gone. */
+void
+tdc_stage_consumer_release(void *arg)
+{
+	StageConsumer *sc = (StageConsumer *) arg;
+
+	/* the run's thread uses the consumer: it goes first; the consumer's files before the directory */
+	tdc_stage_stop(sc->br);
+	if (sc->obj != NULL)
+	{
+		sc->free_obj(sc->obj);
+		sc->obj = NULL;
+	}
+	tdc_stage_release(sc->br);
 }

@@ -66,6 +66,33 @@ typedef struct StageArg
 	const char *fname;
 } StageArg;
 
+/*
+ * A run whose final triangles go to a consumer of the core (the raster of
+ * tdc_interpolate_tiled, the contour pieces of tdc_contours_tiled): the
+ * run's emit hands each final tile's triangles to tile, and on any end of
+ * the call the run is stopped before free_obj frees the consumer, then the
+ * files go.  The callers' structs begin with it, so that the run's begin,
+ * given the StageConsumer, reaches the rest.
+ */
+typedef int (*StageTileFn) (void *obj, const double *q, const double *qz, const size_t *tri,
+							size_t ntri, char *err, size_t errlen);
+
+typedef struct StageConsumer
+{
+	BoundedRun *br;
+	void	   *obj;			/* the consumer, made by the run's begin */
+	StageTileFn tile;
+	void		(*free_obj) (void *obj);
+	char		err[1024];		/* a callback's failure, said in full */
+	MemoryContextCallback cb;
+} StageConsumer;
+
+extern void tdc_stage_consumer_init(StageConsumer *sc, MemoryContext cxt, StageTileFn tile,
+									void (*free_obj) (void *obj));
+extern int	tdc_stage_consumer_emit(void *arg, int tile, const double *q, const double *qz,
+									const int64_t *ql, const size_t *tri, size_t ntri);
+extern void tdc_stage_consumer_release(void *arg);
+
 extern void tdc_stage_close(FILE **f);
 extern void tdc_stage_release(void *arg);
 extern void tdc_stage_make_dir(BoundedRun *br, const char *fname);
@@ -84,6 +111,7 @@ extern void tdc_stage_init(StageArg *sa, BoundedRun *br, TdcPointBuf *buf, Memor
 extern uint64 tdc_stage_done(StageArg *sa);
 extern void tdc_stage_stop(BoundedRun *br);
 extern void tdc_stage_write_error(BoundedRun *br, const char *fname);
+extern TdcPcColumn *tdc_stage_pc_column(FunctionCallInfo fcinfo, int geometry_nargs, MemoryContext cxt);
 extern void tdc_stage_run(BoundedRun *br, tdc_bounded_params *p, const tdc_options *opt,
 						  uint64 limit_mb, const char *setting, uint64 outside, const char *what,
 						  const char *cb_err, tdc_bounded_stats *st, const char *fname);

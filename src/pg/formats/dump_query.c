@@ -4,7 +4,8 @@
  *		refuse it unless it only reads, run it, and collect the vertices of
  *		its geometry column, with the id of each vertex's row when asked,
  *		or each row's tag (tdc_delaunay_tiled's tile column), when the query
- *		has one, for a callback.
+ *		has one, for a callback; or, for the tiled procedures over a pcpatch
+ *		column, the X, Y, Z of its patches (tdc_dump_collect_pc).
  *
  * The query runs through SPI as the calling user (the Dump functions are
  * not SECURITY DEFINER), read-only, behind a cursor fetched in batches of
@@ -164,7 +165,7 @@ dump_check_columns(TupleDesc desc, bool with_ids, bool with_tags, Oid geomoid,
  */
 static void
 dump_collect(TdcPointBuf *buf, TdcIdBuf *ids, const char *query,
-			 Oid geomoid, const char *fname, TdcDumpRowFn row_fn,
+			 Oid geomoid, TdcPcColumn *pc, const char *fname, TdcDumpRowFn row_fn,
 			 void *row_arg, const TdcDumpTagOps *tag_ops)
 {
 	ErrorContextCallback errcb;
@@ -241,7 +242,10 @@ dump_collect(TdcPointBuf *buf, TdcIdBuf *ids, const char *query,
 					(int64) DatumGetInt16(d);
 			}
 			first = buf->n;
-			(void) tdc_read_geometry(buf, g, fname);
+			if (pc)
+				tdc_pc_append_patch(buf, &pc->src, pc->cxt, g, pc->filter, "column", fname);
+			else
+				(void) tdc_read_geometry(buf, g, fname);
 			if (tagp)
 				tag.value = SPI_getbinval(SPI_tuptable->vals[i], SPI_tuptable->tupdesc, 2,
 										  &tag.isnull);
@@ -271,14 +275,14 @@ dump_collect(TdcPointBuf *buf, TdcIdBuf *ids, const char *query,
  */
 static void
 dump_collect_hinted(TdcPointBuf *buf, TdcIdBuf *ids, const char *query,
-					Oid geomoid, const char *fname, TdcDumpRowFn row_fn,
+					Oid geomoid, TdcPcColumn *pc, const char *fname, TdcDumpRowFn row_fn,
 					void *row_arg, const TdcDumpTagOps *tag_ops)
 {
 	MemoryContext outer = CurrentMemoryContext;
 
 	PG_TRY();
 	{
-		dump_collect(buf, ids, query, geomoid, fname, row_fn, row_arg, tag_ops);
+		dump_collect(buf, ids, query, geomoid, pc, fname, row_fn, row_arg, tag_ops);
 	}
 	PG_CATCH();
 	{
@@ -308,7 +312,7 @@ tdc_dump_collect(TdcPointBuf *buf, TdcIdBuf *ids, const char *query,
 				 Oid geomoid, const char *fname, TdcDumpRowFn row_fn,
 				 void *row_arg)
 {
-	dump_collect_hinted(buf, ids, query, geomoid, fname, row_fn, row_arg, NULL);
+	dump_collect_hinted(buf, ids, query, geomoid, NULL, fname, row_fn, row_arg, NULL);
 }
 
 /*
@@ -322,5 +326,26 @@ void
 tdc_dump_collect_tagged(TdcPointBuf *buf, const char *query, Oid geomoid,
 						const char *fname, const TdcDumpTagOps *ops, void *arg)
 {
-	dump_collect_hinted(buf, NULL, query, geomoid, fname, NULL, arg, ops);
+	dump_collect_hinted(buf, NULL, query, geomoid, NULL, fname, NULL, arg, ops);
+}
+
+/*
+ * The same two for a query whose column (of type coltype) holds
+ * pgpointcloud patches: each patch's X, Y, Z (those the filter keeps) are
+ * appended as a geometry's vertices would be (pcpatch_source.c).  Only the
+ * tiled procedures' internal functions of tdc_delaunay_pointcloud come
+ * here, so tdc_delaunay alone never reads a patch.
+ */
+void
+tdc_dump_collect_pc(TdcPointBuf *buf, const char *query, Oid coltype, TdcPcColumn *pc,
+					const char *fname, TdcDumpRowFn row_fn, void *row_arg)
+{
+	dump_collect_hinted(buf, NULL, query, coltype, pc, fname, row_fn, row_arg, NULL);
+}
+
+void
+tdc_dump_collect_tagged_pc(TdcPointBuf *buf, const char *query, Oid coltype, TdcPcColumn *pc,
+						   const char *fname, const TdcDumpTagOps *ops, void *arg)
+{
+	dump_collect_hinted(buf, NULL, query, coltype, pc, fname, NULL, arg, ops);
 }

@@ -19,6 +19,11 @@
  * pcpatch aggregates have no combine function (no partial aggregation), so
  * that this check covers every row.
  *
+ * The tiled procedures read a pcpatch column through the same function
+ * (tdc_pc_append_patch, from dump_query.c), their format kept in the call
+ * rather than in a state, only when called through the forms of their
+ * internal functions that tdc_delaunay_pointcloud declares.
+ *
  * The bytes are decoded by pcpatch_read.c (pure C, fuzzed); this file maps
  * its codes to errors with hints.  Once the layout is found able to hold
  * the header's point count (tdc_pc_patch_check), the buffer grows by it
@@ -190,16 +195,18 @@ pc_lookup(TdcPcSource *src, uint32 pcid, const char *fname)
 }
 
 /*
- * Append the points of one patch (those passing the filter) to st's
- * buffer.  The first patch fixes the pcid and the filter; later ones must
- * agree.
+ * Append the points of one patch (those passing the filter ftext, NULL:
+ * none) to buf; what names the input in the mixed pcid error.  The first patch fixes the pcid and the filter, its format
+ * kept in *srcp (allocated in cxt); later ones must agree.  The aggregates
+ * keep *srcp in their state (tdc_pc_read_patch); the tiled procedures in
+ * their call (tdc_dump_collect_pc), in a context that outlives the
+ * point buffer's, which staging to files resets.
  */
 void
-tdc_pc_read_patch(TdcAggState *st, Datum patch, text *filter, const char *fname)
+tdc_pc_append_patch(TdcPointBuf *buf, struct TdcPcSource **srcp, MemoryContext cxt, Datum patch,
+					const char *ftext, const char *what, const char *fname)
 {
-	TdcPointBuf *buf = &st->pts;
-	TdcPcSource *src = st->pc;
-	char	   *ftext = filter ? text_to_cstring(filter) : NULL;
+	TdcPcSource *src = *srcp;
 	struct varlena *v;
 	TdcPcHeader h;
 	char		err[256];
@@ -215,25 +222,26 @@ tdc_pc_read_patch(TdcAggState *st, Datum patch, text *filter, const char *fname)
 		pc_error(rc, err, 0, fname);
 	if (src == NULL)
 	{
-		src = MemoryContextAllocZero(buf->cxt, sizeof(TdcPcSource));
+		src = MemoryContextAllocZero(cxt, sizeof(TdcPcSource));
 		pc_lookup(src, h.pcid, fname);
 		if (ftext != NULL)
 		{
 			rc = tdc_pc_filter_parse(ftext, &src->schema, &src->filter, err, sizeof(err));
 			if (rc != TDC_PC_OK)
 				pc_error(rc, err, h.pcid, fname);
-			src->filter_text = MemoryContextStrdup(buf->cxt, ftext);
+			src->filter_text = MemoryContextStrdup(cxt, ftext);
 		}
 		else
 			src->filter.dim = -1;
-		st->pc = src;
+		*srcp = src;
 	}
 	else if (src->pcid != h.pcid)
 		ereport(ERROR,
 				(errcode(ERRCODE_INVALID_PARAMETER_VALUE),
-				 errmsg("%s: patches of different pcids %u and %u in one aggregate",
-						fname, Min(src->pcid, h.pcid), Max(src->pcid, h.pcid)),
-				 errhint("Aggregate the patches of each pcid apart (WHERE PC_PCId(pa) = ...), or move them to one "
+				 errmsg("%s: patches of different pcids %u and %u in one %s",
+						fname, Min(src->pcid, h.pcid), Max(src->pcid, h.pcid),
+						what),
+				 errhint("Take the patches of each pcid apart (WHERE PC_PCId(pa) = ...), or move them to one "
 						 "format with PC_Transform.")));
 	if ((ftext == NULL) != (src->filter_text == NULL) ||
 		(ftext != NULL && strcmp(ftext, src->filter_text) != 0))
@@ -263,4 +271,12 @@ tdc_pc_read_patch(TdcAggState *st, Datum patch, text *filter, const char *fname)
 	buf->n += kept;
 	if ((Pointer) v != DatumGetPointer(patch))
 		pfree(v);
+}
+
+/* An aggregate's row: the patch into its state, the format kept there. */
+void
+tdc_pc_read_patch(TdcAggState *st, Datum patch, text *filter, const char *fname)
+{
+	tdc_pc_append_patch(&st->pts, &st->pc, st->pts.cxt, patch, filter ? text_to_cstring(filter) : NULL,
+						"aggregate", fname);
 }
