@@ -307,7 +307,7 @@ zcall() {
 # distributed source (each scan is one command per shard)
 rounds() {
 	local n s
-	n=$(grep -c "issuing .*FROM public\.${2}_[0-9]* " "$BASE/$1.out")
+	n=$(grep -c -E "issuing .*[ .]${2}_[0-9]+ " "$BASE/$1.out")
 	s=$(q coord -c "SELECT count(*) FROM pg_dist_shard WHERE logicalrelid = '$2'::regclass")
 	if ((s > 0 && n % s == 0)); then echo "$((n / s)) $n $s"; else echo "? $n $s"; fi
 }
