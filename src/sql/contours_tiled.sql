@@ -17,6 +17,11 @@ COMMENT ON FUNCTION _tdc_contours_tiled_write(text, regclass, float8, float8, re
 -- The procedure: the arguments checked, the target made with the first
 -- row's SRID, and the work done by _tdc_contours_tiled_write in one call,
 -- in the caller's transaction: an error or a cancel leaves no target.
+--
+-- On Citus the source may be distributed (or a reference table): the SRID
+-- probe and the read are two distributed SELECTs, whatever the tiles, and
+-- the target is a plain table of the coordinator, where the lines are made
+-- (the TIN covers all the samples): test/citus/run.sh.
 CREATE PROCEDURE tdc_contours_tiled(source text, target text, geom_column text, "interval" float8,
 									base float8 DEFAULT 0, filter text DEFAULT NULL)
 LANGUAGE plpgsql

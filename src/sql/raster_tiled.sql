@@ -20,6 +20,14 @@ COMMENT ON FUNCTION _tdc_interpolate_tiled_write(text, regclass, float8[], int4,
 -- template's geometry, and the work done by _tdc_interpolate_tiled_write
 -- in one call, in the caller's transaction: an error or a cancel leaves no
 -- target behind.
+--
+-- On Citus the source may be distributed (or a reference table): it is
+-- read by one distributed SELECT, whatever the tiles, and the target is a
+-- plain table of the coordinator.  The grid needs the TIN of all the
+-- samples, so the work stays in this backend under max_memory, and a
+-- coverage is few, large rows that GIS clients read through the
+-- coordinator; AddRasterConstraints takes it as on plain PostgreSQL (and
+-- takes a copy distributed by rid too).  test/citus/run.sh checks both.
 CREATE PROCEDURE tdc_interpolate_tiled(source text, target text, geom_column text, template raster,
 									   method text DEFAULT 'linear', pixel_type text DEFAULT '32BF',
 									   nodata float8 DEFAULT -9999, tile_width int DEFAULT 256,

@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# test/citus/run.sh: tdc_delaunay_tiled on a 3-node Citus cluster (a
+# test/citus/run.sh: tdc_delaunay_tiled, tdc_interpolate_tiled and
+# tdc_contours_tiled on a 3-node Citus cluster (a
 # coordinator and two workers) on this machine, throw-away like
 # scripts/cluster.sh: three initdb'ed clusters listening on Unix sockets only
 # (no TCP), in a fresh directory under /tmp, always stopped and removed on exit.
@@ -11,7 +12,8 @@
 #    release's major by default); on a major Citus does not support (18) it
 #    says "skipped" and tests nothing;
 # 2. starts the nodes with shared_preload_libraries = citus, creates postgis,
-#    tdc_delaunay and citus on each, and registers the workers;
+#    postgis_raster, tdc_delaunay, tdc_delaunay_raster and citus on each,
+#    and registers the workers;
 # 3. distributes a table of uniform points by its tile column, runs
 #    tdc_delaunay_tiled, and checks: the target is distributed and co-located
 #    with the source, its triangles are those of ST_TDCDelaunayDump, each
@@ -19,7 +21,17 @@
 #    SELECT ran as a pushed-down Citus plan (no "pull to coordinator");
 #    and the same points in a plain table of the coordinator give the same
 #    triangles, tiles and id ranks through the one C function;
-# 4. an error inside a tile leaves no target behind, on any node.
+# 4. an error inside a tile leaves no target behind, on any node;
+# 5. tdc_interpolate_tiled and tdc_contours_tiled on sources distributed by
+#    id (in one pass, and under a max_memory that takes the bounded run into
+#    tens of tiles) and on a reference table: the same tiles and lines, byte
+#    for byte, as on the coordinator's plain tables, which equal
+#    ST_TDCInterpolate's windows and ST_TDCContours's lines; the rounds (the
+#    scans of the distributed source, from citus.log_remote_commands: one
+#    command per shard each) are 1 for a coverage and 2 for contours, in one
+#    pass or many tiles; the targets are plain tables of the coordinator,
+#    AddRasterConstraints takes the coverage (and a distributed copy of it);
+#    errors after the distributed read leave no target on any node.
 # Prints "N passed, M failed".  Needs root or the rights to install Citus into
 # PostgreSQL's directories (the build alone does not).
 set -uo pipefail
@@ -104,13 +116,14 @@ q() {	# node sql...: run as the owner, stop at the first error, unaligned output
 
 setup_ok=1
 for n in w1 w2 coord; do
-	q "$n" -c "CREATE EXTENSION citus; CREATE EXTENSION postgis; CREATE EXTENSION tdc_delaunay;" || setup_ok=0
+	q "$n" -c "CREATE EXTENSION citus; CREATE EXTENSION postgis; CREATE EXTENSION tdc_delaunay;
+			   CREATE EXTENSION postgis_raster; CREATE EXTENSION tdc_delaunay_raster;" || setup_ok=0
 done
 q coord -c "SELECT citus_set_coordinator_host('$RUN', ${PORT[coord]});
 			SELECT citus_add_node('$RUN', ${PORT[w1]}); SELECT citus_add_node('$RUN', ${PORT[w2]});" >/dev/null || setup_ok=0
 nw=$(q coord -c "SELECT count(*) FROM citus_get_active_worker_nodes()")
 if ((setup_ok)) && [ "$nw" = 2 ]; then
-	ok "citus, postgis, tdc_delaunay on every node; 2 active workers"
+	ok "citus, postgis(_raster), tdc_delaunay(_raster) on every node; 2 active workers"
 else
 	bad "cluster set-up (active workers: ${nw:-?})"
 	finish
@@ -238,6 +251,198 @@ if ! q coord -c "CALL tdc_delaunay_tiled('pts', 'tri', tile_column => 'tile')" >
 else
 	bad "existing target: $(head -3 "$BASE/exists.out")"
 fi
+
+# 5. tdc_interpolate_tiled and tdc_contours_tiled on a distributed source.
+# The clustered samples with heights of sql/tdc_raster_tiled.sql: 2,000
+# (one pass) and 262,800 (under max_memory = 16 MB, the core's bounded run
+# in tens of tiles), made as plain tables of the coordinator (zs_local,
+# zc_local), then copied into tables distributed by id whose shells on the
+# coordinator are emptied: a procedure that read the coordinator's own
+# table instead of the shards would see no sample.  The checks of the
+# pg_regress tests (cov_check, cov_constraints, ct_check) are read from
+# their files, so both compare the same things.
+t1=$SECONDS
+TS="ST_MakeEmptyRaster(137, 101, -20, 80, 0.75, -1.05, 0, 0, 4326)"
+TC="ST_MakeEmptyRaster(331, 290, -20, 230, 1.0, -1.0, 0, 0, 3006)"
+{
+	sed -n '/^CREATE FUNCTION cov_check/,/^END \$\$;/p; /^CREATE FUNCTION cov_constraints/,/^END \$\$;/p' \
+		"$ROOT/sql/tdc_raster_tiled.sql"
+	sed -n '/^CREATE FUNCTION ct_check/,/^END \$\$;/p' "$ROOT/sql/tdc_contours_tiled.sql"
+	cat <<-SQL
+		SELECT setseed(0.25);
+		CREATE TABLE zs_local AS
+			SELECT row_number() OVER () AS id, ST_MakePoint(x, y, sin(x / 7) * 10 + cos(y / 5) * 5) AS geom
+			  FROM (SELECT cx + 30 * (random() - 0.5) AS x, cy + 30 * (random() - 0.5) AS y
+					  FROM (SELECT (i % 2) * 60 AS cx, (i / 2) * 50 AS cy FROM generate_series(0, 3) i) c,
+						   generate_series(1, 500)) q;
+		CREATE TABLE zc_local AS
+			SELECT row_number() OVER () AS id, ST_MakePoint(x, y, sin(x / 7) * 10 + cos(y / 5) * 5) AS geom
+			  FROM (SELECT cx + 30 * (random() - 0.5) AS x, cy + 30 * (random() - 0.5) AS y
+					  FROM (SELECT (i % 3) * 100 AS cx, ((i / 3) % 3) * 100 AS cy FROM generate_series(0, 8) i) c,
+						   generate_series(1, 29200)) q;
+		CREATE TABLE zs AS SELECT * FROM zs_local;
+		CREATE TABLE zc AS SELECT * FROM zc_local;
+		CREATE TABLE zr AS SELECT * FROM zs_local;
+		SELECT create_distributed_table('zs', 'id'), create_distributed_table('zc', 'id'), create_reference_table('zr');
+		SELECT truncate_local_data_after_distributing_table(t) FROM unnest(ARRAY['zs', 'zc', 'zr']::regclass[]) t;
+	SQL
+} >"$BASE/zsetup.sql"
+if q coord -f "$BASE/zsetup.sql" >"$BASE/zsetup.out" 2>&1 &&
+	[ "$(q coord -c "SELECT count(*) FROM pg_dist_partition WHERE logicalrelid IN ('zs'::regclass, 'zc'::regclass, 'zr'::regclass)
+					 AND pg_relation_size('zs') + pg_relation_size('zc') + pg_relation_size('zr') = 0")" = 3 ]; then
+	ok "samples with heights: zs (2000) and zc (262800) distributed by id, zr (2000) a reference table; shells empty"
+else
+	bad "set-up of the samples with heights: $(grep -m3 ERROR "$BASE/zsetup.out")"
+fi
+
+# zcall NAME SQL: SQL in a session of the coordinator with one thread (the
+# same plan on every machine) and each command it sends to a worker logged
+# (citus.log_remote_commands: one NOTICE per command), into $BASE/NAME.out
+zcall() {
+	q coord -c "SET tdc_delaunay.threads = 1; SET citus.log_remote_commands = on; SET client_min_messages = notice;" \
+		-c "$2" >"$BASE/$1.out" 2>&1
+}
+# rounds NAME TABLE: the commands of NAME's run that read a shard of TABLE,
+# over TABLE's shard count: the number of times the run scanned the whole
+# distributed source (each scan is one command per shard)
+rounds() {
+	local n s
+	n=$(grep -c -E "issuing .*[ .]${2}_[0-9]+ " "$BASE/$1.out")
+	s=$(q coord -c "SELECT count(*) FROM pg_dist_shard WHERE logicalrelid = '$2'::regclass")
+	if ((s > 0 && n % s == 0)); then echo "$((n / s)) $n $s"; else echo "? $n $s"; fi
+}
+zrun() {	# NAME TABLE ROUNDS PASS SQL: a run on a distributed source, its summary, its rounds
+	local name=$1 tbl=$2 want=$3 pass=$4 r sum
+	if zcall "$name" "$5"; then
+		sum=$(grep -o 'tdc_[a-z_]*_tiled: .*' "$BASE/$name.out")
+		read -r -a r <<<"$(rounds "$name" "$tbl")"
+		if [ "${r[0]}" = "$want" ] && grep -q -- "$pass" <<<"$sum"; then
+			ok "$name on distributed $tbl: $sum; rounds: ${r[0]} (${r[1]} shard queries over ${r[2]} shards)"
+		else
+			bad "$name on distributed $tbl: rounds ${r[*]} (want $want), summary '$sum' (want '$pass')"
+		fi
+	else
+		bad "$name on distributed $tbl: $(grep -m1 -A2 ERROR "$BASE/$name.out")"
+	fi
+}
+# one pass, then the bounded run in several tiles; the interpolation reads
+# the source once, the contours twice (the SRID of the target's column,
+# LIMIT 1, then the samples)
+zrun i_one zs 1 'in one pass' \
+	"CALL tdc_interpolate_tiled('zs', 'zs_cov', 'geom', $TS, 'linear', '64BF', -9999, 30, 17)"
+zrun i_run zc 1 'in [0-9]* run tiles' \
+	"SET tdc_delaunay.max_memory = 16; CALL tdc_interpolate_tiled('zc', 'zc_cov', 'geom', $TC, 'linear', '32BF', -9999, 64, 50)"
+zrun c_one zs 2 'in one pass' \
+	"CALL tdc_contours_tiled('zs', 'zs_lines', 'geom', 2.5, 0.3)"
+zrun c_run zc 2 'in [0-9]* run tiles' \
+	"SET tdc_delaunay.max_memory = 16; CALL tdc_contours_tiled('zc', 'zc_lines', 'geom', 1.25)"
+ntiles=$(grep -ho 'in [0-9]* run tiles' "$BASE/i_run.out" "$BASE/c_run.out" | grep -o '[0-9]*' | sort -n | head -1)
+((${ntiles:-0} >= 2)) && ok "max_memory = 16 MB forced the bounded run into $ntiles or more tiles" ||
+	bad "the bounded run did not take several tiles (${ntiles:-none})"
+
+# the same procedures on the plain tables of the coordinator, and on the
+# reference table
+if q coord -c "SET tdc_delaunay.threads = 1;
+	CALL tdc_interpolate_tiled('zs_local', 'zs_cov_local', 'geom', $TS, 'linear', '64BF', -9999, 30, 17);
+	CALL tdc_contours_tiled('zs_local', 'zs_lines_local', 'geom', 2.5, 0.3);
+	CALL tdc_interpolate_tiled('zr', 'zr_cov', 'geom', $TS, 'linear', '64BF', -9999, 30, 17);
+	CALL tdc_contours_tiled('zr', 'zr_lines', 'geom', 2.5, 0.3);
+	SET tdc_delaunay.max_memory = 16;
+	CALL tdc_interpolate_tiled('zc_local', 'zc_cov_local', 'geom', $TC, 'linear', '32BF', -9999, 64, 50);
+	CALL tdc_contours_tiled('zc_local', 'zc_lines_local', 'geom', 1.25);" >"$BASE/zlocal.out" 2>&1; then
+	ok "the same runs on plain tables of the coordinator and on the reference table"
+else
+	bad "runs on the plain tables: $(grep -m1 -A2 ERROR "$BASE/zlocal.out")"
+fi
+# zsame A B KEY: rows of A not in B and of B not in A, by KEY, and A's rows
+zsame() {
+	q coord -c "SELECT (SELECT count(*) FROM (SELECT $3 FROM $1 EXCEPT ALL SELECT $3 FROM $2) x) || ' ' ||
+					   (SELECT count(*) FROM (SELECT $3 FROM $2 EXCEPT ALL SELECT $3 FROM $1) x) || ' ' ||
+					   (SELECT count(*) FROM $1)" 2>&1
+}
+for p in "zs_cov zs_cov_local" "zc_cov zc_cov_local" "zr_cov zs_cov_local" \
+	"zs_lines zs_lines_local" "zc_lines zc_lines_local" "zr_lines zs_lines_local"; do
+	read -r a b <<<"$p"
+	case $a in *cov) key="rid, rast::bytea" what=tiles ;; *) key="id, level, ST_AsEWKB(geom)" what=lines ;; esac
+	read -r ab ba n <<<"$(zsame "$a" "$b" "$key")"
+	if [ "$ab" = 0 ] && [ "$ba" = 0 ] && ((${n:-0} > 0)); then
+		ok "$a = $b: the same $n $what, byte for byte"
+	else
+		bad "$a against $b (only in $a, only in $b, rows: $ab $ba $n)"
+	fi
+done
+
+# against the one-value functions over the same samples: each tile the
+# same window of ST_TDCInterpolate pixel for pixel, the lines those of
+# ST_TDCContours (as a set, in order, each at its level).  They run over the
+# coordinator's plain tables: over a distributed table Citus gathers an
+# aggregate's arguments row by row, and ST_TDCInterpolate's template, a
+# constant, would come back from the workers with every sample (EXPLAIN
+# VERBOSE shows it in each task's target list): 262,800 copies of 384 kB.
+zcov() {	# COV SRC TEMPLATE PIXTYPE TW TH PIXELS
+	local r tiles bp bc bb pixels
+	r=$(q coord -c "SELECT concat_ws(' ', tiles, bad_pixels, bad_corner, bad_band, pixels)
+					 FROM cov_check('$1', '$2', $3, 'linear', '$4', -9999, $5, $6)" 2>&1)
+	read -r tiles bp bc bb pixels <<<"$r"
+	if [ "${bp:-x}" = 0 ] && [ "$bc" = 0 ] && [ "$bb" = 0 ] && [ "$pixels" = "$7" ] && ((tiles > 1)); then
+		ok "$1 = ST_TDCInterpolate over $2: $tiles tiles, $pixels pixels, each its window"
+	else
+		bad "$1 against ST_TDCInterpolate (tiles, bad pixels, corners, bands, pixels: $r)"
+	fi
+}
+zcov zs_cov zs_local "$TS" 64BF 30 17 13837
+zcov zc_cov zc_local "$TC" 32BF 64 50 95990
+for c in "zs_lines zs_local 2.5 0.3" "zc_lines zc_local 1.25 0"; do
+	read -r lines src iv b0 <<<"$c"
+	r=$(q coord -c "SELECT concat_ws(' ', nlines, extra, missing, bad_id, bad_level) FROM ct_check('$lines', '$src', $iv, $b0)" 2>&1)
+	read -r nl ex mi bi bl <<<"$r"
+	if [ "${ex:-x}" = 0 ] && [ "$mi" = 0 ] && [ "$bi" = 0 ] && [ "$bl" = 0 ] && ((nl > 0)); then
+		ok "$lines = ST_TDCContours over $src: $nl lines"
+	else
+		bad "$lines against ST_TDCContours (lines, extra, missing, bad id, bad level: $r)"
+	fi
+done
+
+# the targets are plain tables of the coordinator; AddRasterConstraints
+# takes the coverage, and a distributed copy of it too
+r=$(q coord -c "SELECT (SELECT count(*) FROM pg_dist_partition WHERE logicalrelid::text IN ('zs_cov', 'zc_cov', 'zs_lines', 'zc_lines'))
+				 || ' ' || (SELECT count(*) FROM pg_class WHERE relname IN ('zs_cov', 'zc_cov', 'zs_lines', 'zc_lines') AND relkind = 'r')")
+nw=0
+for n in w1 w2; do
+	c=$(q "$n" -c "SELECT count(*) FROM pg_class WHERE relname ~ '^z[sc]_(cov|lines)'")
+	nw=$((nw + ${c:-1}))
+done
+[ "$r" = "0 4" ] && ((nw == 0)) && ok "the targets are plain tables of the coordinator, none on the workers" ||
+	bad "targets: (distributed, plain on the coordinator) $r, on the workers $nw"
+r=$(q coord -c "SELECT concat_ws(' ', added, same_alignment, blocksize_x, blocksize_y, srid) FROM cov_constraints('zc_cov')" 2>&1 | tail -1)
+[ "$r" = "t t 64 50 3006" ] && ok "AddRasterConstraints on the coverage: $r" || bad "AddRasterConstraints on zc_cov: $r"
+r=$(q coord -c "CREATE TABLE zc_cov_dist AS SELECT * FROM zc_cov_local; SELECT create_distributed_table('zc_cov_dist', 'rid');" \
+	-c "SELECT concat_ws(' ', added, same_alignment, blocksize_x, blocksize_y, srid) FROM cov_constraints('zc_cov_dist')" 2>&1 | tail -1)
+ncon=0
+for n in w1 w2; do
+	c=$(q "$n" -c "SELECT count(*) FROM pg_constraint WHERE conrelid::regclass::text LIKE 'zc_cov_dist_%' AND conname LIKE 'enforce_%'")
+	ncon=$((ncon + ${c:-0}))
+done
+[ "$r" = "t t 64 50 3006" ] && ((ncon > 0)) &&
+	ok "AddRasterConstraints on a distributed copy: $r, $ncon constraints on the workers' shards" ||
+	bad "AddRasterConstraints on a distributed copy: $r ($ncon on the shards)"
+
+# errors after the distributed read: no target on any node
+zcall e_nn "SET tdc_delaunay.max_memory = 16; CALL tdc_interpolate_tiled('zc', 'zerr_cov', 'geom', $TC, 'natural_neighbor')"
+zcall e_method "CALL tdc_interpolate_tiled('zc', 'zerr_cov', 'geom', $TC, 'cubic')"
+zcall e_mem "SET tdc_delaunay.max_memory = 1; CALL tdc_contours_tiled('zc', 'zerr_lines', 'geom', 1.25)"
+left=0
+for n in coord w1 w2; do
+	c=$(q "$n" -c "SELECT count(*) FROM pg_class WHERE relname LIKE 'zerr%'")
+	left=$((left + ${c:-1}))
+done
+if grep -q 'does not fit tdc_delaunay.max_memory' "$BASE/e_nn.out" && grep -q 'invalid method' "$BASE/e_method.out" &&
+	grep -q 'more than tdc_delaunay.max_memory' "$BASE/e_mem.out" && ((left == 0)); then
+	ok "errors (natural_neighbor over max_memory, a bad method, contours over max_memory): no target on any node"
+else
+	bad "error cases (left behind: $left): $(grep -h -m1 ERROR "$BASE"/e_*.out | paste -sd'|')"
+fi
+echo "citus: the coverage and contour part took $((SECONDS - t1)) s"
 
 echo "citus: wall time $((SECONDS - t0)) s"
 finish

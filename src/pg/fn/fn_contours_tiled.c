@@ -4,7 +4,7 @@
  *		table of lines, within tdc_delaunay.max_memory:
  *		_tdc_contours_tiled_write.
  *
- * The procedure (src/sql/tiled.sql) checks the arguments, creates the
+ * The procedure (src/sql/contours_tiled.sql) checks the arguments, creates the
  * target (id bigint, level float8, geom geometry(LineStringZ, srid)) and
  * calls this function once.  The samples are read as ST_TDCContours reads
  * them (curves stroked, the first copy of a duplicate giving its height),
@@ -23,8 +23,13 @@
  * a row, id 1.. in the lines' order (levels increasing, a level's lines by
  * their points), its vertices with the level as Z, through a prepared
  * INSERT of the geometry its EWKB gives (the type's binary input): the
- * same LINESTRING Z as the line of ST_TDCContours's MULTILINESTRING Z.  The procedure and this function are one transaction:
- * an error or a cancel leaves no target.
+ * same LINESTRING Z as the line of ST_TDCContours's MULTILINESTRING Z.
+ * The procedure and this function are one transaction: an error or a
+ * cancel leaves no target.
+ *
+ * On Citus a distributed source is read by one distributed SELECT,
+ * gathered on the coordinator, and the lines go into the coordinator's
+ * plain table the procedure made: the same rows as from a plain source.
  */
 #include "postgres.h"
 

@@ -4,7 +4,7 @@
  *		raster coverage, a table of tiles like raster2pgsql -t writes,
  *		within tdc_delaunay.max_memory: _tdc_interpolate_tiled_write.
  *
- * The procedure (src/sql/raster.sql) checks the arguments, reads the
+ * The procedure (src/sql/raster_tiled.sql) checks the arguments, reads the
  * band-less template's size, georeference and SRID, creates the target
  * (rid bigint, rast raster) and calls this function once.  The samples are
  * read as ST_TDCInterpolate reads them (curves by their stored vertices,
@@ -35,6 +35,11 @@
  * prepared INSERT per tile: tiles are few (a 65535 x 65535 grid in 256 x
  * 256 tiles is 65536 rows) and big.  The procedure and this function are
  * one transaction: an error or a cancel leaves no target.
+ *
+ * On Citus nothing here changes: a distributed source is one distributed
+ * SELECT that the executor gathers on the coordinator, read once through
+ * the same cursor, and the target is the coordinator's plain table the
+ * procedure made, so the tiles are those of a plain source to the byte.
  */
 #include "postgres.h"
 
