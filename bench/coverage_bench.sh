@@ -61,7 +61,7 @@
 # on this machine (the backend's /proc), with the extensions postgis,
 # postgis_raster, pointcloud and tdc_delaunay's three installed; it makes and
 # drops the database tdc_coverage_bench.  Disk at 1e8: the LAS file (~3.9 GB),
-# the tables (~13 GB with the patches), ./tdc's tiles.
+# the tables (some 10 GB), ./tdc's tiles.
 #
 # Knobs: BENCH_COV_N, BENCH_COV_AGG_N, BENCH_COV_DT_N, BENCH_COV_LIMIT,
 # BENCH_COV_ROUNDS, BENCH_COV_AGG_ROUNDS, BENCH_COV_PATCH_SIDE,
