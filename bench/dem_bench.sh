@@ -32,17 +32,13 @@
 #      compared (GDAL's raw Float64, byte for byte).  Its hillshade
 #      (gdaldem) with ./tdc's 2 m contour lines of the same ground burnt in
 #      (gdal_rasterize) is docs/benchmarks/dem.png.
-#   C. (BENCH_DEM_BIG_SIDE, unset: skipped; 10000 is a billion returns)
-#      the full survey, LAS in, a 1 m ground DEM under --max-memory
-#      BENCH_DEM_BIG_LIMIT (2000) with max_edge=5, its phases; its
-#      phases.  Disk: the LAS file (30 bytes a return),
-#      the staged ground (24 bytes a point) and the tiles (about as much).
+#   (A billion returns, the full survey: bench/dem_big_bench.sh.)
 #
 # Output: stdout, build/bench/dem.txt, docs/benchmarks/dem.md.
 # Knobs: BENCH_DEM_SIZES, BENCH_DEM_ROUNDS (3: medians; gdal_grid runs
 # once from 5e6 points), BENCH_DEM_LIMIT, BENCH_DEM_PREPARE_ONLY=1 (the
 # data only, no timing),
-# BENCH_DEM_BIG_SIDE, BENCH_DEM_BIG_LIMIT, BENCH_DEM_TMP (build/bench/dem).
+# BENCH_DEM_TMP (build/bench/dem).
 set -euo pipefail
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 # shellcheck source=bench/lib.sh
@@ -52,8 +48,6 @@ SIZES=${BENCH_DEM_SIZES:-"1e6 1e7"}
 ROUNDS=${BENCH_DEM_ROUNDS:-3}
 LIMIT=${BENCH_DEM_LIMIT:-150}
 ARB_MAX=$(n_of "${BENCH_DEM_ARBITER_MAX:-2e7}")
-BIG_SIDE=${BENCH_DEM_BIG_SIDE:-}
-BIG_LIMIT=${BENCH_DEM_BIG_LIMIT:-2000}
 WORK=${BENCH_DEM_TMP:-$BENCH_OUT/dem}
 TXT=$BENCH_OUT/dem.txt
 mkdir -p "$WORK" "$BENCH_OUT"
@@ -167,15 +161,6 @@ for ((r = 1; r <= ROUNDS; r++)); do
 		--method linear:max_edge=5:nodata=-9999 --srs EPSG:32632 -o "$WORK/til_$largest.tif" "$WORK/ground_$largest.xyz"
 	cp "$WORK/cmd.err" "$WORK/tiles_stats.txt"
 done
-# C: the full survey
-if [ -n "$BIG_SIDE" ]; then
-	big=$WORK/survey.las
-	[ -s "$big" ] || { log "generating $big (side $BIG_SIDE m)"; "$BENCH_BIN/gen_las" -s 2 "$BIG_SIDE" "$big" 2> /dev/null; }
-	log "C: the survey to a 1 m DEM under --max-memory $BIG_LIMIT"
-	timed "survey" "$TDC_BIN" --stats --max-memory "$BIG_LIMIT" --tmpdir "$WORK" --class 2 --grid 1 \
-		--method linear:max_edge=5:nodata=-9999 -o "$WORK/survey_dem.tif" "$big"
-	cp "$WORK/cmd.err" "$WORK/survey_stats.txt"
-fi
 bench_end
 
 # The checks (untimed)
@@ -242,13 +227,6 @@ same=$(cmp -s "$WORK/one.raw" "$WORK/til.raw" && echo "the same pixels, byte for
 	printf '| `--max-memory %s` | %s s | %s s | %s MB | %s / %s | %s |\n' "$LIMIT" "$t" "$tc" "$trss" "$tiles" "$runs" "${workers:-1}"
 	printf '\nTiles against one pass: %s.\n' "$same"
 } >> "$TXT"
-if [ -n "$BIG_SIDE" ]; then
-	{
-		printf '\nThe survey: %s m square, LAS in, class 2, a 1 m DEM (max_edge=5) under --max-memory %s:\n\n' "$BIG_SIDE" "$BIG_LIMIT"
-		grep survey "$RUNS" | awk '{ printf "wall %s s, CPU %s s, peak RSS %s MB\n", $2, $3, $4 }'
-		printf '```text\n'; cat "$WORK/survey_stats.txt"; printf '```\n'
-	} >> "$TXT"
-fi
 # The picture: the hillshade of the tiled DEM with ./tdc's 2 m contour lines of the same ground
 log "the picture: hillshade and contours"
 "$TDC_BIN" --contours 2 -o "$WORK/contours.txt" "$WORK/ground_$largest.xyz"

@@ -45,6 +45,7 @@ extern void test_concurrency(void);
 extern void test_tolerance(void);
 extern void test_voronoi(void);
 extern void test_tile(void);
+extern void test_tile_plan(void);
 extern void test_bounded(void);
 extern void test_bounded_labels(void);
 extern void test_raster_tiles(void);
