@@ -11,6 +11,7 @@
 #   make demo                   set-up + side-by-side demo (scripts/demo.sh)
 #   make bench                  benchmarks (bench/run.sh)
 #   make bench-tin              the TIN benchmark alone (bench/tin_bench.sh, issue 29)
+#   make bench-coverage         the coverage benchmark alone (bench/coverage_bench.sh, issue 40)
 
 # Three extensions from one library: tdc_delaunay (needs postgis),
 # tdc_delaunay_raster (needs tdc_delaunay and postgis_raster) and
@@ -68,7 +69,7 @@ TEST_SRCS = $(sort $(wildcard test/test_*.c))
 # from any current directory.
 TEST_CFLAGS = -Itest -DTDC_SOURCE_DIR='"$(CURDIR)"'
 
-.PHONY: check-core check-core-asan check-core-tsan test demo bench bench-tin
+.PHONY: check-core check-core-asan check-core-tsan test demo bench bench-tin bench-coverage
 
 # ./tdc writes GeoTIFF through GDAL (src/cli/geotiff.c; Debian: libgdal-dev).
 # It compiles against GDAL's headers and loads the library it names
@@ -171,6 +172,11 @@ bench:
 # bench/run.sh with its part G only: build, install, a throw-away cluster
 bench-tin:
 	BENCH_TIN=1 BENCH_SKIP_CORE=1 BENCH_SKIP_TILED=1 BENCH_SKIP_SQL=1 BENCH_SKIP_SWEEP=1 bash bench/run.sh
+
+# bench/run.sh with its part I only (bench/coverage_bench.sh, issue 40)
+bench-coverage:
+	BENCH_COVERAGE=1 BENCH_SKIP_CORE=1 BENCH_SKIP_TILED=1 BENCH_SKIP_SQL=1 BENCH_SKIP_SWEEP=1 \
+		BENCH_SKIP_FIRST=1 bash bench/run.sh
 
 # PGXS is optional: the core, ./tdc and its tests build without PostgreSQL.
 PG_CONFIG ?= pg_config

@@ -56,6 +56,7 @@ build_helpers() {
 	command -v cc >/dev/null || die "cc not found"
 	LIBS=-lm build_tool gen_points "$ROOT/bench/gen_points.c" cc -O2 -Wall
 	LIBS=-lm build_tool gen_las "$ROOT/bench/gen_las.c" cc -O2 -Wall
+	LIBS=-lm build_tool las_pg "$ROOT/bench/las_pg.c" cc -O2 -Wall
 	build_tool gshhg_convert "$ROOT/bench/gshhg_convert.c" cc -O2 -Wall
 	build_tool first_touch "$ROOT/bench/first_touch.c" cc -O2 -Wall
 }

@@ -19,6 +19,10 @@
 #   H  bench/first_statement.sh  the 1M-point aggregate as the first statement of
 #      a freshly started server, and warm, ours against PostGIS (a server of its
 #      own, restarted before every first statement)   -> first_statement.md
+#   I  bench/coverage_bench.sh  (optional, BENCH_COVERAGE=1; alone: make bench-coverage)
+#      a 1 m DEM coverage from 1e8 LiDAR ground points: CALL tdc_interpolate_tiled
+#      from a geometry and a pcpatch table against ./tdc --grid, and the pcpatch
+#      aggregates against PC_Explode at 1e7 points    -> coverage.md
 #
 # Each script writes its own report, docs/benchmarks/NAME.md (BENCH_DOCS),
 # with the header of bench_publish in bench/lib.sh: date, commit, machine,
@@ -39,6 +43,8 @@
 #   BENCH_CONSTRAINED=1 run E too (some 10 minutes: SFCGAL takes 5-20 s a statement, 12 times)
 #   BENCH_VORONOI=1     run F too (BENCH_VOR_* knobs: see bench/voronoi_bench.sh)
 #   BENCH_TIN=1         run G too (some 10 minutes; BENCH_TIN_* knobs: see bench/tin_bench.sh)
+#   BENCH_COVERAGE=1    run I too (an hour or more, ~20 GB of disk; BENCH_COV_* knobs: see
+#                       bench/coverage_bench.sh)
 # The knobs of the scripts (BENCH_SIZES, BENCH_SQL_SIZES, BENCH_SWEEP_*, BENCH_TILED_*, BENCH_CDT_*,
 # ...) pass through.
 set -euo pipefail
@@ -74,7 +80,7 @@ if [ "${BENCH_SKIP_TILED:-0}" != 1 ]; then
 	part tiled_cli_bench.sh || log "the tiled benchmark failed"
 fi
 
-# sql_parts: B, C, E, F and G, against the server the PG* variables now point at
+# sql_parts: B, C, E, F, G, H and I, against the server the PG* variables now point at
 sql_parts() {
 	if [ "${BENCH_SKIP_SQL:-0}" != 1 ]; then
 		log "=== B: SQL benchmark"
@@ -100,10 +106,14 @@ sql_parts() {
 		log "=== G: the TIN in SQL: interpolation, draping, contours"
 		part tin_bench.sh
 	fi
+	if [ "${BENCH_COVERAGE:-0}" = 1 ]; then
+		log "=== I: DEM coverages and pcpatch aggregates in SQL"
+		part coverage_bench.sh
+	fi
 }
 
 if [ "${BENCH_SKIP_SQL:-0}" != 1 ] || [ "${BENCH_SKIP_SWEEP:-0}" != 1 ] || [ "${BENCH_CONSTRAINED:-0}" = 1 ] ||
-	[ "${BENCH_VORONOI:-0}" = 1 ] || [ "${BENCH_TIN:-0}" = 1 ]; then
+	[ "${BENCH_VORONOI:-0}" = 1 ] || [ "${BENCH_TIN:-0}" = 1 ] || [ "${BENCH_COVERAGE:-0}" = 1 ]; then
 	# shellcheck source=scripts/lib.sh
 	. "$ROOT/scripts/lib.sh"
 	if [ "${BENCH_NO_INSTALL:-0}" != 1 ]; then
