@@ -238,6 +238,29 @@ test_bounded(void)
 	CHECK(st.workers == 1, "bounded: %d tile workers in the plan's order, 1 expected", st.workers);
 
 	/*
+	 * drop_input: a caller's staged copy of the input is gone once binned
+	 * (the tiles' files hold what the runs read), with the same triangles;
+	 * without it the input stays (above: input.bin is still there).
+	 */
+	{
+		tdc_bounded_params q = p;
+		char		copy[4200];
+
+		snprintf(copy, sizeof(copy), "%s/staged.bin", dir);
+		CHECK(write_bin(copy, xy, n) == 0, "bounded: cannot write %s", copy);
+		q.xypath = copy;
+		q.drop_input = true;
+		q.check_files = false;
+		memset(&s, 0, sizeof(s));
+		rc = run(&q, &s, &st, err, sizeof(err));
+		CHECK(rc == TDC_OK && s.hash == one.hash && s.ntri == one.ntri,
+			  "bounded: drop_input: %d %s, or another triangle set", rc, err);
+		CHECK(access(copy, F_OK) != 0 && access(bin, F_OK) == 0,
+			  "bounded: drop_input left the staged copy, or took the other input");
+		unlink(copy);
+	}
+
+	/*
 	 * In any order: two tiles at a time on two threads (each reserving its
 	 * share of the limit, the other waiting while it does not fit), and
 	 * every tile the same triangles as in the plan's order; with one

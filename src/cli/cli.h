@@ -168,6 +168,7 @@ extern volatile int cli_cancel;	/* a signal came: the run in tiles stops */
 extern void tmp_create(const char *base);
 extern void tmp_cleanup(void);
 extern FILE *tmp_open(const char *name, const char *mode);
+extern bool tmp_owns(const char *path);
 
 /* bounded_mem.c: the process's memory around a run in tiles */
 extern size_t heap_start(size_t limit);

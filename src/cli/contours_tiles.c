@@ -107,7 +107,8 @@ contours_in_tiles(const cli_args *a, const char *xypath, const char *zpath, size
 		.xypath = xypath, .zpath = zpath, .n = n, .opt = &a->opt, .limit = limit,
 		.tmpdir = tmp_dir, .limit_name = "--max-memory",
 		.begin = begin, .emit = emit, .settle = heap_settle, .peak = heap_peak, .arg = &ct,
-		.cancel = &cli_cancel, .any_order = true
+		.cancel = &cli_cancel, .any_order = true,
+		.drop_input = tmp_owns(xypath)	/* the staged input: its disk goes to the tiles */
 	};
 	tdc_bounded_stats st;
 	char		err[1024];

@@ -101,6 +101,8 @@ run_bounded(const char *xypath, const char *zpath, size_t n, const tdc_options *
 	p.trace = getenv("TDC_TILE_DEBUG") ? trace : NULL;
 	/* without -o the order of the tiles shows nowhere: two at a time */
 	p.any_order = out == NULL;
+	/* a staged copy of the input: its disk goes to the tiles once binned */
+	p.drop_input = tmp_owns(xypath);
 	/* the heap kept between tiles; what the process holds beside them off the limit */
 	p.outside = heap_start(limit);
 	if (tdc_bounded_run(&p, st, err, sizeof(err)) != TDC_OK)

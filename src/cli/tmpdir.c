@@ -97,6 +97,15 @@ tmp_cleanup(void)
 	}
 }
 
+/* Is path one of the temporary directory's files (a staged input the run may drop)? */
+bool
+tmp_owns(const char *path)
+{
+	size_t		k = strlen(tmp_dir);
+
+	return k > 0 && strncmp(path, tmp_dir, k) == 0 && path[k] == '/';
+}
+
 FILE *
 tmp_open(const char *name, const char *mode)
 {

@@ -888,6 +888,7 @@ typedef struct tdc_bounded_params
 	 * tile at a time.
 	 */
 	bool		any_order;
+	bool		drop_input;		/* the input files are the caller's temporaries: unlinked once binned */
 	void	   *arg;			/* passed to the callbacks */
 	/*
 	 * NULL, or a flag another thread may set to nonzero: polled between

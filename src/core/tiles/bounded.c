@@ -67,6 +67,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include "bounded_int.h"
 
@@ -452,6 +453,19 @@ run_phases(bounded_run *r)
 	if (tdc_bd_bin_points(r) != TDC_OK)
 		return r->e.code;
 	st->bin = now_s() - t0;
+	/*
+	 * Nothing reads the input after the bins (the tiles' files hold every
+	 * point, its z and label): a caller's temporary copy of it frees its
+	 * disk for the tiles' files, which are about as large.
+	 */
+	if (r->p->drop_input)
+	{
+		unlink(r->p->xypath);
+		if (r->p->zpath)
+			unlink(r->p->zpath);
+		if (r->p->lpath)
+			unlink(r->p->lpath);
+	}
 	/* the scan's and the bins' buffers, freed, are not the tiles' to reuse */
 	heap_settle(r, true);
 	if (before_tiles(r) != TDC_OK)
