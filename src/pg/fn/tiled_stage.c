@@ -281,6 +281,8 @@ tdc_stage_run(BoundedRun *br, tdc_bounded_params *p, const tdc_options *opt, uin
 	p->limit = (size_t) (limit_mb << 20);
 	p->outside = (size_t) outside;
 	p->tmpdir = br->dir;
+	/* the staged files are ours: their disk goes to the tiles once binned */
+	p->drop_input = true;
 	p->limit_name = setting;
 	rc = tdc_bounded_start(p, &br->job, err, sizeof(err));
 	if (rc != TDC_OK)
