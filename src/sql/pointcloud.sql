@@ -24,7 +24,7 @@
 -- comments: SQL has no statement that declares an aggregate for several
 -- signatures, and a DO block that generated them would hide each object
 -- and its C symbol from this script (test/release.sh checks every
--- 'MODULE_PATHNAME', 'symbol' of the scripts against the library, and
+-- C symbol named after MODULE_PATHNAME in the scripts against the library, and
 -- the catalogue a reader greps is the script).
 
 -- complain if script is sourced in psql, rather than via CREATE EXTENSION
