@@ -456,7 +456,8 @@ run_phases(bounded_run *r)
 	/*
 	 * Nothing reads the input after the bins (the tiles' files hold every
 	 * point, its z and label): a caller's temporary copy of it frees its
-	 * disk for the tiles' files, which are about as large.
+	 * disk for the reruns' rewrites and the caller's output (the peak, at
+	 * the end of the bins, holds both).
 	 */
 	if (r->p->drop_input)
 	{
