@@ -602,7 +602,9 @@ model_combined(const TinFormat *f, const Model *a, const Model *b, size_t *len)
 	uint32		hf = (a->bits | b->bits) & SB_HAVE_FIRST;
 	uint32		hasz = ((a->bits & SB_HAVE_FIRST) ? a->bits : b->bits) & SB_HASZ;
 	uint32		bits = hf | hasz | ((a->bits | b->bits) & SB_PARAMS);
-	int32		srid = (a->bits & SB_HAVE_FIRST) ? a->srid : b->srid;
+	/* a state without vertices' dimensions has no SRID: it serializes 0 */
+	int32		srid = (a->bits & SB_HAVE_FIRST) ? a->srid :
+		(b->bits & SB_HAVE_FIRST) ? b->srid : 0;
 	const Model *q = (a->bits & SB_PARAMS) ? a : b;
 	int32		flags = (bits & SB_PARAMS) ? q->flags : 0;
 	double		tol = (bits & SB_PARAMS) ? q->tol : 0;

@@ -87,8 +87,9 @@ emit_sum(void *arg, int tile, const double *q, const double *qz, const int64_t *
 	if (tile >= 0 && tile < TILES_KEPT)
 		s->tile_ntri[tile] += ntri;
 	s->ntri += ntri;
+	/* A worker sets it while the run's threads read it: atomically. */
 	if (s->cancel_at_first)
-		*s->cancel_at_first = 1;
+		__atomic_store_n(s->cancel_at_first, 1, __ATOMIC_RELAXED);
 	return 0;
 }
 
@@ -99,9 +100,9 @@ trace_cancel(void *arg, const char *line)
 
 	const char *c = strrchr(line, ':');
 
-	if (s->cancel_at_trace && !*s->cancel_at_trace)
+	if (s->cancel_at_trace && !__atomic_load_n(s->cancel_at_trace, __ATOMIC_RELAXED))
 	{
-		*s->cancel_at_trace = 1;
+		__atomic_store_n(s->cancel_at_trace, 1, __ATOMIC_RELAXED);
 		s->traced_points = c ? strtoul(c + 1, NULL, 10) : 0;
 	}
 }
