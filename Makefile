@@ -193,7 +193,7 @@ build/regress:
 src/core/%.o: src/core/%.c $(CORE_HDRS)
 	$(CC) $(CFLAGS) -std=c11 -D_GNU_SOURCE -ffp-contract=off -pthread -Isrc/core -c -o $@ $<
 # PGXS does not track headers: a changed struct must rebuild every user.
-$(PG_SRCS:.c=.o): $(wildcard src/pg/*.h src/pg/*/*.h) src/core/tdc.h
+$(PG_SRCS:.c=.o): $(wildcard src/pg/*.h src/pg/*/*.h) src/core/tdc.h src/core/tdc_bounded.h
 # tdc_delaunay_full_version() reports the PostGIS found here at build time:
 # the default_version of its control file (the library does not compile
 # against PostGIS, so nothing more precise exists), or "unknown".
