@@ -56,7 +56,7 @@ src/core/cdt		src/core/engine
 src/core/voronoi	src/core/engine
 src/core/tin		src/core/engine src/core/cdt
 src/core/tiles		src/core/engine
-src/core/terrain	src/core/engine src/core/tin
+src/core/terrain	src/core/engine src/core/tin src/core/tiles
 src/cli				src/core
 src/pg/runtime		src/core
 src/pg/formats		src/pg/runtime src/core

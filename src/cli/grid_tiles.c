@@ -17,8 +17,9 @@
  * tiles' memory is free again; the sites that pixels outside the hull may
  * take are loaded then, within what the limit leaves.
  *
- * Linear and nearest: a natural neighbour value may depend on sites that
- * no one tile proves complete (refused, with the reason).
+ * Natural neighbour takes each final tile's whole triangulation through
+ * the run's final_run (terrain/raster_natural.c proves each pixel's
+ * cavity global, or the tile runs again with a larger box).
  * --contours in tiles is contours_tiles.c.
  */
 #include <math.h>
@@ -75,7 +76,21 @@ emit(void *arg, int tile, const double *q, const double *qz, const int64_t *ql,
 
 	(void) tile;
 	(void) ql;
+	if (gt->spec.method == TDC_INTERP_NATURAL)
+		return 0;				/* final_run took the tile's pixels */
 	return tdc_raster_tile(gt->ras, q, qz, tri, ntri, gt->err, sizeof(gt->err));
+}
+
+/* natural neighbour: the tile's pixels from its whole triangulation, or a larger K */
+static int
+final_run(void *arg, int tile, const tdc_job *job, const double *q, const double *qz,
+		  const int64_t *tile_of, size_t m, const size_t *tri, size_t ntri, const double known[4],
+		  double need[4])
+{
+	grid_tiles *gt = arg;
+
+	return tdc_raster_nn_tile(gt->ras, tile, job, q, qz, tile_of, m, tri, ntri, known, need,
+							  gt->err, sizeof(gt->err));
 }
 
 /* The grid's rows, from the raster to the .asc or the GeoTIFF; dies on errors. */
@@ -169,8 +184,10 @@ grid_in_tiles(const cli_args *a, const char *xypath, const char *zpath, size_t n
 	if (tdc_interp_parse(a->method ? a->method : "linear", &gt.spec, err, sizeof(err)) != TDC_OK)
 		die(2, "--method: %s", err);
 	if (gt.spec.method == TDC_INTERP_NATURAL)
-		die(1, "--grid in tiles takes --method linear or nearest: a natural neighbour value may "
-			"depend on sites no one tile holds; raise --max-memory for %s", a->method);
+	{
+		p.final_run = final_run;
+		p.final_per_point = TDC_RASTER_NN_PER_POINT;
+	}
 	if (n == 0)
 		die(1, "--grid needs an --extent when the input has no point%s", "");
 	p.outside = start = heap_start(limit);

@@ -82,6 +82,25 @@ typedef struct tdc_bounded_params
 	int			(*emit) (void *arg, int tile, const double *q, const double *qz,
 						 const int64_t *ql, const size_t *tri, size_t ntri);
 	/*
+	 * Optional, for an output that needs more than the final triangles
+	 * (the natural neighbour grid, terrain/raster_natural.c): called for
+	 * each final tile run before emit, one call at a time as emit is, with
+	 * the run's finished job (the tile's whole triangulation T(Q); its
+	 * input is q, m points, with qz as emit's), tile_of (the tile of each
+	 * point: a site is owned by the least among its copies'), the tile's
+	 * final triangles (as emit's) and K, the known box: every point of the
+	 * input inside it is in q.  Returns 0 (emit follows), 1 with need set to
+	 * a box containing K that the tile must know (it runs again with a
+	 * larger K, and emit waits for that run), or a nonzero code that stops
+	 * the run as emit's does.  final_per_point: the bytes per point of q it
+	 * holds at most while it runs, counted in the tiles' memory.
+	 */
+	int			(*final_run) (void *arg, int tile, const tdc_job *job, const double *q,
+							  const double *qz, const int64_t *tile_of, size_t m,
+							  const size_t *tri, size_t ntri, const double known[4],
+							  double need[4]);
+	size_t		final_per_point;
+	/*
 	 * Optional, before emit: called once after the first pass, before the
 	 * plan, with the points' exact box (xmin, ymin, xmax, ymax) and their
 	 * convex hull (nhull x,y pairs, counter-clockwise, collinear vertices
@@ -163,8 +182,8 @@ extern void tdc_bounded_free(tdc_bounded_job *job);
  * same values to the bit: linear (its value at a pixel is decided by the
  * triangle or edge or site that holds the pixel's centre) and nearest (the
  * nearest site is a corner of a triangle whose region with its
- * circumcentre holds the centre: terrain/raster_nearest.c); natural
- * neighbour needs neighbourhoods that cross tiles: TDC_EINVAL.  The values
+ * circumcentre holds the centre: terrain/raster_nearest.c) and natural
+ * neighbour (through tdc_raster_nn_tile below).  The values
  * wait in a temporary file of the grid's size (8 bytes a pixel, 32 for
  * nearest; sparse: never written pixels take no disk) and come out by
  * rows; the tiles may come in any order.
@@ -190,6 +209,24 @@ extern int	tdc_raster_tile(tdc_raster *r, const double *q, const double *qz,
 extern int	tdc_raster_rows(tdc_raster *r, size_t y0, size_t nrows, double *v, size_t *valid,
 							size_t max_bytes, char *err, size_t errlen);
 extern void tdc_raster_free(tdc_raster *r);
+
+/*
+ * A natural neighbour grid (terrain/raster_natural.c) takes each final
+ * tile's whole triangulation instead of tile: call it from the bounded
+ * run's final_run with its arguments (tile, job, q, qz, tile_of, m, tri,
+ * ntri, known, need) and return what it returns: TDC_OK, 1 when a pixel's
+ * cavity is not proven global from the tile (need: the larger box the tile
+ * must know; its other pixels are written), or an error.  The values are
+ * those of the whole TIN to the bit.  Set the run's final_per_point to
+ * TDC_RASTER_NN_PER_POINT: the TIN it builds on the tile's job and a label
+ * and a flag per point.
+ */
+#define TDC_RASTER_NN_PER_POINT		72
+
+extern int	tdc_raster_nn_tile(tdc_raster *r, int tile, const tdc_job *job, const double *q,
+							   const double *qz, const int64_t *tile_of, size_t m,
+							   const size_t *tri, size_t ntri, const double known[4],
+							   double need[4], char *err, size_t errlen);
 
 /* --- Contour lines from a bounded run's triangles (terrain/contour_tiles.c) --- */
 

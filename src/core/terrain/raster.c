@@ -47,7 +47,7 @@
 #include "raster_int.h"
 #include "tin/tin_lerp.h"
 
-#define SENT		UINT64_C(0x7ff4a1b2c3d4e5f6)	/* a signalling NaN's bits */
+#define SENT		RS_SENT		/* a signalling NaN's bits */
 #define WIN_MIN		((size_t) 2 << 20)	/* bytes of a tile's window, at least */
 
 
@@ -72,10 +72,9 @@ tdc_raster_begin(const tdc_interp_spec *spec, const tdc_grid_spec *g, const doub
 
 	*out = NULL;
 	*hold = 0;
-	if ((spec->method != TDC_INTERP_LINEAR && spec->method != TDC_INTERP_NEAREST) || spec->breaklines)
-		return tdc_rs_fail(err, errlen, TDC_EINVAL, "%s", "a grid in tiles takes linear or nearest: a "
-					"natural neighbour value may depend on sites of other tiles, and breaklines "
-					"need the whole constrained triangulation");
+	if (spec->breaklines)
+		return tdc_rs_fail(err, errlen, TDC_EINVAL, "%s", "a grid in tiles cannot take breaklines: "
+					"they need the whole constrained triangulation");
 	if (!(g->gt[1] > 0 && g->gt[5] < 0 && g->gt[2] == 0 && g->gt[4] == 0) ||
 		g->width == 0 || g->height == 0 || g->width > SIZE_MAX / 32 / g->height ||
 		g->height > UINT32_MAX || g->width > UINT32_MAX)
@@ -104,8 +103,8 @@ tdc_raster_begin(const tdc_interp_spec *spec, const tdc_grid_spec *g, const doub
 	r->inv[1] = 1 / g->gt[5];
 	r->slack = 1e-6 + 8 * DBL_EPSILON * ((fabs(g->gt[0]) + fabs(g->gt[3])) / g->gt[1] +
 										 (double) g->width + (double) g->height);
-	/* linear's window (nearest has its own, raster_nearest.c) */
-	r->wincap = spec->method != TDC_INTERP_LINEAR ? 0 :
+	/* linear's and natural neighbour's window (nearest has its own, raster_nearest.c) */
+	r->wincap = spec->method == TDC_INTERP_NEAREST ? 0 :
 		WIN_MIN / 8 > 16 * g->width ? WIN_MIN / 8 : 16 * g->width;
 	r->win = r->wincap > 0 ? malloc(8 * r->wincap) : NULL;
 	if (r->wincap > 0 && r->win == NULL)
@@ -135,7 +134,8 @@ tdc_raster_begin(const tdc_interp_spec *spec, const tdc_grid_spec *g, const doub
 		return rc;
 	}
 	*out = r;
-	*hold = sizeof(*r) + 8 * r->wincap + FR_HOLD(nhull) + tdc_rn_hold(r);
+	*hold = sizeof(*r) + 8 * r->wincap + FR_HOLD(nhull) + tdc_rn_hold(r) +
+		(spec->method == TDC_INTERP_NATURAL ? RS_NN_HOLD : 0);
 	return TDC_OK;
 }
 
@@ -219,6 +219,8 @@ tri_pixels(const tdc_raster *r, const double *const p[3], const double z[3], dou
 			}
 			else if (!kept)
 				continue;		/* a long edge: the triangle's other pixels are not its */
+			else if (r->spec.method == TDC_INTERP_NATURAL && (zeros == 0 || !fr_on_hull(&r->fr, q)))
+				*w = RS_NN_MARK;	/* the cavity's value, raster_natural.c */
 			else if (zeros == 1)
 				put(w, tin_lerp_xy(p[zk], z[zk], p[(zk + 1) % 3], z[(zk + 1) % 3], q));
 			else
@@ -258,6 +260,21 @@ win_flush(tdc_raster *r, size_t w0, size_t w1, size_t c0, size_t wcols, char *er
 int
 tdc_raster_tile(tdc_raster *r, const double *q, const double *qz, const size_t *tri, size_t ntri,
 				char *err, size_t errlen)
+{
+	if (r->spec.method == TDC_INTERP_NATURAL)
+		return tdc_rs_fail(err, errlen, TDC_EINVAL, "%s", "a natural neighbour grid takes each tile's "
+					"whole triangulation (tdc_raster_nn_tile), not only its final triangles");
+	return tdc_rs_tile(r, q, qz, tri, ntri, NULL, NULL, err, errlen);
+}
+
+/*
+ * The pixels of a tile's final triangles, window by window; fill (natural
+ * neighbour: NULL otherwise) replaces each RS_NN_MARK of a window before
+ * it is written.
+ */
+int
+tdc_rs_tile(tdc_raster *r, const double *q, const double *qz, const size_t *tri, size_t ntri,
+			rs_fill_fn fill, void *arg, char *err, size_t errlen)
 {
 	const double *gt = r->g.gt;
 	double		xmin = INFINITY,
@@ -332,6 +349,8 @@ tdc_raster_tile(tdc_raster *r, const double *q, const double *qz, const size_t *
 
 			tri_pixels(r, p, z, tslack, w0, w1, c0, wcols, r->win);
 		}
+		if (fill && (rc = fill(arg, w0, w1, c0, wcols, r->win, err, errlen)) != TDC_OK)
+			return rc;
 		if ((rc = win_flush(r, w0, w1, c0, wcols, err, errlen)) != TDC_OK)
 			return rc;
 	}

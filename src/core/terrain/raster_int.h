@@ -33,6 +33,25 @@ struct tdc_raster
 	double		deep;			/* how far a strip beyond an edge may need to reach */
 };
 
+/*
+ * Natural neighbour: a window's pixel whose value its cavity gives
+ * (raster_natural.c fills it before the window is written; a NaN no
+ * height can be, and not SENT), and the bytes its scratch may hold beside
+ * the tile's TIN.
+ */
+#define RS_NN_MARK		UINT64_C(0x7ff4a1b2c3d4e5f7)
+/* a window's pixel not set (raster.c writes it XOR its bits to the file) */
+#define RS_SENT			UINT64_C(0x7ff4a1b2c3d4e5f6)
+#define RS_NN_HOLD		((size_t) 1 << 20)
+
+/* Fills a window's RS_NN_MARK pixels: rows [w0, w1), columns [c0, c0 + wcols). */
+typedef int (*rs_fill_fn) (void *arg, size_t w0, size_t w1, size_t c0, size_t wcols,
+						   uint64_t *win, char *err, size_t errlen);
+
+/* raster.c: a tile's final triangles to the grid, fill as above (NULL: linear) */
+extern int	tdc_rs_tile(struct tdc_raster *r, const double *q, const double *qz, const size_t *tri,
+						size_t ntri, rs_fill_fn fill, void *arg, char *err, size_t errlen);
+
 /* bytes a pixel's record takes in the file: linear's value, or nearest's offer */
 #define RS_REC(r)		((r)->spec.method == TDC_INTERP_NEAREST ? (size_t) 32 : (size_t) 8)
 /* do the pixels outside the hull take the fringe's nearest site (nearest's radius is never 0)? */

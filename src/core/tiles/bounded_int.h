@@ -39,9 +39,11 @@ typedef struct bd_err
 
 /*
  * Bytes a point costs a tile run beside the engine and the finality check
- * (tdc_tp_tile_bytes): its coordinates, its tile, its z, the caller's label.
+ * (tdc_tp_tile_bytes): its coordinates, its tile, its z, the caller's
+ * label, and what the caller's final_run holds per point while it runs.
  */
-#define POINT_BYTES(r)	((size_t) (16 + 8 + ((r)->has_z ? 8 : 0) + ((r)->has_l ? 8 : 0)))
+#define POINT_BYTES(r)	((size_t) (16 + 8 + ((r)->has_z ? 8 : 0) + ((r)->has_l ? 8 : 0) + \
+								   ((r)->p->final_run ? (r)->p->final_per_point : 0)))
 
 /*
  * A point's record in the run's files: x, y, then z with a z file, then the

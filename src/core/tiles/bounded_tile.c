@@ -564,6 +564,31 @@ tile_write(bounded_run *r, int t, const tile_points *p, const tdc_tile_result *r
 }
 
 /*
+ * The caller's final_run on a final run's job (under the output's lock, as
+ * emit): 0, 1 with need (the tile runs again), or the run's error code.
+ */
+static int
+tile_final_run(bounded_run *r, int t, const tdc_job *job, const tile_points *p,
+			   const tdc_tile_result *res, const double K[4], double need[4])
+{
+	int			rc;
+
+	tdc_bd_out_lock(r);
+	if (tdc_bd_stopped(r))
+		rc = tdc_bd_fail(&r->e, TDC_ECANCELED, "canceled");
+	else if ((rc = r->p->final_run(r->p->arg, t, job, p->q, p->qz, p->ql, p->m, res->tri,
+								   res->ntri, K, need)) != 0 && rc != 1)
+	{
+		rc = tdc_bd_fail(&r->e, rc < 0 ? rc : TDC_EINVAL, "tile %d of %d was not taken (the "
+						 "caller's final_run returned %d)", t, r->nt, rc);
+		if (r->sh != NULL)
+			tdc_bd_stop(r);
+	}
+	tdc_bd_out_unlock(r);
+	return rc;
+}
+
+/*
  * Tile t, run until its run is final, its triangles then emitted: each
  * global triangle it owns once, whatever the runs before.  Its known
  * region starts as the policy's first region (first_region) and only
@@ -647,6 +672,27 @@ tdc_bd_tile_run(bounded_run *r, int t)
 		/* each vertex's label: the least of its copies', while the job still names them */
 		if (res.final && p.qc)
 			tdc_least_labels(job, p.qc);
+		/* the caller's look at the whole T(Q) first: it may need a larger K */
+		if (res.final && r->p->final_run != NULL)
+		{
+			double		need[4];
+			int			frc = tile_final_run(r, t, job, &p, &res, K, need);
+
+			if (frc != 0)
+			{
+				tile_account(r, job);
+				if (frc != 1)
+				{
+					tdc_tile_result_free(&res);
+					points_free(&p);
+					return r->e.code;
+				}
+				tdc_tp_grow_known(K, Kmin, need, h);
+				run_done(r, &res, &p);
+				r->st->write += now_s() - t0;
+				continue;
+			}
+		}
 		tile_account(r, job);
 		if (res.final)
 		{

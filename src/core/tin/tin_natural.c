@@ -44,9 +44,13 @@
  * cancellation in its area costs about log2(L / d) bits, which double-double
  * has to spare.  The weights are the areas rounded to double and the value
  * the mean of the heights in double, summed in the order of the boundary
- * from its first vertex in (x, y) order: so the value is the same whatever
- * triangle the walk located q in, and a cocircular tie-break changes it by
- * no more than rounding (tested on lattices against their mirror images).
+ * from its first vertex in (x, y) order, and each circumcenter is computed
+ * from its triangle's first corner in (x, y) order: so the value depends on
+ * the cavity's triangles as geometry only, the same whatever triangle the
+ * walk located q in and however the mesh numbers its half-edges (a bounded
+ * run's tile computes it on its own triangulation, terrain/raster_natural.c,
+ * to the same bits), and a cocircular tie-break changes it by no more than
+ * rounding (tested on lattices against their mirror images).
  *
  * A point on an edge of the hull (exactly) has an unbounded cell; the
  * interpolation is then linear along the edge, its limit from inside
@@ -417,11 +421,16 @@ tin_natural(const tdc_tin *tin, tin_scratch *sc, const double *q,
 	if (sc->nbnd != nb)
 		return TDC_EINVAL;
 
-	/* circumcenters of the cavity triangles, relative to q */
+	/*
+	 * circumcenters of the cavity triangles, relative to q, each from its
+	 * first corner in (x, y) order: the rounding then depends on the
+	 * triangle, not on how its half-edges are numbered
+	 */
 	for (size_t i = 0; i < sc->ntri; i++)
 	{
 		uint32_t	h = sc->tri[i],
-					h1 = tin_lnext(tin, h);
+					h1,
+					g = h;
 		dd			ax,
 					ay,
 					bx,
@@ -429,6 +438,13 @@ tin_natural(const tdc_tin *tin, tin_scratch *sc, const double *q,
 					cx,
 					cy;
 
+		for (int k = 0; k < 2; k++)
+		{
+			g = tin_lnext(tin, g);
+			if (tdc_lex_less(tin_pt(tin, tin_org(tin, g)), tin_pt(tin, tin_org(tin, h))))
+				h = g;
+		}
+		h1 = tin_lnext(tin, h);
 		offset(tin_pt(tin, tin_org(tin, h)), q, &ax, &ay);
 		offset(tin_pt(tin, tin_org(tin, h1)), q, &bx, &by);
 		offset(tin_pt(tin, tin_dest(tin, h1)), q, &cx, &cy);

@@ -1,0 +1,346 @@
+/*
+ * raster_natural.c
+ *		Natural neighbour pixels of a bounded run's grid (tdc_raster_nn_tile,
+ *		tdc_bounded.h): the whole TIN's values, to the bit, from each tile's
+ *		own triangulation.
+ *
+ * Sibson's value at a pixel centre q (tin_natural.c) is made of the
+ * cavity of q: the triangles of the Delaunay triangulation T(P) whose open
+ * circumdisk holds q, and nothing else (tin_natural.c computes it from
+ * their corners, heights and circumcentres alone, in an order the geometry
+ * fixes).  A tile holds T(Q), the triangulation of the points Q of a box K
+ * around it; raster.c hands over the pixels its final triangles hold
+ * (closed; a centre on P's hull is linear along the hull edge, at a site
+ * the site's height, as in one TIN), and for each here the tile's cavity
+ * cav_Q is computed on a TIN of T(Q) and accepted only when it is proven
+ * to be the global cavity cav_P:
+ *
+ *	(a) every triangle of cav_Q is a triangle of T(P), and
+ *	(b) across every boundary edge e of cav_Q, the triangle of T(Q) is one
+ *		of T(P) too, or e is an edge of T(Q)'s outer face and a hull edge
+ *		of P.
+ *
+ * Then cav_P = cav_Q.  cav_P holds a triangle of cav_Q (q's own, which
+ * T(P) shares by (a)), and it is edge-connected (the Bowyer-Watson cavity
+ * is star-shaped from q), so if it held more it would hold a triangle t'
+ * across a boundary edge e of cav_Q, from the side away from cav_Q; by
+ * (b) that is the triangle of T(Q) across e, which is not in cav_Q, so q
+ * is not in its open circumdisk; or there is none, e being on P's hull.
+ * And cav_P holds every triangle of cav_Q, which are in T(P) by (a) with
+ * q in their circumdisks.
+ *
+ * A triangle of T(Q) is proven in T(P) when one of its corners is an own
+ * site of the tile (the tile is final: every own site's star passed, see
+ * docs/design/tiles.md) or by Lemma 1 there: its closed circumdisk lies in
+ * K, or beyond K only where K reaches past the box B of P's hull (no point
+ * lies there).  The disk's box is computed in double-double from exact
+ * differences and widened by a forward bound (disk_box); a triangle too
+ * flat for the bound is not proven by its disk.  An outer edge a -> b of
+ * T(Q) is P's hull edge when every vertex of P's hull lies on its closed
+ * left (exact orientations).
+ *
+ * A pixel that fails is left unwritten and its tile asks for a larger K
+ * (the failing disks' boxes, clipped to B; the box of an outer edge of
+ * T(Q) that is not P's grown by its length; B when nothing smaller can
+ * help), and the bounded run reruns the tile (final_run, tdc_bounded.h):
+ * it grows every time, and once K holds B, Q = P and every cavity is
+ * proven, so the run completes.  The pixels already written are the
+ * global values and are written again the same.
+ *
+ * Memory: the TIN of T(Q) (tdc_tin_memory) and a label and a flag per
+ * point, TDC_RASTER_NN_PER_POINT bytes a point of the tile, counted in the
+ * tile's model by the caller; the cavity scratch within RS_NN_HOLD.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "engine/predicates.h"
+#include "raster_int.h"
+#include "tiles/tile_disk.h"
+#include "tin/tin_int.h"
+
+/* what the fill of one tile needs */
+typedef struct nn_tile
+{
+	tdc_raster *r;
+	tdc_tin    *tin;
+	tin_scratch sc;
+	uint8_t    *own;			/* per site of T(Q): an own site of the tile */
+	double		keff[4];		/* K, a side past B's open */
+	double		need[4];		/* what failed, clipped to B */
+	bool		more;			/* some pixel failed: need holds what it asks */
+	bool		all;			/* K holds B: Q = P, everything is proven */
+	uint32_t	hint;
+} nn_tile;
+
+/* need grown by box, clipped to the hull's box B */
+static void
+ask(nn_tile *t, const double *box)
+{
+	const double *B = t->r->fr.box;
+
+	t->need[0] = fmin(t->need[0], fmax(box[0], B[0]));
+	t->need[1] = fmin(t->need[1], fmax(box[1], B[1]));
+	t->need[2] = fmax(t->need[2], fmin(box[2], B[2]));
+	t->need[3] = fmax(t->need[3], fmin(box[3], B[3]));
+	t->more = true;
+}
+
+/* Does box lie in K, or past it only where K reaches past B (docs/design/tiles.md, Lemma 1)? */
+static inline bool
+box_known(const nn_tile *t, const double *box)
+{
+	return box[0] > t->keff[0] && box[1] > t->keff[1] && box[2] < t->keff[2] && box[3] < t->keff[3];
+}
+
+/* Is outer edge a -> b of T(Q) a hull edge of P (every vertex of P's hull on its closed left)? */
+static bool
+on_hull(const nn_tile *t, const double *a, const double *b)
+{
+	const fringe *fr = &t->r->fr;
+
+	for (size_t i = 0; i < fr->nhull; i++)
+		if (tdc_orient2d(a, b, fr->hull + 2 * i) < 0)
+			return false;
+	return true;
+}
+
+/*
+ * Is the triangle left of h (not the outer face) in T(P)?  Lemma 1 as
+ * tile_final.c decides it (tile_disk.c): the disk's box, else the box of
+ * its part inside P's hull and on the inner side of its own edges on P's
+ * hull.  If not, ask for that box.
+ */
+static bool
+tri_proven(nn_tile *t, uint32_t h)
+{
+	const tdc_tin *tin = t->tin;
+	const fringe *fr = &t->r->fr;
+	uint32_t	hh[3],
+				v[3];
+	const double *p[3];
+	double		box[4],
+				disk[3];
+
+	hh[0] = h;
+	hh[1] = tin_lnext(tin, h);
+	hh[2] = tin_lnext(tin, hh[1]);
+	for (int k = 0; k < 3; k++)
+	{
+		v[k] = tin_org(tin, hh[k]);
+		p[k] = tin_pt(tin, v[k]);
+	}
+	if (t->all || t->own[v[0]] || t->own[v[1]] || t->own[v[2]])
+		return true;
+	if (!tdc_disk_box(p[0], p[1], p[2], box, disk))
+	{
+		ask(t, fr->box);
+		return false;
+	}
+	if (box_known(t, box))
+		return true;
+	for (int k = 0; k < 3; k++)
+		if (tin_outer(tin, hh[k] ^ 1u) && on_hull(t, p[k], p[(k + 1) % 3]))
+		{
+			tdc_disk_clip_box(disk, p[k], p[(k + 1) % 3], box);
+			tdc_disk_segment_box(p[k], p[(k + 1) % 3], p[(k + 2) % 3], box);
+		}
+	for (size_t i = 0; i < fr->nhull; i++)
+		tdc_disk_clip_box(disk, fr->hull + 2 * i, fr->hull + 2 * ((i + 1) % fr->nhull), box);
+	if (box_known(t, box))
+		return true;
+	ask(t, box);
+	return false;
+}
+
+/* Is outer edge a -> b of T(Q) (outer face on its right) a hull edge of P?  If not, ask around it. */
+static bool
+hull_proven(nn_tile *t, uint32_t a, uint32_t b)
+{
+	const double *pa = tin_pt(t->tin, a),
+			   *pb = tin_pt(t->tin, b);
+	double		g,
+				box[4];
+
+	if (t->all || on_hull(t, pa, pb))
+		return true;
+	g = fabs(pb[0] - pa[0]) + fabs(pb[1] - pa[1]);
+	box[0] = fmin(pa[0], pb[0]) - g;
+	box[1] = fmin(pa[1], pb[1]) - g;
+	box[2] = fmax(pa[0], pb[0]) + g;
+	box[3] = fmax(pa[1], pb[1]) + g;
+	ask(t, box);
+	return false;
+}
+
+/*
+ * The value at q, a centre strictly inside a final triangle or an edge of
+ * one not on P's hull: 1 with *z when its cavity is proven global, 0 when
+ * not (t->need grown), or an error.
+ */
+static int
+nn_value(nn_tile *t, const double *q, double *z)
+{
+	const tdc_tin *tin = t->tin;
+	tin_scratch *sc = &t->sc;
+	tin_loc		loc;
+	bool		ok = true;
+	int			rc;
+
+	tin_locate(tin, q, t->hint, &loc);
+	if (loc.h != TDC_NIL)
+		t->hint = loc.h;
+	if (loc.kind != LOC_FACE && loc.kind != LOC_EDGE)
+		return TDC_EINVAL;		/* a final triangle holds q: T(Q) must too */
+	if (loc.kind == LOC_EDGE && (loc.h == TDC_NIL || tin_outer(tin, loc.h ^ 1u)))
+	{
+		/* on T(Q)'s hull but inside P's: points beyond the edge are missing */
+		if (loc.h != TDC_NIL)
+			(void) hull_proven(t, tin_org(tin, loc.h), tin_dest(tin, loc.h));
+		if (!t->more)
+			ask(t, t->r->fr.box);
+		return 0;
+	}
+	rc = tin_natural(tin, sc, q, &loc, z);
+	if (rc == TDC_ENOMEM)
+		return rc;
+	if (rc != TDC_OK)
+	{
+		/* T(Q)'s cavity is not a disk: only where T(Q) is not T(P) near q */
+		ask(t, t->r->fr.box);
+		return 0;
+	}
+	/* (a): the cavity's triangles; (b): across its boundary (sc->bnd[0 .. nbnd)) */
+	for (size_t i = 0; i < sc->ntri; i++)
+		ok &= tri_proven(t, sc->tri[i]);
+	for (size_t i = 0; i < sc->nbnd; i++)
+	{
+		uint32_t	b = sc->bnd[i];
+
+		/* b has the cavity on its left; the other side is outer or a triangle */
+		ok &= tin_outer(tin, b ^ 1u) ? hull_proven(t, tin_org(tin, b), tin_dest(tin, b)) :
+			tri_proven(t, b ^ 1u);
+	}
+	return ok ? 1 : 0;
+}
+
+/* rs_fill_fn: the window's natural neighbour pixels, each proven or left unwritten */
+static int
+nn_fill(void *arg, size_t w0, size_t w1, size_t c0, size_t wcols, uint64_t *win, char *err,
+		size_t errlen)
+{
+	nn_tile    *t = arg;
+
+	for (size_t row = w0; row < w1; row++)
+		for (size_t col = c0; col < c0 + wcols; col++)
+		{
+			uint64_t   *w = win + (row - w0) * wcols + (col - c0);
+			double		q[2],
+						z;
+			int			rc;
+
+			if (*w != RS_NN_MARK)
+				continue;
+			rs_centre(t->r->g.gt, col, row, q);
+			rc = nn_value(t, q, &z);
+			if (rc < 0)
+			{
+				char		c[80];
+
+				snprintf(c, sizeof(c), "(%.17g %.17g)", q[0], q[1]);
+				return tdc_rs_fail(err, errlen, rc, rc == TDC_ENOMEM ?
+								   "out of memory for the natural neighbour cavity at %s" :
+								   "the natural neighbour cavity at %s: the tile's triangulation "
+								   "does not hold the centre its final triangle holds", c);
+			}
+			if (rc == 1)
+				memcpy(w, &z, 8);
+			else
+				*w = RS_SENT;
+		}
+	if (t->sc.bytes > RS_NN_HOLD)
+		return tdc_rs_fail(err, errlen, TDC_EMEMLIMIT, "%s", "a natural neighbour cavity needs more "
+						   "than the grid's scratch allows (a huge set of cocircular sites)");
+	return TDC_OK;
+}
+
+int
+tdc_raster_nn_tile(tdc_raster *r, int tile, const tdc_job *job, const double *q, const double *qz,
+				   const int64_t *tile_of, size_t m, const size_t *tri, size_t ntri,
+				   const double known[4], double need[4], char *err, size_t errlen)
+{
+	nn_tile		t;
+	const double *B = r->fr.box;
+	int64_t    *lab;
+	int			rc;
+
+	if (r->spec.method != TDC_INTERP_NATURAL)
+		return tdc_rs_fail(err, errlen, TDC_EINVAL, "%s", "tdc_raster_nn_tile is for a natural "
+						   "neighbour grid");
+	memset(&t, 0, sizeof(t));
+	t.r = r;
+	t.hint = TDC_NIL;
+	memcpy(t.need, known, sizeof(t.need));
+	t.keff[0] = known[0] <= B[0] ? -INFINITY : known[0];
+	t.keff[1] = known[1] <= B[1] ? -INFINITY : known[1];
+	t.keff[2] = known[2] >= B[2] ? INFINITY : known[2];
+	t.keff[3] = known[3] >= B[3] ? INFINITY : known[3];
+	t.all = isinf(t.keff[0]) && isinf(t.keff[1]) && isinf(t.keff[2]) && isinf(t.keff[3]);
+	if (ntri == 0)
+		return TDC_OK;
+	if ((rc = tdc_tin_build(job, qz, 1, 0, &t.tin, err, errlen)) != TDC_OK)
+		return rc;
+	if (t.tin->mesh.nin != m)
+	{
+		tdc_tin_free(t.tin);
+		return tdc_rs_fail(err, errlen, TDC_EINVAL, "%s", "the tile's job is not of its points");
+	}
+	/* own sites: a site belongs to the least tile among its copies */
+	lab = malloc(sizeof(int64_t) * (m + 1));
+	t.own = calloc(m + 1, 1);
+	if (lab == NULL || t.own == NULL)
+	{
+		free(lab);
+		free(t.own);
+		tdc_tin_free(t.tin);
+		return tdc_rs_fail(err, errlen, TDC_ENOMEM, "%s", "out of memory for the tile's sites");
+	}
+	for (size_t s = 0; s < m; s++)
+		lab[s] = INT64_MAX;
+	for (size_t at = 0; at < m; at++)
+	{
+		uint32_t	s = t.tin->mesh.site_of[at];
+		int64_t		l = tile_of[t.tin->mesh.idx[at]];
+
+		if (l < lab[s])
+			lab[s] = l;
+	}
+	for (size_t s = 0; s < m; s++)
+		t.own[s] = lab[s] == tile;
+	free(lab);
+
+	rc = tdc_rs_tile(r, q, qz, tri, ntri, nn_fill, &t, err, errlen);
+	tin_scratch_free(&t.sc);
+	free(t.own);
+	tdc_tin_free(t.tin);
+	if (rc != TDC_OK)
+		return rc;
+	if (!t.more)
+		return TDC_OK;
+	if (t.all)
+		return tdc_rs_fail(err, errlen, TDC_EINVAL, "%s", "a natural neighbour cavity of a tile "
+						   "that holds every point is not proven: a bug");
+	/* a box containing K that K does not hold: else all of B */
+	if (t.need[0] >= known[0] && t.need[1] >= known[1] && t.need[2] <= known[2] &&
+		t.need[3] <= known[3])
+	{
+		t.need[0] = fmin(known[0], B[0]);
+		t.need[1] = fmin(known[1], B[1]);
+		t.need[2] = fmax(known[2], B[2]);
+		t.need[3] = fmax(known[3], B[3]);
+	}
+	memcpy(need, t.need, sizeof(t.need));
+	return 1;
+}
