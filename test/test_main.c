@@ -21,7 +21,7 @@ main(int argc, char **argv)
 	{
 		if (strcmp(argv[i], "--quick") == 0)
 			tdc_test_quick = 1;
-		/* one part alone, while working on it: --only tin, --only tile, --only bounded */
+		/* one part alone, while working on it: --only tin, --only tile, --only bounded, --only raster */
 		else if (strcmp(argv[i], "--only") == 0 && i + 1 < argc && strcmp(argv[i + 1], "tin") == 0)
 		{
 			setvbuf(stdout, NULL, _IOLBF, 0);
@@ -37,6 +37,13 @@ main(int argc, char **argv)
 			test_bounded_labels();
 			test_raster_tiles();
 			test_contour_tiles();
+			printf("%ld passed, %ld failed\n", tdc_test_passed, tdc_test_failed);
+			return tdc_test_failed ? 1 : 0;
+		}
+		else if (strcmp(argv[i], "--only") == 0 && i + 1 < argc && strcmp(argv[i + 1], "raster") == 0)
+		{
+			setvbuf(stdout, NULL, _IOLBF, 0);
+			test_raster_tiles();
 			printf("%ld passed, %ld failed\n", tdc_test_passed, tdc_test_failed);
 			return tdc_test_failed ? 1 : 0;
 		}

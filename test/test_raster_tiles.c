@@ -63,6 +63,7 @@ typedef struct rt_state
 	tdc_raster *ras;
 	char		err[512];
 	int			begins;
+	int			reruns;			/* natural neighbour: tiles that asked for a larger K */
 } rt_state;
 
 double
@@ -90,7 +91,22 @@ rt_emit(void *arg, int tile, const double *q, const double *qz, const int64_t *q
 
 	(void) tile;
 	(void) ql;
+	if (s->spec.method == TDC_INTERP_NATURAL)
+		return 0;				/* rt_final_run took the tile */
 	return tdc_raster_tile(s->ras, q, qz, tri, ntri, s->err, sizeof(s->err));
+}
+
+/* natural neighbour: the tile's whole triangulation, or what it needs more (1) */
+static int
+rt_final_run(void *arg, const tdc_job *job, const double *q, const double *qz, size_t m,
+			 const size_t *tri, size_t ntri, const tdc_tile_spec *spec, tdc_tile_result *more)
+{
+	rt_state   *s = arg;
+	int			rc = tdc_raster_nn_tile(s->ras, job, q, qz, m, tri, ntri, spec, more, s->err,
+										sizeof(s->err));
+
+	s->reruns += rc == 1;
+	return rc;
 }
 
 int
@@ -189,6 +205,11 @@ tiled_grid(const rt_case *c, rt_state *s, const char *dir, int threads, size_t *
 	p.tmpdir = dir;
 	p.begin = rt_begin;
 	p.emit = rt_emit;
+	if (s->spec.method == TDC_INTERP_NATURAL)
+	{
+		p.final_run = rt_final_run;
+		p.final_per_point = TDC_RASTER_NN_PER_POINT;
+	}
 	p.arg = s;
 	/* as ./tdc: the output does not depend on the tiles' order, so two run at once */
 	p.any_order = true;
@@ -281,6 +302,9 @@ compare(const rt_case *c, const char *method, const char *dir, int threads)
 			  c->name, method, tiles, tdc_test_quick || c->workers > 1 ? 3 : 8);
 		CHECK(valid1 > 0 && valid1 < s.g.width * s.g.height * 2, "raster %s %s: %zu valid",
 			  c->name, method, valid1);
+		if (getenv("TDC_TEST_VERBOSE"))
+			fprintf(stderr, "raster %s %s: %d tiles, %d reruns for natural neighbour\n", c->name,
+					method, tiles, s.reruns);
 	}
 	CHECK(tiles_files_in(dir) == 0, "raster %s %s: files left in %s", c->name, method, dir);
 	free(v1);
@@ -311,10 +335,10 @@ refusals(rt_case *c, const char *dir)
 	double	   *v;
 
 	grid_of(c, &s.g);
-	tdc_interp_parse("natural_neighbor", &s.spec, err, sizeof(err));
+	tdc_interp_parse("linear:breaklines=true", &s.spec, err, sizeof(err));
 	v = tiled_grid(c, &s, dir, 2, &valid, &tiles, &rc, err, sizeof(err));
-	CHECK(v == NULL && rc == TDC_EINVAL && strstr(err, "linear or nearest") != NULL,
-		  "raster: natural neighbour in tiles: %d %s", rc, err);
+	CHECK(v == NULL && rc == TDC_EINVAL && strstr(err, "cannot take breaklines") != NULL,
+		  "raster: breaklines in tiles: %d %s", rc, err);
 	CHECK(tiles_files_in(dir) == 0, "raster: refusals: files left in %s", dir);
 }
 
@@ -329,7 +353,8 @@ test_raster_tiles(void)
 	static const char *const methods[] = {
 		"linear", "linear:radius=0", "linear:radius=30:nodata=-9999", "linear:max_edge=6",
 		"linear:max_edge=4:radius=12", "nearest", "nearest:radius1=3:radius2=3:nodata=-9999",
-		"nearest:max_edge=6"
+		"nearest:max_edge=6", "natural_neighbor", "natural_neighbor:radius=0",
+		"natural_neighbor:max_edge=6:radius=30:nodata=-9999"
 	};
 
 	snprintf(dir, sizeof(dir), "%s/tdc_test_raster.XXXXXX", base);
@@ -359,6 +384,7 @@ test_raster_tiles(void)
 		compare(&c, methods[m], dir, 2);
 	compare(&c, "linear", dir, 1);
 	compare(&c, "nearest", dir, 1);
+	compare(&c, "natural_neighbor", dir, 1);
 	/* a window inside the samples' box: every row's hull crossings lie beside the grid */
 	c.name = "window";
 	c.extent[0] = 300.3;
@@ -366,6 +392,7 @@ test_raster_tiles(void)
 	compare(&c, "linear", dir, 2);
 	compare(&c, "nearest", dir, 2);
 	compare(&c, "nearest:max_edge=6", dir, 2);
+	compare(&c, "natural_neighbor", dir, 2);
 	c.name = "uniform";
 	c.extent[0] = -40.3;
 	c.extent[2] = 1044.7;
@@ -375,6 +402,7 @@ test_raster_tiles(void)
 	c.workers = 2;
 	compare(&c, "linear", dir, 2);
 	compare(&c, "nearest:max_edge=6", dir, 2);
+	compare(&c, "natural_neighbor", dir, 2);
 	c.limit_mb = 14;
 	c.workers = 0;
 
@@ -394,6 +422,7 @@ test_raster_tiles(void)
 	compare(&c, "linear", dir, 2);
 	compare(&c, "linear:max_edge=5:radius=20", dir, 2);
 	compare(&c, "nearest", dir, 2);
+	compare(&c, "natural_neighbor", dir, 2);
 
 	/* a diamond: the hull's sides are slanted, so the corners' pixels lie far outside it */
 	c.name = "diamond";
@@ -415,6 +444,8 @@ test_raster_tiles(void)
 	compare(&c, "linear", dir, 2);
 	compare(&c, "linear:radius=40:max_edge=7", dir, 2);
 	compare(&c, "nearest:max_edge=7", dir, 2);
+	compare(&c, "natural_neighbor", dir, 2);
+	compare(&c, "natural_neighbor:radius=40:max_edge=7", dir, 2);
 
 	/* clusters in a sparse field */
 	c.name = "clusters";
@@ -445,6 +476,8 @@ test_raster_tiles(void)
 	compare(&c, "linear", dir, 2);
 	compare(&c, "linear:max_edge=8", dir, 2);
 	compare(&c, "nearest", dir, 2);
+	compare(&c, "natural_neighbor", dir, 2);
+	compare(&c, "natural_neighbor:max_edge=8", dir, 2);
 
 	/* the lattice on the pixels, with a lake */
 	{
@@ -479,6 +512,9 @@ test_raster_tiles(void)
 		compare(&c, "linear:max_edge=1.5:radius=0", dir, 2);
 		compare(&c, "nearest", dir, 2);
 		compare(&c, "nearest:max_edge=1.5", dir, 2);
+		compare(&c, "natural_neighbor", dir, 2);
+		compare(&c, "natural_neighbor:max_edge=1.5", dir, 2);
+		compare(&c, "natural_neighbor:max_edge=1.5:radius=0", dir, 2);
 	}
 
 	/* a collinear input: refused, with its reason */

@@ -81,16 +81,15 @@ emit(void *arg, int tile, const double *q, const double *qz, const int64_t *ql,
 	return tdc_raster_tile(gt->ras, q, qz, tri, ntri, gt->err, sizeof(gt->err));
 }
 
-/* natural neighbour: the tile's pixels from its whole triangulation, or a larger K */
+/* natural neighbour: the tile's pixels from its whole triangulation, or what it needs more */
 static int
-final_run(void *arg, int tile, const tdc_job *job, const double *q, const double *qz,
-		  const int64_t *tile_of, size_t m, const size_t *tri, size_t ntri, const double known[4],
-		  double need[4])
+final_run(void *arg, const tdc_job *job, const double *q, const double *qz, size_t m,
+		  const size_t *tri, size_t ntri, const tdc_tile_spec *spec, tdc_tile_result *more)
 {
 	grid_tiles *gt = arg;
 
-	return tdc_raster_nn_tile(gt->ras, tile, job, q, qz, tile_of, m, tri, ntri, known, need,
-							  gt->err, sizeof(gt->err));
+	return tdc_raster_nn_tile(gt->ras, job, q, qz, m, tri, ntri, spec, more, gt->err,
+							  sizeof(gt->err));
 }
 
 /* The grid's rows, from the raster to the .asc or the GeoTIFF; dies on errors. */

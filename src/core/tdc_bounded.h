@@ -86,19 +86,18 @@ typedef struct tdc_bounded_params
 	 * (the natural neighbour grid, terrain/raster_natural.c): called for
 	 * each final tile run before emit, one call at a time as emit is, with
 	 * the run's finished job (the tile's whole triangulation T(Q); its
-	 * input is q, m points, with qz as emit's), tile_of (the tile of each
-	 * point: a site is owned by the least among its copies'), the tile's
-	 * final triangles (as emit's) and K, the known box: every point of the
-	 * input inside it is in q.  Returns 0 (emit follows), 1 with need set to
-	 * a box containing K that the tile must know (it runs again with a
-	 * larger K, and emit waits for that run), or a nonzero code that stops
+	 * input is q, m points, with qz as emit's), the tile's final triangles
+	 * (as emit's) and what the tile knows (spec: K, the extra boxes, the
+	 * cells, each point's tile; tdc_tile_finish's).  Returns 0 (emit
+	 * follows), 1 with more's need (a box containing K) and need_cells set
+	 * as a tile that is not final sets them (the tile runs again with what
+	 * they ask, and emit waits for that run), or a nonzero code that stops
 	 * the run as emit's does.  final_per_point: the bytes per point of q it
 	 * holds at most while it runs, counted in the tiles' memory.
 	 */
-	int			(*final_run) (void *arg, int tile, const tdc_job *job, const double *q,
-							  const double *qz, const int64_t *tile_of, size_t m,
-							  const size_t *tri, size_t ntri, const double known[4],
-							  double need[4]);
+	int			(*final_run) (void *arg, const tdc_job *job, const double *q, const double *qz,
+							  size_t m, const size_t *tri, size_t ntri,
+							  const tdc_tile_spec *spec, tdc_tile_result *more);
 	size_t		final_per_point;
 	/*
 	 * Optional, before emit: called once after the first pass, before the
@@ -213,20 +212,18 @@ extern void tdc_raster_free(tdc_raster *r);
 /*
  * A natural neighbour grid (terrain/raster_natural.c) takes each final
  * tile's whole triangulation instead of tile: call it from the bounded
- * run's final_run with its arguments (tile, job, q, qz, tile_of, m, tri,
- * ntri, known, need) and return what it returns: TDC_OK, 1 when a pixel's
- * cavity is not proven global from the tile (need: the larger box the tile
- * must know; its other pixels are written), or an error.  The values are
- * those of the whole TIN to the bit.  Set the run's final_per_point to
- * TDC_RASTER_NN_PER_POINT: the TIN it builds on the tile's job and a label
- * and a flag per point.
+ * run's final_run with its arguments and return what it returns: TDC_OK,
+ * 1 when a pixel's cavity is not proven global from what the tile knows
+ * (more: what it must know besides; the pixels proven are written), or an
+ * error.  The values are those of the whole TIN to the bit.  Set the
+ * run's final_per_point to TDC_RASTER_NN_PER_POINT: the TIN it builds on
+ * the tile's job (tdc_tin_memory) and a label and a flag per point.
  */
 #define TDC_RASTER_NN_PER_POINT		72
 
-extern int	tdc_raster_nn_tile(tdc_raster *r, int tile, const tdc_job *job, const double *q,
-							   const double *qz, const int64_t *tile_of, size_t m,
-							   const size_t *tri, size_t ntri, const double known[4],
-							   double need[4], char *err, size_t errlen);
+extern int	tdc_raster_nn_tile(tdc_raster *r, const tdc_job *job, const double *q, const double *qz,
+							   size_t m, const size_t *tri, size_t ntri, const tdc_tile_spec *spec,
+							   tdc_tile_result *more, char *err, size_t errlen);
 
 /* --- Contour lines from a bounded run's triangles (terrain/contour_tiles.c) --- */
 

@@ -58,6 +58,7 @@
 
 #include "engine/predicates.h"
 #include "raster_int.h"
+#include "tiles/tile_cells.h"
 #include "tiles/tile_disk.h"
 #include "tin/tin_int.h"
 
@@ -68,6 +69,10 @@ typedef struct nn_tile
 	tdc_tin    *tin;
 	tin_scratch sc;
 	uint8_t    *own;			/* per site of T(Q): an own site of the tile */
+	const tdc_tile_spec *spec;	/* what the tile knows: K, extra boxes, cells */
+	const double **known_list;	/* K and the extra boxes */
+	tdc_cells	cells;			/* the spec's cells (g NULL without) */
+	tdc_cell_list cl;			/* OTHER cells a failing pixel needs */
 	double		keff[4];		/* K, a side past B's open */
 	double		need[4];		/* what failed, clipped to B */
 	bool		more;			/* some pixel failed: need holds what it asks */
@@ -88,11 +93,27 @@ ask(nn_tile *t, const double *box)
 	t->more = true;
 }
 
-/* Does box lie in K, or past it only where K reaches past B (docs/design/tiles.md, Lemma 1)? */
-static inline bool
+/*
+ * Is box known (docs/design/tiles.md, Lemma 1): inside K, or past it only
+ * where K reaches past B, or its part inside B covered by K and the extra
+ * boxes?  As tile_final.c's box_known.
+ */
+static bool
 box_known(const nn_tile *t, const double *box)
 {
-	return box[0] > t->keff[0] && box[1] > t->keff[1] && box[2] < t->keff[2] && box[3] < t->keff[3];
+	const double *B = t->r->fr.box;
+	double		r[4] = {fmax(box[0], B[0]), fmax(box[1], B[1]), fmin(box[2], B[2]), fmin(box[3], B[3])};
+
+	if (box[0] > t->keff[0] && box[1] > t->keff[1] && box[2] < t->keff[2] && box[3] < t->keff[3])
+		return true;
+	return t->spec->nextra > 0 && tdc_box_covered(r, t->known_list, t->spec->nextra + 1);
+}
+
+/* box_known for the cells' walks (tile_cells.c) */
+static bool
+cell_covered(const void *arg, const double box[4])
+{
+	return box_known((const nn_tile *) arg, box);
 }
 
 /* Is outer edge a -> b of T(Q) a hull edge of P (every vertex of P's hull on its closed left)? */
@@ -151,6 +172,14 @@ tri_proven(nn_tile *t, uint32_t h)
 		tdc_disk_clip_box(disk, fr->hull + 2 * i, fr->hull + 2 * ((i + 1) % fr->nhull), box);
 	if (box_known(t, box))
 		return true;
+	/* with cells: known when every cell the disk meets is empty or known */
+	if (t->cells.g != NULL)
+	{
+		double		near[6] = {p[0][0], p[0][1], p[1][0], p[1][1], p[2][0], p[2][1]};
+
+		if (tdc_cells_disk(&t->cells, disk, box, near, 3, cell_covered, t, &t->cl))
+			return true;
+	}
 	ask(t, box);
 	return false;
 }
@@ -166,6 +195,8 @@ hull_proven(nn_tile *t, uint32_t a, uint32_t b)
 
 	if (t->all || on_hull(t, pa, pb))
 		return true;
+	if (t->cells.g != NULL)
+		(void) tdc_cells_beyond(&t->cells, pa, pb, cell_covered, t, &t->cl);
 	g = fabs(pb[0] - pa[0]) + fabs(pb[1] - pa[1]);
 	box[0] = fmin(pa[0], pb[0]) - g;
 	box[1] = fmin(pa[1], pb[1]) - g;
@@ -266,81 +297,112 @@ nn_fill(void *arg, size_t w0, size_t w1, size_t c0, size_t wcols, uint64_t *win,
 	return TDC_OK;
 }
 
+/* The tile's state freed. */
+static void
+nn_free(nn_tile *t)
+{
+	tin_scratch_free(&t->sc);
+	free(t->own);
+	free(t->known_list);
+	free(t->cl.v);
+	tdc_cells_free(&t->cells);
+	if (t->tin)
+		tdc_tin_free(t->tin);
+}
+
 int
-tdc_raster_nn_tile(tdc_raster *r, int tile, const tdc_job *job, const double *q, const double *qz,
-				   const int64_t *tile_of, size_t m, const size_t *tri, size_t ntri,
-				   const double known[4], double need[4], char *err, size_t errlen)
+tdc_raster_nn_tile(tdc_raster *r, const tdc_job *job, const double *q, const double *qz, size_t m,
+				   const size_t *tri, size_t ntri, const tdc_tile_spec *spec,
+				   tdc_tile_result *more, char *err, size_t errlen)
 {
 	nn_tile		t;
-	const double *B = r->fr.box;
+	const double *B = r->fr.box,
+			   *K = spec->known;
 	int64_t    *lab;
 	int			rc;
 
+	memset(more, 0, sizeof(*more));
 	if (r->spec.method != TDC_INTERP_NATURAL)
 		return tdc_rs_fail(err, errlen, TDC_EINVAL, "%s", "tdc_raster_nn_tile is for a natural "
 						   "neighbour grid");
-	memset(&t, 0, sizeof(t));
-	t.r = r;
-	t.hint = TDC_NIL;
-	memcpy(t.need, known, sizeof(t.need));
-	t.keff[0] = known[0] <= B[0] ? -INFINITY : known[0];
-	t.keff[1] = known[1] <= B[1] ? -INFINITY : known[1];
-	t.keff[2] = known[2] >= B[2] ? INFINITY : known[2];
-	t.keff[3] = known[3] >= B[3] ? INFINITY : known[3];
-	t.all = isinf(t.keff[0]) && isinf(t.keff[1]) && isinf(t.keff[2]) && isinf(t.keff[3]);
 	if (ntri == 0)
 		return TDC_OK;
-	if ((rc = tdc_tin_build(job, qz, 1, 0, &t.tin, err, errlen)) != TDC_OK)
-		return rc;
-	if (t.tin->mesh.nin != m)
-	{
-		tdc_tin_free(t.tin);
-		return tdc_rs_fail(err, errlen, TDC_EINVAL, "%s", "the tile's job is not of its points");
-	}
-	/* own sites: a site belongs to the least tile among its copies */
+	memset(&t, 0, sizeof(t));
+	t.r = r;
+	t.spec = spec;
+	t.hint = TDC_NIL;
+	memcpy(t.need, K, sizeof(t.need));
+	t.keff[0] = K[0] <= B[0] ? -INFINITY : K[0];
+	t.keff[1] = K[1] <= B[1] ? -INFINITY : K[1];
+	t.keff[2] = K[2] >= B[2] ? INFINITY : K[2];
+	t.keff[3] = K[3] >= B[3] ? INFINITY : K[3];
+	t.all = isinf(t.keff[0]) && isinf(t.keff[1]) && isinf(t.keff[2]) && isinf(t.keff[3]);
+	t.known_list = malloc(sizeof(double *) * (spec->nextra + 1));
 	lab = malloc(sizeof(int64_t) * (m + 1));
 	t.own = calloc(m + 1, 1);
-	if (lab == NULL || t.own == NULL)
+	if (t.known_list == NULL || lab == NULL || t.own == NULL ||
+		(spec->grid != NULL && !tdc_cells_init(&t.cells, spec->grid)))
 	{
 		free(lab);
-		free(t.own);
-		tdc_tin_free(t.tin);
+		nn_free(&t);
 		return tdc_rs_fail(err, errlen, TDC_ENOMEM, "%s", "out of memory for the tile's sites");
 	}
+	t.known_list[0] = K;
+	for (size_t i = 0; i < spec->nextra; i++)
+		t.known_list[i + 1] = spec->extra + 4 * i;
+	if ((rc = tdc_tin_build(job, qz, 1, 0, &t.tin, err, errlen)) != TDC_OK)
+	{
+		free(lab);
+		nn_free(&t);
+		return rc;
+	}
+	if (t.tin->mesh.nin != m)
+	{
+		free(lab);
+		nn_free(&t);
+		return tdc_rs_fail(err, errlen, TDC_EINVAL, "%s", "the tile's job is not of its points");
+	}
+	/* own sites: a site belongs to the least tile among its copies (tile_final.c) */
 	for (size_t s = 0; s < m; s++)
 		lab[s] = INT64_MAX;
 	for (size_t at = 0; at < m; at++)
 	{
 		uint32_t	s = t.tin->mesh.site_of[at];
-		int64_t		l = tile_of[t.tin->mesh.idx[at]];
+		int64_t		l = spec->tile[t.tin->mesh.idx[at]];
 
 		if (l < lab[s])
 			lab[s] = l;
 	}
 	for (size_t s = 0; s < m; s++)
-		t.own[s] = lab[s] == tile;
+		t.own[s] = lab[s] == spec->self;
 	free(lab);
 
 	rc = tdc_rs_tile(r, q, qz, tri, ntri, nn_fill, &t, err, errlen);
-	tin_scratch_free(&t.sc);
-	free(t.own);
-	tdc_tin_free(t.tin);
-	if (rc != TDC_OK)
-		return rc;
-	if (!t.more)
-		return TDC_OK;
-	if (t.all)
-		return tdc_rs_fail(err, errlen, TDC_EINVAL, "%s", "a natural neighbour cavity of a tile "
-						   "that holds every point is not proven: a bug");
-	/* a box containing K that K does not hold: else all of B */
-	if (t.need[0] >= known[0] && t.need[1] >= known[1] && t.need[2] <= known[2] &&
-		t.need[3] <= known[3])
+	if (rc == TDC_OK && t.more && t.all)
+		rc = tdc_rs_fail(err, errlen, TDC_EINVAL, "%s", "a natural neighbour cavity of a tile "
+						 "that holds every point is not proven: a bug");
+	if (rc != TDC_OK || !t.more)
 	{
-		t.need[0] = fmin(known[0], B[0]);
-		t.need[1] = fmin(known[1], B[1]);
-		t.need[2] = fmax(known[2], B[2]);
-		t.need[3] = fmax(known[3], B[3]);
+		nn_free(&t);
+		return rc;
 	}
-	memcpy(need, t.need, sizeof(t.need));
+	/* a box containing K that K does not hold: else all of B */
+	if (t.need[0] >= K[0] && t.need[1] >= K[1] && t.need[2] <= K[2] && t.need[3] <= K[3])
+	{
+		t.need[0] = fmin(K[0], B[0]);
+		t.need[1] = fmin(K[1], B[1]);
+		t.need[2] = fmax(K[2], B[2]);
+		t.need[3] = fmax(K[3], B[3]);
+	}
+	memcpy(more->need, t.need, sizeof(t.need));
+	if (t.cells.g != NULL && t.cl.n > 0 &&
+		!tdc_cells_merge(&t.cells, &t.cl, 1, &more->need_cells, &more->nneed_cells))
+	{
+		memset(&t.cl, 0, sizeof(t.cl));
+		nn_free(&t);
+		return tdc_rs_fail(err, errlen, TDC_ENOMEM, "%s", "out of memory for the cells a tile needs");
+	}
+	memset(&t.cl, 0, sizeof(t.cl));		/* merged: the list is gone */
+	nn_free(&t);
 	return 1;
 }

@@ -565,19 +565,19 @@ tile_write(bounded_run *r, int t, const tile_points *p, const tdc_tile_result *r
 
 /*
  * The caller's final_run on a final run's job (under the output's lock, as
- * emit): 0, 1 with need (the tile runs again), or the run's error code.
+ * emit): 0, 1 with more (the tile runs again), or the run's error code.
  */
 static int
 tile_final_run(bounded_run *r, int t, const tdc_job *job, const tile_points *p,
-			   const tdc_tile_result *res, const double K[4], double need[4])
+			   const tdc_tile_result *res, const tdc_tile_spec *spec, tdc_tile_result *more)
 {
 	int			rc;
 
 	tdc_bd_out_lock(r);
 	if (tdc_bd_stopped(r))
 		rc = tdc_bd_fail(&r->e, TDC_ECANCELED, "canceled");
-	else if ((rc = r->p->final_run(r->p->arg, t, job, p->q, p->qz, p->ql, p->m, res->tri,
-								   res->ntri, K, need)) != 0 && rc != 1)
+	else if ((rc = r->p->final_run(r->p->arg, job, p->q, p->qz, p->m, res->tri, res->ntri, spec,
+								   more)) != 0 && rc != 1)
 	{
 		rc = tdc_bd_fail(&r->e, rc < 0 ? rc : TDC_EINVAL, "tile %d of %d was not taken (the "
 						 "caller's final_run returned %d)", t, r->nt, rc);
@@ -672,25 +672,30 @@ tdc_bd_tile_run(bounded_run *r, int t)
 		/* each vertex's label: the least of its copies', while the job still names them */
 		if (res.final && p.qc)
 			tdc_least_labels(job, p.qc);
-		/* the caller's look at the whole T(Q) first: it may need a larger K */
+		/*
+		 * the caller's look at the whole T(Q) first: it may need more, and
+		 * the run then goes on as a run that is not final
+		 */
 		if (res.final && r->p->final_run != NULL)
 		{
-			double		need[4];
-			int			frc = tile_final_run(r, t, job, &p, &res, K, need);
+			tdc_tile_result more = {0};
+			int			frc = tile_final_run(r, t, job, &p, &res, &spec, &more);
 
-			if (frc != 0)
+			if (frc != 0 && frc != 1)
 			{
+				tdc_tile_result_free(&more);
 				tile_account(r, job);
-				if (frc != 1)
-				{
-					tdc_tile_result_free(&res);
-					points_free(&p);
-					return r->e.code;
-				}
-				tdc_tp_grow_known(K, Kmin, need, h);
-				run_done(r, &res, &p);
-				r->st->write += now_s() - t0;
-				continue;
+				tdc_tile_result_free(&res);
+				points_free(&p);
+				return r->e.code;
+			}
+			if (frc == 1)
+			{
+				tdc_tile_result_free(&res);
+				res.final = 0;
+				memcpy(res.need, more.need, sizeof(res.need));
+				res.need_cells = more.need_cells;
+				res.nneed_cells = more.nneed_cells;
 			}
 		}
 		tile_account(r, job);

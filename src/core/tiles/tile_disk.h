@@ -7,6 +7,7 @@
 #define TDC_TILE_DISK_H
 
 #include <stdbool.h>
+#include <stddef.h>
 
 /*
  * A box (xmin, ymin, xmax, ymax) that holds the closed circumdisk of
@@ -26,5 +27,12 @@ extern void tdc_disk_clip_box(const double *disk, const double *a, const double 
  */
 extern void tdc_disk_segment_box(const double *a, const double *b, const double *c,
 								 double box[4]);
+
+/*
+ * tile_final.c: is box r (xmin, ymin, xmax, ymax) covered by the union of
+ * the closed boxes k[0..nk)?  Conservative: false may be a union too
+ * fragmented to tell.  (Also for terrain/raster_natural.c's Lemma 1.)
+ */
+extern bool tdc_box_covered(const double *r, const double *const *k, size_t nk);
 
 #endif							/* TDC_TILE_DISK_H */

@@ -122,6 +122,12 @@ box_known(const tile_ctx *cx, const double *box)
 	return box_covered(r, cx->known_list, cx->spec->nextra + 1, 0);
 }
 
+bool
+tdc_box_covered(const double *r, const double *const *k, size_t nk)
+{
+	return box_covered(r, k, nk, 0);
+}
+
 /* box_known for the cells' walks (tile_cells.c). */
 static bool
 cell_covered(const void *arg, const double box[4])
