@@ -12,7 +12,12 @@
 #   - the GSHHG coastline of Stockholm (test/fixtures): real clustered
 #     data, under a tight limit;
 #   - nearest: beyond the data, a radius, max_edge, the coastline;
-#   - the refusals (natural neighbour, input without heights),
+#   - natural neighbour (terrain/raster_natural.c: each pixel's cavity
+#     proven global in its tile's triangulation): beyond the data, radius=0,
+#     max_edge, two tiles at once, a lattice whose pixel centres fall on
+#     sites, edges and the centres of cocircular squares, the LiDAR ground
+#     (GeoTIFF) and the coastline;
+#   - the refusal of an input without heights,
 #     each one line, with no -o written and nothing left in --tmpdir;
 #     SIGINT in the middle leaves no file behind.
 #   bash test/cli_grid_tiles.sh        (prints "N passed, N failed")
@@ -88,6 +93,19 @@ want_workers=
 grid_case "hills, nearest, extent beyond the data" 18 20 "$tmp/hills.txt" --grid 4 --extent -60.5,-33.25,2047,2031.5 --method nearest
 grid_case "hills, nearest:radius1=3:radius2=3" 18 20 "$tmp/hills.txt" --grid 4 --extent -60.5,-33.25,2047,2031.5 --method nearest:radius1=3:radius2=3:nodata=-9999
 grid_case "hills, nearest:max_edge=9" 18 20 "$tmp/hills.txt" --grid 3 --method nearest:max_edge=9:nodata=-9999
+# natural neighbour: the cavity of each centre, proven global in its tile (raster_natural.c)
+grid_case "hills, natural neighbour, extent beyond the data" 18 20 "$tmp/hills.txt" --grid 4 --extent -60.5,-33.25,2047,2031.5 --method natural_neighbor
+grid_case "hills, natural_neighbor:radius=0" 18 20 "$tmp/hills.txt" --grid 4 --extent -60.5,-33.25,2047,2031.5 --method natural_neighbor:radius=0
+grid_case "hills, natural_neighbor:max_edge=9" 18 20 "$tmp/hills.txt" --grid 3 --method natural_neighbor:max_edge=9:nodata=-9999
+grid_case "hills, natural neighbour, a tighter limit" 16 40 "$tmp/hills.txt" --grid 5 --method natural_neighbor
+want_workers=2 grid_case "hills, two tiles at once, natural neighbour" 30 8 "$tmp/hills.txt" --grid 4 --extent -60.5,-33.25,2047,2031.5 --method natural_neighbor
+# a unit lattice (cocircular squares) with a lake; pixels of 0.5 centred on
+# sites, on the lattice's edges and diagonals and at the squares' centres
+awk 'BEGIN { for (j = 0; j < 420; j++) for (i = 0; i < 420; i++) {
+	dx = i - 210; dy = j - 140; if (dx * dx + dy * dy < 900 && !(i == 210 && j == 140)) continue;
+	printf "%d %d %.3f\n", i, j, (i * 7 + j * 13) % 17 + 0.125 * (i % 3) } }' > "$tmp/lattice.txt"
+grid_case "lattice, natural neighbour" 18 20 "$tmp/lattice.txt" --grid 0.5 --extent -2.25,-2.25,421.25,421.25 --method natural_neighbor
+grid_case "lattice, natural_neighbor:max_edge=1.5" 18 20 "$tmp/lattice.txt" --grid 0.5 --extent -2.25,-2.25,421.25,421.25 --method natural_neighbor:max_edge=1.5:nodata=-9999
 if ((have_gdal)); then
 	# GDAL's libraries (some 40 MB resident) and its block cache count against the limit
 	grid_case "hills, GeoTIFF Float32" 70 20 "$tmp/hills.txt" --grid 2 --tif --type Float32 --srs EPSG:25832
@@ -100,6 +118,7 @@ if ((have_gdal)); then
 	grid_case "LiDAR ground to a 1 m DEM" 70 20 "$tmp/site.las" --class 2 --grid 1 --tif
 	want_workers=2 grid_case "LiDAR ground, nearest, max_edge=5" 80 20 "$tmp/site.las" --class 2 --grid 1 --method nearest:max_edge=5:nodata=-9999 --tif
 	grid_case "LiDAR ground, max_edge=5" 70 20 "$tmp/site.las" --class 2 --grid 0.5 --method linear:max_edge=5:nodata=-9999 --tif
+	grid_case "LiDAR ground, natural neighbour, max_edge=5" 70 20 "$tmp/site.las" --class 2 --grid 1 --method natural_neighbor:max_edge=5:nodata=-9999 --tif
 	check "LiDAR: the DEM has the LAS file's CRS (EPSG:32632)" "gdalinfo $tmp/til.tif | grep -q 'ID\\[\"EPSG\",32632\\]'"
 else
 	grid_case "LiDAR ground to a 1 m grid" 30 20 "$tmp/site.las" --class 2 --grid 1
@@ -115,18 +134,9 @@ perl -e 'local $/; $_ = <>; while (/\(([^()]+)\)/g) { my @p = map { [split / /] 
 grid_case "GSHHG Stockholm, a tight limit" 16 20 "$tmp/coast.txt" --grid 0.001
 grid_case "GSHHG Stockholm, max_edge=0.01" 16 20 "$tmp/coast.txt" --grid 0.001 --method linear:max_edge=0.01:nodata=-9999
 grid_case "GSHHG Stockholm, nearest" 20 12 "$tmp/coast.txt" --grid 0.001 --method nearest
+grid_case "GSHHG Stockholm, natural neighbour" 20 12 "$tmp/coast.txt" --grid 0.001 --method natural_neighbor
 
-# Refusals: one line each, no -o, nothing left in --tmpdir
-refuse() {	# name pattern args...
-	local name=$1 pat=$2; shift 2
-	rm -f "$tmp/r.out"
-	$TDC --max-memory 18 --tmpdir "$tmp/t" "$@" -o "$tmp/r.out" "$tmp/hills.txt" > /dev/null 2> "$tmp/r.err"
-	check "$name: exit 1" "[ $? -eq 1 ]"
-	check "$name: one line saying why" "[ \$(wc -l < $tmp/r.err) -eq 1 ] && grep -q '$pat' $tmp/r.err"
-	check "$name: no -o written" "[ ! -e $tmp/r.out ]"
-	check "$name: --tmpdir left empty" "[ -z \"\$(ls -A $tmp/t)\" ]"
-}
-refuse "natural neighbour in tiles" "linear or nearest: a natural neighbour" --grid 4 --method natural_neighbor
+# Refused: an input without heights, one line, no -o
 awk '{ print $1, $2 }' "$tmp/hills.txt" > "$tmp/flat.txt"
 rm -f "$tmp/r.out"
 $TDC --max-memory 18 --tmpdir "$tmp/t" --grid 4 -o "$tmp/r.out" "$tmp/flat.txt" > /dev/null 2> "$tmp/r.err"
