@@ -146,6 +146,31 @@ SELECT 'near', * FROM cov_check('rt_c9_near', 'rt_c9', ST_MakeEmptyRaster(200, 1
 SELECT '32' AS cov, * FROM cov_constraints('rt_c9_32')
 UNION ALL SELECT 'near', * FROM cov_constraints('rt_c9_near');
 
+-- Natural neighbour in tiles: each tile proves every pixel's cavity (the
+-- triangles whose circumcircle holds the pixel's centre) global in its own
+-- triangulation, or runs again knowing more (terrain/raster_natural.c).
+-- 270,000 samples spread over 300 x 300 (one pass does not fit 16 MB),
+-- 64BF, and with max_edge and radius=0 beyond a grid wider than the data.
+CREATE TABLE rt_u AS
+	SELECT ST_MakePoint(x, y, sin(x / 7) * 10 + cos(y / 5) * 5) AS geom
+	  FROM (SELECT 300 * random() AS x, 300 * random() AS y FROM generate_series(1, 270000)) q;
+SET tdc_delaunay.max_memory = 16;
+SET client_min_messages = notice;
+\set VERBOSITY terse
+CALL tdc_interpolate_tiled('rt_u', 'rt_u_nn', 'geom',
+						   ST_MakeEmptyRaster(331, 290, -20, 295, 1.0, -1.0, 0, 0, 3006), 'natural_neighbor', '64BF', -9999, 64, 50);
+\set VERBOSITY default
+SET client_min_messages = warning;
+CALL tdc_interpolate_tiled('rt_u', 'rt_u_nn_me', 'geom',
+						   ST_MakeEmptyRaster(331, 290, -20, 295, 1.0, -1.0, 0, 0, 3006),
+						   'natural_neighbor:max_edge=1.5:radius=0', '32BF', -9999, 64, 50);
+RESET tdc_delaunay.max_memory;
+SELECT 'nn' AS cov, * FROM cov_check('rt_u_nn', 'rt_u', ST_MakeEmptyRaster(331, 290, -20, 295, 1.0, -1.0, 0, 0, 3006),
+									 'natural_neighbor', '64BF', -9999, 64, 50)
+UNION ALL
+SELECT 'nn_me', * FROM cov_check('rt_u_nn_me', 'rt_u', ST_MakeEmptyRaster(331, 290, -20, 295, 1.0, -1.0, 0, 0, 3006),
+								 'natural_neighbor:max_edge=1.5:radius=0', '32BF', -9999, 64, 50);
+
 -- The GSHHG shoreline of the Stockholm archipelago (test/fixtures/
 -- gshhg-stockholm.wkt, as tdc_constrained_gshhg reads it): its 17,548
 -- vertices with a made-up Z, in one pass, 4 x 3 tiles of 64 x 64.
@@ -200,7 +225,9 @@ CALL tdc_interpolate_tiled('rt_small', 'rt_bad', 'geom', ST_MakeEmptyRaster(10, 
 CALL tdc_interpolate_tiled('rt_small', 'rt_small_lin', 'geom', ST_MakeEmptyRaster(10, 10, 0, 10, 1, -1, 0, 0, 0));
 CALL tdc_interpolate_tiled('rt_nosuch', 'rt_bad', 'geom', ST_MakeEmptyRaster(10, 10, 0, 10, 1, -1, 0, 0, 0));
 CALL tdc_interpolate_tiled('rt_small', 'rt_bad', 'nosuch', ST_MakeEmptyRaster(10, 10, 0, 10, 1, -1, 0, 0, 0));
--- in tiles: natural neighbour and a skewed grid are refused with the reason
+-- in tiles: a skewed grid is refused with the reason, and so is natural
+-- neighbour where the cavities of a tile's pixels reach further than the
+-- limit lets it read (the clusters' gaps hold triangles as wide as them)
 SET tdc_delaunay.max_memory = 16;
 CALL tdc_interpolate_tiled('rt_c9', 'rt_bad', 'geom', ST_MakeEmptyRaster(100, 100, -20, 230, 3, -3, 0, 0, 0), 'natural_neighbor');
 CALL tdc_interpolate_tiled('rt_c9', 'rt_bad', 'geom', ST_MakeEmptyRaster(100, 100, -20, 230, 3, -3, 0.5, 0, 0));
@@ -221,7 +248,7 @@ SELECT to_regclass('rt_bad') IS NULL AS no_target_left;
 SELECT count(*) AS tmp_left FROM pg_ls_dir('base/pgsql_tmp', true, false) f WHERE f LIKE 'pgsql_tmp%.tdc.%';
 
 DROP TABLE rt_small, rt_c9, rt_gshhg, rt_flat, rt_small_lin, rt_small_nn, rt_small_near, rt_small_one, rt_small_skew,
-	rt_c9_32, rt_c9_64, rt_c9_near, rt_gshhg_cov, rt_gshhg_big, rt_gshhg_near;
+	rt_c9_32, rt_c9_64, rt_c9_near, rt_u, rt_u_nn, rt_u_nn_me, rt_gshhg_cov, rt_gshhg_big, rt_gshhg_near;
 DROP FUNCTION cov_check(regclass, text, raster, text, text, float8, int, int);
 DROP FUNCTION cov_constraints(name);
 RESET tdc_delaunay.threads;

@@ -318,7 +318,7 @@ region_points(bounded_run *r, int t, const double *Kr, size_t nextra, tile_point
  */
 static int
 gather_region(bounded_run *r, int t, double K[4], const double Kmin[4], size_t nextra,
-			  tile_points *p)
+			  tile_points *p, const char *why)
 {
 	size_t		m;
 
@@ -337,8 +337,8 @@ gather_region(bounded_run *r, int t, double K[4], const double Kmin[4], size_t n
 	if (tdc_tp_tile_bytes(m, r->opt, POINT_BYTES(r)) > r->budget)
 		return tdc_bd_fail(&r->e, TDC_EMEMLIMIT, "tile %d of %d (%zu own points) needs %zu points with "
 						   "the region it must know, about %zu MB, more than %s %zu: the data is too "
-						   "clustered around this tile for the limit", t, r->nt, r->tiles[t].count, m,
-						   (run_need(r, m) >> 20) + 1, r->lname, r->limit >> 20);
+						   "clustered around this tile for the limit%s", t, r->nt, r->tiles[t].count, m,
+						   (run_need(r, m) >> 20) + 1, r->lname, r->limit >> 20, why);
 	/* every file this copies from was rewritten by the count above, if it needed to be */
 	if (tdc_bd_reserve(r, tdc_tp_tile_bytes(m, r->opt, POINT_BYTES(r))) != TDC_OK ||
 		points_alloc(r, p, m) != TDC_OK)
@@ -607,6 +607,7 @@ tdc_bd_tile_run(bounded_run *r, int t)
 	size_t		nextra = 0;
 	tdc_tile_spec spec = {0};
 	bool		first = r->use_halo;	/* the first run reads the tile and halo files */
+	const char *why = "";		/* what asked for more: the caller's final_run, said */
 
 	tdc_tile_grid tg = {TDC_TP_GRID, TDC_TP_GRID, r->grid.xcut, r->grid.ycut, r->cellst, TDC_TP_FIRST_RINGS};
 
@@ -648,7 +649,7 @@ tdc_bd_tile_run(bounded_run *r, int t)
 			first = false;
 		}
 		else
-			gather_region(r, t, K, Kmin, nextra, &p);
+			gather_region(r, t, K, Kmin, nextra, &p, why);
 		if (r->e.code != TDC_OK)
 		{
 			points_free(&p);
@@ -691,6 +692,8 @@ tdc_bd_tile_run(bounded_run *r, int t)
 			}
 			if (frc == 1)
 			{
+				why = " (the natural neighbour cavities of its pixels reach that far: a larger "
+					"limit, or linear or nearest)";
 				tdc_tile_result_free(&res);
 				res.final = 0;
 				memcpy(res.need, more.need, sizeof(res.need));
@@ -722,7 +725,8 @@ tdc_bd_tile_run(bounded_run *r, int t)
 				if (r->e.code == TDC_OK)
 					tdc_bd_fail(&r->e, TDC_EMEMLIMIT, "tile %d of %d (%zu own points) holds %zu points "
 								"and needs more, beyond %s %zu: the data is too clustered around this "
-								"tile for the limit", t, r->nt, ti->count, p.m, r->lname, r->limit >> 20);
+								"tile for the limit%s", t, r->nt, ti->count, p.m, r->lname, r->limit >> 20,
+								why);
 				tdc_tile_result_free(&res);
 				points_free(&p);
 				return r->e.code;

@@ -18,10 +18,12 @@
  * that raster's windows, pixel for pixel, for every method.  In tiles: the
  * bounded run emits final triangles on its thread, and its callbacks hand
  * them to the core's raster (tdc_raster_begin/_tile: the same values to
- * the bit, linear and nearest, north-up grids; the core says why it refuses
- * anything else); after the run the rows come out a band of tile_height
- * rows at a time (tdc_raster_rows), what the band, a tile and its value
- * hold being taken off the tiles' budget in the begin callback.  The
+ * the bit, linear and nearest, north-up grids; natural neighbour takes
+ * each final tile's whole triangulation instead, tdc_raster_nn_tile, which
+ * proves every pixel's cavity global or has the tile run again); after
+ * the run the rows come out a band of tile_height rows at a time
+ * (tdc_raster_rows), what the band, a tile and its value hold being taken
+ * off the tiles' budget in the begin callback.  The
  * callbacks never call PostgreSQL.
  *
  * Each tile is the window (c0, r0, w, h) of the grid, numbered rid = 1..
@@ -87,6 +89,17 @@ coverage_tile(void *obj, const double *q, const double *qz, const size_t *tri, s
 			  size_t errlen)
 {
 	return tdc_raster_tile((tdc_raster *) obj, q, qz, tri, ntri, err, errlen);
+}
+
+/* natural neighbour: the run's final_run, on its thread (the raster proves each pixel's cavity) */
+static int
+coverage_final_run(void *arg, const tdc_job *job, const double *q, const double *qz, size_t m,
+				   const size_t *tri, size_t ntri, const tdc_tile_spec *spec, tdc_tile_result *more)
+{
+	StageConsumer *sc = (StageConsumer *) arg;
+
+	return tdc_raster_nn_tile((tdc_raster *) sc->obj, job, q, qz, m, tri, ntri, spec, more, sc->err,
+							  sizeof(sc->err));
 }
 
 static void
@@ -339,16 +352,6 @@ _tdc_interpolate_tiled_write(PG_FUNCTION_ARGS)
 		PG_RETURN_INT64((int64) cov->rows);
 	}
 
-	/* in tiles: what the core's bounded raster cannot do is refused before the run */
-	if (cov->spec.method != TDC_INTERP_LINEAR && cov->spec.method != TDC_INTERP_NEAREST)
-		ereport(ERROR,
-				(errcode(ERRCODE_PROGRAM_LIMIT_EXCEEDED),
-				 errmsg("%s: method \"%s\" needs one pass, and one pass of %llu samples and a %u x %u grid "
-						"does not fit %s = %llu MB", fname, method, (unsigned long long) npts,
-						cov->width, cov->height, setting, (unsigned long long) limit_mb),
-				 errdetail("In tiles only linear and nearest are computed: a natural neighbour value may "
-						   "depend on sites of other tiles."),
-				 errhint("Raise %s, or interpolate with linear or nearest.", setting)));
 	if (!(cov->gt[1] > 0 && cov->gt[5] < 0 && cov->gt[2] == 0 && cov->gt[4] == 0))
 		ereport(ERROR,
 				(errcode(ERRCODE_PROGRAM_LIMIT_EXCEEDED),
@@ -368,7 +371,14 @@ _tdc_interpolate_tiled_write(PG_FUNCTION_ARGS)
 
 		memset(&p, 0, sizeof(p));
 		p.begin = coverage_begin;
-		p.emit = tdc_stage_consumer_emit;
+		if (cov->spec.method == TDC_INTERP_NATURAL)
+		{
+			/* each final tile's whole triangulation instead of its triangles */
+			p.final_run = coverage_final_run;
+			p.final_per_point = TDC_RASTER_NN_PER_POINT;
+		}
+		else
+			p.emit = tdc_stage_consumer_emit;
 		p.arg = cov;
 		p.any_order = true;
 		/* the staging buffer, still allocated, is beside the run */
