@@ -47,7 +47,10 @@ JOB_LAYER="job.c job_arena.c triangulate.c subdivide.c tolerance.c leaf.c result
 
 # FOLDER  and the folders it may call (docs/design.md, "The plan"):
 # the engine calls no feature; the features and the tiles stand on the
-# engine, the TIN on the constrained insertion too; the front ends call the
+# engine, the TIN on the constrained insertion too; the terrain products of
+# a bounded run on the TIN and on the tiles' proofs (a natural neighbour
+# pixel's cavity is proven global as tile_final.c proves a triangle,
+# tile_disk.c's boxes and tile_cells.c's cells); the front ends call the
 # core; in src/pg the entry points call the formats and the runtime, the
 # formats the runtime, and nothing calls an entry point.
 LAYERS="

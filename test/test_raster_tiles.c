@@ -1,6 +1,6 @@
 /*
  * test_raster_tiles.c
- *		A grid in tiles (tdc_raster_*, src/core/terrain/raster.c): the
+ *		A grid in tiles (tdc_raster_*, src/core/terrain/raster*.c): the
  *		bounded run's final triangles rasterised tile by tile give the whole
  *		TIN's grid (tdc_tin_grid_start), every pixel's double bit for bit.
  *
@@ -24,10 +24,15 @@
  *	- nearest (raster_nearest.c) on each: the site each triangle offers
  *	  around it, with its radius and max_edge's mask; on the lattice,
  *	  centres equidistant from several sites take the first in (x, y);
+ *	- natural neighbour (raster_natural.c) on each: every pixel's cavity
+ *	  proven global in its tile's own triangulation, or the tile run
+ *	  again; on the lattice the pixel centres at the squares' centres have
+ *	  cavities of cocircular triangles, which a tile must see as the whole
+ *	  triangulation does; max_edge, radius=0, near the hull (the diamond);
  *	- the same grid with 1 and 2 threads (two tiles at once); many tiles
  *	  (the stats say);
- *	- the refusals: natural neighbour, a collinear input, each with its
- *	  message; no file left in the directory.
+ *	- the refusals: breaklines, a collinear input, each with its message;
+ *	  no file left in the directory.
  * A check that compared a few values, or that the grid merely has the
  * right size, would pass with a wrong edge rule; every pixel is compared.
  */

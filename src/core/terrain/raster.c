@@ -34,6 +34,10 @@
  * the nearest site within the radius, found among the sites on the hull
  * and those of the triangles whose circumcentre lies outside it (fringe.c),
  * which each tile's triangles add to as they pass.
+ *
+ * Natural neighbour takes the same pixels, sites and hull edges included;
+ * the others are marked (RS_NN_MARK) and raster_natural.c fills them from
+ * the tile's whole triangulation before the window is written.
  */
 #include <errno.h>
 #include <fcntl.h>

@@ -31,21 +31,32 @@
  *
  * A triangle of T(Q) is proven in T(P) when one of its corners is an own
  * site of the tile (the tile is final: every own site's star passed, see
- * docs/design/tiles.md) or by Lemma 1 there: its closed circumdisk lies in
- * K, or beyond K only where K reaches past the box B of P's hull (no point
- * lies there).  The disk's box is computed in double-double from exact
- * differences and widened by a forward bound (disk_box); a triangle too
- * flat for the bound is not proven by its disk.  An outer edge a -> b of
- * T(Q) is P's hull edge when every vertex of P's hull lies on its closed
- * left (exact orientations).
+ * docs/design/tiles.md), or by Lemma 1 there, decided as tile_final.c
+ * decides it: the box of its closed circumdisk (tile_disk.c, with its
+ * forward error bound; a triangle too flat for the bound is not proven by
+ * its disk) inside what the tile knows (K, a side of K past the box B of
+ * P's hull open, the extra boxes), else the box of the disk's part inside
+ * P's hull and on the inner side of the triangle's own edges on that hull,
+ * else with the cells, every cell the disk meets empty or known
+ * (tile_cells.c).  An outer edge a -> b of T(Q) is P's hull edge when
+ * every vertex of P's hull lies on its closed left (exact orientations).
  *
- * A pixel that fails is left unwritten and its tile asks for a larger K
- * (the failing disks' boxes, clipped to B; the box of an outer edge of
- * T(Q) that is not P's grown by its length; B when nothing smaller can
- * help), and the bounded run reruns the tile (final_run, tdc_bounded.h):
- * it grows every time, and once K holds B, Q = P and every cavity is
- * proven, so the run completes.  The pixels already written are the
- * global values and are written again the same.
+ * A pixel that fails is left unwritten and the tile asks, as a tile that
+ * is not final asks (final_run, tdc_bounded.h): the cells the failing
+ * disks meet and the boxes of those disks (an outer edge of T(Q) that is
+ * not P's: the cells beyond it and its box grown by its length; B when
+ * nothing smaller can help), and the bounded run runs it again knowing
+ * more.  Its known region grows every time; once it holds B, Q = P and
+ * every cavity is proven, so the run completes unless the limit stops it
+ * first: where wide empty triangles join dense clusters, the cavity of a
+ * pixel between them has circumdisks whose rims cross the clusters, and
+ * the run says that a tile needs more than the limit.  The pixels already
+ * written are global values and are written again the same; a centre on
+ * an edge between two tiles' triangles is written by both, the same.
+ * What makes the bits equal to the whole TIN's: cav_Q is cav_P as a set
+ * of triangles, and tin_natural.c's value depends on that geometry only
+ * (its order of summation and its circumcentres start from the first
+ * vertex in (x, y) order, not from how a mesh numbers its half-edges).
  *
  * Memory: the TIN of T(Q) (tdc_tin_memory) and a label and a flag per
  * point, TDC_RASTER_NN_PER_POINT bytes a point of the tile, counted in the
