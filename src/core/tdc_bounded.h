@@ -43,7 +43,8 @@ typedef struct tdc_bounded_stats
 				reread;			/* records reruns read from other tiles' files */
 	int			tiles,			/* tiles of the plan */
 				threads,		/* worker threads of the engine's last run */
-				workers;		/* tiles that could run at once (1, or 2 with any_order) */
+				workers,		/* tiles that could run at once (1, or 2 with any_order) */
+				bin_threads;	/* threads that binned the input (1, or 2 with files enough) */
 	tdc_times	t;				/* the engine's phases, summed over the runs */
 	double		scan,			/* wall seconds: box, hull and counts */
 				bin,			/* the points to the tile files */
