@@ -238,6 +238,9 @@ CALL tdc_interpolate_tiled('rt_small', 'rt_bad', 'geom', ST_MakeEmptyRaster(10, 
 -- in tiles: natural neighbour is refused with the reason
 SET tdc_delaunay.max_memory = 16;
 CALL tdc_interpolate_tiled('rt_c9', 'rt_bad', 'geom', ST_MakeEmptyRaster(100, 100, -20, 230, 3, -3, 0, 0, 0), 'natural_neighbor');
+-- and a template whose pixels are nearly flat (their area 1e-14 of a square's: the core cannot map
+-- a point back to its pixel with a bounded error), naming its geotransform
+CALL tdc_interpolate_tiled('rt_c9', 'rt_bad', 'geom', ST_MakeEmptyRaster(100, 100, -20, 230, 1, -1, 1, -0.99999999999999, 0));
 -- a cancel (here a statement timeout) stops it, in the read or the run
 SET statement_timeout = '300ms';
 CALL tdc_interpolate_tiled('rt_c9', 'rt_bad', 'geom', ST_MakeEmptyRaster(331, 290, -20, 230, 1.0, -1.0, 0, 0, 3006));
