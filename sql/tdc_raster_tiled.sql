@@ -128,12 +128,26 @@ SET client_min_messages = notice;
 \set VERBOSITY terse
 CALL tdc_interpolate_tiled('rt_c9', 'rt_c9_32', 'geom',
 						   ST_MakeEmptyRaster(331, 290, -20, 230, 1.0, -1.0, 0, 0, 3006), 'linear', '32BF', -9999, 64, 50);
+-- Skewed, rotated and flipped templates in tiles too (the same 30 run
+-- tiles): each tile's upper left corner is the template's geotransform at
+-- its first pixel's corner, its scale and skew the template's.  Skewed
+-- (linear, 64BF) here; below, rotated by 30 degrees (nearest with a
+-- radius, 32BF) and flipped (scale x < 0, scale y > 0: linear with
+-- max_edge, 32BF); each reaches past the samples on every side.
+CALL tdc_interpolate_tiled('rt_c9', 'rt_c9_skew', 'geom',
+						   ST_MakeEmptyRaster(290, 290, -102, 208, 1.1, -1.0, 0.3, 0.25, 3006), 'linear', '64BF', -9999, 64, 50);
 \set VERBOSITY default
 SET client_min_messages = warning;
 CALL tdc_interpolate_tiled('rt_c9', 'rt_c9_64', 'geom',
 						   ST_MakeEmptyRaster(331, 290, -20, 230, 1.0, -1.0, 0, 0, 3006), 'linear:radius=0', '64BF', -1e30, 64, 50);
 CALL tdc_interpolate_tiled('rt_c9', 'rt_c9_near', 'geom',
 						   ST_MakeEmptyRaster(200, 190, -20, 230, 1.6, -1.55, 0, 0, 3006), 'nearest', '32BF', -9999, 256, 37);
+CALL tdc_interpolate_tiled('rt_c9', 'rt_c9_rot', 'geom',
+						   ST_MakeEmptyRaster(290, 290, -140, 160, 1.2 * cos(pi() / 6), -1.2 * cos(pi() / 6),
+											  1.2 * sin(pi() / 6), 1.2 * sin(pi() / 6), 3006),
+						   'nearest:radius=4', '32BF', -9999, 60, 45);
+CALL tdc_interpolate_tiled('rt_c9', 'rt_c9_flip', 'geom',
+						   ST_MakeEmptyRaster(170, 160, 230, -20, -1.5, 1.6, 0, 0, 3006), 'linear:max_edge=6', '32BF', -9999, 50, 50);
 RESET tdc_delaunay.max_memory;
 SELECT '32' AS cov, * FROM cov_check('rt_c9_32', 'rt_c9', ST_MakeEmptyRaster(331, 290, -20, 230, 1.0, -1.0, 0, 0, 3006),
 									 'linear', '32BF', -9999, 64, 50)
@@ -142,32 +156,10 @@ SELECT '64', * FROM cov_check('rt_c9_64', 'rt_c9', ST_MakeEmptyRaster(331, 290, 
 							  'linear:radius=0', '64BF', -1e30, 64, 50)
 UNION ALL
 SELECT 'near', * FROM cov_check('rt_c9_near', 'rt_c9', ST_MakeEmptyRaster(200, 190, -20, 230, 1.6, -1.55, 0, 0, 3006),
-								'nearest', '32BF', -9999, 256, 37);
-SELECT '32' AS cov, * FROM cov_constraints('rt_c9_32')
-UNION ALL SELECT 'near', * FROM cov_constraints('rt_c9_near');
-
--- Skewed, rotated and flipped templates in tiles too, under the same 16 MB
--- (30 run tiles): each tile's upper left corner is the template's
--- geotransform applied to its first pixel's corner, its scale and skew the
--- template's.  Skewed (linear, 64BF), rotated by 30 degrees (nearest with a
--- radius, 32BF) and flipped (scale x < 0, scale y > 0: linear, 32BF), each
--- reaching past the samples on every side.
-SET tdc_delaunay.max_memory = 16;
-SET client_min_messages = notice;
-\set VERBOSITY terse
-CALL tdc_interpolate_tiled('rt_c9', 'rt_c9_skew', 'geom',
-						   ST_MakeEmptyRaster(290, 290, -102, 208, 1.1, -1.0, 0.3, 0.25, 3006), 'linear', '64BF', -9999, 64, 50);
-\set VERBOSITY default
-SET client_min_messages = warning;
-CALL tdc_interpolate_tiled('rt_c9', 'rt_c9_rot', 'geom',
-						   ST_MakeEmptyRaster(290, 290, -140, 160, 1.2 * cos(pi() / 6), -1.2 * cos(pi() / 6),
-											  1.2 * sin(pi() / 6), 1.2 * sin(pi() / 6), 3006),
-						   'nearest:radius=4', '32BF', -9999, 60, 45);
-CALL tdc_interpolate_tiled('rt_c9', 'rt_c9_flip', 'geom',
-						   ST_MakeEmptyRaster(170, 160, 230, -20, -1.5, 1.6, 0, 0, 3006), 'linear:max_edge=6', '32BF', -9999, 50, 50);
-RESET tdc_delaunay.max_memory;
-SELECT 'skew' AS cov, * FROM cov_check('rt_c9_skew', 'rt_c9', ST_MakeEmptyRaster(290, 290, -102, 208, 1.1, -1.0, 0.3, 0.25, 3006),
-									   'linear', '64BF', -9999, 64, 50)
+								'nearest', '32BF', -9999, 256, 37)
+UNION ALL
+SELECT 'skew', * FROM cov_check('rt_c9_skew', 'rt_c9', ST_MakeEmptyRaster(290, 290, -102, 208, 1.1, -1.0, 0.3, 0.25, 3006),
+								'linear', '64BF', -9999, 64, 50)
 UNION ALL
 SELECT 'rot', * FROM cov_check('rt_c9_rot', 'rt_c9', ST_MakeEmptyRaster(290, 290, -140, 160, 1.2 * cos(pi() / 6), -1.2 * cos(pi() / 6),
 																		 1.2 * sin(pi() / 6), 1.2 * sin(pi() / 6), 3006),
@@ -175,7 +167,9 @@ SELECT 'rot', * FROM cov_check('rt_c9_rot', 'rt_c9', ST_MakeEmptyRaster(290, 290
 UNION ALL
 SELECT 'flip', * FROM cov_check('rt_c9_flip', 'rt_c9', ST_MakeEmptyRaster(170, 160, 230, -20, -1.5, 1.6, 0, 0, 3006),
 								'linear:max_edge=6', '32BF', -9999, 50, 50);
-SELECT 'skew' AS cov, * FROM cov_constraints('rt_c9_skew')
+SELECT '32' AS cov, * FROM cov_constraints('rt_c9_32')
+UNION ALL SELECT 'near', * FROM cov_constraints('rt_c9_near')
+UNION ALL SELECT 'skew', * FROM cov_constraints('rt_c9_skew')
 UNION ALL SELECT 'rot', * FROM cov_constraints('rt_c9_rot')
 UNION ALL SELECT 'flip', * FROM cov_constraints('rt_c9_flip');
 

@@ -29,6 +29,14 @@
  * cap is the grid's hold, WIN_MIN or 16 rows), as many windows as its
  * triangles span, each written back as runs of the pixels it set.
  *
+ * The grid may be skewed, rotated or flipped: any geotransform whose
+ * pixel matrix is invertible.  Its centres are the one-pass expression
+ * (rs_centre) and the exact tests decide membership, so only the search
+ * for candidates changes: a triangle's corners go to pixel coordinates
+ * through the inverse (rs_pixel), and their box, widened by a bound on
+ * the rounding (pixel_matrix proves it), holds every centre the triangle
+ * holds.  Without skew the old axis-parallel path stays, flips included.
+ *
  * Rows come out after the run (tdc_raster_rows).  A pixel no triangle held
  * is nodata inside the hull (max_edge dropped it) and outside it takes
  * the nearest site within the radius, found among the sites on the hull
@@ -85,7 +93,7 @@ coord_ok(double c)
  * (4u for each 3u, and the rounding of "- 0.5 - slack" itself, for f
  * within the grid, under its W + H), and 1e-6 of a pixel more for the
  * second-order terms.  r->slack is all but the |px| + |py| term, which
- * tdc_rs_slack_at adds for the points at hand.
+ * rs_slack_at adds for the points at hand.
  */
 static int
 pixel_matrix(const tdc_grid_spec *g, tdc_raster *r, char *err, size_t errlen)
@@ -130,13 +138,6 @@ pixel_matrix(const tdc_grid_spec *g, tdc_raster *r, char *err, size_t errlen)
 	r->slack = 1e-6 + 8 * DBL_EPSILON * (r->inorm * (fabs(gt[0]) + fabs(gt[3])) +
 										 (k + 1) * r->inorm * a * ((double) g->width + (double) g->height));
 	return TDC_OK;
-}
-
-double
-tdc_rs_slack_at(const struct tdc_raster *r, const double *box)
-{
-	return r->slack + 8 * DBL_EPSILON * r->inorm * (fmax(fabs(box[0]), fabs(box[2])) +
-													fmax(fabs(box[1]), fabs(box[3])));
 }
 
 int
@@ -414,7 +415,7 @@ tdc_raster_tile(tdc_raster *r, const double *q, const double *qz, const size_t *
 	 * tri_pixels' slack three times over (theirs, the corners' and
 	 * tri_pixels' own) and three pixels more.
 	 */
-	tslack = tdc_rs_slack_at(r, box);
+	tslack = rs_slack_at(r, box);
 	slack = 3 + 3 * tslack;
 	for (int k = 0; k < 4; k++)
 	{

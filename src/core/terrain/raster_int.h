@@ -7,6 +7,8 @@
 #ifndef TDC_TERRAIN_RASTER_INT_H
 #define TDC_TERRAIN_RASTER_INT_H
 
+#include <float.h>
+#include <math.h>
 #include <stdint.h>
 #include <stdio.h>
 
@@ -70,6 +72,14 @@ rs_pixel(const struct tdc_raster *r, const double *p, double *uv)
 	uv[1] = r->inv[2] * dx + r->inv[3] * dy;
 }
 
+/* The slack (in pixels) of rs_pixel for points in box (xmin, ymin, xmax, ymax): raster.c's pixel_matrix. */
+static inline double
+rs_slack_at(const struct tdc_raster *r, const double *box)
+{
+	return r->slack + 8 * DBL_EPSILON * r->inorm * (fmax(fabs(box[0]), fabs(box[2])) +
+													fmax(fabs(box[1]), fabs(box[3])));
+}
+
 /* An error's code, with its message (fmt with one string argument) in err. */
 static inline int
 tdc_rs_fail(char *err, size_t errlen, int code, const char *fmt, const char *arg)
@@ -88,9 +98,6 @@ tdc_rs_edge_long(const double *a, const double *b, double max_edge)
 
 	return tdc_sqdist_cmp(a, b, l, o) > 0;
 }
-
-/* raster.c: the slack (in pixels) of rs_pixel for points in box (xmin, ymin, xmax, ymax) */
-extern double tdc_rs_slack_at(const struct tdc_raster *r, const double *box);
 
 /* raster_nearest.c */
 extern int	tdc_rn_begin(struct tdc_raster *r, char *err, size_t errlen);

@@ -29,11 +29,14 @@
  * A superset of R_T serves as well (an offer that is not nearest loses),
  * so R_T is covered in floating point with room to spare: T and the box
  * of c_T's error (fr_centre_box), row by row, widened by a column each
- * way and clipped to the hull's span of each row (widened too).  A sliver,
- * whose centre is ill-conditioned, offers T and, beyond each edge whose
- * opposite angle may be obtuse (a dot product's sign, with its rounding),
- * a strip as wide as the edge, reaching past the hull's box: c_T lies on
- * the edge's bisector, so R_T's part beyond the edge is in that strip.
+ * way and clipped to the hull's span of each row (widened too); on a
+ * skewed grid a row is a band in pixel coordinates (rs_pixel), wide
+ * enough for the rounding of the mapping ("The geometry of rows" below).
+ * A sliver, whose centre is ill-conditioned, offers T and, beyond each
+ * edge whose opposite angle may be obtuse (a dot product's sign, with its
+ * rounding), a strip as wide as the edge, reaching past the hull's box:
+ * c_T lies on the edge's bisector, so R_T's part beyond the edge is in
+ * that strip.
  *
  * max_edge masks as it does linear: a pixel has a value when it is at a
  * site or some closed triangle holding it keeps its edges (the same exact
@@ -67,6 +70,7 @@ typedef struct piece
 	double		box[4];			/* xmin, ymin, xmax, ymax */
 	double		pv[PIECE_MAX][2];	/* a skewed grid's: v in pixel coordinates (rs_pixel) */
 	double		pbox[4];		/* and their box */
+	double		sl;				/* the rounding of rs_pixel for its points (rs_slack_at) */
 } piece;
 
 static int
@@ -80,21 +84,22 @@ rn_io(char *err, size_t errlen, const char *what, const struct tdc_raster *r)
  * row's centres lie exactly on the line y = gt[3] + (row + 0.5) gt[5], as
  * rs_centre computes them, and a column's x maps to pixels by one
  * division.  A skewed grid's row is not a line of the world's doubles:
- * there the points go to pixel coordinates (rs_pixel, off by at most
- * r->nslack with the centre's own rounding: raster.c's pixel_matrix), and
- * a row is the band of half-width nslack around row + 0.5, which holds the
- * mapped point of each of its centres that a convex region holds.
- * Either way the columns and rows found are widened by nslack and one
- * more: supersets, the exact tests deciding.
+ * there the points go to pixel coordinates (rs_pixel, off by at most sl,
+ * the centre's own rounding included: rs_slack_at, raster.c's
+ * pixel_matrix), and a row is the band of half-width sl around row + 0.5,
+ * which holds the mapped point of each of its centres that a convex
+ * region of those points holds.  Either way the columns and rows found
+ * are widened by sl and one more: supersets, the exact tests deciding.
+ * sl is r->nslack for the hull and what lies within deep of its box, a
+ * piece's own beyond (a circumcentre may lie farther).
  */
 
-/* Cells [*a, *b] of 0 .. n - 1 whose centres (index + 0.5) may lie in [lo, hi]; false: none. */
+/* Cells [*a, *b] of 0 .. n - 1 whose centres (index + 0.5) may lie in [lo, hi] (slack sl); false: none. */
 static bool
-cells(const struct tdc_raster *r, double lo, double hi, size_t n, size_t *a, size_t *b)
+cells(double lo, double hi, double sl, size_t n, size_t *a, size_t *b)
 {
-	double		sl = r->nslack + 1,
-				f0 = floor(lo - 0.5 - sl),
-				f1 = ceil(hi - 0.5 + sl);
+	double		f0 = floor(lo - 0.5 - (sl + 1)),
+				f1 = ceil(hi - 0.5 + (sl + 1));
 
 	if (f1 < 0 || f0 > (double) (n - 1))
 		return false;
@@ -158,25 +163,29 @@ axis_cells(const struct tdc_raster *r, int y, double l, double h, size_t *a, siz
 	double		fl = (l - r->g.gt[3 * y]) / r->g.gt[1 + 4 * y],
 				fh = (h - r->g.gt[3 * y]) / r->g.gt[1 + 4 * y];
 
-	return cells(r, fmin(fl, fh), fmax(fl, fh), y ? r->g.height : r->g.width, a, b);
+	return cells(fmin(fl, fh), fmax(fl, fh), r->nslack, y ? r->g.height : r->g.width, a, b);
 }
 
-/* The rows a box (world; pbox: its points' in pixel coordinates, for a skewed grid) may reach */
+/*
+ * The rows a box (world; pbox: its points' in pixel coordinates with
+ * slack sl, for a skewed grid) may reach
+ */
 static bool
-box_rows(const struct tdc_raster *r, const double *box, const double *pbox, size_t *ra, size_t *rb)
+box_rows(const struct tdc_raster *r, const double *box, const double *pbox, double sl, size_t *ra,
+		 size_t *rb)
 {
 	return r->axis ? axis_cells(r, 1, box[1], box[3], ra, rb) :
-		cells(r, pbox[1], pbox[3], r->g.height, ra, rb);
+		cells(pbox[1], pbox[3], sl, r->g.height, ra, rb);
 }
 
 /*
  * The pixel columns' range [*ul, *ur] in row row of the convex hull of n
- * points (pt: world, pv: pixel coordinates, for a skewed grid); false: it
- * misses the row.
+ * points (pt: world, pv: pixel coordinates with slack sl, for a skewed
+ * grid); false: it misses the row.
  */
 static bool
 row_extent(const struct tdc_raster *r, const double (*pt)[2], const double (*pv)[2], int n, size_t row,
-		   double *ul, double *ur)
+		   double sl, double *ul, double *ur)
 {
 	const double *gt = r->g.gt;
 	double		xl = INFINITY,
@@ -197,7 +206,7 @@ row_extent(const struct tdc_raster *r, const double (*pt)[2], const double (*pv)
 		*ur = fmax(a, b);
 		return true;
 	}
-	band_extent(pv, n, (double) row + 0.5 - r->nslack, (double) row + 0.5 + r->nslack, &xl, &xr);
+	band_extent(pv, n, (double) row + 0.5 - sl, (double) row + 0.5 + sl, &xl, &xr);
 	*ul = xl;
 	*ur = xr;
 	return xl <= xr;
@@ -222,7 +231,7 @@ tdc_rn_begin(struct tdc_raster *r, char *err, size_t errlen)
 	/* the rounding of rs_pixel for any point of a piece (pieces_of: within deep of the hull's box) */
 	for (int k = 0; k < 4; k++)
 		far[k] = r->fr.box[k] + (k < 2 ? -r->deep : r->deep);
-	r->nslack = tdc_rs_slack_at(r, far);
+	r->nslack = rs_slack_at(r, far);
 	for (size_t row = 0; row < height; row++)
 	{
 		r->span[2 * row] = UINT32_MAX;
@@ -246,7 +255,7 @@ tdc_rn_begin(struct tdc_raster *r, char *err, size_t errlen)
 
 		if (!r->axis)
 			pixel_box(r, (const double (*)[2]) e, 2, pe, pbox);
-		if (!box_rows(r, box, pbox, &ra, &rb))
+		if (!box_rows(r, box, pbox, r->nslack, &ra, &rb))
 			continue;
 		for (size_t row = ra; row <= rb; row++)
 		{
@@ -257,7 +266,8 @@ tdc_rn_begin(struct tdc_raster *r, char *err, size_t errlen)
 			uint32_t	lo,
 						hi;
 
-			if (!row_extent(r, (const double (*)[2]) e, (const double (*)[2]) pe, 2, row, &ul, &ur))
+			if (!row_extent(r, (const double (*)[2]) e, (const double (*)[2]) pe, 2, row, r->nslack,
+							&ul, &ur))
 				continue;
 			c0 = floor(ul - 0.5 - (r->nslack + 1));
 			c1 = ceil(ur - 0.5 + (r->nslack + 1));
@@ -296,8 +306,6 @@ tdc_rn_free(struct tdc_raster *r)
 static void
 piece_box(const struct tdc_raster *r, piece *pc)
 {
-	if (!r->axis)
-		pixel_box(r, (const double (*)[2]) pc->v, pc->n, pc->pv, pc->pbox);
 	pc->box[0] = pc->box[2] = pc->v[0][0];
 	pc->box[1] = pc->box[3] = pc->v[0][1];
 	for (int k = 1; k < pc->n; k++)
@@ -306,6 +314,12 @@ piece_box(const struct tdc_raster *r, piece *pc)
 		pc->box[2] = fmax(pc->box[2], pc->v[k][0]);
 		pc->box[1] = fmin(pc->box[1], pc->v[k][1]);
 		pc->box[3] = fmax(pc->box[3], pc->v[k][1]);
+	}
+	pc->sl = r->nslack;
+	if (!r->axis)
+	{
+		pixel_box(r, (const double (*)[2]) pc->v, pc->n, pc->pv, pc->pbox);
+		pc->sl = fmax(pc->sl, rs_slack_at(r, pc->box));
 	}
 }
 
@@ -385,8 +399,9 @@ piece_cols(const struct tdc_raster *r, const piece *pc, size_t row, size_t *ca, 
 	double		ul,
 				ur;
 
-	return row_extent(r, (const double (*)[2]) pc->v, (const double (*)[2]) pc->pv, pc->n, row, &ul, &ur) &&
-		cells(r, ul, ur, r->g.width, ca, cb);
+	return row_extent(r, (const double (*)[2]) pc->v, (const double (*)[2]) pc->pv, pc->n, row, pc->sl,
+					  &ul, &ur) &&
+		cells(ul, ur, pc->sl, r->g.width, ca, cb);
 }
 
 /*
@@ -401,7 +416,7 @@ offer_piece(struct tdc_raster *r, const piece *pc, const double *const p[3], con
 	size_t		ra,
 				rb;
 
-	if (!box_rows(r, pc->box, pc->pbox, &ra, &rb) || rb < w0 || ra >= w1)
+	if (!box_rows(r, pc->box, pc->pbox, pc->sl, &ra, &rb) || rb < w0 || ra >= w1)
 		return;
 	ra = ra > w0 ? ra : w0;
 	rb = rb < w1 - 1 ? rb : w1 - 1;
@@ -458,7 +473,7 @@ mask_tri(struct tdc_raster *r, const double *const p[3], bool kept, size_t w0, s
 		t.v[k][1] = p[k][1];
 	}
 	piece_box(r, &t);
-	if (!box_rows(r, t.box, t.pbox, &ra, &rb) || rb < w0 || ra >= w1)
+	if (!box_rows(r, t.box, t.pbox, t.sl, &ra, &rb) || rb < w0 || ra >= w1)
 		return;
 	ra = ra > w0 ? ra : w0;
 	rb = rb < w1 - 1 ? rb : w1 - 1;
@@ -579,7 +594,7 @@ tdc_rn_tile(struct tdc_raster *r, const double *q, const double *qz, const size_
 		if (!r->axis)
 			pixel_box(r, (const double (*)[2]) corner, 4, pc4, pbox);
 	}
-	if (!box_rows(r, box, pbox, &r0, &r1))
+	if (!box_rows(r, box, pbox, r->nslack, &r0, &r1))
 		return TDC_OK;
 	for (size_t row = r0; row <= r1; row++)
 		if (r->span[2 * row] <= r->span[2 * row + 1])
@@ -593,7 +608,7 @@ tdc_rn_tile(struct tdc_raster *r, const double *q, const double *qz, const size_
 
 		/* the hull's columns in those rows, within the box's */
 		if (c0 > c1 || !(r->axis ? axis_cells(r, 0, box[0], box[2], &ba, &bb) :
-						 cells(r, pbox[0], pbox[2], r->g.width, &ba, &bb)))
+						 cells(pbox[0], pbox[2], r->nslack, r->g.width, &ba, &bb)))
 			return TDC_OK;
 		c0 = c0 > ba ? c0 : ba;
 		c1 = c1 < bb ? c1 : bb;
