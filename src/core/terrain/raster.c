@@ -74,7 +74,7 @@ coord_ok(double c)
  * (NULL: only checked), and the slack of rs_pixel.  A singular A (exactly:
  * the sign of its determinant is an orientation) has no pixels to map
  * back, and one so nearly singular that its determinant's rounding is not
- * small (k below over 1e12) is refused with it; north-up, flipped or any
+ * small (k, below, over 1e12) is refused with it; north-up, flipped or any
  * other grid without skew keeps 1 / gt[1] and 1 / gt[5] as they were.
  *
  * The slack.  Let M be the computed inverse, m its largest row sum of
