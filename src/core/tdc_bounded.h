@@ -171,7 +171,10 @@ extern void tdc_bounded_free(tdc_bounded_job *job);
  * rows; the tiles may come in any order.
  *
  * begin: from the bounded run's begin callback (the hull is copied).  g
- * must be north-up (gt[2] = gt[4] = 0, gt[1] > 0, gt[5] < 0).  *hold: the
+ * may be any grid whose pixels have an area: north-up, flipped, skewed or
+ * rotated (its pixel matrix gt[1], gt[2]; gt[4], gt[5] is inverted, and a
+ * singular one, or one whose determinant is below 1e-12 of |gt[1] gt[5]| +
+ * |gt[2] gt[4]|, is TDC_EINVAL naming the geotransform).  *hold: the
  * bytes the grid holds from then on (the buffers; add them to the run's).
  * tile: a final tile's triangles, from the run's emit (q, qz, tri as
  * there).  rows: after the run, rows y0 .. y0 + nrows - 1 (top down) into
