@@ -88,8 +88,9 @@ run() {
 	printf '  input: %s returns, %s ground points kept, %s distinct; %s triangles\n' \
 		"$(thousands "$(kv "$WORK/stats" points)")" "$(thousands "$(kv "$WORK/stats" kept)")" \
 		"$(thousands "$(kv "$WORK/stats" unique)")" "$(thousands "$(kv "$WORK/stats" triangles)")"
-	printf '  bounded run: %s tiles, %s runs, %s halo points, %s tiles at once\n' "$(kv "$WORK/stats" tiles)" \
-		"$(kv "$WORK/stats" tile_runs)" "$(thousands "$(kv "$WORK/stats" halo_points)")" "$(kv "$WORK/stats" workers)"
+	printf '  bounded run: %s tiles, %s runs, %s halo points, %s tiles at once, binned on %s threads\n' \
+		"$(kv "$WORK/stats" tiles)" "$(kv "$WORK/stats" tile_runs)" "$(thousands "$(kv "$WORK/stats" halo_points)")" \
+		"$(kv "$WORK/stats" workers)" "$(kv "$WORK/stats" bin_threads)"
 	printf '  phases (wall s): scan %.1f, bin %.1f, tiles %.1f; the rest of the %.1f s (the LAS file read and its ground staged, the output closed): %.1f\n' \
 		"$(kv "$WORK/stats" scan)" "$(kv "$WORK/stats" bin)" "$(kv "$WORK/stats" tiles_wall)" "$wall" \
 		"$(awk -v w="$wall" -v a="$(kv "$WORK/stats" scan)" -v b="$(kv "$WORK/stats" bin)" -v c="$(kv "$WORK/stats" tiles_wall)" 'BEGIN { print w - a - b - c }')"

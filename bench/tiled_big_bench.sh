@@ -92,8 +92,9 @@ run() {
 		printf '  tiles %s, runs %s, halo points %s; %s the limit\n' "$(kv "$WORK/stats" tiles)" \
 			"$(kv "$WORK/stats" tile_runs)" "$(kv "$WORK/stats" halo_points)" \
 			"$(awk -v r="$rss" -v l="$limit" 'BEGIN { print (r <= l ? "within" : "OVER") }')"
-		printf '  phases (wall s): scan %s, bin %s, tiles %s on %s workers\n' "$(kv "$WORK/stats" scan)" \
-			"$(kv "$WORK/stats" bin)" "$(kv "$WORK/stats" tiles_wall)" "$(kv "$WORK/stats" workers)"
+		printf '  phases (wall s): scan %s, bin %s on %s threads, tiles %s on %s workers\n' "$(kv "$WORK/stats" scan)" \
+			"$(kv "$WORK/stats" bin)" "$(kv "$WORK/stats" bin_threads)" "$(kv "$WORK/stats" tiles_wall)" \
+			"$(kv "$WORK/stats" workers)"
 		printf '  in the tiles (s, summed over the workers): gather %s, engine %s, finish %s, write %s, waiting for memory %s\n' \
 			"$(kv "$WORK/stats" gather)" "$(kv "$WORK/stats" engine)" "$(kv "$WORK/stats" finish)" \
 			"$(kv "$WORK/stats" write)" "$(kv "$WORK/stats" wait)"

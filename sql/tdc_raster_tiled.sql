@@ -128,12 +128,26 @@ SET client_min_messages = notice;
 \set VERBOSITY terse
 CALL tdc_interpolate_tiled('rt_c9', 'rt_c9_32', 'geom',
 						   ST_MakeEmptyRaster(331, 290, -20, 230, 1.0, -1.0, 0, 0, 3006), 'linear', '32BF', -9999, 64, 50);
+-- Skewed, rotated and flipped templates in tiles too (the same 30 run
+-- tiles): each tile's upper left corner is the template's geotransform at
+-- its first pixel's corner, its scale and skew the template's.  Skewed
+-- (linear, 64BF) here; below, rotated by 30 degrees (nearest with a
+-- radius, 32BF) and flipped (scale x < 0, scale y > 0: linear with
+-- max_edge, 32BF); each reaches past the samples on every side.
+CALL tdc_interpolate_tiled('rt_c9', 'rt_c9_skew', 'geom',
+						   ST_MakeEmptyRaster(290, 290, -102, 208, 1.1, -1.0, 0.3, 0.25, 3006), 'linear', '64BF', -9999, 64, 50);
 \set VERBOSITY default
 SET client_min_messages = warning;
 CALL tdc_interpolate_tiled('rt_c9', 'rt_c9_64', 'geom',
 						   ST_MakeEmptyRaster(331, 290, -20, 230, 1.0, -1.0, 0, 0, 3006), 'linear:radius=0', '64BF', -1e30, 64, 50);
 CALL tdc_interpolate_tiled('rt_c9', 'rt_c9_near', 'geom',
 						   ST_MakeEmptyRaster(200, 190, -20, 230, 1.6, -1.55, 0, 0, 3006), 'nearest', '32BF', -9999, 256, 37);
+CALL tdc_interpolate_tiled('rt_c9', 'rt_c9_rot', 'geom',
+						   ST_MakeEmptyRaster(290, 290, -140, 160, 1.2 * cos(pi() / 6), -1.2 * cos(pi() / 6),
+											  1.2 * sin(pi() / 6), 1.2 * sin(pi() / 6), 3006),
+						   'nearest:radius=4', '32BF', -9999, 60, 45);
+CALL tdc_interpolate_tiled('rt_c9', 'rt_c9_flip', 'geom',
+						   ST_MakeEmptyRaster(170, 160, 230, -20, -1.5, 1.6, 0, 0, 3006), 'linear:max_edge=6', '32BF', -9999, 50, 50);
 RESET tdc_delaunay.max_memory;
 SELECT '32' AS cov, * FROM cov_check('rt_c9_32', 'rt_c9', ST_MakeEmptyRaster(331, 290, -20, 230, 1.0, -1.0, 0, 0, 3006),
 									 'linear', '32BF', -9999, 64, 50)
@@ -142,9 +156,22 @@ SELECT '64', * FROM cov_check('rt_c9_64', 'rt_c9', ST_MakeEmptyRaster(331, 290, 
 							  'linear:radius=0', '64BF', -1e30, 64, 50)
 UNION ALL
 SELECT 'near', * FROM cov_check('rt_c9_near', 'rt_c9', ST_MakeEmptyRaster(200, 190, -20, 230, 1.6, -1.55, 0, 0, 3006),
-								'nearest', '32BF', -9999, 256, 37);
+								'nearest', '32BF', -9999, 256, 37)
+UNION ALL
+SELECT 'skew', * FROM cov_check('rt_c9_skew', 'rt_c9', ST_MakeEmptyRaster(290, 290, -102, 208, 1.1, -1.0, 0.3, 0.25, 3006),
+								'linear', '64BF', -9999, 64, 50)
+UNION ALL
+SELECT 'rot', * FROM cov_check('rt_c9_rot', 'rt_c9', ST_MakeEmptyRaster(290, 290, -140, 160, 1.2 * cos(pi() / 6), -1.2 * cos(pi() / 6),
+																		 1.2 * sin(pi() / 6), 1.2 * sin(pi() / 6), 3006),
+							   'nearest:radius=4', '32BF', -9999, 60, 45)
+UNION ALL
+SELECT 'flip', * FROM cov_check('rt_c9_flip', 'rt_c9', ST_MakeEmptyRaster(170, 160, 230, -20, -1.5, 1.6, 0, 0, 3006),
+								'linear:max_edge=6', '32BF', -9999, 50, 50);
 SELECT '32' AS cov, * FROM cov_constraints('rt_c9_32')
-UNION ALL SELECT 'near', * FROM cov_constraints('rt_c9_near');
+UNION ALL SELECT 'near', * FROM cov_constraints('rt_c9_near')
+UNION ALL SELECT 'skew', * FROM cov_constraints('rt_c9_skew')
+UNION ALL SELECT 'rot', * FROM cov_constraints('rt_c9_rot')
+UNION ALL SELECT 'flip', * FROM cov_constraints('rt_c9_flip');
 
 -- Natural neighbour in tiles: each tile proves every pixel's cavity (the
 -- triangles whose circumcircle holds the pixel's centre) global in its own
@@ -225,12 +252,16 @@ CALL tdc_interpolate_tiled('rt_small', 'rt_bad', 'geom', ST_MakeEmptyRaster(10, 
 CALL tdc_interpolate_tiled('rt_small', 'rt_small_lin', 'geom', ST_MakeEmptyRaster(10, 10, 0, 10, 1, -1, 0, 0, 0));
 CALL tdc_interpolate_tiled('rt_nosuch', 'rt_bad', 'geom', ST_MakeEmptyRaster(10, 10, 0, 10, 1, -1, 0, 0, 0));
 CALL tdc_interpolate_tiled('rt_small', 'rt_bad', 'nosuch', ST_MakeEmptyRaster(10, 10, 0, 10, 1, -1, 0, 0, 0));
--- in tiles: a skewed grid is refused with the reason, and so is natural
--- neighbour where the cavities of a tile's pixels reach further than the
--- limit lets it read (the clusters' gaps hold triangles as wide as them)
+-- a skewed template whose pixels have no area (scale x scale y = skew x skew y)
+CALL tdc_interpolate_tiled('rt_small', 'rt_bad', 'geom', ST_MakeEmptyRaster(10, 10, 0, 10, 2, 2, 1, 4, 0));
+-- in tiles: natural neighbour where the cavities of a tile's pixels reach
+-- further than the limit lets it read (the clusters' gaps hold triangles
+-- as wide as them) is refused with the reason
 SET tdc_delaunay.max_memory = 16;
 CALL tdc_interpolate_tiled('rt_c9', 'rt_bad', 'geom', ST_MakeEmptyRaster(100, 100, -20, 230, 3, -3, 0, 0, 0), 'natural_neighbor');
-CALL tdc_interpolate_tiled('rt_c9', 'rt_bad', 'geom', ST_MakeEmptyRaster(100, 100, -20, 230, 3, -3, 0.5, 0, 0));
+-- and a template whose pixels are nearly flat (their area 1e-14 of a square's: the core cannot map
+-- a point back to its pixel with a bounded error), naming its geotransform
+CALL tdc_interpolate_tiled('rt_c9', 'rt_bad', 'geom', ST_MakeEmptyRaster(100, 100, -20, 230, 1, -1, 1, -0.99999999999999, 0));
 -- a cancel (here a statement timeout) stops it, in the read or the run
 SET statement_timeout = '300ms';
 CALL tdc_interpolate_tiled('rt_c9', 'rt_bad', 'geom', ST_MakeEmptyRaster(331, 290, -20, 230, 1.0, -1.0, 0, 0, 3006));
@@ -248,7 +279,8 @@ SELECT to_regclass('rt_bad') IS NULL AS no_target_left;
 SELECT count(*) AS tmp_left FROM pg_ls_dir('base/pgsql_tmp', true, false) f WHERE f LIKE 'pgsql_tmp%.tdc.%';
 
 DROP TABLE rt_small, rt_c9, rt_gshhg, rt_flat, rt_small_lin, rt_small_nn, rt_small_near, rt_small_one, rt_small_skew,
-	rt_c9_32, rt_c9_64, rt_c9_near, rt_u, rt_u_nn, rt_u_nn_me, rt_gshhg_cov, rt_gshhg_big, rt_gshhg_near;
+	rt_c9_32, rt_c9_64, rt_c9_near, rt_c9_skew, rt_c9_rot, rt_c9_flip, rt_u, rt_u_nn, rt_u_nn_me, rt_gshhg_cov,
+	rt_gshhg_big, rt_gshhg_near;
 DROP FUNCTION cov_check(regclass, text, raster, text, text, float8, int, int);
 DROP FUNCTION cov_constraints(name);
 RESET tdc_delaunay.threads;

@@ -22,6 +22,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include "harness.h"
@@ -325,6 +326,75 @@ test_bounded(void)
 
 	}
 	p.check_files = false;
+
+	/*
+	 * The bin on two threads needs two sets of tile files open at once:
+	 * with a soft limit of 1,024 open files a plan of over 200 tiles bins
+	 * on one, with room for them on two (bounded_bin.c, files_room), and
+	 * the triangles are the same.  A million uniform points under a limit
+	 * that makes small tiles (not in --quick).
+	 */
+	if (n >= ((size_t) 1 << 18))
+	{
+		tdc_bounded_params q = p;
+		struct rlimit old,
+					lim;
+		int			threads[2] = {0, 0},
+					tiles = 0;
+		bool		same = true;
+		size_t		un = 1000000;
+		double	   *u = malloc(16 * un);
+		char		ubin[4200];
+		tri_sum		uone = {0};
+
+		CHECK(u != NULL, "bounded: out of memory");
+		if (u == NULL)
+			goto out;
+		for (size_t i = 0; i < 2 * un; i++)
+			u[i] = tdc_splitmix64(&seed) / 18446744073709551616.0 * 1000;
+		snprintf(ubin, sizeof(ubin), "%s/uniform.bin", dir);
+		CHECK(write_bin(ubin, u, un) == 0, "bounded: cannot write %s", ubin);
+		rc = tdc_triangulate(u, un, &opt, &job, err, sizeof(err));
+		CHECK(rc == TDC_OK, "bounded: one-shot run of uniform points: %s", err);
+		memset(&it, 0, sizeof(it));
+		while (rc == TDC_OK && tdc_next_triangle(job, &it, v))
+		{
+			uone.hash += tri_hash(tdc_site_xy(job, v[0]), tdc_site_xy(job, v[1]), tdc_site_xy(job, v[2]));
+			uone.ntri++;
+		}
+		tdc_job_free(job);
+		job = NULL;
+		free(u);
+		q.xypath = ubin;
+		q.n = un;
+		q.limit = (size_t) 10 << 20;
+		CHECK(getrlimit(RLIMIT_NOFILE, &old) == 0, "bounded: getrlimit");
+		for (int k = 0; k < 2; k++)
+		{
+			lim = old;
+			lim.rlim_cur = k == 0 ? 1024 :
+				(old.rlim_max == RLIM_INFINITY || old.rlim_max > 8192 ? 8192 : old.rlim_max);
+			if (setrlimit(RLIMIT_NOFILE, &lim) != 0)
+				continue;
+			memset(&s, 0, sizeof(s));
+			rc = run(&q, &s, &st, err, sizeof(err));
+			CHECK(rc == TDC_OK, "bounded: bin threads, soft limit %llu: %d %s",
+				  (unsigned long long) lim.rlim_cur, rc, err);
+			same = same && s.hash == uone.hash && s.ntri == uone.ntri;
+			threads[k] = st.bin_threads;
+			tiles = st.tiles;
+		}
+		setrlimit(RLIMIT_NOFILE, &old);
+		printf("bounded: %d tiles binned on %d thread(s) under a soft limit of 1024 open files, "
+			   "on %d with %llu\n", tiles, threads[0], threads[1], (unsigned long long) lim.rlim_cur);
+		CHECK(tiles > 200 && tiles <= 400, "bounded: bin threads: %d tiles, 201 to 400 wanted", tiles);
+		CHECK(threads[0] == 1, "bounded: %d bin threads under 1024 open files, 1 expected", threads[0]);
+		CHECK(threads[1] == 2 || lim.rlim_cur < 2 * 2 * (rlim_t) tiles + 1224,
+			  "bounded: %d bin threads with room for the files, 2 expected", threads[1]);
+		CHECK(same, "bounded: bin threads: another triangle set than the one-shot run's");
+		unlink(ubin);
+		CHECK(others_in(dir, "input.bin") == 0, "bounded: bin threads: files left in %s", dir);
+	}
 
 	/* canceled before it starts */
 	memset(&s, 0, sizeof(s));

@@ -58,6 +58,7 @@ typedef struct rt_case
 	double		cell;
 	size_t		limit_mb;
 	int			workers;		/* 2: two tile workers expected with 2 threads (0: one or two) */
+	const tdc_grid_spec *grid;	/* NULL: north-up over extent, pixels of cell */
 } rt_case;
 
 typedef struct rt_state
@@ -259,6 +260,11 @@ grid_of(const rt_case *c, tdc_grid_spec *g)
 	double		w = ceil((c->extent[2] - c->extent[0]) / c->cell),
 				h = ceil((c->extent[3] - c->extent[1]) / c->cell);
 
+	if (c->grid)
+	{
+		*g = *c->grid;
+		return;
+	}
 	g->width = (size_t) w;
 	g->height = (size_t) h;
 	g->gt[0] = c->extent[0];
@@ -303,8 +309,9 @@ compare(const rt_case *c, const char *method, const char *dir, int threads)
 		CHECK(valid1 == valid2, "raster %s %s: %zu pixels with a value in tiles, %zu whole",
 			  c->name, method, valid2, valid1);
 		/* the sanitizers' --quick inputs are a third the size: fewer tiles */
-		CHECK(tiles >= (tdc_test_quick || c->workers > 1 ? 3 : 8), "raster %s %s: %d tiles, at least %d expected",
-			  c->name, method, tiles, tdc_test_quick || c->workers > 1 ? 3 : 8);
+		CHECK(tiles >= (tdc_test_quick || c->workers > 1 ? 3 : c->grid ? 10 : 8),
+			  "raster %s %s: %d tiles, at least %d expected", c->name, method, tiles,
+			  tdc_test_quick || c->workers > 1 ? 3 : c->grid ? 10 : 8);
 		CHECK(valid1 > 0 && valid1 < s.g.width * s.g.height * 2, "raster %s %s: %zu valid",
 			  c->name, method, valid1);
 		if (getenv("TDC_TEST_VERBOSE"))
@@ -345,6 +352,97 @@ refusals(rt_case *c, const char *dir)
 	CHECK(v == NULL && rc == TDC_EINVAL && strstr(err, "cannot take breaklines") != NULL,
 		  "raster: breaklines in tiles: %d %s", rc, err);
 	CHECK(tiles_files_in(dir) == 0, "raster: refusals: files left in %s", dir);
+}
+
+/*
+ * A grid of w x h pixels centred on (cx, cy), pixel matrix (a b; d e)
+ * (gt[1], gt[2]; gt[4], gt[5]).
+ */
+static tdc_grid_spec
+grid_at(double cx, double cy, size_t w, size_t h, double a, double b, double d, double e)
+{
+	tdc_grid_spec g;
+
+	g.width = w;
+	g.height = h;
+	g.gt[1] = a;
+	g.gt[2] = b;
+	g.gt[4] = d;
+	g.gt[5] = e;
+	g.gt[0] = cx - ((double) w / 2 * a + (double) h / 2 * b);
+	g.gt[3] = cy - ((double) w / 2 * d + (double) h / 2 * e);
+	return g;
+}
+
+/*
+ * Skewed, rotated and flipped grids over case c (samples in the 1000 x
+ * 1000 square from (ox, oy)), each reaching past the samples' hull on
+ * every side: the pixel ranges of triangles, tiles, hull spans and
+ * nearest's pieces go through the inverse of the pixel matrix (raster.c's
+ * pixel_matrix); a grid its bounds were too narrow for would lose pixels,
+ * a count that differs.
+ */
+static void
+skewed(rt_case *c, const char *dir, double ox, double oy, bool all)
+{
+	double		th = 0.5235987755982988;	/* 30 degrees */
+	tdc_grid_spec skew = grid_at(ox + 500, oy + 500, 470, 430, 2.2, 0.8, -0.5, -2.4),
+				rot = grid_at(ox + 500.3, oy + 499.1, 440, 450, 2.6 * cos(th), 2.6 * sin(th),
+							  2.6 * sin(th), -2.6 * cos(th)),
+				flip = grid_at(ox + 500, oy + 500, 430, 440, -2.5, 0, 0, 2.5),
+				mirror = grid_at(ox + 501, oy + 498, 450, 460, 2.3, 0.4, 0.3, 2.1);
+	const char *name = c->name;
+	static const char *const methods[] = {
+		"linear", "linear:max_edge=6", "linear:radius=30:nodata=-9999", "nearest",
+		"nearest:max_edge=6", "nearest:radius1=3:radius2=3:nodata=-9999"
+	};
+
+	c->grid = &skew;
+	c->name = "skewed";
+	for (size_t m = 0; m < (all ? sizeof(methods) / sizeof(methods[0]) : 1); m++)
+		compare(c, methods[m], dir, 2);
+	c->grid = &rot;
+	c->name = "rotated";
+	compare(c, "linear:max_edge=6:radius=20", dir, 2);
+	compare(c, "nearest", dir, 2);
+	compare(c, "natural_neighbor", dir, 2);
+	if (all)
+	{
+		compare(c, "linear", dir, 1);
+		compare(c, "nearest:max_edge=6", dir, 2);
+		c->grid = &flip;
+		c->name = "flipped";
+		compare(c, "linear", dir, 2);
+		compare(c, "nearest:max_edge=6", dir, 2);
+		compare(c, "natural_neighbor:max_edge=6", dir, 2);
+		c->grid = &mirror;
+		c->name = "mirrored and skewed";
+		compare(c, "linear:max_edge=6", dir, 2);
+		compare(c, "nearest", dir, 2);
+	}
+	c->grid = NULL;
+	c->name = name;
+}
+
+/* A singular grid is refused before the run, naming it; nothing left behind. */
+static void
+singular(rt_case *c, const char *dir)
+{
+	tdc_grid_spec g = grid_at(500, 500, 100, 100, 2, 1, 4, 2);
+	rt_state	s = {0};
+	char		err[1024];
+	size_t		valid;
+	int			tiles,
+				rc;
+
+	c->grid = &g;
+	grid_of(c, &s.g);
+	tdc_interp_parse("linear", &s.spec, err, sizeof(err));
+	CHECK(tiled_grid(c, &s, dir, 2, &valid, &tiles, &rc, err, sizeof(err)) == NULL && rc == TDC_EINVAL &&
+		  strstr(err, "geotransform (scale 2 x 2, skew 1 x 4) is singular") != NULL,
+		  "raster: a singular grid: %d %s", rc, err);
+	CHECK(tiles_files_in(dir) == 0, "raster: singular: files left in %s", dir);
+	c->grid = NULL;
 }
 
 void
@@ -402,6 +500,8 @@ test_raster_tiles(void)
 	c.extent[0] = -40.3;
 	c.extent[2] = 1044.7;
 	refusals(&c, dir);
+	singular(&c, dir);
+	skewed(&c, dir, 0, 0, true);
 	/* room for a second worker's scratch: two tiles at once (bounded_share.c) */
 	c.limit_mb = tdc_test_quick ? 24 : 40;
 	c.workers = 2;
@@ -428,6 +528,7 @@ test_raster_tiles(void)
 	compare(&c, "linear:max_edge=5:radius=20", dir, 2);
 	compare(&c, "nearest", dir, 2);
 	compare(&c, "natural_neighbor", dir, 2);
+	skewed(&c, dir, 500000, 4000000, false);
 
 	/* a diamond: the hull's sides are slanted, so the corners' pixels lie far outside it */
 	c.name = "diamond";
@@ -520,6 +621,28 @@ test_raster_tiles(void)
 		compare(&c, "natural_neighbor", dir, 2);
 		compare(&c, "natural_neighbor:max_edge=1.5", dir, 2);
 		compare(&c, "natural_neighbor:max_edge=1.5:radius=0", dir, 2);
+		{
+			/*
+			 * Skewed grids whose centres fall on the lattice's sites,
+			 * sides and diagonals: transposed (the rows run up the
+			 * columns), and turned by 45 degrees.
+			 */
+			double		mid = (double) (side - 1) / 2 + 0.25;
+			tdc_grid_spec tr = grid_at(mid, mid, 2 * side + 8, 2 * side + 8, 0, 0.5, 0.5, 0),
+						dia = grid_at((double) (side / 2), (double) (side / 2), 2 * side + 16,
+									  2 * side + 16, 0.5, 0.5, 0.5, -0.5);
+
+			c.grid = &tr;
+			c.name = "lattice, transposed";
+			compare(&c, "linear:max_edge=1.5", dir, 2);
+			compare(&c, "nearest:max_edge=1.5", dir, 2);
+			c.grid = &dia;
+			c.name = "lattice, turned 45 degrees";
+			compare(&c, "linear:max_edge=1.5:radius=0", dir, 2);
+			compare(&c, "nearest", dir, 2);
+			compare(&c, "natural_neighbor:max_edge=1.5", dir, 2);
+			c.grid = NULL;
+		}
 	}
 
 	/* a collinear input: refused, with its reason */

@@ -505,12 +505,12 @@ run_in_tiles(const cli_args *a, const staged *s, gtiff_out *tif)
 
 		getrusage(RUSAGE_SELF, &ru);
 		fprintf(stderr,
-				"n=%zu unique=%zu triangles=%zu threads=%d sort=%.6f subdivide=%.6f leaves=%.6f merge=%.6f total=%.6f peak_rss_mb=%.1f tiles=%d halo_points=%zu tile_runs=%zu reread_points=%zu scan=%.6f bin=%.6f gather=%.6f engine=%.6f finish=%.6f write=%.6f workers=%d wait=%.6f tiles_wall=%.6f\n",
+				"n=%zu unique=%zu triangles=%zu threads=%d sort=%.6f subdivide=%.6f leaves=%.6f merge=%.6f total=%.6f peak_rss_mb=%.1f tiles=%d halo_points=%zu tile_runs=%zu reread_points=%zu scan=%.6f bin=%.6f gather=%.6f engine=%.6f finish=%.6f write=%.6f workers=%d wait=%.6f tiles_wall=%.6f bin_threads=%d\n",
 				st.n, st.unique, st.ntri, st.threads, st.t.sort, st.t.subdivide,
 				st.t.leaves, st.t.merge,
 				(t1.tv_sec - t0.tv_sec) + (t1.tv_nsec - t0.tv_nsec) * 1e-9,
 				ru.ru_maxrss / 1024.0, st.tiles, st.halo, st.runs, st.reread,
-				st.scan, st.bin, st.gather, st.engine, st.finish, st.write, st.workers, st.wait, st.tiles_wall);
+				st.scan, st.bin, st.gather, st.engine, st.finish, st.write, st.workers, st.wait, st.tiles_wall, st.bin_threads);
 	}
 }
 
@@ -535,6 +535,24 @@ read_staged(const staged *s, cli_input *in)
 		raise(cli_cancel);		/* it came while the input was staged */
 }
 
+/*
+ * A bounded run bins its input on two threads when it may hold two sets of
+ * tile files open (bounded_bin.c reads the soft limit): a shell's soft
+ * limit is often 1,024 where the hard one is far higher, so raise it, as
+ * far as the hard limit allows.  Nothing else changes if it cannot.
+ */
+static void
+raise_open_files(void)
+{
+	struct rlimit rl;
+
+	if (getrlimit(RLIMIT_NOFILE, &rl) == 0 && rl.rlim_cur < rl.rlim_max)
+	{
+		rl.rlim_cur = rl.rlim_max == RLIM_INFINITY || rl.rlim_max > 65536 ? 65536 : rl.rlim_max;
+		(void) setrlimit(RLIMIT_NOFILE, &rl);
+	}
+}
+
 int
 main(int argc, char **argv)
 {
@@ -549,6 +567,7 @@ main(int argc, char **argv)
 	{
 		staged		s;
 
+		raise_open_files();
 		stage_input(&a, &s);
 		/* a grid's GeoTIFF: GDAL loaded now, so that the limit counts it */
 		in.n = s.n;

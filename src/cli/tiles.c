@@ -73,9 +73,10 @@ tiles_stats_line(const tdc_bounded_stats *st, double total)
 	getrusage(RUSAGE_SELF, &ru);
 	fprintf(stderr, "n=%zu unique=%zu triangles=%zu tiles=%d halo_points=%zu tile_runs=%zu "
 			"scan=%.6f bin=%.6f gather=%.6f engine=%.6f finish=%.6f write=%.6f workers=%d wait=%.6f "
-			"tiles_wall=%.6f total=%.6f peak_rss_mb=%.1f\n", st->n, st->unique, st->ntri, st->tiles,
-			st->halo, st->runs, st->scan, st->bin, st->gather, st->engine, st->finish, st->write,
-			st->workers, st->wait, st->tiles_wall, total, ru.ru_maxrss / 1024.0);
+			"tiles_wall=%.6f total=%.6f peak_rss_mb=%.1f bin_threads=%d\n", st->n, st->unique, st->ntri,
+			st->tiles, st->halo, st->runs, st->scan, st->bin, st->gather, st->engine, st->finish,
+			st->write, st->workers, st->wait, st->tiles_wall, total, ru.ru_maxrss / 1024.0,
+			st->bin_threads);
 }
 
 /*

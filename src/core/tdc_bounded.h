@@ -43,7 +43,8 @@ typedef struct tdc_bounded_stats
 				reread;			/* records reruns read from other tiles' files */
 	int			tiles,			/* tiles of the plan */
 				threads,		/* worker threads of the engine's last run */
-				workers;		/* tiles that could run at once (1, or 2 with any_order) */
+				workers,		/* tiles that could run at once (1, or 2 with any_order) */
+				bin_threads;	/* threads that binned the input (1, or 2 with files enough) */
 	tdc_times	t;				/* the engine's phases, summed over the runs */
 	double		scan,			/* wall seconds: box, hull and counts */
 				bin,			/* the points to the tile files */
@@ -188,7 +189,10 @@ extern void tdc_bounded_free(tdc_bounded_job *job);
  * rows; the tiles may come in any order.
  *
  * begin: from the bounded run's begin callback (the hull is copied).  g
- * must be north-up (gt[2] = gt[4] = 0, gt[1] > 0, gt[5] < 0).  *hold: the
+ * may be any grid whose pixels have an area: north-up, flipped, skewed or
+ * rotated (its pixel matrix gt[1], gt[2]; gt[4], gt[5] is inverted, and a
+ * singular one, or one whose determinant is below 1e-12 of |gt[1] gt[5]| +
+ * |gt[2] gt[4]|, is TDC_EINVAL naming the geotransform).  *hold: the
  * bytes the grid holds from then on (the buffers; add them to the run's).
  * tile: a final tile's triangles, from the run's emit (q, qz, tri as
  * there).  rows: after the run, rows y0 .. y0 + nrows - 1 (top down) into

@@ -115,5 +115,6 @@ COMMENT ON PROCEDURE tdc_interpolate_tiled(text, text, text, raster, text, text,
 'rast raster), a coverage of tiles of tile_width x tile_height pixels as raster2pgsql -t writes (rid 1.. row by row, '
 'the last column and row cut to fit), one band of pixel_type with nodata: each tile equals the same window of '
 'ST_TDCInterpolate over all the samples, pixel for pixel, and all-nodata tiles are written too. In one pass when it '
-'fits tdc_delaunay.max_memory (any method), else through the core''s bounded run (north-up grids; natural neighbour '
-'where each tile proves its pixels'' natural neighbours within the limit, else an error says so).';
+'fits tdc_delaunay.max_memory (any method), else through the core''s bounded run (any grid whose pixels have an '
+'area; natural neighbour where each tile proves its pixels'' natural neighbours within the limit, else an error '
+'says so).';

@@ -31,7 +31,11 @@
 #    command per shard each) are 1 for a coverage and 2 for contours, in one
 #    pass or many tiles; the targets are plain tables of the coordinator,
 #    AddRasterConstraints takes the coverage (and a distributed copy of it);
-#    errors after the distributed read leave no target on any node.
+#    errors after the distributed read leave no target on any node;
+# 6. where pgpointcloud is installed, the procedures over a pcpatch column
+#    distributed by id: the same tiles, lines and triangles as over the
+#    same patches in a plain table; and tdc_delaunay_tiled with a
+#    tile_column over patches refused with a hint, nothing written.
 # Prints "N passed, M failed".  Needs root or the rights to install Citus into
 # PostgreSQL's directories (the build alone does not).
 set -uo pipefail
@@ -443,6 +447,89 @@ else
 	bad "error cases (left behind: $left): $(grep -h -m1 ERROR "$BASE"/e_*.out | paste -sd'|')"
 fi
 echo "citus: the coverage and contour part took $((SECONDS - t1)) s"
+
+# 6. A pcpatch source (where pgpointcloud is installed): the coordinator
+# reads a distributed patch table as it reads geometries, so the
+# procedures give the tiles, lines and triangles of the same patches in a
+# plain table; tdc_delaunay_tiled's rounds on the workers read geometries
+# only, so a tile_column over patches is refused with a hint before
+# anything is written.  2,000 points of sql/tdc_pointcloud_tiled.sql's
+# format 21 (int32 X, Y, Z scaled by 0.01, dimensional), in patches of 400;
+# each node has the format in its pointcloud_formats.
+if [ -n "$(q coord -c "SELECT 1 FROM pg_available_extensions WHERE name = 'pointcloud'")" ]; then
+	t1=$SECONDS
+	TP="ST_MakeEmptyRaster(33, 10, 499999.5, 6000002.3, 1.0, -0.25, 0, 0, 3006)"
+	# the extensions through the coordinator (Citus creates them on the
+	# workers); the format, a row of each node's own pointcloud_formats, on
+	# each node
+	{
+		echo "CREATE EXTENSION pointcloud; CREATE EXTENSION tdc_delaunay_pointcloud;"
+		sed -n '/^CREATE FUNCTION tdc_pc_format/,/^FROM unnest.*\$\$;/p' "$ROOT/sql/tdc_pointcloud_tiled.sql"
+		echo "SELECT tdc_pc_format('{\"X int32_t 500000\",\"Y int32_t 6000000\",\"Z int32_t 100\",\"Classification uint8_t\"}', 'dimensional');"
+	} >"$BASE/pcnode.sql"
+	pc_ok=1
+	q coord -f "$BASE/pcnode.sql" >"$BASE/pcformat.xml" 2>"$BASE/pcnode.err" || pc_ok=0
+	for n in w1 w2 coord; do
+		q "$n" -v xml="$(cat "$BASE/pcformat.xml")" >>"$BASE/pcnode.err" 2>&1 <<-SQL || pc_ok=0
+			INSERT INTO pointcloud_formats (pcid, srid, schema) VALUES (21, 3006, :'xml');
+		SQL
+	done
+	q coord -c "CREATE TABLE pz_local AS
+		SELECT p AS id, p % 2 AS tile, PC_Patch(PC_MakePoint(21, ARRAY[x, y,
+				round((sin((x - 500000) / 7) * 10 + cos((y - 6000000) / 5) * 5)::numeric, 2), 2]) ORDER BY i) AS pa
+		  FROM (SELECT i, i / 400 AS p, 500000 + (i % 180) * 0.17 + ((i::bigint * 7919) % 13) * 0.01 AS x,
+					   6000000 + (i / 180) * 0.19 + ((i::bigint * 104729) % 11) * 0.01 AS y
+				  FROM generate_series(0, 1999) i) s
+		 GROUP BY p;
+		CREATE TABLE pz AS SELECT * FROM pz_local;
+		CREATE TABLE pzt AS SELECT * FROM pz_local;
+		SELECT create_distributed_table('pz', 'id'), create_distributed_table('pzt', 'tile');
+		SELECT truncate_local_data_after_distributing_table(t) FROM unnest(ARRAY['pz', 'pzt']::regclass[]) t;" \
+		>"$BASE/pzsetup.out" 2>&1 || pc_ok=0
+	if ((pc_ok)) && [ "$(q coord -c "SELECT sum(PC_NumPoints(pa)) FROM pz")" = 2000 ]; then
+		ok "pointcloud and tdc_delaunay_pointcloud on every node; 2,000 points in 5 patches, distributed by id and by tile"
+	else
+		bad "pcpatch set-up: $(grep -h -m2 ERROR "$BASE/pcnode.err" "$BASE/pzsetup.out" | paste -sd'|')"
+	fi
+	zrun p_cov pz 1 'in one pass' \
+		"CALL tdc_interpolate_tiled('pz', 'pz_cov', 'pa', $TP, 'linear', '64BF', -9999, 16, 4)"
+	zrun p_lines pz 2 'in one pass' "CALL tdc_contours_tiled('pz', 'pz_lines', 'pa', 0.5)"
+	if q coord -c "SET tdc_delaunay.threads = 1;
+		CALL tdc_interpolate_tiled('pz_local', 'pz_cov_local', 'pa', $TP, 'linear', '64BF', -9999, 16, 4);
+		CALL tdc_contours_tiled('pz_local', 'pz_lines_local', 'pa', 0.5);
+		CALL tdc_delaunay_tiled('pz', 'pz_tri', 'pa');
+		CALL tdc_delaunay_tiled('pz_local', 'pz_tri_local', 'pa');" >"$BASE/pzlocal.out" 2>&1; then
+		ok "the same procedures on the patches of a plain table, and tdc_delaunay_tiled on both"
+	else
+		bad "pcpatch runs on the coordinator: $(grep -m1 -A2 ERROR "$BASE/pzlocal.out")"
+	fi
+	for p in "pz_cov pz_cov_local" "pz_lines pz_lines_local" "pz_tri pz_tri_local"; do
+		read -r a b <<<"$p"
+		case $a in *cov) key="rid, rast::bytea" what=tiles ;; *tri) key="ST_AsEWKB(geom)" what=triangles ;;
+			*) key="id, level, ST_AsEWKB(geom)" what=lines ;; esac
+		read -r ab ba n <<<"$(zsame "$a" "$b" "$key")"
+		if [ "$ab" = 0 ] && [ "$ba" = 0 ] && ((${n:-0} > 0)); then
+			ok "$a (distributed patches) = $b (plain): the same $n $what, byte for byte"
+		else
+			bad "$a against $b (only in $a, only in $b, rows: $ab $ba $n)"
+		fi
+	done
+	q coord -c "CALL tdc_delaunay_tiled('pzt', 'pz_err', 'pa', tile_column => 'tile')" >"$BASE/pzerr.out" 2>&1
+	left=0
+	for n in coord w1 w2; do
+		c=$(q "$n" -c "SELECT count(*) FROM pg_class WHERE relname LIKE 'pz_err%'")
+		left=$((left + ${c:-1}))
+	done
+	if grep -q 'a pcpatch column is not read by the rounds on Citus workers' "$BASE/pzerr.out" &&
+		grep -q 'HINT:.*without tile_column' "$BASE/pzerr.out" && ((left == 0)); then
+		ok "tdc_delaunay_tiled over patches distributed by tile_column: refused with a hint, no target on any node"
+	else
+		bad "the tile_column refusal over patches (left behind: $left): $(head -3 "$BASE/pzerr.out" | paste -sd'|')"
+	fi
+	echo "citus: the pcpatch part took $((SECONDS - t1)) s"
+else
+	echo "citus: pgpointcloud is not installed: the pcpatch part is skipped"
+fi
 
 echo "citus: wall time $((SECONDS - t0)) s"
 finish

@@ -29,6 +29,14 @@
  * cap is the grid's hold, WIN_MIN or 16 rows), as many windows as its
  * triangles span, each written back as runs of the pixels it set.
  *
+ * The grid may be skewed, rotated or flipped: any geotransform whose
+ * pixel matrix is invertible.  Its centres are the one-pass expression
+ * (rs_centre) and the exact tests decide membership, so only the search
+ * for candidates changes: a triangle's corners go to pixel coordinates
+ * through the inverse (rs_pixel), and their box, widened by a bound on
+ * the rounding (pixel_matrix proves it), holds every centre the triangle
+ * holds.  Without skew the old axis-parallel path stays, flips included.
+ *
  * Rows come out after the run (tdc_raster_rows).  A pixel no triangle held
  * is nodata inside the hull (max_edge dropped it) and outside it takes
  * the nearest site within the radius, found among the sites on the hull
@@ -65,6 +73,77 @@ coord_ok(double c)
 }
 
 
+/*
+ * The grid's pixel matrix A = (gt[1] gt[2]; gt[4] gt[5]) inverted into r
+ * (NULL: only checked), and the slack of rs_pixel.  A singular A (exactly:
+ * the sign of its determinant is an orientation) has no pixels to map
+ * back, and one so nearly singular that its determinant's rounding is not
+ * small (k, below, over 1e12) is refused with it; north-up, flipped or any
+ * other grid without skew keeps 1 / gt[1] and 1 / gt[5] as they were.
+ *
+ * The slack.  Let M be the computed inverse, m its largest row sum of
+ * magnitudes, a A's largest entry, u = DBL_EPSILON / 2, and
+ * k = (|gt[1] gt[5]| + |gt[2] gt[4]|) / |det| (1 without skew).  A centre
+ * q = fl(o + A f) (rs_centre, f = (col + 0.5, row + 0.5), o = (gt[0],
+ * gt[3])) is off o + A f by at most 3u (|gt[0]| + |gt[3]| + a (W + H)) a
+ * coordinate, so M (q - o) is off f by m times that plus |M A - I| |f|,
+ * where M's entries are off A's inverse's by (2k + 1)u relatively (the
+ * determinant's and the division's rounding): at most 3u (k + 1) m a
+ * (W + H) more.  rs_pixel of a corner p is off M (p - o) by at most
+ * 3u m (|p| + |o|).  A centre that a triangle holds is a convex
+ * combination of its corners, which M keeps: so its f lies within the
+ * corners' rs_pixel box widened by the sum, below
+ *		8 DBL_EPSILON (m (|gt[0]| + |gt[3]| + |px| + |py|) + (k + 1) m a (W + H))
+ * (4u for each 3u, and the rounding of "- 0.5 - slack" itself, for f
+ * within the grid, under its W + H), and 1e-6 of a pixel more for the
+ * second-order terms.  r->slack is all but the |px| + |py| term, which
+ * rs_slack_at adds for the points at hand.
+ */
+static int
+pixel_matrix(const tdc_grid_spec *g, tdc_raster *r, char *err, size_t errlen)
+{
+	const double *gt = g->gt;
+	double		o[2] = {0, 0},
+				c1[2] = {gt[1], gt[4]},
+				c2[2] = {gt[2], gt[5]},
+				det = gt[1] * gt[5] - gt[2] * gt[4],
+				k,
+				a;
+	char		s[160];
+
+	for (int i = 0; i < 6; i++)
+		if (!isfinite(gt[i]))
+			return tdc_rs_fail(err, errlen, TDC_EINVAL, "%s", "the grid's geotransform is not finite");
+	k = (fabs(gt[1] * gt[5]) + fabs(gt[2] * gt[4])) / fabs(det);
+	if (tdc_orient2d(o, c1, c2) == 0 || !(k <= 1e12))
+	{
+		snprintf(s, sizeof(s), "(scale %.17g x %.17g, skew %.17g x %.17g)", gt[1], gt[5], gt[2], gt[4]);
+		return tdc_rs_fail(err, errlen, TDC_EINVAL, "the grid's pixels have no area: its geotransform "
+					"%s is singular or nearly so", s);
+	}
+	if (r == NULL)
+		return TDC_OK;
+	r->axis = gt[2] == 0 && gt[4] == 0;
+	if (r->axis)
+	{
+		r->inv[0] = 1 / gt[1];
+		r->inv[1] = r->inv[2] = 0;
+		r->inv[3] = 1 / gt[5];
+	}
+	else
+	{
+		r->inv[0] = gt[5] / det;
+		r->inv[1] = -gt[2] / det;
+		r->inv[2] = -gt[4] / det;
+		r->inv[3] = gt[1] / det;
+	}
+	r->inorm = fmax(fabs(r->inv[0]) + fabs(r->inv[1]), fabs(r->inv[2]) + fabs(r->inv[3]));
+	a = fmax(fmax(fabs(gt[1]), fabs(gt[2])), fmax(fabs(gt[4]), fabs(gt[5])));
+	r->slack = 1e-6 + 8 * DBL_EPSILON * (r->inorm * (fabs(gt[0]) + fabs(gt[3])) +
+										 (k + 1) * r->inorm * a * ((double) g->width + (double) g->height));
+	return TDC_OK;
+}
+
 int
 tdc_raster_begin(const tdc_interp_spec *spec, const tdc_grid_spec *g, const double *hull,
 				 size_t nhull, const char *tmpdir, tdc_raster **out, size_t *hold,
@@ -79,10 +158,11 @@ tdc_raster_begin(const tdc_interp_spec *spec, const tdc_grid_spec *g, const doub
 	if (spec->breaklines)
 		return tdc_rs_fail(err, errlen, TDC_EINVAL, "%s", "a grid in tiles cannot take breaklines: "
 					"they need the whole constrained triangulation");
-	if (!(g->gt[1] > 0 && g->gt[5] < 0 && g->gt[2] == 0 && g->gt[4] == 0) ||
-		g->width == 0 || g->height == 0 || g->width > SIZE_MAX / 32 / g->height ||
+	if (g->width == 0 || g->height == 0 || g->width > SIZE_MAX / 32 / g->height ||
 		g->height > UINT32_MAX || g->width > UINT32_MAX)
-		return tdc_rs_fail(err, errlen, TDC_EINVAL, "%s", "a grid in tiles must be north-up, with pixels");
+		return tdc_rs_fail(err, errlen, TDC_EINVAL, "%s", "a grid in tiles must have pixels");
+	if ((rc = pixel_matrix(g, NULL, err, errlen)) != TDC_OK)
+		return rc;
 	for (int k = 0; k < 4; k++)
 	{
 		rs_centre(g->gt, k & 1 ? g->width - 1 : 0, k & 2 ? g->height - 1 : 0, q);
@@ -103,10 +183,7 @@ tdc_raster_begin(const tdc_interp_spec *spec, const tdc_grid_spec *g, const doub
 	r->fd = -1;
 	r->spec = *spec;
 	r->g = *g;
-	r->inv[0] = 1 / g->gt[1];
-	r->inv[1] = 1 / g->gt[5];
-	r->slack = 1e-6 + 8 * DBL_EPSILON * ((fabs(g->gt[0]) + fabs(g->gt[3])) / g->gt[1] +
-										 (double) g->width + (double) g->height);
+	pixel_matrix(g, r, NULL, 0);
 	/* linear's and natural neighbour's window (nearest has its own, raster_nearest.c) */
 	r->wincap = spec->method == TDC_INTERP_NEAREST ? 0 :
 		WIN_MIN / 8 > 16 * g->width ? WIN_MIN / 8 : 16 * g->width;
@@ -155,14 +232,14 @@ put(uint64_t *w, double v)
  * [w0, w1) (columns [c0, c0 + wcols)): each centre it holds, closed, gets
  * its value when max_edge keeps it (none of its edges is long), else only
  * a centre at one of its sites gets a value, the site's.  The columns and
- * rows are those whose centres lie in its box, found in floating point and
- * widened by slack, far more than the rounding of that (a millionth of a
- * pixel, more where the coordinates dwarf the pixels: the tile's, from its
- * largest coordinates); the exact tests decide.  A triangle of dense
- * samples holds no centre at all most often: its range of columns or rows
- * is then empty (the first column is the ceiling of the box's left side in
- * centres, not its floor), and it costs four products and no orientation
- * test.
+ * rows are those whose centres lie in the box of its corners in pixel
+ * coordinates (rs_pixel; without skew, the box of its corners mapped),
+ * found in floating point and widened by slack, more than the rounding of
+ * that (pixel_matrix's bound, with the tile's largest coordinates); the
+ * exact tests decide.  A triangle of dense samples holds no centre at all
+ * most often: its range of columns or rows is then empty (the first column
+ * is the ceiling of the box's left side in centres, not its floor), and
+ * without skew it costs four products and no orientation test.
  */
 static void
 tri_pixels(const tdc_raster *r, const double *const p[3], const double z[3], double slack,
@@ -170,19 +247,45 @@ tri_pixels(const tdc_raster *r, const double *const p[3], const double z[3], dou
 {
 	bool		kept = true;
 	const double *gt = r->g.gt;
-	double		xmin = fmin(fmin(p[0][0], p[1][0]), p[2][0]),
-				xmax = fmax(fmax(p[0][0], p[1][0]), p[2][0]),
-				ymin = fmin(fmin(p[0][1], p[1][1]), p[2][1]),
-				ymax = fmax(fmax(p[0][1], p[1][1]), p[2][1]);
-	double		fc0 = ceil((xmin - gt[0]) * r->inv[0] - 0.5 - slack),
-				fc1 = floor((xmax - gt[0]) * r->inv[0] - 0.5 + slack),
-				fr0 = ceil((ymax - gt[3]) * r->inv[1] - 0.5 - slack),
-				fr1 = floor((ymin - gt[3]) * r->inv[1] - 0.5 + slack);
+	double		u[2],
+				v[2],
+				fc0,
+				fc1,
+				fr0,
+				fr1;
 	size_t		ca,
 				cb,
 				ra,
 				rb;
 
+	if (r->axis)
+	{
+		/* a flipped grid's (gt[1] < 0 or gt[5] > 0) first column or row is at the box's other side */
+		double		a = (fmin(fmin(p[0][0], p[1][0]), p[2][0]) - gt[0]) * r->inv[0],
+					b = (fmax(fmax(p[0][0], p[1][0]), p[2][0]) - gt[0]) * r->inv[0],
+					c = (fmax(fmax(p[0][1], p[1][1]), p[2][1]) - gt[3]) * r->inv[3],
+					d = (fmin(fmin(p[0][1], p[1][1]), p[2][1]) - gt[3]) * r->inv[3];
+
+		u[0] = fmin(a, b);
+		u[1] = fmax(a, b);
+		v[0] = fmin(c, d);
+		v[1] = fmax(c, d);
+	}
+	else
+	{
+		double		t[3][2];
+
+		for (int k = 0; k < 3; k++)
+			rs_pixel(r, p[k], t[k]);
+		u[0] = fmin(fmin(t[0][0], t[1][0]), t[2][0]);
+		u[1] = fmax(fmax(t[0][0], t[1][0]), t[2][0]);
+		v[0] = fmin(fmin(t[0][1], t[1][1]), t[2][1]);
+		v[1] = fmax(fmax(t[0][1], t[1][1]), t[2][1]);
+	}
+	fc0 = ceil(u[0] - 0.5 - slack);
+	fc1 = floor(u[1] - 0.5 + slack);
+	fr0 = ceil(v[0] - 0.5 - slack);
+	fr1 = floor(v[1] - 0.5 + slack);
 	if (fc0 > fc1 || fr0 > fr1 ||
 		fc1 < (double) c0 || fc0 >= (double) (c0 + wcols) || fr1 < (double) w0 || fr0 >= (double) w1)
 		return;
@@ -261,6 +364,13 @@ win_flush(tdc_raster *r, size_t w0, size_t w1, size_t c0, size_t wcols, char *er
 	return TDC_OK;
 }
 
+/* f clamped to [0, n] */
+static size_t
+grid_index(double f, size_t n)
+{
+	return f > 0 ? (f < (double) n ? (size_t) f : n) : 0;
+}
+
 int
 tdc_raster_tile(tdc_raster *r, const double *q, const double *qz, const size_t *tri, size_t ntri,
 				char *err, size_t errlen)
@@ -280,14 +390,11 @@ int
 tdc_rs_tile(tdc_raster *r, const double *q, const double *qz, const size_t *tri, size_t ntri,
 			rs_fill_fn fill, void *arg, char *err, size_t errlen)
 {
-	const double *gt = r->g.gt;
-	double		xmin = INFINITY,
-				xmax = -INFINITY,
-				ymin = INFINITY,
-				ymax = -INFINITY,
+	double		box[4] = {INFINITY, INFINITY, -INFINITY, -INFINITY},
+				lo[2] = {INFINITY, INFINITY},
+				hi[2] = {-INFINITY, -INFINITY},
 				slack,
-				tslack,
-				f;
+				tslack;
 	size_t		c0,
 				c1,
 				r0,
@@ -307,10 +414,10 @@ tdc_rs_tile(tdc_raster *r, const double *q, const double *qz, const size_t *tri,
 
 		for (int k = 0; k < 3; k++)
 		{
-			xmin = fmin(xmin, q[2 * v[k]]);
-			xmax = fmax(xmax, q[2 * v[k]]);
-			ymin = fmin(ymin, q[2 * v[k] + 1]);
-			ymax = fmax(ymax, q[2 * v[k] + 1]);
+			box[0] = fmin(box[0], q[2 * v[k]]);
+			box[2] = fmax(box[2], q[2 * v[k]]);
+			box[1] = fmin(box[1], q[2 * v[k] + 1]);
+			box[3] = fmax(box[3], q[2 * v[k] + 1]);
 		}
 		if (r->spec.radius != 0)
 		{
@@ -323,18 +430,30 @@ tdc_rs_tile(tdc_raster *r, const double *q, const double *qz, const size_t *tri,
 					return rc;
 		}
 	}
-	/* the tile's columns and rows, more each way than its box needs (tri_pixels' slack and one) */
-	tslack = r->slack + 8 * DBL_EPSILON * (fmax(fabs(xmin), fabs(xmax)) + fmax(fabs(ymin), fabs(ymax))) / gt[1];
-	slack = 3 + 8 * DBL_EPSILON * (fabs(gt[0]) + fabs(gt[3]) + fmax(fabs(xmin), fabs(xmax)) +
-								   fmax(fabs(ymin), fabs(ymax))) / gt[1];
-	f = floor((xmin - gt[0]) / gt[1] - slack);
-	c0 = f > 0 ? (f < (double) r->g.width ? (size_t) f : r->g.width) : 0;
-	f = ceil((xmax - gt[0]) / gt[1] + slack);
-	c1 = f > 0 ? (f < (double) r->g.width ? (size_t) f : r->g.width) : 0;
-	f = floor((ymax - gt[3]) / gt[5] - slack);
-	r0 = f > 0 ? (f < (double) r->g.height ? (size_t) f : r->g.height) : 0;
-	f = ceil((ymin - gt[3]) / gt[5] + slack);
-	r1 = f > 0 ? (f < (double) r->g.height ? (size_t) f : r->g.height) : 0;
+	/*
+	 * The tile's columns and rows: its box's corners in pixel coordinates
+	 * (which hold its triangles' corners', M being linear), widened by
+	 * tri_pixels' slack three times over (theirs, the corners' and
+	 * tri_pixels' own) and three pixels more.
+	 */
+	tslack = rs_slack_at(r, box);
+	slack = 3 + 3 * tslack;
+	for (int k = 0; k < 4; k++)
+	{
+		double		corner[2] = {box[k & 1 ? 2 : 0], box[k & 2 ? 3 : 1]},
+					uv[2];
+
+		rs_pixel(r, corner, uv);
+		for (int i = 0; i < 2; i++)
+		{
+			lo[i] = fmin(lo[i], uv[i]);
+			hi[i] = fmax(hi[i], uv[i]);
+		}
+	}
+	c0 = grid_index(floor(lo[0] - slack), r->g.width);
+	c1 = grid_index(ceil(hi[0] + slack), r->g.width);
+	r0 = grid_index(floor(lo[1] - slack), r->g.height);
+	r1 = grid_index(ceil(hi[1] + slack), r->g.height);
 	if (c1 <= c0 || r1 <= r0)
 		return TDC_OK;
 	wcols = c1 - c0;

@@ -7,6 +7,8 @@
 #ifndef TDC_TERRAIN_RASTER_INT_H
 #define TDC_TERRAIN_RASTER_INT_H
 
+#include <float.h>
+#include <math.h>
 #include <stdint.h>
 #include <stdio.h>
 
@@ -22,8 +24,11 @@ struct tdc_raster
 	int			fd;				/* the pixels' file: RS_REC(r) bytes a pixel */
 	uint64_t   *win;			/* linear: a window of rows, wincap pixels */
 	size_t		wincap;
-	double		slack;			/* in pixels: above the rounding of a centre's column or row */
-	double		inv[2];			/* 1 / gt[1], 1 / gt[5]: a triangle's columns and rows */
+	double		slack;			/* in pixels: above the rounding of a centre's column or row
+								 * (rs_slack_at adds the points' own) */
+	double		inv[4];			/* gt's pixel matrix inverted: rs_pixel */
+	double		inorm;			/* its largest row sum of magnitudes */
+	bool		axis;			/* no skew (gt[2] = gt[4] = 0): the axis-parallel fast paths */
 	fringe		fr;
 
 	/* nearest (raster_nearest.c) */
@@ -31,6 +36,7 @@ struct tdc_raster
 	size_t		nwincap;
 	uint32_t   *span;			/* per row: the hull's first and last column (2 each), widened */
 	double		deep;			/* how far a strip beyond an edge may need to reach */
+	double		nslack;			/* rs_slack_at the hull's box widened by deep */
 };
 
 /*
@@ -66,6 +72,31 @@ rs_centre(const double *gt, size_t col, size_t row, double *q)
 
 	q[0] = gt[0] + fx * gt[1] + fy * gt[2];
 	q[1] = gt[3] + fx * gt[4] + fy * gt[5];
+}
+
+/*
+ * Point p in pixel coordinates: (col + 0.5, row + 0.5) at pixel (col, row)'s
+ * centre, up to rounding that rs_slack_at bounds.  A skewed grid's
+ * candidate pixels are found here (a triangle's are those whose centres
+ * its corners' box holds), the exact orientation tests of the centres
+ * themselves (rs_centre) deciding.
+ */
+static inline void
+rs_pixel(const struct tdc_raster *r, const double *p, double *uv)
+{
+	double		dx = p[0] - r->g.gt[0],
+				dy = p[1] - r->g.gt[3];
+
+	uv[0] = r->inv[0] * dx + r->inv[1] * dy;
+	uv[1] = r->inv[2] * dx + r->inv[3] * dy;
+}
+
+/* The slack (in pixels) of rs_pixel for points in box (xmin, ymin, xmax, ymax): raster.c's pixel_matrix. */
+static inline double
+rs_slack_at(const struct tdc_raster *r, const double *box)
+{
+	return r->slack + 8 * DBL_EPSILON * r->inorm * (fmax(fabs(box[0]), fabs(box[2])) +
+													fmax(fabs(box[1]), fabs(box[3])));
 }
 
 /* An error's code, with its message (fmt with one string argument) in err. */

@@ -29,11 +29,14 @@
  * A superset of R_T serves as well (an offer that is not nearest loses),
  * so R_T is covered in floating point with room to spare: T and the box
  * of c_T's error (fr_centre_box), row by row, widened by a column each
- * way and clipped to the hull's span of each row (widened too).  A sliver,
- * whose centre is ill-conditioned, offers T and, beyond each edge whose
- * opposite angle may be obtuse (a dot product's sign, with its rounding),
- * a strip as wide as the edge, reaching past the hull's box: c_T lies on
- * the edge's bisector, so R_T's part beyond the edge is in that strip.
+ * way and clipped to the hull's span of each row (widened too); on a
+ * skewed grid a row is a band in pixel coordinates (rs_pixel), wide
+ * enough for the rounding of the mapping ("The geometry of rows" below).
+ * A sliver, whose centre is ill-conditioned, offers T and, beyond each
+ * edge whose opposite angle may be obtuse (a dot product's sign, with its
+ * rounding), a strip as wide as the edge, reaching past the hull's box:
+ * c_T lies on the edge's bisector, so R_T's part beyond the edge is in
+ * that strip.
  *
  * max_edge masks as it does linear: a pixel has a value when it is at a
  * site or some closed triangle holding it keeps its edges (the same exact
@@ -65,6 +68,9 @@ typedef struct piece
 	double		v[PIECE_MAX][2];
 	int			n;
 	double		box[4];			/* xmin, ymin, xmax, ymax */
+	double		pv[PIECE_MAX][2];	/* a skewed grid's: v in pixel coordinates (rs_pixel) */
+	double		pbox[4];		/* and their box */
+	double		sl;				/* the rounding of rs_pixel for its points (rs_slack_at) */
 } piece;
 
 static int
@@ -73,15 +79,147 @@ rn_io(char *err, size_t errlen, const char *what, const struct tdc_raster *r)
 	return tdc_rs_fail(err, errlen, TDC_EIO, what, r->path);
 }
 
+/*
+ * The geometry of rows and columns.  Without skew it is the world's: a
+ * row's centres lie exactly on the line y = gt[3] + (row + 0.5) gt[5], as
+ * rs_centre computes them, and a column's x maps to pixels by one
+ * division.  A skewed grid's row is not a line of the world's doubles:
+ * there the points go to pixel coordinates (rs_pixel, off by at most sl,
+ * the centre's own rounding included: rs_slack_at, raster.c's
+ * pixel_matrix), and a row is the band of half-width sl around row + 0.5,
+ * which holds the mapped point of each of its centres that a convex
+ * region of those points holds.  Either way the columns and rows found
+ * are widened by sl and one more: supersets, the exact tests deciding.
+ * sl is r->nslack for the hull and what lies within deep of its box, a
+ * piece's own beyond (a circumcentre may lie farther).
+ */
+
+/* Cells [*a, *b] of 0 .. n - 1 whose centres (index + 0.5) may lie in [lo, hi] (slack sl); false: none. */
+static bool
+cells(double lo, double hi, double sl, size_t n, size_t *a, size_t *b)
+{
+	double		f0 = floor(lo - 0.5 - (sl + 1)),
+				f1 = ceil(hi - 0.5 + (sl + 1));
+
+	if (f1 < 0 || f0 > (double) (n - 1))
+		return false;
+	*a = f0 > 0 ? (size_t) f0 : 0;
+	*b = f1 < (double) (n - 1) ? (size_t) f1 : n - 1;
+	return true;
+}
+
+/*
+ * The x range [*xl, *xr] (widened from what they hold) of the convex hull
+ * of n points within the band lo <= y <= hi: every pair's segment's part
+ * in it.
+ */
+static void
+band_extent(const double (*pt)[2], int n, double lo, double hi, double *xl, double *xr)
+{
+	for (int i = 0; i < n; i++)
+		for (int j = i; j < n; j++)
+		{
+			const double *a = pt[i],
+					   *b = pt[j];
+
+			if (hi < fmin(a[1], b[1]) || lo > fmax(a[1], b[1]))
+				continue;
+			if (a[1] == b[1])
+			{
+				*xl = fmin(*xl, fmin(a[0], b[0]));
+				*xr = fmax(*xr, fmax(a[0], b[0]));
+				continue;
+			}
+			for (int e = 0; e < (hi > lo ? 2 : 1); e++)
+			{
+				double		x = a[0] + fmin(fmax(((e ? hi : lo) - a[1]) / (b[1] - a[1]), 0), 1) * (b[0] - a[0]);
+
+				*xl = fmin(*xl, x);
+				*xr = fmax(*xr, x);
+			}
+		}
+}
+
+/* n points (world: pt) to pixel coordinates pv, and their box */
+static void
+pixel_box(const struct tdc_raster *r, const double (*pt)[2], int n, double (*pv)[2], double *pbox)
+{
+	pbox[0] = pbox[1] = INFINITY;
+	pbox[2] = pbox[3] = -INFINITY;
+	for (int k = 0; k < n; k++)
+	{
+		rs_pixel(r, pt[k], pv[k]);
+		pbox[0] = fmin(pbox[0], pv[k][0]);
+		pbox[1] = fmin(pbox[1], pv[k][1]);
+		pbox[2] = fmax(pbox[2], pv[k][0]);
+		pbox[3] = fmax(pbox[3], pv[k][1]);
+	}
+}
+
+/* A grid without skew: world x (y) in [l, h] to columns (rows) */
+static bool
+axis_cells(const struct tdc_raster *r, int y, double l, double h, size_t *a, size_t *b)
+{
+	double		fl = (l - r->g.gt[3 * y]) / r->g.gt[1 + 4 * y],
+				fh = (h - r->g.gt[3 * y]) / r->g.gt[1 + 4 * y];
+
+	return cells(fmin(fl, fh), fmax(fl, fh), r->nslack, y ? r->g.height : r->g.width, a, b);
+}
+
+/*
+ * The rows a box (world; pbox: its points' in pixel coordinates with
+ * slack sl, for a skewed grid) may reach
+ */
+static bool
+box_rows(const struct tdc_raster *r, const double *box, const double *pbox, double sl, size_t *ra,
+		 size_t *rb)
+{
+	return r->axis ? axis_cells(r, 1, box[1], box[3], ra, rb) :
+		cells(pbox[1], pbox[3], sl, r->g.height, ra, rb);
+}
+
+/*
+ * The pixel columns' range [*ul, *ur] in row row of the convex hull of n
+ * points (pt: world, pv: pixel coordinates with slack sl, for a skewed
+ * grid); false: it misses the row.
+ */
+static bool
+row_extent(const struct tdc_raster *r, const double (*pt)[2], const double (*pv)[2], int n, size_t row,
+		   double sl, double *ul, double *ur)
+{
+	const double *gt = r->g.gt;
+	double		xl = INFINITY,
+				xr = -INFINITY;
+
+	if (r->axis)
+	{
+		double		y = gt[3] + ((double) row + 0.5) * gt[5],
+					a,
+					b;
+
+		band_extent(pt, n, y, y, &xl, &xr);
+		if (!(xl <= xr))
+			return false;
+		a = (xl - gt[0]) / gt[1];
+		b = (xr - gt[0]) / gt[1];
+		*ul = fmin(a, b);
+		*ur = fmax(a, b);
+		return true;
+	}
+	band_extent(pv, n, (double) row + 0.5 - sl, (double) row + 0.5 + sl, &xl, &xr);
+	*ul = xl;
+	*ur = xr;
+	return xl <= xr;
+}
+
 int
 tdc_rn_begin(struct tdc_raster *r, char *err, size_t errlen)
 {
-	const double *gt = r->g.gt,
-			   *h = r->fr.hull;
+	const double *h = r->fr.hull;
 	size_t		width = r->g.width,
 				height = r->g.height,
 				nh = r->fr.nhull;
-	double		sl = r->slack + 1;
+	double		far[4];
 
 	r->nwincap = NWIN_MIN / 32 > 16 * width ? NWIN_MIN / 32 : 16 * width;
 	r->nwin = malloc(32 * r->nwincap);
@@ -90,6 +228,10 @@ tdc_rn_begin(struct tdc_raster *r, char *err, size_t errlen)
 		return tdc_rs_fail(err, errlen, TDC_ENOMEM, "%s", "out of memory for the grid's window");
 	/* past the hull's box from anywhere in it */
 	r->deep = 2 * (r->fr.box[2] - r->fr.box[0] + r->fr.box[3] - r->fr.box[1]) + 1;
+	/* the rounding of rs_pixel for any point of a piece (pieces_of: within deep of the hull's box) */
+	for (int k = 0; k < 4; k++)
+		far[k] = r->fr.box[k] + (k < 2 ? -r->deep : r->deep);
+	r->nslack = rs_slack_at(r, far);
 	for (size_t row = 0; row < height; row++)
 	{
 		r->span[2 * row] = UINT32_MAX;
@@ -97,50 +239,48 @@ tdc_rn_begin(struct tdc_raster *r, char *err, size_t errlen)
 	}
 
 	/*
-	 * Each row's span of the hull, from each edge's crossing of the row's
-	 * centre line (its ends where the line passes beside it within the
-	 * slack), widened by a column and the rounding: a superset.
+	 * Each row's span of the hull, from each edge's part in the row's line
+	 * (or band), widened by the slack and a column: a superset.
 	 */
 	for (size_t i = 0; i < nh; i++)
 	{
-		const double *a = h + 2 * i,
-				   *b = h + 2 * ((i + 1) % nh);
-		double		ylo = fmin(a[1], b[1]),
-					yhi = fmax(a[1], b[1]),
-					f0 = floor((yhi - gt[3]) / gt[5] - 0.5 - sl),
-					f1 = ceil((ylo - gt[3]) / gt[5] - 0.5 + sl);
+		double		e[2][2] = {{h[2 * i], h[2 * i + 1]},
+							   {h[2 * ((i + 1) % nh)], h[2 * ((i + 1) % nh) + 1]}},
+					pe[2][2],
+					box[4] = {fmin(e[0][0], e[1][0]), fmin(e[0][1], e[1][1]),
+							  fmax(e[0][0], e[1][0]), fmax(e[0][1], e[1][1])},
+					pbox[4];
 		size_t		ra,
 					rb;
 
-		if (f1 < 0 || f0 >= (double) height)
+		if (!r->axis)
+			pixel_box(r, (const double (*)[2]) e, 2, pe, pbox);
+		if (!box_rows(r, box, pbox, r->nslack, &ra, &rb))
 			continue;
-		ra = f0 > 0 ? (size_t) f0 : 0;
-		rb = f1 < (double) (height - 1) ? (size_t) f1 : height - 1;
 		for (size_t row = ra; row <= rb; row++)
 		{
-			double		y = gt[3] + ((double) row + 0.5) * gt[5],
-						t = b[1] != a[1] ? (y - a[1]) / (b[1] - a[1]) : 0,
-						xs[2];
+			double		ul,
+						ur,
+						c0,
+						c1;
+			uint32_t	lo,
+						hi;
 
-			t = fmin(fmax(t, 0), 1);
-			xs[0] = a[0] + t * (b[0] - a[0]);
-			xs[1] = b[1] != a[1] ? xs[0] : b[0];
-			for (int k = 0; k < 2; k++)
-			{
-				double		c0 = floor((xs[k] - gt[0]) / gt[1] - 0.5 - sl),
-							c1 = ceil((xs[k] - gt[0]) / gt[1] - 0.5 + sl);
+			if (!row_extent(r, (const double (*)[2]) e, (const double (*)[2]) pe, 2, row, r->nslack,
+							&ul, &ur))
+				continue;
+			c0 = floor(ul - 0.5 - (r->nslack + 1));
+			c1 = ceil(ur - 0.5 + (r->nslack + 1));
 
-				/*
-				 * A crossing beside the grid stretches the row's span to
-				 * the grid's side (clamped, not skipped: a hull wider than
-				 * the grid spans the whole row between its crossings).
-				 */
-				uint32_t	lo = c0 <= 0 ? 0 : c0 >= (double) (width - 1) ? (uint32_t) (width - 1) : (uint32_t) c0,
-							hi = c1 <= 0 ? 0 : c1 >= (double) (width - 1) ? (uint32_t) (width - 1) : (uint32_t) c1;
-
-				r->span[2 * row] = lo < r->span[2 * row] ? lo : r->span[2 * row];
-				r->span[2 * row + 1] = hi > r->span[2 * row + 1] ? hi : r->span[2 * row + 1];
-			}
+			/*
+			 * A part beside the grid stretches the row's span to the
+			 * grid's side (clamped, not skipped: a hull wider than the
+			 * grid spans the whole row between its sides).
+			 */
+			lo = c0 <= 0 ? 0 : c0 >= (double) (width - 1) ? (uint32_t) (width - 1) : (uint32_t) c0;
+			hi = c1 <= 0 ? 0 : c1 >= (double) (width - 1) ? (uint32_t) (width - 1) : (uint32_t) c1;
+			r->span[2 * row] = lo < r->span[2 * row] ? lo : r->span[2 * row];
+			r->span[2 * row + 1] = hi > r->span[2 * row + 1] ? hi : r->span[2 * row + 1];
 		}
 	}
 	return TDC_OK;
@@ -164,7 +304,7 @@ tdc_rn_free(struct tdc_raster *r)
 }
 
 static void
-piece_box(piece *pc)
+piece_box(const struct tdc_raster *r, piece *pc)
 {
 	pc->box[0] = pc->box[2] = pc->v[0][0];
 	pc->box[1] = pc->box[3] = pc->v[0][1];
@@ -174,6 +314,12 @@ piece_box(piece *pc)
 		pc->box[2] = fmax(pc->box[2], pc->v[k][0]);
 		pc->box[1] = fmin(pc->box[1], pc->v[k][1]);
 		pc->box[3] = fmax(pc->box[3], pc->v[k][1]);
+	}
+	pc->sl = r->nslack;
+	if (!r->axis)
+	{
+		pixel_box(r, (const double (*)[2]) pc->v, pc->n, pc->pv, pc->pbox);
+		pc->sl = fmax(pc->sl, rs_slack_at(r, pc->box));
 	}
 }
 
@@ -204,10 +350,10 @@ pieces_of(const struct tdc_raster *r, const double *const p[3], piece pc[4])
 			pc[0].v[3 + k][1] = o[1] + (k & 2 ? e : -e);
 		}
 		pc[0].n = 7;
-		piece_box(&pc[0]);
+		piece_box(r, &pc[0]);
 		return 1;
 	}
-	piece_box(&pc[0]);
+	piece_box(r, &pc[0]);
 	for (int k = 0; k < 3; k++)
 	{
 		const double *a = p[k],
@@ -240,71 +386,22 @@ pieces_of(const struct tdc_raster *r, const double *const p[3], piece pc[4])
 		pc[np].v[3][0] = a[0] + nx;
 		pc[np].v[3][1] = a[1] + ny;
 		pc[np].n = 4;
-		piece_box(&pc[np]);
+		piece_box(r, &pc[np]);
 		np++;
 	}
 	return np;
 }
 
-/* The columns whose centres may lie in [xl, xr], widened by the slack and a column; false: none. */
+/* The columns of row row that a piece may cover; false: none. */
 static bool
-x_cols(const struct tdc_raster *r, double xl, double xr, size_t *ca, size_t *cb)
+piece_cols(const struct tdc_raster *r, const piece *pc, size_t row, size_t *ca, size_t *cb)
 {
-	const double *gt = r->g.gt;
-	double		sl = r->slack + 1,
-				f0,
-				f1;
+	double		ul,
+				ur;
 
-	f0 = floor((xl - gt[0]) / gt[1] - 0.5 - sl);
-	f1 = ceil((xr - gt[0]) / gt[1] - 0.5 + sl);
-	if (f1 < 0 || f0 > (double) (r->g.width - 1))
-		return false;
-	*ca = f0 > 0 ? (size_t) f0 : 0;
-	*cb = f1 < (double) (r->g.width - 1) ? (size_t) f1 : r->g.width - 1;
-	return true;
-}
-
-/*
- * The columns of row y that a piece may cover: the span of its points'
- * convex hull on the line (every pair's segment crossing it), widened by
- * the slack and a column.  false: none.
- */
-static bool
-piece_cols(const struct tdc_raster *r, const piece *pc, double y, size_t *ca, size_t *cb)
-{
-	double		xl = INFINITY,
-				xr = -INFINITY;
-
-	for (int i = 0; i < pc->n; i++)
-		for (int j = i; j < pc->n; j++)
-		{
-			const double *a = pc->v[i],
-					   *b = pc->v[j];
-			double		x;
-
-			if (y < fmin(a[1], b[1]) || y > fmax(a[1], b[1]))
-				continue;
-			x = a[1] != b[1] ? a[0] + fmin(fmax((y - a[1]) / (b[1] - a[1]), 0), 1) * (b[0] - a[0]) : a[0];
-			xl = fmin(xl, a[1] != b[1] ? x : fmin(a[0], b[0]));
-			xr = fmax(xr, a[1] != b[1] ? x : fmax(a[0], b[0]));
-		}
-	return xl <= xr && x_cols(r, xl, xr, ca, cb);
-}
-
-/* A piece's rows, [*ra, *rb] (widened by the slack and a row); false: none in the grid. */
-static bool
-box_rows(const struct tdc_raster *r, const double *box, size_t *ra, size_t *rb)
-{
-	const double *gt = r->g.gt;
-	double		sl = r->slack + 1,
-				f0 = floor((box[3] - gt[3]) / gt[5] - 0.5 - sl),
-				f1 = ceil((box[1] - gt[3]) / gt[5] - 0.5 + sl);
-
-	if (f1 < 0 || f0 > (double) (r->g.height - 1))
-		return false;
-	*ra = f0 > 0 ? (size_t) f0 : 0;
-	*rb = f1 < (double) (r->g.height - 1) ? (size_t) f1 : r->g.height - 1;
-	return true;
+	return row_extent(r, (const double (*)[2]) pc->v, (const double (*)[2]) pc->pv, pc->n, row, pc->sl,
+					  &ul, &ur) &&
+		cells(ul, ur, pc->sl, r->g.width, ca, cb);
 }
 
 /*
@@ -319,7 +416,7 @@ offer_piece(struct tdc_raster *r, const piece *pc, const double *const p[3], con
 	size_t		ra,
 				rb;
 
-	if (!box_rows(r, pc->box, &ra, &rb) || rb < w0 || ra >= w1)
+	if (!box_rows(r, pc->box, pc->pbox, pc->sl, &ra, &rb) || rb < w0 || ra >= w1)
 		return;
 	ra = ra > w0 ? ra : w0;
 	rb = rb < w1 - 1 ? rb : w1 - 1;
@@ -329,9 +426,8 @@ offer_piece(struct tdc_raster *r, const piece *pc, const double *const p[3], con
 					cb,
 					hlo = r->span[2 * row],
 					hhi = r->span[2 * row + 1];
-		double		y = r->g.gt[3] + ((double) row + 0.5) * r->g.gt[5];
 
-		if (hlo > hhi || !piece_cols(r, pc, y, &ca, &cb))
+		if (hlo > hhi || !piece_cols(r, pc, row, &ca, &cb))
 			continue;
 		ca = ca > hlo ? ca : hlo;
 		cb = cb < hhi ? cb : hhi;
@@ -376,8 +472,8 @@ mask_tri(struct tdc_raster *r, const double *const p[3], bool kept, size_t w0, s
 		t.v[k][0] = p[k][0];
 		t.v[k][1] = p[k][1];
 	}
-	piece_box(&t);
-	if (!box_rows(r, t.box, &ra, &rb) || rb < w0 || ra >= w1)
+	piece_box(r, &t);
+	if (!box_rows(r, t.box, t.pbox, t.sl, &ra, &rb) || rb < w0 || ra >= w1)
 		return;
 	ra = ra > w0 ? ra : w0;
 	rb = rb < w1 - 1 ? rb : w1 - 1;
@@ -385,9 +481,8 @@ mask_tri(struct tdc_raster *r, const double *const p[3], bool kept, size_t w0, s
 	{
 		size_t		ca,
 					cb;
-		double		y = r->g.gt[3] + ((double) row + 0.5) * r->g.gt[5];
 
-		if (!piece_cols(r, &t, y, &ca, &cb))
+		if (!piece_cols(r, &t, row, &ca, &cb))
 			continue;
 		ca = ca > c0 ? ca : c0;
 		cb = cb < c0 + wcols - 1 ? cb : c0 + wcols - 1;
@@ -460,7 +555,8 @@ int
 tdc_rn_tile(struct tdc_raster *r, const double *q, const double *qz, const size_t *tri, size_t ntri,
 			char *err, size_t errlen)
 {
-	double		box[4] = {INFINITY, INFINITY, -INFINITY, -INFINITY};
+	double		box[4] = {INFINITY, INFINITY, -INFINITY, -INFINITY},
+				pbox[4] = {0, 0, 0, 0};
 	size_t		r0,
 				r1,
 				c0 = SIZE_MAX,
@@ -491,7 +587,14 @@ tdc_rn_tile(struct tdc_raster *r, const double *q, const double *qz, const size_
 			box[3] = fmax(box[3], fmin(pc[i].box[3], r->fr.box[3]));
 		}
 	}
-	if (!box_rows(r, box, &r0, &r1))
+	{
+		double		corner[4][2] = {{box[0], box[1]}, {box[2], box[1]}, {box[0], box[3]}, {box[2], box[3]}},
+					pc4[4][2];
+
+		if (!r->axis)
+			pixel_box(r, (const double (*)[2]) corner, 4, pc4, pbox);
+	}
+	if (!box_rows(r, box, pbox, r->nslack, &r0, &r1))
 		return TDC_OK;
 	for (size_t row = r0; row <= r1; row++)
 		if (r->span[2 * row] <= r->span[2 * row + 1])
@@ -504,7 +607,8 @@ tdc_rn_tile(struct tdc_raster *r, const double *q, const double *qz, const size_
 					bb;
 
 		/* the hull's columns in those rows, within the box's */
-		if (c0 > c1 || !x_cols(r, fmin(box[0], box[2]), fmax(box[0], box[2]), &ba, &bb))
+		if (c0 > c1 || !(r->axis ? axis_cells(r, 0, box[0], box[2], &ba, &bb) :
+						 cells(pbox[0], pbox[2], r->nslack, r->g.width, &ba, &bb)))
 			return TDC_OK;
 		c0 = c0 > ba ? c0 : ba;
 		c1 = c1 < bb ? c1 : bb;

@@ -22,8 +22,30 @@
 #include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
 
 #include "bounded_int.h"
+
+/*
+ * The files the bin may hold open at once: 800 (two each for 400 tiles,
+ * the halo index's bound), or more when the process's soft limit on open
+ * files leaves more than that after HOST_FILES for the host's own (a
+ * PostgreSQL backend keeps up to max_files_per_process, 1000 by default;
+ * ./tdc raises its soft limit to the hard one).  The limit is only read.
+ */
+#define HOST_FILES	1224
+
+static size_t
+files_room(void)
+{
+	struct rlimit rl;
+	rlim_t		cur;
+
+	if (getrlimit(RLIMIT_NOFILE, &rl) != 0)
+		return 800;
+	cur = rl.rlim_cur == RLIM_INFINITY || rl.rlim_cur > (rlim_t) 1 << 20 ? (rlim_t) 1 << 20 : rl.rlim_cur;
+	return cur > 800 + HOST_FILES ? (size_t) cur - HOST_FILES : 800;
+}
 
 /*
  * Each tile's first region: r->kfirst[t], its first K, and r->band_idx
@@ -299,7 +321,9 @@ bin_range(void *arg)
  * r->nparts parts, r->tiles[t].bb the exact box of tile t's points and
  * r->halo_count[t] its halo file's points.  The two halves of the input
  * on two threads (each with its own files) when there are file handles
- * enough.  Frees the cell maps.
+ * enough (files_room): a 1e9-point run's few hundred tiles need about
+ * 1,400, which the old fixed bound of 800 refused, so that its bin, a
+ * minute long, kept one core idle.  Frees the cell maps.
  */
 int
 tdc_bd_bin_points(bounded_run *r)
@@ -314,7 +338,9 @@ tdc_bd_bin_points(bounded_run *r)
 	bool		started = false;
 
 	memset(bw, 0, sizeof(bw));
-	r->nparts = r->n >= ((size_t) 1 << 18) && (size_t) nt * (use_halo ? 2 : 1) * 2 <= 800 ? 2 : 1;
+	r->nparts = r->n >= ((size_t) 1 << 18) &&
+		(size_t) nt * (use_halo ? 2 : 1) * 2 <= files_room() ? 2 : 1;
+	r->st->bin_threads = r->nparts;
 	per = r->budget / 16 / (size_t) (2 * r->nparts * (nt > 0 ? nt : 1)) / 8;
 	per = per < 512 ? 512 : per > 32768 ? 32768 : per;
 	for (int p = 0; p < r->nparts && r->e.code == TDC_OK; p++)

@@ -18,13 +18,14 @@
  * that raster's windows, pixel for pixel, for every method.  In tiles: the
  * bounded run emits final triangles on its thread, and its callbacks hand
  * them to the core's raster (tdc_raster_begin/_tile: the same values to
- * the bit, linear and nearest, north-up grids; natural neighbour takes
- * each final tile's whole triangulation instead, tdc_raster_nn_tile, which
- * proves every pixel's cavity global or has the tile run again); after
- * the run the rows come out a band of tile_height rows at a time
- * (tdc_raster_rows), what the band, a tile and its value hold being taken
- * off the tiles' budget in the begin callback.  The
- * callbacks never call PostgreSQL.
+ * the bit, linear and nearest, on any grid whose pixels have an area:
+ * skewed, rotated or flipped too; natural neighbour takes each final
+ * tile's whole triangulation instead, tdc_raster_nn_tile, which proves
+ * every pixel's cavity global or has the tile run again; the core says why
+ * it refuses anything else); after the run the rows come out a band of
+ * tile_height rows at a time (tdc_raster_rows), what the band, a tile and
+ * its value hold being taken off the tiles' budget in the begin callback.
+ * The callbacks never call PostgreSQL.
  *
  * Each tile is the window (c0, r0, w, h) of the grid, numbered rid = 1..
  * row by row from the top left as raster2pgsql numbers them, the last
@@ -351,16 +352,6 @@ _tdc_interpolate_tiled_write(PG_FUNCTION_ARGS)
 						(unsigned long long) cov->rows, cov->tw, cov->th, (unsigned long long) npts)));
 		PG_RETURN_INT64((int64) cov->rows);
 	}
-
-	if (!(cov->gt[1] > 0 && cov->gt[5] < 0 && cov->gt[2] == 0 && cov->gt[4] == 0))
-		ereport(ERROR,
-				(errcode(ERRCODE_PROGRAM_LIMIT_EXCEEDED),
-				 errmsg("%s: a skewed, rotated or flipped template needs one pass, and one pass of %llu "
-						"samples and a %u x %u grid does not fit %s = %llu MB", fname,
-						(unsigned long long) npts, cov->width, cov->height, setting,
-						(unsigned long long) limit_mb),
-				 errdetail("In tiles the grid must be north-up: scale x > 0, scale y < 0, no skew."),
-				 errhint("Raise %s, or give a north-up template.", setting)));
 
 	/* in tiles: the run on its thread rasterises, then the bands come out */
 	{
