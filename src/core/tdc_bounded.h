@@ -221,7 +221,8 @@ extern void tdc_raster_free(tdc_raster *r);
  * (more: what it must know besides; the pixels proven are written), or an
  * error.  The values are those of the whole TIN to the bit.  Set the
  * run's final_per_point to TDC_RASTER_NN_PER_POINT: the TIN it builds on
- * the tile's job (tdc_tin_memory) and a label and a flag per point.
+ * the tile's job (tdc_tin_memory), a label and a flag per point and a byte
+ * per triangle.
  */
 #define TDC_RASTER_NN_PER_POINT		72
 

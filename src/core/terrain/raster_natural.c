@@ -58,9 +58,12 @@
  * (its order of summation and its circumcentres start from the first
  * vertex in (x, y) order, not from how a mesh numbers its half-edges).
  *
- * Memory: the TIN of T(Q) (tdc_tin_memory) and a label and a flag per
- * point, TDC_RASTER_NN_PER_POINT bytes a point of the tile, counted in the
- * tile's model by the caller; the cavity scratch within RS_NN_HOLD.
+ * Memory: the TIN of T(Q) (tdc_tin_memory), a label and a flag per point
+ * and a state per triangle (at most two a point), within
+ * TDC_RASTER_NN_PER_POINT bytes a point of the tile, counted in the tile's
+ * model by the caller; the cavity scratch within RS_NN_HOLD.  Each
+ * triangle asks once, so the cells asked for are at most the failing
+ * triangles' few each.
  */
 #include <math.h>
 #include <stdio.h>
@@ -73,6 +76,9 @@
 #include "tiles/tile_disk.h"
 #include "tin/tin_int.h"
 
+#define TRI_PROVEN	1			/* in T(P) */
+#define TRI_ASKED	2			/* not proven: what it needs is asked for already */
+
 /* what the fill of one tile needs */
 typedef struct nn_tile
 {
@@ -80,6 +86,7 @@ typedef struct nn_tile
 	tdc_tin    *tin;
 	tin_scratch sc;
 	uint8_t    *own;			/* per site of T(Q): an own site of the tile */
+	uint8_t    *state;			/* per triangle of T(Q): 0 not tried, TRI_PROVEN, TRI_ASKED */
 	const tdc_tile_spec *spec;	/* what the tile knows: K, extra boxes, cells */
 	const double **known_list;	/* K and the extra boxes */
 	tdc_cells	cells;			/* the spec's cells (g NULL without) */
@@ -143,10 +150,11 @@ on_hull(const nn_tile *t, const double *a, const double *b)
  * Is the triangle left of h (not the outer face) in T(P)?  Lemma 1 as
  * tile_final.c decides it (tile_disk.c): the disk's box, else the box of
  * its part inside P's hull and on the inner side of its own edges on P's
- * hull.  If not, ask for that box.
+ * hull, else the cells.  If not, ask for that box and those cells.  Each
+ * triangle is decided once a tile (many pixels share it).
  */
 static bool
-tri_proven(nn_tile *t, uint32_t h)
+tri_decide(nn_tile *t, uint32_t h)
 {
 	const tdc_tin *tin = t->tin;
 	const fringe *fr = &t->r->fr;
@@ -195,6 +203,17 @@ tri_proven(nn_tile *t, uint32_t h)
 	return false;
 }
 
+/* tri_decide, once a triangle */
+static bool
+tri_proven(nn_tile *t, uint32_t h)
+{
+	uint8_t    *st = &t->state[t->tin->he_tri[h]];
+
+	if (*st == 0)
+		*st = tri_decide(t, h) ? TRI_PROVEN : TRI_ASKED;
+	return *st == TRI_PROVEN;
+}
+
 /* Is outer edge a -> b of T(Q) (outer face on its right) a hull edge of P?  If not, ask around it. */
 static bool
 hull_proven(nn_tile *t, uint32_t a, uint32_t b)
@@ -239,9 +258,7 @@ nn_value(nn_tile *t, const double *q, double *z)
 	if (loc.kind == LOC_EDGE && (loc.h == TDC_NIL || tin_outer(tin, loc.h ^ 1u)))
 	{
 		/* on T(Q)'s hull but inside P's: points beyond the edge are missing */
-		if (loc.h != TDC_NIL)
-			(void) hull_proven(t, tin_org(tin, loc.h), tin_dest(tin, loc.h));
-		if (!t->more)
+		if (loc.h == TDC_NIL || hull_proven(t, tin_org(tin, loc.h), tin_dest(tin, loc.h)))
 			ask(t, t->r->fr.box);
 		return 0;
 	}
@@ -314,6 +331,7 @@ nn_free(nn_tile *t)
 {
 	tin_scratch_free(&t->sc);
 	free(t->own);
+	free(t->state);
 	free(t->known_list);
 	free(t->cl.v);
 	tdc_cells_free(&t->cells);
@@ -372,6 +390,12 @@ tdc_raster_nn_tile(tdc_raster *r, const tdc_job *job, const double *q, const dou
 		free(lab);
 		nn_free(&t);
 		return tdc_rs_fail(err, errlen, TDC_EINVAL, "%s", "the tile's job is not of its points");
+	}
+	if ((t.state = calloc(t.tin->ntri + 1, 1)) == NULL)
+	{
+		free(lab);
+		nn_free(&t);
+		return tdc_rs_fail(err, errlen, TDC_ENOMEM, "%s", "out of memory for the tile's triangles");
 	}
 	/* own sites: a site belongs to the least tile among its copies (tile_final.c) */
 	for (size_t s = 0; s < m; s++)
