@@ -177,20 +177,8 @@ plan(bounded_run *r)
 	tile_max = tdc_tp_tile_max(r->n, r->opt, POINT_BYTES(r), r->budget);
 	if (tdc_tp_tile_bytes(TDC_TP_ALLOW(tile_max), r->opt, POINT_BYTES(r)) > r->budget)
 		return refuse_plan(r, 0, TDC_TP_PLAN_DENSE_CELL);
-	rc = TDC_TP_PLAN_DENSE_CELL;
-	/*
-	 * Two tiles at once share the budget, and one that waits for the
-	 * other's memory leaves a core idle: a rerun's region with the other's
-	 * first run fit more often when the tiles are planned for a tenth less
-	 * (a few more tiles, a little more halo).  The whole budget's tiles
-	 * when that plan cannot be made.
-	 */
-	if (r->two)
-		rc = tdc_tp_plan_fit(ps, &r->grid, tdc_tp_tile_max(r->n, r->opt, POINT_BYTES(r), r->budget / 11 * 10),
-							 TILE_FLOOR, tdc_tp_spacing(r->bb, r->n), r->tiles, &r->nt, &fit_max);
-	if (rc != TDC_TP_PLAN_OK)
-		rc = tdc_tp_plan_fit(ps, &r->grid, tile_max, TILE_FLOOR, tdc_tp_spacing(r->bb, r->n),
-							 r->tiles, &r->nt, &fit_max);
+	rc = tdc_tp_plan_fit(ps, &r->grid, tile_max, TILE_FLOOR, tdc_tp_spacing(r->bb, r->n),
+						 r->tiles, &r->nt, &fit_max);
 	if (rc != TDC_TP_PLAN_OK)
 	{
 		r->nt = 0;				/* no tile has a file yet */
