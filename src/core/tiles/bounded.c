@@ -46,13 +46,9 @@
  * finality check names (tdc_tile_grid), not a box around them: on a
  * coastline or between clusters a box would take whole stretches of
  * dense data that the disks only graze.  The named cells reach a few
- * rings of cells past the nearest one needed, four times as far on every
+ * rings of cells past the nearest one needed, twice as far on every
  * rerun, and are added as far as the budget holds them, nearest first
- * (bounded_tile.c): a rerun costs a whole run of the tile, and the tiles
- * along the hull and between clusters need several, so reaching further
- * at once triangulates fewer points in all (1e9 uniform points: 1.86e9
- * triangulated with twice as far, 1.65e9 with four times; 1e8 in 64
- * clusters: 6.67e8 and 6.19e8).
+ * (bounded_tile.c).
  *
  * Beside the coordinates, every file carries a point's z and the caller's
  * label when the caller gives them (zpath, lpath; REC_L in bounded.h): a

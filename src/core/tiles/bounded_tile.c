@@ -715,11 +715,10 @@ tdc_bd_tile_run(bounded_run *r, int t)
 		{
 			/*
 			 * the same K with the cells the check named, as many as fit;
-			 * the next request reaches four times as far past the nearest
-			 * cell (bounded.c says why);
+			 * the next request reaches twice as far past the nearest cell;
 			 * and the bands of the hull edges the request meets
 			 */
-			tg.rings = fmin(4 * tg.rings, TDC_TP_RINGS_MAX);
+			tg.rings = fmin(2 * tg.rings, TDC_TP_RINGS_MAX);
 			spec.nextra = nextra = add_bands(r, t, res.need, p.m, nextra);
 			if (add_cells_fit(r, t, res.need_cells, res.nneed_cells, p.m) == 0)
 			{
