@@ -186,6 +186,7 @@ grid_in_tiles(const cli_args *a, const char *xypath, const char *zpath, size_t n
 	{
 		p.final_run = final_run;
 		p.final_per_point = TDC_RASTER_NN_PER_POINT;
+		p.final_run_why = TDC_RASTER_NN_WHY;
 	}
 	if (n == 0)
 		die(1, "--grid needs an --extent when the input has no point%s", "");

@@ -101,6 +101,12 @@ typedef struct tdc_bounded_params
 							  const tdc_tile_spec *spec, tdc_tile_result *more);
 	size_t		final_per_point;
 	/*
+	 * Optional, with final_run: what its requests for more are for, said
+	 * in the refusal when the limit cannot hold one (" (the ... reach that
+	 * far: ...)"); NULL says nothing more than the tile's numbers.
+	 */
+	const char *final_run_why;
+	/*
 	 * Optional, before emit: called once after the first pass, before the
 	 * plan, with the points' exact box (xmin, ymin, xmax, ymax) and their
 	 * convex hull (nhull x,y pairs, counter-clockwise, collinear vertices
@@ -225,6 +231,9 @@ extern void tdc_raster_free(tdc_raster *r);
  * per triangle.
  */
 #define TDC_RASTER_NN_PER_POINT		72
+/* and its final_run_why */
+#define TDC_RASTER_NN_WHY	" (the natural neighbour cavities of its pixels reach that far: a larger " \
+	"limit, or linear or nearest)"
 
 extern int	tdc_raster_nn_tile(tdc_raster *r, const tdc_job *job, const double *q, const double *qz,
 							   size_t m, const size_t *tri, size_t ntri, const tdc_tile_spec *spec,

@@ -692,8 +692,7 @@ tdc_bd_tile_run(bounded_run *r, int t)
 			}
 			if (frc == 1)
 			{
-				why = " (the natural neighbour cavities of its pixels reach that far: a larger "
-					"limit, or linear or nearest)";
+				why = r->p->final_run_why ? r->p->final_run_why : "";
 				tdc_tile_result_free(&res);
 				res.final = 0;
 				memcpy(res.need, more.need, sizeof(res.need));

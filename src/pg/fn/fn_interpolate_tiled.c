@@ -367,6 +367,7 @@ _tdc_interpolate_tiled_write(PG_FUNCTION_ARGS)
 			/* each final tile's whole triangulation instead of its triangles */
 			p.final_run = coverage_final_run;
 			p.final_per_point = TDC_RASTER_NN_PER_POINT;
+			p.final_run_why = TDC_RASTER_NN_WHY;
 		}
 		else
 			p.emit = tdc_stage_consumer_emit;
