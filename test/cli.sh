@@ -142,6 +142,23 @@ check "--max-memory, no -o: the one-shot's triangle and site counts" \
 	"[ \"\$(grep -oE '^n=[0-9]+ unique=[0-9]+ triangles=[0-9]+' $tmp/big1.err)\" = \"\$(grep -oE '^n=[0-9]+ unique=[0-9]+ triangles=[0-9]+' $tmp/big3.err)\" ]"
 check "--max-memory, no -o: temporary files removed" "[ -z \"\$(ls -A $tmp/tiles)\" ]"
 
+# hull_edge_walk: uniform points in a square with its four corners, so that
+# each side is one hull edge past every tile along it.  A border tile's own
+# hull is P's only once the far corners are known, and the slivers under a
+# side have lenses thinner than a spacing running along it: the tiles along
+# the sides ran again and again, each run naming the next few cells along
+# the side (323 runs of 218 tiles).  Each is final in its first run now.
+perl -e 'srand(5); print pack("d<d<", 0, 0), pack("d<d<", 1000, 0), pack("d<d<", 1000, 1000), pack("d<d<", 0, 1000);
+  for (5..4000000) { print pack("d<d<", rand(1000), rand(1000)) }' > "$tmp/sq.bin"
+TDC_TILE_CHECK=1 $TDC --max-memory 24 --tmpdir "$tmp/tiles" --stats "$tmp/sq.bin" 2> "$tmp/sq.err"
+check "--max-memory, hull edges along whole sides: exit 0" "[ $? -eq 0 ]"
+check "--max-memory, hull edges along whole sides: 2n - 2 - 4 triangles" "grep -q ' triangles=7999994 ' $tmp/sq.err"
+sq_tiles=$(sed -n 's/.* tiles=\([0-9]*\) .*/\1/p' "$tmp/sq.err")
+sq_runs=$(sed -n 's/.* tile_runs=\([0-9]*\) .*/\1/p' "$tmp/sq.err")
+check "--max-memory, hull edges along whole sides: $sq_runs runs of $sq_tiles tiles, at most 2% again" \
+	"[ \"$sq_tiles\" -gt 150 ] && [ \"$sq_runs\" -le \$(( $sq_tiles + $sq_tiles / 50 )) ]"
+check "--max-memory, hull edges along whole sides: temporary files removed" "[ -z \"\$(ls -A $tmp/tiles)\" ]"
+
 # an integer lattice over [0, 512]: the fine grid's cells are 1 wide, so
 # points lie on cell sides, tile sides, and the sides of the first known
 # boxes (halo 8 spacings), which are closed; with duplicates

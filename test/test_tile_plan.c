@@ -2,7 +2,8 @@
  * test_tile_plan.c
  *		The tile plan's unit parts (tile_plan.c, tile_plan.h): the cell of a
  *		coordinate, the hull cells and outer cell sides, the cells a rerun
- *		adds, and the square labels.  Each checks a rule the plan's callers
+ *		adds, the hull cells' limit, the cells a disk's request names
+ *		(tile_cells.c), and the square labels.  Each checks a rule the plan's callers
  *		rely on against a case small enough to know the answer by hand.
  */
 #include <math.h>
@@ -13,6 +14,7 @@
 
 #include "harness.h"
 #include "tdc.h"
+#include "tiles/tile_cells.h"
 #include "tiles/tile_plan.h"
 #include "splitmix.h"
 
@@ -163,6 +165,98 @@ test_cells_fit(void)
 }
 
 /*
+ * The hull cells' limit (tdc_tp_hull_limit): half the tile's own points at
+ * least (1,000 at least), up to all of them while its K and they stay
+ * within twice tile_max.  hull_edge_walk (test/cli.sh) is the case: a row
+ * of cells along a side held more than half a border tile.
+ */
+static void
+test_hull_limit(void)
+{
+	CHECK(tdc_tp_hull_limit(100000, 200000, 150000) == 100000, "room for all: %zu",
+		  tdc_tp_hull_limit(100000, 200000, 150000));
+	CHECK(tdc_tp_hull_limit(100000, 200000, 330000) == 70000, "room for 70,000: %zu",
+		  tdc_tp_hull_limit(100000, 200000, 330000));
+	CHECK(tdc_tp_hull_limit(100000, 200000, 390000) == 50000, "half at least: %zu",
+		  tdc_tp_hull_limit(100000, 200000, 390000));
+	CHECK(tdc_tp_hull_limit(100000, 200000, 500000) == 50000, "K past twice tile_max: %zu",
+		  tdc_tp_hull_limit(100000, 200000, 500000));
+	CHECK(tdc_tp_hull_limit(10, 200000, 0) == 1000, "a tiny tile: %zu", tdc_tp_hull_limit(10, 200000, 0));
+}
+
+static bool
+covered_none(const void *arg, const double box[4])
+{
+	(void) arg;
+	(void) box;
+	return false;
+}
+
+/*
+ * The cells a disk's request names (tdc_cells_disk), on 64 x 64 unit cells,
+ * all OTHER but the tile's [0, 8) x [0, 8): a disk around (30, 30) of
+ * radius 25 names the cells within the rings of the nearest to its own
+ * vertex at (8.5, 30), not the far side of the disk; the disk of a sliver
+ * along the side x = 64 (radius 1e6, centre far to the right), whose part
+ * inside the clip is a strip 0.001 wide from y = 0 to 64, names every cell
+ * of the column x in [63, 64), however far from its own vertex at
+ * (63.9995, 4).  Without the strip rule it named the 9 nearest (4 rings),
+ * and a tile along a side of 1e8 uniform points ran 5 times, a few cells
+ * further along each time.
+ */
+static void
+test_cells_disk(void)
+{
+	double		cut[65];
+	uint8_t    *st = malloc(64 * 64);
+	tdc_tile_grid g = {64, 64, cut, cut, st, 4};
+	tdc_cells	c;
+	tdc_cell_list out = {0};
+	double		disk[3] = {30, 30, 25},
+				clip[4] = {-INFINITY, -INFINITY, INFINITY, INFINITY},
+				near[2] = {8.5, 30};
+	bool		far = false,
+				all = true;
+
+	for (int i = 0; i <= 64; i++)
+		cut[i] = i;
+	for (int j = 0; j < 64; j++)
+		for (int i = 0; i < 64; i++)
+			st[j * 64 + i] = i < 8 && j < 8 ? TDC_TILE_CELL_KNOWN : TDC_TILE_CELL_OTHER;
+	CHECK(tdc_cells_init(&c, &g), "cells: out of memory");
+	CHECK(!tdc_cells_disk(&c, disk, clip, near, 1, covered_none, NULL, &out), "the disk meets OTHER cells");
+	for (size_t k = 0; k < out.n; k++)
+		far |= out.v[k] % 64 > 20;
+	CHECK(out.n > 0 && !far, "a round disk: %zu cells named, some past column 20: %d", out.n, far);
+	free(out.v);
+	memset(&out, 0, sizeof(out));
+
+	disk[0] = 63.9995 + 1e6;
+	disk[1] = 32;
+	disk[2] = 1e6;
+	clip[0] = 63.999;
+	clip[2] = 64;
+	clip[1] = 0;
+	clip[3] = 64;
+	near[0] = 63.9995;
+	near[1] = 4;
+	CHECK(!tdc_cells_disk(&c, disk, clip, near, 1, covered_none, NULL, &out), "the strip meets OTHER cells");
+	for (int j = 0; j < 64; j++)
+	{
+		bool		in = false;
+
+		for (size_t k = 0; k < out.n; k++)
+			in |= out.v[k] == (uint32_t) (j * 64 + 63);
+		all &= in;
+	}
+	CHECK(all && out.n == 64, "a strip along x = 64: %zu cells named, every cell of the column: %d",
+		  out.n, all);
+	free(out.v);
+	tdc_cells_free(&c);
+	free(st);
+}
+
+/*
  * Square labels count from the origin, so that points far from (0, 0) in
  * tiny squares get small labels, and squares too small to number are
  * refused rather than wrapped.
@@ -197,5 +291,7 @@ test_tile_plan(void)
 	test_cell_of();
 	test_hull_cells();
 	test_cells_fit();
+	test_hull_limit();
+	test_cells_disk();
 	test_square_labels();
 }

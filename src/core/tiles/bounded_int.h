@@ -222,7 +222,8 @@ first_region(struct bounded_run *r, int t, double K[4], double *h)
 	tdc_tp_first_bands(K, r->tiles[t].count, r->bands, r->nhull, r->inband);
 	r->nhcells = r->use_cells ?
 		tdc_tp_hull_cells(&r->grid, r->counts, &r->tiles[t], r->hull, r->nhull, r->inband,
-						  r->tiles[t].count / 2 > 1000 ? r->tiles[t].count / 2 : 1000, r->hcells) : 0;
+						  tdc_tp_hull_limit(r->tiles[t].count, r->tile_max,
+											tdc_tp_box_count(r->ps, &r->grid, K)), r->hcells) : 0;
 	tdc_tp_fit_bands(r->ps, &r->grid, r->bands, r->nhull,
 					 r->tiles[t].count / 8 > 1000 ? r->tiles[t].count / 8 : 1000, r->inband);
 }

@@ -594,6 +594,27 @@ tdc_tp_hull_cells(const tdc_tp_grid *g, const uint32_t *counts, const tdc_tp_til
 	return n;
 }
 
+/*
+ * The most points the hull cells of a tile of count points may hold
+ * (tdc_tp_hull_cells), its first K holding known of them (by the counts):
+ * half its own, and up to all its own while K and they stay within twice
+ * tile_max, what a full tile's K (TDC_TP_KNOWN_MAX) and half its own came
+ * to, so that a rerun's cells keep the rest of the allowance.  A long hull
+ * edge runs past many tiles; until its far vertex is known each rerun of
+ * a tile along it certified the next few cells of its own hull: the tiles
+ * along the top of 1e8 uniform points, whose edge's row of cells held
+ * 100,000 points against a limit of 83,000, ran up to ten times.
+ */
+size_t
+tdc_tp_hull_limit(size_t count, size_t tile_max, size_t known)
+{
+	size_t		half = count / 2 > 1000 ? count / 2 : 1000,
+				room = 2 * tile_max > known ? 2 * tile_max - known : 0;
+
+	room = room < count ? room : count;
+	return room > half ? room : half;
+}
+
 /* The least known region of tile ti: its cell box, which holds its points. */
 void
 tdc_tp_least_known(const tdc_tp_tile *ti, const tdc_tp_grid *g, double Kmin[4])

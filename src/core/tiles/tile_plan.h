@@ -176,6 +176,7 @@ extern void tdc_tp_fit_bands(const size_t *ps, const tdc_tp_grid *g, const doubl
 							 size_t nhull, size_t limit, uint8_t *mark);
 extern size_t tdc_tp_known_limit(size_t count, size_t tile_max);
 extern size_t tdc_tp_box_count(const size_t *ps, const tdc_tp_grid *g, const double box[4]);
+extern size_t tdc_tp_hull_limit(size_t count, size_t tile_max, size_t known);
 extern tdc_tp_plan_status tdc_tp_plan_fit(const size_t *ps, const tdc_tp_grid *g, size_t tile_max,
 										  size_t floor, double spacing, tdc_tp_tile *tiles,
 										  int *nt, size_t *fit_max);
