@@ -38,7 +38,8 @@
  * (halved while K would hold more than twice the tile), as extra known
  * boxes the bands along the hull edges near it (those that hold few
  * points), and whole the cells those hull edges pass through (the hull
- * cells, at most half the tile's points).
+ * cells, up to the tile's own points while the region stays within twice
+ * the largest tile, tdc_tp_hull_limit).
  *
  * Memory: the largest tile with its halo is bounded by tile_max times a
  * growth allowance; a tile whose K would exceed the budget is an error,

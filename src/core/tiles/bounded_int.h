@@ -207,8 +207,8 @@ extern void tdc_bd_out_unlock(const bounded_run *r);
 /*
  * Tile t's first known region, as the policy makes it from its cell box:
  * K and the halo h, in r->inband (cleared here) its hull bands, and in
- * r->hcells the cells along the hull edges near it, whole (at most half
- * the tile's points, tdc_tp_hull_cells).
+ * r->hcells the cells along the hull edges near it, whole (as many as
+ * tdc_tp_hull_limit allows, tdc_tp_hull_cells).
  */
 static inline void
 first_region(struct bounded_run *r, int t, double K[4], double *h)

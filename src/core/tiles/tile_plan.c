@@ -323,8 +323,9 @@ tdc_tp_fit_bands(const size_t *ps, const tdc_tp_grid *g, const double *bands, si
 
 /*
  * The most points a tile's first K may hold: twice its own, within
- * TDC_TP_KNOWN_MAX(tile_max), so that the hull cells (half its own at
- * most) and a rerun's cells stay within the allowance.  (Within tile_max,
+ * TDC_TP_KNOWN_MAX(tile_max), so that the hull cells (half its own, more
+ * only while there is room: tdc_tp_hull_limit) and a rerun's cells stay
+ * within the allowance.  (Within tile_max,
  * as it was, a full tile of uniform points had no halo at all, and every
  * interior tile of 600,000 uniform points ran three times.)
  */
