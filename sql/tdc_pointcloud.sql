@@ -108,6 +108,14 @@ CREATE TEMP TABLE pts AS
 SELECT pcid, p, k, ST_SetSRID(ST_MakePoint(v[1], v[2], v[3]), 2154) AS g, v[4] AS cls
 FROM pat, LATERAL (SELECT PC_Get(pt) AS v, k FROM PC_Explode(pa) WITH ORDINALITY e(pt, k)) e;
 
+-- One call site over groups of three formats: the format kept per call
+-- site (fn_extra) serves the groups of its pcid, and a group of another
+-- pcid reads its own (1 and 2 differ in compression only, 3 in types).
+SELECT a.pcid, count(*) AS groups, bool_and(ST_AsEWKB(a.d) = ST_AsEWKB(b.d)) AS same
+FROM (SELECT pcid, p, ST_TDCDelaunay(pa) d FROM pat GROUP BY pcid, p) a
+JOIN (SELECT pcid, p, ST_TDCDelaunay(g ORDER BY k) d FROM pts GROUP BY pcid, p) b USING (pcid, p)
+GROUP BY a.pcid ORDER BY a.pcid;
+
 -- The compressions pgpointcloud chose (PC_Summary), one line per format.
 SELECT pcid, PC_Compression(pa) AS patch,
 	string_agg(DISTINCT d->>'name' || ':' || coalesce(d->>'compr', 'none'), ' ') AS dims

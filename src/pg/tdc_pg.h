@@ -276,9 +276,11 @@ extern TdcAggState *tdc_agg_state_deserialize(const bytea *in,
 											  MemoryContext cxt);
 
 /* formats/pcpatch_source.c: pgpointcloud patches into a point buffer (its X, Y, Z) */
-extern void tdc_pc_read_patch(TdcAggState *st, Datum patch, text *filter, const char *fname);
+extern void tdc_pc_read_patch(TdcAggState *st, FmgrInfo *flinfo, Datum patch, text *filter,
+							  const char *fname);
 extern void tdc_pc_append_patch(TdcPointBuf *buf, struct TdcPcSource **srcp, MemoryContext cxt,
-								Datum patch, const char *ftext, const char *what, const char *fname);
+								FmgrInfo *flinfo, Datum patch, const char *ftext, const char *what,
+								const char *fname);
 extern text *tdc_pc_filter_arg(FunctionCallInfo fcinfo, int geometry_nargs);
 
 /*
@@ -544,7 +546,8 @@ extern TdcTinAgg *tdc_tin_agg_new(MemoryContext cxt, Size size, TdcCurves curves
 extern void tdc_tin_agg_breaklines(TdcTinAgg *a, bool breaklines, MemoryContext cxt,
 								   const char *fname);
 extern void tdc_tin_agg_add(TdcTinAgg *a, Datum geom, const char *fname);
-extern void tdc_tin_agg_add_patch(TdcTinAgg *a, Datum patch, text *filter, const char *fname);
+extern void tdc_tin_agg_add_patch(TdcTinAgg *a, FmgrInfo *flinfo, Datum patch, text *filter,
+								  const char *fname);
 extern Datum tdc_tin_agg_serialfn(FunctionCallInfo fcinfo, const TdcTinAggKind *k,
 								  const char *fn);
 extern Datum tdc_tin_agg_deserialfn(FunctionCallInfo fcinfo, const TdcTinAggKind *k,

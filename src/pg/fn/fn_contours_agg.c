@@ -147,7 +147,7 @@ contours_trans(FunctionCallInfo fcinfo, bool patch)
 		st = contour_state_new(aggcxt);
 	contour_params(st, interval, base, max_edge);
 	if (patch)
-		tdc_tin_agg_add_patch(&st->s, PG_GETARG_DATUM(1), tdc_pc_filter_arg(fcinfo, 5), CONTOUR_NAME);
+		tdc_tin_agg_add_patch(&st->s, fcinfo->flinfo, PG_GETARG_DATUM(1), tdc_pc_filter_arg(fcinfo, 5), CONTOUR_NAME);
 	else
 		tdc_tin_agg_add(&st->s, PG_GETARG_DATUM(1), CONTOUR_NAME);
 	PG_RETURN_POINTER(st);

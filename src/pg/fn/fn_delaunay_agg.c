@@ -99,7 +99,7 @@ delaunay_trans(FunctionCallInfo fcinfo, bool patch)
 	tdc_agg_state_set_params(st, tolerance, flags);
 
 	if (patch)
-		tdc_pc_read_patch(st, PG_GETARG_DATUM(1), tdc_pc_filter_arg(fcinfo, 4), TDC_AGG_NAME);
+		tdc_pc_read_patch(st, fcinfo->flinfo, PG_GETARG_DATUM(1), tdc_pc_filter_arg(fcinfo, 4), TDC_AGG_NAME);
 	else
 		(void) tdc_read_geometry(&st->pts, PG_GETARG_DATUM(1), TDC_AGG_NAME);
 	PG_RETURN_POINTER(st);

@@ -187,7 +187,7 @@ drape_trans(FunctionCallInfo fcinfo, bool patch)
 		drape_params(st, aggcxt, method, target, VARSIZE_ANY(target));
 	}
 	if (patch)
-		tdc_tin_agg_add_patch(&st->s, PG_GETARG_DATUM(1), tdc_pc_filter_arg(fcinfo, 4), DRAPE_NAME);
+		tdc_tin_agg_add_patch(&st->s, fcinfo->flinfo, PG_GETARG_DATUM(1), tdc_pc_filter_arg(fcinfo, 4), DRAPE_NAME);
 	else
 		tdc_tin_agg_add(&st->s, PG_GETARG_DATUM(1), DRAPE_NAME);
 	PG_RETURN_POINTER(st);

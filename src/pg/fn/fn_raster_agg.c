@@ -217,7 +217,7 @@ interp_trans(FunctionCallInfo fcinfo, bool patch)
 		interp_params(st, aggcxt, method, band, NULL);
 
 	if (patch)
-		tdc_tin_agg_add_patch(&st->s, PG_GETARG_DATUM(1), tdc_pc_filter_arg(fcinfo, 5), INTERP_NAME);
+		tdc_tin_agg_add_patch(&st->s, fcinfo->flinfo, PG_GETARG_DATUM(1), tdc_pc_filter_arg(fcinfo, 5), INTERP_NAME);
 	else
 		tdc_tin_agg_add(&st->s, PG_GETARG_DATUM(1), INTERP_NAME);
 	PG_RETURN_POINTER(st);

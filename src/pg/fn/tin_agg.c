@@ -87,7 +87,7 @@ tdc_tin_agg_add(TdcTinAgg *a, Datum geom, const char *fname)
  * pass the filter).  A patch has no linework, so breaklines are refused.
  */
 void
-tdc_tin_agg_add_patch(TdcTinAgg *a, Datum patch, text *filter, const char *fname)
+tdc_tin_agg_add_patch(TdcTinAgg *a, FmgrInfo *flinfo, Datum patch, text *filter, const char *fname)
 {
 	if (a->breaklines)
 		ereport(ERROR,
@@ -95,7 +95,7 @@ tdc_tin_agg_add_patch(TdcTinAgg *a, Datum patch, text *filter, const char *fname
 				 errmsg("%s: breaklines=true needs linework, and a pcpatch has none", fname),
 				 errhint("Drop breaklines=true from the method, or give the breaklines as geometries.")));
 	a->rows++;
-	tdc_pc_read_patch(a->base, patch, filter, fname);
+	tdc_pc_read_patch(a->base, flinfo, patch, filter, fname);
 }
 
 /* src's samples after dst's; the caller has made their parameters agree. */

@@ -243,7 +243,7 @@ dump_collect(TdcPointBuf *buf, TdcIdBuf *ids, const char *query,
 			}
 			first = buf->n;
 			if (pc)
-				tdc_pc_append_patch(buf, &pc->src, pc->cxt, g, pc->filter, "column", fname);
+				tdc_pc_append_patch(buf, &pc->src, pc->cxt, NULL, g, pc->filter, "column", fname);
 			else
 				(void) tdc_read_geometry(buf, g, fname);
 			if (tagp)
