@@ -23,6 +23,8 @@
 #      a 1 m DEM coverage from 1e8 LiDAR ground points: CALL tdc_interpolate_tiled
 #      from a geometry and a pcpatch table against ./tdc --grid, and the pcpatch
 #      aggregates against PC_Explode at 1e7 points    -> coverage.md
+#      and the pcpatch aggregates' size sweep (BENCH_SWEEP_SOURCE=patch
+#      bench/sweep_bench.sh)                          -> sweep_patch.md
 #
 # Each script writes its own report, docs/benchmarks/NAME.md (BENCH_DOCS),
 # with the header of bench_publish in bench/lib.sh: date, commit, machine,
@@ -109,6 +111,8 @@ sql_parts() {
 	if [ "${BENCH_COVERAGE:-0}" = 1 ]; then
 		log "=== I: DEM coverages and pcpatch aggregates in SQL"
 		part coverage_bench.sh
+		log "=== I: the pcpatch aggregates from 3 points a call"
+		BENCH_SWEEP_SOURCE=patch part sweep_bench.sh
 	fi
 }
 

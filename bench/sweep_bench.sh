@@ -30,6 +30,23 @@
 #          BENCH_SWEEP_PG_10M=1), plus "agg_ng": the ST_NumGeometries(...)
 #          form of both at 1e6 (or at the largest n run, if smaller)
 #
+# BENCH_SWEEP_SOURCE=patch sweeps the pcpatch aggregates instead (issue 40):
+# the same points, z = 0, as pgpointcloud patches (PC_Patch of PC_MakePoint,
+# schema of double X, Y, Z, uncompressed; patches of at most 400 points, a
+# row's one patch of k), against what a user of pgpointcloud has without
+# them: PC_Explode each patch, PC_Get its point, ST_MakePoint, into the
+# geometry aggregate (PostGIS's ST_DelaunayTriangles is slower than it on
+# the same points, the geometry sweep shows).  Workloads ("explode" first):
+#   row    SELECT count(d) FROM (SELECT ST_TDCDelaunay(ST_MakePoint(v[1], v[2], v[3])) d
+#            FROM (SELECT id, PC_Get(pt) v FROM t, PC_Explode(t.pa) pt) e GROUP BY id) s
+#          SELECT count(d) FROM (SELECT ST_TDCDelaunay(pa) d FROM t GROUP BY id) s
+#   group  the same grouped by grp, k points a group in patches of at most 400
+#   agg    SELECT ST_TDCDelaunay(ST_MakePoint(...)) IS NOT NULL FROM (SELECT PC_Get(pt) v ...) e
+#          SELECT ST_TDCDelaunay(pa) IS NOT NULL FROM t
+#          (and agg_ng: ST_NumGeometries of both)
+# The outputs are named sweep_patch* instead of sweep*; the extensions
+# pointcloud and tdc_delaunay_pointcloud are created if missing.
+#
 # Timing: server side, clock_timestamp() around EXECUTE in a plpgsql function.
 # Each cell (workload, size) runs in one psql session: the session settings,
 # then each statement once untimed (warm-up: shared libraries, caches;
@@ -90,11 +107,27 @@ GROUP_SIZES=${BENCH_SWEEP_GROUP_SIZES:-"3:1000 10:1000 30:1000 100:1000 1000:100
 AGG_SIZES=${BENCH_SWEEP_AGG_SIZES:-"3 10 100 1e3 1e4 1e5 1e6 1e7"}
 PNG=${BENCH_SWEEP_PNG:-$BENCH_OUT/sweep.png}
 S=bench_sweep
+SRC=${BENCH_SWEEP_SOURCE:-geom}
+# what the report calls the two systems (pg: the statement a user has without
+# the feature; tdc: ours), the outputs' name, and the patches' format
+case $SRC in
+	geom) NAME=sweep; A_NAME=PostGIS; B_NAME=tdc_delaunay ;;
+	patch) NAME=sweep_patch; A_NAME=PC_Explode; B_NAME="pcpatch aggregate"; PCID=4711
+		[ -n "${BENCH_SWEEP_PNG:-}" ] || PNG=$BENCH_OUT/sweep_patch.png
+		# one value of 2 triangles a point: past some 5e6 points over 1 GB
+		[ -n "${BENCH_SWEEP_AGG_SIZES:-}" ] || AGG_SIZES="3 10 100 1e3 1e4 1e5 1e6" ;;
+	*) die "BENCH_SWEEP_SOURCE: '$SRC' is not geom or patch" ;;
+esac
+# the most points in one patch of a group's or an aggregate's table
+PATCH=400
+# the names in gnuplot's enhanced text
+GA=${A_NAME//_/\\_}
+GB=${B_NAME//_/\\_}
 
 mkdir -p "$BENCH_OUT" "$(dirname "$PNG")"
-RUNS=$BENCH_OUT/sweep_runs.csv
-CSV=$BENCH_OUT/sweep.csv
-TXT=$BENCH_OUT/sweep.txt
+RUNS=$BENCH_OUT/${NAME}_runs.csv
+CSV=$BENCH_OUT/$NAME.csv
+TXT=$BENCH_OUT/$NAME.txt
 WORK=$(mktemp -d)
 trap 'rm -rf "$WORK"' EXIT
 
@@ -132,10 +165,10 @@ make_plot() {
 			group) pt=5; dt=2; wl="per group (GROUP BY)" ;;
 			agg) pt=9; dt=3; wl="one aggregate" ;;
 		esac
-		add "$WORK/$w.pg.dat" t "with linespoints lw 2 dt $dt pt $pt lc rgb '#d62728' title 'PostGIS, $wl'"
-		add "$WORK/$w.tdc.dat" t "with linespoints lw 2 dt $dt pt $pt lc rgb '#1f77b4' title 'tdc\\_delaunay, $wl'"
-		add "$WORK/$w.pg.fail" t "with points pt 2 ps 2.5 lw 2 lc rgb '#d62728' title 'PostGIS $wl: failed after'"
-		add "$WORK/$w.tdc.fail" t "with points pt 2 ps 2.5 lw 2 lc rgb '#1f77b4' title 'tdc\\_delaunay $wl: failed after'"
+		add "$WORK/$w.pg.dat" t "with linespoints lw 2 dt $dt pt $pt lc rgb '#d62728' title '$GA, $wl'"
+		add "$WORK/$w.tdc.dat" t "with linespoints lw 2 dt $dt pt $pt lc rgb '#1f77b4' title '$GB, $wl'"
+		add "$WORK/$w.pg.fail" t "with points pt 2 ps 2.5 lw 2 lc rgb '#d62728' title '$GA $wl: failed after'"
+		add "$WORK/$w.tdc.fail" t "with points pt 2 ps 2.5 lw 2 lc rgb '#1f77b4' title '$GB $wl: failed after'"
 		add "$WORK/$w.ratio.dat" r "with linespoints lw 2 dt $dt pt $pt lc rgb '#2ca02c' title '$wl'"
 	done
 	if [ ${#t[@]} -eq 0 ]; then
@@ -144,6 +177,7 @@ make_plot() {
 	fi
 	local title
 	title="Delaunay in PostgreSQL: tdc\\_delaunay vs PostGIS ${PGIS_VER:-} (GEOS ${GEOS_VER:-}), $(nproc) CPUs"
+	[ "$SRC" = patch ] && title="Delaunay of pgpointcloud patches: tdc\\_delaunay's pcpatch aggregate vs PC\\_Explode into it, $(nproc) CPUs"
 	{
 		echo "set terminal pngcairo size 1400,620 font 'DejaVu Sans,11'"
 		echo "set output '$PNG'"
@@ -161,8 +195,8 @@ make_plot() {
 		echo "unset logscale y"
 		echo "set logscale y 2"
 		echo "set format y '%g'"
-		echo "set ylabel 'PostGIS time / tdc\\_delaunay time'"
-		echo "set title 'speed-up (PostGIS / ours); 1 = same'"
+		echo "set ylabel '$GA time / $GB time'"
+		echo "set title 'speed-up ($GA / $GB); 1 = same'"
 		echo "set key top left font ',9'"
 		if [ ${#r[@]} -gt 0 ]; then
 			printf 'plot 1 with lines lc rgb "#888888" dt 4 notitle, '
@@ -192,6 +226,19 @@ sql -c 'SELECT 1' >/dev/null 2>&1 ||
 sql -c "CREATE EXTENSION IF NOT EXISTS postgis" >/dev/null
 sql -c "CREATE EXTENSION IF NOT EXISTS tdc_delaunay" >/dev/null 2> "$WORK/err" ||
 	die "tdc_delaunay extension not available ($(head -1 "$WORK/err")): make install first"
+if [ "$SRC" = patch ]; then
+	sql -c "CREATE EXTENSION IF NOT EXISTS tdc_delaunay_pointcloud CASCADE" >/dev/null 2> "$WORK/err" ||
+		die "tdc_delaunay_pointcloud not available ($(head -1 "$WORK/err")): pgpointcloud and make install first"
+	# the patches' format: double X, Y, Z, uncompressed
+	dims=""
+	for c in X Y Z; do
+		dims+="<pc:dimension><pc:position>$(( $(printf '%d' "'$c") - 87 ))</pc:position><pc:size>8</pc:size>"
+		dims+="<pc:description>$c</pc:description><pc:name>$c</pc:name><pc:interpretation>double</pc:interpretation>"
+		dims+="<pc:active>true</pc:active></pc:dimension>"
+	done
+	sql -c "DELETE FROM pointcloud_formats WHERE pcid = $PCID" \
+		-c "INSERT INTO pointcloud_formats (pcid, srid, schema) VALUES ($PCID, 0, '<?xml version=\"1.0\" encoding=\"UTF-8\"?><pc:PointCloudSchema xmlns:pc=\"http://pointcloud.org/schemas/PC/1.1\" xmlns:xsi=\"http://www.w3.org/2001/XMLSchema-instance\">$dims<pc:metadata><Metadata name=\"compression\">none</Metadata></pc:metadata></pc:PointCloudSchema>')" >/dev/null
+fi
 server_versions
 
 # SET lines for the session settings (BENCH_SWEEP_SETTINGS)
@@ -237,10 +284,12 @@ done
 
 # table_of WORKLOAD K CALLS: the cell's table (agg_ng shares agg's)
 table_of() {
+	local p=""
+	[ "$SRC" = patch ] && p=pc_
 	case $1 in
-		row) echo "$S.row_k$2_r$3" ;;
-		group) echo "$S.grp_k$2_g$3" ;;
-		agg | agg_ng) echo "$S.agg_n$2" ;;
+		row) echo "$S.${p}row_k$2_r$3" ;;
+		group) echo "$S.${p}grp_k$2_g$3" ;;
+		agg | agg_ng) echo "$S.${p}agg_n$2" ;;
 	esac
 }
 
@@ -251,6 +300,7 @@ ensure_table() {
 	[ "$w" = agg_ng ] && w=agg
 	t=$(table_of "$w" "$k" "$c")
 	spec="sweep v1: $w k=$k calls=$c, points $S.pt(0 .. $((k * c - 1)))"
+	[ "$SRC" = patch ] && spec="$spec as pcpatch($PCID) of at most $PATCH (a row: k) points"
 	if [ "$RELOAD" = 0 ] && [ "$(sql -c "SELECT obj_description(to_regclass('$t'), 'pg_class')")" = "$spec" ]; then
 		return 0
 	fi
@@ -265,6 +315,15 @@ ensure_table() {
 		agg)
 			body="SELECT $S.pt(i) AS geom FROM generate_series(0::bigint, $((k - 1))) i ORDER BY i" ;;
 	esac
+	if [ "$SRC" = patch ]; then
+		# the same points, z = 0, in patches: a row's k, else at most PATCH
+		local per=$k key="(i / $k)::int"
+		[ "$w" = row ] || per=$((k < PATCH ? k : PATCH))
+		[ "$w" = agg ] && key="0"
+		body="SELECT ($([ "$w" = row ] && echo "i / $k" || echo "i / $per"))::int AS id, $key AS grp,
+				PC_Patch(PC_MakePoint($PCID, ARRAY[ST_X(p), ST_Y(p), 0]) ORDER BY i) AS pa
+			FROM generate_series(0::bigint, $((k * c - 1))) i, $S.pt(i) p GROUP BY 1, 2 ORDER BY 1"
+	fi
 	log "creating $t ($c x $k points)"
 	sql <<EOF >/dev/null
 SET statement_timeout = 0;
@@ -277,6 +336,24 @@ EOF
 
 # queries WORKLOAD TABLE: sets QPG and QTDC
 queries() {
+	local ex="(SELECT t.id, t.grp, PC_Get(pt) v FROM $2 t, PC_Explode(t.pa) pt) e" mk="ST_MakePoint(v[1], v[2], v[3])"
+	if [ "$SRC" = patch ]; then
+		case $1 in
+			row)
+				QPG="SELECT count(d) FROM (SELECT ST_TDCDelaunay($mk) d FROM $ex GROUP BY id) s"
+				QTDC="SELECT count(d) FROM (SELECT ST_TDCDelaunay(pa) d FROM $2 GROUP BY id) s" ;;
+			group)
+				QPG="SELECT count(d) FROM (SELECT ST_TDCDelaunay($mk) d FROM $ex GROUP BY grp) s"
+				QTDC="SELECT count(d) FROM (SELECT ST_TDCDelaunay(pa) d FROM $2 GROUP BY grp) s" ;;
+			agg)
+				QPG="SELECT ST_TDCDelaunay($mk) IS NOT NULL FROM $ex"
+				QTDC="SELECT ST_TDCDelaunay(pa) IS NOT NULL FROM $2" ;;
+			agg_ng)
+				QPG="SELECT ST_NumGeometries(ST_TDCDelaunay($mk)) FROM $ex"
+				QTDC="SELECT ST_NumGeometries(ST_TDCDelaunay(pa)) FROM $2" ;;
+		esac
+		return 0
+	fi
 	case $1 in
 		row)
 			QPG="SELECT count(ST_DelaunayTriangles(g)) FROM $2"
@@ -313,7 +390,7 @@ run_cell() {
 	t=$(table_of "$w" "$k" "$c")
 	queries "$w" "$t"
 	systems=(pg tdc)
-	if [ "$w" = agg ] && [ "$k" -gt 1000000 ] && [ "$PG_10M" != 1 ]; then
+	if [ "$SRC" = geom ] && [ "$w" = agg ] && [ "$k" -gt 1000000 ] && [ "$PG_10M" != 1 ]; then
 		systems=(tdc)	# PostGIS past 1e6 points in one aggregate only on request
 	fi
 	declare -A Q=([pg]=$QPG [tdc]=$QTDC)
@@ -404,12 +481,19 @@ setting() { sql -c "$SET_SQL" -c "SELECT current_setting('$1', true)" | tail -1;
 	fi
 	echo "- function costs (pg_proc.procost): $(sql -c "SELECT string_agg(proname || ' ' || procost, ', ' ORDER BY proname) FROM pg_proc WHERE proname IN ('st_delaunaytriangles', 'st_tdcdelaunaytriangles', 'st_tdcdelaunay_finalfn')")"
 	echo "- settings: shared_buffers=$(setting shared_buffers) work_mem=$(setting work_mem) jit=$(setting jit) max_parallel_workers_per_gather=$(setting max_parallel_workers_per_gather) tdc_delaunay.threads=${THREADS:-?} statement_timeout=${TIMEOUT}s${SETTINGS:+ (set for the runs: $SETTINGS)}"
-	echo "- timing: server side (clock_timestamp() around EXECUTE in plpgsql), one session per cell, each statement run $WARM time(s) untimed first, then $REPS runs interleaved PostGIS, ours, PostGIS, ...; medians. Points uniform in [0,1)^2."
-	echo "- per row: \`SELECT count(ST_DelaunayTriangles(g)) FROM t\` vs \`SELECT count(ST_TDCDelaunayTriangles(g)) FROM t\`, t = rows of one MULTIPOINT of k points"
-	echo "- per group: \`SELECT count(d) FROM (SELECT ST_DelaunayTriangles(ST_Collect(geom)) d FROM t GROUP BY grp) s\` vs the same with \`ST_TDCDelaunay(geom)\`, groups of k points"
-	echo "- aggregate: \`SELECT ST_DelaunayTriangles(ST_Collect(geom)) IS NOT NULL FROM t\` vs \`SELECT ST_TDCDelaunay(geom) IS NOT NULL FROM t\` over n points; \"ST_NumGeometries\": \`ST_NumGeometries(...)\` of both"
+	echo "- timing: server side (clock_timestamp() around EXECUTE in plpgsql), one session per cell, each statement run $WARM time(s) untimed first, then $REPS runs interleaved $A_NAME, $B_NAME, $A_NAME, ...; medians. Points uniform in [0,1)^2."
+	if [ "$SRC" = patch ]; then
+		echo "- patches: the points with z = 0 as pcpatch($PCID) values (PC_Patch of PC_MakePoint; double X, Y, Z, compression none), at most $PATCH points a patch (per row: one patch of k points a row); $A_NAME: \`e = (SELECT t.id, t.grp, PC_Get(pt) v FROM t, PC_Explode(t.pa) pt)\` into \`ST_TDCDelaunay(ST_MakePoint(v[1], v[2], v[3]))\`"
+		echo "- per row: \`SELECT count(d) FROM (SELECT ST_TDCDelaunay(ST_MakePoint(...)) d FROM e GROUP BY id) s\` vs \`SELECT count(d) FROM (SELECT ST_TDCDelaunay(pa) d FROM t GROUP BY id) s\`"
+		echo "- per group: the same with \`GROUP BY grp\`, groups of k points"
+		echo "- aggregate: \`SELECT ST_TDCDelaunay(ST_MakePoint(...)) IS NOT NULL FROM e\` vs \`SELECT ST_TDCDelaunay(pa) IS NOT NULL FROM t\` over n points; \"ST_NumGeometries\": \`ST_NumGeometries(...)\` of both"
+	else
+		echo "- per row: \`SELECT count(ST_DelaunayTriangles(g)) FROM t\` vs \`SELECT count(ST_TDCDelaunayTriangles(g)) FROM t\`, t = rows of one MULTIPOINT of k points"
+		echo "- per group: \`SELECT count(d) FROM (SELECT ST_DelaunayTriangles(ST_Collect(geom)) d FROM t GROUP BY grp) s\` vs the same with \`ST_TDCDelaunay(geom)\`, groups of k points"
+		echo "- aggregate: \`SELECT ST_DelaunayTriangles(ST_Collect(geom)) IS NOT NULL FROM t\` vs \`SELECT ST_TDCDelaunay(geom) IS NOT NULL FROM t\` over n points; \"ST_NumGeometries\": \`ST_NumGeometries(...)\` of both"
+	fi
 	echo
-	echo "| workload | k or n | rows / groups | PostGIS median | tdc_delaunay median | PostGIS / tdc_delaunay | PostGIS per call | tdc_delaunay per call |"
+	echo "| workload | k or n | rows / groups | $A_NAME median | $B_NAME median | $A_NAME / $B_NAME | $A_NAME per call | $B_NAME per call |"
 	echo "|---|--:|--:|--:|--:|--:|--:|--:|"
 } > "$TXT"
 
@@ -435,7 +519,7 @@ for cell in "${CELLS[@]}"; do
 			f=$(failure "$w" "$k" $sys)
 			IFS='|' read -r fst fms fmsg <<< "$f"
 			CELLTXT[$sys]="$fst after $(fmt_ms "$fms")"
-			NOTES+=("$(wl_name "$w") $(thousands "$k"), $([ $sys = pg ] && echo PostGIS || echo tdc_delaunay): $fst after $(fmt_ms "$fms"): $fmsg")
+			NOTES+=("$(wl_name "$w") $(thousands "$k"), $([ $sys = pg ] && echo "$A_NAME" || echo "$B_NAME"): $fst after $(fmt_ms "$fms"): $fmsg")
 		fi
 	done
 	ratio=""
@@ -445,10 +529,10 @@ for cell in "${CELLS[@]}"; do
 	# the triangle count of n points in general position is 2n-2-h
 	expect=""
 	if [ "$w" = agg_ng ]; then
-		expect=$(sql -c "SELECT 2 * count(*) - 2 - (ST_NPoints(ST_ExteriorRing(ST_ConvexHull(ST_Collect(geom)))) - 1) FROM $(table_of agg "$k" 1)")
-		NOTES+=("$(wl_name "$w") $(thousands "$k"): triangles: PostGIS ${RES[pg]:--}, tdc_delaunay ${RES[tdc]:--}; 2n-2-h = $expect (h = vertices of ST_ConvexHull)")
+		expect=$(sql -c "SELECT 2 * count(*) - 2 - (ST_NPoints(ST_ExteriorRing(ST_ConvexHull(ST_Collect(geom)))) - 1) FROM (SELECT $S.pt(i) AS geom FROM generate_series(0::bigint, $((k - 1))) i) s")
+		NOTES+=("$(wl_name "$w") $(thousands "$k"): triangles: $A_NAME ${RES[pg]:--}, $B_NAME ${RES[tdc]:--}; 2n-2-h = $expect (h = vertices of ST_ConvexHull)")
 	elif [ "$agree" = no ]; then
-		NOTES+=("$(wl_name "$w") $(thousands "$k"): results differ: PostGIS ${RES[pg]}, tdc_delaunay ${RES[tdc]}")
+		NOTES+=("$(wl_name "$w") $(thousands "$k"): results differ: $A_NAME ${RES[pg]}, $B_NAME ${RES[tdc]}")
 	fi
 	echo "$w,$k,$c,$k,${MED[pg]},${MED[tdc]},$ratio,${PER[pg]},${PER[tdc]},${NR[pg]},${NR[tdc]},${MN[pg]},${MX[pg]},${MN[tdc]},${MX[tdc]},${ST[pg]},${ST[tdc]},${RES[pg]},${RES[tdc]},$agree,${PL[pg]},${PL[tdc]},$expect" >> "$CSV"
 	printf '| %s | %s | %s | %s | %s | %s | %s | %s |\n' "$(wl_name "$w")" "$(thousands "$k")" "$(thousands "$c")" \
@@ -461,7 +545,7 @@ done
 	echo
 	echo "Per call = median / rows (per row), / groups (per group), or the median itself (aggregate)."
 	plans=$(awk -F, 'function p(x) { return x == "" ? "-" : x }
-		NR > 1 && ($21 != "serial" && $21 != "" || $22 != "serial" && $22 != "") { printf "%s%s %s: PostGIS %s, tdc_delaunay %s", sep, $1, $2, p($21), p($22); sep = "; " }' "$CSV")
+		NR > 1 && ($21 != "serial" && $21 != "" || $22 != "serial" && $22 != "") { printf "%s%s %s: " a " %s, " b " %s", sep, $1, $2, p($21), p($22); sep = "; " }' a="$A_NAME" b="$B_NAME" "$CSV")
 	if [ -n "$plans" ]; then echo "Plans with parallel workers or JIT (all others serial, no JIT): $plans."; fi
 	if awk -F, 'NR > 1 && $16 == "not run" { f = 1 } END { exit !f }' "$CSV"; then
 		echo "PostGIS \"not run\": one aggregate over more than 10^6 points, only with BENCH_SWEEP_PG_10M=1."
@@ -472,7 +556,11 @@ done
 make_plot
 if [ "$QUICK" != 1 ]; then
 	bench_figure "$PNG" "time per call and ratio against points per call"
-	bench_publish sweep "Size sweep in SQL: tdc_delaunay against PostGIS, 3 to 10^7 points per call" "$TXT"
+	if [ "$SRC" = patch ]; then
+		bench_publish sweep_patch "Size sweep of the pcpatch aggregates against PC_Explode, 3 to 10^7 points per call" "$TXT"
+	else
+		bench_publish sweep "Size sweep in SQL: tdc_delaunay against PostGIS, 3 to 10^7 points per call" "$TXT"
+	fi
 fi
 cat "$TXT"
 log "wrote $RUNS, $CSV, $TXT, $PNG"
