@@ -177,7 +177,7 @@ make_plot() {
 	fi
 	local title
 	title="Delaunay in PostgreSQL: tdc\\_delaunay vs PostGIS ${PGIS_VER:-} (GEOS ${GEOS_VER:-}), $(nproc) CPUs"
-	[ "$SRC" = patch ] && title="Delaunay of pgpointcloud patches: tdc\\_delaunay's pcpatch aggregate vs PC\\_Explode into it, $(nproc) CPUs"
+	[ "$SRC" = patch ] && title="Delaunay of pgpointcloud patches: the pcpatch aggregate vs PC\\_Explode into the geometry one, $(nproc) CPUs"
 	{
 		echo "set terminal pngcairo size 1400,620 font 'DejaVu Sans,11'"
 		echo "set output '$PNG'"
@@ -557,7 +557,7 @@ make_plot
 if [ "$QUICK" != 1 ]; then
 	bench_figure "$PNG" "time per call and ratio against points per call"
 	if [ "$SRC" = patch ]; then
-		bench_publish sweep_patch "Size sweep of the pcpatch aggregates against PC_Explode, 3 to 10^7 points per call" "$TXT"
+		bench_publish sweep_patch "Size sweep of the pcpatch aggregates against PC_Explode, 3 to 10^6 points per call" "$TXT"
 	else
 		bench_publish sweep "Size sweep in SQL: tdc_delaunay against PostGIS, 3 to 10^7 points per call" "$TXT"
 	fi
