@@ -161,7 +161,7 @@ make_plot() {
 	}
 	for w in row group agg; do
 		case $w in
-			row) pt=7; dt=1; wl="per row (MULTIPOINT)" ;;
+			row) pt=7; dt=1; wl="per row (MULTIPOINT)"; [ "$SRC" = patch ] && wl="per row (one patch)" ;;
 			group) pt=5; dt=2; wl="per group (GROUP BY)" ;;
 			agg) pt=9; dt=3; wl="one aggregate" ;;
 		esac
