@@ -83,7 +83,7 @@ tdc_tin_read_sample(TdcPointBuf *buf, Datum d, int64 row, const char *fname)
 
 /* pcpatch_source.c: the pcpatch transition functions' reader */
 void
-tdc_pc_read_patch(TdcAggState *st, Datum patch, text *filter, const char *fname)
+tdc_pc_read_patch(TdcAggState *st, FmgrInfo *flinfo, Datum patch, text *filter, const char *fname)
 {
 	not_here("tdc_pc_read_patch");
 }
