@@ -230,24 +230,18 @@ tdc_pc_append_patch(TdcPointBuf *buf, struct TdcPcSource **srcp, MemoryContext c
 	{
 		TdcPcSource *known = flinfo ? (TdcPcSource *) flinfo->fn_extra : NULL;
 
+		/* the call site's format: pcid, SRID and schema, no filter */
 		src = MemoryContextAllocZero(cxt, sizeof(TdcPcSource));
 		if (known != NULL && known->pcid == h.pcid)
-		{
-			src->pcid = known->pcid;
-			src->srid = known->srid;
-			src->schema = known->schema;
-		}
+			*src = *known;
 		else
 		{
 			pc_lookup(src, h.pcid, fname);
 			if (flinfo != NULL)
 			{
 				if (known == NULL)
-					flinfo->fn_extra = known = MemoryContextAllocZero(flinfo->fn_mcxt,
-																	  sizeof(TdcPcSource));
-				known->pcid = src->pcid;
-				known->srid = src->srid;
-				known->schema = src->schema;
+					flinfo->fn_extra = known = MemoryContextAlloc(flinfo->fn_mcxt, sizeof(TdcPcSource));
+				*known = *src;
 			}
 		}
 		if (ftext != NULL)
