@@ -38,6 +38,7 @@
  */
 #include <dirent.h>
 #include <math.h>
+#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -67,6 +68,7 @@ typedef struct rt_state
 	tdc_grid_spec g;
 	const char *dir;
 	tdc_raster *ras;
+	pthread_mutex_t mu;			/* err: both workers emit at once */
 	char		err[512];
 	int			begins;
 	int			reruns;			/* natural neighbour: tiles that asked for a larger K */
@@ -94,12 +96,21 @@ rt_emit(void *arg, int tile, const double *q, const double *qz, const int64_t *q
 		const size_t *tri, size_t ntri)
 {
 	rt_state   *s = arg;
+	char		err[512];
+	int			rc;
 
 	(void) tile;
 	(void) ql;
 	if (s->spec.method == TDC_INTERP_NATURAL)
 		return 0;				/* rt_final_run took the tile */
-	return tdc_raster_tile(s->ras, q, qz, tri, ntri, s->err, sizeof(s->err));
+	if ((rc = tdc_raster_tile(s->ras, q, qz, tri, ntri, err, sizeof(err))) != TDC_OK)
+	{
+		pthread_mutex_lock(&s->mu);
+		if (s->err[0] == '\0')
+			snprintf(s->err, sizeof(s->err), "%s", err);
+		pthread_mutex_unlock(&s->mu);
+	}
+	return rc;
 }
 
 /* natural neighbour: the tile's whole triangulation, or what it needs more (1) */
@@ -217,8 +228,13 @@ tiled_grid(const rt_case *c, rt_state *s, const char *dir, int threads, size_t *
 		p.final_per_point = TDC_RASTER_NN_PER_POINT;
 	}
 	p.arg = s;
-	/* as ./tdc: the output does not depend on the tiles' order, so two run at once */
+	/*
+	 * as ./tdc: the output does not depend on the tiles' order, so two run
+	 * at once, and hand their tiles over at once (the raster's windows)
+	 */
 	p.any_order = true;
+	p.emit_concurrent = true;
+	pthread_mutex_init(&s->mu, NULL);
 	s->dir = dir;
 	s->ras = NULL;
 	s->err[0] = '\0';

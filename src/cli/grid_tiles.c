@@ -17,12 +17,18 @@
  * tiles' memory is free again; the sites that pixels outside the hull may
  * take are loaded then, within what the limit leaves.
  *
+ * The two tile workers hand their tiles over at once (emit_concurrent):
+ * the raster takes each in a window of its own, and the pixels of two
+ * tiles are disjoint but for centres on their shared edges, which both
+ * write with the same bits; so neither waits for the other's pixels.
+ *
  * Natural neighbour takes each final tile's whole triangulation through
  * the run's final_run (terrain/raster_natural.c proves each pixel's
  * cavity global, or the tile runs again with a larger box).
  * --contours in tiles is contours_tiles.c.
  */
 #include <math.h>
+#include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
@@ -39,6 +45,7 @@ typedef struct grid_tiles
 	double		box[4];
 	tdc_raster *ras;
 	bool		tif;
+	pthread_mutex_t mu;			/* err, for emits on both workers */
 	char		err[1024];		/* a callback's failure, said in full */
 } grid_tiles;
 
@@ -64,7 +71,7 @@ begin(void *arg, const double box[4], const double *hull, size_t nhull, size_t *
 							   gt->err, sizeof(gt->err))) != TDC_OK)
 		return rc;
 	*hold = h + 8 * gt->g.width * (gt->g.height < OUT_ROWS ? gt->g.height : OUT_ROWS) +
-		(gt->tif ? GTIFF_CACHE_BYTES : 0);
+		(gt->tif ? GTIFF_HOLD(gt->a->opt.threads) : 0);
 	return TDC_OK;
 }
 
@@ -73,12 +80,22 @@ emit(void *arg, int tile, const double *q, const double *qz, const int64_t *ql,
 	 const size_t *tri, size_t ntri)
 {
 	grid_tiles *gt = arg;
+	char		err[1024];
+	int			rc;
 
 	(void) tile;
 	(void) ql;
 	if (gt->spec.method == TDC_INTERP_NATURAL)
 		return 0;				/* final_run took the tile's pixels */
-	return tdc_raster_tile(gt->ras, q, qz, tri, ntri, gt->err, sizeof(gt->err));
+	/* both workers' tiles at once (emit_concurrent): the first failure is said */
+	if ((rc = tdc_raster_tile(gt->ras, q, qz, tri, ntri, err, sizeof(err))) != TDC_OK)
+	{
+		pthread_mutex_lock(&gt->mu);
+		if (gt->err[0] == '\0')
+			snprintf(gt->err, sizeof(gt->err), "%s", err);
+		pthread_mutex_unlock(&gt->mu);
+	}
+	return rc;
 }
 
 /* natural neighbour: the tile's pixels from its whole triangulation, or what it needs more */
@@ -106,8 +123,8 @@ write_rows(grid_tiles *gt, const char *srs, gtiff_out *tif, size_t left)
 
 	if (v == NULL)
 		die(1, "out of memory for the grid's rows%s", "");
-	if (tif && gtiff_open(tif, w, hgt, gt->g.gt, srs, gt->spec.nodata, a->float32, err,
-						  sizeof(err)) != 0)
+	if (tif && gtiff_open(tif, w, hgt, gt->g.gt, srs, gt->spec.nodata, a->float32, a->opt.threads,
+						  err, sizeof(err)) != 0)
 	{
 		gtiff_discard(tif);
 		die(1, "%s", err);
@@ -169,7 +186,7 @@ grid_in_tiles(const cli_args *a, const char *xypath, const char *zpath, size_t n
 		.xypath = xypath, .zpath = zpath, .n = n, .opt = &a->opt, .limit = limit,
 		.tmpdir = tmp_dir, .limit_name = "--max-memory",
 		.begin = begin, .emit = emit, .settle = heap_settle, .peak = heap_peak, .arg = &gt,
-		.cancel = &cli_cancel, .any_order = true,
+		.cancel = &cli_cancel, .any_order = true, .emit_concurrent = true,
 		.drop_input = tmp_owns(xypath)	/* the staged input: its disk goes to the tiles */
 	};
 	tdc_bounded_stats st;
@@ -178,6 +195,7 @@ grid_in_tiles(const cli_args *a, const char *xypath, const char *zpath, size_t n
 				t1,
 				t2;
 
+	pthread_mutex_init(&gt.mu, NULL);
 	if (zpath == NULL)
 		die(1, "--grid needs heights: 'x y z' text, LAS or .xyz.bin input%s", "");
 	if (tdc_interp_parse(a->method ? a->method : "linear", &gt.spec, err, sizeof(err)) != TDC_OK)
@@ -202,7 +220,7 @@ grid_in_tiles(const cli_args *a, const char *xypath, const char *zpath, size_t n
 	t1 = now_s();
 	/* the tiles are gone: what the limit leaves beside the grid's buffers is the fringe's */
 	held = start + 8 * gt.g.width * (gt.g.height < OUT_ROWS ? gt.g.height : OUT_ROWS) +
-		((size_t) 8 << 20) + (tif ? GTIFF_CACHE_BYTES : 0);
+		((size_t) 8 << 20) + (tif ? GTIFF_HOLD(a->opt.threads) : 0);
 	valid = write_rows(&gt, srs, tif, limit > held ? limit - held : 0);
 	t2 = now_s();
 	tdc_raster_free(gt.ras);

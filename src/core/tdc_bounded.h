@@ -142,6 +142,14 @@ typedef struct tdc_bounded_params
 	 * tile at a time.
 	 */
 	bool		any_order;
+	/*
+	 * With any_order: emit may be called by both workers at once (the
+	 * caller's emit guards its own state; a raster's tdc_raster_tile
+	 * does), beside settle and trace too, which stay one call at a time
+	 * among themselves.  A tile's output then no longer waits for the
+	 * other's.  false: emit is one call at a time with them all.
+	 */
+	bool		emit_concurrent;
 	bool		drop_input;		/* the input files are the caller's temporaries: unlinked once binned */
 	void	   *arg;			/* passed to the callbacks */
 	/*
@@ -201,7 +209,8 @@ extern void tdc_bounded_free(tdc_bounded_job *job);
  * |gt[2] gt[4]|, is TDC_EINVAL naming the geotransform).  *hold: the
  * bytes the grid holds from then on (the buffers; add them to the run's).
  * tile: a final tile's triangles, from the run's emit (q, qz, tri as
- * there).  rows: after the run, rows y0 .. y0 + nrows - 1 (top down) into
+ * there); two threads may call it at once, so the run may set
+ * emit_concurrent (each tile takes its own window of rows).  rows: after the run, rows y0 .. y0 + nrows - 1 (top down) into
  * v (nrows * width doubles), *valid += the pixels with a value; the first
  * call loads the sites the pixels outside the hull may take (those on the
  * hull, and the corners of the triangles whose circumcentre lies outside

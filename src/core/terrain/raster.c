@@ -27,7 +27,10 @@
  * centre", and a grid over a sparse survey takes disk only where it has
  * values.  A tile's pixels are made in a window of rows in memory (its
  * cap is the grid's hold, WIN_MIN or 16 rows), as many windows as its
- * triangles span, each written back as runs of the pixels it set.
+ * triangles span, each written back as runs of the pixels it set.  Two
+ * tiles may come at once (the bounded run's workers): each takes a window
+ * of its own, and what they share (the fringe's file, nearest's window)
+ * is taken under the raster's lock.
  *
  * The grid may be skewed, rotated or flipped: any geotransform whose
  * pixel matrix is invertible.  Its centres are the one-pass expression
@@ -183,16 +186,19 @@ tdc_raster_begin(const tdc_interp_spec *spec, const tdc_grid_spec *g, const doub
 	r->fd = -1;
 	r->spec = *spec;
 	r->g = *g;
+	pthread_mutex_init(&r->mu, NULL);
+	pthread_cond_init(&r->cv, NULL);
 	pixel_matrix(g, r, NULL, 0);
-	/* linear's and natural neighbour's window (nearest has its own, raster_nearest.c) */
+	/* linear's and natural neighbour's windows (nearest has its own, raster_nearest.c) */
 	r->wincap = spec->method == TDC_INTERP_NEAREST ? 0 :
 		WIN_MIN / 8 > 16 * g->width ? WIN_MIN / 8 : 16 * g->width;
-	r->win = r->wincap > 0 ? malloc(8 * r->wincap) : NULL;
-	if (r->wincap > 0 && r->win == NULL)
-	{
-		free(r);
-		return tdc_rs_fail(err, errlen, TDC_ENOMEM, "%s", "out of memory for the grid's window");
-	}
+	r->nwins = spec->method == TDC_INTERP_NEAREST ? 0 : spec->method == TDC_INTERP_NATURAL ? 1 : RS_WINS;
+	for (int i = 0; i < r->nwins; i++)
+		if ((r->win[i] = malloc(8 * r->wincap)) == NULL)
+		{
+			tdc_raster_free(r);
+			return tdc_rs_fail(err, errlen, TDC_ENOMEM, "%s", "out of memory for the grid's windows");
+		}
 	if ((rc = fr_init(&r->fr, hull, nhull, tmpdir, err, errlen)) != TDC_OK ||
 		(spec->method == TDC_INTERP_NEAREST && (rc = tdc_rn_begin(r, err, errlen)) != TDC_OK))
 	{
@@ -215,7 +221,7 @@ tdc_raster_begin(const tdc_interp_spec *spec, const tdc_grid_spec *g, const doub
 		return rc;
 	}
 	*out = r;
-	*hold = sizeof(*r) + 8 * r->wincap + FR_HOLD(nhull) + tdc_rn_hold(r) +
+	*hold = sizeof(*r) + 8 * (size_t) r->nwins * r->wincap + FR_HOLD(nhull) + tdc_rn_hold(r) +
 		(spec->method == TDC_INTERP_NATURAL ? RS_NN_HOLD : 0);
 	return TDC_OK;
 }
@@ -335,13 +341,19 @@ tri_pixels(const tdc_raster *r, const double *const p[3], const double z[3], dou
 		}
 }
 
-/* The window's set pixels, rows [w0, w1), to the file as runs. */
+/*
+ * The window's set pixels, rows [w0, w1), to the file as runs.  Another
+ * tile's window may be written at once: the runs are disjoint but for
+ * centres on an edge or at a site between the tiles, where both write the
+ * same bits (the essay above), so the file does not depend on the order.
+ */
 static int
-win_flush(tdc_raster *r, size_t w0, size_t w1, size_t c0, size_t wcols, char *err, size_t errlen)
+win_flush(tdc_raster *r, uint64_t *win, size_t w0, size_t w1, size_t c0, size_t wcols, char *err,
+		  size_t errlen)
 {
 	for (size_t row = w0; row < w1; row++)
 	{
-		uint64_t   *w = r->win + (row - w0) * wcols;
+		uint64_t   *w = win + (row - w0) * wcols;
 
 		for (size_t a = 0; a < wcols;)
 		{
@@ -362,6 +374,49 @@ win_flush(tdc_raster *r, size_t w0, size_t w1, size_t c0, size_t wcols, char *er
 		}
 	}
 	return TDC_OK;
+}
+
+/* A window no other tile is using: waits while nwins tiles are being rasterised. */
+static uint64_t *
+win_claim(tdc_raster *r)
+{
+	int			i;
+
+	pthread_mutex_lock(&r->mu);
+	for (;;)
+	{
+		for (i = 0; i < r->nwins && r->win_busy[i]; i++)
+			;
+		if (i < r->nwins)
+			break;
+		pthread_cond_wait(&r->cv, &r->mu);
+	}
+	r->win_busy[i] = true;
+	pthread_mutex_unlock(&r->mu);
+	return r->win[i];
+}
+
+static void
+win_release(tdc_raster *r, const uint64_t *win)
+{
+	pthread_mutex_lock(&r->mu);
+	for (int i = 0; i < r->nwins; i++)
+		if (r->win[i] == win)
+			r->win_busy[i] = false;
+	pthread_cond_signal(&r->cv);
+	pthread_mutex_unlock(&r->mu);
+}
+
+/* fr_add for tiles handed over at once: the fringe's file is one */
+static int
+rs_fringe_add(tdc_raster *r, const double *p, double z, char *err, size_t errlen)
+{
+	int			rc;
+
+	pthread_mutex_lock(&r->mu);
+	rc = fr_add(&r->fr, p, z, err, errlen);
+	pthread_mutex_unlock(&r->mu);
+	return rc;
 }
 
 /* f clamped to [0, n] */
@@ -401,12 +456,18 @@ tdc_rs_tile(tdc_raster *r, const double *q, const double *qz, const size_t *tri,
 				r1,
 				wcols,
 				wrows;
-	int			rc;
+	uint64_t   *win;
+	int			rc = TDC_OK;
 
 	if (ntri == 0)
 		return TDC_OK;
 	if (r->spec.method == TDC_INTERP_NEAREST)
-		return tdc_rn_tile(r, q, qz, tri, ntri, err, errlen);
+	{
+		pthread_mutex_lock(&r->mu);
+		rc = tdc_rn_tile(r, q, qz, tri, ntri, err, errlen);
+		pthread_mutex_unlock(&r->mu);
+		return rc;
+	}
 	/* the fringe's sites, and the tile's box */
 	for (size_t t = 0; t < ntri; t++)
 	{
@@ -426,7 +487,7 @@ tdc_rs_tile(tdc_raster *r, const double *q, const double *qz, const size_t *tri,
 
 			for (int k = 0; k < 3; k++)
 				if ((all || fr_on_hull(&r->fr, q + 2 * v[k])) &&
-					(rc = fr_add(&r->fr, q + 2 * v[k], qz[v[k]], err, errlen)) != TDC_OK)
+					(rc = rs_fringe_add(r, q + 2 * v[k], qz[v[k]], err, errlen)) != TDC_OK)
 					return rc;
 		}
 	}
@@ -458,26 +519,28 @@ tdc_rs_tile(tdc_raster *r, const double *q, const double *qz, const size_t *tri,
 		return TDC_OK;
 	wcols = c1 - c0;
 	wrows = r->wincap / wcols;	/* at least 16: the window holds 16 rows of the grid */
-	for (size_t w0 = r0; w0 < r1; w0 += wrows)
+	win = win_claim(r);
+	for (size_t w0 = r0; w0 < r1 && rc == TDC_OK; w0 += wrows)
 	{
 		size_t		w1 = w0 + wrows < r1 ? w0 + wrows : r1;
 
 		for (size_t i = 0; i < (w1 - w0) * wcols; i++)
-			r->win[i] = SENT;
+			win[i] = SENT;
 		for (size_t t = 0; t < ntri; t++)
 		{
 			const size_t *v = tri + 3 * t;
 			const double *p[3] = {q + 2 * v[0], q + 2 * v[1], q + 2 * v[2]};
 			double		z[3] = {qz[v[0]], qz[v[1]], qz[v[2]]};
 
-			tri_pixels(r, p, z, tslack, w0, w1, c0, wcols, r->win);
+			tri_pixels(r, p, z, tslack, w0, w1, c0, wcols, win);
 		}
-		if (fill && (rc = fill(arg, w0, w1, c0, wcols, r->win, err, errlen)) != TDC_OK)
-			return rc;
-		if ((rc = win_flush(r, w0, w1, c0, wcols, err, errlen)) != TDC_OK)
-			return rc;
+		if (fill)
+			rc = fill(arg, w0, w1, c0, wcols, win, err, errlen);
+		if (rc == TDC_OK)
+			rc = win_flush(r, win, w0, w1, c0, wcols, err, errlen);
 	}
-	return TDC_OK;
+	win_release(r, win);
+	return rc;
 }
 
 int
@@ -547,7 +610,10 @@ tdc_raster_free(tdc_raster *r)
 	if (r->path[0])
 		unlink(r->path);
 	fr_free(&r->fr);
-	free(r->win);
+	for (int i = 0; i < RS_WINS; i++)
+		free(r->win[i]);
 	tdc_rn_free(r);
+	pthread_cond_destroy(&r->cv);
+	pthread_mutex_destroy(&r->mu);
 	free(r);
 }

@@ -9,6 +9,7 @@
 
 #include <float.h>
 #include <math.h>
+#include <pthread.h>
 #include <stdint.h>
 #include <stdio.h>
 
@@ -16,14 +17,28 @@
 #include "fringe.h"
 #include "tdc.h"
 
+#define RS_WINS			2		/* the bounded run's workers: tdc_bounded.h */
+
 struct tdc_raster
 {
 	tdc_interp_spec spec;
 	tdc_grid_spec g;
 	char		path[4200];
 	int			fd;				/* the pixels' file: RS_REC(r) bytes a pixel */
-	uint64_t   *win;			/* linear: a window of rows, wincap pixels */
+	/*
+	 * Linear's and natural neighbour's windows of rows, wincap pixels each:
+	 * one per tile rasterised at once (a bounded run's workers: linear's
+	 * RS_WINS; natural neighbour's tiles come one at a time, through the
+	 * run's final_run), nwins of them, claimed under mu.  mu also guards the fringe's adds and
+	 * nearest's tiles (one at a time), so two workers may hand over their
+	 * tiles at once (tdc_raster_tile is thread-safe).
+	 */
+	uint64_t   *win[RS_WINS];
+	bool		win_busy[RS_WINS];
+	int			nwins;
 	size_t		wincap;
+	pthread_mutex_t mu;
+	pthread_cond_t cv;			/* a window released */
 	double		slack;			/* in pixels: above the rounding of a centre's column or row
 								 * (rs_slack_at adds the points' own) */
 	double		inv[4];			/* gt's pixel matrix inverted: rs_pixel */

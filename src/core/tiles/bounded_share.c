@@ -29,7 +29,9 @@
  *			(bounded_cells.c) while the other worker reads it: a
  *			read-write lock per tile, and its `sorted` flag read and set
  *			under it.
- *	output	emit, trace and settle are called by one worker at a time.
+ *	output	emit, trace and settle are called by one worker at a time;
+ *			emit beside them when the caller's can take it
+ *			(emit_concurrent: a raster's windows are per tile).
  *	tiles	claimed in the plan's order from a counter.  With two workers
  *			final tiles are emitted as they finish, not in the plan's
  *			order; only a caller that takes any order gets two

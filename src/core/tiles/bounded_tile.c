@@ -539,11 +539,15 @@ tile_write(bounded_run *r, int t, const tile_points *p, const tdc_tile_result *r
 
 	if (r->p->emit)
 	{
+		bool		lock = !r->p->emit_concurrent;
+
 		/*
 		 * Nothing is emitted once the run stops (the other worker's error,
-		 * a cancel), and a refusal stops it before the other emits again.
+		 * a cancel), and a refusal stops it before the other emits again
+		 * (or, with emit_concurrent, before it starts its next).
 		 */
-		tdc_bd_out_lock(r);
+		if (lock)
+			tdc_bd_out_lock(r);
 		if (tdc_bd_stopped(r))
 			tdc_bd_fail(&r->e, TDC_ECANCELED, "canceled");
 		else if ((rc = r->p->emit(r->p->arg, t, p->q, p->qz, p->qc, res->tri, res->ntri)) != 0)
@@ -553,7 +557,8 @@ tile_write(bounded_run *r, int t, const tile_points *p, const tdc_tile_result *r
 			if (r->sh != NULL)
 				tdc_bd_stop(r);
 		}
-		tdc_bd_out_unlock(r);
+		if (lock)
+			tdc_bd_out_unlock(r);
 		if (r->e.code != TDC_OK)
 			return r->e.code;
 	}
