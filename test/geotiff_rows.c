@@ -66,7 +66,7 @@ main(int argc, char **argv)
 		for (size_t c = 0; c < w; c++)
 			v[r * w + c] = (r * w + c) % 7 == 3 ? -9999 : r * 1000.0 + c + 0.25;
 	if ((g = gtiff_reserve(argv[shortw || order ? 2 : 1], err, sizeof(err))) == NULL ||
-		gtiff_open(g, w, h, gt, "EPSG:25832", -9999, false, err, sizeof(err)) != 0)
+		gtiff_open(g, w, h, gt, "EPSG:25832", -9999, false, 0, err, sizeof(err)) != 0)
 		return failed(err);
 	if (shortw)
 	{

@@ -135,10 +135,18 @@ extern bool gtiff_path(const char *path);	/* ends in .tif or .tiff, any case */
 extern int	gtiff_check_srs(const char *srs, char *err, size_t errlen);
 /* bytes of GDAL's block cache while a GeoTIFF is written (geotiff.c caps it) */
 #define GTIFF_CACHE_BYTES	((size_t) 16 << 20)
+/* threads that compress a GeoTIFF's blocks, for -t threads (0: the online CPUs) */
+#define GTIFF_THREADS		4
+extern int	gtiff_threads(int threads);
+/* bytes GDAL holds while it writes one: the cache, and each thread's block and one more */
+#define GTIFF_HOLD(threads)	(GTIFF_CACHE_BYTES + ((size_t) gtiff_threads(threads) + 1) * 2 * \
+							 ((size_t) 8 << 16))
 /* the temporary file beside path, now; removed at exit unless closed */
 extern gtiff_out *gtiff_reserve(const char *path, char *err, size_t errlen);
+/* threads: -t's (gtiff_threads of it compress the blocks) */
 extern int	gtiff_open(gtiff_out *g, size_t width, size_t height, const double gt[6],
-					   const char *srs, double nodata, bool float32, char *err, size_t errlen);
+					   const char *srs, double nodata, bool float32, int threads, char *err,
+					   size_t errlen);
 /* rows y0 .. y0 + nrows - 1, top down, in order: width values a row */
 extern int	gtiff_write_rows(gtiff_out *g, size_t y0, size_t nrows, const double *values,
 							 char *err, size_t errlen);

@@ -319,13 +319,32 @@ gtiff_reserve(const char *path, char *err, size_t errlen)
 }
 
 int
-gtiff_open(gtiff_out *g, size_t width, size_t height, const double gt[6], const char *srs,
-		   double nodata, bool float32, char *err, size_t errlen)
+gtiff_threads(int threads)
 {
-	static const char *const co[] = {"TILED=YES", "BLOCKXSIZE=256", "BLOCKYSIZE=256",
-		"COMPRESS=DEFLATE", "PREDICTOR=3", "BIGTIFF=IF_SAFER", NULL};
+	long		cpus = sysconf(_SC_NPROCESSORS_ONLN);
+
+	if (threads <= 0)
+		threads = cpus < 1 ? 1 : (int) (cpus < GTIFF_THREADS ? cpus : GTIFF_THREADS);
+	return threads < GTIFF_THREADS ? threads : GTIFF_THREADS;
+}
+
+int
+gtiff_open(gtiff_out *g, size_t width, size_t height, const double gt[6], const char *srs,
+		   double nodata, bool float32, int threads, char *err, size_t errlen)
+{
+	/*
+	 * NUM_THREADS: DEFLATE is most of a large grid's writing, and GDAL's
+	 * threads compress blocks while the rows come.  A block's bytes do
+	 * not depend on the thread that compresses it, nor the file on their
+	 * number (test/cli.sh compares -t 1 with -t 2).
+	 */
+	char		nt[32];
+	const char *co[] = {"TILED=YES", "BLOCKXSIZE=256", "BLOCKYSIZE=256",
+		"COMPRESS=DEFLATE", "PREDICTOR=3", "BIGTIFF=IF_SAFER", nt, NULL};
 	GDALDriverH drv = gd.GDALGetDriverByName("GTiff");
 	double		t[6];
+
+	snprintf(nt, sizeof(nt), "NUM_THREADS=%d", gtiff_threads(threads));
 
 	if (width > 2147483647 || height > 2147483647)
 	{

@@ -433,7 +433,7 @@ fits(const cli_args *a, const staged *s, bool tif)
 	if (base < ((size_t) 8 << 20))
 		base = (size_t) 8 << 20;
 	need = tdc_estimate_memory(s->n, &a->opt) + s->n * (16 + (s->has_z ? 12 : 0)) + base +
-		(tif ? GTIFF_CACHE_BYTES : 0);
+		(tif ? GTIFF_HOLD(a->opt.threads) : 0);
 	if (need > budget)
 		return false;
 	if (a->contours)

@@ -125,8 +125,8 @@ write_tif(const cli_args *a, const tdc_grid_spec *g, const double *v, double nod
 {
 	char		err[1024];
 
-	if (gtiff_open(tif, g->width, g->height, g->gt, srs, nodata, a->float32, err,
-				   sizeof(err)) != 0 ||
+	if (gtiff_open(tif, g->width, g->height, g->gt, srs, nodata, a->float32, a->opt.threads,
+				   err, sizeof(err)) != 0 ||
 		gtiff_write_rows(tif, 0, g->height, v, err, sizeof(err)) != 0)
 	{
 		gtiff_discard(tif);
