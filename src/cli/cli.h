@@ -175,6 +175,7 @@ extern int	grid_geometry(const cli_args *a, const double data_box[4], tdc_grid_s
 						  double box[4], char *err, size_t errlen);
 extern void asc_header(FILE *f, const tdc_grid_spec *g, const double box[4], double nodata);
 extern void asc_rows(FILE *f, const double *v, size_t width, size_t nrows);
+extern void contour_line(FILE *f, double level, const double *xy, size_t n);
 
 /* grid_tiles.c: --grid in tiles */
 extern void grid_in_tiles(const cli_args *a, const char *xypath, const char *zpath, size_t n,
