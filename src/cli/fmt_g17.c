@@ -155,14 +155,18 @@ g17_text(char *p, uint64_t n, int x)
 	char	   *start = p;
 	int			last;
 
-	for (int i = 16; i > 0; i -= 2)
-	{
-		unsigned	r = (unsigned) (n % 100);
+	/* two 32-bit halves, 9 and 8 digits: two short chains of divisions */
+	uint32_t	hi = (uint32_t) (n / 100000000),
+				lo = (uint32_t) (n % 100000000);
 
-		n /= 100;
-		memcpy(dig + i - 1, digit_pairs + 2 * r, 2);
+	for (int i = 15; i >= 9; i -= 2)
+	{
+		memcpy(dig + i, digit_pairs + 2 * (lo % 100), 2);
+		lo /= 100;
+		memcpy(dig + i - 8, digit_pairs + 2 * (hi % 100), 2);
+		hi /= 100;
 	}
-	dig[0] = (char) ('0' + n);
+	dig[0] = (char) ('0' + hi);
 	/* the last significant digit: trailing zeros are not written */
 	for (last = 16; last > 0 && dig[last] == '0'; last--)
 		;
