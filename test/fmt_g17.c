@@ -163,7 +163,7 @@ powers(void)
  * Exact ties of the 17th significant digit: a = k / 2^(s+1) with k odd and
  * 10^(16-s) <= a < 10^(17-s) is (q + 1/2) 10^(s - 16) with q an integer,
  * since a 10^s = k 5^s / 2 and k 5^s is odd.  Such a is a double when
- * k < 2^53, which leaves room for s = 1 .. 22 (and beyond, down to 1e-22).
+ * k < 2^53, which leaves room for s = 1 .. 22 (a from 1e-6 to 1e15).
  * Each one is also checked to be a tie by its exact decimal expansion, and
  * the C library to round it to even.
  */
@@ -385,7 +385,8 @@ line_writer(void)
 		passed++;
 	else
 		failed++;
-	printf("line writer: %s\n", same ? "the same file as fprintf's" : "FAILED: the file differs from fprintf's");
+	printf("line writer: %s\n",
+		   same ? "the same file as fprintf's" : "FAILED: the file differs from fprintf's");
 	if (a)
 		fclose(a);
 	if (b)

@@ -16,20 +16,21 @@
  * With d = floor(log10 |v|), "%.17g" prints the 17 significant digits
  * N = round(|v| 10^(16 - d)), rounded to nearest with exact ties going to
  * the even N (as the C library does in that rounding mode), and the
- * exponent X = d, or d + 1 when N rounds up to 10^17.  When 16 - d >= 0
- * and e <= 0, |v| 10^(16 - d) is the quotient of the integers m 10^(16 - d)
- * and 2^-e: the first is below 2^53 10^22 < 2^127 for 16 - d <= 22, so it
- * fits an unsigned 128-bit integer, the quotient is a shift and the
- * remainder, compared with half the divisor, rounds it exactly, ties
- * included.  When e >= 0, |v| is the integer m 2^e: up to 2^127 it fits, and
- * N is it times 10^(16 - d), or its quotient by 10^(d - 16), whose
- * remainder again rounds it exactly.  No floating-point operation takes
- * part.  d is first estimated from the binary exponent (floor(log10 |v|)
- * or one less) and then corrected by the result itself: N >= 10^17 means d was too small
- * (or the rounding carried, which the next d gets right: 10^16),
- * N < 10^16 that it was too large.  Everything the integers cannot hold,
- * |v| below 10^-6 or above 2^127, subnormals, infinities and NaN, goes to
- * snprintf itself; so do platforms without a 128-bit integer type.
+ * exponent X = d, or d + 1 with N = 10^16 when N rounds up to 10^17.
+ * When 16 - d >= 0 and e <= 0, |v| 10^(16 - d) is the quotient of the
+ * integers m 10^(16 - d) and 2^-e: the first is below 2^53 10^22 < 2^127
+ * for 16 - d <= 22, so it fits an unsigned 128-bit integer, the quotient
+ * is a shift and the remainder, compared with half the divisor, rounds it
+ * exactly, ties included.  When e >= 0, |v| is the integer m 2^e: up to
+ * 2^127 it fits, and N is it times 10^(16 - d), or its quotient by
+ * 10^(d - 16), whose remainder again rounds it exactly.  No
+ * floating-point operation takes part.  d is first estimated from the
+ * binary exponent (floor(log10 |v|) or one less) and then corrected by the
+ * result itself: N >= 10^17 means d was too small (or the rounding carried,
+ * which the next d gets right: 10^16), N < 10^16 that it was too large.
+ * Everything the integers cannot hold, |v| below 10^-6 or above 2^127,
+ * subnormals, infinities and NaN, goes to snprintf itself; so do platforms
+ * without a 128-bit integer type.
  *
  * The text is then C11's %g (7.21.6.1): with precision P = 17, fixed
  * notation with P - 1 - X decimals when P > X >= -4, else one digit, the
@@ -43,7 +44,6 @@
  * as printf would set it, so the callers' checks are unchanged.
  */
 #include <stdio.h>
-#include <stdlib.h>
 #include <string.h>
 
 #include "cli.h"
