@@ -93,6 +93,11 @@ build/geotiff_rows: test/geotiff_rows.c src/cli/geotiff.c src/cli/cli.h
 	@mkdir -p build
 	$(CC_CORE) $(CORE_CFLAGS) $(GDAL_BUILD) -Isrc/cli -o $@ test/geotiff_rows.c src/cli/geotiff.c -ldl -lm
 
+# ./tdc's "%.17g" without printf against the C library (test/cli_fmt_g17.sh)
+build/fmt_g17: test/fmt_g17.c test/splitmix.h src/cli/fmt_g17.c src/cli/cli.h
+	@mkdir -p build
+	$(CC_CORE) $(CORE_CFLAGS) -Isrc/cli -Itest -o $@ test/fmt_g17.c src/cli/fmt_g17.c -lm
+
 build/test_core: $(TEST_SRCS) $(wildcard test/*.h) $(CORE_SRCS) $(CORE_HDRS)
 	@mkdir -p build
 	$(CC_CORE) $(CORE_CFLAGS) $(TEST_CFLAGS) -o $@ $(TEST_SRCS) $(CORE_SRCS) -lgmp -lm

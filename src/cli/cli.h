@@ -17,9 +17,11 @@
  *				(terrain/contour_tiles.c), joined after it
  *	geotiff.c	the GeoTIFF writer, through GDAL
  *	die.c		how ./tdc fails
- * Layered without loops: die.c at the bottom, then tmpdir.c, bounded_mem.c
- * and geotiff.c and las.c, then input.c and tiles.c, then oneshot.c and
- * tin_out.c, then grid_tiles.c and contours_tiles.c, then tdc.c.
+ *	fmt_g17.c	numbers as the text of "%.17g", without printf
+ * Layered without loops: die.c and fmt_g17.c at the bottom, then tmpdir.c,
+ * bounded_mem.c and geotiff.c and las.c, then input.c and tiles.c, then
+ * oneshot.c and tin_out.c, then grid_tiles.c and contours_tiles.c, then
+ * tdc.c.
  */
 #ifndef TDC_CLI_H
 #define TDC_CLI_H
@@ -70,6 +72,25 @@ typedef struct cli_input
 
 /* die.c: "tdc: " and fmt with arg on stderr, then exit(code) */
 extern void die(int code, const char *fmt, const char *arg) __attribute__((noreturn));
+
+/*
+ * fmt_g17.c: v as snprintf(buf, 32, "%.17g", v) writes it, NUL included;
+ * returns the characters before the NUL.  buf: 32 bytes.
+ */
+extern size_t fmt_g17(char *buf, double v);
+
+/* A line of such numbers, one space apart, to f through a buffer */
+typedef struct g17_line
+{
+	FILE	   *f;
+	size_t		len;
+	bool		first;
+	char		buf[4096];
+} g17_line;
+
+extern void g17_line_start(g17_line *l, FILE *f);
+extern void g17_line_num(g17_line *l, double v);
+extern void g17_line_end(g17_line *l);	/* "\n", and what is left to f */
 
 /* las.c: an open LAS file (las_open), read in batches of whole records (las_next) */
 typedef struct las_file
@@ -162,6 +183,7 @@ extern int	grid_geometry(const cli_args *a, const double data_box[4], tdc_grid_s
 						  double box[4], char *err, size_t errlen);
 extern void asc_header(FILE *f, const tdc_grid_spec *g, const double box[4], double nodata);
 extern void asc_rows(FILE *f, const double *v, size_t width, size_t nrows);
+extern void contour_line(FILE *f, double level, const double *xy, size_t n);
 
 /* grid_tiles.c: --grid in tiles */
 extern void grid_in_tiles(const cli_args *a, const char *xypath, const char *zpath, size_t n,

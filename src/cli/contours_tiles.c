@@ -70,10 +70,7 @@ line_out(void *arg, double level, const double *xy, size_t n, bool closed)
 	FILE	   *f = arg;
 
 	(void) closed;
-	fprintf(f, "%.17g", level);
-	for (size_t k = 0; k < n; k++)
-		fprintf(f, " %.17g %.17g", xy[2 * k], xy[2 * k + 1]);
-	fputc('\n', f);
+	contour_line(f, level, xy, n);
 	return ferror(f) ? TDC_EIO : 0;
 }
 

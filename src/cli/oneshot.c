@@ -140,6 +140,7 @@ write_cells(const char *outpath, const oneshot *r)
 {
 	FILE	   *f = open_output(outpath);
 	unsigned char *seen = calloc(tdc_site_id_limit(r->job) + 1, 1);
+	g17_line	l;
 
 	if (f == NULL || seen == NULL)
 		die(1, "cannot write %s", outpath);
@@ -155,9 +156,10 @@ write_cells(const char *outpath, const oneshot *r)
 			continue;
 		seen[s] = 1;
 		m = tdc_voronoi_cell(r->vor, s, &c);
-		for (size_t k = 0; k < m; k++)
-			fprintf(f, k ? " %.17g %.17g" : "%.17g %.17g", c[2 * k], c[2 * k + 1]);
-		fputc('\n', f);
+		g17_line_start(&l, f);
+		for (size_t k = 0; k < 2 * m; k++)
+			g17_line_num(&l, c[k]);
+		g17_line_end(&l);
 	}
 	free(seen);
 	if (f != stdout && fclose(f) != 0)
@@ -171,22 +173,23 @@ write_triangles(const char *outpath, const double *z, const tdc_job *job)
 	FILE	   *f = open_output(outpath);
 	tdc_iter	it = {0};
 	uint32_t	v[3];
+	g17_line	l;
 
 	if (f == NULL)
 		die(1, "cannot write %s", outpath);
 	while (tdc_next_triangle(job, &it, v))
 	{
+		g17_line_start(&l, f);
 		for (int k = 0; k < 3; k++)
 		{
 			const double *p = tdc_site_xy(job, v[k]);
 
+			g17_line_num(&l, p[0]);
+			g17_line_num(&l, p[1]);
 			if (z)
-				fprintf(f, k ? " %.17g %.17g %.17g" : "%.17g %.17g %.17g", p[0], p[1],
-						z[tdc_site_input(job, v[k])]);
-			else
-				fprintf(f, k ? " %.17g %.17g" : "%.17g %.17g", p[0], p[1]);
+				g17_line_num(&l, z[tdc_site_input(job, v[k])]);
 		}
-		fputc('\n', f);
+		g17_line_end(&l);
 	}
 	if (f != stdout && fclose(f) != 0)
 		die(1, "error writing %s", outpath);

@@ -31,6 +31,7 @@ emit_text(void *arg, int tile, const double *q, const double *qz, const int64_t 
 		  const size_t *tri, size_t ntri)
 {
 	FILE	   *out = ((tiles_out *) arg)->out;
+	g17_line	l;
 
 	(void) tile;
 	(void) ql;
@@ -39,16 +40,17 @@ emit_text(void *arg, int tile, const double *q, const double *qz, const int64_t 
 	{
 		const size_t *v = tri + 3 * j;
 
+		g17_line_start(&l, out);
 		for (int k = 0; k < 3; k++)
 		{
 			const double *c = q + 2 * v[k];
 
+			g17_line_num(&l, c[0]);
+			g17_line_num(&l, c[1]);
 			if (qz)
-				fprintf(out, k ? " %.17g %.17g %.17g" : "%.17g %.17g %.17g", c[0], c[1], qz[v[k]]);
-			else
-				fprintf(out, k ? " %.17g %.17g" : "%.17g %.17g", c[0], c[1]);
+				g17_line_num(&l, qz[v[k]]);
 		}
-		fputc('\n', out);
+		g17_line_end(&l);
 	}
 	return 0;
 }

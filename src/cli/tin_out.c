@@ -78,6 +78,19 @@ wait_op(tdc_tin *tin, int rc, const char *err)
 		die(1, "%s", tdc_tin_error(tin));
 }
 
+/* One line of -o: the level, then the n points "x y", %.17g (fmt_g17.c) */
+void
+contour_line(FILE *f, double level, const double *xy, size_t n)
+{
+	g17_line	l;
+
+	g17_line_start(&l, f);
+	g17_line_num(&l, level);
+	for (size_t k = 0; k < 2 * n; k++)
+		g17_line_num(&l, xy[k]);
+	g17_line_end(&l);
+}
+
 static void
 contours(const cli_args *a, tdc_tin *tin, double tin_s)
 {
@@ -106,10 +119,7 @@ contours(const cli_args *a, tdc_tin *tin, double tin_s)
 			bool		closed;
 			const double *xy = tdc_tin_contour_line(tin, i, &level, &n, &closed);
 
-			fprintf(f, "%.17g", level);
-			for (size_t k = 0; k < n; k++)
-				fprintf(f, " %.17g %.17g", xy[2 * k], xy[2 * k + 1]);
-			fputc('\n', f);
+			contour_line(f, level, xy, n);
 		}
 		close_out(f, a->outpath);
 	}
@@ -180,15 +190,18 @@ asc_header(FILE *f, const tdc_grid_spec *g, const double box[4], double nodata)
 			nodata);
 }
 
-/* nrows rows of width values, top down, %.17g. */
+/* nrows rows of width values, top down, %.17g (fmt_g17.c). */
 void
 asc_rows(FILE *f, const double *v, size_t width, size_t nrows)
 {
+	g17_line	l;
+
 	for (size_t r = 0; r < nrows; r++)
 	{
+		g17_line_start(&l, f);
 		for (size_t c = 0; c < width; c++)
-			fprintf(f, c ? " %.17g" : "%.17g", v[r * width + c]);
-		fputc('\n', f);
+			g17_line_num(&l, v[r * width + c]);
+		g17_line_end(&l);
 	}
 }
 
