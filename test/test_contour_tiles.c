@@ -197,8 +197,13 @@ tiled_lines(const ctt_case *c, ctt_state *s, const char *dir, int threads, size_
 	p.begin = ctt_begin;
 	p.emit = ctt_emit;
 	p.arg = s;
-	/* as ./tdc: the output does not depend on the tiles' order, so two run at once */
+	/*
+	 * as ./tdc: the output does not depend on the tiles' order, so two run
+	 * at once and hand their tiles over at once (a failure's message is
+	 * the only thing two emits could both write, in s->err)
+	 */
 	p.any_order = true;
+	p.emit_concurrent = true;
 	s->dir = dir;
 	s->ct = NULL;
 	s->err[0] = '\0';

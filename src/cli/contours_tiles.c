@@ -13,8 +13,11 @@
  * one level's lines at a time get what the limit leaves beside what the
  * process holds, and say so when that is too little.  The output file is
  * opened only then, and removed again if the join fails, so a failed run
- * leaves no half file (the one-shot run writes nothing either).
+ * leaves no half file (the one-shot run writes nothing either).  The two
+ * tile workers hand their tiles over at once (emit_concurrent): the
+ * pieces of each are made on its worker, and only their writing waits.
  */
+#include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
@@ -28,6 +31,7 @@ typedef struct contours_tiles
 	tdc_interp_spec spec;
 	tdc_contour_tiles *ct;
 	FILE	   *f;
+	pthread_mutex_t mu;			/* err, for emits on both workers */
 	char		err[1024];		/* a callback's failure, said in full */
 } contours_tiles;
 
@@ -57,10 +61,19 @@ emit(void *arg, int tile, const double *q, const double *qz, const int64_t *ql,
 	 const size_t *tri, size_t ntri)
 {
 	contours_tiles *ct = arg;
+	char		err[1024];
+	int			rc;
 
 	(void) tile;
 	(void) ql;
-	return tdc_contour_tiles_tile(ct->ct, q, qz, tri, ntri, ct->err, sizeof(ct->err));
+	if ((rc = tdc_contour_tiles_tile(ct->ct, q, qz, tri, ntri, err, sizeof(err))) != TDC_OK)
+	{
+		pthread_mutex_lock(&ct->mu);
+		if (ct->err[0] == '\0')
+			snprintf(ct->err, sizeof(ct->err), "%s", err);
+		pthread_mutex_unlock(&ct->mu);
+	}
+	return rc;
 }
 
 /* One line, as tin_out.c writes it: the level, then its points, %.17g. */
@@ -104,7 +117,7 @@ contours_in_tiles(const cli_args *a, const char *xypath, const char *zpath, size
 		.xypath = xypath, .zpath = zpath, .n = n, .opt = &a->opt, .limit = limit,
 		.tmpdir = tmp_dir, .limit_name = "--max-memory",
 		.begin = begin, .emit = emit, .settle = heap_settle, .peak = heap_peak, .arg = &ct,
-		.cancel = &cli_cancel, .any_order = true,
+		.cancel = &cli_cancel, .any_order = true, .emit_concurrent = true,
 		.drop_input = tmp_owns(xypath)	/* the staged input: its disk goes to the tiles */
 	};
 	tdc_bounded_stats st;
@@ -115,6 +128,7 @@ contours_in_tiles(const cli_args *a, const char *xypath, const char *zpath, size
 	int			rc;
 	bool		to_file = a->outpath && strcmp(a->outpath, "-") != 0;
 
+	pthread_mutex_init(&ct.mu, NULL);
 	if (zpath == NULL)
 		die(1, "--contours needs heights: 'x y z' text, LAS or .xyz.bin input%s", "");
 	if (tdc_interp_parse(a->method ? a->method : "linear", &ct.spec, err, sizeof(err)) != TDC_OK)

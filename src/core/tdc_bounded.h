@@ -261,7 +261,8 @@ extern int	tdc_raster_nn_tile(tdc_raster *r, const tdc_job *job, const double *q
  * begin: interval, base and spec (NULL, or linear with max_edge only) as
  * for tdc_tin_contours_start_spec; *hold: the bytes held from then on
  * beside the tiles (add them to the run's).  tile: a final tile's
- * triangles, from the run's emit.  lines: after the run, calls fn for
+ * triangles, from the run's emit; two threads may call it at once, so
+ * the run may set emit_concurrent.  lines: after the run, calls fn for
  * each line in order (xy: n x,y pairs, valid during the call; a ring's
  * last point repeats its first); nonzero from fn stops it (returned as a
  * TDC_ code as emit's is).  The join and one level's lines must fit in

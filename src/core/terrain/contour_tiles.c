@@ -34,11 +34,28 @@
  * Memory per tile.  The segments are made in windows of levels holding at
  * most max(tile's triangles, CT_SEG_MIN) segments (a level crosses a
  * triangle once, so one level always fits), counted first by a histogram
- * of CT_HIST levels: about 30 bytes a segment with the hash, beside the
- * tile's points and triangles; the bounded run frees the tile's engine
- * (the bulk of its model, tdc_tp_tile_bytes) before it emits, so the
- * window fits in what the tile was allowed.  What stays beside the tiles
- * (this struct, the histogram and the two buffers) is the hold.
+ * of CT_HIST levels: about 30 bytes a segment with the hash, and 8 bytes a
+ * point for its level index (below), beside the tile's points and
+ * triangles; the bounded run frees the tile's engine (the bulk of its
+ * model, tdc_tp_tile_bytes) before it emits, so the window fits in what
+ * the tile was allowed.  What stays beside the tiles (this struct, the two
+ * buffers and a histogram for each of the two tiles that may come at
+ * once) is the hold.
+ *
+ * Levels by vertex.  Which levels a triangle crosses, [klo, khi], is
+ * asked of every triangle twice (the histogram, the windows), and most
+ * triangles of dense samples cross none.  The least level above a height,
+ * tin_k_above, is monotone in the height, so a triangle's klo and khi + 1
+ * are the least and greatest of its corners' (kv, computed once a vertex),
+ * and max_edge's exact test is only needed by a triangle that crosses one.
+ *
+ * Two tiles at once.  The bounded run's two workers may hand their tiles
+ * over together (emit_concurrent): the segments and chains of each are
+ * made on its own worker, and only the writing of a window's chains (so
+ * that their points stay in one piece of the points file) and the counts
+ * are taken under the struct's lock.  The files' order of chains then
+ * depends on the workers, as it depends on the tiles' order already; the
+ * join (contour_join.c) makes the lines canonical whatever it is.
  *
  * Levels.  A tile's heights are checked as the whole TIN's are
  * (tin_levels_check); a tile that fails marks the run, makes no segment,
@@ -73,6 +90,7 @@ typedef struct ct_window
 	const double *q,
 			   *qz;
 	const size_t *tri;
+	const int64_t *kv;			/* per vertex: tin_k_above of its height */
 	int64_t		ka;
 	ct_seg	   *seg;
 	size_t		nseg;
@@ -126,10 +144,10 @@ tdc_contour_tiles_begin(double interval, double base, const tdc_interp_spec *spe
 	c->zmax = -INFINITY;
 	c->pts_fd = c->chain_fd = -1;
 	strcpy(c->dir, tmpdir);
-	c->hist = malloc(CT_HIST * sizeof(size_t));
+	pthread_mutex_init(&c->mu, NULL);
 	c->pts_buf = malloc(CT_BUF);
 	c->chain_buf = malloc(CT_BUF);
-	if (c->hist == NULL || c->pts_buf == NULL || c->chain_buf == NULL)
+	if (c->pts_buf == NULL || c->chain_buf == NULL)
 	{
 		tdc_contour_tiles_free(c);
 		return fail(err, errlen, TDC_ENOMEM, "%s", "out of memory for the contours' buffers");
@@ -156,7 +174,7 @@ tdc_contour_tiles_begin(double interval, double base, const tdc_interp_spec *spe
 		}
 	}
 	*out = c;
-	*hold = sizeof(*c) + CT_HIST * sizeof(size_t) + 2 * CT_BUF;
+	*hold = sizeof(*c) + 2 * CT_HIST * sizeof(size_t) + 2 * CT_BUF;
 	return TDC_OK;
 }
 
@@ -175,23 +193,31 @@ dropped(const tdc_contour_tiles *c, const double *const p[3])
 	return false;
 }
 
-/* The levels [*klo, *khi] triangle t crosses (none when dropped: *klo > *khi). */
-static void
-tri_levels(const tdc_contour_tiles *c, const double *q, const double *qz, const size_t *v,
+/*
+ * The levels [*klo, *khi] triangle v crosses (none when dropped: *klo >
+ * *khi): tin_k_above of its lowest and highest corner, from kv (the
+ * essay's levels by vertex).
+ */
+static inline void
+tri_levels(const tdc_contour_tiles *c, const double *q, const int64_t *kv, const size_t *v,
 		   int64_t *klo, int64_t *khi)
 {
-	const double *p[3] = {q + 2 * v[0], q + 2 * v[1], q + 2 * v[2]};
-	double		lo = fmin(qz[v[0]], fmin(qz[v[1]], qz[v[2]])),
-				hi = fmax(qz[v[0]], fmax(qz[v[1]], qz[v[2]]));
+	int64_t		a = kv[v[0]],
+				b = kv[v[1]],
+				d = kv[v[2]];
 
-	if (dropped(c, p))
+	*klo = a < b ? (a < d ? a : d) : (b < d ? b : d);
+	*khi = (a > b ? (a > d ? a : d) : (b > d ? b : d)) - 1;
+	if (*klo <= *khi)
 	{
-		*klo = 1;
-		*khi = 0;
-		return;
+		const double *p[3] = {q + 2 * v[0], q + 2 * v[1], q + 2 * v[2]};
+
+		if (dropped(c, p))
+		{
+			*klo = 1;
+			*khi = 0;
+		}
 	}
-	*klo = tin_k_above(c->base, c->interval, lo);
-	*khi = tin_k_above(c->base, c->interval, hi) - 1;
 }
 
 /* Edge e of triangle t (from corner e to corner e + 1): its two vertices, the lesser index first. */
@@ -326,7 +352,7 @@ do_window(tdc_contour_tiles *c, ct_window *w, size_t ntri, int64_t kb, size_t ns
 		int64_t		klo,
 					khi;
 
-		tri_levels(c, w->q, w->qz, v, &klo, &khi);
+		tri_levels(c, w->q, w->kv, v, &klo, &khi);
 		if (klo < w->ka)
 			klo = w->ka;
 		if (khi > kb - 1)
@@ -371,10 +397,12 @@ do_window(tdc_contour_tiles *c, ct_window *w, size_t ntri, int64_t kb, size_t ns
 			w->state[w->succ[s]] |= 1;
 	}
 	/* chains from their starts, then the rings within the tile */
+	pthread_mutex_lock(&c->mu);
 	for (int pass = 0; pass < 2 && rc == TDC_OK; pass++)
 		for (size_t s = 0; s < w->nseg && rc == TDC_OK; s++)
 			if (!(w->state[s] & 2) && (pass == 1 || !(w->state[s] & 1)))
 				rc = write_chain(c, w, (uint32_t) s, err, errlen);
+	pthread_mutex_unlock(&c->mu);
 done:
 	free(w->seg);
 	free(w->slot);
@@ -395,9 +423,13 @@ tdc_contour_tiles_tile(tdc_contour_tiles *c, const double *q, const double *qz, 
 	double		zlo = INFINITY,
 				zhi = -INFINITY;
 	int64_t		kmin,
-				kmax;
-	size_t		cap = ntri > CT_SEG_MIN ? ntri : CT_SEG_MIN;
-	int			rc;
+				kmax,
+			   *kv;
+	size_t		cap = ntri > CT_SEG_MIN ? ntri : CT_SEG_MIN,
+				nv = 0,
+			   *hist;
+	bool		too_fine;
+	int			rc = TDC_OK;
 
 	if (ntri == 0)
 		return TDC_OK;
@@ -407,49 +439,65 @@ tdc_contour_tiles_tile(tdc_contour_tiles *c, const double *q, const double *qz, 
 	{
 		zlo = fmin(zlo, qz[tri[i]]);
 		zhi = fmax(zhi, qz[tri[i]]);
+		nv = tri[i] >= nv ? tri[i] + 1 : nv;
 	}
+	too_fine = tin_levels_check(c->interval, c->base, zlo, zhi, NULL, 0) != TDC_OK;
+	pthread_mutex_lock(&c->mu);
 	c->zmin = fmin(c->zmin, zlo);
 	c->zmax = fmax(c->zmax, zhi);
 	c->ntri += ntri;
-	if (c->too_fine || tin_levels_check(c->interval, c->base, zlo, zhi, NULL, 0) != TDC_OK)
-	{
-		c->too_fine = true;		/* the run's check reports it (contour_join.c) */
+	/* the run's check reports it (contour_join.c) */
+	too_fine = c->too_fine = c->too_fine || too_fine;
+	pthread_mutex_unlock(&c->mu);
+	if (too_fine)
 		return TDC_OK;
-	}
 	kmin = tin_k_above(c->base, c->interval, zlo);
 	kmax = tin_k_above(c->base, c->interval, zhi) - 1;
-	for (int64_t ka = kmin; ka <= kmax; ka += CT_HIST)
+	hist = malloc(CT_HIST * sizeof(size_t));
+	kv = malloc(nv * sizeof(int64_t));
+	if (hist == NULL || kv == NULL)
+	{
+		free(hist);
+		free(kv);
+		return fail(err, errlen, TDC_ENOMEM, "%s", "out of memory for a tile's contour levels");
+	}
+	/* every vertex's level, once (indices no triangle names get one too: harmless) */
+	for (size_t i = 0; i < nv; i++)
+		kv[i] = tin_k_above(c->base, c->interval, qz[i]);
+	w.kv = kv;
+	for (int64_t ka = kmin; ka <= kmax && rc == TDC_OK; ka += CT_HIST)
 	{
 		size_t		nh = kmax - ka + 1 < CT_HIST ? (size_t) (kmax - ka + 1) : CT_HIST;
 
-		memset(c->hist, 0, nh * sizeof(size_t));
+		memset(hist, 0, nh * sizeof(size_t));
 		for (size_t t = 0; t < ntri; t++)
 		{
 			int64_t		klo,
 						khi;
 
-			tri_levels(c, q, qz, tri + 3 * t, &klo, &khi);
+			tri_levels(c, q, kv, tri + 3 * t, &klo, &khi);
 			for (int64_t k = klo > ka ? klo : ka; k <= khi && k < ka + (int64_t) nh; k++)
-				c->hist[k - ka]++;
+				hist[k - ka]++;
 		}
 		/* windows of consecutive levels, each within cap segments (or one level) */
-		for (size_t h0 = 0; h0 < nh;)
+		for (size_t h0 = 0; h0 < nh && rc == TDC_OK;)
 		{
 			size_t		h1 = h0 + 1,
-						sum = c->hist[h0];
+						sum = hist[h0];
 
-			while (h1 < nh && sum + c->hist[h1] <= cap)
-				sum += c->hist[h1++];
+			while (h1 < nh && sum + hist[h1] <= cap)
+				sum += hist[h1++];
 			if (sum > 0)
 			{
 				w.ka = ka + (int64_t) h0;
-				if ((rc = do_window(c, &w, ntri, ka + (int64_t) h1, sum, err, errlen)) != TDC_OK)
-					return rc;
+				rc = do_window(c, &w, ntri, ka + (int64_t) h1, sum, err, errlen);
 			}
 			h0 = h1;
 		}
 	}
-	return TDC_OK;
+	free(hist);
+	free(kv);
+	return rc;
 }
 
 void
@@ -467,6 +515,6 @@ tdc_contour_tiles_free(tdc_contour_tiles *c)
 		close(c->chain_fd);
 	free(c->pts_buf);
 	free(c->chain_buf);
-	free(c->hist);
+	pthread_mutex_destroy(&c->mu);
 	free(c);
 }

@@ -7,6 +7,7 @@
 #ifndef TDC_TERRAIN_CONTOUR_TILES_H
 #define TDC_TERRAIN_CONTOUR_TILES_H
 
+#include <pthread.h>
 #include <stdbool.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -49,7 +50,13 @@ struct tdc_contour_tiles
 			   *chain_buf;
 	uint64_t	npts,
 				nchains;
-	size_t	   *hist;			/* a tile's segments per level, CT_HIST levels at a time */
+	/*
+	 * Two tiles may come at once (tdc_contour_tiles_tile is thread-safe):
+	 * mu guards everything above; each call has its own histogram and
+	 * windows, and writes a window's chains under mu, so that a chain's
+	 * points stay together in the points file.
+	 */
+	pthread_mutex_t mu;
 };
 
 #define CT_HIST		65536		/* levels a tile counts at a time */
