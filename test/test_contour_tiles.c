@@ -112,8 +112,8 @@ ctt_begin(void *arg, const double box[4], const double *hull, size_t nhull, size
 	(void) box;
 	(void) hull;
 	(void) nhull;
-	return tdc_contour_tiles_begin(s->interval, s->base, &s->spec, s->dir, &s->ct, hold, s->err,
-								   sizeof(s->err));
+	return tdc_contour_tiles_begin(s->interval, s->base, &s->spec, s->dir, 2, &s->ct, hold,
+								   s->err, sizeof(s->err));
 }
 
 static int

@@ -87,7 +87,7 @@ rt_begin(void *arg, const double box[4], const double *hull, size_t nhull, size_
 
 	(void) box;
 	s->begins++;
-	return tdc_raster_begin(&s->spec, &s->g, hull, nhull, s->dir, &s->ras, hold, s->err,
+	return tdc_raster_begin(&s->spec, &s->g, hull, nhull, s->dir, 2, &s->ras, hold, s->err,
 							sizeof(s->err));
 }
 

@@ -52,8 +52,9 @@ begin(void *arg, const double box[4], const double *hull, size_t nhull, size_t *
 	(void) box;
 	(void) hull;
 	(void) nhull;
+	/* two tiles at once: the run's emit_concurrent */
 	return tdc_contour_tiles_begin(ct->a->contour_interval, ct->a->contour_base, &ct->spec,
-								   tmp_dir, &ct->ct, hold, ct->err, sizeof(ct->err));
+								   tmp_dir, 2, &ct->ct, hold, ct->err, sizeof(ct->err));
 }
 
 static int

@@ -67,7 +67,8 @@ begin(void *arg, const double box[4], const double *hull, size_t nhull, size_t *
 
 	if (grid_geometry(gt->a, box, &gt->g, gt->box, gt->err, sizeof(gt->err)) != 0)
 		return TDC_EINVAL;
-	if ((rc = tdc_raster_begin(&gt->spec, &gt->g, hull, nhull, tmp_dir, &gt->ras, &h,
+	/* two tiles at once: the run's emit_concurrent */
+	if ((rc = tdc_raster_begin(&gt->spec, &gt->g, hull, nhull, tmp_dir, 2, &gt->ras, &h,
 							   gt->err, sizeof(gt->err))) != TDC_OK)
 		return rc;
 	*hold = h + 8 * gt->g.width * (gt->g.height < OUT_ROWS ? gt->g.height : OUT_ROWS) +

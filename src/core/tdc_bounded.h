@@ -209,8 +209,9 @@ extern void tdc_bounded_free(tdc_bounded_job *job);
  * |gt[2] gt[4]|, is TDC_EINVAL naming the geotransform).  *hold: the
  * bytes the grid holds from then on (the buffers; add them to the run's).
  * tile: a final tile's triangles, from the run's emit (q, qz, tri as
- * there); two threads may call it at once, so the run may set
- * emit_concurrent (each tile takes its own window of rows).  rows: after the run, rows y0 .. y0 + nrows - 1 (top down) into
+ * there); at_once (1 or 2) of them may be called at once, on threads of
+ * the run that sets emit_concurrent (each tile takes its own window of
+ * rows: linear holds 2 MB or 16 rows more for the second).  rows: after the run, rows y0 .. y0 + nrows - 1 (top down) into
  * v (nrows * width doubles), *valid += the pixels with a value; the first
  * call loads the sites the pixels outside the hull may take (those on the
  * hull, and the corners of the triangles whose circumcentre lies outside
@@ -220,7 +221,7 @@ extern void tdc_bounded_free(tdc_bounded_job *job);
 typedef struct tdc_raster tdc_raster;
 
 extern int	tdc_raster_begin(const tdc_interp_spec *spec, const tdc_grid_spec *g,
-							 const double *hull, size_t nhull, const char *tmpdir,
+							 const double *hull, size_t nhull, const char *tmpdir, int at_once,
 							 tdc_raster **r, size_t *hold, char *err, size_t errlen);
 extern int	tdc_raster_tile(tdc_raster *r, const double *q, const double *qz,
 							const size_t *tri, size_t ntri, char *err, size_t errlen);
@@ -261,8 +262,8 @@ extern int	tdc_raster_nn_tile(tdc_raster *r, const tdc_job *job, const double *q
  * begin: interval, base and spec (NULL, or linear with max_edge only) as
  * for tdc_tin_contours_start_spec; *hold: the bytes held from then on
  * beside the tiles (add them to the run's).  tile: a final tile's
- * triangles, from the run's emit; two threads may call it at once, so
- * the run may set emit_concurrent.  lines: after the run, calls fn for
+ * triangles, from the run's emit; at_once (1 or 2) calls may run at
+ * once, on threads of a run that sets emit_concurrent.  lines: after the run, calls fn for
  * each line in order (xy: n x,y pairs, valid during the call; a ring's
  * last point repeats its first); nonzero from fn stops it (returned as a
  * TDC_ code as emit's is).  The join and one level's lines must fit in
@@ -274,8 +275,8 @@ typedef int (*tdc_contour_line_fn) (void *arg, double level, const double *xy, s
 									bool closed);
 
 extern int	tdc_contour_tiles_begin(double interval, double base, const tdc_interp_spec *spec,
-									const char *tmpdir, tdc_contour_tiles **c, size_t *hold,
-									char *err, size_t errlen);
+									const char *tmpdir, int at_once, tdc_contour_tiles **c,
+									size_t *hold, char *err, size_t errlen);
 extern int	tdc_contour_tiles_tile(tdc_contour_tiles *c, const double *q, const double *qz,
 								   const size_t *tri, size_t ntri, char *err, size_t errlen);
 extern int	tdc_contour_tiles_lines(tdc_contour_tiles *c, size_t max_bytes, tdc_contour_line_fn fn,

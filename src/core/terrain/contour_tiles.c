@@ -39,8 +39,8 @@
  * triangles; the bounded run frees the tile's engine (the bulk of its
  * model, tdc_tp_tile_bytes) before it emits, so the window fits in what
  * the tile was allowed.  What stays beside the tiles (this struct, the two
- * buffers and a histogram for each of the two tiles that may come at
- * once) is the hold.
+ * buffers and a histogram for each tile that may come at once: begin's
+ * at_once) is the hold.
  *
  * Levels by vertex.  Which levels a triangle crosses, [klo, khi], is
  * asked of every triangle twice (the histogram, the windows), and most
@@ -110,7 +110,7 @@ fail(char *err, size_t errlen, int code, const char *fmt, const char *arg)
 
 int
 tdc_contour_tiles_begin(double interval, double base, const tdc_interp_spec *spec,
-						const char *tmpdir, tdc_contour_tiles **out, size_t *hold,
+						const char *tmpdir, int at_once, tdc_contour_tiles **out, size_t *hold,
 						char *err, size_t errlen)
 {
 	tdc_contour_tiles *c;
@@ -174,7 +174,7 @@ tdc_contour_tiles_begin(double interval, double base, const tdc_interp_spec *spe
 		}
 	}
 	*out = c;
-	*hold = sizeof(*c) + 2 * CT_HIST * sizeof(size_t) + 2 * CT_BUF;
+	*hold = sizeof(*c) + (at_once < 2 ? 1 : 2) * CT_HIST * sizeof(size_t) + 2 * CT_BUF;
 	return TDC_OK;
 }
 

@@ -149,7 +149,7 @@ pixel_matrix(const tdc_grid_spec *g, tdc_raster *r, char *err, size_t errlen)
 
 int
 tdc_raster_begin(const tdc_interp_spec *spec, const tdc_grid_spec *g, const double *hull,
-				 size_t nhull, const char *tmpdir, tdc_raster **out, size_t *hold,
+				 size_t nhull, const char *tmpdir, int at_once, tdc_raster **out, size_t *hold,
 				 char *err, size_t errlen)
 {
 	tdc_raster *r;
@@ -192,7 +192,8 @@ tdc_raster_begin(const tdc_interp_spec *spec, const tdc_grid_spec *g, const doub
 	/* linear's and natural neighbour's windows (nearest has its own, raster_nearest.c) */
 	r->wincap = spec->method == TDC_INTERP_NEAREST ? 0 :
 		WIN_MIN / 8 > 16 * g->width ? WIN_MIN / 8 : 16 * g->width;
-	r->nwins = spec->method == TDC_INTERP_NEAREST ? 0 : spec->method == TDC_INTERP_NATURAL ? 1 : RS_WINS;
+	r->nwins = spec->method == TDC_INTERP_NEAREST ? 0 : spec->method == TDC_INTERP_NATURAL ? 1 :
+		at_once < 2 ? 1 : RS_WINS;
 	for (int i = 0; i < r->nwins; i++)
 		if ((r->win[i] = malloc(8 * r->wincap)) == NULL)
 		{

@@ -27,9 +27,9 @@ struct tdc_raster
 	int			fd;				/* the pixels' file: RS_REC(r) bytes a pixel */
 	/*
 	 * Linear's and natural neighbour's windows of rows, wincap pixels each:
-	 * one per tile rasterised at once (a bounded run's workers: linear's
-	 * RS_WINS; natural neighbour's tiles come one at a time, through the
-	 * run's final_run), nwins of them, claimed under mu.  mu also guards the fringe's adds and
+	 * one per tile rasterised at once (linear's: the begin's at_once, at
+	 * most RS_WINS; natural neighbour's tiles come one at a time, through
+	 * the run's final_run), nwins of them, claimed under mu.  mu also guards the fringe's adds and
 	 * nearest's tiles (one at a time), so two workers may hand over their
 	 * tiles at once (tdc_raster_tile is thread-safe).
 	 */

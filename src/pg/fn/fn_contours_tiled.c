@@ -97,7 +97,8 @@ contour_begin(void *arg, const double box[4], const double *hull, size_t nhull, 
 	(void) box;
 	(void) hull;
 	(void) nhull;
-	rc = tdc_contour_tiles_begin(cr->interval, cr->base, &cr->spec, cr->sc.br->dir, &ct, hold,
+	/* one tile at a time: the consumer takes the tiles on the backend's thread */
+	rc = tdc_contour_tiles_begin(cr->interval, cr->base, &cr->spec, cr->sc.br->dir, 1, &ct, hold,
 								 cr->sc.err, sizeof(cr->sc.err));
 	cr->sc.obj = ct;
 	return rc;

@@ -133,7 +133,8 @@ coverage_begin(void *arg, const double box[4], const double *hull, size_t nhull,
 	memcpy(g.gt, cov->gt, sizeof(g.gt));
 	g.width = cov->width;
 	g.height = cov->height;
-	rc = tdc_raster_begin(&cov->spec, &g, hull, nhull, cov->sc.br->dir, &ras, &h,
+	/* one tile at a time: the consumer takes the tiles on the backend's thread */
+	rc = tdc_raster_begin(&cov->spec, &g, hull, nhull, cov->sc.br->dir, 1, &ras, &h,
 						  cov->sc.err, sizeof(cov->sc.err));
 	cov->sc.obj = ras;
 	if (rc != TDC_OK)
