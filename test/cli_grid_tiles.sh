@@ -139,7 +139,7 @@ perl -e 'local $/; $_ = <>; while (/\(([^()]+)\)/g) { my @p = map { [split / /] 
 grid_case "GSHHG Stockholm, a tight limit" 18 20 "$tmp/coast.txt" --grid 0.001
 grid_case "GSHHG Stockholm, max_edge=0.01" 18 20 "$tmp/coast.txt" --grid 0.001 --method linear:max_edge=0.01:nodata=-9999
 grid_case "GSHHG Stockholm, nearest" 20 12 "$tmp/coast.txt" --grid 0.001 --method nearest
-grid_case "GSHHG Stockholm, natural neighbour" 20 12 "$tmp/coast.txt" --grid 0.001 --method natural_neighbor
+grid_case "GSHHG Stockholm, natural neighbour" 22 12 "$tmp/coast.txt" --grid 0.001 --method natural_neighbor
 
 # Refused: an input without heights, one line, no -o
 awk '{ print $1, $2 }' "$tmp/hills.txt" > "$tmp/flat.txt"

@@ -63,21 +63,26 @@ heap_resident(void)
 }
 
 /*
- * At the start of the run: what the process holds (its resident size;
- * where unknown, 2 MB, what ./tdc holds on three points: 1.8 MB); the
- * heap kept from here on, and settled against limit.
+ * At the start of the run: what the process holds (its resident size,
+ * rounded up to a whole MB; where unknown, 2 MB, what ./tdc holds on three
+ * points: 1.8 MB); the heap kept from here on, and settled against limit.
+ * The rounding keeps the plan from the pages the address layout happens to
+ * touch: the same run measured 2.26 to 2.38 MB, and a budget that much
+ * larger cut the Stockholm coastline into 16 tiles instead of 18, one of
+ * which natural neighbour then refused under 20 MB.
  */
 size_t
 heap_start(size_t limit)
 {
-	size_t		base = resident_bytes();
+	size_t		base = resident_bytes(),
+				mb = (size_t) 1 << 20;
 
 	heap_limit = limit;
 #ifdef __GLIBC__
 	mallopt(M_MMAP_MAX, 0);
 	mallopt(M_TRIM_THRESHOLD, INT32_MAX);
 #endif
-	return base != 0 ? base : (size_t) 2 << 20;
+	return base != 0 ? (base + mb - 1) / mb * mb : (size_t) 2 << 20;
 }
 
 /*
