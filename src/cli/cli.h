@@ -26,6 +26,7 @@
 #ifndef TDC_CLI_H
 #define TDC_CLI_H
 
+#include <pthread.h>
 #include <stdbool.h>
 #include <stdio.h>
 #include <stddef.h>
@@ -72,6 +73,8 @@ typedef struct cli_input
 
 /* die.c: "tdc: " and fmt with arg on stderr, then exit(code) */
 extern void die(int code, const char *fmt, const char *arg) __attribute__((noreturn));
+/* die.c: msg into first under mu, unless first holds a message already */
+extern void keep_first_error(pthread_mutex_t *mu, char *first, size_t firstlen, const char *msg);
 
 /*
  * fmt_g17.c: v as snprintf(buf, 32, "%.17g", v) writes it, NUL included;

@@ -67,13 +67,9 @@ emit(void *arg, int tile, const double *q, const double *qz, const int64_t *ql,
 
 	(void) tile;
 	(void) ql;
+	/* both workers' tiles at once (emit_concurrent): the first failure is said */
 	if ((rc = tdc_contour_tiles_tile(ct->ct, q, qz, tri, ntri, err, sizeof(err))) != TDC_OK)
-	{
-		pthread_mutex_lock(&ct->mu);
-		if (ct->err[0] == '\0')
-			snprintf(ct->err, sizeof(ct->err), "%s", err);
-		pthread_mutex_unlock(&ct->mu);
-	}
+		keep_first_error(&ct->mu, ct->err, sizeof(ct->err), err);
 	return rc;
 }
 

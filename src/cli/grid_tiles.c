@@ -90,12 +90,7 @@ emit(void *arg, int tile, const double *q, const double *qz, const int64_t *ql,
 		return 0;				/* final_run took the tile's pixels */
 	/* both workers' tiles at once (emit_concurrent): the first failure is said */
 	if ((rc = tdc_raster_tile(gt->ras, q, qz, tri, ntri, err, sizeof(err))) != TDC_OK)
-	{
-		pthread_mutex_lock(&gt->mu);
-		if (gt->err[0] == '\0')
-			snprintf(gt->err, sizeof(gt->err), "%s", err);
-		pthread_mutex_unlock(&gt->mu);
-	}
+		keep_first_error(&gt->mu, gt->err, sizeof(gt->err), err);
 	return rc;
 }
 
